@@ -1,0 +1,40 @@
+"""Rocking models and their free-rocking periods (paper eqs. 2-5).
+
+Units: angles in rad, time in s, ``nu`` (the rocking frequency parameter) in rad/s,
+``g = nu**2 * theta_cr`` (the restoring acceleration of the simplified model, eq. 4)
+in rad/s**2.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def restoring_acceleration(nu: float, theta_cr: float) -> float:
+    """``g = nu^2 * theta_cr`` in rad/s^2: the constant restoring term of eq. 4."""
+    return float(nu) ** 2 * float(theta_cr)
+
+
+def period_simplified(theta0, nu: float, theta_cr: float):
+    """Free-rocking period of the simplified model, eq. 5: ``T = (4/nu) sqrt(2 theta0/theta_cr)``.
+
+    Equivalently ``T = 4 sqrt(2 theta0 / g)``; ``theta0`` in rad, ``T`` in s.
+    """
+    return 4.0 / nu * np.sqrt(2.0 * np.asarray(theta0, dtype=float) / theta_cr)
+
+
+def period_from_g(theta0, g: float):
+    """Eq. 5 written with the restoring acceleration only: ``T = 4 sqrt(2 theta0 / g)``."""
+    return 4.0 * np.sqrt(2.0 * np.asarray(theta0, dtype=float) / g)
+
+
+def period_housner(theta0, nu: float, theta_cr: float):
+    """Free-rocking period of the linearized Housner model, eq. 3.
+
+    ``T = (4/nu) acosh(1 / (1 - theta0/theta_cr))``; infinite at ``theta0 >= theta_cr``
+    (the block overturns).
+    """
+    ratio = np.asarray(theta0, dtype=float) / theta_cr
+    with np.errstate(divide="ignore", invalid="ignore"):
+        out = 4.0 / nu * np.arccosh(1.0 / (1.0 - ratio))
+    return np.where(ratio >= 1.0, np.inf, out)
