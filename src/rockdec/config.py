@@ -69,6 +69,11 @@ def validate(config: dict) -> dict:
     return config
 
 
+def validate_scene(scene: dict, name: str = "cli") -> dict:
+    """Validate and complete one scene on its own (changed in place); returns it."""
+    return validate({"default_scene": name, "scenes": {name: scene}})["scenes"][name]
+
+
 def load(path: str | Path = "config/config.yaml") -> dict:
     """Read, validate and complete the configuration file at ``path``."""
     path = Path(path)

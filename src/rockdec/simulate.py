@@ -33,6 +33,7 @@ import numba
 import numpy as np
 import xarray as xr
 
+from rockdec.io import provenance
 from rockdec.models import period_from_g, restoring_acceleration
 
 #: Largest number of correction steps when the closed-form flight count is off by rounding.
@@ -285,16 +286,24 @@ def scene_seeds(scene: dict) -> np.ndarray:
     return (rec["first_seed"] + np.arange(n, dtype=np.int64)).reshape(rec["replicates"], rec["series_per_replicate"])
 
 
-def scene_parameters(scene: dict) -> dict:
+def scene_parameters(scene: dict, amplitude: float = 0.0) -> dict:
     """Everything needed to simulate a scene: the system, and the step from calibration.
 
     ``dt`` comes from the scene or from :func:`calibrate_dt`; the burn-in from the scene or
     :func:`default_burn_in`. Stationary statistics are measured by a pilot at that step.
+    Without noise (``sigma_p = 0``, a free response) there is no ``sigma_Y``: the step then
+    gives ``points_per_cycle`` samples per cycle at ``amplitude`` (eq. 5), no burn-in.
     """
     system, exc = scene["system"], scene["excitation"]
     g = restoring_acceleration(system["nu"], system["theta_cr"])
     e, sigma_p = system["e"], exc["sigma_p"]
-    if exc["dt"] is None:
+    if sigma_p == 0.0:
+        if exc["dt"] is None and amplitude <= 0.0:
+            raise ValueError("a free response (sigma_p = 0) needs --theta0 > 0 to set the step, or --dt")
+        dt = exc["dt"] if exc["dt"] is not None else float(period_from_g(abs(amplitude), g)) / exc["points_per_cycle"]
+        nan = float("nan")
+        cal = {"dt": dt, "burn_in": 0, "sigma_y": nan, "sigma_ydot": nan, "points_per_cycle": nan}
+    elif exc["dt"] is None:
         cal = calibrate_dt(e=e, g=g, sigma_p=sigma_p, points_per_cycle=exc["points_per_cycle"])
     else:
         burn_in = exc["burn_in"] if exc["burn_in"] is not None else default_burn_in(e, exc["points_per_cycle"])
@@ -312,3 +321,46 @@ def scene_parameters(scene: dict) -> dict:
         "points_per_cycle_target": exc["points_per_cycle"],
         **cal,
     }
+
+
+def scene_dataset(scene: dict, params: dict, seeds, theta0: float = 0.0, theta_dot0: float = 0.0) -> xr.Dataset:
+    """The lazy simulation Dataset of ``seeds`` for a scene, with the SPEC §5 attributes.
+
+    The attributes hold everything needed to regenerate any other seed of the scene bit
+    for bit (see :func:`regenerate`).
+    """
+    ds = simulation_dataset(
+        seeds,
+        scene["records"]["n_points"],
+        dt=params["dt"],
+        g=params["g"],
+        e=params["e"],
+        sigma_p=params["sigma_p"],
+        theta0=theta0,
+        theta_dot0=theta_dot0,
+        burn_in=params["burn_in"],
+        chunk_seeds=scene["records"]["chunk_seeds"],
+    )
+    ds.attrs.update({k: v for k, v in params.items()})
+    ds.attrs["n_points"] = scene["records"]["n_points"]
+    ds.attrs.update(provenance("simulate", scene))
+    return ds
+
+
+def regenerate(attrs: dict, seeds, chunk_seeds: int = 100) -> xr.Dataset:
+    """Series of any ``seeds`` simulated as the run described by ``attrs`` simulated its own.
+
+    ``attrs`` are the global attributes of a simulation file written by :func:`scene_dataset`.
+    """
+    return simulation_dataset(
+        seeds,
+        int(attrs["n_points"]),
+        dt=float(attrs["dt"]),
+        g=float(attrs["g"]),
+        e=float(attrs["e"]),
+        sigma_p=float(attrs["sigma_p"]),
+        theta0=float(attrs["theta0"]),
+        theta_dot0=float(attrs["theta_dot0"]),
+        burn_in=int(attrs["burn_in"]),
+        chunk_seeds=chunk_seeds,
+    )

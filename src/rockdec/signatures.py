@@ -1,0 +1,593 @@
+"""Random Decrement signatures of a rocking record (paper §3, eqs. 8, 18-20).
+
+A signature (eq. 8) averages record segments ``y(t_i + tau)`` over trigger times
+``t_i``; here it is two-sided, ``tau = -L dt .. +L dt`` (``2L + 1`` lags, index ``L`` is
+``tau = 0``). Two triggers, both from eq. 19:
+
+``D_a`` -- extremum trigger (first line of eq. 19)
+    ``y(t_i)`` within ``[a - da, a + da]`` and ``y'(t_i) = 0``. On samples, ``y' = 0`` is
+    read as a sampled local maximum, ``y[i-1] < y[i] >= y[i+1]``. **Tie rule**: the left
+    comparison is strict and the right one is not, so a flat top of equal samples
+    triggers once, at its first sample, and a record that is constant there (all zeros,
+    a body at rest) never triggers. With ``both_signs`` the mirror rule
+    ``y[i-1] > y[i] <= y[i+1]`` also accepts local minima within ``[-a - da, -a + da]``,
+    whose segments are added with their sign flipped; the two rules are exact mirrors,
+    so ``-y`` gives the same signature as ``y``.
+
+``D_v`` -- zero-crossing trigger (second line of eq. 19, the follow-up of paper §6)
+    ``y`` crosses zero between samples ``i`` and ``i + 1``: upward when
+    ``y[i] < 0 <= y[i+1]`` (with ``both_signs`` also downward, ``y[i] > 0 >= y[i+1]``,
+    sign-flipped). The crossing time is the root of the chord through the two samples,
+    ``t_c = t_i + f dt`` with ``f = y[i] / (y[i] - y[i+1])`` in ``(0, 1]``.
+    **Velocity**: a rocking record is smooth between impacts and its velocity jumps by the
+    factor ``e`` at every zero crossing (eq. 6), so a difference straddling the crossing
+    mixes the two sides. ``v`` is the *pre-impact* (incoming) velocity: the derivative at
+    ``t_c`` of the parabola through the three incoming samples ``y[i-2], y[i-1], y[i]``
+    (one-sided, second order; exact for the piecewise-parabolic free response of eq. 4).
+    The trigger condition is ``|v_in| in [v - dv, v + dv]`` (``v_in`` sign-flipped for a
+    downward crossing).
+    **Segment**: linear interpolation at ``t_c + k dt``, i.e.
+    ``(1 - f) y[i+k] + f y[i+k+1]``. Interpolation (rather than the nearest sample) keeps
+    ``tau = 0`` exactly at the crossing, so the kink of the signature, whose one-sided
+    slopes are in the ratio ``e``, stays at lag 0 instead of being smeared over one step.
+    For ``k != 0`` the two interpolated samples lie on one side of the crossing; the
+    error is ``O(dt^2)`` (``-y'' f (1 - f) dt^2 / 2``: a constant offset along one
+    parabolic arc). At ``k = 0`` the chord root gives exactly ``0``, which is stored as
+    an exact zero. The chord root itself is biased by the kink by at most
+    ``(1 - e) dt / (4 e)``, a shift that does not change the slopes.
+
+Only triggers whose whole segment lies inside the record count (the record's ends are
+never triggers). A trigger whose segment holds a NaN is not added; it is counted in
+``skipped`` instead. Samples next to a NaN cannot be classified (the comparisons fail),
+so they are neither triggers nor skipped.
+
+All window sizes in one pass: the half-widths ``da_1 <= ... <= da_W`` are nested, so each
+trigger is added once, into the bin of the smallest window that holds it, and a cumulative
+sum over the window axis finishes the job. Kernels return per-series *sums* and *counts*,
+so signatures pool exactly by adding (SPEC §2): over series, seeds, groups or time chunks.
+
+Layers: NumPy/numba kernels (:func:`extremum_sums`, :func:`crossing_sums`), the
+:func:`reference_per_window` used by tests and the benchmark, small helpers
+(:func:`lag_samples`, :func:`free_response`, :func:`pool`) and the xarray/Dask wrapper
+:func:`signature_cube`.
+"""
+
+from __future__ import annotations
+
+import warnings
+from typing import NamedTuple
+
+import dask.array as da
+import numpy as np
+import xarray as xr
+from numba import njit
+
+from rockdec import __version__
+from rockdec.models import period_from_g
+
+__all__ = [
+    "DEFAULT_WINDOWS",
+    "NoTriggerWarning",
+    "SignatureSums",
+    "crossing_sums",
+    "extremum_sums",
+    "free_response",
+    "lag_samples",
+    "mean_signature",
+    "pool",
+    "reference_per_window",
+    "signature_cube",
+]
+
+DEFAULT_WINDOWS = (0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0)
+"""Window half-widths relative to the largest one (``da/da_max``, ``dv/dv_max``)."""
+
+TRIGGERS = ("a", "v")
+_SUM_VARS = ("signature_sum", "count", "skipped")
+
+
+class NoTriggerWarning(RuntimeWarning):
+    """A window caught no trigger, so its signature is NaN."""
+
+
+class SignatureSums(NamedTuple):
+    """Per-series accumulators of one trigger, cumulative over the windows.
+
+    ``sum[..., window, lag]`` (float64, sum of the segments), ``count[..., window]``
+    (int64, triggers added) and ``skipped[..., window]`` (int64, triggers whose segment
+    held a NaN).
+    """
+
+    sum: np.ndarray
+    count: np.ndarray
+    skipped: np.ndarray
+
+
+# --------------------------------------------------------------------------- kernels
+
+
+@njit(nogil=True, cache=True)
+def _nan_prefix(row, out):
+    """``out[j]`` = number of NaN among ``row[:j]``."""
+    out[0] = 0
+    for j in range(row.size):
+        out[j + 1] = out[j] + (1 if np.isnan(row[j]) else 0)
+
+
+@njit(nogil=True, cache=True)
+def _close_windows(sums, counts, skipped):
+    """Per-bin accumulators of one series -> cumulative over the nested windows."""
+    for w in range(1, counts.size):
+        counts[w] += counts[w - 1]
+        skipped[w] += skipped[w - 1]
+        for k in range(sums.shape[1]):
+            sums[w, k] += sums[w - 1, k]
+
+
+@njit(nogil=True, cache=True)
+def _add_interpolated(seg, row, base, k0, k1, sign, frac):
+    """``seg[k] += sign * y(t_base + (k + frac) dt)`` for ``k0 <= k < k1``, linear interpolation."""
+    for k in range(k0, k1):
+        left = np.float64(row[base + k])
+        seg[k] += sign * (left + frac * (np.float64(row[base + k + 1]) - left))
+
+
+@njit(nogil=True, cache=True)
+def _extremum_kernel(y, level, edges, n_lag, both_signs, lo, hi, sums, counts, skipped):
+    """One pass of the extremum trigger over ``y[row, time]`` for all windows ``edges``."""
+    n_rows, n = y.shape
+    widest = edges[edges.size - 1]
+    reach = max(n_lag, 1)
+    nan_before = np.empty(n + 1, np.int64)
+    for r in range(n_rows):
+        row = y[r]
+        _nan_prefix(row, nan_before)
+        for i in range(max(lo, reach), min(hi, n - reach)):
+            y0 = np.float64(row[i])
+            above = abs(y0 - level)  # level test first: cheap, and rarely passed
+            below = abs(y0 + level)
+            if above <= widest and row[i - 1] < row[i] and row[i] >= row[i + 1]:
+                sign = 1.0
+                dist = above
+            elif both_signs and below <= widest and row[i - 1] > row[i] and row[i] <= row[i + 1]:
+                sign = -1.0
+                dist = below
+            else:
+                continue
+            w = np.searchsorted(edges, dist)  # smallest window holding the trigger
+            if nan_before[i + n_lag + 1] != nan_before[i - n_lag]:
+                skipped[r, w] += 1
+                continue
+            counts[r, w] += 1
+            seg = sums[r, w]
+            base = i - n_lag
+            for k in range(2 * n_lag + 1):
+                seg[k] += sign * row[base + k]
+        _close_windows(sums[r], counts[r], skipped[r])
+
+
+@njit(nogil=True, cache=True)
+def _crossing_kernel(y, velocity, edges, n_lag, inv_dt, both_signs, lo, hi, sums, counts, skipped):
+    """One pass of the zero-crossing trigger over ``y[row, time]`` for all windows ``edges``."""
+    n_rows, n = y.shape
+    widest = edges[edges.size - 1]
+    nan_before = np.empty(n + 1, np.int64)
+    for r in range(n_rows):
+        row = y[r]
+        _nan_prefix(row, nan_before)
+        for i in range(max(lo, n_lag, 2), min(hi, n - n_lag - 1)):
+            y0 = np.float64(row[i])
+            y1 = np.float64(row[i + 1])
+            if y0 < 0.0 and y1 >= 0.0:
+                sign = 1.0
+            elif both_signs and y0 > 0.0 and y1 <= 0.0:
+                sign = -1.0
+            else:
+                continue
+            frac = y0 / (y0 - y1)  # chord root: crossing at t_i + frac dt
+            ym1 = np.float64(row[i - 1])
+            ym2 = np.float64(row[i - 2])
+            # derivative at frac of the parabola through the samples i-2, i-1, i
+            slope = 0.5 * (3.0 * y0 - 4.0 * ym1 + ym2) + (y0 - 2.0 * ym1 + ym2) * frac
+            dist = abs(sign * slope * inv_dt - velocity)
+            if not dist <= widest:
+                continue
+            w = np.searchsorted(edges, dist)
+            if nan_before[i + n_lag + 2] != nan_before[i - n_lag]:
+                skipped[r, w] += 1
+                continue
+            counts[r, w] += 1
+            seg = sums[r, w]
+            base = i - n_lag
+            # lag 0 is the chord root, where the interpolant is 0: left out, stays exactly 0
+            _add_interpolated(seg, row, base, 0, n_lag, sign, frac)
+            _add_interpolated(seg, row, base, n_lag + 1, 2 * n_lag + 1, sign, frac)
+        _close_windows(sums[r], counts[r], skipped[r])
+
+
+def _run(trigger, y, target, half_widths, n_lag, dt, both_signs, owned):
+    """Shape checks and output allocation around a numba kernel; ``time`` is the last axis."""
+    y = np.asarray(y)
+    if y.ndim == 0:
+        raise ValueError("the record must have a time axis (the last axis)")
+    if y.dtype not in (np.float32, np.float64):
+        y = y.astype(np.float64)
+    edges = np.atleast_1d(np.asarray(half_widths, dtype=np.float64))
+    if edges.ndim != 1 or edges.size == 0 or np.any(edges < 0) or np.any(np.diff(edges) < 0):
+        raise ValueError(f"window half-widths must be a non-empty, non-negative, ascending sequence; got {half_widths!r}")
+    n_lag = int(n_lag)
+    if n_lag < 0:
+        raise ValueError(f"n_lag must be >= 0, got {n_lag}")
+    lead_shape, n = y.shape[:-1], y.shape[-1]
+    rows = int(np.prod(lead_shape, dtype=np.int64))
+    lo, hi = (0, n) if owned is None else (int(owned[0]), int(owned[1]))
+    sums = np.zeros((rows, edges.size, 2 * n_lag + 1))
+    counts = np.zeros((rows, edges.size), np.int64)
+    skipped = np.zeros((rows, edges.size), np.int64)
+    y = np.ascontiguousarray(y.reshape(rows, n))
+    if trigger == "a":
+        _extremum_kernel(y, float(target), edges, n_lag, bool(both_signs), lo, hi, sums, counts, skipped)
+    else:
+        _crossing_kernel(y, float(target), edges, n_lag, 1.0 / float(dt), bool(both_signs), lo, hi, sums, counts, skipped)
+    return SignatureSums(
+        sums.reshape(lead_shape + sums.shape[1:]),
+        counts.reshape(lead_shape + counts.shape[1:]),
+        skipped.reshape(lead_shape + skipped.shape[1:]),
+    )
+
+
+def extremum_sums(y, level, half_widths, n_lag, *, both_signs=True, owned=None) -> SignatureSums:
+    """Sums and counts of the extremum-triggered signature ``D_a`` (eq. 19, first line).
+
+    Parameters
+    ----------
+    y : array (..., time), float32 or float64 (computed in float64)
+        Records, time on the last axis.
+    level : float
+        Trigger level ``a``, in the units of ``y``.
+    half_widths : sequence of float, ascending
+        Window half-widths ``da_1 <= ... <= da_W`` (units of ``y``); a trigger is in window
+        ``w`` when ``|y(t_i) - a| <= da_w``.
+    n_lag : int
+        ``L``: segments are ``y[i-L .. i+L]``.
+    both_signs : bool
+        Also use local minima within ``[-a - da, -a + da]``, sign-flipped.
+    owned : (int, int), optional
+        Only samples ``lo <= i < hi`` may be triggers (time chunks with overlap); the
+        segment may reach outside ``[lo, hi)``. Default: the whole record.
+
+    Returns
+    -------
+    SignatureSums
+        ``sum (..., W, 2L+1)``, ``count (..., W)``, ``skipped (..., W)``, cumulative over
+        the windows. The signature is ``sum / count`` (:func:`mean_signature`).
+    """
+    return _run("a", y, level, half_widths, n_lag, 1.0, both_signs, owned)
+
+
+def crossing_sums(y, velocity, half_widths, n_lag, dt, *, both_signs=True, owned=None) -> SignatureSums:
+    """Sums and counts of the zero-crossing signature ``D_v`` (eq. 19, second line).
+
+    ``velocity`` is the trigger velocity ``v`` and ``half_widths`` the ascending ``dv_w``,
+    in units of ``y`` per second; ``v`` is compared with the *pre-impact* velocity
+    (module docstring), estimated from the three samples before the crossing. ``dt`` is
+    the sampling interval in s. The segment is interpolated at ``t_c + k dt``,
+    ``k = -L .. L``. Other parameters and the result as in :func:`extremum_sums`.
+    """
+    return _run("v", y, velocity, half_widths, n_lag, dt, both_signs, owned)
+
+
+def reference_per_window(y, trigger, target, half_widths, n_lag, *, dt=1.0, both_signs=True) -> SignatureSums:
+    """Reference implementation: one full rescan of the record per window.
+
+    Calls the kernel once for each half-width alone (no binning, no cumulative sum) and
+    stacks the results; same conventions as :func:`extremum_sums` (``trigger="a"``) and
+    :func:`crossing_sums` (``trigger="v"``), slower by about the number of windows. Kept
+    only to check the one-pass binning (tests) and to time it
+    (``benchmarks/bench_signatures.py``).
+    """
+    parts = [_run(trigger, y, target, [width], n_lag, dt, both_signs, None) for width in np.atleast_1d(half_widths)]
+    return SignatureSums(
+        np.concatenate([part.sum for part in parts], axis=-2),
+        np.concatenate([part.count for part in parts], axis=-1),
+        np.concatenate([part.skipped for part in parts], axis=-1),
+    )
+
+
+# --------------------------------------------------------------------------- helpers
+
+
+def lag_samples(n_periods: float, level: float, g: float, dt: float) -> int:
+    """Half-length ``L`` of the lag axis in samples: ``round(n_periods T(a) / dt)``.
+
+    ``T(a) = 4 sqrt(2 a / g)`` is the free-rocking period at amplitude ``a`` of the
+    simplified model (eq. 5); ``level`` ``a`` in rad, ``g = nu^2 theta_cr`` in rad/s^2,
+    ``dt`` in s.
+    """
+    if level < 0 or g <= 0 or dt <= 0:
+        raise ValueError(f"lag_samples needs level >= 0, g > 0 and dt > 0; got level={level}, g={g}, dt={dt}")
+    return int(np.rint(n_periods * float(period_from_g(level, g)) / dt))
+
+
+def free_response(signature):
+    """Free-response estimate from a two-sided signature: its even part (paper §4, eq. 20).
+
+    ``(D(tau) + D(-tau)) / 2`` for ``tau >= 0``, along the last axis: ``2L + 1`` lags in,
+    ``L + 1`` out. Taking the even part imposes the zero-velocity initial condition of
+    ``g(a, tau) = G(a, 0, tau)``.
+    """
+    signature = np.asarray(signature)
+    n_lag = (signature.shape[-1] - 1) // 2
+    return 0.5 * (signature[..., n_lag:] + signature[..., n_lag::-1])
+
+
+def mean_signature(sums, counts, *, triggers=TRIGGERS, windows=None):
+    """Signature ``sum / count`` (eq. 8); NaN where the count is 0.
+
+    ``sums (..., trigger, window, lag)`` and ``counts (..., trigger, window)``. A
+    :class:`NoTriggerWarning` names every (trigger, window) that holds no trigger in any
+    of the series given (so a cube warns only for windows that are empty everywhere).
+    """
+    sums = np.asarray(sums, dtype=np.float64)
+    counts = np.asarray(counts)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        out = sums / counts[..., None]
+    out[counts == 0] = np.nan
+    if counts.size:
+        empty = np.all(counts.reshape(-1, *counts.shape[-2:]) == 0, axis=0)
+        windows = np.arange(counts.shape[-1]) if windows is None else np.asarray(windows)
+        for t, w in zip(*np.nonzero(empty)):
+            kind = "D_a (extremum)" if triggers[t] == "a" else "D_v (zero crossing)"
+            warnings.warn(
+                f"no {kind} trigger in window {windows[w]:g}: its signature is NaN; lower "
+                "the trigger level, widen the window or use a longer record (or pool more series)",
+                NoTriggerWarning,
+                stacklevel=2,
+            )
+    return out
+
+
+# --------------------------------------------------------------------------- xarray / Dask
+
+
+def _cube_block(y, *, a, a_widths, v, v_widths, n_lag, dt, both_signs, owned=None):
+    """Both triggers on one block: sums ``(..., 2, W, 2L+1)``, count and skipped ``(..., 2, W)``."""
+    sa = extremum_sums(y, a, a_widths, n_lag, both_signs=both_signs, owned=owned)
+    sv = crossing_sums(y, v, v_widths, n_lag, dt, both_signs=both_signs, owned=owned)
+    return (
+        np.stack([sa.sum, sv.sum], axis=-3),
+        np.stack([sa.count, sv.count], axis=-2),
+        np.stack([sa.skipped, sv.skipped], axis=-2),
+    )
+
+
+def _cube_time_chunked(x, **kw):
+    """:func:`_cube_block` on a Dask array chunked along time (the last axis).
+
+    Each time chunk is extended by ``depth`` samples from its neighbours (none past the
+    record's ends), counts only the triggers at its own samples, and the per-chunk sums
+    are added. ``depth`` covers the segment and the incoming-velocity stencil.
+    """
+    n_lag, n_win = kw["n_lag"], len(kw["a_widths"])
+    axis = x.ndim - 1
+    depth = max(n_lag, 2) + 1
+    if x.shape[axis] <= 2 * depth:  # too short to split: no segment fits anyway
+        x = x.rechunk({axis: -1})
+    else:
+        x = x.rechunk({axis: da.overlap.ensure_minimum_chunksize(depth, x.chunks[axis])})
+    n_chunks = len(x.chunks[axis])
+    extended = da.overlap.overlap(x, depth={axis: depth}, boundary={axis: "none"}) if n_chunks > 1 else x
+    width = 2 * n_lag + 1
+
+    def block(b, block_info=None):
+        loc = block_info[0]["chunk-location"][axis]
+        lo = 0 if loc == 0 else depth
+        hi = b.shape[-1] - (0 if loc == n_chunks - 1 else depth)
+        s, c, k = _cube_block(b, owned=(lo, hi), **kw)
+        packed = np.concatenate([s, c[..., None].astype(np.float64), k[..., None].astype(np.float64)], axis=-1)
+        return packed[..., None, :, :, :]
+
+    packed = extended.map_blocks(
+        block,
+        new_axis=[axis + 1, axis + 2, axis + 3],
+        chunks=x.chunks[:axis] + ((1,) * n_chunks, (2,), (n_win,), (width + 2,)),
+        dtype=np.float64,
+        meta=np.empty((0,) * (axis + 4)),
+    ).sum(axis=axis)
+    return (
+        packed[..., :width],
+        packed[..., width].astype(np.int64),
+        packed[..., width + 1].astype(np.int64),
+    )
+
+
+def _sampling_interval(theta: xr.DataArray) -> float:
+    """``dt`` in s from ``theta.attrs['dt']`` or a uniform ``time`` coordinate."""
+    if "dt" in theta.attrs:
+        return float(theta.attrs["dt"])
+    if "time" in theta.coords and theta.sizes["time"] > 1:
+        t = theta["time"].values
+        step = np.diff(t)
+        if np.issubdtype(step.dtype, np.timedelta64):
+            step = step / np.timedelta64(1, "s")
+        step = step.astype(np.float64)
+        if np.allclose(step, step[0], rtol=1e-6, atol=0):
+            return float(step[0])
+        raise ValueError("the time coordinate is not uniformly sampled: resample it, or give attrs['dt'] in seconds")
+    raise ValueError("cannot tell the sampling interval: give theta an attribute 'dt' (s) or a uniform 'time' coordinate")
+
+
+def _finish(sums: xr.Dataset) -> xr.Dataset:
+    """Add ``signature`` and ``free_response`` to a Dataset of sums and counts."""
+    units = sums["signature_sum"].attrs.get("units", "rad")
+    signature = xr.apply_ufunc(
+        mean_signature,
+        sums["signature_sum"],
+        sums["count"],
+        input_core_dims=[["trigger", "window", "lag"], ["trigger", "window"]],
+        output_core_dims=[["trigger", "window", "lag"]],
+        kwargs={"triggers": tuple(sums["trigger"].values), "windows": sums["window"].values},
+        dask="parallelized",
+        output_dtypes=[np.float64],
+    )
+    signature.attrs = {"units": units, "long_name": "RDD signature: mean segment over the triggers (eqs. 8, 19)"}
+    n_lag = (sums.sizes["lag"] - 1) // 2
+    even = xr.apply_ufunc(
+        free_response,
+        signature.sel(trigger="a", drop=True),
+        input_core_dims=[["lag"]],
+        output_core_dims=[["lag_pos"]],
+        dask="parallelized",
+        dask_gufunc_kwargs={"output_sizes": {"lag_pos": n_lag + 1}},
+        output_dtypes=[np.float64],
+    )
+    even.attrs = {"units": units, "long_name": "free-response estimate: even part of D_a (eq. 20)"}
+    out = sums.assign(signature=signature, free_response=even)
+    return out.assign_coords(lag_pos=("lag_pos", sums["lag"].values[n_lag:], {"units": "s", "long_name": "time lag tau >= 0"}))
+
+
+def pool(ds: xr.Dataset, dim) -> xr.Dataset:
+    """Pool a signature cube over ``dim`` (a name or a list): sum of sums / sum of counts.
+
+    Exact: the pooled signature is the mean over the union of the triggers of the pooled
+    series (SPEC §2). NaN (with a :class:`NoTriggerWarning`) where the pooled count is 0.
+    """
+    summed = ds[list(_SUM_VARS)].sum(dim, keep_attrs=True)
+    return _finish(summed)
+
+
+def signature_cube(
+    theta: xr.DataArray,
+    *,
+    sigma_y: float,
+    sigma_ydot: float,
+    level: float = 2.0,
+    windows=DEFAULT_WINDOWS,
+    window_max: float = 0.28,
+    v_level: float = 1.0,
+    dv_max: float = 0.28,
+    n_periods: float = 2.5,
+    g: float | None = None,
+    n_lag: int | None = None,
+    both_signs: bool = True,
+    group: xr.DataArray | None = None,
+) -> xr.Dataset:
+    """Per-series RDD signatures ``D_a`` and ``D_v`` (eq. 19) of ``theta(seed, time)``.
+
+    Parameters
+    ----------
+    theta : DataArray with a ``time`` dimension (typically ``(seed, time)``)
+        Rocking angle (rad, or ``theta.attrs['units']``); NumPy or Dask, chunked over
+        seed and/or time. ``dt`` (s) from ``theta.attrs['dt']`` or the ``time`` coordinate.
+    sigma_y, sigma_ydot : float
+        One standard deviation of the response and of its velocity for *all* series:
+        a per-series level would mix rocking periods in a pooled signature (SPEC §2).
+    level : float
+        ``D_a`` trigger level ``a = level * sigma_y`` (paper: ``a = 2 sigma_Y``).
+    windows : sequence of float, ascending in ``(0, 1]``
+        Window half-widths relative to the largest: ``da = windows * window_max * a``,
+        ``dv = windows * dv_max * v``.
+    window_max : float
+        Largest ``D_a`` half-width relative to ``a`` (paper: ``0.28``).
+    v_level : float
+        ``D_v`` trigger velocity ``v = v_level * sigma_ydot`` (pre-impact velocity).
+    dv_max : float
+        Largest ``D_v`` half-width relative to ``v``. Default ``0.28``, the same relative
+        window as ``D_a``, so that both triggers make the same bias/variance trade-off;
+        it must stay below 1 so that no window reaches velocities of the wrong sign.
+    n_periods, g : float
+        Lag range: ``L = lag_samples(n_periods, a, g, dt)``, ``n_periods`` rocking periods
+        at amplitude ``a`` (eq. 5; about 2.5 reproduces the paper's ``e_g``), ``g`` in
+        rad/s^2.
+    n_lag : int, optional
+        ``L`` in samples, instead of ``n_periods`` and ``g``.
+    both_signs : bool
+        Also use the mirrored triggers (minima at ``-a``, downward crossings), sign-flipped.
+    group : DataArray of int labels along one dimension of ``theta``, optional
+        Sum the per-series sums and counts within groups; the output then has a ``group``
+        dimension instead of that one.
+
+    Returns
+    -------
+    Dataset
+        ``signature_sum(..., trigger, window, lag)``, ``count`` and ``skipped``
+        ``(..., trigger, window)`` (int64), ``signature = sum / count`` (NaN where the
+        count is 0) and ``free_response(..., window, lag_pos)`` (even part of ``D_a``).
+        Coordinates ``trigger = ["a", "v"]``, ``window`` (relative), ``da``/``dv``
+        (absolute half-widths), ``lag`` and ``lag_pos`` (s). Global attributes hold the
+        settings: ``level``, ``sigma_y``, ``sigma_ydot``, ``a`` and ``v`` (absolute trigger
+        level and velocity), ``window_max`` and ``dv_max`` (relative, as given),
+        ``da_max`` (absolute, ``window_max * a``), ``both_signs`` (0/1), ``n_lag``, ``dt``.
+        Lazy when ``theta`` is: building it computes nothing.
+    """
+    if "time" not in theta.dims:
+        raise ValueError(f"theta must have a 'time' dimension; it has {theta.dims}")
+    dt = _sampling_interval(theta)
+    windows = np.asarray(windows, dtype=np.float64)
+    a = level * sigma_y
+    v = v_level * sigma_ydot
+    if n_lag is None:
+        if g is None:
+            raise ValueError("give g (rad/s^2) to size the lag range from n_periods, or n_lag directly")
+        n_lag = lag_samples(n_periods, a, g, dt)
+    kw = {
+        "a": a,
+        "a_widths": windows * window_max * a,
+        "v": v,
+        "v_widths": windows * dv_max * v,
+        "n_lag": int(n_lag),
+        "dt": dt,
+        "both_signs": both_signs,
+    }
+    width = 2 * kw["n_lag"] + 1
+    core_out = [["trigger", "window", "lag"], ["trigger", "window"], ["trigger", "window"]]
+    dtypes = [np.float64, np.int64, np.int64]
+    chunks = theta.chunksizes.get("time") if theta.chunks is not None else None
+    if chunks is not None and len(chunks) > 1:
+        ufunc_kw = {"dask": "allowed"}
+        func = _cube_time_chunked
+    else:
+        ufunc_kw = {
+            "dask": "parallelized",
+            "dask_gufunc_kwargs": {"output_sizes": {"trigger": 2, "window": windows.size, "lag": width}},
+            "output_dtypes": dtypes,
+        }
+        func = _cube_block
+    s, c, k = xr.apply_ufunc(
+        func, theta, input_core_dims=[["time"]], output_core_dims=core_out, kwargs=kw, **ufunc_kw
+    )
+    units = theta.attrs.get("units", "rad")
+    vel_units = f"{units} s-1"
+    lag = np.arange(-kw["n_lag"], kw["n_lag"] + 1) * dt
+    sums = xr.Dataset(
+        {
+            "signature_sum": s.assign_attrs(units=units, long_name="sum of the trigger segments (numerator of eq. 8)"),
+            "count": c.assign_attrs(units="1", long_name="number of triggers averaged"),
+            "skipped": k.assign_attrs(units="1", long_name="triggers left out because their segment holds NaN"),
+        },
+        coords={
+            "trigger": ("trigger", list(TRIGGERS), {"long_name": "trigger: a = extremum at level a, v = zero crossing at velocity v (eq. 19)"}),
+            "window": ("window", windows, {"units": "1", "long_name": "window half-width relative to the largest (da/da_max, dv/dv_max)"}),
+            "da": ("window", kw["a_widths"], {"units": units, "long_name": "D_a window half-width"}),
+            "dv": ("window", kw["v_widths"], {"units": vel_units, "long_name": "D_v window half-width (pre-impact velocity)"}),
+            "lag": ("lag", lag, {"units": "s", "long_name": "time lag tau"}),
+        },
+    )
+    if group is not None:
+        sums = sums.groupby(group.rename("group")).sum(keep_attrs=True)
+    sums.attrs = {
+        "level": float(level),
+        "sigma_y": float(sigma_y),
+        "sigma_ydot": float(sigma_ydot),
+        "a": float(a),
+        "v": float(v),
+        "v_level": float(v_level),
+        "window_max": float(window_max),
+        "da_max": float(window_max * a),
+        "dv_max": float(dv_max),
+        "both_signs": int(bool(both_signs)),
+        "n_lag": int(kw["n_lag"]),
+        "dt": float(dt),
+        "history": f"signature_cube (rockdec {__version__}): Random Decrement signatures D_a, D_v (eq. 19)",
+    }
+    return _finish(sums)

@@ -1,0 +1,78 @@
+"""The command line: clear one-sentence errors with exit code 2, no partial files."""
+
+import subprocess
+import sys
+
+import pytest
+import xarray as xr
+
+from rockdec.cli import main
+
+
+def run(args, capsys):
+    code = main(args)
+    return code, capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    "args, names",
+    [
+        (["--e", "1.5"], "--e 1.5"),
+        (["--e", "-0.1"], "--e -0.1"),
+        (["--n-points", "-5"], "--n-points -5"),
+        (["--burn-in", "-1"], "--burn-in -1"),
+        (["--seeds", "3-1"], "--seeds '3-1'"),
+        (["--scene", "nope", "--config", "config/config.yaml"], "unknown scene 'nope'"),
+        (["--config", "no/such.yaml", "--scene", "paper"], "cannot read the config file"),
+    ],
+)
+def test_bad_simulate_input_names_the_field_and_exits_2(tmp_path, capsys, args, names):
+    out = tmp_path / "out.nc"
+    code, err = run(["simulate", "--out", str(out), *args], capsys)
+    assert code == 2
+    assert names in err
+    assert "Traceback" not in err
+    assert not out.exists() and not list(tmp_path.iterdir())
+
+
+def test_unwritable_or_existing_output_is_refused(tmp_path, capsys):
+    code, err = run(["simulate", "--out", str(tmp_path / "missing" / "x.nc")], capsys)
+    assert code == 2 and "does not exist" in err
+    existing = tmp_path / "x.nc"
+    existing.write_text("keep me")
+    code, err = run(["simulate", "--out", str(existing)], capsys)
+    assert code == 2 and "--overwrite" in err
+    assert existing.read_text() == "keep me"
+
+
+def test_e_one_needs_an_explicit_step(tmp_path, capsys):
+    code, err = run(["simulate", "--out", str(tmp_path / "x.nc"), "--e", "1"], capsys)
+    assert code == 2 and "--dt" in err
+
+
+def test_free_response_run_writes_the_analytic_start(tmp_path, capsys):
+    out = tmp_path / "free.nc"
+    code, _ = run(
+        ["simulate", "--out", str(out), "--sigma-p", "0", "--theta0", "1", "--burn-in", "0",
+         "--seeds", "0", "--n-points", "100", "--e", "0.9", "--nu", "1", "--theta-cr", "1"],
+        capsys,
+    )
+    assert code == 0
+    with xr.open_dataset(out) as ds:
+        assert ds.theta.dtype == "float32"
+        assert ds.theta.attrs["units"] == "rad"
+        dt = ds.attrs["dt"]
+        t = ds.time.values
+        # before the first impact (t1 = sqrt(2), g = 1) the parabola 1 - t^2/2
+        before = t < 2**0.5
+        assert abs(ds.theta.values[0, before] - (1 - t[before] ** 2 / 2)).max() < 1e-6
+        assert dt == pytest.approx(4 * 2**0.5 / 75)  # eq. 5 at amplitude 1, 75 points per cycle
+
+
+def test_console_script_exit_code_is_2_without_traceback(tmp_path):
+    proc = subprocess.run(
+        [sys.executable, "-m", "rockdec.cli", "simulate", "--out", str(tmp_path / "x.nc"), "--e", "2"],
+        capture_output=True, text=True,
+    )
+    assert proc.returncode == 2
+    assert "Traceback" not in proc.stderr and "--e 2" in proc.stderr
