@@ -1,11 +1,16 @@
 # rockdec: the coefficient of restitution of a rocking block by the Random Decrement technique.
 # `snakemake --cores 2` rebuilds every figure and table of the default scene (config/config.yaml).
 
+report: "workflow/report/workflow.rst"
+
+
 configfile: "config/config.yaml"
 
 
 include: "workflow/rules/common.smk"
 include: "workflow/rules/simulate.smk"
+include: "workflow/rules/signatures.smk"
+include: "workflow/rules/estimates.smk"
 
 
 rule all:

@@ -339,6 +339,9 @@ def test_cube_is_labelled_with_units_and_settings():
     np.testing.assert_allclose(cube.lag.values[[0, -1]], [-6.0, 6.0])
     assert cube.attrs["a"] == 1.0 and cube.attrs["da_max"] == pytest.approx(0.28)
     assert {"level", "sigma_y", "sigma_ydot", "dv_max", "both_signs", "n_lag", "dt"} <= set(cube.attrs)
+    assert "dt" not in cube.signature_sum.attrs  # the record's attributes stay with the record
+    sized = signature_cube(seeds_block(), **cube_kwargs(n_lag=None, g=2.0, n_periods=1.0))
+    assert sized.attrs["n_lag"] == lag_samples(1.0, 1.0, 2.0, 0.5) == 8 and sized.attrs["g"] == 2.0
 
 
 def test_sampling_interval_from_time_coordinate():

@@ -14,10 +14,6 @@ from pathlib import Path
 import jsonschema
 import yaml
 
-READINGS = {"pooled": None, "per_series": 1, "groups_of_10": 10}
-"""Series per signature for each reading of the paper's sizes (None: the whole replicate)."""
-
-
 class ConfigError(ValueError):
     """A configuration the user can fix; the message names the field and the fix."""
 

@@ -8,11 +8,15 @@ A signature (eq. 8) averages record segments ``y(t_i + tau)`` over trigger times
     ``y(t_i)`` within ``[a - da, a + da]`` and ``y'(t_i) = 0``. On samples, ``y' = 0`` is
     read as a sampled local maximum, ``y[i-1] < y[i] >= y[i+1]``. **Tie rule**: the left
     comparison is strict and the right one is not, so a flat top of equal samples
-    triggers once, at its first sample, and a record that is constant there (all zeros,
-    a body at rest) never triggers. With ``both_signs`` the mirror rule
-    ``y[i-1] > y[i] <= y[i+1]`` also accepts local minima within ``[-a - da, -a + da]``,
-    whose segments are added with their sign flipped; the two rules are exact mirrors,
-    so ``-y`` gives the same signature as ``y``.
+    triggers once, at its first sample, and a constant stretch (all zeros, a body at
+    rest) never triggers; a rise, a run of equal samples and a further rise also
+    triggers once (ties only occur in quantized records). With ``both_signs`` the mirror
+    rule ``y[i-1] > y[i] <= y[i+1]`` also accepts local minima within
+    ``[-a - da, -a + da]``, whose segments are added with their sign flipped; the two
+    rules are exact mirrors, so ``-y`` gives the same signature as ``y``. A sampled
+    extremum also selects negative curvature: for a Gaussian process the signature then
+    differs from ``a R(tau) / sigma^2`` (eqs. 9, 10 with ``v = 0``) by a few per cent of
+    ``a`` (the tests compute the exact value).
 
 ``D_v`` -- zero-crossing trigger (second line of eq. 19, the follow-up of paper §6)
     ``y`` crosses zero between samples ``i`` and ``i + 1``: upward when
@@ -24,8 +28,8 @@ A signature (eq. 8) averages record segments ``y(t_i + tau)`` over trigger times
     mixes the two sides. ``v`` is the *pre-impact* (incoming) velocity: the derivative at
     ``t_c`` of the parabola through the three incoming samples ``y[i-2], y[i-1], y[i]``
     (one-sided, second order; exact for the piecewise-parabolic free response of eq. 4).
-    The trigger condition is ``|v_in| in [v - dv, v + dv]`` (``v_in`` sign-flipped for a
-    downward crossing).
+    The trigger condition is ``s v_in`` in ``[v - dv, v + dv]``, ``s = +1`` for an upward
+    and ``-1`` for a downward crossing.
     **Segment**: linear interpolation at ``t_c + k dt``, i.e.
     ``(1 - f) y[i+k] + f y[i+k+1]``. Interpolation (rather than the nearest sample) keeps
     ``tau = 0`` exactly at the crossing, so the kink of the signature, whose one-sided
@@ -33,8 +37,10 @@ A signature (eq. 8) averages record segments ``y(t_i + tau)`` over trigger times
     For ``k != 0`` the two interpolated samples lie on one side of the crossing; the
     error is ``O(dt^2)`` (``-y'' f (1 - f) dt^2 / 2``: a constant offset along one
     parabolic arc). At ``k = 0`` the chord root gives exactly ``0``, which is stored as
-    an exact zero. The chord root itself is biased by the kink by at most
-    ``(1 - e) dt / (4 e)``, a shift that does not change the slopes.
+    an exact zero. The kink bends the chord, so its root lies within
+    ``(1 - e) dt / (4 e)`` of the true crossing; that moves each one-sided slope at
+    lag 0 by at most ``g`` times this shift (relative error ``O((1 - e) / N)`` with ``N``
+    samples per cycle).
 
 Only triggers whose whole segment lies inside the record count (the record's ends are
 never triggers). A trigger whose segment holds a NaN is not added; it is counted in
@@ -505,7 +511,7 @@ def signature_cube(
         Also use the mirrored triggers (minima at ``-a``, downward crossings), sign-flipped.
     group : DataArray of int labels along one dimension of ``theta``, optional
         Sum the per-series sums and counts within groups; the output then has a ``group``
-        dimension instead of that one.
+        dimension instead of that one. The labels must be in memory (NumPy).
 
     Returns
     -------
@@ -517,8 +523,14 @@ def signature_cube(
         (absolute half-widths), ``lag`` and ``lag_pos`` (s). Global attributes hold the
         settings: ``level``, ``sigma_y``, ``sigma_ydot``, ``a`` and ``v`` (absolute trigger
         level and velocity), ``window_max`` and ``dv_max`` (relative, as given),
-        ``da_max`` (absolute, ``window_max * a``), ``both_signs`` (0/1), ``n_lag``, ``dt``.
+        ``da_max`` (absolute, ``window_max * a``), ``both_signs`` (0/1), ``n_lag`` (with
+        ``n_periods`` and ``g`` when they set it), ``dt``.
         Lazy when ``theta`` is: building it computes nothing.
+
+    A :class:`NoTriggerWarning` names each (trigger, window) without a trigger in any
+    series (or group) of the cube -- for a lazy cube, of a Dask chunk, when it is
+    computed. A window empty in some series only is normal (see ``count``) and not warned
+    about; :func:`pool` warns for windows still empty after pooling.
     """
     if "time" not in theta.dims:
         raise ValueError(f"theta must have a 'time' dimension; it has {theta.dims}")
@@ -526,10 +538,12 @@ def signature_cube(
     windows = np.asarray(windows, dtype=np.float64)
     a = level * sigma_y
     v = v_level * sigma_ydot
+    lag_settings = {}
     if n_lag is None:
         if g is None:
             raise ValueError("give g (rad/s^2) to size the lag range from n_periods, or n_lag directly")
         n_lag = lag_samples(n_periods, a, g, dt)
+        lag_settings = {"n_periods": float(n_periods), "g": float(g)}
     kw = {
         "a": a,
         "a_widths": windows * window_max * a,
@@ -554,7 +568,7 @@ def signature_cube(
         }
         func = _cube_block
     s, c, k = xr.apply_ufunc(
-        func, theta, input_core_dims=[["time"]], output_core_dims=core_out, kwargs=kw, **ufunc_kw
+        func, theta, input_core_dims=[["time"]], output_core_dims=core_out, kwargs=kw, keep_attrs=False, **ufunc_kw
     )
     units = theta.attrs.get("units", "rad")
     vel_units = f"{units} s-1"
@@ -587,6 +601,7 @@ def signature_cube(
         "dv_max": float(dv_max),
         "both_signs": int(bool(both_signs)),
         "n_lag": int(kw["n_lag"]),
+        **lag_settings,
         "dt": float(dt),
         "history": f"signature_cube (rockdec {__version__}): Random Decrement signatures D_a, D_v (eq. 19)",
     }

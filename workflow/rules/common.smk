@@ -18,4 +18,7 @@ def scene(name):
 def default_products():
     """Every product of the default scene."""
     name = config["default_scene"]
-    return [f"results/{name}/simulations.nc"]
+    tables = ["table.csv", "table.md"]
+    if scene(name)["estimates"]["compare_readings"]:
+        tables += ["table_readings.csv", "table_readings.md"]
+    return [f"results/{name}/{table}" for table in tables]

@@ -1,0 +1,127 @@
+"""Replicates and the readings of the paper's sizes (SPEC §4).
+
+A scene's seeds form ``replicates`` of ``series_per_replicate`` series. A *reading* says
+how a replicate's series become signatures and estimates:
+
+``pooled``
+    all series of the replicate pool their triggers into one signature (the default:
+    it reproduces the paper's spreads, eq. 28, and its ``e_g``);
+``per_series``
+    one signature per series for the first 100 series (paper §5: "each point averages
+    100 values"), the replicate's estimate at each window is the mean of the 100;
+``groups_of_10``
+    one signature per 10 consecutive series (the pooling of the paper's fig. 2c), the
+    replicate's estimate the mean over its groups.
+
+Extrapolation to zero window then runs per replicate on the window curve (paper §5).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+
+from rockdec import estimators, signatures, simulate
+
+READINGS = ("pooled", "per_series", "groups_of_10")
+"""The readings, in the order tables list them."""
+
+PER_SERIES_LIMIT = 100
+"""Series per replicate in the ``per_series`` reading (the paper's 100 values a point)."""
+
+
+def grouping(seeds: np.ndarray, reading: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Seeds used by a reading and their labels.
+
+    ``seeds`` is ``(replicate, series)``. Returns ``(used_seeds, group_of_seed,
+    replicate_of_group)``, 1-D arrays: group labels run 0..G-1 in seed order.
+    """
+    n_rep, n_series = seeds.shape
+    if reading == "pooled":
+        size, used = n_series, n_series
+    elif reading == "per_series":
+        size, used = 1, min(PER_SERIES_LIMIT, n_series)
+    elif reading == "groups_of_10":
+        size = 10
+        used = (n_series // size) * size
+        if used == 0:
+            raise ValueError(f"the groups_of_10 reading needs at least 10 series per replicate; the scene has {n_series}")
+    else:
+        raise ValueError(f"unknown reading '{reading}'; use pooled, per_series or groups_of_10")
+    used_seeds = seeds[:, :used]
+    per_rep = used // size
+    group = np.repeat(np.arange(n_rep * per_rep), size)
+    return used_seeds.ravel(), group, np.repeat(np.arange(n_rep), per_rep)
+
+
+def scene_signatures(theta: xr.DataArray, scene: dict, stats: dict, group: np.ndarray, replicate_of_group) -> xr.Dataset:
+    """The scene's signature cube of ``theta(seed, time)``, summed within groups.
+
+    ``stats`` holds the stationary ``sigma_y``, ``sigma_ydot`` and ``g`` of the scene (one
+    trigger level for every series, SPEC §2).
+    """
+    sig = scene["signatures"]
+    cube = signatures.signature_cube(
+        theta,
+        sigma_y=stats["sigma_y"],
+        sigma_ydot=stats["sigma_ydot"],
+        level=sig["level"],
+        windows=sig["windows"],
+        window_max=sig["window_max"],
+        v_level=sig["v_level"],
+        dv_max=sig["dv_max"],
+        n_periods=sig["n_periods"],
+        g=stats["g"],
+        both_signs=sig["both_signs"],
+        group=xr.DataArray(group, dims="seed", coords={"seed": theta["seed"]}),
+    )
+    return cube.assign_coords(replicate=("group", np.asarray(replicate_of_group), {"long_name": "replicate of the group"}))
+
+
+def replicate_estimates(cube: xr.Dataset, *, fit_points: int, weights: str = "window") -> xr.Dataset:
+    """Estimates per replicate and their zero-window extrapolation.
+
+    ``e_hat(estimator, replicate, window)``: every estimator on every group's signature,
+    averaged over the groups of a replicate (NaN-aware); ``e_hat0(estimator, replicate)``
+    and its standard error from :func:`rockdec.estimators.extrapolate`, weighted by the
+    window size (paper §5) or by the replicate's trigger count (``weights="count"``).
+    """
+    dt = float(cube.attrs["dt"])
+    per_group = estimators.estimate_cube(
+        cube["free_response"], cube["signature"].sel(trigger="v", drop=True), dt, fit_points=fit_points
+    )["e_hat"]
+    e_hat = per_group.groupby(cube["replicate"]).mean("group", skipna=True)
+    e_hat.attrs = per_group.attrs
+    count = cube["count"].groupby(cube["replicate"]).sum("group")
+    if weights == "count":
+        # e_v rests on the D_v triggers, every other estimator on the D_a triggers
+        w = xr.concat(
+            [count.sel(trigger="v" if name == "e_v" else "a", drop=True) for name in e_hat["estimator"].values],
+            dim=e_hat["estimator"],
+        ).astype(float)
+        extrap = estimators.extrapolate(e_hat, weights=w)
+    else:
+        extrap = estimators.extrapolate(e_hat)
+    out = extrap.assign(e_hat=e_hat, count=count)
+    out["count"].attrs = {"units": "1", "long_name": "triggers pooled in the replicate"}
+    out.attrs.update({"weights": weights, "fit_points": fit_points, "dt": dt})
+    return out
+
+
+def reading_cube(simulation_attrs: dict, scene: dict, reading: str) -> xr.Dataset:
+    """Lazy signature cube of a reading, every series regenerated from its seed.
+
+    ``simulation_attrs`` are the global attributes of the scene's simulation file (step,
+    burn-in, stationary statistics); the series are simulated chunk by chunk (Dask over
+    seeds) and reduced to signature sums at once, so no full record is ever stored.
+    """
+    used, group, replicate_of_group = grouping(simulate.scene_seeds(scene), reading)
+    sim = simulate.regenerate(simulation_attrs, used, chunk_seeds=scene["records"]["chunk_seeds"])
+    cube = scene_signatures(sim["theta"], scene, simulation_attrs, group, replicate_of_group)
+    cube.attrs["reading"] = reading
+    return cube
+
+
+def estimate_options(scene: dict) -> dict:
+    """Keyword arguments of :func:`replicate_estimates` from a scene's ``estimates`` section."""
+    return {"fit_points": scene["estimates"]["fit_points"], "weights": scene["estimates"]["weights"]}

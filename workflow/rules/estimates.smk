@@ -1,0 +1,36 @@
+rule estimates:
+    """Estimators per replicate, zero-window extrapolation, and the table beside the paper."""
+    input:
+        "results/{scene}/signatures.nc",
+    output:
+        estimates="results/{scene}/estimates.nc",
+        csv=report("results/{scene}/table.csv", category="Tables", caption="../report/table.rst"),
+        md="results/{scene}/table.md",
+    log:
+        "results/{scene}/logs/estimates.log",
+    benchmark:
+        "results/{scene}/benchmarks/estimates.tsv"
+    threads: 1
+    params:
+        scene=lambda w: scene(w.scene),
+    script:
+        "../scripts/estimates.py"
+
+
+rule readings:
+    """The other readings of the paper's sizes, end to end in memory, compared in one table."""
+    input:
+        "results/{scene}/simulations.nc",
+    output:
+        estimates="results/{scene}/estimates_readings.nc",
+        csv=report("results/{scene}/table_readings.csv", category="Tables", caption="../report/table_readings.rst"),
+        md="results/{scene}/table_readings.md",
+    log:
+        "results/{scene}/logs/readings.log",
+    benchmark:
+        "results/{scene}/benchmarks/readings.tsv"
+    threads: 2
+    params:
+        scene=lambda w: scene(w.scene),
+    script:
+        "../scripts/readings.py"

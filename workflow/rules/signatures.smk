@@ -1,0 +1,16 @@
+rule signatures:
+    """RDD signature cube of every series of the scene, pooled per group of its reading."""
+    input:
+        "results/{scene}/simulations.nc",
+    output:
+        "results/{scene}/signatures.nc",
+    log:
+        "results/{scene}/logs/signatures.log",
+    benchmark:
+        "results/{scene}/benchmarks/signatures.tsv"
+    threads: 2
+    params:
+        scene=lambda w: scene(w.scene),
+        reading=lambda w: scene(w.scene)["estimates"]["reading"],
+    script:
+        "../scripts/signatures.py"

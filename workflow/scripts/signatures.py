@@ -1,0 +1,17 @@
+"""Rule `signatures`: the scene's signature cube for its reading."""
+
+import sys
+
+import dask
+from dask.diagnostics import ProgressBar
+
+from rockdec import io, replicates
+
+sys.stderr = open(snakemake.log[0], "w")
+with io.open_dataset(snakemake.input[0]) as sim:
+    attrs = dict(sim.attrs)
+cube = replicates.reading_cube(attrs, snakemake.params.scene, snakemake.params.reading)
+cube.attrs.update(io.provenance("signatures", snakemake.params.scene["signatures"]))
+with dask.config.set(scheduler="threads", num_workers=snakemake.threads), ProgressBar(out=sys.stderr, dt=5.0):
+    cube = cube.compute()
+io.write_netcdf(cube, snakemake.output[0])
