@@ -76,3 +76,27 @@ def test_console_script_exit_code_is_2_without_traceback(tmp_path):
     )
     assert proc.returncode == 2
     assert "Traceback" not in proc.stderr and "--e 2" in proc.stderr
+
+
+def test_simulate_signatures_estimates_chain_gives_e_with_an_error_bar(tmp_path, capsys):
+    sim, sig, est = (tmp_path / n for n in ("sim.nc", "sig.nc", "est.nc"))
+    assert main(["simulate", "--out", str(sim), "--seeds", "0-59", "--scene", "tiny"]) == 0
+    assert main(["signatures", str(sim), "--out", str(sig)]) == 0
+    capsys.readouterr()
+    assert main(["estimates", str(sig), "--out", str(est)]) == 0
+    printed = capsys.readouterr().out
+    assert "e_v:" in printed and "+-" in printed
+    with xr.open_dataset(est) as ds:
+        e_v = float(ds.e_hat0.sel(estimator="e_v", replicate=0))
+        assert abs(e_v - 0.95) < 0.02  # 60 series: the D_v estimate scatters ~0.005
+
+
+def test_signatures_refuses_a_file_without_the_record(tmp_path, capsys):
+    bad = tmp_path / "bad.nc"
+    xr.Dataset({"x": ("time", [0.0, 1.0])}).to_netcdf(bad)
+    code, err = run(["signatures", str(bad), "--out", str(tmp_path / "o.nc")], capsys)
+    assert code == 2 and "--variable" in err
+    code, err = run(["estimates", str(bad), "--out", str(tmp_path / "o.nc")], capsys)
+    assert code == 2 and "not a signature file" in err
+    code, err = run(["signatures", str(tmp_path / "none.nc"), "--out", str(tmp_path / "o.nc")], capsys)
+    assert code == 2 and "does not exist" in err

@@ -14,7 +14,7 @@ import sys
 import numpy as np
 
 from rockdec import config as config_mod
-from rockdec import io, simulate
+from rockdec import io, replicates, simulate
 
 #: Scene fields set by ``simulate`` options: option -> (section, key).
 SIMULATE_OPTIONS = {
@@ -86,6 +86,73 @@ def cmd_simulate(args) -> None:
         io.write_netcdf(ds, out, float32=("theta", "theta_dot"), overwrite=args.overwrite)
 
 
+def cmd_signatures(args) -> None:
+    out = io.check_output(args.out, args.overwrite)
+    with io.open_dataset(args.input) as src:
+        if args.variable not in src:
+            raise UsageError(f"{args.input} has no variable '{args.variable}'; name it with --variable.")
+        theta = src[args.variable].load()
+        attrs = dict(src.attrs)
+    if theta.ndim == 1:
+        theta = theta.expand_dims(seed=[0])
+    if set(theta.dims) != {"seed", "time"}:
+        raise UsageError(f"'{args.variable}' must have dimensions (seed, time) or (time); it has {theta.dims}.")
+    theta = theta.transpose("seed", "time").astype(float)
+    theta.attrs.setdefault("dt", attrs.get("dt", float(theta.time[1] - theta.time[0])))
+    stats = {
+        "sigma_y": _finite(attrs.get("sigma_y"), lambda: float(np.sqrt(np.nanmean(theta.values**2)))),
+        "sigma_ydot": _finite(
+            attrs.get("sigma_ydot"), lambda: float(np.sqrt(np.nanmean((np.diff(theta.values) / theta.attrs["dt"]) ** 2)))
+        ),
+        "g": args.g if args.g is not None else attrs.get("g"),
+    }
+    if stats["g"] is None:
+        raise UsageError(f"{args.input} does not say g (rad/s^2): give --g to size the lag range in rocking periods.")
+    scene = config_mod.validate_scene(
+        {
+            "signatures": {
+                k: v
+                for k, v in {
+                    "level": args.level,
+                    "windows": args.windows,
+                    "n_periods": args.n_periods,
+                    "both_signs": args.both_signs,
+                    "v_level": args.v_level,
+                }.items()
+                if v is not None
+            }
+        }
+    )
+    size = args.group_size or theta.sizes["seed"]
+    group = np.arange(theta.sizes["seed"]) // size
+    cube = replicates.scene_signatures(theta, scene, stats, group, np.arange(group.max() + 1))
+    cube.attrs.update(io.provenance("signatures", scene["signatures"]))
+    io.write_netcdf(cube, out, overwrite=args.overwrite)
+    counts = cube["count"].sum("group")
+    print(f"triggers per window: D_a {counts.sel(trigger='a').values}, D_v {counts.sel(trigger='v').values}", file=sys.stderr)
+
+
+def _finite(value, fallback):
+    return float(value) if value is not None and np.isfinite(value) else fallback()
+
+
+def cmd_estimates(args) -> None:
+    out = io.check_output(args.out, args.overwrite)
+    with io.open_dataset(args.input) as src:
+        if "free_response" not in src or "group" not in src.dims:
+            raise UsageError(f"{args.input} is not a signature file; make one with 'rockdec signatures'.")
+        cube = src.load()
+    if "replicate" not in cube.coords:
+        cube = cube.assign_coords(replicate=("group", np.zeros(cube.sizes["group"], dtype=int)))
+    est = replicates.replicate_estimates(cube, fit_points=args.fit_points, weights=args.weights)
+    est.attrs.update(io.provenance("estimates", {"fit_points": args.fit_points, "weights": args.weights}))
+    io.write_netcdf(est, out, overwrite=args.overwrite)
+    for name in est["estimator"].values:
+        value = est["e_hat0"].sel(estimator=name).values
+        err = est["e_hat0_stderr"].sel(estimator=name).values
+        print(f"{name:>4}: " + ", ".join(f"{v:.4f} +- {s:.4f}" for v, s in zip(value, err)))
+
+
 def _progress():
     from dask.diagnostics import ProgressBar
 
@@ -115,6 +182,28 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--chunk-seeds", type=int, help="seeds per Dask chunk")
     sim.add_argument("--overwrite", action="store_true", help="replace --out if it exists")
     sim.set_defaults(func=cmd_simulate)
+
+    sig = sub.add_parser("signatures", help="RDD signatures D_a and D_v (eq. 19) of a record or a simulation file")
+    sig.add_argument("input", help="NetCDF file with theta(seed, time) or theta(time), in rad")
+    sig.add_argument("--out", required=True, help="NetCDF file to write")
+    sig.add_argument("--variable", default="theta", help="name of the record (default: %(default)s)")
+    sig.add_argument("--level", type=float, help="trigger level a in units of sigma_Y (default 2)")
+    sig.add_argument("--windows", type=float, nargs="+", help="relative window sizes da/da_max, ascending")
+    sig.add_argument("--n-periods", type=float, help="lag range in rocking periods at amplitude a (default 2.5)")
+    sig.add_argument("--v-level", type=float, help="D_v trigger velocity in units of sigma_Ydot (default 1)")
+    sig.add_argument("--both-signs", action=argparse.BooleanOptionalAction, default=None, help="use mirrored triggers too")
+    sig.add_argument("--g", type=float, help="restoring acceleration nu^2 theta_cr, rad/s^2 (if the file does not say)")
+    sig.add_argument("--group-size", type=int, help="series pooled per signature (default: all)")
+    sig.add_argument("--overwrite", action="store_true", help="replace --out if it exists")
+    sig.set_defaults(func=cmd_signatures)
+
+    est = sub.add_parser("estimates", help="estimate e (eqs. 25-27, e_v) and extrapolate to zero window")
+    est.add_argument("input", help="signature file from 'rockdec signatures'")
+    est.add_argument("--out", required=True, help="NetCDF file to write")
+    est.add_argument("--fit-points", type=int, default=5, help="points per side of the e_v slope fits")
+    est.add_argument("--weights", choices=["window", "count"], default="window", help="extrapolation weights")
+    est.add_argument("--overwrite", action="store_true", help="replace --out if it exists")
+    est.set_defaults(func=cmd_estimates)
     return parser
 
 

@@ -1,0 +1,408 @@
+"""The paper's figures (1b, 2, 3, 4) and the figure of its §6 proposal, ``e_v``.
+
+One function per figure: labelled datasets in, a :class:`matplotlib.figure.Figure` out.
+Figures are made without :mod:`matplotlib.pyplot`, so no global figure state is created
+or leaked; :func:`save` writes them (PNG at 150 dpi, PDF without a creation date, so
+the same data give the same file).
+
+Inputs are the workflow's products (:mod:`rockdec.io`):
+
+- ``sim``: a simulation Dataset, ``theta(seed, time)`` in rad, attributes ``dt``, ``g``,
+  ``e``, ``sigma_y``;
+- ``sig``: a signature cube (:func:`rockdec.signatures.signature_cube`), possibly with a
+  ``group`` dimension, which is pooled exactly (:func:`rockdec.signatures.pool`);
+- ``est``: estimates, ``e_hat(estimator, replicate, window)``, ``e_hat0`` and ``slope``
+  ``(estimator, replicate)`` (:func:`rockdec.replicates.replicate_estimates`).
+
+The target ``e`` is passed in (the estimates do not store it); the paper's values are
+drawn only when it is the paper's ``e = 0.95`` (as in :func:`rockdec.tables.summary_table`).
+Window sizes are relative, ``da/da_max`` (``dv/dv_max`` for ``e_v``).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import numpy as np  # noqa: E402
+import xarray as xr  # noqa: E402
+from matplotlib.figure import Figure  # noqa: E402
+from scipy.optimize import brentq  # noqa: E402
+
+from rockdec import models, signatures, tables  # noqa: E402
+from rockdec.models import period_from_g  # noqa: E402
+
+__all__ = ["FIGURES", "fig1b", "fig2", "fig3", "fig4", "fig_ev", "free_rocking", "save"]
+
+FIGURES = ("fig1b", "fig2", "fig3", "fig4", "fig_ev")
+"""Names of the figures; the workflow writes ``results/{scene}/figures/{name}.png|pdf``."""
+
+WINDOW_LABEL = r"relative window size $\Delta a/\Delta a_{max}$"
+TARGET_STYLE = {"color": "k", "ls": "--", "lw": 1.0}
+PAPER_STYLE = {"color": "tab:red", "marker": "D", "ms": 6, "ls": "none", "zorder": 5}
+
+
+# --------------------------------------------------------------------------- helpers
+
+
+def free_rocking(t, theta0: float, omega0: float, g: float, e: float) -> np.ndarray:
+    """Closed-form free rocking of the simplified model (eqs. 4, 6) from ``(theta0, omega0)``.
+
+    Between impacts the angle is a parabola of curvature ``-g sign(theta)``; at every zero
+    crossing the speed is multiplied by ``e``. From ``(a, 0)`` (the free response
+    ``G(a, 0, t)`` of paper §2) the first crossing is at ``t1 = sqrt(2a/g)`` with speed
+    ``g t1``, the first minimum ``-e^2 a`` at ``(1 + e) t1``; bounce ``k >= 1`` starts
+    with speed ``e^k V`` (``V`` the first impact speed) and lasts ``2 e^k V/g``. With
+    ``e < 1`` the bounces add up to a finite time after which the block rests at 0.
+
+    ``t`` in s (``t >= 0``), angles in rad, ``omega0`` in rad/s, ``g = nu^2 theta_cr`` in
+    rad/s^2. ``theta0 = 0, omega0 > 0`` starts *after* an impact, leaving zero upwards.
+    """
+    t = np.asarray(t, dtype=float)
+    if theta0 == 0.0 and omega0 == 0.0:
+        return np.zeros_like(t)
+    side = math.copysign(1.0, theta0 if theta0 != 0.0 else omega0)
+    h, u = abs(theta0), side * omega0  # height above zero and speed away from it
+    speed = math.sqrt(u * u + 2.0 * g * h)  # speed at the first impact
+    t_cross = (u + speed) / g
+    out = np.where(t <= t_cross, side * (h + u * t - 0.5 * g * t**2), 0.0)
+    start, w, t_end = t_cross, e * speed, float(np.max(t, initial=0.0))
+    while start < t_end and w > 0.0:
+        side = -side
+        length = 2.0 * w / g
+        if length <= 1e-12 * max(t_end, 1.0):  # the remaining bounces are shorter than rounding
+            break
+        s = t - start
+        inside = (s > 0.0) & (s <= length)
+        out[inside] = side * (w * s[inside] - 0.5 * g * s[inside] ** 2)
+        start, w = start + length, e * w
+    return out
+
+
+def save(fig: Figure, paths: str | Path | Iterable[str | Path]) -> list[Path]:
+    """Write ``fig`` to each path, in the format its suffix names (PNG at 150 dpi, PDF).
+
+    Metadata that would change from run to run (creation date, software version) is left
+    out, so the same figure gives the same bytes.
+    """
+    if isinstance(paths, (str, Path)):
+        paths = [paths]
+    written = []
+    for path in map(Path, paths):
+        fmt = path.suffix.lstrip(".").lower()
+        metadata = {"CreationDate": None, "Producer": None} if fmt == "pdf" else {"Software": None}
+        fig.savefig(path, format=fmt, dpi=150, metadata=metadata)
+        written.append(path)
+    return written
+
+
+def _new_figure(width: float, height: float) -> Figure:
+    return Figure(figsize=(width, height), layout="constrained")
+
+
+def _paper_values(name: str, e_target: float | None) -> tuple[float, float]:
+    """Paper's (mean, std) of an estimator at zero window, NaN unless the target is the paper's."""
+    if e_target is None or e_target != tables.PAPER_E_TARGET:
+        return np.nan, np.nan
+    return tables.PAPER.get(name, (np.nan, np.nan))
+
+
+def _replicate_stats(values: xr.DataArray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Mean, std (ddof 1) and standard error over ``replicate``, NaN-aware."""
+    n = values.notnull().sum("replicate")
+    mean = values.mean("replicate", skipna=True)
+    std = values.std("replicate", ddof=1, skipna=True).where(n > 1)
+    return mean.values, std.values, (std / np.sqrt(n.where(n > 0))).values
+
+
+def _extrapolated_line(est: xr.DataArray | xr.Dataset, name: str, w: np.ndarray) -> np.ndarray:
+    """Mean over replicates of the fitted line ``e_hat0 + slope * w`` (paper §5)."""
+    line = est["e_hat0"].sel(estimator=name) + est["slope"].sel(estimator=name) * xr.DataArray(w, dims="w")
+    return line.mean("replicate", skipna=True).values
+
+
+def _pooled(sig: xr.Dataset) -> xr.Dataset:
+    """A cube without groups: pooled exactly over ``group`` when it has that dimension."""
+    return signatures.pool(sig, "group") if "group" in sig.dims else sig
+
+
+def _draw_target(ax, e_target: float | None) -> None:
+    if e_target is not None:
+        ax.axhline(e_target, label=f"target e = {e_target:g}", **TARGET_STYLE)
+
+
+# --------------------------------------------------------------------------- figures
+
+
+def fig1b(max_ratio: float = 0.9, tolerance: float = 0.05) -> Figure:
+    """Paper fig. 1b: free-rocking period against relative amplitude, eqs. 3 and 5.
+
+    Top: ``nu T`` (the period in units of ``1/nu``) against ``theta0/theta_cr`` for the
+    linearized Housner model (eq. 3) and the simplified model (eq. 5). Bottom: their
+    relative difference; the amplitude where it reaches ``tolerance`` is marked (about
+    0.06 for 5 %, consistent with the paper's "below about 0.1 the difference is
+    negligible"). Needs no simulation.
+    """
+    ratio = np.linspace(0.0, max_ratio, 400)
+    housner = models.period_housner(ratio, 1.0, 1.0)  # nu = theta_cr = 1: nu T against theta0/theta_cr
+    simple = models.period_simplified(ratio, 1.0, 1.0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        rel = housner / simple - 1.0
+
+    def excess(x):
+        return float(models.period_housner(x, 1.0, 1.0) / models.period_simplified(x, 1.0, 1.0)) - 1.0 - tolerance
+
+    x_tol = brentq(excess, 1e-6, 0.99)
+
+    fig = _new_figure(6.0, 5.5)
+    top, bottom = fig.subplots(2, 1, sharex=True, height_ratios=[2.0, 1.0])
+    top.plot(ratio, housner, label="linearized Housner model, eq. 3")
+    top.plot(ratio, simple, ls="--", label="simplified model, eq. 5")
+    top.axvline(x_tol, color="0.5", lw=0.8, ls=":")
+    top.set_ylabel(r"period $\nu T$ (T in units of $1/\nu$)")
+    top.set_ylim(0.0, None)
+    top.legend(loc="upper left")
+    top.set_title("Free-rocking period against amplitude (paper fig. 1b)")
+    bottom.plot(ratio[1:], 100.0 * rel[1:], color="tab:purple")
+    bottom.axhline(100.0 * tolerance, color="0.5", lw=0.8, ls=":")
+    bottom.axvline(x_tol, color="0.5", lw=0.8, ls=":")
+    bottom.annotate(
+        f"{100 * tolerance:g} % at $\\theta_0/\\theta_{{cr}}$ = {x_tol:.3f}",
+        xy=(x_tol, 100.0 * tolerance),
+        xytext=(x_tol + 0.08, 100.0 * tolerance + 25.0),
+        arrowprops={"arrowstyle": "->", "color": "0.3"},
+    )
+    bottom.set_xlabel(r"relative amplitude $\theta_0/\theta_{cr}$")
+    bottom.set_ylabel("eq. 3 / eq. 5 − 1 (%)")
+    bottom.set_xlim(0.0, max_ratio)
+    bottom.set_ylim(0.0, None)
+    return fig
+
+
+def fig2(sim: xr.Dataset, stored_sig: xr.Dataset, *, n_samples: int = 750, window: float | None = None) -> Figure:
+    """Paper fig. 2: two simulated responses (a, b) and a free-response estimate (c).
+
+    (a), (b): the first ``n_samples`` samples of the first two stored series, in units of
+    ``sigma_Y``, with the trigger levels ``+-a``. (c): the even part of ``D_a`` (eq. 20)
+    pooled over the series of ``stored_sig`` (the paper pools 10 series of 6000 points),
+    divided by the trigger level ``a``, against the free response ``G(a, 0, tau)/a`` of
+    eqs. 4 and 6 (:func:`free_rocking`) at the simulated ``e``. ``window`` (relative)
+    defaults to the middle one of the windows that caught triggers.
+    """
+    attrs = sim.attrs
+    sigma_y, e, g, dt = (float(attrs[k]) for k in ("sigma_y", "e", "g", "dt"))
+    sig = _pooled(stored_sig)
+    a = float(sig.attrs["a"])
+    count = sig["count"].sel(trigger="a")
+    if window is None:
+        filled = sig["window"].values[count.values > 0]
+        window = float(filled[(filled.size - 1) // 2]) if filled.size else float(sig["window"].values[-1])
+    r = sig["free_response"].sel(window=window)
+    n_trig = int(count.sel(window=window))
+    tau = sig["lag_pos"].values
+
+    fig = _new_figure(7.5, 7.5)
+    axes = fig.subplots(3, 1)
+    n_series = sim.sizes["seed"]
+    n = min(n_samples, sim.sizes["time"])
+    t = np.arange(n) * dt
+    for k, (ax, letter) in enumerate(zip(axes[:2], "ab")):
+        if k < n_series:
+            y = sim["theta"].isel(seed=k, time=slice(0, n)).values.astype(float) / sigma_y
+            ax.plot(t, y, lw=0.8, color="tab:blue", label=f"seed {int(sim['seed'][k])}")
+            for level in (a / sigma_y, -a / sigma_y):
+                ax.axhline(level, color="tab:orange", lw=0.8, ls=":")
+            ax.legend(loc="upper right", fontsize="small")
+        else:
+            ax.text(0.5, 0.5, "only one stored series", ha="center", va="center", transform=ax.transAxes)
+        ax.axhline(0.0, color="0.6", lw=0.5)
+        ax.set_xlim(0.0, t[-1] if n > 1 else 1.0)
+        ax.set_xlabel("time t (s)")
+        ax.set_ylabel(r"$\theta/\sigma_Y$")
+        ax.set_title(
+            f"({letter}) simulated response, e = {e:g} "
+            f"($\\sigma_Y$ = {sigma_y:.3g} rad; dotted: trigger levels $\\pm a$)",
+            fontsize="medium",
+        )
+    ax = axes[2]
+    tau_fine = np.linspace(0.0, tau[-1], 2000)
+    ax.plot(tau_fine, free_rocking(tau_fine, a, 0.0, g, e) / a, color="k", lw=1.0, ls="--",
+            label=f"free response G(a, 0, τ)/a, e = {e:g}")
+    ax.plot(tau, r.values / a, color="tab:blue", lw=1.3,
+            label=f"RDD estimate, {n_trig} triggers, Δa/Δa$_{{max}}$ = {window:g}")
+    ax.axhline(0.0, color="0.6", lw=0.5)
+    ax.set_xlim(0.0, tau[-1])
+    ax.set_xlabel("time lag τ (s)")
+    ax.set_ylabel(r"free response $r(\tau)/a$")
+    ax.set_title(
+        f"(c) free-response estimate from {n_series} series × {sim.sizes['time']} points "
+        f"(a = {float(sig.attrs.get('level', a / sigma_y)):g} $\\sigma_Y$)",
+        fontsize="medium",
+    )
+    ax.legend(loc="upper right", fontsize="small")
+    return fig
+
+
+def fig3(est: xr.Dataset, e_target: float | None = None) -> Figure:
+    """Paper fig. 3: ``e_g`` (eqs. 25, 7) and ``e_0`` (eq. 26) against the window size.
+
+    Points: the mean over replicates at each window, error bars one standard error
+    (``std/sqrt(n)``). Lines: the mean over replicates of the weighted least-squares lines
+    ``e_hat0 + slope * w`` (§5), drawn from ``w = 0``; the open marker at ``w = 0`` is
+    our mean extrapolated value, the red diamond the paper's.
+    """
+    w = est["window"].values
+    w_line = np.linspace(0.0, w.max(), 50)
+    fig = _new_figure(6.5, 4.5)
+    ax = fig.subplots()
+    for name, label, color in (("e_g", r"$\hat e_g$ (global, eq. 25)", "tab:blue"),
+                               ("e_0", r"$\hat e_0$ (first peak, eq. 26)", "tab:green")):
+        mean, _, sem = _replicate_stats(est["e_hat"].sel(estimator=name))
+        ax.errorbar(w, mean, yerr=sem, color=color, marker="o", ls="none", capsize=3, label=label)
+        ax.plot(w_line, _extrapolated_line(est, name, w_line), color=color, lw=1.0)
+        e0 = float(est["e_hat0"].sel(estimator=name).mean(skipna=True))
+        ax.plot(0.0, e0, color=color, marker="o", mfc="white", ls="none", zorder=4)
+        ax.annotate(f"{e0:.4f}", (0.0, e0), xytext=(6, -4 if name == "e_g" else 6), textcoords="offset points",
+                    color=color, fontsize="small")
+        paper, _ = _paper_values(name, e_target)
+        if np.isfinite(paper):
+            ax.plot(0.0, paper, **PAPER_STYLE, label=f"paper, {name} at zero window: {paper:.4f}")
+    _draw_target(ax, e_target)
+    n = est.sizes["replicate"]
+    ax.set_xlim(-0.03, 1.03 * w.max())
+    ax.set_xlabel(WINDOW_LABEL)
+    ax.set_ylabel(r"estimate of $e$")
+    ax.set_title(f"Global and first-peak estimates, mean of {n} replicates (paper fig. 3)", fontsize="medium")
+    ax.legend(fontsize="small", loc="best")
+    return fig
+
+
+def fig4(est: xr.Dataset, e_target: float | None = None) -> Figure:
+    """Paper fig. 4: the local estimates ``e1..e4`` (eq. 27, ``e4`` corrected) per replicate.
+
+    Each panel: every replicate's estimate against the window size (thin grey), their mean
+    (thick), the mean extrapolated line, our mean and standard deviation at zero window
+    (open circle) beside the paper's (red diamond, eq. 28) and the target.
+    """
+    w = est["window"].values
+    w_line = np.linspace(0.0, w.max(), 50)
+    fig = _new_figure(9.0, 7.0)
+    axes = fig.subplots(2, 2, sharex=True)
+    formulas = {
+        "e1": r"$\hat e_1 = \sqrt{|c_2|/c_1}$",
+        "e2": r"$\hat e_2 = v_2/v_1$",
+        "e3": r"$\hat e_3 = (|c_2|/c_1)\,t_1/(t_2 - t_1)$",
+        "e4": r"$\hat e_4 = (t_2 - t_1)/t_1$ (corrected)",
+    }
+    for ax, name in zip(axes.flat, ("e1", "e2", "e3", "e4")):
+        curves = est["e_hat"].sel(estimator=name)
+        for k, rep in enumerate(curves["replicate"].values):
+            ax.plot(w, curves.sel(replicate=rep).values, color="0.6", lw=0.6,
+                    label="replicates" if k == 0 else None)
+        mean, _, _ = _replicate_stats(curves)
+        ax.plot(w, mean, color="tab:blue", lw=2.0, marker="o", ms=3, label="mean")
+        ax.plot(w_line, _extrapolated_line(est, name, w_line), color="tab:blue", lw=1.0, ls="-.")
+        e0 = est["e_hat0"].sel(estimator=name)
+        e0_mean, e0_std, _ = _replicate_stats(e0)
+        ax.errorbar(0.0, e0_mean, yerr=e0_std if np.isfinite(e0_std) else None, color="tab:blue", marker="o",
+                    mfc="white", capsize=3, ls="none", zorder=4,
+                    label=f"ours at zero window: {float(e0_mean):.4f} ± {float(e0_std):.4f}")
+        paper, paper_std = _paper_values(name, e_target)
+        if np.isfinite(paper):
+            ax.errorbar(0.0, paper, yerr=paper_std, capsize=3, **PAPER_STYLE,
+                        label=f"paper (eq. 28): {paper:.4f} ± {paper_std:.4f}")
+        _draw_target(ax, e_target)
+        ax.set_title(formulas[name], fontsize="medium")
+        ax.set_ylabel(r"estimate of $e$")
+        ax.set_xlim(-0.04, 1.03 * w.max())
+        ax.legend(fontsize="x-small", loc="best")
+    for ax in axes[1]:
+        ax.set_xlabel(WINDOW_LABEL)
+    fig.suptitle(f"Local estimates on the first half cycle, {est.sizes['replicate']} replicates (paper fig. 4)")
+    return fig
+
+
+def fig_ev(sig: xr.Dataset, est: xr.Dataset, e_target: float | None = None) -> Figure:
+    """The paper's §6 proposal: ``e`` from the zero-crossing signature ``D_v`` (eq. 19).
+
+    (a) ``D_v`` pooled over every group, at the smallest and largest window, in units of
+    ``sigma_Y`` against the lag in rocking periods ``T(a)`` (eq. 5). (b) The same near lag 0
+    with the free flight through an impact at ``(0, v)``: slope ``v`` before, ``e v`` after
+    (eqs. 4, 6); the kink is the estimator ``e_v`` (slope ratio, :func:`rockdec.estimators.
+    e_impact_slope`). (c) ``e_v`` of every replicate against ``dv/dv_max``, the mean
+    extrapolated line and the target.
+    """
+    pooled = _pooled(sig)
+    sigma_y, a, v, dt = (float(pooled.attrs[k]) for k in ("sigma_y", "a", "v", "dt"))
+    g = float(pooled.attrs["g"]) if "g" in pooled.attrs else None
+    e_ideal = e_target
+    lag = pooled["lag"].values
+    period = float(period_from_g(a, g)) if g else None
+    x = lag / period if period else lag
+    x_label = r"time lag $\tau/T(a)$ (T from eq. 5)" if period else "time lag τ (s)"
+    windows = pooled["window"].values
+    count = pooled["count"].sel(trigger="v")
+    shown = sorted({float(windows[0]), float(windows[-1])})
+
+    fig = _new_figure(12.0, 4.2)
+    ax_full, ax_zoom, ax_e = fig.subplots(1, 3, width_ratios=[1.2, 1.0, 1.1])
+    colors = {shown[0]: "tab:blue", shown[-1]: "tab:orange"}
+    for w in shown:
+        d = pooled["signature"].sel(trigger="v", window=w).values / sigma_y
+        label = f"Δv/Δv$_{{max}}$ = {w:g} ({int(count.sel(window=w))} triggers)"
+        ax_full.plot(x, d, color=colors[w], lw=1.0, label=label)
+        ax_zoom.plot(lag * 1e3, d, color=colors[w], lw=1.0, marker=".", ms=3, label=label)
+    ax_full.axhline(0.0, color="0.6", lw=0.5)
+    ax_full.axvline(0.0, color="0.6", lw=0.5)
+    ax_full.set_xlabel(x_label)
+    ax_full.set_ylabel(r"$D_v(\tau)/\sigma_Y$")
+    ax_full.set_title(f"(a) zero-crossing signature, v = {pooled.attrs.get('v_level', 1.0):g} "
+                      r"$\sigma_{\dot Y}$", fontsize="medium")
+    ax_full.legend(fontsize="x-small", loc="lower right")
+
+    # zoom: a few free flights of the post-impact arc, 2 e v / g long
+    half = 1.5 * 2.0 * v / g if g else 10 * dt
+    half = max(half, 8 * dt)
+    if g and e_ideal is not None:
+        s = np.linspace(-half, half, 400)
+        ideal = np.where(s < 0, v * s + 0.5 * g * s**2, e_ideal * v * s - 0.5 * g * s**2)
+        ax_zoom.plot(s * 1e3, ideal / sigma_y, color="k", ls="--", lw=1.0,
+                     label=f"free flight through an impact: slope v, then {e_ideal:g} v")
+    ax_zoom.axhline(0.0, color="0.6", lw=0.5)
+    ax_zoom.axvline(0.0, color="0.6", lw=0.5)
+    ax_zoom.set_xlim(-half * 1e3, half * 1e3)
+    in_view = np.abs(lag) <= half
+    sel = pooled["signature"].sel(trigger="v", window=shown).values[..., in_view] / sigma_y
+    if np.isfinite(sel).any():
+        lo, hi = np.nanmin(sel), np.nanmax(sel)
+        pad = 0.1 * (hi - lo if hi > lo else 1.0)
+        ax_zoom.set_ylim(lo - pad, hi + pad)
+    ax_zoom.set_xlabel("time lag τ (ms)")
+    ax_zoom.set_ylabel(r"$D_v(\tau)/\sigma_Y$")
+    ax_zoom.set_title("(b) the slope jump at the impact, lag 0", fontsize="medium")
+    ax_zoom.legend(fontsize="x-small", loc="lower right")
+
+    curves = est["e_hat"].sel(estimator="e_v")
+    w = est["window"].values
+    for k, rep in enumerate(curves["replicate"].values):
+        ax_e.plot(w, curves.sel(replicate=rep).values, color="0.6", lw=0.6, label="replicates" if k == 0 else None)
+    mean, _, sem = _replicate_stats(curves)
+    ax_e.errorbar(w, mean, yerr=sem, color="tab:blue", marker="o", ms=4, capsize=3, label="mean ± std. error")
+    w_line = np.linspace(0.0, w.max(), 50)
+    ax_e.plot(w_line, _extrapolated_line(est, "e_v", w_line), color="tab:blue", lw=1.0, ls="-.")
+    e0_mean, e0_std, _ = _replicate_stats(est["e_hat0"].sel(estimator="e_v"))
+    ax_e.errorbar(0.0, e0_mean, yerr=e0_std if np.isfinite(e0_std) else None, color="tab:blue", marker="o",
+                  mfc="white", capsize=3, ls="none", zorder=4,
+                  label=f"zero window: {float(e0_mean):.4f} ± {float(e0_std):.4f}")
+    _draw_target(ax_e, e_target)
+    ax_e.set_xlim(-0.04, 1.03 * w.max())
+    ax_e.set_xlabel(r"relative window size $\Delta v/\Delta v_{max}$")
+    ax_e.set_ylabel(r"$\hat e_v$ (slope ratio at lag 0)")
+    ax_e.set_title(r"(c) $\hat e_v$ per replicate", fontsize="medium")
+    ax_e.legend(fontsize="x-small", loc="best")
+    return fig
