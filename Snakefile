@@ -11,6 +11,7 @@ include: "workflow/rules/common.smk"
 include: "workflow/rules/simulate.smk"
 include: "workflow/rules/signatures.smk"
 include: "workflow/rules/estimates.smk"
+include: "workflow/rules/figures.smk"
 
 
 rule all:

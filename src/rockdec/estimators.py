@@ -30,7 +30,6 @@ from typing import NamedTuple
 
 import numpy as np
 import xarray as xr
-from numpy.polynomial import Polynomial
 from numpy.polynomial import polynomial as poly
 
 from rockdec import __version__
@@ -80,6 +79,54 @@ class Extrapolation(NamedTuple):
     stderr: float
     slope: float
     reason: str = ""
+
+
+class _Parabola(NamedTuple):
+    """``y = c0 + c1 (t - tc) + c2 (t - tc)^2``: a least-squares parabola about ``tc``."""
+
+    tc: float
+    c0: float
+    c1: float
+    c2: float
+
+    def value(self, t):
+        u = t - self.tc
+        return self.c0 + u * (self.c1 + u * self.c2)
+
+    def slope(self, t):
+        return self.c1 + 2.0 * self.c2 * (t - self.tc)
+
+    def vertex(self):
+        return self.tc - self.c1 / (2.0 * self.c2)
+
+    def roots(self) -> np.ndarray:
+        """Real roots in ``t``, computed without cancellation."""
+        c0, c1, c2 = self.c0, self.c1, self.c2
+        if c2 == 0.0:
+            return np.array([self.tc - c0 / c1]) if c1 != 0.0 else np.array([])
+        disc = c1 * c1 - 4.0 * c2 * c0
+        if disc < 0.0:
+            return np.array([])
+        q = -0.5 * (c1 + np.copysign(np.sqrt(disc), c1))
+        us = [q / c2] + ([c0 / q] if q != 0.0 else [])
+        return self.tc + np.array(us)
+
+
+def _fit2(t: np.ndarray, y: np.ndarray) -> _Parabola:
+    """Least-squares parabola through ``(t, y)`` (at least 3 points).
+
+    Solved by the 3x3 normal equations in the scaled variable ``u = (t - tc)/h`` in
+    ``[-1, 1]`` (``tc``, ``h`` the centre and half-range of ``t``): well conditioned for
+    the few points of each fit, and far cheaper than a general polynomial fit.
+    """
+    tc = 0.5 * (t[0] + t[-1])
+    h = 0.5 * (t[-1] - t[0])
+    u = (t - tc) / h
+    u2 = u * u
+    s = (u.size, u.sum(), u2.sum(), (u2 * u).sum(), (u2 * u2).sum())
+    normal = np.array([[s[0], s[1], s[2]], [s[1], s[2], s[3]], [s[2], s[3], s[4]]])
+    a0, a1, a2 = np.linalg.solve(normal, np.array([y.sum(), (u * y).sum(), (u2 * y).sum()]))
+    return _Parabola(float(tc), float(a0), float(a1 / h), float(a2 / h**2))
 
 
 def _failed(reason: str) -> Estimate:
@@ -163,7 +210,7 @@ def half_cycle(r, dt: float) -> HalfCycle:
 
     ``N_h = m + 1`` is the number of samples from ``tau = 0`` to the sampled first minimum
     ``m`` (see :func:`e_global`). Fits, each least squares of degree 2
-    (``numpy.polynomial.Polynomial.fit``) in ``tau = k*dt``:
+    (:func:`_fit2`) in ``tau = k*dt``:
 
     - start: the first ``N_h // 8`` samples; ``c1`` = the fit at ``tau = 0``;
     - minimum: ``N_h // 4`` samples centred on ``m``; ``t2``, ``c2`` = its vertex;
@@ -195,21 +242,20 @@ def half_cycle(r, dt: float) -> HalfCycle:
     if any(stop - start < MIN_FIT_POINTS for start, stop in windows.values()):
         return _failed_half_cycle(f"fewer than {MIN_FIT_POINTS} points for a fit")
     tau = dt * np.arange(r.size)
-    fit = {name: Polynomial.fit(tau[a:b], r[a:b], 2) for name, (a, b) in windows.items()}
+    fit = {name: _fit2(tau[a:b], r[a:b]) for name, (a, b) in windows.items()}
 
     roots = fit["before"].roots()
-    roots = roots[np.isreal(roots)].real
     if roots.size == 0:
         return _failed_half_cycle("before-crossing fit has no real root")
     crossing = 0.5 * (tau[end0 - 1] + tau[start1])
     t1 = roots[np.argmin(np.abs(roots - crossing))]
-    v1 = fit["before"].deriv()(t1)
+    v1 = fit["before"].slope(t1)
     if v1 == 0:
         return _failed_half_cycle("before-crossing fit touches zero without crossing")
-    if not fit["minimum"].deriv(2)(0.0) > 0:
+    if not fit["minimum"].c2 > 0:
         return _failed_half_cycle("minimum fit has no minimum")
-    t2 = fit["minimum"].deriv().roots()[0].real
-    c1 = fit["start"](0.0)
+    t2 = fit["minimum"].vertex()
+    c1 = fit["start"].value(0.0)
     if not c1 > 0:
         return _failed_half_cycle("fitted c1 not positive")
     if not 0 < t1 < t2:
@@ -218,9 +264,9 @@ def half_cycle(r, dt: float) -> HalfCycle:
         c1=float(c1),
         t1=float(t1),
         v1=float(v1),
-        v2=float(fit["after"].deriv()(t1)),
+        v2=float(fit["after"].slope(t1)),
         t2=float(t2),
-        c2=float(fit["minimum"](t2)),
+        c2=float(fit["minimum"].value(t2)),
     )
 
 
@@ -274,8 +320,8 @@ def e_impact_slope(d, dt: float, fit_points: int = DEFAULT_FIT_POINTS) -> Estima
     if lag0 < fit_points:
         return _failed(f"fewer than fit_points={fit_points} lags on a side")
     tau = dt * np.arange(1, fit_points + 1)
-    before = Polynomial.fit(-tau[::-1], d[lag0 - fit_points : lag0], 2).deriv()(0.0)
-    after = Polynomial.fit(tau, d[lag0 + 1 : lag0 + 1 + fit_points], 2).deriv()(0.0)
+    before = _fit2(-tau[::-1], d[lag0 - fit_points : lag0]).slope(0.0)
+    after = _fit2(tau, d[lag0 + 1 : lag0 + 1 + fit_points]).slope(0.0)
     if before == 0:
         return _failed("zero slope before the impact")
     return Estimate(float(after / before))

@@ -144,9 +144,9 @@ def fig1b(max_ratio: float = 0.9, tolerance: float = 0.05) -> Figure:
 
     Top: ``nu T`` (the period in units of ``1/nu``) against ``theta0/theta_cr`` for the
     linearized Housner model (eq. 3) and the simplified model (eq. 5). Bottom: their
-    relative difference; the amplitude where it reaches ``tolerance`` is marked (about
-    0.06 for 5 %, consistent with the paper's "below about 0.1 the difference is
-    negligible"). Needs no simulation.
+    relative difference; the amplitude where it reaches ``tolerance`` is marked (0.111
+    for 5 %, in line with the paper's remark that the two agree below about 0.1).
+    Needs no simulation.
     """
     ratio = np.linspace(0.0, max_ratio, 400)
     housner = models.period_housner(ratio, 1.0, 1.0)  # nu = theta_cr = 1: nu T against theta0/theta_cr
@@ -260,25 +260,27 @@ def fig3(est: xr.Dataset, e_target: float | None = None) -> Figure:
     w_line = np.linspace(0.0, w.max(), 50)
     fig = _new_figure(6.5, 4.5)
     ax = fig.subplots()
-    for name, label, color in (("e_g", r"$\hat e_g$ (global, eq. 25)", "tab:blue"),
-                               ("e_0", r"$\hat e_0$ (first peak, eq. 26)", "tab:green")):
+    handles = []
+    for name, symbol, label, color in (("e_g", r"$\hat e_g$", "global, eq. 25", "tab:blue"),
+                                       ("e_0", r"$\hat e_0$", "first peak, eq. 26", "tab:green")):
         mean, _, sem = _replicate_stats(est["e_hat"].sel(estimator=name))
-        ax.errorbar(w, mean, yerr=sem, color=color, marker="o", ls="none", capsize=3, label=label)
+        handles.append(ax.errorbar(w, mean, yerr=sem, color=color, marker="o", ls="none", capsize=3,
+                                   label=f"{symbol} ({label}): mean ± std. error"))
         ax.plot(w_line, _extrapolated_line(est, name, w_line), color=color, lw=1.0)
         e0 = float(est["e_hat0"].sel(estimator=name).mean(skipna=True))
-        ax.plot(0.0, e0, color=color, marker="o", mfc="white", ls="none", zorder=4)
-        ax.annotate(f"{e0:.4f}", (0.0, e0), xytext=(6, -4 if name == "e_g" else 6), textcoords="offset points",
-                    color=color, fontsize="small")
+        handles += ax.plot(0.0, e0, color=color, marker="o", mfc="white", ls="none", zorder=4,
+                           label=f"{symbol} extrapolated to zero window: {e0:.4f}")
         paper, _ = _paper_values(name, e_target)
         if np.isfinite(paper):
-            ax.plot(0.0, paper, **PAPER_STYLE, label=f"paper, {name} at zero window: {paper:.4f}")
-    _draw_target(ax, e_target)
+            handles += ax.plot(0.0, paper, **PAPER_STYLE, label=f"{symbol} paper at zero window: {paper:.4f}")
+    if e_target is not None:
+        handles.append(ax.axhline(e_target, label=f"target e = {e_target:g}", **TARGET_STYLE))
     n = est.sizes["replicate"]
     ax.set_xlim(-0.03, 1.03 * w.max())
     ax.set_xlabel(WINDOW_LABEL)
     ax.set_ylabel(r"estimate of $e$")
     ax.set_title(f"Global and first-peak estimates, mean of {n} replicates (paper fig. 3)", fontsize="medium")
-    ax.legend(fontsize="small", loc="best")
+    ax.legend(handles=handles, fontsize="small", loc="best")
     return fig
 
 
@@ -349,7 +351,7 @@ def fig_ev(sig: xr.Dataset, est: xr.Dataset, e_target: float | None = None) -> F
     count = pooled["count"].sel(trigger="v")
     shown = sorted({float(windows[0]), float(windows[-1])})
 
-    fig = _new_figure(12.0, 4.2)
+    fig = _new_figure(12.0, 4.8)
     ax_full, ax_zoom, ax_e = fig.subplots(1, 3, width_ratios=[1.2, 1.0, 1.1])
     colors = {shown[0]: "tab:blue", shown[-1]: "tab:orange"}
     for w in shown:
@@ -363,16 +365,18 @@ def fig_ev(sig: xr.Dataset, est: xr.Dataset, e_target: float | None = None) -> F
     ax_full.set_ylabel(r"$D_v(\tau)/\sigma_Y$")
     ax_full.set_title(f"(a) zero-crossing signature, v = {pooled.attrs.get('v_level', 1.0):g} "
                       r"$\sigma_{\dot Y}$", fontsize="medium")
-    ax_full.legend(fontsize="x-small", loc="lower right")
 
     # zoom: a few free flights of the post-impact arc, 2 e v / g long
     half = 1.5 * 2.0 * v / g if g else 10 * dt
     half = max(half, 8 * dt)
     if g and e_ideal is not None:
-        s = np.linspace(-half, half, 400)
-        ideal = np.where(s < 0, v * s + 0.5 * g * s**2, e_ideal * v * s - 0.5 * g * s**2)
-        ax_zoom.plot(s * 1e3, ideal / sigma_y, color="k", ls="--", lw=1.0,
-                     label=f"free flight through an impact: slope v, then {e_ideal:g} v")
+        # before: the incoming arc back to the previous crossing; after: the free response
+        before = np.linspace(-min(half, 2.0 * v / g), 0.0, 200)
+        after = np.linspace(0.0, half, 400)
+        ax_zoom.plot(before * 1e3, (v * before + 0.5 * g * before**2) / sigma_y, color="k", ls="--", lw=1.0,
+                     label=f"free flight through an impact at (0, v): slope v, then {e_ideal:g} v")
+        ax_zoom.plot(after * 1e3, free_rocking(after, 0.0, e_ideal * v, g, e_ideal) / sigma_y,
+                     color="k", ls="--", lw=1.0)
     ax_zoom.axhline(0.0, color="0.6", lw=0.5)
     ax_zoom.axvline(0.0, color="0.6", lw=0.5)
     ax_zoom.set_xlim(-half * 1e3, half * 1e3)
@@ -385,7 +389,7 @@ def fig_ev(sig: xr.Dataset, est: xr.Dataset, e_target: float | None = None) -> F
     ax_zoom.set_xlabel("time lag τ (ms)")
     ax_zoom.set_ylabel(r"$D_v(\tau)/\sigma_Y$")
     ax_zoom.set_title("(b) the slope jump at the impact, lag 0", fontsize="medium")
-    ax_zoom.legend(fontsize="x-small", loc="lower right")
+    fig.legend(*ax_zoom.get_legend_handles_labels(), loc="outside lower center", ncols=3, fontsize="small")
 
     curves = est["e_hat"].sel(estimator="e_v")
     w = est["window"].values

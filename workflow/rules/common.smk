@@ -15,10 +15,19 @@ def scene(name):
     return config["scenes"][name]
 
 
+def figure_names(name):
+    """The figures scene ``name`` can draw: fig. 2 needs at least one stored series."""
+    figures = ["fig1b", "fig2", "fig3", "fig4", "fig_ev"]
+    if scene(name)["records"]["store_series"] < 1:
+        figures.remove("fig2")
+    return figures
+
+
 def default_products():
-    """Every product of the default scene."""
+    """Every product of the default scene: its tables and its figures (PNG and PDF)."""
     name = config["default_scene"]
     tables = ["table.csv", "table.md"]
     if scene(name)["estimates"]["compare_readings"]:
         tables += ["table_readings.csv", "table_readings.md"]
-    return [f"results/{name}/{table}" for table in tables]
+    figures = [f"figures/{fig}.{fmt}" for fig in figure_names(name) for fmt in ("png", "pdf")]
+    return [f"results/{name}/{product}" for product in tables + figures]

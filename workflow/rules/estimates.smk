@@ -20,7 +20,8 @@ rule estimates:
 rule readings:
     """The other readings of the paper's sizes, end to end in memory, compared in one table."""
     input:
-        "results/{scene}/simulations.nc",
+        simulations="results/{scene}/simulations.nc",
+        estimates="results/{scene}/estimates.nc",
     output:
         estimates="results/{scene}/estimates_readings.nc",
         csv=report("results/{scene}/table_readings.csv", category="Tables", caption="../report/table_readings.rst"),

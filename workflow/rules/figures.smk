@@ -1,0 +1,123 @@
+# Figures: one compute rule (the signature of the stored series, paper fig. 2c) and one plot
+# rule per figure. Plot rules only read NetCDF products, so changing a plot never reruns a
+# simulation; each also lists the plotting module, so editing it redraws every figure.
+from importlib.util import find_spec
+
+FIGURES_CODE = find_spec("rockdec.figures").origin
+
+
+def figure_outputs(name):
+    """PNG and PDF of figure ``name`` for the scene, both tagged for the report."""
+    return {
+        fmt: report(
+            f"results/{{scene}}/figures/{name}.{fmt}",
+            caption=f"../report/{name}.rst",
+            category="Figures",
+            labels={"figure": name, "format": fmt.upper()},
+        )
+        for fmt in ("png", "pdf")
+    }
+
+
+rule stored_signature:
+    """Signature cube of the stored series pooled into one group (the estimate of fig. 2c)."""
+    input:
+        "results/{scene}/simulations.nc",
+    output:
+        "results/{scene}/stored_signature.nc",
+    log:
+        "results/{scene}/logs/stored_signature.log",
+    benchmark:
+        "results/{scene}/benchmarks/stored_signature.tsv"
+    threads: 1
+    params:
+        scene=lambda w: scene(w.scene),
+    script:
+        "../scripts/stored_signature.py"
+
+
+rule fig1b:
+    """Paper fig. 1b: free-rocking period of eqs. 3 and 5 against amplitude (no data)."""
+    input:
+        code=FIGURES_CODE,
+    output:
+        **figure_outputs("fig1b"),
+    log:
+        "results/{scene}/logs/fig1b.log",
+    benchmark:
+        "results/{scene}/benchmarks/fig1b.tsv"
+    threads: 1
+    script:
+        "../scripts/fig_1b.py"
+
+
+rule fig2:
+    """Paper fig. 2: two simulated responses and the free-response estimate of the stored series."""
+    input:
+        code=FIGURES_CODE,
+        sim="results/{scene}/simulations.nc",
+        sig="results/{scene}/stored_signature.nc",
+    output:
+        **figure_outputs("fig2"),
+    log:
+        "results/{scene}/logs/fig2.log",
+    benchmark:
+        "results/{scene}/benchmarks/fig2.tsv"
+    threads: 1
+    script:
+        "../scripts/fig_2.py"
+
+
+rule fig3:
+    """Paper fig. 3: e_g and e_0 against the window size, extrapolated to zero."""
+    input:
+        code=FIGURES_CODE,
+        est="results/{scene}/estimates.nc",
+    output:
+        **figure_outputs("fig3"),
+    log:
+        "results/{scene}/logs/fig3.log",
+    benchmark:
+        "results/{scene}/benchmarks/fig3.tsv"
+    threads: 1
+    params:
+        e=lambda w: scene(w.scene)["system"]["e"],
+    script:
+        "../scripts/fig_3.py"
+
+
+rule fig4:
+    """Paper fig. 4: e1..e4 of every replicate against the window size."""
+    input:
+        code=FIGURES_CODE,
+        est="results/{scene}/estimates.nc",
+    output:
+        **figure_outputs("fig4"),
+    log:
+        "results/{scene}/logs/fig4.log",
+    benchmark:
+        "results/{scene}/benchmarks/fig4.tsv"
+    threads: 1
+    params:
+        e=lambda w: scene(w.scene)["system"]["e"],
+    script:
+        "../scripts/fig_4.py"
+
+
+rule fig_ev:
+    """The paper's section 6 proposal: the D_v signature and the estimator e_v."""
+    input:
+        code=FIGURES_CODE,
+        sig="results/{scene}/signatures.nc",
+        est="results/{scene}/estimates.nc",
+    output:
+        **figure_outputs("fig_ev"),
+    log:
+        "results/{scene}/logs/fig_ev.log",
+    benchmark:
+        "results/{scene}/benchmarks/fig_ev.tsv"
+    threads: 1
+    params:
+        e=lambda w: scene(w.scene)["system"]["e"],
+    script:
+        "../scripts/fig_ev.py"

@@ -1,0 +1,8 @@
+"""Rule `fig1b`: paper fig. 1b, the free-rocking periods of eqs. 3 and 5 (no input data)."""
+
+import sys
+
+from rockdec import figures
+
+sys.stderr = open(snakemake.log[0], "w")
+figures.save(figures.fig1b(), [snakemake.output.png, snakemake.output.pdf])
