@@ -35,3 +35,22 @@ rule readings:
         scene=lambda w: scene(w.scene),
     script:
         "../scripts/readings.py"
+
+
+rule choices:
+    """One unstated choice at a time (lag range, mirrored triggers, level): what moves which estimator."""
+    input:
+        "results/{scene}/simulations.nc",
+    output:
+        estimates="results/{scene}/estimates_choices.nc",
+        csv=report("results/{scene}/table_choices.csv", category="Tables", caption="../report/table_choices.rst"),
+        md="results/{scene}/table_choices.md",
+    log:
+        "results/{scene}/logs/choices.log",
+    benchmark:
+        "results/{scene}/benchmarks/choices.tsv"
+    threads: 2
+    params:
+        scene=lambda w: scene(w.scene),
+    script:
+        "../scripts/choices.py"
