@@ -32,12 +32,15 @@ matplotlib.use("Agg")
 import numpy as np  # noqa: E402
 import xarray as xr  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
-from scipy.optimize import brentq  # noqa: E402
 
-from rockdec import models, signatures, tables  # noqa: E402
+from rockdec import models  # noqa: E402
 from rockdec.models import period_from_g  # noqa: E402
 
-__all__ = ["FIGURES", "fig1b", "fig2", "fig3", "fig4", "fig_ev", "free_rocking", "save"]
+# rockdec.signatures (numba, dask), rockdec.tables (scipy.stats) and scipy.optimize are
+# imported where they are used: each plot rule is a fresh process, and these imports would
+# double its start-up time for the figures that do not need them.
+
+__all__ = ["FIGURES", "fig1b", "fig2", "fig3", "fig4", "fig_ev", "free_rocking", "period_gap_amplitude", "save"]
 
 FIGURES = ("fig1b", "fig2", "fig3", "fig4", "fig_ev")
 """Names of the figures; the workflow writes ``results/{scene}/figures/{name}.png|pdf``."""
@@ -101,12 +104,28 @@ def save(fig: Figure, paths: str | Path | Iterable[str | Path]) -> list[Path]:
     return written
 
 
+def period_gap_amplitude(tolerance: float = 0.05) -> float:
+    """Relative amplitude ``theta0/theta_cr`` where eq. 3 exceeds eq. 5 by ``tolerance``.
+
+    The ratio of the two periods grows monotonically from 1 at zero amplitude to infinity
+    at ``theta_cr`` (overturning), so the root is unique; 5 % is reached at 0.111.
+    """
+    from scipy.optimize import brentq
+
+    def excess(x):
+        return float(models.period_housner(x, 1.0, 1.0) / models.period_simplified(x, 1.0, 1.0)) - 1.0 - tolerance
+
+    return float(brentq(excess, 1e-9, 1.0 - 1e-9, xtol=1e-12))
+
+
 def _new_figure(width: float, height: float) -> Figure:
     return Figure(figsize=(width, height), layout="constrained")
 
 
 def _paper_values(name: str, e_target: float | None) -> tuple[float, float]:
     """Paper's (mean, std) of an estimator at zero window, NaN unless the target is the paper's."""
+    from rockdec import tables
+
     if e_target is None or e_target != tables.PAPER_E_TARGET:
         return np.nan, np.nan
     return tables.PAPER.get(name, (np.nan, np.nan))
@@ -128,6 +147,8 @@ def _extrapolated_line(est: xr.DataArray | xr.Dataset, name: str, w: np.ndarray)
 
 def _pooled(sig: xr.Dataset) -> xr.Dataset:
     """A cube without groups: pooled exactly over ``group`` when it has that dimension."""
+    from rockdec import signatures
+
     return signatures.pool(sig, "group") if "group" in sig.dims else sig
 
 
@@ -153,11 +174,7 @@ def fig1b(max_ratio: float = 0.9, tolerance: float = 0.05) -> Figure:
     simple = models.period_simplified(ratio, 1.0, 1.0)
     with np.errstate(invalid="ignore", divide="ignore"):
         rel = housner / simple - 1.0
-
-    def excess(x):
-        return float(models.period_housner(x, 1.0, 1.0) / models.period_simplified(x, 1.0, 1.0)) - 1.0 - tolerance
-
-    x_tol = brentq(excess, 1e-6, 0.99)
+    x_tol = period_gap_amplitude(tolerance)
 
     fig = _new_figure(6.0, 5.5)
     top, bottom = fig.subplots(2, 1, sharex=True, height_ratios=[2.0, 1.0])
@@ -294,7 +311,7 @@ def fig4(est: xr.Dataset, e_target: float | None = None) -> Figure:
     w = est["window"].values
     w_line = np.linspace(0.0, w.max(), 50)
     fig = _new_figure(9.0, 7.0)
-    axes = fig.subplots(2, 2, sharex=True)
+    axes = fig.subplots(2, 2)
     formulas = {
         "e1": r"$\hat e_1 = \sqrt{|c_2|/c_1}$",
         "e2": r"$\hat e_2 = v_2/v_1$",
@@ -322,9 +339,8 @@ def fig4(est: xr.Dataset, e_target: float | None = None) -> Figure:
         ax.set_title(formulas[name], fontsize="medium")
         ax.set_ylabel(r"estimate of $e$")
         ax.set_xlim(-0.04, 1.03 * w.max())
-        ax.legend(fontsize="x-small", loc="best")
-    for ax in axes[1]:
         ax.set_xlabel(WINDOW_LABEL)
+        ax.legend(fontsize="x-small", loc="best")
     fig.suptitle(f"Local estimates on the first half cycle, {est.sizes['replicate']} replicates (paper fig. 4)")
     return fig
 

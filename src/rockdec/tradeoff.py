@@ -1,0 +1,529 @@
+"""Speed against accuracy: what each knob of a scene costs and what it buys.
+
+Every knob of :data:`KNOBS` is moved one at a time away from a base scene (the
+``tradeoff`` scene of ``config/config.yaml``); each resulting *configuration* is run end to
+end (simulation, signature cube, estimates and zero-window extrapolation, for every
+replicate of the scene) and measured twice:
+
+* **cost**: CPU seconds of the process (:func:`time.process_time`, all threads summed, so
+  it does not depend on how many cores ran it) from building the lazy graph to the
+  extrapolated estimates. The step calibration of a sampling density (:func:`rockdec.
+  simulate.calibrate_dt`, a one-off per density, cached within the run) is reported apart,
+  as ``calibration_cpu_s``. ``cpu_s_per_replicate`` is the cost of one estimate of ``e``.
+* **accuracy** of each estimator over the replicates, against the scene's ``e``
+  (:func:`accuracy`): ``bias = mean - e``, ``std`` (``ddof = 1``) and
+  ``rmse = sqrt(mean((x - e)^2))``, so that ``rmse^2 = bias^2 + std^2 (n - 1)/n`` exactly,
+  and ``ci95 = |bias| + 1.96 std``: an estimate of one replicate lies within ``+-ci95`` of
+  the true ``e`` in about 95 % of the cases (normal errors).
+
+Choices written down here (the issue leaves them open):
+
+* *Points per cycle* (``dt``) is moved at a fixed record **duration**: a series keeps the
+  base scene's number of rocking cycles at amplitude ``sigma_Y`` (``n_points`` scales with
+  the density), so the knob measures sampling alone, not more data. Likewise the burn-in
+  (in cycles, :func:`rockdec.simulate.default_burn_in`) and the ``e_v`` slope fits
+  (``fit_points`` scaled from the base, at least 3) keep their duration.
+* *Points per series* is counted at the base density; the burn-in stays as it is.
+* *Number of window sizes* ``n`` uses the evenly spaced relative windows
+  ``1/n, 2/n, ..., 1`` (the scene's own list when ``n`` is its length).
+* *Simulator*: ``"exact"`` (:mod:`rockdec.simulate`) or ``"fixed_step"``
+  (:mod:`rockdec.fixed_step`) at the same ``dt`` (calibrated on the exact model). The
+  analysis of a fixed-step record uses that record's own stationary statistics
+  (``sigma_Y`` and ``sigma_Ydot`` from a fixed-step pilot), as an analyst of those data
+  would. ``fixed_step_points_per_cycle`` (not in the issue's list) moves the density of
+  the fixed-step simulator too: whether a finer step cures its bias, and at what price.
+
+Every configuration uses the scene's seeds (``first_seed`` on), so configurations that
+share a simulation also share its series. Moving one knob at a time cannot find the best
+*combination*: :func:`recommend` only picks among the configurations run.
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+import math
+import time
+import warnings
+from concurrent.futures import ThreadPoolExecutor
+
+import dask
+import numpy as np
+import pandas as pd
+import xarray as xr
+
+from rockdec import estimators, fixed_step, replicates, simulate
+from rockdec.models import restoring_acceleration
+
+KNOBS = {
+    "points_per_cycle": (5, 10, 20, 35, 75, 150, 300, 1000),
+    "n_points": (1500, 3000, 6000, 12000),
+    "series_per_replicate": (25, 50, 100, 200, 400),
+    "n_windows": (2, 5, 10),
+    "level": (1.5, 2.0, 2.5),
+    "n_periods": (1.0, 2.5),
+    "simulator": ("exact", "fixed_step"),
+    "fixed_step_points_per_cycle": (75, 150, 300, 1000),
+}
+"""Knob -> values, each moved alone from the base scene. ``points_per_cycle``: samples per
+cycle at ``sigma_Y`` (eq. 5, sets ``dt``); ``n_points``: points per series (at the base
+density); ``series_per_replicate``: series pooled into one signature; ``n_windows``: window
+sizes of the zero-window extrapolation; ``level``: trigger level ``a/sigma_Y``;
+``n_periods``: lag range in periods at ``a`` (matters for ``e_g`` only); ``simulator``;
+``fixed_step_points_per_cycle``: the fixed-step simulator at another density."""
+
+SETTINGS = ("simulator", "points_per_cycle", "n_points", "series_per_replicate", "n_windows", "level", "n_periods")
+"""The settings that make up a configuration (one per knob; the last knob sets two)."""
+
+ACCURACY_CLASSES = (0.005, 0.01, 0.02, 0.05)
+"""Half-widths of the accuracy classes of :func:`recommend` ("e within +-0.01 (95 %)")."""
+
+Z95 = 1.96
+"""Normal quantile of a two-sided 95 % interval."""
+
+CRITERIA = ("ci95", "rmse")
+
+PARETO_ESTIMATORS = ("e4", "e_v", "e_0", "e1")
+"""Estimators drawn by :func:`pareto_figure` by default."""
+
+PILOT = {"pilot_seeds": 256, "pilot_points": 40_000}
+"""Size of the calibration pilots (as :func:`rockdec.simulate.calibrate_dt`)."""
+
+FIXED_STEP_PILOT_SEEDS = 64
+"""Series of the fixed-step pilot that measures that simulator's ``sigma_Y``, ``sigma_Ydot``."""
+
+MAX_CHUNK_POINTS = 2_000_000
+"""Largest number of samples in one Dask chunk (seeds per chunk shrink for long series)."""
+
+
+# --------------------------------------------------------------------------- configurations
+
+
+def base_settings(scene: dict) -> dict:
+    """The configuration of the scene itself (see :data:`SETTINGS`)."""
+    sig = scene["signatures"]
+    return {
+        "simulator": "exact",
+        "points_per_cycle": float(scene["excitation"]["points_per_cycle"]),
+        "n_points": int(scene["records"]["n_points"]),
+        "series_per_replicate": int(scene["records"]["series_per_replicate"]),
+        "n_windows": len(sig["windows"]),
+        "level": float(sig["level"]),
+        "n_periods": float(sig["n_periods"]),
+    }
+
+
+def knob_settings(base: dict, knob: str, value) -> dict:
+    """``base`` with one knob moved to ``value``."""
+    if knob == "fixed_step_points_per_cycle":
+        return {**base, "simulator": fixed_step.KIND, "points_per_cycle": float(value)}
+    if knob not in base:
+        raise ValueError(f"unknown knob '{knob}'; known knobs: {', '.join(KNOBS)}")
+    if knob == "simulator" and value not in ("exact", fixed_step.KIND):
+        raise ValueError(f"unknown simulator '{value}'; use 'exact' or '{fixed_step.KIND}'")
+    return {**base, knob: type(base[knob])(value)}
+
+
+def configurations(scene: dict, knobs: dict | None = None) -> list[tuple[str, str, dict]]:
+    """``(knob, value label, settings)`` for every knob value, in the order of ``knobs``.
+
+    A value equal to the base's appears under its knob; its settings equal
+    :func:`base_settings`, so it is run once (see :func:`run_study`).
+    """
+    base = base_settings(scene)
+    knobs = KNOBS if knobs is None else knobs
+    return [(knob, _label(value), knob_settings(base, knob, value)) for knob, values in knobs.items() for value in values]
+
+
+def _label(value) -> str:
+    return value if isinstance(value, str) else f"{value:g}"
+
+
+def _key(settings: dict) -> tuple:
+    return tuple(settings[name] for name in SETTINGS)
+
+
+def variant_scene(scene: dict, settings: dict) -> dict:
+    """A copy of ``scene`` run with ``settings`` (module docstring: how each knob applies)."""
+    base = base_settings(scene)
+    out = copy.deepcopy(scene)
+    density = settings["points_per_cycle"] / base["points_per_cycle"]
+    n_points = max(2, int(round(settings["n_points"] * density)))
+    out["excitation"]["points_per_cycle"] = settings["points_per_cycle"]
+    rec = out["records"]
+    rec["n_points"] = n_points
+    rec["series_per_replicate"] = settings["series_per_replicate"]
+    rec["chunk_seeds"] = max(1, min(rec["chunk_seeds"], MAX_CHUNK_POINTS // n_points))
+    sig = out["signatures"]
+    if settings["n_windows"] != len(sig["windows"]):
+        n = settings["n_windows"]
+        sig["windows"] = [round(k / n, 12) for k in range(1, n + 1)]
+    sig["level"] = settings["level"]
+    sig["n_periods"] = settings["n_periods"]
+    out["estimates"]["fit_points"] = max(estimators.MIN_FIT_POINTS, int(round(scene["estimates"]["fit_points"] * density)))
+    return out
+
+
+# --------------------------------------------------------------------------- calibration
+
+
+def _calibrate(scene: dict, points_per_cycle: float, simulators: set, pilot: dict) -> dict:
+    """Step, burn-in and stationary statistics at one density, per simulator; CPU s of this thread."""
+    start = time.thread_time()
+    system, exc = scene["system"], scene["excitation"]
+    g = restoring_acceleration(system["nu"], system["theta_cr"])
+    e, sigma_p = system["e"], exc["sigma_p"]
+    cal = simulate.calibrate_dt(e=e, g=g, sigma_p=sigma_p, points_per_cycle=points_per_cycle, **pilot)
+    out = {"exact": {**cal, "g": g}}
+    if fixed_step.KIND in simulators:
+        seeds = np.arange(min(FIXED_STEP_PILOT_SEEDS, pilot["pilot_seeds"])) + 2**62
+        theta, _ = fixed_step.simulate_block_fixed_step(
+            seeds, pilot["pilot_points"], dt=cal["dt"], g=g, e=e, sigma_p=sigma_p, burn_in=cal["burn_in"]
+        )
+        out[fixed_step.KIND] = {"dt": cal["dt"], "burn_in": cal["burn_in"], "g": g, **simulate.pilot_statistics(theta, cal["dt"], g)}
+    cpu = time.thread_time() - start
+    for entry in out.values():
+        entry["calibration_cpu_s"] = cpu
+    return out
+
+
+def calibrations(scene: dict, settings: list[dict], threads: int = 1, pilot: dict | None = None) -> dict:
+    """Calibration of every density the configurations use, computed once each.
+
+    Returns ``{(points_per_cycle, simulator): {"dt", "burn_in", "g", "sigma_y",
+    "sigma_ydot", "points_per_cycle", "calibration_cpu_s"}}``; the densities run in
+    ``threads`` threads (the kernels release the GIL).
+    """
+    pilot = PILOT if pilot is None else pilot
+    wanted: dict[float, set] = {}
+    for s in settings:
+        wanted.setdefault(s["points_per_cycle"], set()).add(s["simulator"])
+    # longest first, so the threads finish together
+    order = sorted(wanted, reverse=True)
+    with ThreadPoolExecutor(max_workers=max(1, threads)) as pool:
+        results = list(pool.map(lambda ppc: _calibrate(scene, ppc, wanted[ppc], pilot), order))
+    return {(ppc, kind): entry for ppc, result in zip(order, results) for kind, entry in result.items()}
+
+
+# --------------------------------------------------------------------------- one configuration
+
+
+def configuration_estimates(scene: dict, settings: dict, calibration: dict, threads: int = 1) -> tuple[xr.DataArray, float, float]:
+    """Run one configuration end to end; returns ``(e_hat0(estimator, replicate), cpu_s, wall_s)``.
+
+    ``calibration`` is the entry of :func:`calibrations` for its density and simulator.
+    Timed: graph construction, simulation, signatures (Dask, ``threads`` threads),
+    estimates and extrapolation.
+    """
+    start_cpu, start_wall = time.process_time(), time.perf_counter()
+    variant = variant_scene(scene, settings)
+    rec = variant["records"]
+    used, group, replicate_of_group = replicates.grouping(simulate.scene_seeds(variant), variant["estimates"]["reading"])
+    simulator = fixed_step.simulation_dataset if settings["simulator"] == fixed_step.KIND else simulate.simulation_dataset
+    sim = simulator(
+        used,
+        rec["n_points"],
+        dt=calibration["dt"],
+        g=calibration["g"],
+        e=variant["system"]["e"],
+        sigma_p=variant["excitation"]["sigma_p"],
+        burn_in=calibration["burn_in"],
+        chunk_seeds=rec["chunk_seeds"],
+    )
+    cube = replicates.scene_signatures(sim["theta"], variant, calibration, group, replicate_of_group)
+    with dask.config.set(scheduler="threads", num_workers=threads):
+        cube = cube.compute()
+    e_hat0 = replicates.replicate_estimates(cube, **replicates.estimate_options(variant))["e_hat0"]
+    return e_hat0, time.process_time() - start_cpu, time.perf_counter() - start_wall
+
+
+def _warm_up(scene: dict, calibration: dict, simulators: set) -> None:
+    """Compile (or load) every numba kernel once, so no configuration pays for it."""
+    small = copy.deepcopy(scene)
+    small["records"].update(replicates=1, series_per_replicate=2, n_points=2000, chunk_seeds=2)
+    for kind in simulators:
+        settings = {**base_settings(small), "simulator": kind}
+        cal = next(entry for (_, k), entry in calibration.items() if k == kind)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            configuration_estimates(small, settings, cal)
+
+
+# --------------------------------------------------------------------------- the study
+
+
+def run_study(scene: dict, knobs: dict | None = None, threads: int = 1, pilot: dict | None = None) -> xr.Dataset:
+    """Every configuration of ``knobs`` (default :data:`KNOBS`) from ``scene``, cost and estimates.
+
+    Returns a Dataset with dimension ``config`` (one per knob value, the base repeated under
+    each knob that lists it, flagged ``base = 1``, computed once): ``e_hat0(config,
+    estimator, replicate)``, ``cpu_s``, ``wall_s``, ``calibration_cpu_s`` and the
+    calibration (``dt``, ``burn_in``, ``sigma_y``, ``sigma_ydot``, achieved
+    ``points_per_cycle_at_sigma_y``) per configuration; coordinates ``knob``, ``value`` and
+    every setting. Attributes: ``e_target``, ``replicates``, ``threads``.
+    """
+    configs = configurations(scene, knobs)
+    base_key = _key(base_settings(scene))
+    unique: dict[tuple, dict] = {}
+    for _, _, settings in configs:
+        unique.setdefault(_key(settings), settings)
+    cal = calibrations(scene, list(unique.values()), threads=threads, pilot=pilot)
+    _warm_up(scene, cal, {s["simulator"] for s in unique.values()})
+    results = {}
+    for key, settings in unique.items():
+        results[key] = configuration_estimates(scene, settings, cal[(settings["points_per_cycle"], settings["simulator"])], threads)
+    rows = [results[_key(s)] for _, _, s in configs]
+    cals = [cal[(s["points_per_cycle"], s["simulator"])] for _, _, s in configs]
+    variants = [variant_scene(scene, s) for _, _, s in configs]
+    e_hat0 = xr.concat([r[0] for r in rows], dim="config")
+    e_hat0.attrs = {"units": "1", "long_name": "estimate of e extrapolated to zero window, per replicate"}
+
+    def per_config(values, units, long_name, dtype=float):
+        return ("config", np.asarray(values, dtype=dtype), {"units": units, "long_name": long_name})
+
+    ds = xr.Dataset(
+        {
+            "e_hat0": e_hat0,
+            "cpu_s": per_config([r[1] for r in rows], "s", "CPU time of the configuration (all threads)"),
+            "wall_s": per_config([r[2] for r in rows], "s", "wall-clock time of the configuration"),
+            "calibration_cpu_s": per_config(
+                [c["calibration_cpu_s"] for c in cals], "s", "CPU time of the one-off step calibration at this density"
+            ),
+            "dt": per_config([c["dt"] for c in cals], "s", "time step"),
+            "burn_in": per_config([c["burn_in"] for c in cals], "1", "steps discarded before recording", dtype=np.int64),
+            "sigma_y": per_config([c["sigma_y"] for c in cals], "rad", "stationary response standard deviation (pilot)"),
+            "sigma_ydot": per_config([c["sigma_ydot"] for c in cals], "rad s-1", "std of the sampled slope (pilot)"),
+            "points_per_cycle_at_sigma_y": per_config(
+                [c["points_per_cycle"] for c in cals], "1", "achieved samples per cycle at sigma_Y of the simulator used (eq. 5)"
+            ),
+        },
+        coords={
+            "config": ("config", [f"{k}={v}" for k, v, _ in configs], {"long_name": "knob=value"}),
+            "knob": ("config", [k for k, _, _ in configs], {"long_name": "the knob moved from the base scene"}),
+            "value": ("config", [v for _, v, _ in configs], {"long_name": "value of the knob"}),
+            "base": ("config", np.array([_key(s) == base_key for _, _, s in configs], dtype=np.int8),
+                     {"long_name": "1 where the configuration is the base scene"}),
+            "simulator": ("config", [s["simulator"] for _, _, s in configs], {"long_name": "simulator kind"}),
+            "points_per_cycle": ("config", [s["points_per_cycle"] for _, _, s in configs],
+                                 {"units": "1", "long_name": "target samples per cycle at sigma_Y (sets dt)"}),
+            "n_points": ("config", [v["records"]["n_points"] for v in variants], {"units": "1", "long_name": "points per series"}),
+            "series_per_replicate": ("config", [s["series_per_replicate"] for _, _, s in configs],
+                                     {"units": "1", "long_name": "series pooled per replicate"}),
+            "n_windows": ("config", [s["n_windows"] for _, _, s in configs], {"units": "1", "long_name": "window sizes"}),
+            "level": ("config", [s["level"] for _, _, s in configs], {"units": "1", "long_name": "trigger level a/sigma_Y"}),
+            "n_periods": ("config", [s["n_periods"] for _, _, s in configs],
+                          {"units": "1", "long_name": "lag range in periods at amplitude a"}),
+            "fit_points": ("config", [v["estimates"]["fit_points"] for v in variants],
+                           {"units": "1", "long_name": "points per side of the e_v slope fits"}),
+        },
+        attrs={
+            "e_target": float(scene["system"]["e"]),
+            "replicates": int(scene["records"]["replicates"]),
+            "threads": int(threads),
+            "knobs": json.dumps({k: list(v) for k, v in (KNOBS if knobs is None else knobs).items()}),
+        },
+    )
+    return ds
+
+
+# --------------------------------------------------------------------------- statistics
+
+
+def accuracy(values, e_target: float) -> dict:
+    """Bias, std, RMSE and the 95 % half-width of one estimator's replicate estimates.
+
+    NaN estimates (an estimator that failed on a replicate) are left out; ``n`` counts the
+    rest. ``std`` has ``ddof = 1``; ``rmse = sqrt(mean((x - e)^2))``, hence
+    ``rmse^2 = bias^2 + std^2 (n - 1)/n``; ``ci95 = |bias| + 1.96 std``.
+    """
+    x = np.asarray(values, dtype=float)
+    x = x[np.isfinite(x)]
+    n = x.size
+    nan = float("nan")
+    if n == 0:
+        return {"n": 0, "mean": nan, "bias": nan, "std": nan, "rmse": nan, "ci95": nan}
+    mean = float(x.mean())
+    std = float(x.std(ddof=1)) if n > 1 else nan
+    bias = mean - e_target
+    return {
+        "n": n,
+        "mean": mean,
+        "bias": bias,
+        "std": std,
+        "rmse": float(math.sqrt(np.mean((x - e_target) ** 2))),
+        "ci95": abs(bias) + Z95 * std,
+    }
+
+
+def study_table(ds: xr.Dataset) -> pd.DataFrame:
+    """The tidy table: one row per (configuration, estimator).
+
+    Columns: ``knob, value, kind, base, cpu_s, cpu_s_per_replicate, estimator, n,
+    replicates, mean, bias, std, rmse, ci95``, then the configuration's settings
+    (``points_per_cycle, n_points, series_per_replicate, n_windows, level, n_periods,
+    dt``) and ``calibration_cpu_s``.
+    """
+    e_target = float(ds.attrs["e_target"])
+    n_rep = ds.sizes["replicate"]
+    rows = []
+    for i in range(ds.sizes["config"]):
+        c = ds.isel(config=i)
+        head = {
+            "knob": str(c["knob"].values),
+            "value": str(c["value"].values),
+            "kind": str(c["simulator"].values),
+            "base": bool(c["base"].values),
+            "cpu_s": float(c["cpu_s"]),
+            "cpu_s_per_replicate": float(c["cpu_s"]) / n_rep,
+        }
+        tail = {
+            "points_per_cycle": float(c["points_per_cycle"]),
+            "n_points": int(c["n_points"]),
+            "series_per_replicate": int(c["series_per_replicate"]),
+            "n_windows": int(c["n_windows"]),
+            "level": float(c["level"]),
+            "n_periods": float(c["n_periods"]),
+            "dt": float(c["dt"]),
+            "calibration_cpu_s": float(c["calibration_cpu_s"]),
+        }
+        for name in ds["estimator"].values:
+            stats = accuracy(c["e_hat0"].sel(estimator=name).values, e_target)
+            rows.append({**head, "estimator": str(name), "replicates": n_rep, **stats, **tail})
+    table = pd.DataFrame(rows)
+    table.attrs["e_target"] = e_target
+    return table
+
+
+def recommend(table: pd.DataFrame, tolerance=ACCURACY_CLASSES, criterion: str = "ci95") -> pd.DataFrame:
+    """The cheapest configuration within ``tolerance`` for each estimator (and tolerance).
+
+    ``criterion = "ci95"`` (default): ``|bias| + 1.96 std <= tolerance``, i.e. "``e`` within
+    ``+-tolerance`` (95 %)" for one replicate's estimate; ``"rmse"``: ``rmse <= tolerance``.
+    Only configurations with an estimate in every replicate (``n == replicates``) qualify;
+    the cheapest is the one of least ``cpu_s``. ``tolerance`` is a number or a sequence.
+    Returns one row per (tolerance, estimator): ``tolerance, estimator, criterion, knob,
+    value, kind, cpu_s, cpu_s_per_replicate, bias, std, rmse, ci95``; ``knob`` is
+    ``"none"`` (and the numbers NaN) when no configuration qualifies.
+    """
+    if criterion not in CRITERIA:
+        raise ValueError(f"unknown criterion '{criterion}'; use one of {CRITERIA}")
+    tolerances = [float(tolerance)] if np.ndim(tolerance) == 0 else [float(t) for t in tolerance]
+    cols = ["knob", "value", "kind", "cpu_s", "cpu_s_per_replicate", "bias", "std", "rmse", "ci95"]
+    complete = table[(table["n"] == table["replicates"]) & np.isfinite(table[criterion])]
+    rows = []
+    for tol in tolerances:
+        for name in pd.unique(table["estimator"]):
+            passing = complete[(complete["estimator"] == name) & (complete[criterion] <= tol)]
+            row = {"tolerance": tol, "estimator": name, "criterion": criterion}
+            if passing.empty:
+                row.update({c: np.nan for c in cols}, knob="none", value="", kind="")
+            else:
+                # stable sort: among equal costs (the base under several knobs) the first listed
+                best = passing.sort_values("cpu_s", kind="stable").iloc[0]
+                row.update({c: best[c] for c in cols})
+                if bool(best.get("base", False)):
+                    row.update(knob="base", value="")
+            rows.append(row)
+    return pd.DataFrame(rows, columns=["tolerance", "estimator", "criterion", *cols])
+
+
+def pareto_front(cost, error) -> np.ndarray:
+    """Indices of the Pareto-optimal points (no other point is both cheaper and more accurate), by cost.
+
+    Points with a non-finite cost or error are left out; of points with equal cost only
+    the most accurate can be on the front.
+    """
+    cost, error = np.asarray(cost, dtype=float), np.asarray(error, dtype=float)
+    idx = np.flatnonzero(np.isfinite(cost) & np.isfinite(error))
+    idx = idx[np.lexsort((error[idx], cost[idx]))]
+    front, best = [], np.inf
+    for i in idx:
+        if error[i] < best:
+            front.append(i)
+            best = error[i]
+    return np.asarray(front, dtype=int)
+
+
+# --------------------------------------------------------------------------- outputs
+
+
+def table_markdown(table: pd.DataFrame, estimators_shown=("e4", "e_v", "e_0", "e1", "e2", "e3", "e_g")) -> str:
+    """Markdown: cost per configuration, accuracy per estimator, and the recommendations."""
+    from rockdec import tables
+
+    configs = table.drop_duplicates(["knob", "value"])
+    cost = configs[["knob", "value", "kind", "points_per_cycle", "n_points", "series_per_replicate", "n_windows",
+                    "level", "n_periods", "dt", "cpu_s", "cpu_s_per_replicate", "calibration_cpu_s"]]
+    e_target = table.attrs.get("e_target")
+    parts = ["# Speed against accuracy (rule tradeoff)\n",
+             "One knob at a time moved from the scene `tradeoff`. Cost: CPU seconds of one configuration "
+             "(simulation + signatures + estimates, all replicates; per replicate in `cpu_s_per_replicate`); "
+             "the step calibration is a one-off (`calibration_cpu_s`). Accuracy over the replicates: "
+             "`bias = mean - e`, `std` (ddof 1), `rmse` (so `rmse^2 = bias^2 + std^2 (n-1)/n`), "
+             "`ci95 = |bias| + 1.96 std`."
+             + (f" Target e = {e_target:g}." if e_target is not None else "") + "\n",
+             "## Cost\n", tables.to_markdown(cost)]
+    for name in estimators_shown:
+        part = table[table["estimator"] == name]
+        if part.empty:
+            continue
+        parts += [f"## {name}\n", tables.to_markdown(
+            part[["knob", "value", "kind", "cpu_s_per_replicate", "n", "mean", "bias", "std", "rmse", "ci95"]])]
+    for criterion, text in (("ci95", "|bias| + 1.96 std <= tolerance (e within +-tolerance, 95 %)"),
+                            ("rmse", "rmse <= tolerance")):
+        rec = recommend(table, ACCURACY_CLASSES, criterion=criterion)
+        parts += [f"## Cheapest configuration: {text}\n", tables.to_markdown(rec.drop(columns="criterion"))]
+    return "\n".join(parts)
+
+
+def pareto_figure(table: pd.DataFrame, estimators_shown=PARETO_ESTIMATORS):
+    """CPU seconds per replicate (log) against RMSE (log), one panel per estimator.
+
+    One marker per configuration, coloured by the knob moved (the base scene a black
+    star); the Pareto front (:func:`pareto_front`) as a step line with its points labelled;
+    grey lines at the RMSE of the accuracy classes. Returns a matplotlib Figure.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib.figure import Figure
+
+    shown = [name for name in estimators_shown if name in set(table["estimator"])]
+    n_col = 2 if len(shown) > 1 else 1
+    n_row = math.ceil(len(shown) / n_col)
+    fig = Figure(figsize=(6.0 * n_col, 4.6 * n_row), layout="constrained")
+    axes = np.atleast_1d(fig.subplots(n_row, n_col, sharex=True, sharey=True)).ravel()
+    knobs = list(pd.unique(table.loc[~table["base"], "knob"]))
+    colors = {k: matplotlib.colormaps["tab10"](i % 10) for i, k in enumerate(knobs)}
+    handles = {}
+    for ax, name in zip(axes, shown):
+        part = table[(table["estimator"] == name)]
+        points = pd.concat([part[~part["base"]], part[part["base"]].head(1)])
+        for knob in knobs:
+            sel = points[(points["knob"] == knob) & ~points["base"]]
+            handles[knob] = ax.scatter(sel["cpu_s_per_replicate"], sel["rmse"], s=28, color=colors[knob],
+                                       label=knob.replace("_", " "), zorder=3)
+        base = points[points["base"]]
+        if not base.empty:
+            handles["base"] = ax.scatter(base["cpu_s_per_replicate"], base["rmse"], s=110, marker="*", color="k",
+                                         label="base scene", zorder=4)
+        front = points.iloc[pareto_front(points["cpu_s_per_replicate"], points["rmse"])]
+        ax.step(front["cpu_s_per_replicate"], front["rmse"], where="post", color="0.3", lw=1.2, zorder=2)
+        for _, row in front.iterrows():
+            text = "base" if row["base"] else f"{row['knob'].replace('_', ' ')} {row['value']}"
+            ax.annotate(text, (row["cpu_s_per_replicate"], row["rmse"]), textcoords="offset points",
+                        xytext=(4, 4), fontsize=6.5, color="0.25")
+        for tol in ACCURACY_CLASSES:
+            ax.axhline(tol, color="0.75", lw=0.7, ls=":", zorder=1)
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_title(f"{name}: Pareto front of cost and RMSE", fontsize="medium")
+        ax.grid(True, which="major", lw=0.3, alpha=0.5)
+    for ax in axes[len(shown):]:
+        ax.set_visible(False)
+    for ax in axes[-n_col:]:
+        ax.set_xlabel("CPU seconds per replicate")
+    for ax in axes[::n_col]:
+        ax.set_ylabel("RMSE of the estimate of e")
+    fig.legend(handles=list(handles.values()), loc="outside lower center", ncol=min(5, len(handles)), fontsize="small")
+    return fig

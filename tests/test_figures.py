@@ -1,0 +1,308 @@
+"""Figures (paper figs. 1b, 2-4 and the e_v figure) and the workflow that draws them.
+
+Unit tests draw every figure from small synthetic products; the workflow tests copy the
+repository's workflow into a temporary folder, shrink the ``tiny`` scene, build its whole
+DAG once with Snakemake and check the products, the dry-run job list and what reruns
+after a plotting script changes.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.image  # noqa: E402
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+import xarray as xr  # noqa: E402
+import yaml  # noqa: E402
+from matplotlib.figure import Figure  # noqa: E402
+
+from rockdec import figures, models, replicates, signatures, simulate  # noqa: E402
+
+REPO = Path(__file__).resolve().parents[1]
+
+# --- the closed-form free response ---------------------------------------------------
+
+
+@pytest.mark.parametrize("e", [0.0, 0.5, 0.95, 1.0])
+def test_free_rocking_from_rest_hits_the_closed_form_points(e):
+    a, g = 0.3, 2.0
+    t1 = math.sqrt(2 * a / g)
+    t = np.array([0.0, 0.5 * t1, t1, (1 + e) * t1, (1 + 2 * e) * t1])
+    r = figures.free_rocking(t, a, 0.0, g, e)
+    assert r[0] == pytest.approx(a)
+    assert r[1] == pytest.approx(a - g * (0.5 * t1) ** 2 / 2)  # the parabola a - g t^2/2
+    assert r[2] == pytest.approx(0.0, abs=1e-12)  # first crossing at sqrt(2a/g)
+    assert r[3] == pytest.approx(-(e**2) * a, abs=1e-12)  # first minimum -e^2 a at (1+e) t1
+    assert r[4] == pytest.approx(0.0, abs=1e-12)  # second crossing
+
+
+def test_free_rocking_minimum_is_the_lowest_point_of_the_first_bounce():
+    a, g, e = 1.0, 1.0, 0.8
+    t1 = math.sqrt(2 * a / g)
+    t = np.linspace(0.0, 2 * t1, 20001)
+    r = figures.free_rocking(t, a, 0.0, g, e)
+    k = np.argmin(r)
+    assert r[k] == pytest.approx(-(e**2) * a, rel=1e-6)
+    assert t[k] == pytest.approx((1 + e) * t1, abs=2 * (t[1] - t[0]))
+
+
+def test_free_rocking_comes_to_rest_after_the_geometric_series_of_bounces():
+    a, g, e = 1.0, 1.0, 0.6
+    t1 = math.sqrt(2 * a / g)
+    rest = t1 * (1 + e) / (1 - e)  # t1 + 2 e t1 (1 + e + e^2 + ...)
+    t = np.linspace(1.001 * rest, 3 * rest, 50)
+    assert np.all(figures.free_rocking(t, a, 0.0, g, e) == 0.0)
+    assert np.any(figures.free_rocking(np.linspace(0.9 * rest, 0.999 * rest, 50), a, 0.0, g, e) != 0.0)
+
+
+def test_free_rocking_after_an_impact_leaves_zero_with_the_given_speed():
+    w, g, e = 0.5, 1.0, 0.9
+    t = np.array([1e-7, w / g, 2 * w / g, 2 * w / g + e * w / g])
+    r = figures.free_rocking(t, 0.0, w, g, e)
+    assert r[0] / t[0] == pytest.approx(w, rel=1e-6)
+    assert r[1] == pytest.approx(w**2 / (2 * g))  # apex of the first flight
+    assert r[2] == pytest.approx(0.0, abs=1e-12)
+    assert r[3] == pytest.approx(-((e * w) ** 2) / (2 * g))  # next flight, other side
+
+
+def test_free_rocking_matches_the_exact_simulator():
+    a, g, e, dt = 0.01, 1.0, 0.9, 1e-3
+    theta, _ = simulate.simulate_block([0], 2000, dt=dt, g=g, e=e, sigma_p=0.0, theta0=a)
+    r = figures.free_rocking(np.arange(2000) * dt, a, 0.0, g, e)
+    np.testing.assert_allclose(r, theta[0], atol=1e-12)
+
+
+def test_periods_differ_by_five_percent_near_a_tenth_of_the_critical_angle():
+    x = figures.period_gap_amplitude(0.05)
+    assert x == pytest.approx(0.1113, abs=5e-4)  # the paper: negligible below about 0.1
+    ratio = models.period_housner(x, 1.0, 1.0) / models.period_simplified(x, 1.0, 1.0)
+    assert ratio == pytest.approx(1.05)
+    assert figures.period_gap_amplitude(0.10) > x
+
+
+# --- figures from synthetic products -------------------------------------------------
+
+G, E, DT, SIGMA_P = 1.0, 0.95, 0.00343, 0.003
+
+
+@pytest.fixture(scope="module")
+def products():
+    """Small products shaped like the workflow's: 4 series, 2 replicates of 2 series."""
+    seeds = np.arange(4)
+    theta, _ = simulate.simulate_block(seeds, 6000, dt=DT, g=G, e=E, sigma_p=SIGMA_P, burn_in=4000)
+    sigma_y = float(theta.std())
+    sigma_ydot = float(np.diff(theta, axis=1).std() / DT)
+    sim = xr.Dataset(
+        {"theta": (("seed", "time"), theta.astype(np.float32), {"units": "rad"})},
+        coords={"seed": seeds, "time": np.arange(theta.shape[1]) * DT},
+        attrs={"dt": DT, "g": G, "e": E, "sigma_y": sigma_y, "sigma_ydot": sigma_ydot},
+    )
+    kw = {"sigma_y": sigma_y, "sigma_ydot": sigma_ydot, "windows": [0.25, 0.5, 1.0], "g": G}
+    th = sim["theta"].astype(np.float64).assign_attrs(dt=DT)
+    stored = signatures.signature_cube(th, group=xr.DataArray(np.zeros(4, int), dims="seed"), **kw)
+    sig = signatures.signature_cube(th, group=xr.DataArray([0, 0, 1, 1], dims="seed"), **kw)
+    sig = sig.assign_coords(replicate=("group", [0, 1]))
+    est = replicates.replicate_estimates(sig, fit_points=5)
+    return {"sim": sim, "stored": stored, "sig": sig, "est": est}
+
+
+def draw(name, products, e_target=E):
+    p = products
+    return {
+        "fig1b": lambda: figures.fig1b(),
+        "fig2": lambda: figures.fig2(p["sim"], p["stored"]),
+        "fig3": lambda: figures.fig3(p["est"], e_target),
+        "fig4": lambda: figures.fig4(p["est"], e_target),
+        "fig_ev": lambda: figures.fig_ev(p["sig"], p["est"], e_target),
+    }[name]()
+
+
+def assert_labelled(fig):
+    """Every axes has a y label and an x label, its own or one of an axes sharing its x axis."""
+    axes = [ax for ax in fig.axes if ax.get_label() != "<colorbar>"]
+    assert axes
+    for ax in axes:
+        assert ax.get_ylabel().strip(), f"axes '{ax.get_title()}' has no y label"
+        siblings = ax.get_shared_x_axes().get_siblings(ax)
+        assert any(s.get_xlabel().strip() for s in siblings), f"axes '{ax.get_title()}' has no x label"
+
+
+@pytest.mark.parametrize("name", figures.FIGURES)
+def test_every_figure_has_labelled_axes_and_a_legend(name, products):
+    fig = draw(name, products)
+    assert isinstance(fig, Figure)
+    assert_labelled(fig)
+    assert fig.legends or any(ax.get_legend() is not None for ax in fig.axes)
+
+
+def test_figures_leave_no_pyplot_state(products):
+    plt.close("all")
+    for name in figures.FIGURES:
+        draw(name, products)
+    assert plt.get_fignums() == []
+
+
+def legend_texts(fig):
+    texts = [t.get_text() for ax in fig.axes if ax.get_legend() for t in ax.get_legend().get_texts()]
+    return texts + [t.get_text() for leg in fig.legends for t in leg.get_texts()]
+
+
+@pytest.mark.parametrize("name", ["fig3", "fig4"])
+def test_paper_values_are_shown_only_for_the_papers_target(name, products):
+    assert any("paper" in t for t in legend_texts(draw(name, products, e_target=0.95)))
+    assert not any("paper" in t for t in legend_texts(draw(name, products, e_target=0.8)))
+
+
+def test_extrapolated_lines_start_at_the_mean_zero_window_value(products):
+    est = products["est"]
+    fig = figures.fig3(est, E)
+    starts = {round(float(line.get_ydata()[0]), 12) for line in fig.axes[0].lines if len(line.get_xdata()) > 2}
+    for name in ("e_g", "e_0"):
+        assert round(float(est["e_hat0"].sel(estimator=name).mean()), 12) in starts
+
+
+def test_figures_cope_with_one_replicate_and_missing_estimates(products):
+    est = products["est"].isel(replicate=[0]).copy(deep=True)
+    est["e_hat"][dict(window=0)] = np.nan
+    for fig in (figures.fig3(est, E), figures.fig4(est, E), figures.fig_ev(products["sig"], est, E)):
+        assert_labelled(fig)
+
+
+def test_fig2_overlays_the_free_response_from_the_trigger_level(products):
+    fig = figures.fig2(products["sim"], products["stored"])
+    ax = fig.axes[2]
+    ideal = next(line for line in ax.lines if line.get_linestyle() == "--")
+    tau, r = ideal.get_xdata(), ideal.get_ydata()
+    t1 = math.sqrt(2 * float(products["stored"].attrs["a"]) / G)
+    assert r[0] == pytest.approx(1.0)  # normalized by the trigger level a
+    assert np.interp(t1, tau, r) == pytest.approx(0.0, abs=1e-3)
+    assert r.min() == pytest.approx(-(E**2), abs=1e-3)
+
+
+def test_save_writes_png_at_150_dpi_and_pdf_reproducibly(tmp_path):
+    fig = figures.fig1b()
+    png, pdf = tmp_path / "f.png", tmp_path / "f.pdf"
+    figures.save(fig, [png, pdf])
+    image = matplotlib.image.imread(png)
+    width, height = fig.get_size_inches()
+    assert image.shape[:2] == (round(height * 150), round(width * 150))
+    assert pdf.read_bytes().startswith(b"%PDF")
+    first = png.read_bytes(), pdf.read_bytes()
+    figures.save(fig, [png, pdf])
+    assert (png.read_bytes(), pdf.read_bytes()) == first
+
+
+# --- the workflow, end to end ---------------------------------------------------------
+
+SCENE = "tiny"
+FIGURE_FILES = [f"figures/{name}.{fmt}" for name in figures.FIGURES for fmt in ("png", "pdf")]
+PRODUCTS = [
+    "simulations.nc",
+    "signatures.nc",
+    "stored_signature.nc",
+    "estimates.nc",
+    "estimates_readings.nc",
+    "table.csv",
+    "table.md",
+    "table_readings.csv",
+    "table_readings.md",
+    *FIGURE_FILES,
+]
+JOBS = {
+    "simulate": 1,
+    "signatures": 1,
+    "estimates": 1,
+    "readings": 1,
+    "stored_signature": 1,
+    **{name: 1 for name in figures.FIGURES},
+    "all": 1,
+}
+
+
+def snakemake(workdir, *args):
+    proc = subprocess.run(
+        [sys.executable, "-m", "snakemake", "--cores", "2", *args],
+        cwd=workdir,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    return proc.returncode, proc.stdout + proc.stderr
+
+
+def job_stats(output: str) -> dict[str, int]:
+    """The first "Job stats" table of a Snakemake log as {rule: count}; {} if nothing to do."""
+    if "Nothing to be done" in output:
+        return {}
+    table = output.split("Job stats:", 1)[1].splitlines()[3:]
+    counts = {}
+    for line in table:
+        match = re.fullmatch(r"\s*(\S+)\s+(\d+)\s*", line)
+        if not match or match[1] == "total":
+            break
+        counts[match[1]] = int(match[2])
+    return counts
+
+
+@pytest.fixture(scope="module")
+def workflow(tmp_path_factory):
+    """A copy of the workflow with a shrunken tiny scene, dry-run and then built once."""
+    root = tmp_path_factory.mktemp("workflow")
+    shutil.copy(REPO / "Snakefile", root)
+    for folder in ("workflow", "config", "profiles"):
+        shutil.copytree(REPO / folder, root / folder, symlinks=False)  # resolves config/schema.yaml
+    config = yaml.safe_load((REPO / "config" / "config.yaml").read_text())
+    config["default_scene"] = SCENE
+    # 2 replicates of 10 series: the fewest the groups_of_10 reading accepts
+    config["scenes"][SCENE]["records"].update(replicates=2, series_per_replicate=10, store_series=10, chunk_seeds=10)
+    (root / "config" / "config.yaml").write_text(yaml.safe_dump(config, sort_keys=False))
+    code, dry = snakemake(root, "-n")
+    assert code == 0, dry
+    code, log = snakemake(root)
+    assert code == 0, log
+    return {"root": root, "dry_run": dry}
+
+
+@pytest.mark.slow
+def test_dry_run_lists_exactly_the_jobs_of_the_default_scene(workflow):
+    assert job_stats(workflow["dry_run"]) == JOBS
+
+
+@pytest.mark.slow
+def test_workflow_builds_every_product_and_each_opens(workflow):
+    results = workflow["root"] / "results" / SCENE
+    for name in PRODUCTS:
+        path = results / name
+        assert path.is_file() and path.stat().st_size > 0, name
+        if path.suffix == ".nc":
+            with xr.open_dataset(path) as ds:
+                assert ds.data_vars
+        elif path.suffix == ".png":
+            assert matplotlib.image.imread(path).ndim == 3
+        elif path.suffix == ".pdf":
+            assert path.read_bytes().startswith(b"%PDF")
+    with xr.open_dataset(results / "stored_signature.nc") as stored:
+        assert stored.sizes["group"] == 1
+        assert int(stored["count"].sel(trigger="a").max()) > 0
+
+
+@pytest.mark.slow
+def test_touching_a_plotting_script_reruns_only_that_figure(workflow):
+    root = workflow["root"]
+    code, out = snakemake(root, "-n")
+    assert code == 0 and job_stats(out) == {}, out
+    script = root / "workflow" / "scripts" / "fig_3.py"
+    script.touch()  # now: newer than the figures, built before the dry run above
+    code, out = snakemake(root, "-n")
+    assert code == 0 and job_stats(out) == {"fig3": 1, "all": 1}, out
