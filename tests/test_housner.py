@@ -293,6 +293,10 @@ def test_e_zero_rests_at_the_first_impact():
     )
     k = math.ceil(t1 / dt)
     assert np.all(theta[0, :k] > 0) and np.all(theta[0, k:] == 0.0) and np.all(theta_dot[0, k:] == 0.0)
+    # leaving zero: one bounce, then rest
+    w = 0.3 * C
+    assert flight(0.0, -w, 0.999 * bounce(w), 0.0)[0] < 0.0
+    assert flight(0.0, -w, 1.001 * bounce(w), 0.0) == (0.0, 0.0, False)
 
 
 def test_e_one_keeps_the_energy_over_many_cycles_and_long_steps():

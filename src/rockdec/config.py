@@ -14,6 +14,8 @@ from pathlib import Path
 import jsonschema
 import yaml
 
+from rockdec.estimators import min_points_per_cycle
+
 class ConfigError(ValueError):
     """A configuration the user can fix; the message names the field and the fix."""
 
@@ -57,6 +59,14 @@ def validate(config: dict) -> dict:
         if list(windows) != sorted(set(windows)):
             raise ConfigError(
                 f"config field 'scenes.{name}.signatures.windows': {windows} must be strictly ascending; sort it and drop repeats."
+            )
+        exc = scene["excitation"]
+        floor = min_points_per_cycle(scene["system"]["e"], scene["signatures"]["level"])
+        if exc["dt"] is None and exc["points_per_cycle"] < floor:
+            raise ConfigError(
+                f"config field 'scenes.{name}.excitation.points_per_cycle': {exc['points_per_cycle']} is below "
+                f"{floor:.1f}, the fewest samples per cycle that leave the local fits of eq. 27 three points "
+                f"each at e = {scene['system']['e']} and level {scene['signatures']['level']}; raise it."
             )
     if config["default_scene"] not in config["scenes"]:
         raise ConfigError(

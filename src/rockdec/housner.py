@@ -218,6 +218,8 @@ def housner_flight(theta, omega, duration, nu, theta_cr, e):
             w = u
             tb = _bounce_time(w, nu, c)
             if tb <= remaining:
+                if e == 0.0:  # plastic impact at the landing: rest
+                    return 0.0, 0.0, False
                 final = True
                 if e == 1.0:
                     k = float(math.floor(remaining / tb))

@@ -39,6 +39,9 @@ from rockdec.models import period_from_g, restoring_acceleration
 #: Largest number of correction steps when the closed-form flight count is off by rounding.
 _COUNT_FIX = 4
 
+#: Largest default burn-in, in steps; beyond it the caller must choose one.
+MAX_DEFAULT_BURN_IN = 10**7
+
 
 @numba.njit(nogil=True, cache=True)
 def flight(theta, omega, duration, g, e):
@@ -175,7 +178,13 @@ def default_burn_in(e: float, points_per_cycle: float, relaxations: float = 20.0
     loss = 1.0 - e**4
     if loss <= 0.0:
         raise ValueError("e = 1 dissipates no energy, so no stationary state exists: give --burn-in explicitly")
-    return int(math.ceil(relaxations * points_per_cycle / loss))
+    steps = relaxations * points_per_cycle / loss
+    if steps > MAX_DEFAULT_BURN_IN:
+        raise ValueError(
+            f"e = {e} loses only {loss:.2g} of the energy per cycle, so reaching the stationary state "
+            f"takes about {steps:.3g} steps; give --burn-in (and --dt) explicitly"
+        )
+    return int(math.ceil(steps))
 
 
 def calibrate_dt(
@@ -291,7 +300,8 @@ def scene_parameters(scene: dict, amplitude: float = 0.0) -> dict:
 
     ``dt`` comes from the scene or from :func:`calibrate_dt`; the burn-in from the scene or
     :func:`default_burn_in`. Stationary statistics are measured by a pilot at that step.
-    Without noise (``sigma_p = 0``, a free response) there is no ``sigma_Y``: the step then
+    Refuses ``e`` so close to 1 that the default burn-in would exceed
+    :data:`MAX_DEFAULT_BURN_IN` steps. Without noise (``sigma_p = 0``, a free response) there is no ``sigma_Y``: the step then
     gives ``points_per_cycle`` samples per cycle at ``amplitude`` (eq. 5), no burn-in.
     """
     system, exc = scene["system"], scene["excitation"]
