@@ -55,7 +55,12 @@ def reference_flight(theta, omega, duration, e, max_impacts=100_000):
         hi = 1.0 / NU
         while height(hi) > 0.0:
             hi *= 2.0
-        lo = 0.0 if h > 0.0 else 1e-3 * bounce(u)  # leave the start when it is the lower root
+        if h > 0.0:  # bracket within a factor of two (the root may be many decades below 1/nu)
+            while height(0.5 * hi) < 0.0:
+                hi *= 0.5
+            lo = 0.5 * hi
+        else:  # leaving zero: t = 0 is the lower root, the bounce ends near bounce(u)
+            lo = 1e-3 * bounce(u)
         t_cross = brentq(height, lo, hi, xtol=1e-300, rtol=1e-15, maxiter=1000)
         if t_cross >= remaining:
             t = remaining

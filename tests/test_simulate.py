@@ -179,3 +179,12 @@ def test_calibration_hits_points_per_cycle_and_refuses_e_one():
     assert cal["points_per_cycle"] == pytest.approx(75.0, rel=0.05)  # pilot sigma_Y is good to ~2 %
     with pytest.raises(ValueError, match="no energy"):
         simulate.calibrate_dt(e=1.0, g=G, sigma_p=0.003)
+
+
+@pytest.mark.parametrize("chunk", [1, 999, 10_007, 50_000])
+def test_long_series_in_time_chunks_equals_the_whole_series(chunk):
+    kwargs = dict(dt=0.0034, g=G, e=0.95, sigma_p=0.003, burn_in=500)
+    whole = simulate.simulate_block([4], 10_007, **kwargs)[0][0]
+    blocks = list(simulate.long_series(4, 10_007, chunk, **kwargs))
+    assert all(b[0].size <= chunk for b in blocks)
+    np.testing.assert_array_equal(np.concatenate([b[0] for b in blocks]), whole)

@@ -4,7 +4,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from rockdec import config, tradeoff
+from rockdec import config, io, tradeoff
 
 
 @pytest.fixture
@@ -95,7 +95,8 @@ def test_pareto_front_keeps_only_undominated_points():
     assert tradeoff.pareto_front(cost, error).tolist() == [0, 2, 4]
 
 
-def test_tiny_study_end_to_end(scene):
+@pytest.mark.filterwarnings("ignore::rockdec.signatures.NoTriggerWarning")
+def test_tiny_study_end_to_end(scene, tmp_path):
     scene["records"].update(replicates=2, series_per_replicate=3, n_points=2500, chunk_seeds=2)
     knobs = {"level": (1.5, 2.0), "simulator": ("exact", "fixed_step")}
     ds = tradeoff.run_study(scene, knobs, threads=2, pilot={"pilot_seeds": 8, "pilot_points": 5000})
@@ -105,6 +106,9 @@ def test_tiny_study_end_to_end(scene):
     # the fixed-step record is analysed with its own (larger) sigma_Y
     assert float(ds["sigma_y"][3]) > float(ds["sigma_y"][0])
     table = tradeoff.study_table(ds)
+    io.write_netcdf(ds, tmp_path / "tradeoff.nc")
+    with io.open_dataset(tmp_path / "tradeoff.nc") as back:
+        pd.testing.assert_frame_equal(tradeoff.study_table(back.load()), table)
     for col in ("knob", "value", "kind", "cpu_s", "estimator", "bias", "std", "rmse", "n"):
         assert col in table.columns
     assert len(table) == 4 * 7

@@ -374,3 +374,38 @@ def regenerate(attrs: dict, seeds, chunk_seeds: int = 100) -> xr.Dataset:
         burn_in=int(attrs["burn_in"]),
         chunk_seeds=chunk_seeds,
     )
+
+
+def long_series(seed: int, n_points: int, chunk: int, *, dt, g, e, sigma_p, theta0=0.0, theta_dot0=0.0, burn_in=0):
+    """One long series in time chunks: yields ``(theta, theta_dot)`` blocks of ``chunk`` samples.
+
+    Memory stays ``O(chunk)`` whatever ``n_points``; the concatenated blocks equal
+    :func:`simulate_block` of the same seed bit for bit (the state and the random stream
+    carry over from block to block).
+    """
+    rng = series_rng(seed)
+    impulses = np.empty(burn_in)
+    if sigma_p > 0.0:
+        rng.standard_normal(out=impulses)
+        impulses *= sigma_p
+    else:
+        impulses[:] = 0.0
+    state_theta, state_omega = np.empty(1), np.empty(1)
+    integrate(impulses, dt, g, e, theta0, theta_dot0, burn_in, state_theta, state_omega)
+    theta, omega = state_theta[0], state_omega[0]
+    done = 0
+    while done < n_points:
+        size = min(chunk, n_points - done)
+        first = done == 0  # the first block starts with the state after the burn-in
+        steps = size - 1 if first else size
+        impulses = np.empty(steps)
+        if sigma_p > 0.0:
+            rng.standard_normal(out=impulses)
+            impulses *= sigma_p
+        else:
+            impulses[:] = 0.0
+        out_theta, out_omega = np.empty(steps + 1), np.empty(steps + 1)
+        integrate(impulses, dt, g, e, theta, omega, 0, out_theta, out_omega)
+        theta, omega = out_theta[-1], out_omega[-1]
+        yield (out_theta, out_omega) if first else (out_theta[1:], out_omega[1:])
+        done += size

@@ -252,7 +252,9 @@ def _warm_up(scene: dict, calibration: dict, simulators: set) -> None:
 # --------------------------------------------------------------------------- the study
 
 
-def run_study(scene: dict, knobs: dict | None = None, threads: int = 1, pilot: dict | None = None) -> xr.Dataset:
+def run_study(
+    scene: dict, knobs: dict | None = None, threads: int = 1, pilot: dict | None = None, progress=None
+) -> xr.Dataset:
     """Every configuration of ``knobs`` (default :data:`KNOBS`) from ``scene``, cost and estimates.
 
     Returns a Dataset with dimension ``config`` (one per knob value, the base repeated under
@@ -260,18 +262,24 @@ def run_study(scene: dict, knobs: dict | None = None, threads: int = 1, pilot: d
     estimator, replicate)``, ``cpu_s``, ``wall_s``, ``calibration_cpu_s`` and the
     calibration (``dt``, ``burn_in``, ``sigma_y``, ``sigma_ydot``, achieved
     ``points_per_cycle_at_sigma_y``) per configuration; coordinates ``knob``, ``value`` and
-    every setting. Attributes: ``e_target``, ``replicates``, ``threads``.
+    every setting. Attributes: ``e_target``, ``replicates``, ``threads``, ``knobs``.
+    ``progress``, a callable taking a string, hears of each step (the rule's log).
     """
+    say = progress if progress is not None else (lambda text: None)
     configs = configurations(scene, knobs)
     base_key = _key(base_settings(scene))
     unique: dict[tuple, dict] = {}
     for _, _, settings in configs:
         unique.setdefault(_key(settings), settings)
+    say(f"{len(configs)} configurations, {len(unique)} distinct; calibrating the step")
     cal = calibrations(scene, list(unique.values()), threads=threads, pilot=pilot)
+    for (ppc, kind), entry in sorted(cal.items()):
+        say(f"calibration {ppc:g} points per cycle, {kind}: {entry}")
     _warm_up(scene, cal, {s["simulator"] for s in unique.values()})
     results = {}
     for key, settings in unique.items():
         results[key] = configuration_estimates(scene, settings, cal[(settings["points_per_cycle"], settings["simulator"])], threads)
+        say(f"{settings}: {results[key][1]:.2f} CPU s, {results[key][2]:.2f} s wall")
     rows = [results[_key(s)] for _, _, s in configs]
     cals = [cal[(s["points_per_cycle"], s["simulator"])] for _, _, s in configs]
     variants = [variant_scene(scene, s) for _, _, s in configs]
