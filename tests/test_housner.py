@@ -278,7 +278,9 @@ def test_overturning_separatrix_from_a_tilted_start(excess):
 
 
 def test_overturned_start_and_burn_in():
-    out = housner.simulate_block_housner([0], 10, dt=0.01, nu=NU, theta_cr=THETA_CR, e=0.9, sigma_p=0.0, theta0=THETA_CR)
+    out = housner.simulate_block_housner(
+        [0], 10, dt=0.01, nu=NU, theta_cr=THETA_CR, e=0.9, sigma_p=0.0, theta0=THETA_CR
+    )
     assert out[2][0] == 0 and np.all(np.isnan(out[0]))
     out = housner.simulate_block_housner(
         [0], 10, dt=0.01, nu=NU, theta_cr=THETA_CR, e=0.9, sigma_p=0.0, theta_dot0=2 * C, burn_in=100

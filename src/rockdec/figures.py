@@ -351,9 +351,9 @@ def fig_ev(sig: xr.Dataset, est: xr.Dataset, e_target: float | None = None) -> F
     (a) ``D_v`` pooled over every group, at the smallest and largest window, in units of
     ``sigma_Y`` against the lag in rocking periods ``T(a)`` (eq. 5). (b) The same near lag 0
     with the free flight through an impact at ``(0, v)``: slope ``v`` before, ``e v`` after
-    (eqs. 4, 6); the kink is the estimator ``e_v`` (slope ratio, :func:`rockdec.estimators.
-    e_impact_slope`). (c) ``e_v`` of every replicate against ``dv/dv_max``, the mean
-    extrapolated line and the target.
+    (eqs. 4, 6); the kink is the estimator ``e_v`` (slope ratio,
+    :func:`rockdec.estimators.e_impact_slope`). (c) ``e_v`` of every replicate against
+    ``dv/dv_max``, the mean extrapolated line and the target.
     """
     pooled = _pooled(sig)
     sigma_y, a, v, dt = (float(pooled.attrs[k]) for k in ("sigma_y", "a", "v", "dt"))

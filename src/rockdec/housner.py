@@ -1,8 +1,9 @@
 """Linearized Housner rocking model (paper eqs. 1-3, 6), simulated exactly between impulses.
 
-Model. For a slender block (small ``theta_cr``) the restoring moment of eq. 1 is linearized
-about the rocking corner but not about ``theta = 0``, which gives (paper eq. 2, the forced
-form) ``theta'' = nu^2 (theta - theta_cr s) + F(t)`` with ``s = sign(theta)``. On one side
+Model. For a slender block (small ``theta_cr``) the equations of motion of eq. 1 are
+linearized in ``theta_cr - |theta|`` (``sin x ~ x``, ``cos x ~ 1``) but not in
+``theta/theta_cr``, which gives ``theta'' = nu^2 (theta - theta_cr s) + F(t)`` with
+``s = sign(theta)``, the equation whose free solution is eq. 2. On one side
 the distance to the critical angle, ``y = theta_cr - |theta|``, obeys ``y'' = nu^2 y``, so the
 free motion is ``y(t) = A exp(nu t) + B exp(-nu t)``. From rest at ``theta0`` this is eq. 2,
 ``theta(t) = theta_cr - (theta_cr - theta0) cosh(nu t)``, and four quarter periods give eq. 3.

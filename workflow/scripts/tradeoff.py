@@ -1,0 +1,15 @@
+"""Rule `tradeoff`: each knob moved from the scene; CPU cost and accuracy per configuration."""
+
+import sys
+
+from rockdec import io, tradeoff
+
+sys.stderr = open(snakemake.log[0], "w")
+scene = snakemake.params.scene
+ds = tradeoff.run_study(scene, threads=snakemake.threads, progress=lambda text: print(text, file=sys.stderr, flush=True))
+ds.attrs.update(io.provenance("tradeoff", scene))
+io.write_netcdf(ds, snakemake.output.nc)
+table = tradeoff.study_table(ds)
+table.to_csv(snakemake.output.csv, index=False)
+with open(snakemake.output.md, "w") as f:
+    f.write(tradeoff.table_markdown(table))
