@@ -15,7 +15,7 @@ from pathlib import Path
 import dask
 import numpy as np
 
-from rockdec import simulate
+from rockdec import loading, simulate
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from rocking_reference import flight_reference  # noqa: E402
@@ -46,7 +46,7 @@ def main() -> None:
     def draw_only():
         buf = np.empty(args.burn_in + args.points - 1)
         for s in seeds:
-            simulate.series_rng(s).standard_normal(out=buf)
+            loading.series_rng(s).standard_normal(out=buf)
 
     t_draw = best_of(args.repeats, draw_only)
     t_one = best_of(args.repeats, lambda: simulate.simulate_block(seeds, args.points, **kw))
@@ -60,7 +60,7 @@ def main() -> None:
     t_dask2 = best_of(args.repeats, lambda: threaded(2))
     # pure-Python reference step on a short stretch of one series
     n_ref = 20_000
-    impulses = simulate.series_rng(0).standard_normal(n_ref) * sigma_p
+    impulses = loading.series_rng(0).standard_normal(n_ref) * sigma_p
 
     def python_steps():
         theta = omega = 0.0

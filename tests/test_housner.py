@@ -9,7 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.optimize import brentq
 
-from rockdec import housner, models, simulate
+from rockdec import housner, loading, models, simulate
 
 NU, THETA_CR = 3.0, 0.15
 C = NU * THETA_CR  # speed that just reaches theta_cr from theta = 0
@@ -207,7 +207,7 @@ def test_random_response_at_small_amplitude_matches_the_simplified_model():
         p = random_parameters(ratio)
         scaled = []
         for seed in range(100):
-            impulses = simulate.series_rng(seed).standard_normal(burn_in + n) * p["sigma_p"]
+            impulses = loading.series_rng(seed).standard_normal(burn_in + n) * p["sigma_p"]
             start, start_dot = np.empty(burn_in + 1), np.empty(burn_in + 1)
             simulate.integrate(impulses, p["dt"], G, p["e"], 0.0, 0.0, 0, start, start_dot)
             a, a_dot, b, b_dot = (np.empty(n) for _ in range(4))

@@ -15,7 +15,7 @@ Units: angles in rad, ``nu`` in rad/s, times in s, angular velocities in rad/s.
 
 Loading: exactly as :func:`rockdec.simulate.simulate_block` (eqs. 21-24 with the parabola
 replaced by the ``cosh``/``sinh`` arcs): velocity impulses ``p_n ~ N(0, sigma_p^2)`` from
-:func:`rockdec.simulate.series_rng` are added at the end of every step, so both models fed
+:func:`rockdec.loading.series_rng` are added at the end of every step, so both models fed
 the same seed see the same load.
 
 How :func:`housner_flight` advances a state exactly (writing ``h = |theta|`` the height above
@@ -54,7 +54,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from rockdec.models import period_housner, period_simplified
-from rockdec.simulate import series_rng
+from rockdec.loading import draw_impulses, series_rng
 
 #: Bounces from ``theta = 0`` with ``w/c`` at most this are counted in closed form.
 _SERIES_RATIO = 0.5
@@ -332,11 +332,7 @@ def simulate_block_housner(seeds, n_points, *, dt, nu, theta_cr, e, sigma_p, the
     overturned_at = np.full(seeds.size, -1, dtype=np.int64)
     impulses = np.empty(n_steps)
     for row, seed in enumerate(seeds):
-        if sigma_p > 0.0:
-            series_rng(seed).standard_normal(out=impulses)
-            impulses *= sigma_p
-        else:
-            impulses[:] = 0.0
+        draw_impulses(series_rng(seed), impulses, sigma_p)
         overturned_at[row] = integrate_housner(
             impulses, dt, nu, theta_cr, e, theta0, theta_dot0, burn_in, theta[row], theta_dot[row]
         )

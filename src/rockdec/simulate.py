@@ -27,13 +27,16 @@ Kernels take and return NumPy arrays; :func:`simulate_dataset` adds labels and D
 from __future__ import annotations
 
 import math
+import warnings
 
 import dask.array as da
 import numba
 import numpy as np
 import xarray as xr
 
+from rockdec.housner import choose_model, simulate_block_housner
 from rockdec.io import provenance
+from rockdec.loading import draw_impulses, series_rng
 from rockdec.models import period_from_g, restoring_acceleration
 
 #: Largest number of correction steps when the closed-form flight count is off by rounding.
@@ -137,15 +140,6 @@ def integrate(impulses, dt, g, e, theta0, omega0, burn_in, theta_out, omega_out)
         omega_out[j] = omega
 
 
-def series_rng(seed: int) -> np.random.Generator:
-    """The random generator of one series: NumPy ``SeedSequence(seed)``, PCG64.
-
-    A series depends on its own seed only, whatever other seeds, chunks or cores run
-    beside it.
-    """
-    return np.random.Generator(np.random.PCG64(np.random.SeedSequence(int(seed))))
-
-
 def simulate_block(seeds, n_points, *, dt, g, e, sigma_p, theta0=0.0, theta_dot0=0.0, burn_in=0):
     """Simulate one series per seed; returns ``(theta, theta_dot)``, each ``(len(seeds), n_points)``.
 
@@ -159,11 +153,7 @@ def simulate_block(seeds, n_points, *, dt, g, e, sigma_p, theta0=0.0, theta_dot0
     theta_dot = np.empty((seeds.size, n_points))
     impulses = np.empty(n_steps)
     for row, seed in enumerate(seeds):
-        if sigma_p > 0.0:
-            series_rng(seed).standard_normal(out=impulses)
-            impulses *= sigma_p
-        else:
-            impulses[:] = 0.0
+        draw_impulses(series_rng(seed), impulses, sigma_p)
         integrate(impulses, dt, g, e, theta0, theta_dot0, burn_in, theta[row], theta_dot[row])
     return theta, theta_dot
 
@@ -251,20 +241,37 @@ def simulation_dataset(
     theta_dot0: float = 0.0,
     burn_in: int = 0,
     chunk_seeds: int = 100,
+    model: str = "simplified",
+    theta_cr: float | None = None,
 ) -> xr.Dataset:
     """Lazy Dataset ``theta(seed, time)``, ``theta_dot(seed, time)`` (float64, Dask chunks over seed).
 
-    Nothing is simulated until the values are asked for; each chunk calls
-    :func:`simulate_block` (numba, ``nogil``), so Dask's threads run chunks in parallel.
-    A series depends on its seed only, so any chunking gives the same numbers, bit for bit.
+    Nothing is simulated until the values are asked for; each chunk calls the model's
+    block kernel (numba, ``nogil``), so Dask's threads run chunks in parallel. A series
+    depends on its seed only, so any chunking gives the same numbers, bit for bit.
+    ``model`` is ``"simplified"`` (eq. 4, :func:`simulate_block`) or ``"housner"`` (eq. 2,
+    :func:`rockdec.housner.simulate_block_housner`, which needs ``theta_cr``; a series that
+    overturns is NaN from the fall on).
     """
     seeds = np.atleast_1d(np.asarray(seeds, dtype=np.int64))
     seed_chunks = da.from_array(seeds, chunks=chunk_seeds)
+    common = dict(e=e, sigma_p=sigma_p, theta0=theta0, theta_dot0=theta_dot0, burn_in=burn_in, dt=dt)
+    if model == "simplified":
 
-    def block(chunk):
-        return np.stack(
-            simulate_block(chunk, n_points, dt=dt, g=g, e=e, sigma_p=sigma_p, theta0=theta0, theta_dot0=theta_dot0, burn_in=burn_in)
-        )
+        def block(chunk):
+            return np.stack(simulate_block(chunk, n_points, g=g, **common))
+
+    elif model == "housner":
+        if theta_cr is None:
+            raise ValueError("the Housner model needs theta_cr")
+        nu = math.sqrt(g / theta_cr)
+
+        def block(chunk):
+            theta, theta_dot, _ = simulate_block_housner(chunk, n_points, nu=nu, theta_cr=theta_cr, **common)
+            return np.stack((theta, theta_dot))
+
+    else:
+        raise ValueError(f"unknown model '{model}'; use simplified or housner")
 
     both = da.map_blocks(
         block, seed_chunks, new_axis=[0, 2], chunks=((2,), seed_chunks.chunks[0], (n_points,)), dtype=np.float64
@@ -284,7 +291,9 @@ def simulation_dataset(
             "time": ("time", time, {"units": "s", "long_name": "time since the end of the burn-in"}),
         },
     )
-    ds.attrs.update({"dt": dt, "g": g, "e": e, "sigma_p": sigma_p, "burn_in": burn_in, "theta0": theta0, "theta_dot0": theta_dot0})
+    ds.attrs.update(
+        {"model": model, "dt": dt, "g": g, "e": e, "sigma_p": sigma_p, "burn_in": burn_in, "theta0": theta0, "theta_dot0": theta_dot0}
+    )
     return ds
 
 
@@ -321,8 +330,23 @@ def scene_parameters(scene: dict, amplitude: float = 0.0) -> dict:
         cal = {"dt": exc["dt"], "burn_in": burn_in, **pilot_statistics(theta, exc["dt"], g)}
     if exc["burn_in"] is not None:
         cal["burn_in"] = exc["burn_in"]
+    model, reason = _model_for(scene["model"], cal["sigma_y"], system["theta_cr"])
+    if model == "housner" and sigma_p > 0.0:
+        # the trigger level and sampling follow the model that runs: re-measure the pilot
+        theta, _, _ = simulate_block_housner(
+            np.arange(64) + 2**62, 40_000, dt=cal["dt"], nu=system["nu"], theta_cr=system["theta_cr"],
+            e=e, sigma_p=sigma_p, burn_in=cal["burn_in"],
+        )
+        standing = np.all(np.isfinite(theta), axis=1)
+        if standing.mean() < 0.5:
+            raise ValueError(
+                f"the block overturns in {1 - standing.mean():.0%} of the pilot series (3 sigma_Y/theta_cr = "
+                f"{3 * cal['sigma_y'] / system['theta_cr']:.2g}): no stationary rocking exists; lower sigma_p"
+            )
+        cal.update(pilot_statistics(theta[standing], cal["dt"], g))
     return {
-        "model": scene["model"],
+        "model": model,
+        "model_reason": reason,
         "e": e,
         "nu": system["nu"],
         "theta_cr": system["theta_cr"],
@@ -331,6 +355,24 @@ def scene_parameters(scene: dict, amplitude: float = 0.0) -> dict:
         "points_per_cycle_target": exc["points_per_cycle"],
         **cal,
     }
+
+
+def _model_for(requested: str, sigma_y: float, theta_cr: float) -> tuple[str, str]:
+    """The model a scene runs, and why: as requested, or for ``auto`` by the amplitude.
+
+    ``auto`` judges the amplitude by ``3 sigma_Y / theta_cr`` (the response is heavy-tailed:
+    peaks of 3 sigma_Y are common) with :func:`rockdec.housner.choose_model`: the
+    simplified model while the periods of eqs. 3 and 5 agree within 2 %, Housner beyond.
+    A requested model is kept, with a warning in ``reason`` when it leaves its validity.
+    """
+    ratio = 3.0 * sigma_y / theta_cr if np.isfinite(sigma_y) else 0.0
+    chosen, why = choose_model(ratio)
+    if requested == "auto":
+        return chosen, f"auto: {why}"
+    if requested == "simplified" and chosen == "housner":
+        warnings.warn(f"the simplified model is outside its validity region: {why}", RuntimeWarning, stacklevel=3)
+        return requested, f"requested; outside its validity: {why}"
+    return requested, "requested"
 
 
 def scene_dataset(scene: dict, params: dict, seeds, theta0: float = 0.0, theta_dot0: float = 0.0) -> xr.Dataset:
@@ -350,6 +392,8 @@ def scene_dataset(scene: dict, params: dict, seeds, theta0: float = 0.0, theta_d
         theta_dot0=theta_dot0,
         burn_in=params["burn_in"],
         chunk_seeds=scene["records"]["chunk_seeds"],
+        model=params["model"],
+        theta_cr=params["theta_cr"],
     )
     ds.attrs.update({k: v for k, v in params.items()})
     ds.attrs["n_points"] = scene["records"]["n_points"]
@@ -373,6 +417,8 @@ def regenerate(attrs: dict, seeds, chunk_seeds: int = 100) -> xr.Dataset:
         theta_dot0=float(attrs["theta_dot0"]),
         burn_in=int(attrs["burn_in"]),
         chunk_seeds=chunk_seeds,
+        model=str(attrs.get("model", "simplified")),
+        theta_cr=float(attrs["theta_cr"]) if "theta_cr" in attrs else None,
     )
 
 
@@ -384,12 +430,7 @@ def long_series(seed: int, n_points: int, chunk: int, *, dt, g, e, sigma_p, thet
     carry over from block to block).
     """
     rng = series_rng(seed)
-    impulses = np.empty(burn_in)
-    if sigma_p > 0.0:
-        rng.standard_normal(out=impulses)
-        impulses *= sigma_p
-    else:
-        impulses[:] = 0.0
+    impulses = draw_impulses(rng, np.empty(burn_in), sigma_p)
     state_theta, state_omega = np.empty(1), np.empty(1)
     integrate(impulses, dt, g, e, theta0, theta_dot0, burn_in, state_theta, state_omega)
     theta, omega = state_theta[0], state_omega[0]
@@ -398,12 +439,7 @@ def long_series(seed: int, n_points: int, chunk: int, *, dt, g, e, sigma_p, thet
         size = min(chunk, n_points - done)
         first = done == 0  # the first block starts with the state after the burn-in
         steps = size - 1 if first else size
-        impulses = np.empty(steps)
-        if sigma_p > 0.0:
-            rng.standard_normal(out=impulses)
-            impulses *= sigma_p
-        else:
-            impulses[:] = 0.0
+        impulses = draw_impulses(rng, np.empty(steps), sigma_p)
         out_theta, out_omega = np.empty(steps + 1), np.empty(steps + 1)
         integrate(impulses, dt, g, e, theta, omega, 0, out_theta, out_omega)
         theta, omega = out_theta[-1], out_omega[-1]

@@ -21,8 +21,11 @@ Choices written down here (the issue leaves them open):
 * *Points per cycle* (``dt``) is moved at a fixed record **duration**: a series keeps the
   base scene's number of rocking cycles at amplitude ``sigma_Y`` (``n_points`` scales with
   the density), so the knob measures sampling alone, not more data. Likewise the burn-in
-  (in cycles, :func:`rockdec.simulate.default_burn_in`) and the ``e_v`` slope fits
-  (``fit_points`` scaled from the base, at least 3) keep their duration.
+  keeps its duration (in cycles, :func:`rockdec.simulate.default_burn_in`). The ``e_v``
+  slope fits keep the scene's ``fit_points`` *in samples*: scaling them to keep their
+  duration was tried and is worse (at 150 and 300 points per cycle the ``e_v`` bias went
+  from -0.001 with 5 points to +0.004 with 10 and 20; ``D_v`` is smooth only close to
+  the impact), while at 10-35 points per cycle neither choice is clearly better.
 * *Points per series* is counted at the base density; the burn-in stays as it is.
 * *Number of window sizes* ``n`` uses the evenly spaced relative windows
   ``1/n, 2/n, ..., 1`` (the scene's own list when ``n`` is its length).
@@ -52,7 +55,7 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from rockdec import estimators, fixed_step, replicates, simulate
+from rockdec import fixed_step, replicates, simulate
 from rockdec.models import restoring_acceleration
 
 KNOBS = {
@@ -69,7 +72,8 @@ KNOBS = {
 cycle at ``sigma_Y`` (eq. 5, sets ``dt``); ``n_points``: points per series (at the base
 density); ``series_per_replicate``: series pooled into one signature; ``n_windows``: window
 sizes of the zero-window extrapolation; ``level``: trigger level ``a/sigma_Y``;
-``n_periods``: lag range in periods at ``a`` (matters for ``e_g`` only); ``simulator``;
+``n_periods``: lag range in periods at ``a`` (it matters for ``e_g``; the others move only
+through the triggers lost at the record ends); ``simulator``;
 ``fixed_step_points_per_cycle``: the fixed-step simulator at another density."""
 
 SETTINGS = ("simulator", "points_per_cycle", "n_points", "series_per_replicate", "n_windows", "level", "n_periods")
@@ -82,6 +86,21 @@ Z95 = 1.96
 """Normal quantile of a two-sided 95 % interval."""
 
 CRITERIA = ("ci95", "rmse")
+
+SETTING_COLUMNS = ["kind", "points_per_cycle", "n_points", "series_per_replicate", "n_windows", "level", "n_periods"]
+"""Columns of :func:`study_table` that identify a configuration."""
+
+_SHORT = {
+    "points_per_cycle": "ppc",
+    "n_points": "points",
+    "series_per_replicate": "series",
+    "n_windows": "windows",
+    "level": "level",
+    "n_periods": "lag periods",
+    "simulator": "",
+    "fixed_step_points_per_cycle": "fixed-step ppc",
+}
+"""Short knob names for the labels of the Pareto front."""
 
 PARETO_ESTIMATORS = ("e4", "e_v", "e_0", "e1")
 """Estimators drawn by :func:`pareto_figure` by default."""
@@ -160,7 +179,6 @@ def variant_scene(scene: dict, settings: dict) -> dict:
         sig["windows"] = [round(k / n, 12) for k in range(1, n + 1)]
     sig["level"] = settings["level"]
     sig["n_periods"] = settings["n_periods"]
-    out["estimates"]["fit_points"] = max(estimators.MIN_FIT_POINTS, int(round(scene["estimates"]["fit_points"] * density)))
     return out
 
 
@@ -505,8 +523,9 @@ def pareto_figure(table: pd.DataFrame, estimators_shown=PARETO_ESTIMATORS):
     colors = {k: matplotlib.colormaps["tab10"](i % 10) for i, k in enumerate(knobs)}
     handles = {}
     for ax, name in zip(axes, shown):
-        part = table[(table["estimator"] == name)]
-        points = pd.concat([part[~part["base"]], part[part["base"]].head(1)])
+        # one marker per distinct configuration (the base and the fixed-step run at the
+        # base density are listed under two knobs each)
+        points = table[table["estimator"] == name].drop_duplicates(SETTING_COLUMNS)
         for knob in knobs:
             sel = points[(points["knob"] == knob) & ~points["base"]]
             handles[knob] = ax.scatter(sel["cpu_s_per_replicate"], sel["rmse"], s=28, color=colors[knob],
@@ -517,10 +536,11 @@ def pareto_figure(table: pd.DataFrame, estimators_shown=PARETO_ESTIMATORS):
                                          label="base scene", zorder=4)
         front = points.iloc[pareto_front(points["cpu_s_per_replicate"], points["rmse"])]
         ax.step(front["cpu_s_per_replicate"], front["rmse"], where="post", color="0.3", lw=1.2, zorder=2)
-        for _, row in front.iterrows():
-            text = "base" if row["base"] else f"{row['knob'].replace('_', ' ')} {row['value']}"
+        for k, (_, row) in enumerate(front.iterrows()):
+            text = "base" if row["base"] else f"{_SHORT.get(row['knob'], row['knob'])} {row['value']}".strip()
             ax.annotate(text, (row["cpu_s_per_replicate"], row["rmse"]), textcoords="offset points",
-                        xytext=(4, 4), fontsize=6.5, color="0.25")
+                        xytext=(4, 4) if k % 2 == 0 else (-4, -11), ha="left" if k % 2 == 0 else "right",
+                        fontsize=6.5, color="0.25")
         for tol in ACCURACY_CLASSES:
             ax.axhline(tol, color="0.75", lw=0.7, ls=":", zorder=1)
         ax.set_xscale("log")
