@@ -12,6 +12,7 @@ include: "workflow/rules/simulate.smk"
 include: "workflow/rules/signatures.smk"
 include: "workflow/rules/estimates.smk"
 include: "workflow/rules/figures.smk"
+include: "workflow/rules/studies.smk"
 
 
 rule all:

@@ -383,7 +383,7 @@ def test_two_steps_equal_one():
 
 
 def test_choose_model_and_amplitude_limit():
-    limit = housner.amplitude_limit(0.02)
+    limit = models.amplitude_limit(0.02)
     t3 = models.period_housner(limit, 1.0, 1.0)
     t5 = models.period_simplified(limit, 1.0, 1.0)
     assert t3 / t5 - 1 == pytest.approx(0.02, rel=1e-9)
@@ -396,7 +396,7 @@ def test_choose_model_and_amplitude_limit():
     name, reason = housner.choose_model(0.2, tolerance=0.2)
     assert name == "simplified" and "9.6" in reason
     with pytest.raises(ValueError):
-        housner.amplitude_limit(0.0)
+        models.amplitude_limit(0.0)
 
 
 def test_parameters_are_checked():

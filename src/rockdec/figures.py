@@ -40,7 +40,7 @@ from rockdec.models import period_from_g  # noqa: E402
 # imported where they are used: each plot rule is a fresh process, and these imports would
 # double its start-up time for the figures that do not need them.
 
-__all__ = ["FIGURES", "fig1b", "fig2", "fig3", "fig4", "fig_ev", "free_rocking", "period_gap_amplitude", "save"]
+__all__ = ["FIGURES", "fig1b", "fig2", "fig3", "fig4", "fig_ev", "free_rocking", "save"]
 
 FIGURES = ("fig1b", "fig2", "fig3", "fig4", "fig_ev")
 """Names of the figures; the workflow writes ``results/{scene}/figures/{name}.png|pdf``."""
@@ -104,20 +104,6 @@ def save(fig: Figure, paths: str | Path | Iterable[str | Path]) -> list[Path]:
     return written
 
 
-def period_gap_amplitude(tolerance: float = 0.05) -> float:
-    """Relative amplitude ``theta0/theta_cr`` where eq. 3 exceeds eq. 5 by ``tolerance``.
-
-    The ratio of the two periods grows monotonically from 1 at zero amplitude to infinity
-    at ``theta_cr`` (overturning), so the root is unique; 5 % is reached at 0.111.
-    """
-    from scipy.optimize import brentq
-
-    def excess(x):
-        return float(models.period_housner(x, 1.0, 1.0) / models.period_simplified(x, 1.0, 1.0)) - 1.0 - tolerance
-
-    return float(brentq(excess, 1e-9, 1.0 - 1e-9, xtol=1e-12))
-
-
 def _new_figure(width: float, height: float) -> Figure:
     return Figure(figsize=(width, height), layout="constrained")
 
@@ -174,7 +160,7 @@ def fig1b(max_ratio: float = 0.9, tolerance: float = 0.05) -> Figure:
     simple = models.period_simplified(ratio, 1.0, 1.0)
     with np.errstate(invalid="ignore", divide="ignore"):
         rel = housner / simple - 1.0
-    x_tol = period_gap_amplitude(tolerance)
+    x_tol = models.amplitude_limit(tolerance)
 
     fig = _new_figure(6.0, 5.5)
     top, bottom = fig.subplots(2, 1, sharex=True, height_ratios=[2.0, 1.0])
@@ -425,4 +411,29 @@ def fig_ev(sig: xr.Dataset, est: xr.Dataset, e_target: float | None = None) -> F
     ax_e.set_ylabel(r"$\hat e_v$ (slope ratio at lag 0)")
     ax_e.set_title(r"(c) $\hat e_v$ per replicate", fontsize="medium")
     ax_e.legend(fontsize="x-small", loc="best")
+    return fig
+
+
+def fig_amplitude(ds: xr.Dataset, e_target: float | None = None, estimators=("e_0", "e4", "e_v")) -> Figure:
+    """Simplified (eq. 4) vs linearized Housner (eq. 2) estimates against ``sigma_Y/theta_cr``.
+
+    ``ds`` from :func:`rockdec.amplitude.sweep`. Points: mean over replicates, error bars one
+    standard error. The dotted line marks where ``auto`` switches model: ``3 sigma_Y`` at the
+    amplitude where eqs. 3 and 5 differ by 2 % (:func:`rockdec.models.amplitude_limit`).
+    """
+    fig = _new_figure(4.0 * len(estimators), 4.0)
+    axes = np.atleast_1d(fig.subplots(1, len(estimators), sharey=False))
+    switch = models.amplitude_limit(0.02) / 3.0
+    for ax, name in zip(axes, estimators):
+        for model, color, marker in (("simplified", "tab:blue", "o"), ("housner", "tab:red", "s")):
+            values = ds["e_hat0"].sel(model=model, estimator=name)
+            mean, _, sem = _replicate_stats(values.transpose("replicate", "ratio"))
+            ax.errorbar(ds["ratio"].values, mean, yerr=sem, color=color, marker=marker, capsize=3, label=f"{model} model")
+        ax.axvline(switch, color="0.4", ls=":", label="auto switches model")
+        _draw_target(ax, e_target)
+        ax.set_xscale("log")
+        ax.set_xlabel(r"$\sigma_Y/\theta_{cr}$")
+        ax.set_ylabel(f"{name} at zero window")
+        ax.set_title(name, fontsize="medium")
+    axes[0].legend(fontsize="small")
     return fig

@@ -51,9 +51,8 @@ import math
 
 import numba
 import numpy as np
-from scipy.optimize import brentq
 
-from rockdec.models import period_housner, period_simplified
+from rockdec.models import amplitude_limit, period_mismatch
 from rockdec.loading import draw_impulses, series_rng
 
 #: Bounces from ``theta = 0`` with ``w/c`` at most this are counted in closed form.
@@ -337,31 +336,6 @@ def simulate_block_housner(seeds, n_points, *, dt, nu, theta_cr, e, sigma_p, the
             impulses, dt, nu, theta_cr, e, theta0, theta_dot0, burn_in, theta[row], theta_dot[row]
         )
     return theta, theta_dot, overturned_at
-
-
-def period_mismatch(amplitude_ratio: float) -> float:
-    """Relative excess of the Housner period (eq. 3) over the simplified one (eq. 5).
-
-    ``T_3/T_5 - 1`` at ``theta0/theta_cr = amplitude_ratio``; about ``5 ratio/12`` for small
-    ratios, infinite at ``ratio >= 1``. Dimensionless (the ratio of the periods does not
-    depend on ``nu``).
-    """
-    ratio = float(amplitude_ratio)
-    if ratio <= 0.0:
-        return 0.0
-    return float(period_housner(ratio, 1.0, 1.0) / period_simplified(ratio, 1.0, 1.0)) - 1.0
-
-
-def amplitude_limit(tolerance: float = 0.02) -> float:
-    """Amplitude ratio ``theta0/theta_cr`` at which eqs. 3 and 5 differ by ``tolerance`` (relative).
-
-    Below it the simplified model's period is within ``tolerance`` of the Housner one. The
-    mismatch grows monotonically from 0 (ratio -> 0) to infinity (ratio -> 1), so the root
-    is unique; found by :func:`scipy.optimize.brentq`. ``amplitude_limit(0.02)`` is about 0.047.
-    """
-    if not tolerance > 0.0:
-        raise ValueError(f"tolerance must be > 0 (got {tolerance})")
-    return float(brentq(lambda x: period_mismatch(x) - tolerance, 1e-12, 1.0 - 1e-12, xtol=1e-15, rtol=1e-14))
 
 
 def choose_model(amplitude_ratio: float, tolerance: float = 0.02) -> tuple[str, str]:

@@ -8,6 +8,7 @@ in rad/s**2.
 from __future__ import annotations
 
 import numpy as np
+from scipy.optimize import brentq
 
 
 def restoring_acceleration(nu: float, theta_cr: float) -> float:
@@ -38,3 +39,28 @@ def period_housner(theta0, nu: float, theta_cr: float):
     with np.errstate(divide="ignore", invalid="ignore"):
         out = 4.0 / nu * np.arccosh(1.0 / (1.0 - ratio))
     return np.where(ratio >= 1.0, np.inf, out)
+
+
+def period_mismatch(amplitude_ratio: float) -> float:
+    """Relative excess of the Housner period (eq. 3) over the simplified one (eq. 5).
+
+    ``T_3/T_5 - 1`` at ``theta0/theta_cr = amplitude_ratio``; about ``5 ratio/12`` for small
+    ratios, infinite at ``ratio >= 1``. Dimensionless (the ratio of the periods does not
+    depend on ``nu``).
+    """
+    ratio = float(amplitude_ratio)
+    if ratio <= 0.0:
+        return 0.0
+    return float(period_housner(ratio, 1.0, 1.0) / period_simplified(ratio, 1.0, 1.0)) - 1.0
+
+
+def amplitude_limit(tolerance: float = 0.02) -> float:
+    """Amplitude ratio ``theta0/theta_cr`` at which eqs. 3 and 5 differ by ``tolerance`` (relative).
+
+    Below it the simplified model's period is within ``tolerance`` of the Housner one. The
+    mismatch grows monotonically from 0 (ratio -> 0) to infinity (ratio -> 1), so the root
+    is unique; found by :func:`scipy.optimize.brentq`. ``amplitude_limit(0.02)`` is about 0.047.
+    """
+    if not tolerance > 0.0:
+        raise ValueError(f"tolerance must be > 0 (got {tolerance})")
+    return float(brentq(lambda x: period_mismatch(x) - tolerance, 1e-12, 1.0 - 1e-12, xtol=1e-15, rtol=1e-14))

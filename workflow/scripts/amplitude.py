@@ -1,0 +1,15 @@
+"""Rule `amplitude`: the simplified and Housner models over sigma_Y/theta_cr."""
+
+import sys
+
+from rockdec import amplitude, io, tables
+
+sys.stderr = open(snakemake.log[0], "w")
+scene = snakemake.params.scene
+ds = amplitude.sweep(scene, threads=snakemake.threads)
+ds.attrs.update(io.provenance("amplitude", scene))
+io.write_netcdf(ds, snakemake.output.estimates)
+table = amplitude.sweep_table(ds, scene["system"]["e"])
+table.to_csv(snakemake.output.csv, index=False)
+with open(snakemake.output.md, "w") as f:
+    f.write(tables.to_markdown(table))
