@@ -27,6 +27,8 @@ def test_points_per_cycle_keeps_the_record_duration(scene):
     assert scene["excitation"]["points_per_cycle"] == 75  # the base scene is left alone
     with pytest.raises(ValueError, match="unknown knob"):
         tradeoff.knob_settings(base, "colour", 1)
+    with pytest.raises(ValueError, match="simplified model"):
+        tradeoff.run_study({**scene, "model": "housner"})
 
 
 def test_every_knob_lists_the_base_value_once(scene):

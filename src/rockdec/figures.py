@@ -432,6 +432,8 @@ def fig_amplitude(ds: xr.Dataset, e_target: float | None = None, estimators=("e_
         ax.axvline(switch, color="0.4", ls=":", label="auto switches model")
         _draw_target(ax, e_target)
         ax.set_xscale("log")
+        ax.set_xticks(ds["ratio"].values, [f"{r:g}" for r in ds["ratio"].values], rotation=45)
+        ax.minorticks_off()
         ax.set_xlabel(r"$\sigma_Y/\theta_{cr}$")
         ax.set_ylabel(f"{name} at zero window")
         ax.set_title(name, fontsize="medium")

@@ -49,7 +49,7 @@ import numba
 import numpy as np
 import xarray as xr
 
-from rockdec.simulate import series_rng
+from rockdec.loading import draw_impulses, series_rng
 
 #: Name of this simulator in tables (``"exact"`` is :mod:`rockdec.simulate`).
 KIND = "fixed_step"
@@ -106,8 +106,7 @@ def simulate_block_fixed_step(seeds, n_points, *, dt, g, e, sigma_p, theta0=0.0,
     """One fixed-step series per seed; returns ``(theta, theta_dot)``, each ``(len(seeds), n_points)``.
 
     Drop-in for :func:`rockdec.simulate.simulate_block`: same arguments, same impulses
-    (``series_rng(seed).standard_normal(n) * sigma_p``), so a seed drives both simulators
-    with the same load. ``sigma_p = 0`` gives the free response from ``(theta0, theta_dot0)``.
+    (:mod:`rockdec.loading`), so a seed drives both simulators with the same load. ``sigma_p = 0`` gives the free response from ``(theta0, theta_dot0)``.
     """
     seeds = np.atleast_1d(np.asarray(seeds, dtype=np.int64))
     n_steps = burn_in + n_points - 1
@@ -115,11 +114,7 @@ def simulate_block_fixed_step(seeds, n_points, *, dt, g, e, sigma_p, theta0=0.0,
     theta_dot = np.empty((seeds.size, n_points))
     impulses = np.empty(n_steps)
     for row, seed in enumerate(seeds):
-        if sigma_p > 0.0:
-            series_rng(seed).standard_normal(out=impulses)
-            impulses *= sigma_p
-        else:
-            impulses[:] = 0.0
+        draw_impulses(series_rng(seed), impulses, sigma_p)
         integrate(impulses, dt, g, e, theta0, theta_dot0, burn_in, theta[row], theta_dot[row])
     return theta, theta_dot
 
