@@ -13,6 +13,7 @@ include: "workflow/rules/signatures.smk"
 include: "workflow/rules/estimates.smk"
 include: "workflow/rules/figures.smk"
 include: "workflow/rules/studies.smk"
+include: "workflow/rules/tradeoff.smk"
 
 
 rule all:

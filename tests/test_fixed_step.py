@@ -121,6 +121,6 @@ def test_same_seed_gives_the_same_series_bit_for_bit():
     alone, _ = fixed_step.simulate_block_fixed_step([8], 2000, **kw)
     assert np.array_equal(first, again) and np.array_equal(first_dot, again_dot)
     assert np.array_equal(alone[0], first[1])
-    lazy = fixed_step.simulation_dataset([7, 8, 9], 2000, chunk_seeds=2, **kw)
-    assert lazy["theta"].chunks is not None and lazy.attrs["simulator"] == "fixed_step"
+    lazy = simulate.simulation_dataset([7, 8, 9], 2000, chunk_seeds=2, model="fixed_step", **kw)
+    assert lazy["theta"].chunks is not None and lazy.attrs["model"] == "fixed_step"
     assert np.array_equal(lazy["theta"].values, first) and np.array_equal(lazy["theta_dot"].values, first_dot)

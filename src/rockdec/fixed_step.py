@@ -44,10 +44,8 @@ Kernels take and return NumPy arrays; :func:`simulation_dataset` adds labels and
 
 from __future__ import annotations
 
-import dask.array as da
 import numba
 import numpy as np
-import xarray as xr
 
 from rockdec.loading import draw_impulses, series_rng
 
@@ -117,50 +115,3 @@ def simulate_block_fixed_step(seeds, n_points, *, dt, g, e, sigma_p, theta0=0.0,
         draw_impulses(series_rng(seed), impulses, sigma_p)
         integrate(impulses, dt, g, e, theta0, theta_dot0, burn_in, theta[row], theta_dot[row])
     return theta, theta_dot
-
-
-def simulation_dataset(
-    seeds,
-    n_points: int,
-    *,
-    dt: float,
-    g: float,
-    e: float,
-    sigma_p: float,
-    theta0: float = 0.0,
-    theta_dot0: float = 0.0,
-    burn_in: int = 0,
-    chunk_seeds: int = 100,
-) -> xr.Dataset:
-    """Lazy Dataset ``theta(seed, time)``, ``theta_dot(seed, time)`` of the fixed-step simulator.
-
-    The counterpart of :func:`rockdec.simulate.simulation_dataset` (same dimensions,
-    coordinates and attributes, plus ``simulator = "fixed_step"``); Dask chunks over seed,
-    each chunk one call of :func:`simulate_block_fixed_step` (numba, ``nogil``).
-    """
-    seeds = np.atleast_1d(np.asarray(seeds, dtype=np.int64))
-    seed_chunks = da.from_array(seeds, chunks=chunk_seeds)
-    kw = dict(dt=dt, g=g, e=e, sigma_p=sigma_p, theta0=theta0, theta_dot0=theta_dot0, burn_in=burn_in)
-
-    def block(chunk):
-        return np.stack(simulate_block_fixed_step(chunk, n_points, **kw))
-
-    both = da.map_blocks(
-        block, seed_chunks, new_axis=[0, 2], chunks=((2,), seed_chunks.chunks[0], (n_points,)), dtype=np.float64
-    )
-    ds = xr.Dataset(
-        {
-            "theta": (("seed", "time"), both[0], {"units": "rad", "long_name": "rocking angle (fixed-step simulator)"}),
-            "theta_dot": (
-                ("seed", "time"),
-                both[1],
-                {"units": "rad s-1", "long_name": "rocking angular velocity just after the impulse (fixed-step simulator)"},
-            ),
-        },
-        coords={
-            "seed": ("seed", seeds, {"long_name": "NumPy SeedSequence entropy of the series"}),
-            "time": ("time", np.arange(n_points) * dt, {"units": "s", "long_name": "time since the end of the burn-in"}),
-        },
-    )
-    ds.attrs.update({**kw, "simulator": KIND})
-    return ds

@@ -34,6 +34,7 @@ import numba
 import numpy as np
 import xarray as xr
 
+from rockdec.fixed_step import simulate_block_fixed_step
 from rockdec.housner import choose_model, simulate_block_housner
 from rockdec.io import provenance
 from rockdec.loading import draw_impulses, series_rng
@@ -251,7 +252,8 @@ def simulation_dataset(
     depends on its seed only, so any chunking gives the same numbers, bit for bit.
     ``model`` is ``"simplified"`` (eq. 4, :func:`simulate_block`) or ``"housner"`` (eq. 2,
     :func:`rockdec.housner.simulate_block_housner`, which needs ``theta_cr``; a series that
-    overturns is NaN from the fall on).
+    overturns is NaN from the fall on); ``"fixed_step"`` runs the simplified model with the
+    grid-impact integrator of :mod:`rockdec.fixed_step` (for the speed/accuracy study).
     """
     seeds = np.atleast_1d(np.asarray(seeds, dtype=np.int64))
     seed_chunks = da.from_array(seeds, chunks=chunk_seeds)
@@ -269,6 +271,11 @@ def simulation_dataset(
         def block(chunk):
             theta, theta_dot, _ = simulate_block_housner(chunk, n_points, nu=nu, theta_cr=theta_cr, **common)
             return np.stack((theta, theta_dot))
+
+    elif model == "fixed_step":  # not a model: the grid-impact integrator of rockdec.fixed_step
+
+        def block(chunk):
+            return np.stack(simulate_block_fixed_step(chunk, n_points, g=g, **common))
 
     else:
         raise ValueError(f"unknown model '{model}'; use simplified or housner")

@@ -244,8 +244,7 @@ def configuration_estimates(scene: dict, settings: dict, calibration: dict, thre
     variant = variant_scene(scene, settings)
     rec = variant["records"]
     used, group, replicate_of_group = replicates.grouping(simulate.scene_seeds(variant), variant["estimates"]["reading"])
-    simulator = fixed_step.simulation_dataset if settings["simulator"] == fixed_step.KIND else simulate.simulation_dataset
-    sim = simulator(
+    sim = simulate.simulation_dataset(
         used,
         rec["n_points"],
         dt=calibration["dt"],
@@ -254,6 +253,7 @@ def configuration_estimates(scene: dict, settings: dict, calibration: dict, thre
         sigma_p=variant["excitation"]["sigma_p"],
         burn_in=calibration["burn_in"],
         chunk_seeds=rec["chunk_seeds"],
+        model="fixed_step" if settings["simulator"] == fixed_step.KIND else "simplified",
     )
     cube = replicates.scene_signatures(sim["theta"], variant, calibration, group, replicate_of_group)
     with dask.config.set(scheduler="threads", num_workers=threads):

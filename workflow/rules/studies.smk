@@ -1,5 +1,8 @@
 # Studies beyond the paper; each writes data, and its figure rule only reads it.
 
+# results/amplitude/table.csv|md also match rule `estimates` (scene amplitude): the study's are meant.
+ruleorder: amplitude > estimates
+
 
 rule amplitude:
     """Simplified vs Housner model over sigma_Y/theta_cr: where the simplified model's estimates drift."""
