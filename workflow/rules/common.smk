@@ -1,4 +1,6 @@
 # Config validation and the helpers that turn a scene into file names.
+from importlib.util import find_spec
+
 from rockdec import config as rockdec_config
 
 rockdec_config.validate(config)
@@ -31,3 +33,19 @@ def default_products():
         tables += ["table_readings.csv", "table_readings.md"]
     figures = [f"figures/{fig}.{fmt}" for fig in figure_names(name) for fmt in ("png", "pdf")]
     return [f"results/{name}/{product}" for product in tables + figures]
+
+
+FIGURES_CODE = find_spec("rockdec.figures").origin
+
+
+def figure_outputs(name):
+    """PNG and PDF of figure ``name`` for the scene, both tagged for the report."""
+    return {
+        fmt: report(
+            f"results/{{scene}}/figures/{name}.{fmt}",
+            caption=f"../report/{name}.rst",
+            category="Figures",
+            labels={"figure": name, "format": fmt.upper()},
+        )
+        for fmt in ("png", "pdf")
+    }

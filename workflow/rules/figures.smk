@@ -1,24 +1,6 @@
 # Figures: one compute rule (the signature of the stored series, paper fig. 2c) and one plot
 # rule per figure. Plot rules only read NetCDF products, so changing a plot never reruns a
 # simulation; each also lists the plotting module, so editing it redraws every figure.
-from importlib.util import find_spec
-
-FIGURES_CODE = find_spec("rockdec.figures").origin
-
-
-def figure_outputs(name):
-    """PNG and PDF of figure ``name`` for the scene, both tagged for the report."""
-    return {
-        fmt: report(
-            f"results/{{scene}}/figures/{name}.{fmt}",
-            caption=f"../report/{name}.rst",
-            category="Figures",
-            labels={"figure": name, "format": fmt.upper()},
-        )
-        for fmt in ("png", "pdf")
-    }
-
-
 rule stored_signature:
     """Signature cube of the stored series pooled into one group (the estimate of fig. 2c)."""
     input:
