@@ -30,7 +30,6 @@ from typing import NamedTuple
 
 import numpy as np
 import xarray as xr
-from numpy.polynomial import polynomial as poly
 
 from rockdec import __version__
 
@@ -181,7 +180,7 @@ def _lobes(r: np.ndarray) -> tuple[list[tuple[int, int, int]], str]:
     return lobes, ""
 
 
-def e_global(r) -> Estimate:
+def e_global(r, lobes=None) -> Estimate:
     """``e_g``: logarithmic decrement from all extremes of ``r`` (eqs. 25, 7).
 
     The extremes ``r_i`` are the sampled values of largest ``|r|`` between successive zero
@@ -192,32 +191,34 @@ def e_global(r) -> Estimate:
     step off the vertex of a parabola of curvature ``g``, when the half cycle is longer
     than a step). With ``2 ln|r_i| = 2 ln r_0 - i delta``
     (eq. 25), the least-squares slope of ``2 ln|r_i|`` on ``i`` is ``-delta``, and
-    ``e = exp(-delta/4)`` (eq. 7).
+    ``e = exp(-delta/4)`` (eq. 7). ``lobes``: the result of :func:`_lobes` when the caller
+    has it already (:func:`estimate_all`).
     """
     r = np.asarray(r, dtype=float)
-    lobes, reason = _lobes(r)
+    lobes, reason = _lobes(r) if lobes is None else lobes
     if reason:
         return _failed(reason)
     k = np.array([extreme for _, _, extreme in lobes])
-    slope = poly.polyfit(np.arange(k.size), 2.0 * np.log(np.abs(r[k])), 1)[1]
+    i = np.arange(k.size) - 0.5 * (k.size - 1)  # centred index: the slope needs no intercept
+    slope = float(np.dot(i, 2.0 * np.log(np.abs(r[k]))) / np.dot(i, i))
     return Estimate(float(np.exp(slope / 4.0)))
 
 
-def e_first_peak(r) -> Estimate:
+def e_first_peak(r, lobes=None) -> Estimate:
     """``e_0 = sqrt(|r_1| / r_0)`` (eq. 26): the first two sampled extremes of ``r``.
 
     ``r_0`` is the maximum and ``r_1`` the first minimum, located as in :func:`e_global`;
     for a decaying response they are the maximum and minimum of the whole estimate.
     """
     r = np.asarray(r, dtype=float)
-    lobes, reason = _lobes(r)
+    lobes, reason = _lobes(r) if lobes is None else lobes
     if reason:
         return _failed(reason)
     r0, r1 = r[lobes[0][2]], r[lobes[1][2]]
     return Estimate(float(np.sqrt(abs(r1) / r0)))
 
 
-def half_cycle(r, dt: float) -> HalfCycle:
+def half_cycle(r, dt: float, lobes=None) -> HalfCycle:
     """Fit the first half cycle of ``r`` with second-order polynomials (eq. 27).
 
     ``N_h = m + 1`` is the number of samples from ``tau = 0`` to the sampled first minimum
@@ -238,7 +239,7 @@ def half_cycle(r, dt: float) -> HalfCycle:
     exact to rounding.
     """
     r = np.asarray(r, dtype=float)
-    lobes, reason = _lobes(r)
+    lobes, reason = _lobes(r) if lobes is None else lobes
     if reason:
         return _failed_half_cycle(reason)
     (_, end0, _), (start1, end1, m) = lobes[0], lobes[1]
@@ -282,7 +283,7 @@ def half_cycle(r, dt: float) -> HalfCycle:
     )
 
 
-def local_measures(r, dt: float) -> dict[str, Estimate]:
+def local_measures(r, dt: float, lobes=None) -> dict[str, Estimate]:
     """``e1..e4`` of eq. 27 from one set of half-cycle fits (:func:`half_cycle`).
 
     ``e1 = sqrt(|c2|/c1)``, ``e2 = v2/v1``, ``e3 = (|c2|/c1) t1/(t2 - t1)``,
@@ -296,7 +297,7 @@ def local_measures(r, dt: float) -> dict[str, Estimate]:
     The paper prints ``e4 = t1/(t2 - t1)``, which is ``1/e`` for this response; ``e4``
     here is its reciprocal.
     """
-    h = half_cycle(r, dt)
+    h = half_cycle(r, dt, lobes)
     if h.reason:
         return {name: _failed(h.reason) for name in LOCAL_ESTIMATORS}
     ratio = abs(h.c2) / h.c1
@@ -342,8 +343,10 @@ def e_impact_slope(d, dt: float, fit_points: int = DEFAULT_FIT_POINTS) -> Estima
 def estimate_all(r, d, dt: float, fit_points: int = DEFAULT_FIT_POINTS) -> dict[str, Estimate]:
     """Every estimator of :data:`ESTIMATORS` on one free response ``r`` and one ``D_v``
     signature ``d`` (``None`` when there is none: ``e_v`` is then NaN)."""
+    r = np.asarray(r, dtype=float)
+    lobes = _lobes(r)
     e_v = _failed("no D_v signature") if d is None else e_impact_slope(d, dt, fit_points)
-    return {"e_g": e_global(r), "e_0": e_first_peak(r), **local_measures(r, dt), "e_v": e_v}
+    return {"e_g": e_global(r, lobes), "e_0": e_first_peak(r, lobes), **local_measures(r, dt, lobes), "e_v": e_v}
 
 
 def extrapolate_to_zero(x, y, weights=None) -> Extrapolation:

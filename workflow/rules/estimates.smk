@@ -30,7 +30,7 @@ rule readings:
         "results/{scene}/logs/readings.log",
     benchmark:
         "results/{scene}/benchmarks/readings.tsv"
-    threads: 2
+    threads: 1  # runs beside `signatures`: its cost is the GIL-bound fits of eq. 27
     params:
         scene=lambda w: scene(w.scene),
     script:
