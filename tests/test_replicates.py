@@ -77,3 +77,10 @@ def test_impact_slope_estimator_is_unbiased_on_the_reduced_scene(reduced_paper):
     """e_v (the paper's §6 proposal): no bias detectable at 3 standard errors."""
     row = tables.bias_row(reduced_paper["e_hat0"].sel(estimator="e_v").values, 0.95)
     assert abs(row["bias"]) < 3 * row["std"] / math.sqrt(row["n"]) + 1e-3
+
+
+def test_alternative_weights_sit_beside_the_table():
+    e_hat0 = xr.DataArray([[0.95, 0.96], [0.90, 0.92]], dims=("estimator", "replicate"), coords={"estimator": ["e1", "e4"]})
+    table = tables.with_alternative(tables.summary_table(e_hat0, 0.95), e_hat0 + 0.01, "count_weights", 0.95)
+    np.testing.assert_allclose(table["mean_count_weights"], table["mean"] + 0.01)
+    np.testing.assert_allclose(table["std_count_weights"], table["std"])

@@ -65,3 +65,13 @@ def to_markdown(table: pd.DataFrame) -> str:
         elif formatted[col].dtype.kind == "f":
             formatted[col] = formatted[col].map(lambda v: f"{v:.4f}")
     return formatted.to_markdown(index=False) + "\n"
+
+
+def with_alternative(table: pd.DataFrame, e_hat0: xr.DataArray, label: str, e_target: float) -> pd.DataFrame:
+    """``table`` with the mean and std of another variant of the estimates beside ours.
+
+    Used for the extrapolation weights (paper §5 weights by window size; the alternative
+    weights by trigger count): columns ``mean_<label>``, ``std_<label>``.
+    """
+    rows = [bias_row(e_hat0.sel(estimator=name).values, e_target) for name in table["estimator"]]
+    return table.assign(**{f"mean_{label}": [r["mean"] for r in rows], f"std_{label}": [r["std"] for r in rows]})
