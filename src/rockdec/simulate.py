@@ -47,7 +47,7 @@ _COUNT_FIX = 4
 MAX_DEFAULT_BURN_IN = 10**7
 
 
-@numba.njit(nogil=True, cache=True)
+@numba.njit(nogil=True, cache=True, inline="always")
 def flight(theta, omega, duration, g, e):
     """Advance ``(theta, omega)`` by ``duration`` seconds of free rocking (no load).
 
