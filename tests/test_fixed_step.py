@@ -21,7 +21,7 @@ G = 1.0
 
 
 def fixed_free(a, e, dt, n):
-    theta, omega = fixed_step.simulate_block_fixed_step([0], n, dt=dt, g=G, e=e, sigma_p=0.0, theta0=a)
+    theta, omega = simulate.simulate_block([0], n, dt=dt, g=G, e=e, sigma_p=0.0, theta0=a, grid_impacts=True)
     return theta[0], omega[0]
 
 
@@ -106,7 +106,7 @@ def test_plastic_impact_chatters_within_a_step_scale():
 
 def test_same_impulses_as_the_exact_simulator_before_the_first_impact():
     a = 0.7
-    fixed, _ = fixed_step.simulate_block_fixed_step([3, 4], 200, dt=0.01, g=G, e=0.9, sigma_p=0.003, theta0=a)
+    fixed, _ = simulate.simulate_block([3, 4], 200, dt=0.01, g=G, e=0.9, sigma_p=0.003, theta0=a, grid_impacts=True)
     exact, _ = simulate.simulate_block([3, 4], 200, dt=0.01, g=G, e=0.9, sigma_p=0.003, theta0=a)
     for f, x in zip(fixed, exact):
         before = int(np.argmax(x < 0))  # both integrate the same parabolas and impulses until then
@@ -116,9 +116,9 @@ def test_same_impulses_as_the_exact_simulator_before_the_first_impact():
 
 def test_same_seed_gives_the_same_series_bit_for_bit():
     kw = dict(dt=0.0034, g=G, e=0.95, sigma_p=0.003, burn_in=300)
-    first, first_dot = fixed_step.simulate_block_fixed_step([7, 8, 9], 2000, **kw)
-    again, again_dot = fixed_step.simulate_block_fixed_step([7, 8, 9], 2000, **kw)
-    alone, _ = fixed_step.simulate_block_fixed_step([8], 2000, **kw)
+    first, first_dot = simulate.simulate_block([7, 8, 9], 2000, **kw, grid_impacts=True)
+    again, again_dot = simulate.simulate_block([7, 8, 9], 2000, **kw, grid_impacts=True)
+    alone, _ = simulate.simulate_block([8], 2000, **kw, grid_impacts=True)
     assert np.array_equal(first, again) and np.array_equal(first_dot, again_dot)
     assert np.array_equal(alone[0], first[1])
     lazy = simulate.simulation_dataset([7, 8, 9], 2000, chunk_seeds=2, model="fixed_step", **kw)

@@ -39,15 +39,15 @@ Consequences (checked in ``tests/test_fixed_step.py``):
   ``190 g dt^2`` at ``e = 0.95``; with ``e = 0`` the block chatters within a few ``g dt^2``
   of zero. (The exact simulator resolves multiple impacts and the rest, SPEC §1.)
 
-Kernels take and return NumPy arrays; :func:`simulation_dataset` adds labels and Dask.
+The step loop, the load and the Dask wrapper are the exact simulator's:
+``rockdec.simulate.simulate_block(..., grid_impacts=True)`` and
+``rockdec.simulate.simulation_dataset(..., model="fixed_step")`` take :func:`step` instead of
+the exact flight.
 """
 
 from __future__ import annotations
 
 import numba
-import numpy as np
-
-from rockdec.loading import draw_impulses, series_rng
 
 #: Name of this simulator in tables (``"exact"`` is :mod:`rockdec.simulate`).
 KIND = "fixed_step"
@@ -75,43 +75,3 @@ def step(theta, omega, dt, g, e):
     if side * new_theta < 0.0 or (new_theta == 0.0 and theta != 0.0):
         new_omega *= e
     return new_theta, new_omega
-
-
-@numba.njit(nogil=True, cache=True)
-def integrate(impulses, dt, g, e, theta0, omega0, burn_in, theta_out, omega_out):
-    """Integrate one series with fixed steps and write the recorded part.
-
-    Same layout as :func:`rockdec.simulate.integrate`: ``burn_in + n - 1`` impulses (rad/s),
-    the first ``burn_in`` steps discarded, ``theta_out[0]`` the state after the burn-in,
-    ``omega_out[n]`` the velocity just after the impulse at sample ``n``.
-    """
-    theta = theta0
-    omega = omega0
-    n = theta_out.shape[0]
-    for i in range(burn_in):
-        theta, omega = step(theta, omega, dt, g, e)
-        omega += impulses[i]
-    theta_out[0] = theta
-    omega_out[0] = omega
-    for j in range(1, n):
-        theta, omega = step(theta, omega, dt, g, e)
-        omega += impulses[burn_in + j - 1]
-        theta_out[j] = theta
-        omega_out[j] = omega
-
-
-def simulate_block_fixed_step(seeds, n_points, *, dt, g, e, sigma_p, theta0=0.0, theta_dot0=0.0, burn_in=0):
-    """One fixed-step series per seed; returns ``(theta, theta_dot)``, each ``(len(seeds), n_points)``.
-
-    Drop-in for :func:`rockdec.simulate.simulate_block`: same arguments, same impulses
-    (:mod:`rockdec.loading`), so a seed drives both simulators with the same load. ``sigma_p = 0`` gives the free response from ``(theta0, theta_dot0)``.
-    """
-    seeds = np.atleast_1d(np.asarray(seeds, dtype=np.int64))
-    n_steps = burn_in + n_points - 1
-    theta = np.empty((seeds.size, n_points))
-    theta_dot = np.empty((seeds.size, n_points))
-    impulses = np.empty(n_steps)
-    for row, seed in enumerate(seeds):
-        draw_impulses(series_rng(seed), impulses, sigma_p)
-        integrate(impulses, dt, g, e, theta0, theta_dot0, burn_in, theta[row], theta_dot[row])
-    return theta, theta_dot

@@ -34,7 +34,7 @@ import numba
 import numpy as np
 import xarray as xr
 
-from rockdec.fixed_step import simulate_block_fixed_step
+from rockdec.fixed_step import step as grid_step
 from rockdec.housner import choose_model, simulate_block_housner
 from rockdec.io import provenance
 from rockdec.loading import draw_impulses, series_rng
@@ -118,35 +118,46 @@ def _bounce_time(f1, e, k):
     return f1 * k
 
 
+@numba.njit(nogil=True, cache=True, inline="always")
+def _advance(theta, omega, dt, g, e, grid_impacts):
+    """One unloaded step: the exact :func:`flight`, or the grid-impact step of
+    :mod:`rockdec.fixed_step` (what most public rocking codes do)."""
+    if grid_impacts:
+        return grid_step(theta, omega, dt, g, e)
+    return flight(theta, omega, dt, g, e)
+
+
 @numba.njit(nogil=True, cache=True)
-def integrate(impulses, dt, g, e, theta0, omega0, burn_in, theta_out, omega_out):
-    """Integrate one series exactly (eqs. 21-24) and write the recorded part.
+def integrate(impulses, dt, g, e, theta0, omega0, burn_in, theta_out, omega_out, grid_impacts=False):
+    """Integrate one series (eqs. 21-24) and write the recorded part.
 
     ``impulses`` holds ``burn_in + n - 1`` velocity impulses (rad/s); the first ``burn_in``
     steps are discarded, then ``n = len(theta_out)`` samples are written, the first one
-    being the state after the burn-in.
+    being the state after the burn-in. ``grid_impacts`` swaps the exact flight for the
+    fixed-step integrator (:func:`rockdec.fixed_step.step`).
     """
     theta = theta0
     omega = omega0
     n = theta_out.shape[0]
     for i in range(burn_in):
-        theta, omega = flight(theta, omega, dt, g, e)
+        theta, omega = _advance(theta, omega, dt, g, e, grid_impacts)
         omega += impulses[i]
     theta_out[0] = theta
     omega_out[0] = omega
     for j in range(1, n):
-        theta, omega = flight(theta, omega, dt, g, e)
+        theta, omega = _advance(theta, omega, dt, g, e, grid_impacts)
         omega += impulses[burn_in + j - 1]
         theta_out[j] = theta
         omega_out[j] = omega
 
 
-def simulate_block(seeds, n_points, *, dt, g, e, sigma_p, theta0=0.0, theta_dot0=0.0, burn_in=0):
+def simulate_block(seeds, n_points, *, dt, g, e, sigma_p, theta0=0.0, theta_dot0=0.0, burn_in=0, grid_impacts=False):
     """Simulate one series per seed; returns ``(theta, theta_dot)``, each ``(len(seeds), n_points)``.
 
     Kernel entry point (NumPy in, NumPy out). ``sigma_p`` is the standard deviation of the
     velocity impulses in rad/s; ``sigma_p = 0`` gives the free response from
-    ``(theta0, theta_dot0)``.
+    ``(theta0, theta_dot0)``. ``grid_impacts=True``: the fixed-step integrator instead of the
+    exact one (same load, same seed).
     """
     seeds = np.atleast_1d(np.asarray(seeds, dtype=np.int64))
     n_steps = burn_in + n_points - 1
@@ -155,7 +166,7 @@ def simulate_block(seeds, n_points, *, dt, g, e, sigma_p, theta0=0.0, theta_dot0
     impulses = np.empty(n_steps)
     for row, seed in enumerate(seeds):
         draw_impulses(series_rng(seed), impulses, sigma_p)
-        integrate(impulses, dt, g, e, theta0, theta_dot0, burn_in, theta[row], theta_dot[row])
+        integrate(impulses, dt, g, e, theta0, theta_dot0, burn_in, theta[row], theta_dot[row], grid_impacts)
     return theta, theta_dot
 
 
@@ -275,7 +286,7 @@ def simulation_dataset(
     elif model == "fixed_step":  # not a model: the grid-impact integrator of rockdec.fixed_step
 
         def block(chunk):
-            return np.stack(simulate_block_fixed_step(chunk, n_points, g=g, **common))
+            return np.stack(simulate_block(chunk, n_points, g=g, grid_impacts=True, **common))
 
     else:
         raise ValueError(f"unknown model '{model}'; use simplified or housner")

@@ -202,8 +202,8 @@ def _calibrate(scene: dict, points_per_cycle: float, simulators: set, pilot: dic
     out = {"exact": {**cal, "g": g}}
     if fixed_step.KIND in simulators:
         seeds = np.arange(min(FIXED_STEP_PILOT_SEEDS, pilot["pilot_seeds"])) + 2**62
-        theta, _ = fixed_step.simulate_block_fixed_step(
-            seeds, pilot["pilot_points"], dt=cal["dt"], g=g, e=e, sigma_p=sigma_p, burn_in=cal["burn_in"]
+        theta, _ = simulate.simulate_block(
+            seeds, pilot["pilot_points"], dt=cal["dt"], g=g, e=e, sigma_p=sigma_p, burn_in=cal["burn_in"], grid_impacts=True
         )
         out[fixed_step.KIND] = {"dt": cal["dt"], "burn_in": cal["burn_in"], "g": g, **simulate.pilot_statistics(theta, cal["dt"], g)}
     cpu = time.thread_time() - start
