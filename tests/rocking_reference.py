@@ -17,7 +17,9 @@ def flight_reference(theta, omega, duration, g, e, max_impacts=10_000_000):
         h, u = side * theta, side * omega
         # time to reach zero: positive root of h + u t - g t^2 / 2 = 0
         t_cross = (u + math.sqrt(u * u + 2.0 * g * h)) / g
-        if t_cross >= remaining:
+        # a landing exactly at the end of the interval is an impact: left for the next
+        # interval, the state (0, speed towards the other side) would cross unrestituted
+        if t_cross > remaining:
             t = remaining
             return side * (h + u * t - 0.5 * g * t * t), side * (u - g * t)
         speed = g * t_cross - u  # impact speed

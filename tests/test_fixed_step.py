@@ -15,7 +15,7 @@ import math
 import numpy as np
 import pytest
 
-from rockdec import fixed_step, simulate
+from rockdec import simulate
 
 G = 1.0
 

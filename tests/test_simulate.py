@@ -4,7 +4,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from rockdec import simulate
@@ -71,6 +71,13 @@ def test_rest_reached_at_geometric_series_sum(e):
     assert after == (0.0, 0.0)
 
 
+def test_landing_exactly_at_the_end_of_a_step_is_restituted():
+    # impact at t = 0 with speed 0.5 -> 0.25 up, back at zero at t = 2 * 0.25 / g = 0.5 = dt:
+    # that landing is an impact too (otherwise the next step would cross unrestituted)
+    theta, omega = simulate.flight(-1e-300, 0.5, 0.5, G, 0.5)
+    assert theta == 0.0 and omega == pytest.approx(-0.125, rel=1e-12)
+
+
 def test_many_impacts_in_one_step_do_not_hang():
     # e close to 1 and a tiny rebound speed: ~1e10 bounces inside one step
     theta, omega = simulate.flight(0.0, 1e-10, 1.0, G, 1.0 - 1e-9)
@@ -118,6 +125,7 @@ def test_extreme_restitution_behaves(e):
     duration=st.floats(1e-6, 3.0),
     e=st.one_of(st.floats(0.0, 0.99), st.just(1.0)),
 )
+@example(theta=-2.772155391678588e-203, omega=0.5, duration=0.5, e=0.5)  # lands exactly at the end
 def test_compiled_step_equals_reference_step(theta, omega, duration, e):
     # the reference walks impact by impact: keep the count of bounces it must walk small
     if e > 0.99 and abs(omega) + math.sqrt(2 * G * abs(theta)) < 1e-3:

@@ -43,9 +43,10 @@ def noise_for_ratios(scene: dict, ratios) -> list[float]:
 
 
 def sweep(scene: dict, ratios=RATIOS, threads: int = 1) -> xr.Dataset:
-    """``e_hat0(ratio, model, estimator, replicate)`` and ``overturned(ratio, model)`` (fraction)."""
+    """``e_hat0(ratio, model, estimator, replicate)``, the measured ``sigma_y_ratio(ratio, model)``
+    and ``skipped_fraction(ratio, model)`` (triggers lost to overturned stretches)."""
     out = []
-    for ratio, sigma_p in zip(ratios, noise_for_ratios(scene, ratios)):
+    for sigma_p in noise_for_ratios(scene, ratios):
         per_model = []
         base = copy.deepcopy(scene)
         base["excitation"]["sigma_p"] = sigma_p

@@ -43,6 +43,9 @@ from rockdec.models import period_from_g, restoring_acceleration
 #: Largest number of correction steps when the closed-form flight count is off by rounding.
 _COUNT_FIX = 4
 
+#: Pilot runs draw seeds from here on, apart from any scene's seeds.
+PILOT_SEED_OFFSET = 2**62
+
 #: Largest default burn-in, in steps; beyond it the caller must choose one.
 MAX_DEFAULT_BURN_IN = 10**7
 
@@ -222,7 +225,7 @@ def calibrate_dt(
     if sigma_p <= 0.0:
         raise ValueError("time-step calibration needs noise: sigma_p must be > 0 (or give --dt)")
     burn_in = default_burn_in(e, points_per_cycle)
-    seeds = np.arange(pilot_seeds) + 2**62  # pilot seeds kept apart from any scene's
+    seeds = np.arange(pilot_seeds) + PILOT_SEED_OFFSET
     dt = sigma_p / g * math.sqrt(4.0 * math.sqrt(2.0 * 290.0) / points_per_cycle)  # c is near 290 at e = 0.95
     for i in range(iterations):
         theta, _ = simulate_block(seeds, pilot_points, dt=dt, g=g, e=e, sigma_p=sigma_p, burn_in=burn_in)
@@ -344,7 +347,7 @@ def scene_parameters(scene: dict, amplitude: float = 0.0) -> dict:
         cal = calibrate_dt(e=e, g=g, sigma_p=sigma_p, points_per_cycle=exc["points_per_cycle"])
     else:
         burn_in = exc["burn_in"] if exc["burn_in"] is not None else default_burn_in(e, exc["points_per_cycle"])
-        theta, _ = simulate_block(np.arange(64) + 2**62, 40_000, dt=exc["dt"], g=g, e=e, sigma_p=sigma_p, burn_in=burn_in)
+        theta, _ = simulate_block(np.arange(64) + PILOT_SEED_OFFSET, 40_000, dt=exc["dt"], g=g, e=e, sigma_p=sigma_p, burn_in=burn_in)
         cal = {"dt": exc["dt"], "burn_in": burn_in, **pilot_statistics(theta, exc["dt"], g)}
     if exc["burn_in"] is not None:
         cal["burn_in"] = exc["burn_in"]
@@ -352,7 +355,7 @@ def scene_parameters(scene: dict, amplitude: float = 0.0) -> dict:
     if model == "housner" and sigma_p > 0.0:
         # the trigger level and sampling follow the model that runs: re-measure the pilot
         theta, _, _ = simulate_block_housner(
-            np.arange(64) + 2**62, 40_000, dt=cal["dt"], nu=system["nu"], theta_cr=system["theta_cr"],
+            np.arange(64) + PILOT_SEED_OFFSET, 40_000, dt=cal["dt"], nu=system["nu"], theta_cr=system["theta_cr"],
             e=e, sigma_p=sigma_p, burn_in=cal["burn_in"],
         )
         standing = np.all(np.isfinite(theta), axis=1)

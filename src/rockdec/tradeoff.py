@@ -201,7 +201,7 @@ def _calibrate(scene: dict, points_per_cycle: float, simulators: set, pilot: dic
     cal = simulate.calibrate_dt(e=e, g=g, sigma_p=sigma_p, points_per_cycle=points_per_cycle, **pilot)
     out = {"exact": {**cal, "g": g}}
     if fixed_step.KIND in simulators:
-        seeds = np.arange(min(FIXED_STEP_PILOT_SEEDS, pilot["pilot_seeds"])) + 2**62
+        seeds = np.arange(min(FIXED_STEP_PILOT_SEEDS, pilot["pilot_seeds"])) + simulate.PILOT_SEED_OFFSET
         theta, _ = simulate.simulate_block(
             seeds, pilot["pilot_points"], dt=cal["dt"], g=g, e=e, sigma_p=sigma_p, burn_in=cal["burn_in"], grid_impacts=True
         )
