@@ -1,4 +1,4 @@
-"""The ``rockdec`` command: ``simulate``, ``signatures``, ``estimates``.
+"""The ``rockdec`` command: ``estimate``, ``simulate``, ``signatures``, ``estimates``.
 
 Errors a user can cause (bad options, unknown scene, unwritable output) end with one
 sentence on stderr naming the problem and the fix, and exit code 2; no file is left
@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from pathlib import Path
 
 import numpy as np
 
@@ -153,15 +154,84 @@ def cmd_estimates(args) -> None:
         print(f"{name:>4}: " + ", ".join(f"{v:.4f} +- {s:.4f}" for v, s in zip(value, err)))
 
 
+def cmd_estimate(args) -> None:
+    from rockdec import inference, records
+
+    plot = io.check_output(args.plot, args.overwrite) if args.plot else None
+    recs = [
+        records.read_record(path, column=args.column, variable=args.variable, dt=args.dt, fs=args.fs) for path in args.records
+    ]
+    if args.g is not None and not (np.isfinite(args.g) and args.g > 0):
+        raise UsageError(f"--g {args.g}: the restoring acceleration must be a positive number of rad/s^2.")
+    if not args.json:
+        print(f"rockdec estimate: {len(recs)} record(s), {sum(r.theta.size for r in recs)} samples; calibrating ...", file=sys.stderr)
+    result = inference.estimate(recs, cache_dir=args.cache, g=args.g)
+    if plot is not None:
+        from rockdec import figures
+
+        figures.save(figures.fig_record(result), plot)
+    public = {k: v for k, v in result.items() if not k.startswith("_")}
+    if args.json:
+        print(json.dumps(public, indent=2))
+    else:
+        print(_estimate_text(public))
+
+
+def _estimate_text(res: dict) -> str:
+    """The human-readable report of ``rockdec estimate``."""
+    fmt = lambda x: "   nan" if x is None else f"{x:.4f}"  # noqa: E731
+    g_how = "given (--g)" if res["g_given"] else f"from the first zero crossing of the free response, g = 2 c1/t1^2, raw {res['g_raw']:.4g}, bias-corrected"
+    cal = res["calibration"]
+    lines = [
+        f"records: {', '.join(res['records'])}: {res['samples']} samples at dt = {res['dt']:.6g} s, {res['nan_samples']} NaN skipped",
+        f"sigma_Y = {res['sigma_y']:.4g} rad, {res['points_per_cycle']:.1f} samples per cycle at sigma_Y (eq. 5)",
+        f"g = {res['g']:.5g} rad/s^2 ({g_how})" if res["g"] is not None else "g: not determined",
+        f"calibration: {cal['file']} ({'from the cache' if cal['cached'] else 'built in %.1f s' % cal['seconds']})",
+        "",
+        f"{'estimator':<10} {'raw':>7} {'corrected':>10}   {'95 % interval':<19} {'triggers':>8}",
+    ]
+    for name, est in res["estimators"].items():
+        mark = " *" if name == res["estimator"] else "  "
+        interval = f"[{fmt(est['interval'][0])}, {fmt(est['interval'][1])}]"
+        lines.append(f"{name + mark:<10} {fmt(est['raw']):>7} {fmt(est['e']):>10}   {interval:<19} {est['triggers']:>8}")
+        lines += [f"{'':>12}note: {note}" for note in est["notes"]]
+    lines += ["", f"e = {fmt(res['e'])}, 95 % interval [{fmt(res['interval'][0])}, {fmt(res['interval'][1])}] ({res['estimator']}, marked *)"]
+    lines += [f"warning: {w}" for w in res["warnings"]]
+    return "\n".join(lines)
+
+
 def _progress():
     from dask.diagnostics import ProgressBar
 
     return ProgressBar(out=sys.stderr, minimum=2.0)
 
 
+def _default_cache() -> str:
+    """Where calibrations are stored: ``$ROCKDEC_CACHE``, else the user's cache folder."""
+    import os
+
+    import platformdirs
+
+    return os.environ.get("ROCKDEC_CACHE") or str(Path(platformdirs.user_cache_dir("rockdec")) / "calibration")
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="rockdec", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
+
+    est1 = sub.add_parser("estimate", help="e of a measured record, bias-corrected, with a 95 % interval (calibrated by simulation)")
+    est1.add_argument("records", nargs="+", help="record file(s) of one block, pooled: .csv (time,theta), .nc or .npy; angles in rad")
+    rate = est1.add_mutually_exclusive_group()
+    rate.add_argument("--dt", type=float, help="sampling step in s (for files without a time axis)")
+    rate.add_argument("--fs", type=float, help="sampling rate in Hz (for files without a time axis)")
+    est1.add_argument("--column", default="theta", help="CSV column of the angle (default: %(default)s)")
+    est1.add_argument("--variable", default="theta", help="NetCDF variable of the angle (default: %(default)s)")
+    est1.add_argument("--g", type=float, help="restoring acceleration nu^2 theta_cr in rad/s^2, if known (default: read off the record)")
+    est1.add_argument("--json", action="store_true", help="print one JSON object instead of the table")
+    est1.add_argument("--plot", help="draw the signature and the calibration curve to this PNG or PDF")
+    est1.add_argument("--cache", default=_default_cache(), help="folder of stored calibrations (default: %(default)s)")
+    est1.add_argument("--overwrite", action="store_true", help="replace --plot if it exists")
+    est1.set_defaults(func=cmd_estimate)
 
     sim = sub.add_parser("simulate", help="simulate rocking series (exact, eqs. 21-24) to NetCDF")
     sim.add_argument("--out", required=True, help="NetCDF file to write")

@@ -40,7 +40,7 @@ from rockdec.models import period_from_g  # noqa: E402
 # imported where they are used: each plot rule is a fresh process, and these imports would
 # double its start-up time for the figures that do not need them.
 
-__all__ = ["FIGURES", "fig1b", "fig2", "fig3", "fig4", "fig_ev", "free_rocking", "save"]
+__all__ = ["FIGURES", "fig1b", "fig2", "fig3", "fig4", "fig_ev", "fig_record", "free_rocking", "save"]
 
 FIGURES = ("fig1b", "fig2", "fig3", "fig4", "fig_ev")
 """Names of the figures; the workflow writes ``results/{scene}/figures/{name}.png|pdf``."""
@@ -438,4 +438,43 @@ def fig_amplitude(ds: xr.Dataset, e_target: float | None = None, estimators=("e_
         ax.set_ylabel(f"{name} at zero window")
         ax.set_title(name, fontsize="medium")
     axes[0].legend(fontsize="small")
+    return fig
+
+
+def fig_record(result: dict) -> Figure:
+    """A measured record's estimate (``rockdec estimate --plot``): signature and calibration.
+
+    Left: the free-response estimate of the record (even part of ``D_a``, largest window)
+    beside the free rocking of eqs. 4 and 6 from ``(c1, 0)`` with the corrected ``e`` and
+    ``g``. Right: the calibration belt of the reported estimator (mean of the raw estimate
+    against the true ``e``, and its 95 % band) with the observed raw value and the
+    corrected ``e`` and interval read off it. ``result`` is
+    :func:`rockdec.inference.estimate`'s output.
+    """
+    analysis, belt = result["_analysis"], result["_belts"][result["estimator"]]
+    fig = _new_figure(10.0, 4.0)
+    left, right = fig.subplots(1, 2)
+    r = analysis.free_response
+    tau = np.arange(r.size) * analysis.dt
+    left.plot(tau, r, color="tab:blue", lw=1.2, label="free-response estimate (even part of $D_a$)")
+    if result["e"] is not None and result["g"] is not None:
+        left.plot(tau, free_rocking(tau, float(r[0]), 0.0, result["g"], result["e"]), "k--", lw=1.0,
+                  label=f"free rocking, e = {result['e']:.3f}, g = {result['g']:.3g} rad/s$^2$ (eqs. 4, 6)")
+    left.axhline(0.0, color="0.6", lw=0.6)
+    left.set(xlabel=r"lag $\tau$ (s)", ylabel="angle (rad)", title="signature of the record")
+    left.legend(fontsize=8, loc="upper right")
+    from rockdec.calibration import Z95
+
+    right.fill_between(belt.e, belt.mean - Z95 * belt.spread, belt.mean + Z95 * belt.spread, color="tab:blue", alpha=0.25, label="95 % of simulated estimates")
+    right.plot(belt.e, belt.mean, color="tab:blue", label="mean raw estimate")
+    right.plot(belt.e, belt.e, **TARGET_STYLE, label="no bias")
+    raw = result["raw"]
+    if raw is not None:
+        right.axhline(raw, color="tab:red", lw=1.0, label=f"observed {result['estimator']} = {raw:.4f}")
+    if result["e"] is not None:
+        low, high = result["interval"]
+        right.axvspan(low, high, color="tab:red", alpha=0.15, label=f"e = {result['e']:.4f}, 95 %: [{low:.4f}, {high:.4f}]")
+        right.axvline(result["e"], color="tab:red", lw=1.0)
+    right.set(xlabel="true e", ylabel=f"raw {result['estimator']} at zero window", title="calibration (simulated records)")
+    right.legend(fontsize=8, loc="upper left")
     return fig

@@ -1,0 +1,182 @@
+"""The analysis of one measured record (or several records of one block), end to end.
+
+One function, :func:`analyse`, takes zero-mean-able rocking records sampled at ``dt`` and
+returns every estimator of ``e`` at zero window (eqs. 25-27, ``e_v``), the restoring
+acceleration ``g`` read off the signature, and the sampling density. The calibration
+(:mod:`rockdec.calibration`) runs this very function on simulated records, so whatever
+the pipeline does to a measured record it also does to the records that calibrate it.
+
+Steps
+    1. Each record loses its own mean; ``sigma_Y`` (of the angle) and ``sigma_Ydot`` (of the
+       sampled slope ``diff(y)/dt``) are pooled over all records, NaN left out.
+    2. ``g`` is not needed in advance. A first ``D_a`` signature, with a lag range of four
+       mean zero-crossing intervals (doubled until the free response crosses zero), locates
+       the first zero crossing ``t1`` of the free-response estimate. From ``(a, 0)`` the
+       free flight of eq. 4 is ``a - g tau^2/2``, so ``t1 = sqrt(2a/g)`` and
+       ``g = 2 c1 / t1^2`` (``c1`` the fitted start value, eq. 27's fits).
+    3. The definitive signatures use the lag range of ``n_periods`` rocking periods at
+       amplitude ``a`` with that ``g`` (eq. 5); every estimator is computed at every window
+       and extrapolated to zero window (weighted least squares, paper §5). ``g = 2 c1/t1^2``
+       is taken at the largest window, where most triggers make it least noisy (half the
+       spread of its zero-window extrapolation); its window bias is calibrated away
+       like the bias of the estimators of ``e``.
+
+The triggers of all records pool into one signature per window (sums and counts add), at
+one trigger level from the pooled ``sigma_Y``.
+"""
+
+from __future__ import annotations
+
+import warnings
+from typing import NamedTuple
+
+import numpy as np
+
+from rockdec import estimators, signatures
+from rockdec.models import period_from_g
+
+#: Settings of the analysis and their defaults (the workflow's scene defaults, see the schema).
+DEFAULT_SETTINGS = {
+    "level": 2.0,
+    "windows": signatures.DEFAULT_WINDOWS,
+    "window_max": 0.28,
+    "v_level": 1.0,
+    "dv_max": 0.28,
+    "n_periods": 2.5,
+    "both_signs": True,
+    "fit_points": estimators.DEFAULT_FIT_POINTS,
+    "weights": "window",
+}
+
+#: Name of the ``g`` row beside the estimators of ``e``.
+G_NAME = "g"
+
+
+class Analysis(NamedTuple):
+    """What :func:`analyse` measures on a set of records.
+
+    ``raw``: zero-window value per estimator of :data:`rockdec.estimators.ESTIMATORS`
+    (dimensionless) and ``"g"`` (rad/s^2, largest window); ``per_window``: the same names, one value per
+    window; ``count``: triggers per window, ``{"a": ..., "v": ...}``; ``sigma_y`` (rad),
+    ``sigma_ydot`` (rad/s), ``points_per_cycle`` (samples per cycle at amplitude
+    ``sigma_y`` with the measured ``g``, eq. 5), ``dt`` (s), ``n_lag``; ``free_response``
+    (largest window, ``tau >= 0``) and ``dv_signature`` (largest window, two-sided) for
+    plots; ``nan_samples``: NaN samples in the records.
+    """
+
+    raw: dict
+    per_window: dict
+    count: dict
+    sigma_y: float
+    sigma_ydot: float
+    points_per_cycle: float
+    dt: float
+    n_lag: int
+    free_response: np.ndarray
+    dv_signature: np.ndarray
+    nan_samples: int
+
+
+def _pooled_sums(records, trigger, target, widths, n_lag, dt, both_signs):
+    """Signature sums of one trigger over every record, pooled (they add, eq. 8)."""
+    total, count = None, None
+    for y in records:
+        if trigger == "a":
+            s = signatures.extremum_sums(y, target, widths, n_lag, both_signs=both_signs)
+        else:
+            s = signatures.crossing_sums(y, target, widths, n_lag, dt, both_signs=both_signs)
+        total = s.sum if total is None else total + s.sum
+        count = s.count if count is None else count + s.count
+    return total, count
+
+
+def _first_crossing_g(r: np.ndarray, dt: float) -> float:
+    """``g = 2 c1 / t1^2`` from the start value and first zero crossing of ``r`` (eq. 4)."""
+    h = estimators.half_cycle(r, dt)
+    return 2.0 * h.c1 / h.t1**2 if not h.reason else np.nan
+
+
+def _crossing_interval(records) -> float:
+    """Mean number of samples between zero crossings over the records (at least 1)."""
+    crossings = sum(int(np.count_nonzero(np.diff(np.signbit(y[np.isfinite(y)])))) for y in records)
+    samples = sum(int(np.isfinite(y).sum()) for y in records)
+    return samples / max(crossings, 1)
+
+
+def analyse(records, dt: float, settings: dict | None = None, g: float | None = None) -> Analysis:
+    """Every estimator of ``e`` and ``g`` on the pooled signatures of ``records``.
+
+    ``records``: a sequence of 1-D arrays (rad), each uniformly sampled at ``dt`` (s), NaN
+    allowed (segments holding a NaN are skipped); ``settings``: overrides of
+    :data:`DEFAULT_SETTINGS`; ``g`` (rad/s^2): the restoring acceleration when known,
+    which then sizes the lag range instead of the signature's own estimate (step 2 of
+    the module docstring is skipped; ``raw["g"]`` is still measured).
+    """
+    opts = {**DEFAULT_SETTINGS, **(settings or {})}
+    records = [np.asarray(y, dtype=np.float64) - np.nanmean(y) for y in records]
+    nan_samples = sum(int(np.count_nonzero(~np.isfinite(y))) for y in records)
+    sigma_y = float(np.sqrt(np.nanmean(np.concatenate([y**2 for y in records]))))
+    sigma_ydot = float(np.sqrt(np.nanmean(np.concatenate([(np.diff(y) / dt) ** 2 for y in records]))))
+    windows = np.asarray(opts["windows"], dtype=np.float64)
+    a = opts["level"] * sigma_y
+    a_widths = windows * opts["window_max"] * a
+    shortest = min(y.size for y in records)
+
+    g_first = np.nan
+    if g is None:
+        n_lag = int(np.ceil(4 * _crossing_interval(records)))
+        while True:
+            n_lag = min(n_lag, (shortest - 1) // 2)
+            total, count = _pooled_sums(records, "a", a, a_widths[-1:], n_lag, dt, opts["both_signs"])
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", signatures.NoTriggerWarning)
+                r = signatures.free_response(signatures.mean_signature(total[None], count[None], triggers=("a",))[0, -1])
+            g_first = _first_crossing_g(r, dt)
+            if np.isfinite(g_first) or 2 * n_lag + 1 >= shortest:
+                break
+            n_lag *= 2
+        if not np.isfinite(g_first):
+            raise ValueError(
+                "the free-response estimate never crosses zero inside the record, so g cannot be read off it; "
+                "give g (--g), or a longer record"
+            )
+    lag_g = g if g is not None else g_first
+    n_lag = signatures.lag_samples(opts["n_periods"], a, lag_g, dt)
+    if 2 * n_lag + 1 > shortest:
+        raise ValueError(
+            f"a lag range of {opts['n_periods']} rocking periods at the trigger level needs {2 * n_lag + 1} samples, "
+            f"but the shortest record has {shortest}; use longer records or a smaller n_periods"
+        )
+    v = opts["v_level"] * sigma_ydot
+    sum_a, count_a = _pooled_sums(records, "a", a, a_widths, n_lag, dt, opts["both_signs"])
+    sum_v, count_v = _pooled_sums(records, "v", v, windows * opts["dv_max"] * v, n_lag, dt, opts["both_signs"])
+    with warnings.catch_warnings():  # empty windows are reported through ``count``
+        warnings.simplefilter("ignore", signatures.NoTriggerWarning)
+        sig = signatures.mean_signature(np.stack([sum_a, sum_v]), np.stack([count_a, count_v]), windows=windows)
+    r_all = signatures.free_response(sig[0])
+
+    names = list(estimators.ESTIMATORS) + [G_NAME]
+    per_window = {name: np.full(windows.size, np.nan) for name in names}
+    for w in range(windows.size):
+        for name, est in estimators.estimate_all(r_all[w], sig[1, w], dt, opts["fit_points"]).items():
+            per_window[name][w] = est.value
+        per_window[G_NAME][w] = _first_crossing_g(r_all[w], dt)
+    raw = {G_NAME: per_window[G_NAME][-1]}
+    for name in estimators.ESTIMATORS:
+        weight = None
+        if opts["weights"] == "count":
+            weight = count_v if name == "e_v" else count_a
+        raw[name] = estimators.extrapolate_to_zero(windows, per_window[name], weight).value
+    return Analysis(
+        raw=raw,
+        per_window=per_window,
+        count={"a": count_a, "v": count_v},
+        sigma_y=sigma_y,
+        sigma_ydot=sigma_ydot,
+        points_per_cycle=float(period_from_g(sigma_y, lag_g) / dt),
+        dt=float(dt),
+        n_lag=int(n_lag),
+        free_response=r_all[-1],
+        dv_signature=sig[1, -1],
+        nan_samples=nan_samples,
+    )

@@ -1,0 +1,203 @@
+"""Measured records: read a rocking record from CSV, NetCDF or ``.npy``, and check it.
+
+A record is one uniformly sampled series of the rocking angle (rad). Everything a user's
+file can get wrong is refused here with one sentence that names the file, the problem and
+the fix (:class:`RecordError`): a missing, empty or unreadable file, non-numeric cells,
+an unknown column or variable, a time axis that is not uniform and increasing, infinite
+values, too many NaN, a constant record, or too few samples. NaN samples (gaps) are kept:
+the signatures skip every segment that holds one, and the count is reported.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import NamedTuple
+
+import numpy as np
+
+#: Largest fraction of NaN samples a record may hold.
+MAX_NAN_FRACTION = 0.1
+
+#: Fewest samples a record must have (a few rocking cycles at the sampling the fits need).
+MIN_SAMPLES = 1000
+
+#: Relative tolerance on the spacing of a time axis (printed times are rounded).
+TIME_RTOL = 1e-3
+
+
+class RecordError(ValueError):
+    """A record the user can fix; the message names the file, the problem and the fix."""
+
+
+class Record(NamedTuple):
+    """One record: ``theta`` (rad, 1-D, float64, NaN for gaps), ``dt`` (s), ``source`` (the file)."""
+
+    theta: np.ndarray
+    dt: float
+    source: str
+
+    @property
+    def nan_count(self) -> int:
+        return int(np.count_nonzero(np.isnan(self.theta)))
+
+
+def sampling_step(time, source: str) -> float:
+    """The step of a time axis (s), refusing one that is not uniform and increasing."""
+    t = np.asarray(time)
+    if np.issubdtype(t.dtype, np.datetime64) or np.issubdtype(t.dtype, np.timedelta64):
+        t = (t - t[0]) / np.timedelta64(1, "s")
+    t = t.astype(np.float64)
+    if t.size < 2:
+        raise RecordError(f"{source}: the time axis has {t.size} value(s); a record needs at least {MIN_SAMPLES} samples.")
+    if not np.all(np.isfinite(t)):
+        row = int(np.flatnonzero(~np.isfinite(t))[0])
+        raise RecordError(f"{source}: time value {row} is {t[row]}; every time stamp must be a finite number of seconds.")
+    step = np.diff(t)
+    if np.any(step <= 0):
+        row = int(np.flatnonzero(step <= 0)[0]) + 1
+        what = "repeats" if step[row - 1] == 0 else "goes back"
+        raise RecordError(f"{source}: time {what} at sample {row} (t = {t[row]:g} s); sort the record and drop duplicate stamps.")
+    median = float(np.median(step))
+    bad = np.abs(step - median) > TIME_RTOL * median
+    if np.any(bad):
+        row = int(np.flatnonzero(bad)[0]) + 1
+        raise RecordError(
+            f"{source}: time is not uniformly sampled (step {step[row - 1]:g} s at sample {row}, typical {median:g} s); "
+            "resample it to a uniform step, or mark missing samples as NaN on a uniform time axis."
+        )
+    return float((t[-1] - t[0]) / (t.size - 1))
+
+
+def _step_from_options(dt, fs, source: str) -> float | None:
+    if dt is not None and fs is not None:
+        raise RecordError(f"{source}: give the sampling as --dt or --fs, not both.")
+    step = dt if dt is not None else (1.0 / fs if fs is not None else None)
+    if step is not None and not (np.isfinite(step) and step > 0):
+        raise RecordError(f"{source}: the sampling step must be a positive, finite number of seconds (got --dt {dt}, --fs {fs}).")
+    return step
+
+
+def _read_csv(path: Path, column: str, step: float | None) -> tuple[np.ndarray, float]:
+    import pandas as pd
+
+    try:
+        table = pd.read_csv(path, comment="#", skipinitialspace=True)
+    except pd.errors.EmptyDataError:
+        raise RecordError(f"{path}: the file is empty; give a CSV with a 'time,{column}' header or one column and --dt.") from None
+    except (pd.errors.ParserError, UnicodeDecodeError) as exc:
+        raise RecordError(f"{path}: not a readable CSV file ({str(exc).splitlines()[0]}).") from None
+    if table.shape[1] == 1 and table.columns[0] not in ("time", column):
+        # one headerless column: the header line is the first value
+        table = pd.read_csv(path, comment="#", header=None, names=[column])
+    table.columns = [str(c).strip() for c in table.columns]
+    if column not in table.columns:
+        raise RecordError(f"{path}: no column '{column}' (columns: {', '.join(table.columns)}); name it with --column.")
+    values = _numeric(table[column], path, column)
+    if "time" in table.columns:
+        if step is not None:
+            raise RecordError(f"{path}: the file has a time column, so --dt/--fs would contradict it; drop the option.")
+        step = sampling_step(_numeric(table["time"], path, "time"), str(path))
+    elif step is None:
+        raise RecordError(f"{path}: no 'time' column; give the sampling step with --dt SECONDS or --fs HZ.")
+    return values, step
+
+
+def _numeric(series, path: Path, column: str) -> np.ndarray:
+    import pandas as pd
+
+    values = pd.to_numeric(series, errors="coerce").to_numpy(dtype=np.float64)
+    bad = np.isnan(values) & series.notna().to_numpy() & ~series.astype(str).str.strip().str.lower().isin(["nan", ""]).to_numpy()
+    if np.any(bad):
+        row = int(np.flatnonzero(bad)[0])
+        raise RecordError(f"{path}: column '{column}' row {row + 1} holds '{series.iloc[row]}', not a number; fix or blank that cell.")
+    return values
+
+
+def _read_netcdf(path: Path, variable: str, step: float | None) -> tuple[np.ndarray, float]:
+    import xarray as xr
+
+    try:
+        ds = xr.open_dataset(path)
+    except (OSError, ValueError) as exc:
+        raise RecordError(f"{path}: not a readable NetCDF file ({exc}).") from None
+    with ds:
+        if variable not in ds:
+            raise RecordError(f"{path}: no variable '{variable}' (variables: {', '.join(map(str, ds.data_vars))}); name it with --variable.")
+        var = ds[variable]
+        if var.ndim != 1:
+            raise RecordError(f"{path}: variable '{variable}' has dimensions {var.dims}; give a 1-D record (one series per file).")
+        values = var.values.astype(np.float64)
+        dim = var.dims[0]
+        if step is None:
+            if dim in ds.coords:
+                step = sampling_step(ds[dim].values, str(path))
+            elif "dt" in var.attrs or "dt" in ds.attrs:
+                step = float(var.attrs.get("dt", ds.attrs.get("dt")))
+            else:
+                raise RecordError(f"{path}: '{variable}' has no time coordinate and no 'dt' attribute; give --dt SECONDS or --fs HZ.")
+    return values, step
+
+
+def read_record(path, *, column: str = "theta", variable: str = "theta", dt: float | None = None, fs: float | None = None) -> Record:
+    """Read and check one record.
+
+    ``.csv``/``.txt``: a header with ``time`` and ``column`` (default ``theta``), or one
+    column of angles with ``dt``/``fs``; ``.nc``: the 1-D ``variable``, sampled by its
+    coordinate, its ``dt`` attribute or ``dt``/``fs``; ``.npy``: a 1-D array with ``dt``/``fs``.
+    Angles in rad, times in s. Raises :class:`RecordError`.
+    """
+    path = Path(path)
+    source = str(path)
+    step = _step_from_options(dt, fs, source)
+    if not path.is_file():
+        raise RecordError(f"{path}: no such file; check the path.")
+    if path.stat().st_size == 0:
+        raise RecordError(f"{path}: the file is empty; give a record with at least {MIN_SAMPLES} samples.")
+    suffix = path.suffix.lower()
+    if suffix in (".csv", ".txt"):
+        values, step = _read_csv(path, column, step)
+    elif suffix in (".nc", ".nc4", ".netcdf"):
+        values, step = _read_netcdf(path, variable, step)
+    elif suffix == ".npy":
+        try:
+            values = np.load(path, allow_pickle=False)
+        except (OSError, ValueError) as exc:
+            raise RecordError(f"{path}: not a readable .npy file ({exc}).") from None
+        if values.ndim != 1 or values.dtype.kind not in "fiu":
+            raise RecordError(f"{path}: holds a {values.dtype} array of shape {values.shape}; give a 1-D array of angles in rad.")
+        if step is None:
+            raise RecordError(f"{path}: a .npy record has no time axis; give --dt SECONDS or --fs HZ.")
+        values = values.astype(np.float64)
+    else:
+        raise RecordError(f"{path}: unknown record format '{suffix}'; give a .csv, .nc or .npy file.")
+    return check_values(values, step, source)
+
+
+def check_values(theta, dt: float, source: str) -> Record:
+    """Check the samples of a record (finite step, no inf, few NaN, not constant, long enough)."""
+    theta = np.asarray(theta, dtype=np.float64)
+    if not (np.isfinite(dt) and dt > 0):
+        raise RecordError(f"{source}: the sampling step {dt} is not a positive, finite number of seconds; give --dt.")
+    if theta.size < MIN_SAMPLES:
+        raise RecordError(f"{source}: the record has {theta.size} samples; the signatures need at least {MIN_SAMPLES} (many rocking cycles).")
+    if np.any(np.isinf(theta)):
+        row = int(np.flatnonzero(np.isinf(theta))[0])
+        raise RecordError(f"{source}: sample {row} is infinite; remove it or mark it as a gap (NaN).")
+    nan = int(np.count_nonzero(np.isnan(theta)))
+    if nan > MAX_NAN_FRACTION * theta.size:
+        raise RecordError(
+            f"{source}: {nan} of {theta.size} samples are NaN (more than {MAX_NAN_FRACTION:.0%}); give a record with fewer gaps."
+        )
+    finite = theta[np.isfinite(theta)]
+    if finite.size == 0 or np.ptp(finite) == 0:
+        raise RecordError(f"{source}: the record is constant ({finite[0] if finite.size else 'all NaN'}); a rocking record must move.")
+    return Record(theta, float(dt), source)
+
+
+def same_step(records: list[Record]) -> float:
+    """The common step of several records of one block; refuses steps that differ."""
+    steps = np.array([r.dt for r in records])
+    if np.any(np.abs(steps - steps[0]) > 1e-6 * steps[0]):
+        listing = ", ".join(f"{r.source}: {r.dt:g} s" for r in records)
+        raise RecordError(f"records pooled together must share one sampling step ({listing}); resample them to one step.")
+    return float(steps[0])
