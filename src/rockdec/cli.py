@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from rockdec import config as config_mod
-from rockdec import io, replicates, simulate
+from rockdec import io, records, replicates, simulate
 
 #: Scene fields set by ``simulate`` options: option -> (section, key).
 SIMULATE_OPTIONS = {
@@ -99,7 +99,14 @@ def cmd_signatures(args) -> None:
     if set(theta.dims) != {"seed", "time"}:
         raise UsageError(f"'{args.variable}' must have dimensions (seed, time) or (time); it has {theta.dims}.")
     theta = theta.transpose("seed", "time").astype(float)
-    theta.attrs.setdefault("dt", attrs.get("dt", float(theta.time[1] - theta.time[0])))
+    if "dt" in attrs:
+        theta.attrs["dt"] = float(attrs["dt"])
+    elif "time" in theta.coords:
+        theta.attrs["dt"] = records.sampling_step(theta["time"].values, f"{args.input}: '{args.variable}'")
+    else:
+        raise UsageError(f"{args.input}: '{args.variable}' has no time coordinate and the file no 'dt' attribute; add either.")
+    if np.isinf(theta.values).any():
+        raise UsageError(f"{args.input}: '{args.variable}' holds infinite values; remove them or mark them as gaps (NaN).")
     stats = {
         "sigma_y": _finite(attrs.get("sigma_y"), lambda: float(np.sqrt(np.nanmean(theta.values**2)))),
         "sigma_ydot": _finite(
@@ -140,7 +147,7 @@ def _finite(value, fallback):
 def cmd_estimates(args) -> None:
     out = io.check_output(args.out, args.overwrite)
     with io.open_dataset(args.input) as src:
-        if "free_response" not in src or "group" not in src.dims:
+        if "free_response" not in src or "group" not in src.dims or "count" not in src or "dt" not in src.attrs:
             raise UsageError(f"{args.input} is not a signature file; make one with 'rockdec signatures'.")
         cube = src.load()
     if "replicate" not in cube.coords:
@@ -155,7 +162,7 @@ def cmd_estimates(args) -> None:
 
 
 def cmd_estimate(args) -> None:
-    from rockdec import inference, records
+    from rockdec import inference
 
     plot = io.check_output(args.plot, args.overwrite) if args.plot else None
     recs = [

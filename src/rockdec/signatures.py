@@ -70,6 +70,7 @@ from numba import njit
 
 from rockdec import __version__
 from rockdec.models import period_from_g
+from rockdec.records import sampling_step
 
 __all__ = [
     "DEFAULT_WINDOWS",
@@ -408,18 +409,12 @@ def _cube_time_chunked(x, **kw):
 
 
 def _sampling_interval(theta: xr.DataArray) -> float:
-    """``dt`` in s from ``theta.attrs['dt']`` or a uniform ``time`` coordinate."""
+    """``dt`` in s from ``theta.attrs['dt']`` or a uniform, increasing ``time`` coordinate
+    (:func:`rockdec.records.sampling_step`)."""
     if "dt" in theta.attrs:
         return float(theta.attrs["dt"])
-    if "time" in theta.coords and theta.sizes["time"] > 1:
-        t = theta["time"].values
-        step = np.diff(t)
-        if np.issubdtype(step.dtype, np.timedelta64):
-            step = step / np.timedelta64(1, "s")
-        step = step.astype(np.float64)
-        if np.allclose(step, step[0], rtol=1e-6, atol=0):
-            return float(step[0])
-        raise ValueError("the time coordinate is not uniformly sampled: resample it, or give attrs['dt'] in seconds")
+    if "time" in theta.coords:
+        return sampling_step(theta["time"].values, "theta's time coordinate")
     raise ValueError("cannot tell the sampling interval: give theta an attribute 'dt' (s) or a uniform 'time' coordinate")
 
 

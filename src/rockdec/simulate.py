@@ -154,13 +154,14 @@ def integrate(impulses, dt, g, e, theta0, omega0, burn_in, theta_out, omega_out,
         omega_out[j] = omega
 
 
-def simulate_block(seeds, n_points, *, dt, g, e, sigma_p, theta0=0.0, theta_dot0=0.0, burn_in=0, grid_impacts=False):
+def simulate_block(seeds, n_points, *, dt, g, e, sigma_p, theta0=0.0, theta_dot0=0.0, burn_in=0, grid_impacts=False, pole=0.0):
     """Simulate one series per seed; returns ``(theta, theta_dot)``, each ``(len(seeds), n_points)``.
 
     Kernel entry point (NumPy in, NumPy out). ``sigma_p`` is the standard deviation of the
     velocity impulses in rad/s; ``sigma_p = 0`` gives the free response from
     ``(theta0, theta_dot0)``. ``grid_impacts=True``: the fixed-step integrator instead of the
-    exact one (same load, same seed).
+    exact one (same load, same seed). ``pole``: low-pass filtered load
+    (:func:`rockdec.loading.draw_impulses`), 0 for white noise.
     """
     seeds = np.atleast_1d(np.asarray(seeds, dtype=np.int64))
     n_steps = burn_in + n_points - 1
@@ -168,7 +169,7 @@ def simulate_block(seeds, n_points, *, dt, g, e, sigma_p, theta0=0.0, theta_dot0
     theta_dot = np.empty((seeds.size, n_points))
     impulses = np.empty(n_steps)
     for row, seed in enumerate(seeds):
-        draw_impulses(series_rng(seed), impulses, sigma_p)
+        draw_impulses(series_rng(seed), impulses, sigma_p, pole)
         integrate(impulses, dt, g, e, theta0, theta_dot0, burn_in, theta[row], theta_dot[row], grid_impacts)
     return theta, theta_dot
 
@@ -201,6 +202,7 @@ def calibrate_dt(
     pilot_seeds: int = 256,
     pilot_points: int = 40_000,
     iterations: int = 3,
+    pole: float = 0.0,
 ) -> dict:
     """Time step giving ``points_per_cycle`` samples per cycle at amplitude ``sigma_Y`` (eq. 5).
 
@@ -214,7 +216,8 @@ def calibrate_dt(
 
     Returns a dict with ``dt``, ``burn_in``, and the last pilot's statistics at that step:
     ``sigma_y``, ``sigma_ydot`` (of the sampled slope ``diff(theta)/dt``, what a measured
-    record gives) and the achieved ``points_per_cycle``. Refuses ``e >= 1``.
+    record gives) and the achieved ``points_per_cycle``. Refuses ``e >= 1``. ``pole``:
+    a low-pass filtered load (:func:`rockdec.loading.draw_impulses`).
     """
     if e >= 1.0:
         raise ValueError(
@@ -228,7 +231,7 @@ def calibrate_dt(
     seeds = np.arange(pilot_seeds) + PILOT_SEED_OFFSET
     dt = sigma_p / g * math.sqrt(4.0 * math.sqrt(2.0 * 290.0) / points_per_cycle)  # c is near 290 at e = 0.95
     for i in range(iterations):
-        theta, _ = simulate_block(seeds, pilot_points, dt=dt, g=g, e=e, sigma_p=sigma_p, burn_in=burn_in)
+        theta, _ = simulate_block(seeds, pilot_points, dt=dt, g=g, e=e, sigma_p=sigma_p, burn_in=burn_in, pole=pole)
         stats = pilot_statistics(theta, dt, g)
         if i < iterations - 1:
             c = stats["sigma_y"] * dt**2 * g**3 / sigma_p**4
