@@ -28,7 +28,7 @@ record with the same settings. Coverage is measured, not assumed
 (:mod:`rockdec.coverage`).
 
 The calibration is stored as NetCDF under a name hashed from everything it depends on, and
-reused.
+reused; the name also hashes the source of the pipeline (:func:`pipeline_fingerprint`).
 """
 
 from __future__ import annotations
@@ -93,7 +93,20 @@ def calibration_settings(lengths, points_per_cycle: float, settings: dict | None
         "e_grid": list(E_GRID),
         "sets_per_e": SETS_PER_E,
         "rockdec_version": __version__,
+        "pipeline": pipeline_fingerprint(),
     }
+
+
+def pipeline_fingerprint() -> str:
+    """SHA-256 (16 hex digits) of the source of every module the calibrated pipeline runs:
+    a change to the simulator, the signatures, the estimators or the analysis makes every
+    stored calibration stale, whatever the version number says."""
+    from rockdec import loading, signatures, simulate
+
+    digest = hashlib.sha256()
+    for module in (loading, simulate, signatures, estimators, measured):
+        digest.update(Path(module.__file__).read_bytes())
+    return digest.hexdigest()[:16]
 
 
 def settings_hash(cal_settings: dict) -> str:

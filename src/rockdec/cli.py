@@ -172,7 +172,8 @@ def cmd_estimate(args) -> None:
         raise UsageError(f"--g {args.g}: the restoring acceleration must be a positive number of rad/s^2.")
     if not args.json:
         print(f"rockdec estimate: {len(recs)} record(s), {sum(r.theta.size for r in recs)} samples; calibrating ...", file=sys.stderr)
-    result = inference.estimate(recs, cache_dir=args.cache, g=args.g)
+    with _progress():  # a calibration not in the cache is built first (about 10 s for 200,000 samples)
+        result = inference.estimate(recs, cache_dir=args.cache, g=args.g)
     if plot is not None:
         from rockdec import figures
 

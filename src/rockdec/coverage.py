@@ -14,6 +14,7 @@ Coloured load (paper §6's open question): the same, with the impulses low-pass 
 
 from __future__ import annotations
 
+import sys
 import warnings
 
 import dask
@@ -67,6 +68,7 @@ def run(e_values, n_records: int, n_points: int, cache_dir, *, points_per_cycle:
             for start in range(0, n_records, batch)
         ]
         analyses = [a for part in dask.compute(*tasks) for a in part]
+        print(f"coverage: e = {e}: {n_records} records of {n_points} samples analysed; correcting", file=sys.stderr, flush=True)
         for k, analysis in enumerate(analyses):
             if analysis is None:
                 continue

@@ -9,15 +9,16 @@ the pipeline does to a measured record it also does to the records that calibrat
 Steps
     1. Each record loses its own mean; ``sigma_Y`` (of the angle) and ``sigma_Ydot`` (of the
        sampled slope ``diff(y)/dt``) are pooled over all records, NaN left out.
-    2. ``g`` is not needed in advance. A first ``D_a`` signature, with a lag range of four
-       mean zero-crossing intervals (doubled until the free response crosses zero), locates
-       the first zero crossing ``t1`` of the free-response estimate. From ``(a, 0)`` the
-       free flight of eq. 4 is ``a - g tau^2/2``, so ``t1 = sqrt(2a/g)`` and
-       ``g = 2 c1 / t1^2`` (``c1`` the fitted start value, eq. 27's fits).
+    2. ``g`` is not needed in advance. A first ``D_a`` signature (largest window), with a
+       lag range of four mean zero-crossing intervals (doubled, up to half the shortest
+       record, until the free response crosses zero), locates the first zero crossing
+       ``t1`` of the free-response estimate. From ``(a, 0)`` the free flight of eq. 4 is
+       ``a - g tau^2/2``, so ``t1 = sqrt(2a/g)`` and ``g = 2 r(0) / t1^2``; this rough ``g``
+       (``t1`` interpolated between samples) sizes the lag range and the samples per cycle.
     3. The definitive signatures use the lag range of ``n_periods`` rocking periods at
        amplitude ``a`` with that ``g`` (eq. 5); every estimator is computed at every window
-       and extrapolated to zero window (weighted least squares, paper §5). ``g = 2 c1/t1^2``
-       is taken at the largest window, where most triggers make it least noisy (half the
+       and extrapolated to zero window (weighted least squares, paper §5). The reported
+       ``g = 2 c1/t1^2`` takes ``c1`` and ``t1`` from the fits of eq. 27 at the largest window, where most triggers make it least noisy (half the
        spread of its zero-window extrapolation); its window bias is calibrated away
        like the bias of the estimators of ``e``.
 
@@ -90,10 +91,22 @@ def _pooled_sums(records, trigger, target, widths, n_lag, dt, both_signs):
     return total, count
 
 
-def _first_crossing_g(r: np.ndarray, dt: float) -> float:
-    """``g = 2 c1 / t1^2`` from the start value and first zero crossing of ``r`` (eq. 4)."""
+def _half_cycle_g(r: np.ndarray, dt: float) -> float:
+    """``g = 2 c1 / t1^2`` from the fitted start value and first zero crossing of ``r``
+    (eq. 4; the fits of eq. 27, :func:`rockdec.estimators.half_cycle`); NaN when they fail."""
     h = estimators.half_cycle(r, dt)
     return 2.0 * h.c1 / h.t1**2 if not h.reason else np.nan
+
+
+def _sampled_crossing_g(r: np.ndarray, dt: float) -> float:
+    """``g = 2 r[0] / t1^2`` with ``t1`` the first sign change of ``r``, linearly
+    interpolated: the rough ``g`` that sizes the lag range; NaN when ``r`` never crosses."""
+    below = np.flatnonzero(r <= 0.0)
+    if not (r.size and r[0] > 0.0 and below.size):
+        return np.nan
+    k = below[0]
+    t1 = (k - 1 + r[k - 1] / (r[k - 1] - r[k])) * dt
+    return 2.0 * r[0] / t1**2
 
 
 def _crossing_interval(records) -> float:
@@ -124,17 +137,17 @@ def analyse(records, dt: float, settings: dict | None = None, g: float | None = 
 
     g_first = np.nan
     if g is None:
-        n_lag = int(np.ceil(4 * _crossing_interval(records)))
+        cap = (shortest - 1) // 2
+        n_lag = min(int(np.ceil(4 * _crossing_interval(records))), cap)
         while True:
-            n_lag = min(n_lag, (shortest - 1) // 2)
             total, count = _pooled_sums(records, "a", a, a_widths[-1:], n_lag, dt, opts["both_signs"])
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", signatures.NoTriggerWarning)
                 r = signatures.free_response(signatures.mean_signature(total[None], count[None], triggers=("a",))[0, -1])
-            g_first = _first_crossing_g(r, dt)
-            if np.isfinite(g_first) or 2 * n_lag + 1 >= shortest:
+            g_first = _sampled_crossing_g(r, dt)
+            if np.isfinite(g_first) or n_lag >= cap:
                 break
-            n_lag *= 2
+            n_lag = min(2 * n_lag, cap)
         if not np.isfinite(g_first):
             raise ValueError(
                 "the free-response estimate never crosses zero inside the record, so g cannot be read off it; "
@@ -160,7 +173,7 @@ def analyse(records, dt: float, settings: dict | None = None, g: float | None = 
     for w in range(windows.size):
         for name, est in estimators.estimate_all(r_all[w], sig[1, w], dt, opts["fit_points"]).items():
             per_window[name][w] = est.value
-        per_window[G_NAME][w] = _first_crossing_g(r_all[w], dt)
+        per_window[G_NAME][w] = _half_cycle_g(r_all[w], dt)
     raw = {G_NAME: per_window[G_NAME][-1]}
     for name in estimators.ESTIMATORS:
         weight = None
