@@ -36,6 +36,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import sys
 from pathlib import Path
 from typing import NamedTuple
 
@@ -99,12 +100,12 @@ def calibration_settings(lengths, points_per_cycle: float, settings: dict | None
 
 def pipeline_fingerprint() -> str:
     """SHA-256 (16 hex digits) of the source of every module the calibrated pipeline runs:
-    a change to the simulator, the signatures, the estimators or the analysis makes every
+    a change to the simulator, the signatures, the estimators, the analysis or this module makes every
     stored calibration stale, whatever the version number says."""
     from rockdec import loading, signatures, simulate
 
     digest = hashlib.sha256()
-    for module in (loading, simulate, signatures, estimators, measured):
+    for module in (loading, simulate, signatures, estimators, measured, sys.modules[__name__]):
         digest.update(Path(module.__file__).read_bytes())
     return digest.hexdigest()[:16]
 
@@ -146,11 +147,15 @@ def step_for(e: float, points_per_cycle: float, lengths, settings: dict, seed0: 
 
 
 def _grid_point(j: int, e: float, cal_settings: dict, seed_base: int) -> np.ndarray:
-    """Raw zero-window values ``(set, name)`` of one grid point."""
+    """Raw zero-window values ``(set, name)`` of one grid point; NaN for sets (or the whole
+    point) that cannot be analysed, e.g. records too short for the lag range at this ``e``."""
     lengths, ppc, settings = cal_settings["lengths"], cal_settings["points_per_cycle"], cal_settings["analysis"]
     seed0 = seed_base + j * 10**7
-    dt, burn_in = step_for(e, ppc, lengths, settings, seed0 + 9 * 10**6)
     out = np.full((cal_settings["sets_per_e"], len(NAMES)), np.nan)
+    try:
+        dt, burn_in = step_for(e, ppc, lengths, settings, seed0 + 9 * 10**6)
+    except ValueError:  # no record at this e can be analysed: the belt leaves this e out
+        return out
     for k in range(cal_settings["sets_per_e"]):
         try:
             raw = measured.analyse(_simulate_set(seed0 + k * len(lengths), lengths, dt, e, burn_in), dt, settings).raw

@@ -166,7 +166,9 @@ def cmd_estimate(args) -> None:
 
     plot = io.check_output(args.plot, args.overwrite) if args.plot else None
     recs = [
-        records.read_record(path, column=args.column, variable=args.variable, dt=args.dt, fs=args.fs) for path in args.records
+        rec
+        for path in args.records
+        for rec in records.read_records(path, column=args.column, variable=args.variable, dt=args.dt, fs=args.fs)
     ]
     if args.g is not None and not (np.isfinite(args.g) and args.g > 0):
         raise UsageError(f"--g {args.g}: the restoring acceleration must be a positive number of rad/s^2.")

@@ -61,7 +61,8 @@ def run(e_values, n_records: int, n_points: int, cache_dir, *, points_per_cycle:
     pole = 0.0 if corner is None else pole_for_corner(corner, points_per_cycle)
     belts: dict = {}
     for i, e in enumerate(e_values):
-        cal = calibrate_dt(e=e, g=1.0, sigma_p=1.0, points_per_cycle=points_per_cycle, pole=pole)
+        # a coloured load needs more pilots: its exponent is measured (simulate._secant_step)
+        cal = calibrate_dt(e=e, g=1.0, sigma_p=1.0, points_per_cycle=points_per_cycle, pole=pole, iterations=3 if pole == 0.0 else 8)
         seed0 = STUDY_SEED_OFFSET + i * 10**7
         tasks = [
             dask.delayed(_record_batch)(e, np.arange(start, min(start + batch, n_records)) + seed0, n_points, cal, pole)

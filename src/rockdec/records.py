@@ -124,10 +124,12 @@ def _read_netcdf(path: Path, variable: str, step: float | None) -> tuple[np.ndar
         if variable not in ds:
             raise RecordError(f"{path}: no variable '{variable}' (variables: {', '.join(map(str, ds.data_vars))}); name it with --variable.")
         var = ds[variable]
-        if var.ndim != 1:
-            raise RecordError(f"{path}: variable '{variable}' has dimensions {var.dims}; give a 1-D record (one series per file).")
+        if var.ndim == 2 and "time" in var.dims:
+            var = var.transpose(..., "time")  # one record per row, e.g. theta(seed, time) of `rockdec simulate`
+        elif var.ndim != 1:
+            raise RecordError(f"{path}: variable '{variable}' has dimensions {var.dims}; give theta(time) or theta(seed, time).")
         values = var.values.astype(np.float64)
-        dim = var.dims[0]
+        dim = var.dims[-1]
         if step is None:
             if dim in ds.coords:
                 step = sampling_step(ds[dim].values, str(path))
@@ -138,13 +140,14 @@ def _read_netcdf(path: Path, variable: str, step: float | None) -> tuple[np.ndar
     return values, step
 
 
-def read_record(path, *, column: str = "theta", variable: str = "theta", dt: float | None = None, fs: float | None = None) -> Record:
-    """Read and check one record.
+def read_records(path, *, column: str = "theta", variable: str = "theta", dt: float | None = None, fs: float | None = None) -> list[Record]:
+    """Read and check the records of one file.
 
     ``.csv``/``.txt``: a header with ``time`` and ``column`` (default ``theta``), or one
-    column of angles with ``dt``/``fs``; ``.nc``: the 1-D ``variable``, sampled by its
-    coordinate, its ``dt`` attribute or ``dt``/``fs``; ``.npy``: a 1-D array with ``dt``/``fs``.
-    Angles in rad, times in s. Raises :class:`RecordError`.
+    column of angles with ``dt``/``fs``; ``.nc``: ``variable`` as ``(time)`` or, one record
+    per row, ``(seed, time)``, sampled by its time coordinate, a ``dt`` attribute or
+    ``dt``/``fs``; ``.npy``: a 1-D array with ``dt``/``fs``. Angles in rad, times in s.
+    Raises :class:`RecordError`.
     """
     path = Path(path)
     source = str(path)
@@ -170,7 +173,9 @@ def read_record(path, *, column: str = "theta", variable: str = "theta", dt: flo
         values = values.astype(np.float64)
     else:
         raise RecordError(f"{path}: unknown record format '{suffix}'; give a .csv, .nc or .npy file.")
-    return check_values(values, step, source)
+    if values.ndim == 2:
+        return [check_values(row, step, f"{source}[{i}]") for i, row in enumerate(values)]
+    return [check_values(values, step, source)]
 
 
 def check_values(theta, dt: float, source: str) -> Record:

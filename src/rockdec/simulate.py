@@ -230,13 +230,35 @@ def calibrate_dt(
     burn_in = default_burn_in(e, points_per_cycle)
     seeds = np.arange(pilot_seeds) + PILOT_SEED_OFFSET
     dt = sigma_p / g * math.sqrt(4.0 * math.sqrt(2.0 * 290.0) / points_per_cycle)  # c is near 290 at e = 0.95
+    history: list[tuple[float, float]] = []
     for i in range(iterations):
         theta, _ = simulate_block(seeds, pilot_points, dt=dt, g=g, e=e, sigma_p=sigma_p, burn_in=burn_in, pole=pole)
         stats = pilot_statistics(theta, dt, g)
         if i < iterations - 1:
-            c = stats["sigma_y"] * dt**2 * g**3 / sigma_p**4
-            dt = sigma_p / g * math.sqrt(4.0 * math.sqrt(2.0 * c) / points_per_cycle)
+            if pole == 0.0:
+                c = stats["sigma_y"] * dt**2 * g**3 / sigma_p**4
+                dt = sigma_p / g * math.sqrt(4.0 * math.sqrt(2.0 * c) / points_per_cycle)
+            else:
+                dt = _secant_step(history, dt, stats["points_per_cycle"], points_per_cycle)
     return {"dt": dt, "burn_in": burn_in, **stats}
+
+
+def _secant_step(history: list, dt: float, achieved: float, target: float) -> float:
+    """Next step of :func:`calibrate_dt` under a coloured load.
+
+    The load's correlation time is a fixed number of steps, so it scales with ``dt`` and
+    the white law ``points_per_cycle ~ dt^-2`` no longer holds (near a corner at the
+    rocking frequency the exponent is nearer 5, and the white update oscillates). The
+    exponent ``k`` is measured from the last two pilots (``history`` of ``(ln dt, ln N)``,
+    appended to here; 2 at first) and ``dt <- dt (N_achieved / N_target)^(1/k)``.
+    """
+    history.append((math.log(dt), math.log(achieved)))
+    k = 2.0
+    if len(history) >= 2:
+        (x0, y0), (x1, y1) = history[-2:]
+        if x1 != x0:
+            k = min(max(-(y1 - y0) / (x1 - x0), 0.5), 10.0)
+    return dt * (achieved / target) ** (1.0 / k)
 
 
 def pilot_statistics(theta: np.ndarray, dt: float, g: float) -> dict:
