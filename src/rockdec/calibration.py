@@ -57,7 +57,7 @@ SETS_PER_E = 40
 PILOT_SETS, PILOT_ITERATIONS = 8, 3
 
 #: Calibrations are shared by records whose samples per cycle agree within this relative step.
-PPC_BIN = 0.05
+PPC_BIN = 0.1
 
 #: Two-sided normal quantile of the 95 % interval.
 Z95 = 1.959963984540054
