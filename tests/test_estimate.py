@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from rockdec import calibration, coverage, measured
+from rockdec import belt, calibration, coverage, measured
 from rockdec.cli import main
 from rockdec.loading import draw_impulses, pole_for_corner, series_rng
 from rockdec.simulate import calibrate_dt, simulate_block
@@ -166,20 +166,20 @@ def synthetic_calibration(bias: float, spread: float, sets: int = 400, seed: int
 
 
 def test_belt_inverts_a_known_bias_and_spread():
-    b = calibration.belt(synthetic_calibration(bias=0.02, spread=0.01), "e_v")
-    c = calibration.correct(b, 0.87)
+    b = belt.belt(synthetic_calibration(bias=0.02, spread=0.01), "e_v")
+    c = belt.correct(b, 0.87)
     assert c.value == pytest.approx(0.85, abs=0.002)
-    assert c.low == pytest.approx(0.85 - calibration.Z95 * 0.01, abs=0.002)
-    assert c.high == pytest.approx(0.85 + calibration.Z95 * 0.01, abs=0.002)
+    assert c.low == pytest.approx(0.85 - belt.Z95 * 0.01, abs=0.002)
+    assert c.high == pytest.approx(0.85 + belt.Z95 * 0.01, abs=0.002)
     assert c.notes == ()
 
 
 def test_belt_says_when_the_interval_reaches_the_calibrated_range():
-    b = calibration.belt(synthetic_calibration(bias=0.0, spread=0.01), "e_v")
-    edge = calibration.correct(b, 0.995)
+    b = belt.belt(synthetic_calibration(bias=0.0, spread=0.01), "e_v")
+    edge = belt.correct(b, 0.995)
     assert edge.high == pytest.approx(calibration.E_GRID[-1])
     assert any("end of the calibrated range" in note for note in edge.notes)
-    outside = calibration.correct(b, 1.3)
+    outside = belt.correct(b, 1.3)
     assert math.isnan(outside.value) and "not produced" in outside.notes[0]
 
 

@@ -1,4 +1,4 @@
-"""Calibration by simulation: bias-corrected ``e`` and a 95 % interval for a measured record.
+"""Calibration by simulation: how each estimator of ``e`` scatters about the truth, for a measured record.
 
 Why. Every estimator of eqs. 25-27 is biased by an amount that depends on ``e`` and on
 how the record was sampled, and the standard error of the zero-window line understates
@@ -15,17 +15,7 @@ only on ``e`` and one dimensionless step (equivalently the samples per cycle at 
 records as it reads off the measured ones; then it runs the identical analysis on each
 set and stores every estimator's zero-window value, and ``g``'s, per set.
 
-Interval: a confidence belt (Neyman construction). At each ``e`` the estimate is taken as
-normal with mean ``m(e)`` and spread ``s(e)``, both smooth in ``e``: ``m`` a weighted
-least-squares cubic in ``e`` through the grid means, ``log s`` a quadratic through the grid
-spreads. The corrected estimate solves ``m(e) = x`` for the observed ``x``; the 95 %
-interval is every ``e`` with ``|x - m(e)| <= 1.96 sqrt(s(e)^2 + var m(e))`` (``var m`` the
-uncertainty of the fitted mean, so a small calibration widens the interval rather than
-shifting it unseen). A belt is inverted at the observed value, so it covers the truth
-as often as the simulated spread says, whatever the bias; a parametric bootstrap would need
-fresh simulations around each record, where the belt's grid is cached and serves every
-record with the same settings. Coverage is measured, not assumed
-(:mod:`rockdec.coverage`).
+The belt built on these values, and its inversion, are in :mod:`rockdec.belt`.
 
 The calibration is stored as NetCDF under a name hashed from everything it depends on, and
 reused; the name also hashes the source of the pipeline (:func:`pipeline_fingerprint`).
@@ -38,7 +28,6 @@ import json
 import math
 import sys
 from pathlib import Path
-from typing import NamedTuple
 
 import dask
 import numpy as np
@@ -59,25 +48,11 @@ PILOT_SETS, PILOT_ITERATIONS = 8, 3
 #: Calibrations are shared by records whose samples per cycle agree within this relative step.
 PPC_BIN = 0.1
 
-#: Two-sided normal quantile of the 95 % interval.
-Z95 = 1.959963984540054
-
 #: Names calibrated: every estimator of e, and g.
 NAMES = (*estimators.ESTIMATORS, measured.G_NAME)
 
 #: Seeds of calibration records start here (apart from scene seeds and pilot seeds).
 CALIBRATION_SEED_OFFSET = 2**61
-
-
-class Corrected(NamedTuple):
-    """A bias-corrected estimate: ``value`` and the 95 % interval ``[low, high]``; ``notes``
-    say when the interval reaches the end of the calibrated range or the raw value lies
-    outside what any calibrated ``e`` produces."""
-
-    value: float
-    low: float
-    high: float
-    notes: tuple[str, ...]
 
 
 def ppc_key(points_per_cycle: float) -> float:
@@ -201,67 +176,3 @@ def load_or_build(cal_settings: dict, cache_dir: str | Path) -> tuple[xr.Dataset
     except io.OutputError:  # another process stored the same calibration meanwhile
         pass
     return ds, False
-
-
-class Belt(NamedTuple):
-    """Smooth mean and spread of one estimator against the true ``e`` (module docstring)."""
-
-    e: np.ndarray
-    mean: np.ndarray
-    spread: np.ndarray
-    failed: float
-
-
-def belt(cal: xr.Dataset, name: str, points: int = 4001) -> Belt:
-    """The belt of estimator ``name`` on a dense grid of ``points`` values of ``e``.
-
-    ``failed``: the fraction of calibration sets on which the estimator gave NaN.
-    """
-    raw = cal["raw"].sel(name=name).values
-    e_grid = cal["e_true"].values
-    ok = np.isfinite(raw)
-    n = ok.sum(axis=1)
-    use = n >= 3
-    means = np.array([raw[j, ok[j]].mean() if use[j] else np.nan for j in range(e_grid.size)])
-    sds = np.array([raw[j, ok[j]].std(ddof=1) if use[j] else np.nan for j in range(e_grid.size)])
-    use &= sds > 0
-    if use.sum() < 5:
-        raise ValueError(f"estimator {name} failed on too many calibration records to build its belt")
-    x = e_grid[use]
-    log_s = np.polyfit(x, np.log(sds[use]), 2)
-    s_fit = np.exp(np.polyval(log_s, x))
-    design = np.vander(x, 4)
-    w = n[use] / s_fit**2
-    cov = np.linalg.inv(design.T @ (design * w[:, None]))
-    coef = cov @ (design.T @ (w * means[use]))
-    dense = np.linspace(x[0], x[-1], points)
-    dense_design = np.vander(dense, 4)
-    mean = dense_design @ coef
-    var_mean = np.einsum("ij,jk,ik->i", dense_design, cov, dense_design)
-    spread = np.sqrt(np.exp(np.polyval(log_s, dense)) ** 2 + var_mean)
-    return Belt(dense, mean, spread, float(1.0 - ok.sum() / ok.size))
-
-
-def correct(b: Belt, observed: float) -> Corrected:
-    """Invert the belt at ``observed``: the corrected ``e`` and its 95 % interval."""
-    if not np.isfinite(observed):
-        return Corrected(np.nan, np.nan, np.nan, ("no raw estimate",))
-    notes = []
-    inside = np.abs(observed - b.mean) <= Z95 * b.spread
-    if not inside.any():
-        nearest = int(np.argmin(np.abs(observed - b.mean) / b.spread))
-        return Corrected(np.nan, np.nan, np.nan, (f"the raw value {observed:.4f} is not produced by any calibrated e (nearest e = {b.e[nearest]:.3f})",))
-    idx = np.flatnonzero(inside)
-    low, high = b.e[idx[0]], b.e[idx[-1]]
-    if idx[0] == 0 or idx[-1] == b.e.size - 1:
-        notes.append(f"the interval reaches the end of the calibrated range [{b.e[0]:.3f}, {b.e[-1]:.3f}]")
-    # corrected value: where the mean curve meets the observation, inside the interval
-    gap = b.mean[idx] - observed
-    crossing = np.flatnonzero(np.diff(np.sign(gap)) != 0)
-    if crossing.size:
-        i = idx[crossing[0]]
-        value = float(np.interp(observed, sorted([b.mean[i], b.mean[i + 1]]), [b.e[i], b.e[i + 1]][:: 1 if b.mean[i] <= b.mean[i + 1] else -1]))
-    else:
-        value = float(b.e[idx[np.argmin(np.abs(gap))]])
-        notes.append("the raw value lies beyond the calibrated mean curve; the corrected value is its nearest point")
-    return Corrected(value, float(low), float(high), tuple(notes))

@@ -22,7 +22,7 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from rockdec import calibration, estimators, measured
+from rockdec import belt, calibration, estimators, measured
 from rockdec.loading import pole_for_corner
 from rockdec.simulate import calibrate_dt, simulate_block
 
@@ -77,9 +77,9 @@ def run(e_values, n_records: int, n_points: int, cache_dir, *, points_per_cycle:
             h = calibration.settings_hash(key)
             if h not in belts:
                 cal_ds, _ = calibration.load_or_build(key, cache_dir)
-                belts[h] = {name: calibration.belt(cal_ds, name) for name in [*names, measured.G_NAME]}
+                belts[h] = {name: belt.belt(cal_ds, name) for name in [*names, measured.G_NAME]}
             for j, name in enumerate(names):
-                c = calibration.correct(belts[h][name], analysis.raw[name])
+                c = belt.correct(belts[h][name], analysis.raw[name])
                 raw[i, k, j], e_hat[i, k, j], low[i, k, j], high[i, k, j] = analysis.raw[name], c.value, c.low, c.high
             e_default = e_hat[i, k, names.index(DEFAULT_ESTIMATOR)]
             g_belt = belts[h][measured.G_NAME]

@@ -463,7 +463,7 @@ def fig_record(result: dict) -> Figure:
     left.axhline(0.0, color="0.6", lw=0.6)
     left.set(xlabel=r"lag $\tau$ (s)", ylabel="angle (rad)", title="signature of the record")
     left.legend(fontsize=8, loc="upper right")
-    from rockdec.calibration import Z95
+    from rockdec.belt import Z95
 
     right.fill_between(belt.e, belt.mean - Z95 * belt.spread, belt.mean + Z95 * belt.spread, color="tab:blue", alpha=0.25, label="95 % of simulated estimates")
     right.plot(belt.e, belt.mean, color="tab:blue", label="mean raw estimate")

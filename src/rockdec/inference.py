@@ -14,7 +14,7 @@ import warnings
 
 import numpy as np
 
-from rockdec import calibration, estimators, measured
+from rockdec import belt, calibration, estimators, measured
 from rockdec.records import Record, RecordError, same_step
 
 #: The estimator reported as ``e``: the calibration's coverage study shows it best
@@ -84,8 +84,8 @@ def estimate(records: list[Record], *, cache_dir, g: float | None = None, settin
     per = {}
     belts = {}
     for name in estimators.ESTIMATORS:
-        belts[name] = calibration.belt(cal, name)
-        c = calibration.correct(belts[name], analysis.raw[name])
+        belts[name] = belt.belt(cal, name)
+        c = belt.correct(belts[name], analysis.raw[name])
         trigger = "v" if name == "e_v" else "a"
         per[name] = {
             "raw": _num(analysis.raw[name]),
@@ -95,7 +95,7 @@ def estimate(records: list[Record], *, cache_dir, g: float | None = None, settin
             "notes": list(c.notes),
         }
     default = per[DEFAULT_ESTIMATOR]
-    g_belt = calibration.belt(cal, measured.G_NAME)
+    g_belt = belt.belt(cal, measured.G_NAME)
     ratio = float(np.interp(default["e"], g_belt.e, g_belt.mean)) if default["e"] is not None else math.nan
     g_value = g if g is not None else analysis.raw[measured.G_NAME] / ratio
     return {
