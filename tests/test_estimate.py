@@ -302,3 +302,10 @@ def test_estimates_command_refuses_a_signature_file_without_dt(tmp_path, capsys)
     code = main(["estimates", str(path), "--out", str(tmp_path / "est.nc")])
     assert code == 2 and "not a signature file" in capsys.readouterr().err
     assert not (tmp_path / "est.nc").exists()
+
+
+def test_an_estimator_that_fails_in_the_calibration_gets_no_interval():
+    cal = synthetic_calibration(bias=0.0, spread=0.01)
+    cal["raw"].loc[{"name": "e4"}] = np.nan
+    c = belt.correct(belt.belt(cal, "e4"), 0.9)
+    assert math.isnan(c.value) and math.isnan(c.low) and "too many for a belt" in c.notes[0]

@@ -64,8 +64,8 @@ def belt(cal: xr.Dataset, name: str, points: int = 4001) -> Belt:
     means = np.array([raw[j, ok[j]].mean() if use[j] else np.nan for j in range(e_grid.size)])
     sds = np.array([raw[j, ok[j]].std(ddof=1) if use[j] else np.nan for j in range(e_grid.size)])
     use &= sds > 0
-    if use.sum() < 5:
-        raise ValueError(f"estimator {name} failed on too many calibration records to build its belt")
+    if use.sum() < 5:  # an empty belt: correct() says why
+        return Belt(np.empty(0), np.empty(0), np.empty(0), float(1.0 - ok.sum() / ok.size))
     x = e_grid[use]
     log_s = np.polyfit(np.log1p(-x), np.log(sds[use]), 2)
     s_fit = np.exp(np.polyval(log_s, np.log1p(-x)))
@@ -85,6 +85,8 @@ def correct(b: Belt, observed: float) -> Corrected:
     """Invert the belt at ``observed``: the corrected ``e`` and its 95 % interval."""
     if not np.isfinite(observed):
         return Corrected(np.nan, np.nan, np.nan, ("no raw estimate",))
+    if b.e.size == 0:
+        return Corrected(np.nan, np.nan, np.nan, (f"the estimator failed on {b.failed:.0%} of the calibration records, too many for a belt",))
     notes = []
     inside = np.abs(observed - b.mean) <= Z95 * b.spread
     if not inside.any():

@@ -83,7 +83,8 @@ def run(e_values, n_records: int, n_points: int, cache_dir, *, points_per_cycle:
                 raw[i, k, j], e_hat[i, k, j], low[i, k, j], high[i, k, j] = analysis.raw[name], c.value, c.low, c.high
             e_default = e_hat[i, k, names.index(DEFAULT_ESTIMATOR)]
             g_belt = belts[h][measured.G_NAME]
-            g_hat[i, k] = analysis.raw[measured.G_NAME] / np.interp(e_default, g_belt.e, g_belt.mean)
+            if g_belt.e.size:
+                g_hat[i, k] = analysis.raw[measured.G_NAME] / np.interp(e_default, g_belt.e, g_belt.mean)
     dims = ("e_true", "record", "estimator")
     attrs = {"units": "1"}
     return xr.Dataset(

@@ -96,7 +96,7 @@ def estimate(records: list[Record], *, cache_dir, g: float | None = None, settin
         }
     default = per[DEFAULT_ESTIMATOR]
     g_belt = belt.belt(cal, measured.G_NAME)
-    ratio = float(np.interp(default["e"], g_belt.e, g_belt.mean)) if default["e"] is not None else math.nan
+    ratio = float(np.interp(default["e"], g_belt.e, g_belt.mean)) if default["e"] is not None and g_belt.e.size else math.nan
     g_value = g if g is not None else analysis.raw[measured.G_NAME] / ratio
     return {
         "e": default["e"],
