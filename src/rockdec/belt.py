@@ -54,7 +54,8 @@ class Belt(NamedTuple):
 def belt(cal: xr.Dataset, name: str, points: int = 4001) -> Belt:
     """The belt of estimator ``name`` on a dense grid of ``points`` values of ``e``.
 
-    ``failed``: the fraction of calibration sets on which the estimator gave NaN.
+    ``failed``: the fraction of calibration sets on which the estimator gave NaN. Fewer
+    than 5 usable grid points give an empty belt, which :func:`correct` refuses to invert.
     """
     raw = cal["raw"].sel(name=name).values
     e_grid = cal["e_true"].values
