@@ -3,7 +3,8 @@ from importlib.util import find_spec
 
 from rockdec import config as rockdec_config
 
-rockdec_config.validate(config)
+# name the file the user passed (--configfile), not always the default one
+rockdec_config.validate(config, source=", ".join(map(str, workflow.overwrite_configfiles)) or rockdec_config.DEFAULT_PATH)
 
 SCENES = sorted(config["scenes"])
 
