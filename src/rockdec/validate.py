@@ -68,6 +68,8 @@ def in_range(value, name: str, lo=-math.inf, hi=math.inf, fix: str | None = None
     above = x > lo if lo_open else x >= lo
     below = x < hi if hi_open else x <= hi
     if not (above and below):
+        if hi == math.inf:
+            raise _fail(name, value, f"not {'>' if lo_open else '>='} {lo:g}", fix)
         raise _fail(name, value, f"outside {left}{lo:g}, {hi:g}{right}", fix)
     return x
 
