@@ -18,6 +18,7 @@ import numpy as np
 from rockdec import config as config_mod
 from rockdec import io, replicates, signatures, simulate
 from rockdec import validate as checks
+from rockdec.models import restoring_acceleration
 
 #: Scene fields set by ``simulate`` options: option -> (section, key).
 SIMULATE_OPTIONS = {
@@ -82,7 +83,14 @@ def _simulate_scene(args) -> dict:
         scene = json.loads(json.dumps(config_mod.scene(config_mod.load(args.config), args.scene)))
     else:
         scene = config_mod.validate_scene({})
-    return _validated(_with_options(scene, args, SIMULATE_OPTIONS), SIMULATE_OPTIONS)
+    scene = _validated(_with_options(scene, args, SIMULATE_OPTIONS), SIMULATE_OPTIONS)
+    system = scene["system"]
+    checks.positive(
+        restoring_acceleration(system["nu"], system["theta_cr"]),
+        f"--nu {checks.show(system['nu'])} with --theta-cr {checks.show(system['theta_cr'])} give g = nu^2 theta_cr =",
+        "choose them so that g is a finite number > 0 (rad/s^2)",
+    )
+    return scene
 
 
 def _with_options(scene: dict, args, options: dict) -> dict:

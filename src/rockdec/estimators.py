@@ -32,6 +32,7 @@ import numpy as np
 import xarray as xr
 
 from rockdec import __version__
+from rockdec import validate as checks
 
 ESTIMATORS = ("e_g", "e_0", "e1", "e2", "e3", "e4", "e_v")
 """Names of the estimators, in the order of the ``estimator`` coordinate."""
@@ -238,6 +239,7 @@ def half_cycle(r, dt: float, lobes=None) -> HalfCycle:
     response (eqs. 4, 6) every window holds samples of one parabola and the features are
     exact to rounding.
     """
+    checks.positive(dt, "dt", "give the sampling interval in s, > 0")
     r = np.asarray(r, dtype=float)
     lobes, reason = _lobes(r) if lobes is None else lobes
     if reason:
@@ -322,8 +324,9 @@ def e_impact_slope(d, dt: float, fit_points: int = DEFAULT_FIT_POINTS) -> Estima
 
     ``fit_points`` below :data:`MIN_FIT_POINTS` is a caller error (``ValueError``).
     """
-    if fit_points < MIN_FIT_POINTS:
-        raise ValueError(f"fit_points={fit_points}: need at least {MIN_FIT_POINTS} points")
+    if not (checks.is_whole(fit_points) and fit_points >= MIN_FIT_POINTS):
+        raise checks.InputError(f"fit_points={fit_points}: need a whole number of at least {MIN_FIT_POINTS} points")
+    checks.positive(dt, "dt", "give the sampling interval in s, > 0")
     d = np.asarray(d, dtype=float)
     if d.ndim != 1 or d.size % 2 == 0:
         return _failed("D_v signature length not odd: no lag 0")

@@ -326,12 +326,18 @@ def lag_samples(n_periods: float, level: float, g: float, dt: float) -> int:
     return int(np.rint(lags))
 
 
+def sums_nbytes(n_series: int, n_windows: int, n_lag: int) -> float:
+    """Bytes of the per-series sums of both triggers: ``n_series x 2 x n_windows x (2 n_lag + 1)`` float64."""
+    return 8.0 * n_series * 2 * n_windows * (2 * n_lag + 1)
+
+
 def check_lag_range(n_lag: int, n_time: int, n_series: int, n_windows: int, what: str, fix: str) -> None:
     """Refuse, before any work, a lag range with no room in the record or beyond the memory.
 
-    A segment spans ``2 n_lag + 1`` samples and must lie inside the record of ``n_time``
-    samples; the per-series sums take ``n_series x 2 triggers x n_windows x (2 n_lag + 1)``
-    float64 values. ``what`` names the settings as the user wrote them, ``fix`` the remedy.
+    For the edges (command line, files): a segment spans ``2 n_lag + 1`` samples and must
+    lie inside the record of ``n_time`` samples, and the sums (:func:`sums_nbytes`) must
+    fit in memory. ``what`` names the settings as the user wrote them, ``fix`` the remedy.
+    (The kernels themselves accept short records: they count no trigger.)
     """
     width = 2 * int(n_lag) + 1
     if width > n_time:
@@ -339,7 +345,7 @@ def check_lag_range(n_lag: int, n_time: int, n_series: int, n_windows: int, what
             f"{what} asks for segments of 2L+1 = {width} samples, longer than the record of {n_time} samples, "
             f"so no trigger fits; {fix}."
         )
-    checks.memory(8.0 * n_series * 2 * n_windows * width, what, fix)
+    checks.memory(sums_nbytes(n_series, n_windows, n_lag), what, fix)
 
 
 def free_response(signature):
@@ -574,9 +580,10 @@ def signature_cube(
     # series summed at once: the largest Dask block, or the whole array
     sizes = {d: max(c) for d, c in theta.chunksizes.items()} if theta.chunks is not None else dict(theta.sizes)
     block_rows = int(np.prod([n for d, n in sizes.items() if d != "time"]))
-    check_lag_range(
-        n_lag, theta.sizes["time"], block_rows, windows.size,
-        f"the lag range ({lag_settings or {'n_lag': n_lag}})", "raise g or lower n_periods (or n_lag)",
+    checks.memory(
+        sums_nbytes(block_rows, windows.size, n_lag),
+        f"the lag range of {n_lag} samples a side ({lag_settings or 'n_lag'})",
+        "raise g or lower n_periods (or n_lag), or use smaller chunks of series",
     )
     kw = {
         "a": a,
