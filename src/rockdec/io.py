@@ -20,10 +20,14 @@ import subprocess
 import tempfile
 from pathlib import Path
 
+import numpy as np
 import xarray as xr
 
 from rockdec import __version__
 from rockdec.validate import InputError
+
+#: Largest magnitude a float32 variable can store without becoming inf.
+FLOAT32_MAX = float(np.finfo(np.float32).max)
 
 #: Free space below which a failed write is reported as a full disk (HDF5 hides the errno).
 DISK_FULL_BYTES = 2**20
@@ -141,6 +145,7 @@ def write_netcdf(ds: xr.Dataset, path: str | Path, *, float32: tuple[str, ...] =
         enc = {"zlib": True, "complevel": 4}
         if name in float32:
             enc["dtype"] = "float32"
+            ds = ds.assign({name: var.copy(data=_fits_float32(var.data, name))})
         if var.ndim >= 1 and var.dtype.kind == "f":
             enc["_FillValue"] = float("nan")
         encoding[name] = enc
@@ -162,6 +167,23 @@ def write_netcdf(ds: xr.Dataset, path: str | Path, *, float32: tuple[str, ...] =
         finally:
             tmp.unlink(missing_ok=True)
     return path
+
+
+def _fits_float32(data, name: str):
+    """``data``, checked (chunk by chunk while writing, if lazy) to stay within the float32 range."""
+
+    def check(block):
+        big = np.abs(block) > FLOAT32_MAX  # NaN (a fallen block) is stored as NaN: not refused
+        if np.any(big):
+            raise OutputError(
+                f"'{name}' reaches {np.abs(block[big]).max():.3g}, beyond the float32 range it is stored in "
+                f"({FLOAT32_MAX:.3g}); choose smaller scales (initial state, sigma_p, dt)."
+            )
+        return block
+
+    if hasattr(data, "map_blocks"):
+        return data.map_blocks(check, dtype=data.dtype)
+    return check(np.asarray(data))
 
 
 def open_dataset(path: str | Path, **kwargs) -> xr.Dataset:

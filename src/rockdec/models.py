@@ -7,6 +7,8 @@ in rad/s**2.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from scipy.optimize import brentq
 
@@ -14,8 +16,11 @@ from rockdec import validate as checks
 
 
 def restoring_acceleration(nu: float, theta_cr: float) -> float:
-    """``g = nu^2 * theta_cr`` in rad/s^2: the constant restoring term of eq. 4."""
-    return float(nu) ** 2 * float(theta_cr)
+    """``g = nu^2 * theta_cr`` in rad/s^2: the constant restoring term of eq. 4 (``inf`` on overflow)."""
+    try:
+        return float(nu) ** 2 * float(theta_cr)
+    except OverflowError:  # float ** raises where * gives inf
+        return math.inf
 
 
 def period_simplified(theta0, nu: float, theta_cr: float):

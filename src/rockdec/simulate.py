@@ -247,17 +247,21 @@ def calibrate_dt(
     burn_in = default_burn_in(e, points_per_cycle)
     seeds = np.arange(pilot_seeds) + PILOT_SEED_OFFSET
     dt = sigma_p / g * math.sqrt(4.0 * math.sqrt(2.0 * 290.0) / points_per_cycle)  # c is near 290 at e = 0.95
+    outside = checks.InputError(
+        f"the time-step calibration at g = {g}, sigma_p = {sigma_p} leaves the floating-point range; "
+        "give the time step explicitly (--dt)"
+    )
     for i in range(iterations):
-        if not (0.0 < dt < math.inf and 0.0 < g * dt**2 < math.inf):
-            raise checks.InputError(
-                f"the time-step calibration at g = {g}, sigma_p = {sigma_p} gives dt = {dt}: the scales are "
-                "outside floating point; give the time step explicitly (--dt)"
-            )
+        if not (0.0 < dt < math.inf and 0.0 < g * dt * dt < math.inf):
+            raise outside
         theta, _ = simulate_block(seeds, pilot_points, dt=dt, g=g, e=e, sigma_p=sigma_p, burn_in=burn_in)
         stats = pilot_statistics(theta, dt, g)
         if i < iterations - 1:
-            c = stats["sigma_y"] * dt**2 * g**3 / sigma_p**4
-            dt = sigma_p / g * math.sqrt(4.0 * math.sqrt(2.0 * c) / points_per_cycle)
+            try:
+                c = stats["sigma_y"] * dt**2 * g**3 / sigma_p**4
+                dt = sigma_p / g * math.sqrt(4.0 * math.sqrt(2.0 * c) / points_per_cycle)
+            except (OverflowError, ZeroDivisionError):  # float ** raises where * gives inf
+                raise outside from None
     return {"dt": dt, "burn_in": burn_in, **stats}
 
 
