@@ -113,7 +113,7 @@ def _validated(scene: dict, options: dict) -> dict:
             if exc.field is not None and (exc.field == field or exc.field.startswith(field + ".")):
                 value = scene[section][key]
                 shown = " ".join(map(checks.show, value)) if isinstance(value, list) else checks.show(value)
-                raise UsageError(f"{option} {shown}: {exc.problem}.") from None
+                raise UsageError(f"{option} {shown}: {exc.problem.replace(' (or null)', '')}.") from None
         raise
 
 
@@ -281,7 +281,8 @@ def main(argv: list[str] | None = None) -> int:
     except checks.InputError as exc:
         if args.debug:
             raise
-        print(f"rockdec {args.command}: error: {' '.join(str(exc).split())}", file=sys.stderr)
+        message = " ".join(str(exc).split())
+        print(f"rockdec {args.command}: error: {message}{'' if message.endswith('.') else '.'}", file=sys.stderr)
         return 2
     except Exception as exc:  # a bug, not the user's input: one line, the traceback on request
         if args.debug:
