@@ -219,8 +219,10 @@ def housner_flight(theta, omega, duration, nu, theta_cr, e):
     remaining = duration
     if not (remaining >= 0.0 and h >= 0.0 and abs(u) < math.inf and c > 0.0):  # NaN in, NaN out
         return math.nan, math.nan, False
-    # each long bounce lasts more than (2/nu) atanh(1/2) > 1/nu: at most nu * duration of them
-    long_bounces = nu * duration
+    # long bounces, taken one at a time: each lasts more than (2/nu) atanh(1/2) > 1/nu and
+    # leaves e times the speed, from below c down to c/2; e = 0 rests at the first landing
+    # and e = 1 counts its bounces in closed form
+    long_bounces = min(nu * duration, math.log(0.5) / math.log(e)) if 0.0 < e < 1.0 else 0.0
     passes = _MAX_PASSES + (int(min(long_bounces, 1e9)) if long_bounces >= 0.0 else 0)
     for _ in range(passes):
         if h == 0.0 and u < c:
