@@ -1,8 +1,9 @@
 """The ``rockdec`` command: ``estimate``, ``simulate``, ``signatures``, ``estimates``.
 
-Errors a user can cause (bad options, unknown scene, unwritable output) end with one
-sentence on stderr naming the problem and the fix, and exit code 2; no file is left
-behind.
+Errors a user can cause (bad options, unknown scene, unwritable output, a request larger
+than the memory) end with one sentence on stderr naming the problem and the fix, and exit
+code 2; no file is left behind. An unexpected internal error says so in one line (exit
+code 1); ``rockdec --debug ...`` shows its traceback.
 """
 
 from __future__ import annotations
@@ -10,12 +11,15 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import traceback
 from pathlib import Path
 
 import numpy as np
 
 from rockdec import config as config_mod
-from rockdec import io, records, replicates, simulate
+from rockdec import io, records, replicates, signatures, simulate
+from rockdec import validate as checks
+from rockdec.models import restoring_acceleration
 
 #: Scene fields set by ``simulate`` options: option -> (section, key).
 SIMULATE_OPTIONS = {
@@ -31,25 +35,48 @@ SIMULATE_OPTIONS = {
 }
 
 
-class UsageError(ValueError):
+#: Scene fields set by ``signatures`` options: option -> (section, key).
+SIGNATURE_OPTIONS = {
+    "--level": ("signatures", "level"),
+    "--windows": ("signatures", "windows"),
+    "--n-periods": ("signatures", "n_periods"),
+    "--both-signs": ("signatures", "both_signs"),
+    "--v-level": ("signatures", "v_level"),
+}
+
+#: Threads a ``simulate`` run computes on at once (Dask's default scheduler, one per core).
+SIMULATE_THREADS = 2
+
+
+class UsageError(checks.InputError):
     """Bad command-line input; the message names the option."""
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with its errors on one line (no usage block), exit code 2."""
+
+    def error(self, message):
+        self.exit(2, f"{self.prog}: error: {message}; see '{self.prog} --help'.\n")
 
 
 def parse_seeds(text: str) -> np.ndarray:
     """Seeds from ``"0-99"``, ``"3,7"`` or a mix like ``"0-4,10"``; inclusive ranges."""
-    seeds: list[int] = []
+    ranges: list[tuple[int, int]] = []
     try:
         for part in text.split(","):
             lo, _, hi = part.strip().partition("-")
             first, last = int(lo), int(hi) if hi else int(lo)
-            if first < 0 or last < first:
+            if first < 0 or last < first or last >= 2**63:
                 raise ValueError
-            seeds.extend(range(first, last + 1))
+            ranges.append((first, last + 1))
     except ValueError:
         raise UsageError(f"--seeds '{text}' is not a list of non-negative seeds; write it like 0-99 or 3,7.") from None
-    if len(set(seeds)) != len(seeds):
+    # the seeds (int64) and the sorted copy that finds repeats
+    checks.memory(16.0 * sum(stop - start for start, stop in ranges), f"--seeds '{text}'", "give fewer seeds per run")
+    seeds = np.concatenate([np.arange(start, stop, dtype=np.int64) for start, stop in ranges])
+    if np.unique(seeds).size != seeds.size:
         raise UsageError(f"--seeds '{text}' names a seed twice; give each seed once.")
-    return np.asarray(seeds, dtype=np.int64)
+    return seeds
 
 
 def _simulate_scene(args) -> dict:
@@ -58,24 +85,60 @@ def _simulate_scene(args) -> dict:
         scene = json.loads(json.dumps(config_mod.scene(config_mod.load(args.config), args.scene)))
     else:
         scene = config_mod.validate_scene({})
-    for option, (section, key) in SIMULATE_OPTIONS.items():
+    scene = _validated(_with_options(scene, args, SIMULATE_OPTIONS), SIMULATE_OPTIONS)
+    system = scene["system"]
+    checks.positive(
+        restoring_acceleration(system["nu"], system["theta_cr"]),
+        f"--nu {checks.show(system['nu'])} with --theta-cr {checks.show(system['theta_cr'])} give g = nu^2 theta_cr =",
+        "choose them so that g is a finite number > 0 (rad/s^2)",
+    )
+    return scene
+
+
+def _with_options(scene: dict, args, options: dict) -> dict:
+    """``scene`` (changed in place) with every option given on the command line set."""
+    for option, (section, key) in options.items():
         value = getattr(args, option[2:].replace("-", "_"))
         if value is not None:
-            scene[section][key] = value
-    try:
-        config_mod.validate_scene(scene)
-    except config_mod.ConfigError as exc:
-        for option, (section, key) in SIMULATE_OPTIONS.items():
-            if f"'scenes.cli.{section}.{key}'" in str(exc):
-                raise UsageError(f"{option} {scene[section][key]}: {str(exc).split(': ', 1)[1].split('. Fix')[0]}.") from None
-        raise
+            scene.setdefault(section, {})[key] = value
     return scene
+
+
+def _validated(scene: dict, options: dict) -> dict:
+    """``config.validate_scene``, with an error in a field set by an option named by that option."""
+    try:
+        return config_mod.validate_scene(scene)
+    except config_mod.ConfigError as exc:
+        for option, (section, key) in options.items():
+            field = f"scenes.cli.{section}.{key}"
+            if exc.field is not None and (exc.field == field or exc.field.startswith(field + ".")):
+                value = scene[section][key]
+                shown = " ".join(map(checks.show, value)) if isinstance(value, list) else checks.show(value)
+                raise UsageError(f"{option} {shown}: {exc.problem.replace(' (or null)', '')}.") from None
+        raise
+
+
+def _check_simulation_size(scene: dict, n_seeds: int) -> None:
+    """Refuse, before any work, a run whose series or burn-in would not fit in memory.
+
+    Each of :data:`SIMULATE_THREADS` threads holds one chunk of series (float64 angle and
+    velocity, stacked: 4 arrays of ``n_points``) and the impulses of one series
+    (``burn_in + n_points`` float64).
+    """
+    rec, burn_in = scene["records"], scene["excitation"]["burn_in"] or 0
+    rows = min(rec["chunk_seeds"], n_seeds)
+    need = SIMULATE_THREADS * 8.0 * (burn_in + rec["n_points"] + 4.0 * rows * rec["n_points"])
+    what = f"--n-points {rec['n_points']} with --burn-in {burn_in} and --chunk-seeds {rec['chunk_seeds']}"
+    checks.memory(need, what, "lower --n-points, --burn-in or --chunk-seeds")
 
 
 def cmd_simulate(args) -> None:
     out = io.check_output(args.out, args.overwrite)
     scene = _simulate_scene(args)
-    seeds = parse_seeds(args.seeds) if args.seeds else simulate.scene_seeds(scene).ravel()
+    checks.finite(args.theta0, "--theta0", "give the initial angle in rad")
+    checks.finite(args.theta_dot0, "--theta-dot0", "give the initial angular velocity in rad/s")
+    seeds = parse_seeds(args.seeds) if args.seeds is not None else simulate.scene_seeds(scene).ravel()
+    _check_simulation_size(scene, seeds.size)
     params = simulate.scene_parameters(scene, amplitude=abs(args.theta0))
     ds = simulate.scene_dataset(scene, params, seeds, theta0=args.theta0, theta_dot0=args.theta_dot0)
     print(
@@ -116,23 +179,20 @@ def cmd_signatures(args) -> None:
     }
     if stats["g"] is None:
         raise UsageError(f"{args.input} does not say g (rad/s^2): give --g to size the lag range in rocking periods.")
-    scene = config_mod.validate_scene(
-        {
-            "signatures": {
-                k: v
-                for k, v in {
-                    "level": args.level,
-                    "windows": args.windows,
-                    "n_periods": args.n_periods,
-                    "both_signs": args.both_signs,
-                    "v_level": args.v_level,
-                }.items()
-                if v is not None
-            }
-        }
-    )
+    g_name = "--g" if args.g is not None else f"the attribute g of {args.input}"
+    stats["g"] = checks.positive(stats["g"], g_name, "give --g, the restoring acceleration nu^2 theta_cr in rad/s^2")
+    scene = _validated(_with_options({}, args, SIGNATURE_OPTIONS), SIGNATURE_OPTIONS)
+    if args.group_size is not None:
+        checks.integer(args.group_size, "--group-size", 1, "give at least 1 series per signature (or leave it out: all)")
     size = args.group_size or theta.sizes["seed"]
     group = np.arange(theta.sizes["seed"]) // size
+    sig = scene["signatures"]
+    n_lag = signatures.lag_samples(sig["n_periods"], sig["level"] * stats["sigma_y"], stats["g"], theta.attrs["dt"])
+    signatures.check_lag_range(
+        n_lag, theta.sizes["time"], theta.sizes["seed"], len(sig["windows"]),
+        f"{g_name} {checks.show(stats['g'])} with --n-periods {checks.show(sig['n_periods'])}",
+        "raise --g or lower --n-periods (or pool fewer series with --group-size)",
+    )
     cube = replicates.scene_signatures(theta, scene, stats, group, np.arange(group.max() + 1))
     cube.attrs.update(io.provenance("signatures", scene["signatures"]))
     io.write_netcdf(cube, out, overwrite=args.overwrite)
@@ -146,6 +206,7 @@ def _finite(value, fallback):
 
 def cmd_estimates(args) -> None:
     out = io.check_output(args.out, args.overwrite)
+    checks.integer(args.fit_points, "--fit-points", 3, "give at least 3 points per side (a parabola needs 3)")
     with io.open_dataset(args.input) as src:
         if "free_response" not in src or "group" not in src.dims or "count" not in src or "dt" not in src.attrs:
             raise UsageError(f"{args.input} is not a signature file; make one with 'rockdec signatures'.")
@@ -170,8 +231,8 @@ def cmd_estimate(args) -> None:
         for path in args.records
         for rec in records.read_records(path, column=args.column, variable=args.variable, dt=args.dt, fs=args.fs)
     ]
-    if args.g is not None and not (np.isfinite(args.g) and args.g > 0):
-        raise UsageError(f"--g {args.g}: the restoring acceleration must be a positive number of rad/s^2.")
+    if args.g is not None:
+        checks.positive(args.g, "--g", "give the restoring acceleration nu^2 theta_cr in rad/s^2, or leave --g out")
     if not args.json:
         print(f"rockdec estimate: {len(recs)} record(s), {sum(r.theta.size for r in recs)} samples; calibrating ...", file=sys.stderr)
     with _progress():  # a calibration not in the cache is built first (about 10 s for 200,000 samples)
@@ -226,7 +287,8 @@ def _default_cache() -> str:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="rockdec", description=__doc__.splitlines()[0])
+    parser = _Parser(prog="rockdec", description=__doc__.splitlines()[0])
+    parser.add_argument("--debug", action="store_true", help="show the traceback of an unexpected error")
     sub = parser.add_subparsers(dest="command", required=True)
 
     est1 = sub.add_parser("estimate", help="e of a measured record, bias-corrected, with a 95 % interval (calibrated by simulation)")
@@ -288,13 +350,31 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Run one command; returns the exit code: 0, 2 (input the user can fix), 1 (internal error)."""
     parser = build_parser()
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:  # --help (0) or a usage error (2), printed already
+        return exc.code if isinstance(exc.code, int) else 2
     try:
         args.func(args)
-    except (UsageError, config_mod.ConfigError, io.OutputError, ValueError) as exc:
-        print(f"rockdec {args.command}: error: {exc}", file=sys.stderr)
+    except checks.InputError as exc:
+        if args.debug:
+            raise
+        message = " ".join(str(exc).split())
+        print(f"rockdec {args.command}: error: {message}{'' if message.endswith('.') else '.'}", file=sys.stderr)
         return 2
+    except Exception as exc:  # a bug, not the user's input: one line, the traceback on request
+        if args.debug:
+            traceback.print_exc()
+            return 1
+        first = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
+        print(
+            f"rockdec {args.command}: internal error ({type(exc).__name__}: {first}); this is a bug in rockdec, "
+            f"not in your input: rerun as 'rockdec --debug {args.command} ...' for the traceback and report it.",
+            file=sys.stderr,
+        )
+        return 1
     return 0
 
 

@@ -32,6 +32,7 @@ import numpy as np
 import xarray as xr
 
 from rockdec import __version__
+from rockdec import validate as checks
 
 ESTIMATORS = ("e_g", "e_0", "e1", "e2", "e3", "e4", "e_v")
 """Names of the estimators, in the order of the ``estimator`` coordinate."""
@@ -144,6 +145,13 @@ def _failed(reason: str) -> Estimate:
     return Estimate(np.nan, reason)
 
 
+def _estimate(value: float) -> Estimate:
+    """An estimate, or NaN with a reason when the arithmetic left the floating-point range."""
+    if np.isfinite(value):
+        return Estimate(float(value))
+    return _failed("not finite: the signature values overflow the arithmetic")
+
+
 def _failed_half_cycle(reason: str) -> HalfCycle:
     return HalfCycle(*([np.nan] * 6), reason=reason)
 
@@ -201,7 +209,8 @@ def e_global(r, lobes=None) -> Estimate:
     k = np.array([extreme for _, _, extreme in lobes])
     i = np.arange(k.size) - 0.5 * (k.size - 1)  # centred index: the slope needs no intercept
     slope = float(np.dot(i, 2.0 * np.log(np.abs(r[k]))) / np.dot(i, i))
-    return Estimate(float(np.exp(slope / 4.0)))
+    with np.errstate(over="ignore"):
+        return _estimate(np.exp(slope / 4.0))
 
 
 def e_first_peak(r, lobes=None) -> Estimate:
@@ -215,7 +224,8 @@ def e_first_peak(r, lobes=None) -> Estimate:
     if reason:
         return _failed(reason)
     r0, r1 = r[lobes[0][2]], r[lobes[1][2]]
-    return Estimate(float(np.sqrt(abs(r1) / r0)))
+    with np.errstate(over="ignore"):
+        return _estimate(np.sqrt(abs(r1) / r0))
 
 
 def half_cycle(r, dt: float, lobes=None) -> HalfCycle:
@@ -238,6 +248,7 @@ def half_cycle(r, dt: float, lobes=None) -> HalfCycle:
     response (eqs. 4, 6) every window holds samples of one parabola and the features are
     exact to rounding.
     """
+    checks.positive(dt, "dt", "give the sampling interval in s, > 0")
     r = np.asarray(r, dtype=float)
     lobes, reason = _lobes(r) if lobes is None else lobes
     if reason:
@@ -300,13 +311,14 @@ def local_measures(r, dt: float, lobes=None) -> dict[str, Estimate]:
     h = half_cycle(r, dt, lobes)
     if h.reason:
         return {name: _failed(h.reason) for name in LOCAL_ESTIMATORS}
-    ratio = abs(h.c2) / h.c1
-    return {
-        "e1": Estimate(float(np.sqrt(ratio))),
-        "e2": Estimate(h.v2 / h.v1),
-        "e3": Estimate(ratio * h.t1 / (h.t2 - h.t1)),
-        "e4": Estimate((h.t2 - h.t1) / h.t1),
-    }
+    with np.errstate(all="ignore"):
+        ratio = np.float64(abs(h.c2)) / h.c1
+        return {
+            "e1": _estimate(np.sqrt(ratio)),
+            "e2": _estimate(np.float64(h.v2) / h.v1),
+            "e3": _estimate(ratio * h.t1 / (h.t2 - h.t1)),
+            "e4": _estimate(np.float64(h.t2 - h.t1) / h.t1),
+        }
 
 
 def e_impact_slope(d, dt: float, fit_points: int = DEFAULT_FIT_POINTS) -> Estimate:
@@ -322,8 +334,9 @@ def e_impact_slope(d, dt: float, fit_points: int = DEFAULT_FIT_POINTS) -> Estima
 
     ``fit_points`` below :data:`MIN_FIT_POINTS` is a caller error (``ValueError``).
     """
-    if fit_points < MIN_FIT_POINTS:
-        raise ValueError(f"fit_points={fit_points}: need at least {MIN_FIT_POINTS} points")
+    if not (checks.is_whole(fit_points) and fit_points >= MIN_FIT_POINTS):
+        raise checks.InputError(f"fit_points={fit_points}: need a whole number of at least {MIN_FIT_POINTS} points")
+    checks.positive(dt, "dt", "give the sampling interval in s, > 0")
     d = np.asarray(d, dtype=float)
     if d.ndim != 1 or d.size % 2 == 0:
         return _failed("D_v signature length not odd: no lag 0")
@@ -337,7 +350,8 @@ def e_impact_slope(d, dt: float, fit_points: int = DEFAULT_FIT_POINTS) -> Estima
     after = _fit2(tau, d[lag0 + 1 : lag0 + 1 + fit_points]).slope(0.0)
     if before == 0:
         return _failed("zero slope before the impact")
-    return Estimate(float(after / before))
+    with np.errstate(all="ignore"):
+        return _estimate(after / before)
 
 
 def estimate_all(r, d, dt: float, fit_points: int = DEFAULT_FIT_POINTS) -> dict[str, Estimate]:

@@ -47,6 +47,8 @@ the exact flight.
 
 from __future__ import annotations
 
+import math
+
 import numba
 
 #: Name of this simulator in tables (``"exact"`` is :mod:`rockdec.simulate`).
@@ -58,7 +60,7 @@ def step(theta, omega, dt, g, e):
     """One fixed step without load: explicit-side parabola, impact on the grid.
 
     ``theta`` in rad, ``omega`` in rad/s, ``dt`` in s, ``g`` in rad/s^2. Returns the new
-    ``(theta, omega)``; see the module docstring for the scheme.
+    ``(theta, omega)``; see the module docstring for the scheme. A NaN state stays NaN.
     """
     if theta > 0.0:
         side = 1.0
@@ -68,8 +70,10 @@ def step(theta, omega, dt, g, e):
         side = 1.0
     elif omega < 0.0:
         side = -1.0
-    else:
+    elif theta == 0.0 and omega == 0.0:
         return 0.0, 0.0
+    else:  # a NaN state stays NaN (it must not come to rest)
+        return math.nan, math.nan
     new_theta = theta + dt * (omega - 0.5 * side * g * dt)
     new_omega = omega - side * g * dt
     if side * new_theta < 0.0 or (new_theta == 0.0 and theta != 0.0):

@@ -52,7 +52,8 @@ import math
 import numba
 import numpy as np
 
-from rockdec.models import amplitude_limit, period_mismatch
+from rockdec import validate as checks
+from rockdec.models import amplitude_limit, check_finite_series, check_run, period_mismatch
 from rockdec.loading import draw_impulses, series_rng
 
 #: Bounces from ``theta = 0`` with ``w/c`` at most this are counted in closed form.
@@ -62,6 +63,9 @@ _SERIES_EPS = 1e-18
 #: Largest number of Newton steps for the bounce count, and of its integer corrections.
 _NEWTON_MAX = 60
 _COUNT_FIX = 4
+#: Passes of the event loop beyond the long bounces before giving up with NaN: a valid
+#: state needs a handful; only NaN or overflow could loop for ever.
+_MAX_PASSES = 64
 
 MODELS = ("simplified", "housner")
 
@@ -196,7 +200,8 @@ def housner_flight(theta, omega, duration, nu, theta_cr, e):
     the rest state included. Returns ``(theta, omega, overturned)``; when the block reaches
     ``|theta| = theta_cr`` inside the interval, the motion stops there and the result is
     ``(s theta_cr, velocity at that instant, True)``. A start at ``|theta| >= theta_cr``
-    counts as overturned at once.
+    counts as overturned at once. A NaN state or step gives ``(nan, nan, False)`` (the
+    loop is bounded).
     """
     if theta == 0.0 and omega == 0.0:
         return 0.0, 0.0, False
@@ -212,7 +217,14 @@ def housner_flight(theta, omega, duration, nu, theta_cr, e):
         return side * h_end, side * u_end, False
     c = nu * theta_cr
     remaining = duration
-    while True:
+    if not (remaining >= 0.0 and h >= 0.0 and abs(u) < math.inf and c > 0.0):  # NaN in, NaN out
+        return math.nan, math.nan, False
+    # long bounces, taken one at a time: each lasts more than (2/nu) atanh(1/2) > 1/nu and
+    # leaves e times the speed, from below c down to c/2; e = 0 rests at the first landing
+    # and e = 1 counts its bounces in closed form
+    long_bounces = min(nu * duration, math.log(0.5) / math.log(e)) if 0.0 < e < 1.0 else 0.0
+    passes = _MAX_PASSES + (int(min(long_bounces, 1e9)) if long_bounces >= 0.0 else 0)
+    for _ in range(passes):
         if h == 0.0 and u < c:
             # At zero, leaving with speed u = w: whole bounces first (each lands with w, eq. 6).
             w = u
@@ -268,6 +280,7 @@ def housner_flight(theta, omega, duration, nu, theta_cr, e):
         u = e * speed
         if u == 0.0:
             return 0.0, 0.0, False
+    return math.nan, math.nan, False
 
 
 @numba.njit(nogil=True, cache=True)
@@ -318,12 +331,9 @@ def simulate_block_housner(seeds, n_points, *, dt, nu, theta_cr, e, sigma_p, the
     NaN from the sample at which a series' block lies overturned, and an int64 array with
     that sample index per seed (``-1``: it never fell; ``0``: it fell in the burn-in).
     """
-    if not (nu > 0.0 and theta_cr > 0.0 and dt > 0.0):
-        raise ValueError(f"nu, theta_cr and dt must be > 0 (got nu={nu}, theta_cr={theta_cr}, dt={dt})")
-    if not 0.0 <= e <= 1.0:
-        raise ValueError(f"the coefficient of restitution must lie in [0, 1] (got e={e})")
-    if sigma_p < 0.0:
-        raise ValueError(f"sigma_p must be >= 0 (got {sigma_p})")
+    check_run(dt=dt, e=e, sigma_p=sigma_p, theta0=theta0, theta_dot0=theta_dot0, burn_in=burn_in, n_points=n_points)
+    checks.positive(nu, "nu", "give the rocking frequency parameter in rad/s, > 0")
+    checks.positive(theta_cr, "theta_cr", "give the critical angle in rad, > 0")
     seeds = np.atleast_1d(np.asarray(seeds, dtype=np.int64))
     n_steps = burn_in + n_points - 1
     theta = np.empty((seeds.size, n_points))
@@ -335,6 +345,12 @@ def simulate_block_housner(seeds, n_points, *, dt, nu, theta_cr, e, sigma_p, the
         overturned_at[row] = integrate_housner(
             impulses, dt, nu, theta_cr, e, theta0, theta_dot0, burn_in, theta[row], theta_dot[row]
         )
+    standing = np.flatnonzero(overturned_at != 0)  # NaN only from the fall on
+    last = np.where(overturned_at < 0, n_points, overturned_at)[standing] - 1
+    check_finite_series(
+        np.stack([theta[standing, last], theta_dot[standing, last]]),
+        f"the Housner simulation at dt = {dt}, nu = {nu}, sigma_p = {sigma_p}",
+    )
     return theta, theta_dot, overturned_at
 
 

@@ -2,24 +2,39 @@
 
 Every product is written through :func:`write_netcdf`: to a temporary file beside the
 target, renamed into place only when complete, so a failed run leaves no partial file,
-and an existing file is never replaced unless the caller says so.
+and an existing file is never replaced unless the caller says so. Each run's temporary
+file has a name of its own, so runs writing different outputs never touch each other's;
+a run claims its output with a lock file made exclusively (``O_EXCL``) beside it, so a
+second run on the same output refuses at once instead of racing the first.
 """
 
 from __future__ import annotations
 
+import contextlib
 import datetime as _dt
+import errno
 import json
 import os
+import shutil
 import subprocess
+import tempfile
 from pathlib import Path
 
+import numpy as np
 import xarray as xr
 
 from rockdec import __version__
+from rockdec.validate import InputError
+
+#: Largest magnitude a float32 variable can store without becoming inf.
+FLOAT32_MAX = float(np.finfo(np.float32).max)
+
+#: Free space below which a failed write is reported as a full disk (HDF5 hides the errno).
+DISK_FULL_BYTES = 2**20
 
 
-class OutputError(ValueError):
-    """An output path the user can fix (exists already, folder missing or not writable)."""
+class OutputError(InputError):
+    """An output path the user can fix (exists already, folder missing or not writable, disk full)."""
 
 
 def git_commit() -> str:
@@ -50,6 +65,8 @@ def provenance(step: str, settings: dict | None = None) -> dict:
 def check_output(path: str | Path, overwrite: bool = False) -> Path:
     """Check before any work that ``path`` can be written; raise :class:`OutputError` if not."""
     path = Path(path)
+    if path.is_dir():
+        raise OutputError(f"output '{path}' is a folder; give a file name such as '{path / 'out.nc'}'.")
     if path.exists() and not overwrite:
         raise OutputError(f"output '{path}' exists already; remove it or pass --overwrite.")
     folder = path.parent if str(path.parent) else Path(".")
@@ -57,7 +74,63 @@ def check_output(path: str | Path, overwrite: bool = False) -> Path:
         raise OutputError(f"output folder '{folder}' does not exist; create it first.")
     if not os.access(folder, os.W_OK):
         raise OutputError(f"output folder '{folder}' is not writable; choose another --out.")
+    if _live_owner(_lock_path(path)) is not None:
+        raise _busy(path)
     return path
+
+
+def _lock_path(path: Path) -> Path:
+    return path.with_name(f".{path.name}.lock")
+
+
+def _busy(path: Path) -> OutputError:
+    return OutputError(
+        f"output '{path}' is being written by another run (lock '{_lock_path(path)}'); "
+        "wait for it to finish or choose another --out."
+    )
+
+
+def _live_owner(lock: Path) -> int | None:
+    """The process id in ``lock`` if that process still runs on this machine, else ``None``."""
+    try:
+        pid = int(lock.read_text().strip() or 0)
+    except (OSError, ValueError):
+        return None
+    if pid <= 0:
+        return None
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return None
+    except PermissionError:  # someone else's process
+        return pid
+    return pid
+
+
+@contextlib.contextmanager
+def _claim(path: Path):
+    """Hold the lock file of ``path`` (created with ``O_EXCL``) while writing it.
+
+    A lock left by a run that was killed (its process is gone) is taken over, and that
+    run's temporary files are removed.
+    """
+    lock = _lock_path(path)
+    for attempt in range(2):
+        try:
+            fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+            break
+        except FileExistsError:
+            if attempt or _live_owner(lock) is not None:
+                raise _busy(path) from None
+            for stale in path.parent.glob(f".{path.name}.*.partial"):
+                stale.unlink(missing_ok=True)
+            lock.unlink(missing_ok=True)
+    try:
+        os.write(fd, f"{os.getpid()}\n".encode())
+        os.close(fd)
+        yield
+    finally:
+        lock.unlink(missing_ok=True)
 
 
 def write_netcdf(ds: xr.Dataset, path: str | Path, *, float32: tuple[str, ...] = (), overwrite: bool = False) -> Path:
@@ -72,17 +145,45 @@ def write_netcdf(ds: xr.Dataset, path: str | Path, *, float32: tuple[str, ...] =
         enc = {"zlib": True, "complevel": 4}
         if name in float32:
             enc["dtype"] = "float32"
+            ds = ds.assign({name: var.copy(data=_fits_float32(var.data, name))})
         if var.ndim >= 1 and var.dtype.kind == "f":
             enc["_FillValue"] = float("nan")
         encoding[name] = enc
-    tmp = path.with_name(f".{path.name}.partial")
-    try:
-        ds.to_netcdf(tmp, encoding=encoding, engine="netcdf4")
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
+    with _claim(path):
+        fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".partial", dir=path.parent)
+        os.close(fd)
+        tmp = Path(name)
+        try:
+            ds.to_netcdf(tmp, encoding=encoding, engine="netcdf4")
+            if path.exists() and not overwrite:  # made meanwhile by a writer that takes no lock
+                raise OutputError(f"output '{path}' appeared while this run wrote it; remove it or pass --overwrite.")
+            os.replace(tmp, path)
+        except (OSError, RuntimeError) as exc:
+            if getattr(exc, "errno", None) in (errno.ENOSPC, errno.EDQUOT) or shutil.disk_usage(path.parent).free < DISK_FULL_BYTES:
+                raise OutputError(
+                    f"no space left on the disk of '{path}' while writing it; free some space or choose another --out."
+                ) from None
+            raise
+        finally:
+            tmp.unlink(missing_ok=True)
     return path
+
+
+def _fits_float32(data, name: str):
+    """``data``, checked (chunk by chunk while writing, if lazy) to stay within the float32 range."""
+
+    def check(block):
+        big = np.abs(block) > FLOAT32_MAX  # NaN (a fallen block) is stored as NaN: not refused
+        if np.any(big):
+            raise OutputError(
+                f"'{name}' reaches {np.abs(block[big]).max():.3g}, beyond the float32 range it is stored in "
+                f"({FLOAT32_MAX:.3g}); choose smaller scales (initial state, sigma_p, dt)."
+            )
+        return block
+
+    if hasattr(data, "map_blocks"):
+        return data.map_blocks(check, dtype=data.dtype)
+    return check(np.asarray(data))
 
 
 def open_dataset(path: str | Path, **kwargs) -> xr.Dataset:

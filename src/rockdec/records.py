@@ -15,6 +15,8 @@ from typing import NamedTuple
 
 import numpy as np
 
+from rockdec.validate import InputError
+
 #: Largest fraction of NaN samples a record may hold.
 MAX_NAN_FRACTION = 0.1
 
@@ -25,7 +27,7 @@ MIN_SAMPLES = 1000
 TIME_RTOL = 1e-3
 
 
-class RecordError(ValueError):
+class RecordError(InputError):
     """A record the user can fix; the message names the file, the problem and the fix."""
 
 

@@ -69,6 +69,7 @@ import xarray as xr
 from numba import njit
 
 from rockdec import __version__
+from rockdec import validate as checks
 from rockdec.models import period_from_g
 from rockdec.records import sampling_step
 
@@ -220,11 +221,13 @@ def _run(trigger, y, target, half_widths, n_lag, dt, both_signs, owned):
     if y.dtype not in (np.float32, np.float64):
         y = y.astype(np.float64)
     edges = np.atleast_1d(np.asarray(half_widths, dtype=np.float64))
-    if edges.ndim != 1 or edges.size == 0 or np.any(edges < 0) or np.any(np.diff(edges) < 0):
-        raise ValueError(f"window half-widths must be a non-empty, non-negative, ascending sequence; got {half_widths!r}")
-    n_lag = int(n_lag)
-    if n_lag < 0:
-        raise ValueError(f"n_lag must be >= 0, got {n_lag}")
+    if edges.ndim != 1 or edges.size == 0 or not np.all(np.isfinite(edges) & (edges >= 0)) or np.any(np.diff(edges) < 0):
+        raise checks.InputError(
+            f"window half-widths must be a non-empty, finite, non-negative, ascending sequence; got {half_widths!r}"
+        )
+    n_lag = checks.integer(n_lag, "n_lag", 0)
+    checks.finite(target, "the trigger level" if trigger == "a" else "the trigger velocity")
+    checks.positive(dt, "dt")
     lead_shape, n = y.shape[:-1], y.shape[-1]
     rows = int(np.prod(lead_shape, dtype=np.int64))
     lo, hi = (0, n) if owned is None else (int(owned[0]), int(owned[1]))
@@ -311,9 +314,39 @@ def lag_samples(n_periods: float, level: float, g: float, dt: float) -> int:
     simplified model (eq. 5); ``level`` ``a`` in rad, ``g = nu^2 theta_cr`` in rad/s^2,
     ``dt`` in s.
     """
-    if level < 0 or g <= 0 or dt <= 0:
-        raise ValueError(f"lag_samples needs level >= 0, g > 0 and dt > 0; got level={level}, g={g}, dt={dt}")
-    return int(np.rint(n_periods * float(period_from_g(level, g)) / dt))
+    checks.positive(n_periods, "n_periods", allow_zero=True)
+    checks.positive(level, "level", allow_zero=True)
+    checks.positive(g, "g")
+    checks.positive(dt, "dt")
+    lags = n_periods * float(period_from_g(level, g)) / dt
+    if not lags < 2**62:
+        raise checks.InputError(
+            f"the lag range of n_periods = {n_periods} periods at level {level} and g = {g} is {lags:.3g} samples of "
+            f"dt = {dt}; raise g or dt, or lower n_periods."
+        )
+    return int(np.rint(lags))
+
+
+def sums_nbytes(n_series: int, n_windows: int, n_lag: int) -> float:
+    """Bytes of the per-series sums of both triggers: ``n_series x 2 x n_windows x (2 n_lag + 1)`` float64."""
+    return 8.0 * n_series * 2 * n_windows * (2 * n_lag + 1)
+
+
+def check_lag_range(n_lag: int, n_time: int, n_series: int, n_windows: int, what: str, fix: str) -> None:
+    """Refuse, before any work, a lag range with no room in the record or beyond the memory.
+
+    For the edges (command line, files): a segment spans ``2 n_lag + 1`` samples and must
+    lie inside the record of ``n_time`` samples, and the sums (:func:`sums_nbytes`) must
+    fit in memory. ``what`` names the settings as the user wrote them, ``fix`` the remedy.
+    (The kernels themselves accept short records: they count no trigger.)
+    """
+    width = 2 * int(n_lag) + 1
+    if width > n_time:
+        raise checks.InputError(
+            f"{what} asks for segments of 2L+1 = {width} samples, longer than the record of {n_time} samples, "
+            f"so no trigger fits; {fix}."
+        )
+    checks.memory(sums_nbytes(n_series, n_windows, n_lag), what, fix)
 
 
 def free_response(signature):
@@ -539,6 +572,14 @@ def signature_cube(
             raise ValueError("give g (rad/s^2) to size the lag range from n_periods, or n_lag directly")
         n_lag = lag_samples(n_periods, a, g, dt)
         lag_settings = {"n_periods": float(n_periods), "g": float(g)}
+    # series summed at once: the largest Dask block, or the whole array
+    sizes = {d: max(c) for d, c in theta.chunksizes.items()} if theta.chunks is not None else dict(theta.sizes)
+    block_rows = int(np.prod([n for d, n in sizes.items() if d != "time"]))
+    checks.memory(
+        sums_nbytes(block_rows, windows.size, n_lag),
+        f"the lag range of {n_lag} samples a side ({lag_settings or 'n_lag'})",
+        "raise g or lower n_periods (or n_lag), or use smaller chunks of series",
+    )
     kw = {
         "a": a,
         "a_widths": windows * window_max * a,

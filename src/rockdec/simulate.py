@@ -38,10 +38,15 @@ from rockdec.fixed_step import step as grid_step
 from rockdec.housner import choose_model, simulate_block_housner
 from rockdec.io import provenance
 from rockdec.loading import draw_impulses, series_rng
-from rockdec.models import period_from_g, restoring_acceleration
+from rockdec import validate as checks
+from rockdec.models import check_finite_series, check_run, period_from_g, restoring_acceleration
 
 #: Largest number of correction steps when the closed-form flight count is off by rounding.
 _COUNT_FIX = 4
+
+#: Passes of the flight loop before giving up with NaN. A valid state needs at most three
+#: (crossing, closed-form bounces, last arc); only NaN or overflow could loop for ever.
+_MAX_PASSES = 64
 
 #: Pilot runs draw seeds from here on, apart from any scene's seeds.
 PILOT_SEED_OFFSET = 2**62
@@ -55,10 +60,11 @@ def flight(theta, omega, duration, g, e):
     """Advance ``(theta, omega)`` by ``duration`` seconds of free rocking (no load).
 
     Exact for the simplified model (eqs. 4, 6, 22-24), any number of impacts, the rest
-    state included. Returns the new ``(theta, omega)``.
+    state included. Returns the new ``(theta, omega)``; ``(nan, nan)`` for a state or
+    step that is NaN (the loop is bounded by :data:`_MAX_PASSES`).
     """
     remaining = duration
-    while True:
+    for _ in range(_MAX_PASSES):
         if theta == 0.0 and omega == 0.0:
             return 0.0, 0.0
         if theta > 0.0 or (theta == 0.0 and omega > 0.0):
@@ -111,6 +117,7 @@ def flight(theta, omega, duration, g, e):
             return 0.0, 0.0
         theta = 0.0
         omega = side * w
+    return math.nan, math.nan
 
 
 @numba.njit(nogil=True, cache=True)
@@ -161,8 +168,12 @@ def simulate_block(seeds, n_points, *, dt, g, e, sigma_p, theta0=0.0, theta_dot0
     velocity impulses in rad/s; ``sigma_p = 0`` gives the free response from
     ``(theta0, theta_dot0)``. ``grid_impacts=True``: the fixed-step integrator instead of the
     exact one (same load, same seed). ``pole``: low-pass filtered load
-    (:func:`rockdec.loading.draw_impulses`), 0 for white noise.
+    (:func:`rockdec.loading.draw_impulses`), 0 for white noise. Inputs outside the model
+    (NaN, infinities, ``e`` outside ``[0, 1]``, ...) and series that overflow raise
+    :class:`rockdec.validate.InputError`.
     """
+    check_run(dt=dt, e=e, sigma_p=sigma_p, theta0=theta0, theta_dot0=theta_dot0, burn_in=burn_in, n_points=n_points)
+    checks.positive(g, "g", "give the restoring acceleration nu^2 theta_cr in rad/s^2, > 0")
     seeds = np.atleast_1d(np.asarray(seeds, dtype=np.int64))
     n_steps = burn_in + n_points - 1
     theta = np.empty((seeds.size, n_points))
@@ -171,6 +182,7 @@ def simulate_block(seeds, n_points, *, dt, g, e, sigma_p, theta0=0.0, theta_dot0
     for row, seed in enumerate(seeds):
         draw_impulses(series_rng(seed), impulses, sigma_p, pole)
         integrate(impulses, dt, g, e, theta0, theta_dot0, burn_in, theta[row], theta_dot[row], grid_impacts)
+    check_finite_series(np.stack([theta[:, -1], theta_dot[:, -1]]), f"the simulation at dt = {dt}, g = {g}, sigma_p = {sigma_p}")
     return theta, theta_dot
 
 
@@ -181,12 +193,14 @@ def default_burn_in(e: float, points_per_cycle: float, relaxations: float = 20.0
     over about ``1/(1 - e^4)`` cycles; ``relaxations`` of those cycles, at
     ``points_per_cycle`` steps each, are discarded. Refuses ``e = 1`` (nothing relaxes).
     """
+    checks.in_range(e, "e", 0.0, 1.0, "give the coefficient of restitution in [0, 1]")
+    checks.positive(points_per_cycle, "points_per_cycle")
     loss = 1.0 - e**4
     if loss <= 0.0:
-        raise ValueError("e = 1 dissipates no energy, so no stationary state exists: give --burn-in explicitly")
+        raise checks.InputError("e = 1 dissipates no energy, so no stationary state exists: give --burn-in explicitly")
     steps = relaxations * points_per_cycle / loss
     if steps > MAX_DEFAULT_BURN_IN:
-        raise ValueError(
+        raise checks.InputError(
             f"e = {e} loses only {loss:.2g} of the energy per cycle, so reaching the stationary state "
             f"takes about {steps:.3g} steps; give --burn-in (and --dt) explicitly"
         )
@@ -219,27 +233,43 @@ def calibrate_dt(
     record gives) and the achieved ``points_per_cycle``. Refuses ``e >= 1``. ``pole``:
     a low-pass filtered load (:func:`rockdec.loading.draw_impulses`).
     """
+    checks.in_range(e, "e", 0.0, 1.0, "give the coefficient of restitution in [0, 1]")
+    checks.positive(g, "g", "give the restoring acceleration nu^2 theta_cr in rad/s^2, > 0")
+    checks.positive(sigma_p, "sigma_p", "give the impulse standard deviation in rad/s, > 0", allow_zero=True)
+    checks.in_range(points_per_cycle, "points_per_cycle", 2.0, lo_open=True, fix="give more than 2 samples per cycle")
+    checks.integer(pilot_seeds, "pilot_seeds", 1)
+    checks.integer(pilot_points, "pilot_points", 2)
+    checks.integer(iterations, "iterations", 1)
     if e >= 1.0:
-        raise ValueError(
+        raise checks.InputError(
             "e = 1 dissipates no energy, so the response never becomes stationary and "
             "sigma_Y does not exist: give the time step explicitly (--dt) instead of "
             "--points-per-cycle"
         )
     if sigma_p <= 0.0:
-        raise ValueError("time-step calibration needs noise: sigma_p must be > 0 (or give --dt)")
+        raise checks.InputError("time-step calibration needs noise: sigma_p must be > 0 (or give --dt)")
     burn_in = default_burn_in(e, points_per_cycle)
     seeds = np.arange(pilot_seeds) + PILOT_SEED_OFFSET
     dt = sigma_p / g * math.sqrt(4.0 * math.sqrt(2.0 * 290.0) / points_per_cycle)  # c is near 290 at e = 0.95
+    outside = checks.InputError(
+        f"the time-step calibration at g = {g}, sigma_p = {sigma_p} leaves the floating-point range; "
+        "give the time step explicitly (--dt)"
+    )
     history: list[tuple[float, float]] = []
     for i in range(iterations):
+        if not (0.0 < dt < math.inf and 0.0 < g * dt * dt < math.inf):
+            raise outside
         theta, _ = simulate_block(seeds, pilot_points, dt=dt, g=g, e=e, sigma_p=sigma_p, burn_in=burn_in, pole=pole)
         stats = pilot_statistics(theta, dt, g)
         if i < iterations - 1:
-            if pole == 0.0:
-                c = stats["sigma_y"] * dt**2 * g**3 / sigma_p**4
-                dt = sigma_p / g * math.sqrt(4.0 * math.sqrt(2.0 * c) / points_per_cycle)
-            else:
-                dt = _secant_step(history, dt, stats["points_per_cycle"], points_per_cycle)
+            try:
+                if pole == 0.0:
+                    c = stats["sigma_y"] * dt**2 * g**3 / sigma_p**4
+                    dt = sigma_p / g * math.sqrt(4.0 * math.sqrt(2.0 * c) / points_per_cycle)
+                else:
+                    dt = _secant_step(history, dt, stats["points_per_cycle"], points_per_cycle)
+            except (OverflowError, ZeroDivisionError):  # float ** raises where * gives inf
+                raise outside from None
     return {"dt": dt, "burn_in": burn_in, **stats}
 
 
@@ -364,7 +394,7 @@ def scene_parameters(scene: dict, amplitude: float = 0.0) -> dict:
     e, sigma_p = system["e"], exc["sigma_p"]
     if sigma_p == 0.0:
         if exc["dt"] is None and amplitude <= 0.0:
-            raise ValueError("a free response (sigma_p = 0) needs --theta0 > 0 to set the step, or --dt")
+            raise checks.InputError("a free response (sigma_p = 0) needs --theta0 > 0 to set the step, or --dt")
         dt = exc["dt"] if exc["dt"] is not None else float(period_from_g(abs(amplitude), g)) / exc["points_per_cycle"]
         nan = float("nan")
         cal = {"dt": dt, "burn_in": 0, "sigma_y": nan, "sigma_ydot": nan, "points_per_cycle": nan}
@@ -385,7 +415,7 @@ def scene_parameters(scene: dict, amplitude: float = 0.0) -> dict:
         )
         standing = np.all(np.isfinite(theta), axis=1)
         if standing.mean() < 0.5:
-            raise ValueError(
+            raise checks.InputError(
                 f"the block overturns in {1 - standing.mean():.0%} of the pilot series (3 sigma_Y/theta_cr = "
                 f"{3 * cal['sigma_y'] / system['theta_cr']:.2g}): no stationary rocking exists; lower sigma_p"
             )

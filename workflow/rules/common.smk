@@ -1,9 +1,15 @@
 # Config validation and the helpers that turn a scene into file names.
+import sys
 from importlib.util import find_spec
 
 from rockdec import config as rockdec_config
 
-rockdec_config.validate(config)
+# Name the file the user passed (--configfile), not always the default one; one sentence, exit code 2.
+try:
+    rockdec_config.validate(config, source=", ".join(map(str, workflow.overwrite_configfiles)) or rockdec_config.DEFAULT_PATH)
+except rockdec_config.ConfigError as exc:
+    print(f"rockdec: error: {exc}", file=sys.stderr)
+    sys.exit(2)
 
 SCENES = sorted(config["scenes"])
 

@@ -1,0 +1,127 @@
+"""Checks of user input at the edges (command line, config, files), shared by every entry point.
+
+Each check returns the value it accepts, converted (``float``, ``int``, ``str``), or raises
+:class:`InputError` with one sentence that names the value by the name the user wrote
+(a flag such as ``--dt``, a config key, a keyword argument) and says how to fix it:
+``"--dt nan: not a finite number; give a time step > 0 in s."``
+
+NaN never passes: every comparison with NaN is false, so each range test is written as
+``not (lo <= x <= hi)``, and finiteness is tested first.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+import re
+
+#: A plain identifier: ASCII letter first, then letters, digits or underscores.
+IDENTIFIER = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
+
+
+class InputError(ValueError):
+    """Input a user can fix; the message names the value and the fix (exit code 2 in the CLI)."""
+
+
+def show(value) -> str:
+    """``value`` as the user would have written it: ``nan``, ``6000.0``, ``12``, ``'a/b'``."""
+    if is_whole(value):
+        return str(int(value))
+    if is_number(value):
+        return repr(float(value))
+    return repr(value)
+
+
+def _fail(name, value, problem: str, fix: str) -> InputError:
+    return InputError(f"{name} {show(value)}: {problem}; {fix}.")
+
+
+def is_number(value) -> bool:
+    """A real number (not a bool, not a string), finite or not."""
+    return isinstance(value, numbers.Real) and not isinstance(value, bool)
+
+
+def is_finite_number(value) -> bool:
+    """A real number other than NaN and +-inf."""
+    return is_number(value) and math.isfinite(value)
+
+
+def is_whole(value) -> bool:
+    """An integer type (Python or NumPy), not a bool and not a float that happens to be whole."""
+    return isinstance(value, numbers.Integral) and not isinstance(value, bool)
+
+
+def finite(value, name: str, fix: str = "give a finite number") -> float:
+    """``value`` as a float; refuses NaN, +-inf and anything that is not a real number."""
+    if not is_number(value):
+        raise _fail(name, value, "not a number", fix)
+    if not math.isfinite(value):
+        raise _fail(name, value, "not a finite number", fix)
+    return float(value)
+
+
+def in_range(value, name: str, lo=-math.inf, hi=math.inf, fix: str | None = None, *, lo_open=False, hi_open=False) -> float:
+    """``value`` as a finite float in the interval from ``lo`` to ``hi`` (closed unless ``*_open``)."""
+    left, right = ("(" if lo_open else "["), (")" if hi_open else "]")
+    fix = fix or f"give a value in {left}{lo:g}, {hi:g}{right}"
+    x = finite(value, name, fix)
+    above = x > lo if lo_open else x >= lo
+    below = x < hi if hi_open else x <= hi
+    if not (above and below):
+        if hi == math.inf:
+            raise _fail(name, value, f"not {'>' if lo_open else '>='} {lo:g}", fix)
+        raise _fail(name, value, f"outside {left}{lo:g}, {hi:g}{right}", fix)
+    return x
+
+
+def positive(value, name: str, fix: str | None = None, *, allow_zero=False) -> float:
+    """``value`` as a finite float ``> 0`` (``>= 0`` with ``allow_zero``)."""
+    fix = fix or f"give a finite number {'>=' if allow_zero else '>'} 0"
+    return in_range(value, name, 0.0, math.inf, fix, lo_open=not allow_zero)
+
+
+def integer(value, name: str, minimum: int | None = None, fix: str | None = None) -> int:
+    """``value`` as an int of an integer type, at least ``minimum``.
+
+    A float is refused even when whole (``6000.0``): in a config it is a typo for ``6000``
+    that would fail later, in a rule.
+    """
+    fix = fix or (f"give a whole number >= {minimum}" if minimum is not None else "give a whole number")
+    if not is_whole(value):
+        if is_finite_number(value) and float(value).is_integer():
+            raise _fail(name, value, "written as a decimal", f"write it as {int(value)}")
+        raise _fail(name, value, "not a whole number", fix)
+    if minimum is not None and value < minimum:
+        raise _fail(name, value, f"below {minimum}", fix)
+    return int(value)
+
+
+def identifier(value, name: str) -> str:
+    """``value`` as a plain identifier (letters, digits, ``_``; a letter first).
+
+    Names become file and folder names (``results/<scene>/``): nothing like ``../`` or
+    ``/`` may slip through.
+    """
+    if not (isinstance(value, str) and IDENTIFIER.fullmatch(value)):
+        raise _fail(name, value, "not a plain name", "use letters, digits and _ only, starting with a letter")
+    return value
+
+
+def available_memory() -> int:
+    """Bytes of memory the machine can give this process now (``psutil``)."""
+    import psutil
+
+    return int(psutil.virtual_memory().available)
+
+
+def memory(nbytes: float, what: str, fix: str) -> None:
+    """Refuse a request that needs more than the available memory, before any work.
+
+    ``what`` names the request by the values the user wrote (``"--burn-in 400000000"``).
+    """
+    available = available_memory()
+    if not nbytes <= available:
+        raise InputError(
+            f"{what} needs {nbytes / 2**30:.3g} GiB of memory, more than the {available / 2**30:.3g} GiB "
+            f"this machine has free; {fix}."
+        )
