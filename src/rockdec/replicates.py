@@ -21,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from rockdec import estimators, signatures, simulate
+from rockdec import estimators, series, signatures, simulate
 
 READINGS = ("pooled", "per_series", "groups_of_10")
 """The readings, in the order tables list them."""
@@ -108,16 +108,22 @@ def replicate_estimates(cube: xr.Dataset, *, fit_points: int, weights: str = "wi
     return out
 
 
-def reading_cube(simulation_attrs: dict, scene: dict, reading: str) -> xr.Dataset:
-    """Lazy signature cube of a reading, every series regenerated from its seed.
+def reading_cube(simulation_attrs: dict, scene: dict, reading: str, series_files=()) -> xr.Dataset:
+    """Lazy signature cube of a reading, every series regenerated from its seed or read back.
 
     ``simulation_attrs`` are the global attributes of the scene's simulation file (step,
     burn-in, stationary statistics); the series are simulated chunk by chunk (Dask over
-    seeds) and reduced to signature sums at once, so no full record is ever stored.
+    seeds) and reduced to signature sums at once, so no full record is ever stored. With
+    ``series_files`` (the per-replicate files of ``store_series: all``) the series are read
+    from them instead; both ways give the same cube bit for bit (see :mod:`rockdec.series`).
     """
     used, group, replicate_of_group = grouping(simulate.scene_seeds(scene), reading)
-    sim = simulate.regenerate(simulation_attrs, used, chunk_seeds=scene["records"]["chunk_seeds"])
-    cube = scene_signatures(sim["theta"], scene, simulation_attrs, group, replicate_of_group)
+    chunk_seeds = scene["records"]["chunk_seeds"]
+    if len(series_files):
+        theta = series.stored_theta(series_files, used, chunk_seeds)
+    else:
+        theta = series.as_recorded(simulate.regenerate(simulation_attrs, used, chunk_seeds=chunk_seeds)["theta"])
+    cube = scene_signatures(theta, scene, simulation_attrs, group, replicate_of_group)
     cube.attrs["reading"] = reading
     return cube
 

@@ -2,6 +2,7 @@
 from importlib.util import find_spec
 
 from rockdec import config as rockdec_config
+from rockdec import series as rockdec_series
 
 rockdec_config.validate(config)
 
@@ -10,6 +11,7 @@ SCENES = sorted(config["scenes"])
 
 wildcard_constraints:
     scene="|".join(SCENES),
+    replicate=r"\d+",
 
 
 def scene(name):
@@ -20,9 +22,14 @@ def scene(name):
 def figure_names(name):
     """The figures scene ``name`` can draw: fig. 2 needs at least one stored series."""
     figures = ["fig1b", "fig2", "fig3", "fig4", "fig_ev"]
-    if scene(name)["records"]["store_series"] < 1:
+    if rockdec_series.simulation_seeds(scene(name)).size < 1:
         figures.remove("fig2")
     return figures
+
+
+def series_files(name):
+    """The per-replicate series files of scene ``name`` (none unless `store_series: all`)."""
+    return [str(path) for path in rockdec_series.replicate_files(f"results/{name}", scene(name))]
 
 
 def default_products():
