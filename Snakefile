@@ -14,6 +14,7 @@ include: "workflow/rules/estimates.smk"
 include: "workflow/rules/figures.smk"
 include: "workflow/rules/studies.smk"
 include: "workflow/rules/tradeoff.smk"
+include: "workflow/rules/archive.smk"
 
 
 rule all:

@@ -1,4 +1,4 @@
-"""The ``rockdec`` command: ``simulate``, ``signatures``, ``estimates``.
+"""The ``rockdec`` command: ``simulate``, ``signatures``, ``estimates``, ``verify``.
 
 Errors a user can cause (bad options, unknown scene, unwritable output) end with one
 sentence on stderr naming the problem and the fix, and exit code 2; no file is left
@@ -14,7 +14,7 @@ import sys
 import numpy as np
 
 from rockdec import config as config_mod
-from rockdec import io, replicates, simulate
+from rockdec import archive, io, replicates, simulate
 
 #: Scene fields set by ``simulate`` options: option -> (section, key).
 SIMULATE_OPTIONS = {
@@ -153,6 +153,24 @@ def cmd_estimates(args) -> None:
         print(f"{name:>4}: " + ", ".join(f"{v:.4f} +- {s:.4f}" for v, s in zip(value, err)))
 
 
+def cmd_verify(args) -> None:
+    out = io.check_output(args.rebuild) if args.rebuild else None
+    problems = archive.verify(args.folder)
+    for line in problems:
+        print(line)
+    if problems:
+        raise SystemExit(1)
+    files = archive.read_manifest(args.folder)["files"]
+    print(f"OK: {len(files)} files in {args.folder} match its {archive.MANIFEST}")
+    if out is not None:
+        out.mkdir()
+        same = archive.rebuild(args.folder, out)
+        for name, equal in same.items():
+            print(f"rebuilt {out / name}: {'identical to the archived table' if equal else 'DIFFERS from the archived table'}")
+        if not all(same.values()):
+            raise SystemExit(1)
+
+
 def _progress():
     from dask.diagnostics import ProgressBar
 
@@ -204,6 +222,11 @@ def build_parser() -> argparse.ArgumentParser:
     est.add_argument("--weights", choices=["window", "count"], default="window", help="extrapolation weights")
     est.add_argument("--overwrite", action="store_true", help="replace --out if it exists")
     est.set_defaults(func=cmd_estimates)
+
+    ver = sub.add_parser("verify", help="re-check the SHA-256 of every file of an archive (snakemake archive)")
+    ver.add_argument("folder", help="archive folder holding manifest.json, e.g. results/paper/archive")
+    ver.add_argument("--rebuild", metavar="OUT", help="then remake the tables and figures from the archive alone into the new folder OUT")
+    ver.set_defaults(func=cmd_verify)
     return parser
 
 

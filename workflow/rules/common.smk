@@ -32,6 +32,20 @@ def series_files(name):
     return [str(path) for path in rockdec_series.replicate_files(f"results/{name}", scene(name))]
 
 
+def archive_files(name):
+    """What the archive of scene ``name`` holds: every NetCDF its tables and figures are made
+    from, and the tables; each with the rule that writes it (under results/{name}/)."""
+    files = {"simulations.nc": "simulate"}
+    files.update({path.split(f"results/{name}/", 1)[1]: "series" for path in series_files(name)})
+    files.update({"signatures.nc": "signatures", "estimates.nc": "estimates", "table.csv": "estimates", "table.md": "estimates"})
+    if "fig2" in figure_names(name):
+        files["stored_signature.nc"] = "stored_signature"
+    if scene(name)["estimates"]["compare_readings"]:
+        files["estimates_other_readings.nc"] = "readings"
+        files.update({f: "table_readings" for f in ("estimates_readings.nc", "table_readings.csv", "table_readings.md")})
+    return files
+
+
 def default_products():
     """Every product of the default scene: its tables and its figures (PNG and PDF)."""
     name = config["default_scene"]

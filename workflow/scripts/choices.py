@@ -12,6 +12,4 @@ est = sensitivity.choice_estimates(attrs, scene, threads=snakemake.threads, seri
 est.attrs.update(io.provenance("choices", {"choices": {k: list(v) for k, v in sensitivity.CHOICES.items()}}))
 io.write_netcdf(est, snakemake.output.estimates)
 table = sensitivity.choice_table(est, scene["system"]["e"])
-table.to_csv(snakemake.output.csv, index=False)
-with open(snakemake.output.md, "w") as f:
-    f.write(tables.to_markdown(table))
+tables.write_table(table, snakemake.output.csv, snakemake.output.md)
