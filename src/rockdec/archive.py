@@ -112,11 +112,13 @@ def verify(folder: str | Path) -> list[str]:
 def rebuild(folder: str | Path, out: str | Path) -> dict[str, bool]:
     """Remake the tables and figures of an archive in ``out`` (an existing, empty folder).
 
-    The steps after the simulation run again on the archived files with the functions
-    the rules call: estimates and their table from ``signatures.nc``
-    (:func:`rockdec.replicates.scene_estimates`), the readings' table when the scene
-    compares readings, and every figure the archive has the inputs of. Returns, for each
-    table, whether the rebuilt file equals the archived one byte for byte.
+    The steps after the simulation run again on the archived files, through files as in
+    the workflow and with the functions its rules call: rule ``estimates`` on
+    ``signatures.nc`` (:func:`rockdec.replicates.scene_estimates`), rule
+    ``table_readings`` when the scene compares readings
+    (:func:`rockdec.replicates.readings_estimates`), and every figure rule the archive
+    holds the inputs of. Returns, for each rebuilt table and NetCDF file, whether it
+    equals the archived one (tables byte for byte, NetCDF files by :func:`same_data`).
     """
     from rockdec import figures, replicates, tables  # matplotlib and numba: only when rebuilding
 
@@ -125,17 +127,22 @@ def rebuild(folder: str | Path, out: str | Path) -> dict[str, bool]:
     scene = manifest["settings"]
     names = {entry["name"] for entry in manifest["files"]}
     e_target = scene["system"]["e"]
-    written = []
     with io.open_dataset(folder / "signatures.nc") as sig_file:
         sig = sig_file.load()
     est, table = replicates.scene_estimates(sig, scene)
+    est.attrs.update(io.provenance("estimates", scene["estimates"]))
+    io.write_netcdf(est, out / "estimates.nc")
     tables.write_table(table, out / "table.csv", out / "table.md")
-    written += ["table.csv", "table.md"]
+    rebuilt = ["estimates.nc", "table.csv", "table.md"]
+    with io.open_dataset(out / "estimates.nc") as est_file:
+        est = est_file.load()
     if "estimates_other_readings.nc" in names:
         with io.open_dataset(folder / "estimates_other_readings.nc") as other:
-            _, table = replicates.readings_estimates(est, other.load(), scene)
+            combined, table = replicates.readings_estimates(est, other.load(), scene)
+        combined.attrs = io.provenance("table_readings", scene["estimates"])
+        io.write_netcdf(combined, out / "estimates_readings.nc")
         tables.write_table(table, out / "table_readings.csv", out / "table_readings.md")
-        written += ["table_readings.csv", "table_readings.md"]
+        rebuilt += ["estimates_readings.nc", "table_readings.csv", "table_readings.md"]
     drawn = {
         "fig1b": figures.fig1b(),
         "fig3": figures.fig3(est, e_target=e_target),
@@ -148,5 +155,17 @@ def rebuild(folder: str | Path, out: str | Path) -> dict[str, bool]:
     (out / "figures").mkdir()
     for name, fig in drawn.items():
         figures.save(fig, [out / "figures" / f"{name}.png", out / "figures" / f"{name}.pdf"])
-    return {name: name in names and (out / name).read_bytes() == (folder / name).read_bytes() for name in written}
+    return {name: name in names and _same(out / name, folder / name) for name in rebuilt}
 
+
+def _same(a: Path, b: Path) -> bool:
+    return same_data(a, b) if a.suffix == ".nc" else a.read_bytes() == b.read_bytes()
+
+
+def same_data(a: str | Path, b: str | Path) -> bool:
+    """Whether two NetCDF files hold the same variables, dimensions and values (attributes,
+    such as ``history`` and its dates, are ignored)."""
+    with io.open_dataset(a) as x, io.open_dataset(b) as y:
+        return set(x.variables) == set(y.variables) and all(
+            x[name].dims == y[name].dims and x[name].equals(y[name]) for name in x.variables
+        )

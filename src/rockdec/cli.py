@@ -166,7 +166,7 @@ def cmd_verify(args) -> None:
         out.mkdir()
         same = archive.rebuild(args.folder, out)
         for name, equal in same.items():
-            print(f"rebuilt {out / name}: {'identical to the archived table' if equal else 'DIFFERS from the archived table'}")
+            print(f"rebuilt {out / name}: {'same as' if equal else 'DIFFERS from'} the archived {name}")
         if not all(same.values()):
             raise SystemExit(1)
 
