@@ -31,7 +31,9 @@ def stored(tmp_path_factory):
     return {"scene": scene, "attrs": attrs, "paths": paths}
 
 
-def test_only_store_series_all_has_replicate_files(tmp_path):
+def test_store_series_is_a_count_or_all(tmp_path):
+    with pytest.raises(config.ConfigError, match="store_series"):
+        config.validate_scene({"records": {"store_series": "most"}})
     scene = config.validate_scene({"records": {"replicates": 3, "store_series": 5}})
     assert series.replicate_files(tmp_path, scene) == []
     assert series.simulation_seeds(scene).tolist() == [0, 1, 2, 3, 4]

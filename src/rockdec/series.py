@@ -13,7 +13,9 @@ exact to reproduce (IEEE round-to-nearest) and is what a float32 record of the r
 holds, so the signatures from the files and from the seeds are equal bit for bit -- not
 merely within a tolerance -- when both are cut into the same Dask chunks of
 ``chunk_seeds`` seeds (the sums over seeds then run in the same order). The rounding moves
-a sample by at most 6e-8 of its size; a trigger that sat exactly on a window edge can flip.
+a sample by at most 6e-8 of its size, so only a trigger within that of a window edge can
+flip: on 4 of the paper scene's replicates, 2 of 2.1 million triggers did, and no estimate
+moved by more than 3e-7.
 """
 
 from __future__ import annotations

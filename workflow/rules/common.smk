@@ -36,7 +36,7 @@ def archive_files(name):
     """What the archive of scene ``name`` holds: every NetCDF its tables and figures are made
     from, and the tables; each with the rule that writes it (under results/{name}/)."""
     files = {"simulations.nc": "simulate"}
-    files.update({path.split(f"results/{name}/", 1)[1]: "series" for path in series_files(name)})
+    files.update({str(path): "series" for path in rockdec_series.replicate_files("", scene(name))})
     files.update({"signatures.nc": "signatures", "estimates.nc": "estimates", "table.csv": "estimates", "table.md": "estimates"})
     if "fig2" in figure_names(name):
         files["stored_signature.nc"] = "stored_signature"
