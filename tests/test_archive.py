@@ -214,28 +214,18 @@ def test_rebuild_remakes_tables_and_figures_from_the_archive_without_simulating(
 
 # --- killed and resumed -------------------------------------------------------------------
 
-#: What rule `signatures` and rule `readings` make, and everything made from it.
-AFTER_SIGNATURES = (
-    "signatures.nc",
-    "estimates_other_readings.nc",
-    "estimates.nc",
-    "table.csv",
-    "table.md",
-    "estimates_readings.nc",
-    "table_readings.csv",
-    "table_readings.md",
-    *(f"figures/{fig}.{fmt}" for fig in ("fig3", "fig4", "fig_ev") for fmt in ("png", "pdf")),
-)
+#: What rule `readings` makes (its work takes seconds after its log opens) and what is made from it.
+AFTER_READINGS = ("estimates_other_readings.nc", "estimates_readings.nc", "table_readings.csv", "table_readings.md")
 
 
 def half_built(reference: Path, root: Path) -> Path:
     """A copy of the finished reference run (results and Snakemake's records) without the
-    products of rules `signatures` and `readings` and of the rules after them."""
+    products of rule `readings` and of the rule after it."""
     shutil.copytree(reference, root, dirs_exist_ok=True)
     results = root / "results" / SCENE
-    for name in AFTER_SIGNATURES:
+    for name in AFTER_READINGS:
         (results / name).unlink()
-    (results / "logs" / "signatures.log").unlink()
+    (results / "logs" / "readings.log").unlink()
     return results
 
 
@@ -244,12 +234,12 @@ def test_sigterm_then_the_readmes_command_gives_the_uninterrupted_outputs(refere
     results = half_built(reference, tmp_path)
     proc = start(tmp_path)
     try:
-        wait_for(results / "logs" / "signatures.log", proc)  # rules `signatures` and `readings` run
+        wait_for(results / "logs" / "readings.log", proc)  # rule `readings` runs
         os.killpg(proc.pid, signal.SIGTERM)  # to Snakemake and its jobs, as Ctrl-C, systemd or a batch system do
         assert proc.wait(timeout=120) != 0
     finally:
         end_group(proc)
-    assert not (results / "signatures.nc").exists()  # it was stopped on the way
+    assert not (results / "estimates_other_readings.nc").exists()  # it was stopped on the way
     assert_no_half_written_netcdf(results)
     code, out = run(tmp_path, "snakemake --cores 2")  # the README's command
     assert code == 0, out
@@ -262,11 +252,11 @@ def test_sigkill_then_the_readmes_recovery_command_gives_the_uninterrupted_outpu
     results = half_built(reference, tmp_path)
     proc = start(tmp_path)
     try:
-        wait_for(results / "logs" / "signatures.log", proc)
+        wait_for(results / "logs" / "readings.log", proc)
         os.killpg(proc.pid, signal.SIGKILL)  # Snakemake and its jobs at once, as a power loss
     finally:
         end_group(proc)
-    assert not (results / "signatures.nc").exists()  # it was killed on the way
+    assert not (results / "estimates_other_readings.nc").exists()  # it was killed on the way
     assert_no_half_written_netcdf(results)
     code, out = run(tmp_path, "snakemake --cores 2")
     assert code != 0 and "LockException" in out

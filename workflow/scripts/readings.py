@@ -18,7 +18,7 @@ results = []
 for reading in others:
     print(f"reading {reading}", file=sys.stderr)
     cube = replicates.reading_cube(attrs, scene, reading, snakemake.input.series)
-    with dask.config.set(scheduler="threads", num_workers=snakemake.threads), ProgressBar(out=sys.stderr, dt=5.0):
+    with dask.config.set(scheduler="threads", num_workers=snakemake.threads), ProgressBar(out=sys.stderr, dt=0.5):
         cube = cube.compute()
     results.append(replicates.replicate_estimates(cube, **replicates.estimate_options(scene))[["e_hat0", "e_hat0_stderr"]])
 combined = xr.concat(results, dim=pd.Index(others, name="reading"))

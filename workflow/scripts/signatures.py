@@ -12,6 +12,6 @@ with io.open_dataset(snakemake.input.sim) as sim:
     attrs = dict(sim.attrs)
 cube = replicates.reading_cube(attrs, snakemake.params.scene, snakemake.params.reading, snakemake.input.series)
 cube.attrs.update(io.provenance("signatures", snakemake.params.scene["signatures"]))
-with dask.config.set(scheduler="threads", num_workers=snakemake.threads), ProgressBar(out=sys.stderr, dt=5.0):
+with dask.config.set(scheduler="threads", num_workers=snakemake.threads), ProgressBar(out=sys.stderr, dt=0.5):
     cube = cube.compute()
 io.write_netcdf(cube, snakemake.output[0])
