@@ -1,9 +1,11 @@
 """Archives and `rockdec verify`, and workflow runs killed and resumed.
 
 A copy of the workflow runs the tiny scene shrunk to 2 replicates of 10 series with every
-series stored (`store_series: all`) and a fixed step (no calibration): once without
-interruption (the reference, and its archive), once killed with SIGTERM and resumed by the
-README's command, then killed with SIGKILL and recovered by the README's recovery command.
+series stored (`store_series: all`) and a fixed step (no calibration) without interruption:
+the reference, and its archive. Copies of that run without the products of rule `readings`
+are rerun and killed while `readings` runs: with SIGTERM, then resumed by the README's
+command; with SIGKILL, then recovered by the README's recovery command. Both must end with
+the reference's outputs.
 """
 
 from __future__ import annotations
