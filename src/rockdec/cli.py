@@ -2,7 +2,7 @@
 
 Errors a user can cause (bad options, unknown scene, unwritable output) end with one
 sentence on stderr naming the problem and the fix, and exit code 2; no file is left
-behind.
+behind. ``verify`` exits 1 when a file of the archive changed or is missing.
 """
 
 from __future__ import annotations
