@@ -15,6 +15,7 @@ include: "workflow/rules/figures.smk"
 include: "workflow/rules/studies.smk"
 include: "workflow/rules/tradeoff.smk"
 include: "workflow/rules/coverage.smk"
+include: "workflow/rules/archive.smk"
 
 
 rule all:

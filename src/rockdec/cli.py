@@ -1,9 +1,10 @@
-"""The ``rockdec`` command: ``estimate``, ``simulate``, ``signatures``, ``estimates``.
+"""The ``rockdec`` command: ``estimate``, ``simulate``, ``signatures``, ``estimates``, ``verify``.
 
 Errors a user can cause (bad options, unknown scene, unwritable output, a request larger
 than the memory) end with one sentence on stderr naming the problem and the fix, and exit
 code 2; no file is left behind. An unexpected internal error says so in one line (exit
-code 1); ``rockdec --debug ...`` shows its traceback.
+code 1); ``rockdec --debug ...`` shows its traceback. ``verify`` exits 1 when a file of the
+archive changed or is missing.
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from rockdec import config as config_mod
-from rockdec import io, records, replicates, signatures, simulate
+from rockdec import archive, io, records, replicates, signatures, simulate
 from rockdec import validate as checks
 from rockdec.models import restoring_acceleration
 
@@ -271,6 +272,28 @@ def _estimate_text(res: dict) -> str:
     return "\n".join(lines)
 
 
+def cmd_verify(args) -> None:
+    out = Path(args.rebuild) if args.rebuild else None
+    if out is not None and out.exists():
+        raise UsageError(f"--rebuild '{out}' exists already; remove it or choose another folder.")
+    if out is not None and not out.parent.is_dir():
+        raise UsageError(f"--rebuild '{out}': its folder '{out.parent}' does not exist; create it first.")
+    problems = archive.verify(args.folder)
+    for line in problems:
+        print(line)
+    if problems:
+        raise SystemExit(1)
+    files = archive.read_manifest(args.folder)["files"]
+    print(f"OK: {len(files)} files in {args.folder} match its {archive.MANIFEST}")
+    if out is not None:
+        out.mkdir()
+        same = archive.rebuild(args.folder, out)
+        for name, equal in same.items():
+            print(f"rebuilt {out / name}: {'same as' if equal else 'DIFFERS from'} the archived {name}")
+        if not all(same.values()):
+            raise SystemExit(1)
+
+
 def _progress():
     from dask.diagnostics import ProgressBar
 
@@ -346,6 +369,11 @@ def build_parser() -> argparse.ArgumentParser:
     est.add_argument("--weights", choices=["window", "count"], default="window", help="extrapolation weights")
     est.add_argument("--overwrite", action="store_true", help="replace --out if it exists")
     est.set_defaults(func=cmd_estimates)
+
+    ver = sub.add_parser("verify", help="re-check the SHA-256 of every file of an archive (snakemake archive)")
+    ver.add_argument("folder", help="archive folder holding manifest.json, e.g. results/paper/archive")
+    ver.add_argument("--rebuild", metavar="OUT", help="then remake the tables and figures from the archive alone into the new folder OUT")
+    ver.set_defaults(func=cmd_verify)
     return parser
 
 

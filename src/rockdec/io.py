@@ -133,11 +133,15 @@ def _claim(path: Path):
         lock.unlink(missing_ok=True)
 
 
-def write_netcdf(ds: xr.Dataset, path: str | Path, *, float32: tuple[str, ...] = (), overwrite: bool = False) -> Path:
+def write_netcdf(
+    ds: xr.Dataset, path: str | Path, *, float32: tuple[str, ...] = (), overwrite: bool = False, chunks: dict | None = None
+) -> Path:
     """Write ``ds`` compressed (zlib level 4) to ``path`` atomically.
 
     Variables named in ``float32`` are stored as float32 (the simulated series); the rest
-    keep their dtype. Dask-backed variables are computed chunk by chunk while writing.
+    keep their dtype. ``chunks`` (dimension -> length) sets the on-disk chunks of every
+    variable along those dimensions (whole length along the others). Dask-backed
+    variables are computed chunk by chunk while writing.
     """
     path = check_output(path, overwrite)
     encoding = {}
@@ -148,6 +152,8 @@ def write_netcdf(ds: xr.Dataset, path: str | Path, *, float32: tuple[str, ...] =
             ds = ds.assign({name: var.copy(data=_fits_float32(var.data, name))})
         if var.ndim >= 1 and var.dtype.kind == "f":
             enc["_FillValue"] = float("nan")
+        if chunks and var.ndim >= 1:
+            enc["chunksizes"] = tuple(max(1, min(chunks.get(dim, size), size)) for dim, size in var.sizes.items())
         encoding[name] = enc
     with _claim(path):
         fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".partial", dir=path.parent)

@@ -19,9 +19,10 @@ Extrapolation to zero window then runs per replicate on the window curve (paper 
 from __future__ import annotations
 
 import numpy as np
+import pandas as pd
 import xarray as xr
 
-from rockdec import estimators, signatures, simulate
+from rockdec import estimators, series, signatures, simulate, tables
 
 READINGS = ("pooled", "per_series", "groups_of_10")
 """The readings, in the order tables list them."""
@@ -108,16 +109,22 @@ def replicate_estimates(cube: xr.Dataset, *, fit_points: int, weights: str = "wi
     return out
 
 
-def reading_cube(simulation_attrs: dict, scene: dict, reading: str) -> xr.Dataset:
-    """Lazy signature cube of a reading, every series regenerated from its seed.
+def reading_cube(simulation_attrs: dict, scene: dict, reading: str, series_files=()) -> xr.Dataset:
+    """Lazy signature cube of a reading, every series regenerated from its seed or read back.
 
     ``simulation_attrs`` are the global attributes of the scene's simulation file (step,
     burn-in, stationary statistics); the series are simulated chunk by chunk (Dask over
-    seeds) and reduced to signature sums at once, so no full record is ever stored.
+    seeds) and reduced to signature sums at once, so no full record is ever stored. With
+    ``series_files`` (the per-replicate files of ``store_series: all``) the series are read
+    from them instead; both ways give the same cube bit for bit (see :mod:`rockdec.series`).
     """
     used, group, replicate_of_group = grouping(simulate.scene_seeds(scene), reading)
-    sim = simulate.regenerate(simulation_attrs, used, chunk_seeds=scene["records"]["chunk_seeds"])
-    cube = scene_signatures(sim["theta"], scene, simulation_attrs, group, replicate_of_group)
+    chunk_seeds = scene["records"]["chunk_seeds"]
+    if len(series_files):
+        theta = series.stored_theta(series_files, used, chunk_seeds)
+    else:
+        theta = series.as_recorded(simulate.regenerate(simulation_attrs, used, chunk_seeds=chunk_seeds)["theta"])
+    cube = scene_signatures(theta, scene, simulation_attrs, group, replicate_of_group)
     cube.attrs["reading"] = reading
     return cube
 
@@ -125,3 +132,35 @@ def reading_cube(simulation_attrs: dict, scene: dict, reading: str) -> xr.Datase
 def estimate_options(scene: dict) -> dict:
     """Keyword arguments of :func:`replicate_estimates` from a scene's ``estimates`` section."""
     return {"fit_points": scene["estimates"]["fit_points"], "weights": scene["estimates"]["weights"]}
+
+
+def scene_estimates(cube: xr.Dataset, scene: dict) -> tuple[xr.Dataset, pd.DataFrame]:
+    """Rule `estimates`: the scene's estimates of a signature cube, and its table beside the paper.
+
+    The table adds the replicate mean and std of the other extrapolation weighting
+    (window size or trigger count, :func:`rockdec.tables.with_alternative`).
+    """
+    options = estimate_options(scene)
+    est = replicate_estimates(cube, **options)
+    other_weights = "count" if options["weights"] == "window" else "window"
+    alternative = replicate_estimates(cube, **{**options, "weights": other_weights})
+    e_target = scene["system"]["e"]
+    table = tables.summary_table(est["e_hat0"], e_target)
+    return est, tables.with_alternative(table, alternative["e_hat0"], f"{other_weights}_weights", e_target)
+
+
+def readings_estimates(own: xr.Dataset, other: xr.Dataset, scene: dict) -> tuple[xr.Dataset, pd.DataFrame]:
+    """Rule `table_readings`: the scene's own reading beside the other readings, and their table.
+
+    ``own`` holds the scene's estimates, ``other`` the ``e_hat0`` of the other readings
+    (dimension ``reading``); the result lists every reading of :data:`READINGS`, in
+    that order.
+    """
+    own_reading = own[["e_hat0", "e_hat0_stderr"]].expand_dims(reading=[scene["estimates"]["reading"]])
+    combined = xr.concat([own_reading, other], dim="reading").sel(reading=list(READINGS))
+    e_target = scene["system"]["e"]
+    table = pd.concat(
+        [tables.summary_table(combined["e_hat0"].sel(reading=r), e_target).assign(reading=r) for r in READINGS],
+        ignore_index=True,
+    )
+    return combined, table[["reading"] + [c for c in table.columns if c != "reading"]]

@@ -37,11 +37,12 @@ def variant_scenes(scene: dict) -> dict[str, dict]:
     return out
 
 
-def choice_estimates(simulation_attrs: dict, scene: dict, threads: int = 1) -> xr.Dataset:
-    """``e_hat0(choice, estimator, replicate)`` for every variant, from one simulation pass."""
+def choice_estimates(simulation_attrs: dict, scene: dict, threads: int = 1, series_files=()) -> xr.Dataset:
+    """``e_hat0(choice, estimator, replicate)`` for every variant, from one simulation pass
+    (or one pass over ``series_files``, see :func:`rockdec.replicates.reading_cube`)."""
     reading = scene["estimates"]["reading"]
     variants = variant_scenes(scene)
-    cubes = [replicates.reading_cube(simulation_attrs, variant, reading) for variant in variants.values()]
+    cubes = [replicates.reading_cube(simulation_attrs, variant, reading, series_files) for variant in variants.values()]
     with dask.config.set(scheduler="threads", num_workers=threads):
         cubes = dask.compute(*cubes)
     est = [replicates.replicate_estimates(cube, **replicates.estimate_options(scene))["e_hat0"] for cube in cubes]

@@ -75,3 +75,11 @@ def with_alternative(table: pd.DataFrame, e_hat0: xr.DataArray, label: str, e_ta
     """
     rows = [bias_row(e_hat0.sel(estimator=name).values, e_target) for name in table["estimator"]]
     return table.assign(**{f"mean_{label}": [r["mean"] for r in rows], f"std_{label}": [r["std"] for r in rows]})
+
+
+def write_table(table: pd.DataFrame, csv_path, md_path) -> None:
+    """Write ``table`` as CSV (every digit) and as Markdown (:func:`to_markdown`)."""
+    table.to_csv(csv_path, index=False)
+    with open(md_path, "w") as f:
+        f.write(to_markdown(table))
+

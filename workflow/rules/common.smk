@@ -3,6 +3,7 @@ import sys
 from importlib.util import find_spec
 
 from rockdec import config as rockdec_config
+from rockdec import series as rockdec_series
 
 # Name the file the user passed (--configfile), not always the default one; one sentence, exit code 2.
 try:
@@ -16,6 +17,7 @@ SCENES = sorted(config["scenes"])
 
 wildcard_constraints:
     scene="|".join(SCENES),
+    replicate=r"\d+",
 
 
 def scene(name):
@@ -26,9 +28,28 @@ def scene(name):
 def figure_names(name):
     """The figures scene ``name`` can draw: fig. 2 needs at least one stored series."""
     figures = ["fig1b", "fig2", "fig3", "fig4", "fig_ev"]
-    if scene(name)["records"]["store_series"] < 1:
+    if rockdec_series.simulation_seeds(scene(name)).size < 1:
         figures.remove("fig2")
     return figures
+
+
+def series_files(name):
+    """The per-replicate series files of scene ``name`` (none unless `store_series: all`)."""
+    return [str(path) for path in rockdec_series.replicate_files(f"results/{name}", scene(name))]
+
+
+def archive_files(name):
+    """What the archive of scene ``name`` holds: every NetCDF its tables and figures are made
+    from, and the tables; each with the rule that writes it (under results/{name}/)."""
+    files = {"simulations.nc": "simulate"}
+    files.update({str(path): "series" for path in rockdec_series.replicate_files("", scene(name))})
+    files.update({"signatures.nc": "signatures", "estimates.nc": "estimates", "table.csv": "estimates", "table.md": "estimates"})
+    if "fig2" in figure_names(name):
+        files["stored_signature.nc"] = "stored_signature"
+    if scene(name)["estimates"]["compare_readings"]:
+        files["estimates_other_readings.nc"] = "readings"
+        files.update({f: "table_readings" for f in ("estimates_readings.nc", "table_readings.csv", "table_readings.md")})
+    return files
 
 
 def default_products():

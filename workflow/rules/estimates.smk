@@ -20,7 +20,8 @@ rule estimates:
 rule readings:
     """The other readings of the paper's sizes, end to end in memory (runs beside `signatures`)."""
     input:
-        "results/{scene}/simulations.nc",
+        sim="results/{scene}/simulations.nc",
+        series=lambda w: series_files(w.scene),
     output:
         "results/{scene}/estimates_other_readings.nc",
     log:
@@ -57,7 +58,8 @@ rule table_readings:
 rule choices:
     """One unstated choice at a time (lag range, mirrored triggers, level): what moves which estimator."""
     input:
-        "results/{scene}/simulations.nc",
+        sim="results/{scene}/simulations.nc",
+        series=lambda w: series_files(w.scene),
     output:
         estimates="results/{scene}/estimates_choices.nc",
         csv=report("results/{scene}/table_choices.csv", category="Tables", caption="../report/table_choices.rst"),

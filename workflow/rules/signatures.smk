@@ -1,7 +1,8 @@
 rule signatures:
     """RDD signature cube of every series of the scene, pooled per group of its reading."""
     input:
-        "results/{scene}/simulations.nc",
+        sim="results/{scene}/simulations.nc",
+        series=lambda w: series_files(w.scene),
     output:
         "results/{scene}/signatures.nc",
     log:

@@ -10,6 +10,4 @@ ds = amplitude.sweep(scene, threads=snakemake.threads)
 ds.attrs.update(io.provenance("amplitude", scene))
 io.write_netcdf(ds, snakemake.output.estimates)
 table = amplitude.sweep_table(ds, scene["system"]["e"])
-table.to_csv(snakemake.output.csv, index=False)
-with open(snakemake.output.md, "w") as f:
-    f.write(tables.to_markdown(table))
+tables.write_table(table, snakemake.output.csv, snakemake.output.md)

@@ -11,14 +11,14 @@ from rockdec import io, replicates
 
 sys.stderr = open(snakemake.log[0], "w")
 scene = snakemake.params.scene
-with io.open_dataset(snakemake.input[0]) as sim:
+with io.open_dataset(snakemake.input.sim) as sim:
     attrs = dict(sim.attrs)
 others = [r for r in replicates.READINGS if r != scene["estimates"]["reading"]]
 results = []
 for reading in others:
     print(f"reading {reading}", file=sys.stderr)
-    cube = replicates.reading_cube(attrs, scene, reading)
-    with dask.config.set(scheduler="threads", num_workers=snakemake.threads), ProgressBar(out=sys.stderr, dt=5.0):
+    cube = replicates.reading_cube(attrs, scene, reading, snakemake.input.series)
+    with dask.config.set(scheduler="threads", num_workers=snakemake.threads), ProgressBar(out=sys.stderr, dt=0.5):
         cube = cube.compute()
     results.append(replicates.replicate_estimates(cube, **replicates.estimate_options(scene))[["e_hat0", "e_hat0_stderr"]])
 combined = xr.concat(results, dim=pd.Index(others, name="reading"))
