@@ -14,10 +14,11 @@ import sys
 import numpy as np
 
 from rockdec import config as config_mod
-from rockdec import io, replicates, simulate
+from rockdec import __version__, io, replicates, simulate
 
-#: Scene fields set by ``simulate`` options: option -> (section, key).
+#: Scene fields set by ``simulate`` options: option -> path of the field in the scene.
 SIMULATE_OPTIONS = {
+    "--model": ("model",),
     "--e": ("system", "e"),
     "--nu": ("system", "nu"),
     "--theta-cr": ("system", "theta_cr"),
@@ -57,17 +58,25 @@ def _simulate_scene(args) -> dict:
         scene = json.loads(json.dumps(config_mod.scene(config_mod.load(args.config), args.scene)))
     else:
         scene = config_mod.validate_scene({})
-    for option, (section, key) in SIMULATE_OPTIONS.items():
+    for option, (*sections, key) in SIMULATE_OPTIONS.items():
         value = getattr(args, option[2:].replace("-", "_"))
         if value is not None:
-            scene[section][key] = value
+            _field(scene, sections)[key] = value
     try:
         config_mod.validate_scene(scene)
     except config_mod.ConfigError as exc:
-        for option, (section, key) in SIMULATE_OPTIONS.items():
-            if f"'scenes.cli.{section}.{key}'" in str(exc):
-                raise UsageError(f"{option} {scene[section][key]}: {str(exc).split(': ', 1)[1].split('. Fix')[0]}.") from None
+        for option, (*sections, key) in SIMULATE_OPTIONS.items():
+            if f"'scenes.cli.{'.'.join((*sections, key))}'" in str(exc):
+                value = _field(scene, sections)[key]
+                raise UsageError(f"{option} {value}: {str(exc).split(': ', 1)[1].split('. Fix')[0]}.") from None
         raise
+    return scene
+
+
+def _field(scene: dict, sections) -> dict:
+    """The part of ``scene`` that the path ``sections`` leads to (the scene itself for ``()``)."""
+    for section in sections:
+        scene = scene[section]
     return scene
 
 
@@ -161,6 +170,7 @@ def _progress():
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="rockdec", description=__doc__.splitlines()[0])
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
 
     sim = sub.add_parser("simulate", help="simulate rocking series (exact, eqs. 21-24) to NetCDF")
@@ -168,6 +178,7 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--scene", help="take every setting from this scene of the config")
     sim.add_argument("--config", default="config/config.yaml", help="config file (default: %(default)s)")
     sim.add_argument("--seeds", help="seeds, e.g. 0-99 or 3,7 (default: the scene's)")
+    sim.add_argument("--model", help="simplified (eq. 4), housner (eq. 2) or auto (by amplitude; default: the scene's)")
     sim.add_argument("--e", type=float, help="coefficient of restitution, 0..1")
     sim.add_argument("--nu", type=float, help="rocking frequency parameter, rad/s")
     sim.add_argument("--theta-cr", type=float, help="critical angle, rad")
