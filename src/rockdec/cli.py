@@ -135,7 +135,7 @@ def cmd_signatures(args) -> None:
     size = args.group_size or theta.sizes["seed"]
     group = np.arange(theta.sizes["seed"]) // size
     cube = replicates.scene_signatures(theta, scene, stats, group, np.arange(group.max() + 1))
-    cube.attrs.update(io.provenance("signatures", scene["signatures"]))
+    cube.attrs.update(io.provenance("signatures", scene["signatures"], inputs=[args.input]))
     io.write_netcdf(cube, out, overwrite=args.overwrite)
     counts = cube["count"].sum("group")
     print(f"triggers per window: D_a {counts.sel(trigger='a').values}, D_v {counts.sel(trigger='v').values}", file=sys.stderr)
@@ -154,7 +154,7 @@ def cmd_estimates(args) -> None:
     if "replicate" not in cube.coords:
         cube = cube.assign_coords(replicate=("group", np.zeros(cube.sizes["group"], dtype=int)))
     est = replicates.replicate_estimates(cube, fit_points=args.fit_points, weights=args.weights)
-    est.attrs.update(io.provenance("estimates", {"fit_points": args.fit_points, "weights": args.weights}))
+    est.attrs.update(io.provenance("estimates", {"fit_points": args.fit_points, "weights": args.weights}, inputs=[args.input]))
     io.write_netcdf(est, out, overwrite=args.overwrite)
     for name in est["estimator"].values:
         value = est["e_hat0"].sel(estimator=name).values

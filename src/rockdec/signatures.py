@@ -589,6 +589,7 @@ def signature_cube(
     )
     if group is not None:
         sums = sums.groupby(group.rename("group")).sum(keep_attrs=True)
+        sums["group"].attrs["long_name"] = "group of series pooled into one signature"
     sums.attrs = {
         "level": float(level),
         "sigma_y": float(sigma_y),

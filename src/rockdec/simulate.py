@@ -49,6 +49,16 @@ PILOT_SEED_OFFSET = 2**62
 #: Largest default burn-in, in steps; beyond it the caller must choose one.
 MAX_DEFAULT_BURN_IN = 10**7
 
+#: The ``time`` coordinate of a simulation: seconds from the end of the burn-in. CF 1.10
+#: (section 4.4) asks a time coordinate for a reference date; the epoch stands for that
+#: instant, so xarray reads ``time`` as dates from 1970-01-01 (``time - time[0]`` in s).
+TIME_ATTRS = {
+    "units": "seconds since 1970-01-01 00:00:00",
+    "calendar": "standard",
+    "standard_name": "time",
+    "long_name": "time since the end of the burn-in",
+}
+
 
 @numba.njit(nogil=True, cache=True, inline="always")
 def flight(theta, omega, duration, g, e):
@@ -309,7 +319,7 @@ def simulation_dataset(
         },
         coords={
             "seed": ("seed", seeds, {"long_name": "NumPy SeedSequence entropy of the series"}),
-            "time": ("time", time, {"units": "s", "long_name": "time since the end of the burn-in"}),
+            "time": ("time", time, TIME_ATTRS),
         },
     )
     ds.attrs.update(

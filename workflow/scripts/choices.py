@@ -9,7 +9,7 @@ scene = snakemake.params.scene
 with io.open_dataset(snakemake.input[0]) as sim:
     attrs = dict(sim.attrs)
 est = sensitivity.choice_estimates(attrs, scene, threads=snakemake.threads)
-est.attrs.update(io.provenance("choices", {"choices": {k: list(v) for k, v in sensitivity.CHOICES.items()}}))
+est.attrs.update(io.provenance("choices", {"choices": {k: list(v) for k, v in sensitivity.CHOICES.items()}}, inputs=snakemake.input))
 io.write_netcdf(est, snakemake.output.estimates)
 table = sensitivity.choice_table(est, scene["system"]["e"])
 table.to_csv(snakemake.output.csv, index=False)

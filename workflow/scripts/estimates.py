@@ -12,7 +12,7 @@ with io.open_dataset(snakemake.input[0]) as cube:
 est = replicates.replicate_estimates(cube, **options)
 other_weights = "count" if options["weights"] == "window" else "window"
 alternative = replicates.replicate_estimates(cube, **{**options, "weights": other_weights})
-est.attrs.update(io.provenance("estimates", scene["estimates"]))
+est.attrs.update(io.provenance("estimates", scene["estimates"], inputs=snakemake.input))
 io.write_netcdf(est, snakemake.output.estimates)
 e_target = scene["system"]["e"]
 table = tables.summary_table(est["e_hat0"], e_target)

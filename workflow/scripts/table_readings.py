@@ -12,7 +12,7 @@ scene = snakemake.params.scene
 with io.open_dataset(snakemake.input.own) as own, io.open_dataset(snakemake.input.other) as other:
     own_reading = own[["e_hat0", "e_hat0_stderr"]].load().expand_dims(reading=[scene["estimates"]["reading"]])
     combined = xr.concat([own_reading, other.load()], dim="reading").sel(reading=list(replicates.READINGS))
-combined.attrs = io.provenance("table_readings", scene["estimates"])
+combined.attrs = io.provenance("table_readings", scene["estimates"], inputs=snakemake.input)
 io.write_netcdf(combined, snakemake.output.estimates)
 e_target = scene["system"]["e"]
 table = pd.concat(
