@@ -133,11 +133,14 @@ def cmd_signatures(args) -> None:
         }
     )
     size = args.group_size or theta.sizes["seed"]
-    group = np.arange(theta.sizes["seed"]) // size
-    cube = replicates.scene_signatures(theta, scene, stats, group, np.arange(group.max() + 1))
+    if size == 1:  # one signature per series: the cube keeps the seed dimension
+        cube = replicates.scene_signatures(theta, scene, stats, None, np.zeros(theta.sizes["seed"], dtype=int))
+    else:
+        group = np.arange(theta.sizes["seed"]) // size
+        cube = replicates.scene_signatures(theta, scene, stats, group, np.arange(group.max() + 1))
     cube.attrs.update(io.provenance("signatures", scene["signatures"], inputs=[args.input]))
     io.write_netcdf(cube, out, overwrite=args.overwrite)
-    counts = cube["count"].sum("group")
+    counts = cube["count"].sum(replicates.series_dim(cube))
     print(f"triggers per window: D_a {counts.sel(trigger='a').values}, D_v {counts.sel(trigger='v').values}", file=sys.stderr)
 
 
@@ -148,11 +151,12 @@ def _finite(value, fallback):
 def cmd_estimates(args) -> None:
     out = io.check_output(args.out, args.overwrite)
     with io.open_dataset(args.input) as src:
-        if "free_response" not in src or "group" not in src.dims:
+        if "free_response" not in src or not {"group", "seed"} & set(src.dims):
             raise UsageError(f"{args.input} is not a signature file; make one with 'rockdec signatures'.")
         cube = src.load()
     if "replicate" not in cube.coords:
-        cube = cube.assign_coords(replicate=("group", np.zeros(cube.sizes["group"], dtype=int)))
+        dim = replicates.series_dim(cube)
+        cube = cube.assign_coords(replicate=(dim, np.zeros(cube.sizes[dim], dtype=int)))
     est = replicates.replicate_estimates(cube, fit_points=args.fit_points, weights=args.weights)
     est.attrs.update(io.provenance("estimates", {"fit_points": args.fit_points, "weights": args.weights}, inputs=[args.input]))
     io.write_netcdf(est, out, overwrite=args.overwrite)
