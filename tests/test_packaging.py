@@ -11,6 +11,8 @@ import tomllib
 from importlib import metadata
 from pathlib import Path
 
+import yaml
+
 from rockdec import __version__
 
 REPO = Path(__file__).resolve().parents[1]
@@ -39,3 +41,15 @@ def test_package_data_globs_cover_every_data_file_of_the_package():
     assert "scene_schema.yaml" in data  # the file config.schema() reads
     missing = [f for f in data if not any(fnmatch.fnmatch(f, g) for g in globs)]
     assert not missing, f"add these to [tool.setuptools.package-data]: {missing}"
+
+
+def test_citation_and_licence_agree_with_the_package_metadata():
+    project = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]
+    cff = yaml.safe_load((REPO / "CITATION.cff").read_text())
+    assert cff["cff-version"] == "1.2.0" and cff["type"] == "software"
+    assert cff["version"] == project["version"]
+    assert cff["license"] == project["license"]["text"] == "MIT"
+    assert (REPO / "LICENSE").read_text().startswith("MIT License")
+    paper = cff["references"][0]
+    assert paper["title"] in " ".join((REPO / "README.md").read_text().split())  # the paper the README names
+    assert paper["authors"] and all(a.get("family-names") for a in paper["authors"])

@@ -1,4 +1,4 @@
-"""Replicates and the readings of the paper's sizes (SPEC §4).
+"""Replicates and the readings of the paper's sizes (docs/method.md §8).
 
 A scene's seeds form ``replicates`` of ``series_per_replicate`` series. A *reading* says
 how a replicate's series become signatures and estimates:
@@ -67,7 +67,7 @@ def scene_signatures(
     ``group=None`` keeps one signature per series: the cube's ``seed`` dimension holds the
     seeds, and ``replicate_of_group`` gives each seed's replicate. ``stats`` holds the
     stationary ``sigma_y``, ``sigma_ydot`` and ``g`` of the scene (one trigger level for
-    every series, SPEC §2).
+    every series, docs/method.md §4.4).
     """
     sig = scene["signatures"]
     cube = signatures.signature_cube(
