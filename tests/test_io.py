@@ -2,9 +2,6 @@
 
 from __future__ import annotations
 
-import json
-import warnings
-
 import numpy as np
 import pytest
 import xarray as xr
@@ -12,24 +9,7 @@ import xarray as xr
 from rockdec import io
 from rockdec.cli import main
 
-
-def cf_findings(path, tmp_path) -> dict[str, list[str]]:
-    """The CF 1.10 checker's messages on ``path``: ``{"errors": [...], "warnings": [...]}``."""
-    runner = pytest.importorskip(
-        "compliance_checker.runner", reason="the CF checker is a test dependency: pip install -e '.[test]'"
-    )
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", DeprecationWarning)  # the checker's own SOS plugins
-        runner.CheckSuite.load_all_available_checkers()
-    report = tmp_path / f"{path.name}.cf.json"
-    runner.ComplianceChecker.run_checker(
-        str(path), ["cf:1.10"], verbose=0, criteria="normal", output_filename=str(report), output_format="json"
-    )
-    result = json.loads(report.read_text())["cf:1.10"]
-    return {
-        kind: [msg for check in result[key] for msg in check["msgs"]]
-        for kind, key in (("errors", "high_priorities"), ("warnings", "medium_priorities"))
-    }
+from cf_check import cf_findings
 
 
 @pytest.fixture(scope="module")
