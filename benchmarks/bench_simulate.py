@@ -1,7 +1,7 @@
 """Simulator throughput against drawing its random numbers, the pure-Python step, and threads.
 
 Run: ``python benchmarks/bench_simulate.py``. Prints steps/s and ratios measured in one
-run (SPEC §1, issue: simulation <= 2x the cost of its random numbers, 2 threads >= 1.7x
+run (docs/method.md §3; issue: simulation <= 2x the cost of its random numbers, 2 threads >= 1.7x
 one thread on 200 seeds). Nothing is asserted: the numbers are the result.
 """
 

@@ -1,4 +1,4 @@
-"""A 1e8-point record processed in time chunks: wall time and peak memory (SPEC §2, issue 6).
+"""A 1e8-point record processed in time chunks: wall time and peak memory (docs/method.md §4.4; issue 6).
 
 Step 1 (``write``) simulates one long series block by block (:func:`rockdec.simulate.long_series`)
 into a NetCDF file, never holding more than one block. Step 2 (``analyse``, a fresh process so

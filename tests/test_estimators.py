@@ -1,6 +1,6 @@
 """Properties of the estimators of e (paper eqs. 25-27) and of the zero-window extrapolation.
 
-The reference is the analytic free rocking response of the simplified model (SPEC §1,
+The reference is the analytic free rocking response of the simplified model (docs/method.md §5,
 eqs. 4-6): parabolas of curvature ``g``, the velocity multiplied by ``e`` at every zero
 crossing, rest once the geometric series of flight times has run out.
 """

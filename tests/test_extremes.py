@@ -1,4 +1,4 @@
-"""Numerical extremes (SPEC §1, §2): scale, precision, restitution at its limits, sampling floor.
+"""Numerical extremes (docs/method.md §3, §4): scale, precision, restitution at its limits, sampling floor.
 
 Nothing hangs and nothing returns a silent wrong number: a correct value or NaN with a reason.
 """

@@ -29,6 +29,8 @@ from matplotlib.figure import Figure  # noqa: E402
 
 from rockdec import figures, models, replicates, signatures, simulate  # noqa: E402
 
+from cf_check import cf_findings  # noqa: E402
+
 REPO = Path(__file__).resolve().parents[1]
 
 # --- the closed-form free response ---------------------------------------------------
@@ -297,6 +299,28 @@ def test_workflow_builds_every_product_and_each_opens(workflow):
     with xr.open_dataset(results / "stored_signature.nc") as stored:
         assert stored.sizes["group"] == 1
         assert int(stored["count"].sel(trigger="a").max()) > 0
+
+
+@pytest.mark.slow
+def test_every_netcdf_product_is_cf_clean_and_carries_its_inputs_history(workflow, tmp_path):
+    root = workflow["root"]
+    products = sorted((root / "results" / SCENE).glob("*.nc"))
+    assert len(products) == 6, products
+    with xr.open_dataset(root / "results" / SCENE / "simulations.nc") as sim:
+        origin = sim.attrs["history"]
+    for path in products:
+        assert cf_findings(path, tmp_path) == {"errors": [], "warnings": []}, path.name
+        with xr.open_dataset(path) as ds:
+            attrs = ds.attrs
+        history = attrs["history"].splitlines()
+        assert history[0] == origin and len(set(history)) == len(history), path.name
+        if path.name == "simulations.nc":
+            continue
+        for source in attrs["source_files"].splitlines():
+            with xr.open_dataset(root / source) as src:  # paths as the rule gave them
+                before = src.attrs["history"].splitlines()
+            assert set(before) <= set(history[:-1]), (path.name, source)
+        assert history[-1].endswith(" ".join(attrs["source_files"].splitlines()))
 
 
 @pytest.mark.slow

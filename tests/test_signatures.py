@@ -1,4 +1,4 @@
-"""Properties of the Random Decrement signatures (paper §3, eqs. 8-20; SPEC §2)."""
+"""Properties of the Random Decrement signatures (paper §3, eqs. 8-20; docs/method.md §4)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""The exact simulator against closed forms, its reference, and its invariants (SPEC §1)."""
+"""The exact simulator against closed forms, its reference, and its invariants (docs/method.md §3)."""
 
 import math
 

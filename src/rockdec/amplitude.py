@@ -1,4 +1,4 @@
-"""Where the simplified model stops being good enough: a sweep of ``sigma_Y / theta_cr`` (SPEC §6).
+"""Where the simplified model stops being good enough: a sweep of ``sigma_Y / theta_cr`` (docs/method.md §2.4).
 
 For each amplitude ratio the noise is set so that the simplified model's response has
 ``sigma_Y = ratio * theta_cr`` at the scene's points per cycle (the scale law of
@@ -31,7 +31,7 @@ def noise_for_ratios(scene: dict, ratios) -> list[float]:
     """The impulse std giving ``sigma_Y = ratio * theta_cr`` for the simplified model, per ratio.
 
     With ``dt`` calibrated to ``N`` points per cycle, ``sigma_Y = sigma_p^2 N sqrt(c)/(4 sqrt(2) g)``
-    and ``c`` does not depend on ``sigma_p`` (scale invariance, SPEC §1); ``c`` is measured
+    and ``c`` does not depend on ``sigma_p`` (scale invariance, docs/method.md §3.4); ``c`` is measured
     once from a pilot at the scene's own noise.
     """
     system, exc = scene["system"], scene["excitation"]

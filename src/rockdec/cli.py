@@ -18,12 +18,13 @@ from pathlib import Path
 import numpy as np
 
 from rockdec import config as config_mod
-from rockdec import archive, io, records, replicates, signatures, simulate
+from rockdec import __version__, archive, io, records, replicates, signatures, simulate
 from rockdec import validate as checks
 from rockdec.models import restoring_acceleration
 
-#: Scene fields set by ``simulate`` options: option -> (section, key).
+#: Scene fields set by ``simulate`` options: option -> path of the field in the scene.
 SIMULATE_OPTIONS = {
+    "--model": ("model",),
     "--e": ("system", "e"),
     "--nu": ("system", "nu"),
     "--theta-cr": ("system", "theta_cr"),
@@ -97,11 +98,12 @@ def _simulate_scene(args) -> dict:
 
 
 def _with_options(scene: dict, args, options: dict) -> dict:
-    """``scene`` (changed in place) with every option given on the command line set."""
-    for option, (section, key) in options.items():
+    """``scene`` (changed in place) with every option given on the command line set;
+    ``options`` maps an option to the path of its field in the scene."""
+    for option, (*sections, key) in options.items():
         value = getattr(args, option[2:].replace("-", "_"))
         if value is not None:
-            scene.setdefault(section, {})[key] = value
+            _field(scene, sections)[key] = value
     return scene
 
 
@@ -110,10 +112,10 @@ def _validated(scene: dict, options: dict) -> dict:
     try:
         return config_mod.validate_scene(scene)
     except config_mod.ConfigError as exc:
-        for option, (section, key) in options.items():
-            field = f"scenes.cli.{section}.{key}"
+        for option, (*sections, key) in options.items():
+            field = ".".join(("scenes.cli", *sections, key))
             if exc.field is not None and (exc.field == field or exc.field.startswith(field + ".")):
-                value = scene[section][key]
+                value = _field(scene, sections)[key]
                 shown = " ".join(map(checks.show, value)) if isinstance(value, list) else checks.show(value)
                 raise UsageError(f"{option} {shown}: {exc.problem.replace(' (or null)', '')}.") from None
         raise
@@ -131,6 +133,14 @@ def _check_simulation_size(scene: dict, n_seeds: int) -> None:
     need = SIMULATE_THREADS * 8.0 * (burn_in + rec["n_points"] + 4.0 * rows * rec["n_points"])
     what = f"--n-points {rec['n_points']} with --burn-in {burn_in} and --chunk-seeds {rec['chunk_seeds']}"
     checks.memory(need, what, "lower --n-points, --burn-in or --chunk-seeds")
+
+
+def _field(scene: dict, sections) -> dict:
+    """The part of ``scene`` that the path ``sections`` leads to (the scene itself for ``()``),
+    made when missing."""
+    for section in sections:
+        scene = scene.setdefault(section, {})
+    return scene
 
 
 def cmd_simulate(args) -> None:
@@ -186,7 +196,6 @@ def cmd_signatures(args) -> None:
     if args.group_size is not None:
         checks.integer(args.group_size, "--group-size", 1, "give at least 1 series per signature (or leave it out: all)")
     size = args.group_size or theta.sizes["seed"]
-    group = np.arange(theta.sizes["seed"]) // size
     sig = scene["signatures"]
     n_lag = signatures.lag_samples(sig["n_periods"], sig["level"] * stats["sigma_y"], stats["g"], theta.attrs["dt"])
     signatures.check_lag_range(
@@ -194,10 +203,14 @@ def cmd_signatures(args) -> None:
         f"{g_name} {checks.show(stats['g'])} with --n-periods {checks.show(sig['n_periods'])}",
         "raise --g or lower --n-periods (or pool fewer series with --group-size)",
     )
-    cube = replicates.scene_signatures(theta, scene, stats, group, np.arange(group.max() + 1))
-    cube.attrs.update(io.provenance("signatures", scene["signatures"]))
+    if size == 1:  # one signature per series: the cube keeps the seed dimension
+        cube = replicates.scene_signatures(theta, scene, stats, None, np.zeros(theta.sizes["seed"], dtype=int))
+    else:
+        group = np.arange(theta.sizes["seed"]) // size
+        cube = replicates.scene_signatures(theta, scene, stats, group, np.arange(group.max() + 1))
+    cube.attrs.update(io.provenance("signatures", scene["signatures"], inputs=[args.input]))
     io.write_netcdf(cube, out, overwrite=args.overwrite)
-    counts = cube["count"].sum("group")
+    counts = cube["count"].sum(replicates.series_dim(cube))
     print(f"triggers per window: D_a {counts.sel(trigger='a').values}, D_v {counts.sel(trigger='v').values}", file=sys.stderr)
 
 
@@ -209,13 +222,14 @@ def cmd_estimates(args) -> None:
     out = io.check_output(args.out, args.overwrite)
     checks.integer(args.fit_points, "--fit-points", 3, "give at least 3 points per side (a parabola needs 3)")
     with io.open_dataset(args.input) as src:
-        if "free_response" not in src or "group" not in src.dims or "count" not in src or "dt" not in src.attrs:
+        if "free_response" not in src or not {"group", "seed"} & set(src.dims) or "count" not in src or "dt" not in src.attrs:
             raise UsageError(f"{args.input} is not a signature file; make one with 'rockdec signatures'.")
         cube = src.load()
     if "replicate" not in cube.coords:
-        cube = cube.assign_coords(replicate=("group", np.zeros(cube.sizes["group"], dtype=int)))
+        dim = replicates.series_dim(cube)
+        cube = cube.assign_coords(replicate=(dim, np.zeros(cube.sizes[dim], dtype=int)))
     est = replicates.replicate_estimates(cube, fit_points=args.fit_points, weights=args.weights)
-    est.attrs.update(io.provenance("estimates", {"fit_points": args.fit_points, "weights": args.weights}))
+    est.attrs.update(io.provenance("estimates", {"fit_points": args.fit_points, "weights": args.weights}, inputs=[args.input]))
     io.write_netcdf(est, out, overwrite=args.overwrite)
     for name in est["estimator"].values:
         value = est["e_hat0"].sel(estimator=name).values
@@ -311,6 +325,7 @@ def _default_cache() -> str:
 
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="rockdec", description=__doc__.splitlines()[0])
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     parser.add_argument("--debug", action="store_true", help="show the traceback of an unexpected error")
     sub = parser.add_subparsers(dest="command", required=True)
 
@@ -333,6 +348,7 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--scene", help="take every setting from this scene of the config")
     sim.add_argument("--config", default="config/config.yaml", help="config file (default: %(default)s)")
     sim.add_argument("--seeds", help="seeds, e.g. 0-99 or 3,7 (default: the scene's)")
+    sim.add_argument("--model", help="simplified (eq. 4), housner (eq. 2) or auto (by amplitude; default: the scene's)")
     sim.add_argument("--e", type=float, help="coefficient of restitution, 0..1")
     sim.add_argument("--nu", type=float, help="rocking frequency parameter, rad/s")
     sim.add_argument("--theta-cr", type=float, help="critical angle, rad")

@@ -37,7 +37,7 @@ Consequences (checked in ``tests/test_fixed_step.py``):
 * several crossings inside one step are seen as at most one impact, and there is no rest
   state: the limit cycle has the amplitude ``g (N* dt)^2 / 32`` (eq. 5), about
   ``190 g dt^2`` at ``e = 0.95``; with ``e = 0`` the block chatters within a few ``g dt^2``
-  of zero. (The exact simulator resolves multiple impacts and the rest, SPEC §1.)
+  of zero. (The exact simulator resolves multiple impacts and the rest, docs/method.md §3.3.)
 
 The step loop, the load and the Dask wrapper are the exact simulator's:
 ``rockdec.simulate.simulate_block(..., grid_impacts=True)`` and

@@ -355,7 +355,7 @@ def simulate_block_housner(seeds, n_points, *, dt, nu, theta_cr, e, sigma_p, the
 
 
 def choose_model(amplitude_ratio: float, tolerance: float = 0.02) -> tuple[str, str]:
-    """The cheapest model valid at ``theta/theta_cr = amplitude_ratio`` (SPEC §6): ``(name, reason)``.
+    """The cheapest model valid at ``theta/theta_cr = amplitude_ratio`` (docs/method.md §2.4): ``(name, reason)``.
 
     ``"simplified"`` (eq. 4) while its period (eq. 5) is within ``tolerance`` (relative) of the
     linearized Housner period (eq. 3) at that amplitude, otherwise ``"housner"`` (eq. 2).

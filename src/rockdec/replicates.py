@@ -1,4 +1,4 @@
-"""Replicates and the readings of the paper's sizes (SPEC §4).
+"""Replicates and the readings of the paper's sizes (docs/method.md §8).
 
 A scene's seeds form ``replicates`` of ``series_per_replicate`` series. A *reading* says
 how a replicate's series become signatures and estimates:
@@ -55,11 +55,20 @@ def grouping(seeds: np.ndarray, reading: str) -> tuple[np.ndarray, np.ndarray, n
     return used_seeds.ravel(), group, np.repeat(np.arange(n_rep), per_rep)
 
 
-def scene_signatures(theta: xr.DataArray, scene: dict, stats: dict, group: np.ndarray, replicate_of_group) -> xr.Dataset:
+def series_dim(cube: xr.Dataset) -> str:
+    """The dimension that holds a cube's signatures: ``seed`` (one a series) or ``group``."""
+    return "seed" if "seed" in cube.dims else "group"
+
+
+def scene_signatures(
+    theta: xr.DataArray, scene: dict, stats: dict, group: np.ndarray | None, replicate_of_group
+) -> xr.Dataset:
     """The scene's signature cube of ``theta(seed, time)``, summed within groups.
 
-    ``stats`` holds the stationary ``sigma_y``, ``sigma_ydot`` and ``g`` of the scene (one
-    trigger level for every series, SPEC §2).
+    ``group=None`` keeps one signature per series: the cube's ``seed`` dimension holds the
+    seeds, and ``replicate_of_group`` gives each seed's replicate. ``stats`` holds the
+    stationary ``sigma_y``, ``sigma_ydot`` and ``g`` of the scene (one trigger level for
+    every series, docs/method.md §4.4).
     """
     sig = scene["signatures"]
     cube = signatures.signature_cube(
@@ -74,9 +83,10 @@ def scene_signatures(theta: xr.DataArray, scene: dict, stats: dict, group: np.nd
         n_periods=sig["n_periods"],
         g=stats["g"],
         both_signs=sig["both_signs"],
-        group=xr.DataArray(group, dims="seed", coords={"seed": theta["seed"]}),
+        group=None if group is None else xr.DataArray(group, dims="seed", coords={"seed": theta["seed"]}),
     )
-    return cube.assign_coords(replicate=("group", np.asarray(replicate_of_group), {"long_name": "replicate of the group"}))
+    dim = series_dim(cube)
+    return cube.assign_coords(replicate=(dim, np.asarray(replicate_of_group), {"long_name": f"replicate of the {dim}"}))
 
 
 def replicate_estimates(cube: xr.Dataset, *, fit_points: int, weights: str = "window") -> xr.Dataset:
@@ -91,9 +101,10 @@ def replicate_estimates(cube: xr.Dataset, *, fit_points: int, weights: str = "wi
     per_group = estimators.estimate_cube(
         cube["free_response"], cube["signature"].sel(trigger="v", drop=True), dt, fit_points=fit_points
     )["e_hat"]
-    e_hat = per_group.groupby(cube["replicate"]).mean("group", skipna=True)
+    dim = series_dim(cube)
+    e_hat = per_group.groupby(cube["replicate"]).mean(dim, skipna=True)
     e_hat.attrs = per_group.attrs
-    count = cube["count"].groupby(cube["replicate"]).sum("group")
+    count = cube["count"].groupby(cube["replicate"]).sum(dim)
     if weights == "count":
         # e_v rests on the D_v triggers, every other estimator on the D_a triggers
         w = xr.concat(

@@ -1,4 +1,4 @@
-"""Which of the paper's unstated choices move which estimator (SPEC §4).
+"""Which of the paper's unstated choices move which estimator (docs/method.md §8).
 
 One choice at a time is moved away from the scene's setting: the lag range (rocking
 periods at amplitude ``a``, eq. 5), the mirrored triggers (minima at ``-a``), and the trigger

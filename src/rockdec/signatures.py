@@ -50,7 +50,7 @@ so they are neither triggers nor skipped.
 All window sizes in one pass: the half-widths ``da_1 <= ... <= da_W`` are nested, so each
 trigger is added once, into the bin of the smallest window that holds it, and a cumulative
 sum over the window axis finishes the job. Kernels return per-series *sums* and *counts*,
-so signatures pool exactly by adding (SPEC §2): over series, seeds, groups or time chunks.
+so signatures pool exactly by adding (docs/method.md §4.4): over series, seeds, groups or time chunks.
 
 Layers: NumPy/numba kernels (:func:`extremum_sums`, :func:`crossing_sums`), the
 :func:`reference_per_window` used by tests and the benchmark, small helpers
@@ -484,7 +484,7 @@ def pool(ds: xr.Dataset, dim) -> xr.Dataset:
     """Pool a signature cube over ``dim`` (a name or a list): sum of sums / sum of counts.
 
     Exact: the pooled signature is the mean over the union of the triggers of the pooled
-    series (SPEC §2). NaN (with a :class:`NoTriggerWarning`) where the pooled count is 0.
+    series (docs/method.md §4.4). NaN (with a :class:`NoTriggerWarning`) where the pooled count is 0.
     """
     summed = ds[list(_SUM_VARS)].sum(dim, keep_attrs=True)
     return _finish(summed)
@@ -515,7 +515,7 @@ def signature_cube(
         seed and/or time. ``dt`` (s) from ``theta.attrs['dt']`` or the ``time`` coordinate.
     sigma_y, sigma_ydot : float
         One standard deviation of the response and of its velocity for *all* series:
-        a per-series level would mix rocking periods in a pooled signature (SPEC §2).
+        a per-series level would mix rocking periods in a pooled signature (docs/method.md §4.4).
     level : float
         ``D_a`` trigger level ``a = level * sigma_y`` (paper: ``a = 2 sigma_Y``).
     windows : sequence of float, ascending in ``(0, 1]``
@@ -625,6 +625,7 @@ def signature_cube(
     )
     if group is not None:
         sums = sums.groupby(group.rename("group")).sum(keep_attrs=True)
+        sums["group"].attrs["long_name"] = "group of series pooled into one signature"
     sums.attrs = {
         "level": float(level),
         "sigma_y": float(sigma_y),

@@ -54,6 +54,20 @@ PILOT_SEED_OFFSET = 2**62
 #: Largest default burn-in, in steps; beyond it the caller must choose one.
 MAX_DEFAULT_BURN_IN = 10**7
 
+#: The ``time`` coordinate of a simulation: seconds from the end of the burn-in. CF 1.10
+#: (section 4.4) asks a time coordinate for a reference date; the epoch stands for that
+#: instant, so xarray reads ``time`` as dates from 1970-01-01 (``time - time[0]`` in s).
+TIME_ATTRS = {
+    "units": "seconds since 1970-01-01 00:00:00",
+    "calendar": "standard",
+    "standard_name": "time",
+    "long_name": "time since the end of the burn-in",
+}
+
+#: Longest record, in s, whose times still decode as dates (NumPy ``datetime64[ns]`` ends
+#: in 2262): a longer one would make the file unreadable to a plain ``xarray.open_dataset``.
+MAX_RECORD_SECONDS = 9.2e9
+
 
 @numba.njit(nogil=True, cache=True, inline="always")
 def flight(theta, omega, duration, g, e):
@@ -64,6 +78,8 @@ def flight(theta, omega, duration, g, e):
     step that is NaN (the loop is bounded by :data:`_MAX_PASSES`).
     """
     remaining = duration
+    if remaining != remaining:  # a NaN step: NaN, whatever the state (even at rest)
+        return math.nan, math.nan
     for _ in range(_MAX_PASSES):
         if theta == 0.0 and omega == 0.0:
             return 0.0, 0.0
@@ -353,6 +369,11 @@ def simulation_dataset(
         block, seed_chunks, new_axis=[0, 2], chunks=((2,), seed_chunks.chunks[0], (n_points,)), dtype=np.float64
     )
     time = np.arange(n_points) * dt
+    if time[-1] > MAX_RECORD_SECONDS:
+        raise checks.InputError(
+            f"dt {dt:g} s x {n_points} points spans {time[-1]:.3g} s, longer than the {MAX_RECORD_SECONDS:.3g} s whose "
+            "times a NetCDF reader can decode; choose a smaller time step or fewer points"
+        )
     ds = xr.Dataset(
         {
             "theta": (("seed", "time"), both[0], {"units": "rad", "long_name": "rocking angle"}),
@@ -364,7 +385,7 @@ def simulation_dataset(
         },
         coords={
             "seed": ("seed", seeds, {"long_name": "NumPy SeedSequence entropy of the series"}),
-            "time": ("time", time, {"units": "s", "long_name": "time since the end of the burn-in"}),
+            "time": ("time", time, TIME_ATTRS),
         },
     )
     ds.attrs.update(
@@ -452,7 +473,7 @@ def _model_for(requested: str, sigma_y: float, theta_cr: float) -> tuple[str, st
 
 
 def scene_dataset(scene: dict, params: dict, seeds, theta0: float = 0.0, theta_dot0: float = 0.0) -> xr.Dataset:
-    """The lazy simulation Dataset of ``seeds`` for a scene, with the SPEC §5 attributes.
+    """The lazy simulation Dataset of ``seeds`` for a scene, with the attributes of docs/method.md §10.
 
     The attributes hold everything needed to regenerate any other seed of the scene bit
     for bit (see :func:`regenerate`).

@@ -1,4 +1,4 @@
-"""Replicate statistics, bias tests, and the paper's numbers side by side (SPEC §4).
+"""Replicate statistics, bias tests, and the paper's numbers side by side (paper eq. 28; docs/method.md §9).
 
 Paper values: ``e_g`` and ``e_0`` at zero window from §5 / fig. 3 (no spread printed);
 ``e1..e4`` mean and standard deviation over 20 repetitions, eq. 28. The paper's ``e4`` is

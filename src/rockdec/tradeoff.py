@@ -39,7 +39,7 @@ Choices written down here (the issue leaves them open):
 The model is always the simplified one (eq. 4), whatever the scene's ``model`` (``auto``
 would switch to Housner at the large amplitudes that a fine step reaches at the same
 ``sigma_p``: ``3 sigma_Y/theta_cr = 0.33`` at 1000 points per cycle). Under eq. 4 the
-stationary response depends only on ``e`` and the sampling density (SPEC §1), so each
+stationary response depends only on ``e`` and the sampling density (docs/method.md §3.4), so each
 configuration stands for every ``sigma_p`` and ``theta_cr``, small amplitudes included;
 a scene that asks for the Housner model is refused.
 

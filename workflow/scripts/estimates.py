@@ -9,6 +9,6 @@ scene = snakemake.params.scene
 with io.open_dataset(snakemake.input[0]) as cube:
     cube = cube.load()
 est, table = replicates.scene_estimates(cube, scene)
-est.attrs.update(io.provenance("estimates", scene["estimates"]))
+est.attrs.update(io.provenance("estimates", scene["estimates"], inputs=snakemake.input))
 io.write_netcdf(est, snakemake.output.estimates)
 tables.write_table(table, snakemake.output.csv, snakemake.output.md)

@@ -22,5 +22,5 @@ for reading in others:
         cube = cube.compute()
     results.append(replicates.replicate_estimates(cube, **replicates.estimate_options(scene))[["e_hat0", "e_hat0_stderr"]])
 combined = xr.concat(results, dim=pd.Index(others, name="reading"))
-combined.attrs.update(io.provenance("readings", scene["estimates"]))
+combined.attrs.update(io.provenance("readings", scene["estimates"], inputs=snakemake.input))
 io.write_netcdf(combined, snakemake.output[0])

@@ -14,5 +14,5 @@ with io.open_dataset(snakemake.input[0]) as sim:
 n = theta.sizes["seed"]
 print(f"signature of {n} stored series x {theta.sizes['time']} points", file=sys.stderr)
 cube = replicates.scene_signatures(theta, scene, attrs, group=np.zeros(n, dtype=np.int64), replicate_of_group=[0])
-cube.attrs.update(io.provenance("stored_signature", scene["signatures"]))
+cube.attrs.update(io.provenance("stored_signature", scene["signatures"], inputs=snakemake.input))
 io.write_netcdf(cube, snakemake.output[0])

@@ -8,6 +8,6 @@ sys.stderr = open(snakemake.log[0], "w")
 scene = snakemake.params.scene
 with io.open_dataset(snakemake.input.own) as own, io.open_dataset(snakemake.input.other) as other:
     combined, table = replicates.readings_estimates(own.load(), other.load(), scene)
-combined.attrs = io.provenance("table_readings", scene["estimates"])
+combined.attrs = io.provenance("table_readings", scene["estimates"], inputs=snakemake.input)
 io.write_netcdf(combined, snakemake.output.estimates)
 tables.write_table(table, snakemake.output.csv, snakemake.output.md)

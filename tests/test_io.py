@@ -1,0 +1,72 @@
+"""Traceable products: CF 1.10 compliance, history appended from the inputs, input files named."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from rockdec import io
+from rockdec.cli import main
+
+from cf_check import cf_findings
+
+
+@pytest.fixture(scope="module")
+def chain(tmp_path_factory):
+    """simulate -> signatures -> estimates on 10 series of the tiny scene, through the CLI."""
+    root = tmp_path_factory.mktemp("chain")
+    paths = {name: root / f"{name}.nc" for name in ("sim", "sig", "est")}
+    assert main(["simulate", "--out", str(paths["sim"]), "--seeds", "0-9", "--scene", "tiny"]) == 0
+    assert main(["signatures", str(paths["sim"]), "--out", str(paths["sig"])]) == 0
+    assert main(["estimates", str(paths["sig"]), "--out", str(paths["est"])]) == 0
+    return paths
+
+
+@pytest.mark.parametrize("name", ["sim", "sig", "est"])
+def test_every_product_passes_the_cf_checker_without_errors_or_warnings(chain, name, tmp_path):
+    findings = cf_findings(chain[name], tmp_path)
+    assert findings == {"errors": [], "warnings": []}
+
+
+def test_history_is_appended_along_the_chain_and_inputs_are_named(chain):
+    attrs = {name: xr.open_dataset(path).attrs for name, path in chain.items()}
+    sim, sig, est = (attrs[k]["history"].splitlines() for k in ("sim", "sig", "est"))
+    assert len(sim) == 1 and sim[0].endswith("simulate")
+    assert sig[:1] == sim and sig[1].endswith(f"signatures {chain['sim']}") and len(sig) == 2
+    assert est[:2] == sig and est[2].endswith(f"estimates {chain['sig']}") and len(est) == 3
+    assert "source_files" not in attrs["sim"]
+    assert attrs["sig"]["source_files"] == str(chain["sim"])
+    assert attrs["est"]["source_files"] == str(chain["sig"])
+    assert all(a["title"] and a["Conventions"] == "CF-1.10" for a in attrs.values())
+
+
+def test_time_coordinate_reads_back_as_seconds_from_the_end_of_the_burn_in(chain):
+    with xr.open_dataset(chain["sim"]) as ds:
+        seconds = (ds["time"] - ds["time"][0]) / np.timedelta64(1, "s")
+        assert seconds.values[1] == pytest.approx(ds.attrs["dt"], rel=1e-6)
+        assert ds["time"].attrs["standard_name"] == "time"
+    with xr.open_dataset(chain["sim"], decode_times=False) as raw:
+        assert raw["time"].values[0] == 0.0
+        assert "_FillValue" not in raw["time"].encoding
+
+
+def test_history_of_several_inputs_keeps_each_line_once_oldest_first(tmp_path):
+    common = "2000-01-01T00:00:00Z: rockdec x simulate"
+    a, b = tmp_path / "a.nc", tmp_path / "b.nc"
+    for path, line in ((a, "2000-01-02T00:00:00Z: rockdec x estimates"), (b, "2000-01-03T00:00:00Z: rockdec x readings")):
+        io.write_netcdf(xr.Dataset({"x": ("n", [1.0, 2.0])}, attrs={"history": f"{common}\n{line}"}), path)
+    attrs = io.provenance("table_readings", {"k": 1}, inputs=[a, b])
+    lines = attrs["history"].splitlines()
+    assert lines[:3] == [common, "2000-01-02T00:00:00Z: rockdec x estimates", "2000-01-03T00:00:00Z: rockdec x readings"]
+    assert len(lines) == 4 and lines[3].endswith(f"table_readings {a} {b}")
+    assert attrs["source_files"].splitlines() == [str(a), str(b)]
+    assert attrs["title"] == io.TITLES["table_readings"]
+
+
+def test_coordinates_are_written_without_fill_values(tmp_path):
+    ds = xr.Dataset({"y": ("x", [1.0, np.nan])}, coords={"x": ("x", [0.5, 1.5]), "label": ("x", [2.0, 3.0])})
+    path = io.write_netcdf(ds, tmp_path / "c.nc")
+    with xr.open_dataset(path) as back:
+        assert "_FillValue" not in back["x"].encoding and "_FillValue" not in back["label"].encoding
+        assert np.isnan(back["y"].encoding["_FillValue"])  # data variables keep NaN as missing
