@@ -52,4 +52,4 @@ def test_citation_and_licence_agree_with_the_package_metadata():
     assert (REPO / "LICENSE").read_text().startswith("MIT License")
     paper = cff["references"][0]
     assert paper["title"] in " ".join((REPO / "README.md").read_text().split())  # the paper the README names
-    assert paper["authors"] and all(a.get("family-names") for a in paper["authors"])
+    assert paper["authors"] and all(a.get("family-names") or a.get("name") for a in paper["authors"])  # CFF: a person or an entity
