@@ -64,6 +64,7 @@ def test_record_at_085_is_inside_its_interval(record_085, cache, capsys, tmp_pat
     assert (tmp_path / "block.png").stat().st_size > 10_000
     assert set(res["estimators"]) == {"e_g", "e_0", "e1", "e2", "e3", "e4", "e_v"}
     assert res["calibration"]["cached"] is False
+    assert 0.9 <= res["coverage"] <= 1.0  # the interval's coverage on the calibration's records
 
 
 def test_second_run_reuses_the_calibration_and_agrees(record_085, cache, capsys):
@@ -331,3 +332,11 @@ def test_warnings_name_what_looks_wrong(short_record):
     spiky[500] = 40 * analysis.sigma_y
     assert "spike" in notes(spiky)
     assert "asymmetric" in notes(theta + 0.8 * np.abs(theta))
+
+
+def test_calibration_coverage_is_95_percent_when_the_belt_is_right_and_less_when_too_narrow():
+    cal = synthetic_calibration(bias=0.02, spread=0.01, sets=400)
+    b = belt.belt(cal, "e_v")
+    assert belt.calibration_coverage(cal, "e_v", b) == pytest.approx(0.95, abs=0.015)
+    narrow = b._replace(spread=0.5 * b.spread)  # normal: P(|Z| < 0.98) = 0.67
+    assert belt.calibration_coverage(cal, "e_v", narrow) == pytest.approx(0.67, abs=0.03)

@@ -107,3 +107,23 @@ def correct(b: Belt, observed: float) -> Corrected:
         value = float(b.e[idx[np.argmin(np.abs(gap))]])
         notes.append("the raw value lies beyond the calibrated mean curve; the corrected value is its nearest point")
     return Corrected(value, float(low), float(high), tuple(notes))
+
+
+def calibration_coverage(cal: xr.Dataset, name: str, b: Belt) -> float:
+    """Share of the calibration's own record sets whose 95 % interval (:func:`correct`)
+    holds their true ``e``: the coverage of the interval at the record's own settings.
+
+    In-sample (the belt was fitted to these sets), so it can only flatter the interval a
+    little; the out-of-sample check is :mod:`rockdec.coverage`. Sets at a true ``e``
+    outside the belt's range, and failed sets, count as not covered. NaN for an empty belt.
+    """
+    if b.e.size == 0:
+        return float("nan")
+    raw = cal["raw"].sel(name=name).values  # (e_true, set)
+    truth = np.broadcast_to(cal["e_true"].values[:, None], raw.shape).ravel()
+    x = raw.ravel()
+    inside = np.abs(x[:, None] - b.mean[None, :]) <= Z95 * b.spread[None, :]  # (record, dense e)
+    any_inside = inside.any(axis=1) & np.isfinite(x)
+    low = b.e[np.argmax(inside, axis=1)]
+    high = b.e[b.e.size - 1 - np.argmax(inside[:, ::-1], axis=1)]
+    return float(np.mean(any_inside & (low <= truth) & (truth <= high)))

@@ -57,10 +57,12 @@ def diagnose(records: list[Record], analysis: measured.Analysis, settings: dict)
 def estimate(records: list[Record], *, cache_dir, g: float | None = None, settings: dict | None = None) -> dict:
     """Calibrated estimates of ``e`` from ``records`` of one block (pooled).
 
-    Returns a JSON-able dict: ``e``, ``interval`` (95 %), ``estimator``, ``raw`` (of the
-    default estimator), ``g`` (rad/s^2: corrected, or as given), ``g_raw``,
+    Returns a JSON-able dict: ``e``, ``interval`` (95 %), ``estimator``, ``coverage`` (the
+    share of the calibration's simulated record sets whose interval held their true ``e``,
+    :func:`rockdec.belt.calibration_coverage`), ``raw`` (of the default estimator), ``g`` (rad/s^2: corrected, or as given), ``g_raw``,
     ``points_per_cycle``, ``sigma_y``, ``dt``, ``samples``, ``nan_samples``,
-    ``estimators`` (per estimator: ``raw``, ``e``, ``interval``, ``triggers``, ``notes``),
+    ``estimators`` (per estimator: ``raw``, ``e``, ``interval``, ``coverage``, ``triggers``,
+    ``notes``),
     ``warnings``, ``calibration`` (file, and whether it came from the cache), and, under
     keys starting with ``_``, the analysis and belts for plots.
     """
@@ -91,6 +93,7 @@ def estimate(records: list[Record], *, cache_dir, g: float | None = None, settin
             "raw": _num(analysis.raw[name]),
             "e": _num(c.value),
             "interval": [_num(c.low), _num(c.high)],
+            "coverage": _num(belt.calibration_coverage(cal, name, belts[name])),
             "triggers": int(analysis.count[trigger][-1]),
             "notes": list(c.notes),
         }
@@ -102,6 +105,7 @@ def estimate(records: list[Record], *, cache_dir, g: float | None = None, settin
         "e": default["e"],
         "interval": default["interval"],
         "estimator": DEFAULT_ESTIMATOR,
+        "coverage": default["coverage"],
         "raw": default["raw"],
         "g": _num(g_value),
         "g_given": g is not None,

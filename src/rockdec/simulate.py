@@ -473,7 +473,7 @@ def _model_for(requested: str, sigma_y: float, theta_cr: float) -> tuple[str, st
 
 
 def scene_dataset(scene: dict, params: dict, seeds, theta0: float = 0.0, theta_dot0: float = 0.0) -> xr.Dataset:
-    """The lazy simulation Dataset of ``seeds`` for a scene, with the attributes of docs/method.md §10.
+    """The lazy simulation Dataset of ``seeds`` for a scene, with the attributes of docs/method.md §11.
 
     The attributes hold everything needed to regenerate any other seed of the scene bit
     for bit (see :func:`regenerate`).
