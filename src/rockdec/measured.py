@@ -59,22 +59,19 @@ class Analysis(NamedTuple):
     ``raw``: zero-window value per estimator of :data:`rockdec.estimators.ESTIMATORS`
     (dimensionless) and ``"g"`` (rad/s^2, largest window); ``per_window``: the same names, one value per
     window; ``count``: triggers per window, ``{"a": ..., "v": ...}``; ``sigma_y`` (rad),
-    ``sigma_ydot`` (rad/s), ``points_per_cycle`` (samples per cycle at amplitude
-    ``sigma_y`` with the measured ``g``, eq. 5), ``dt`` (s), ``n_lag``; ``free_response``
-    (largest window, ``tau >= 0``) and ``dv_signature`` (largest window, two-sided) for
-    plots; ``nan_samples``: NaN samples in the records.
+    ``points_per_cycle`` (samples per cycle at amplitude ``sigma_y`` with the measured
+    ``g``, eq. 5), ``dt`` (s), ``n_lag``; ``free_response`` (largest window,
+    ``tau >= 0``) for plots; ``nan_samples``: NaN samples in the records.
     """
 
     raw: dict
     per_window: dict
     count: dict
     sigma_y: float
-    sigma_ydot: float
     points_per_cycle: float
     dt: float
     n_lag: int
     free_response: np.ndarray
-    dv_signature: np.ndarray
     nan_samples: int
 
 
@@ -185,11 +182,9 @@ def analyse(records, dt: float, settings: dict | None = None, g: float | None = 
         per_window=per_window,
         count={"a": count_a, "v": count_v},
         sigma_y=sigma_y,
-        sigma_ydot=sigma_ydot,
         points_per_cycle=float(period_from_g(sigma_y, lag_g) / dt),
         dt=float(dt),
         n_lag=int(n_lag),
         free_response=r_all[-1],
-        dv_signature=sig[1, -1],
         nan_samples=nan_samples,
     )
