@@ -82,6 +82,30 @@ def belt(cal: xr.Dataset, name: str, points: int = 4001) -> Belt:
     return Belt(dense, mean, spread, float(1.0 - ok.sum() / ok.size))
 
 
+def belts(cal: xr.Dataset) -> dict[str, Belt]:
+    """The belt of every name the calibration holds (each estimator of ``e``, and ``g``)."""
+    return {str(name): belt(cal, str(name)) for name in cal["name"].values}
+
+
+def _inside(b: Belt, observed: np.ndarray) -> np.ndarray:
+    """``(observation, dense e)``: where the 95 % band of the belt holds each observation."""
+    return np.abs(observed[:, None] - b.mean[None, :]) <= Z95 * b.spread[None, :]
+
+
+def _ends(b: Belt, inside: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The 95 % interval of each row of :func:`_inside`: its first and last ``e``."""
+    return b.e[np.argmax(inside, axis=1)], b.e[b.e.size - 1 - np.argmax(inside[:, ::-1], axis=1)]
+
+
+def correct_g(g_belt: Belt, g_raw: float, e: float) -> float:
+    """``g`` read off a record, corrected for its window bias: ``g_raw`` over the mean
+    ratio (measured ``g`` / true ``g``) of the calibration at the corrected ``e``; NaN when
+    ``e`` is NaN or the ``g`` belt is empty."""
+    if g_belt.e.size == 0 or not np.isfinite(e):
+        return float("nan")
+    return float(g_raw / np.interp(e, g_belt.e, g_belt.mean))
+
+
 def correct(b: Belt, observed: float) -> Corrected:
     """Invert the belt at ``observed``: the corrected ``e`` and its 95 % interval."""
     if not np.isfinite(observed):
@@ -89,12 +113,13 @@ def correct(b: Belt, observed: float) -> Corrected:
     if b.e.size == 0:
         return Corrected(np.nan, np.nan, np.nan, (f"the estimator failed on {b.failed:.0%} of the calibration records, too many for a belt",))
     notes = []
-    inside = np.abs(observed - b.mean) <= Z95 * b.spread
+    inside = _inside(b, np.array([observed]))[0]
     if not inside.any():
         nearest = int(np.argmin(np.abs(observed - b.mean) / b.spread))
         return Corrected(np.nan, np.nan, np.nan, (f"the raw value {observed:.4f} is not produced by any calibrated e (nearest e = {b.e[nearest]:.3f})",))
     idx = np.flatnonzero(inside)
-    low, high = b.e[idx[0]], b.e[idx[-1]]
+    low, high = _ends(b, inside[None])
+    low, high = low[0], high[0]
     if idx[0] == 0 or idx[-1] == b.e.size - 1:
         notes.append(f"the interval reaches the end of the calibrated range [{b.e[0]:.3f}, {b.e[-1]:.3f}]")
     # corrected value: where the mean curve meets the observation, inside the interval
@@ -122,8 +147,7 @@ def calibration_coverage(cal: xr.Dataset, name: str, b: Belt) -> float:
     raw = cal["raw"].sel(name=name).values  # (e_true, set)
     truth = np.broadcast_to(cal["e_true"].values[:, None], raw.shape).ravel()
     x = raw.ravel()
-    inside = np.abs(x[:, None] - b.mean[None, :]) <= Z95 * b.spread[None, :]  # (record, dense e)
+    inside = _inside(b, x)
     any_inside = inside.any(axis=1) & np.isfinite(x)
-    low = b.e[np.argmax(inside, axis=1)]
-    high = b.e[b.e.size - 1 - np.argmax(inside[:, ::-1], axis=1)]
+    low, high = _ends(b, inside)
     return float(np.mean(any_inside & (low <= truth) & (truth <= high)))

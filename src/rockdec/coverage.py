@@ -59,7 +59,7 @@ def run(e_values, n_records: int, n_points: int, cache_dir, *, points_per_cycle:
     raw, e_hat, low, high = (np.full(shape, np.nan) for _ in range(4))
     g_hat = np.full(shape[:2], np.nan)
     pole = 0.0 if corner is None else pole_for_corner(corner, points_per_cycle)
-    belts: dict = {}
+    by_hash: dict = {}
     for i, e in enumerate(e_values):
         # a coloured load needs more pilots: its exponent is measured (simulate._secant_step)
         cal = calibrate_dt(e=e, g=1.0, sigma_p=1.0, points_per_cycle=points_per_cycle, pole=pole, iterations=3 if pole == 0.0 else 8)
@@ -75,16 +75,13 @@ def run(e_values, n_records: int, n_points: int, cache_dir, *, points_per_cycle:
                 continue
             key = calibration.calibration_settings([n_points], analysis.points_per_cycle)
             h = calibration.settings_hash(key)
-            if h not in belts:
-                cal_ds, _ = calibration.load_or_build(key, cache_dir)
-                belts[h] = {name: belt.belt(cal_ds, name) for name in [*names, measured.G_NAME]}
+            if h not in by_hash:
+                by_hash[h] = belt.belts(calibration.load_or_build(key, cache_dir)[0])
             for j, name in enumerate(names):
-                c = belt.correct(belts[h][name], analysis.raw[name])
+                c = belt.correct(by_hash[h][name], analysis.raw[name])
                 raw[i, k, j], e_hat[i, k, j], low[i, k, j], high[i, k, j] = analysis.raw[name], c.value, c.low, c.high
             e_default = e_hat[i, k, names.index(DEFAULT_ESTIMATOR)]
-            g_belt = belts[h][measured.G_NAME]
-            if g_belt.e.size:
-                g_hat[i, k] = analysis.raw[measured.G_NAME] / np.interp(e_default, g_belt.e, g_belt.mean)
+            g_hat[i, k] = belt.correct_g(by_hash[h][measured.G_NAME], analysis.raw[measured.G_NAME], e_default)
     dims = ("e_true", "record", "estimator")
     attrs = {"units": "1"}
     return xr.Dataset(

@@ -84,9 +84,8 @@ def estimate(records: list[Record], *, cache_dir, g: float | None = None, settin
     cal, cached = calibration.load_or_build(cal_settings, cache_dir)
     built_s = time.perf_counter() - started
     per = {}
-    belts = {}
+    belts = belt.belts(cal)
     for name in estimators.ESTIMATORS:
-        belts[name] = belt.belt(cal, name)
         c = belt.correct(belts[name], analysis.raw[name])
         trigger = "v" if name == "e_v" else "a"
         per[name] = {
@@ -98,9 +97,8 @@ def estimate(records: list[Record], *, cache_dir, g: float | None = None, settin
             "notes": list(c.notes),
         }
     default = per[DEFAULT_ESTIMATOR]
-    g_belt = belt.belt(cal, measured.G_NAME)
-    ratio = float(np.interp(default["e"], g_belt.e, g_belt.mean)) if default["e"] is not None and g_belt.e.size else math.nan
-    g_value = g if g is not None else analysis.raw[measured.G_NAME] / ratio
+    e_default = math.nan if default["e"] is None else default["e"]
+    g_value = g if g is not None else belt.correct_g(belts[measured.G_NAME], analysis.raw[measured.G_NAME], e_default)
     return {
         "e": default["e"],
         "interval": default["interval"],

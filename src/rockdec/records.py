@@ -38,10 +38,6 @@ class Record(NamedTuple):
     dt: float
     source: str
 
-    @property
-    def nan_count(self) -> int:
-        return int(np.count_nonzero(np.isnan(self.theta)))
-
 
 def sampling_step(time, source: str) -> float:
     """The step of a time axis (s), refusing one that is not uniform and increasing."""
