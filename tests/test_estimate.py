@@ -253,7 +253,7 @@ def _bad_inputs(tmp):
     xr.Dataset({"angle": ("time", y)}, coords={"time": t}).to_netcdf(nc)
     cases["unknown NetCDF variable"] = ([nc], "no variable 'theta'")
     cases["bad --g"] = ([_write(tmp / "g.csv", t, y), "--g", "-2"], "--g")
-    cases["lag window longer than the record"] = ([_write(tmp / "lag.csv", t, y), "--g", "1e-9"], "shortest record")
+    cases["lag window longer than the record"] = ([_write(tmp / "lag.csv", t, y), "--g", "1e-9"], "no trigger fits")
     return cases
 
 

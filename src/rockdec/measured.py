@@ -152,11 +152,11 @@ def analyse(records, dt: float, settings: dict | None = None, g: float | None = 
             )
     lag_g = g if g is not None else g_first
     n_lag = signatures.lag_samples(opts["n_periods"], a, lag_g, dt)
-    if 2 * n_lag + 1 > shortest:
-        raise ValueError(
-            f"a lag range of {opts['n_periods']} rocking periods at the trigger level needs {2 * n_lag + 1} samples, "
-            f"but the shortest record has {shortest}; use longer records or a smaller n_periods"
-        )
+    signatures.check_lag_range(
+        n_lag, shortest, 1, windows.size,  # sums are taken one record at a time
+        f"a lag range of {opts['n_periods']} rocking periods at the trigger level (g = {lag_g:.3g} rad/s^2)",
+        "use longer records, a smaller n_periods, or the right g",
+    )
     v = opts["v_level"] * sigma_ydot
     sum_a, count_a = _pooled_sums(records, "a", a, a_widths, n_lag, dt, opts["both_signs"])
     sum_v, count_v = _pooled_sums(records, "v", v, windows * opts["dv_max"] * v, n_lag, dt, opts["both_signs"])
