@@ -25,7 +25,7 @@ def record():
 def estimates_of(theta, stats):
     scene = config.validate_scene({})
     group = np.zeros(theta.sizes["seed"], dtype=int)
-    cube = replicates.scene_signatures(theta, scene, stats, group, [0])
+    cube = replicates.scene_signatures(theta, scene["signatures"], **stats, group=group, replicate_of_group=[0])
     return replicates.replicate_estimates(cube, fit_points=5)
 
 

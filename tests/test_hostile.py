@@ -21,7 +21,7 @@ import xarray as xr
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from rockdec import config, estimators, fixed_step, housner, io, signatures, simulate
+from rockdec import config, estimators, fixed_step, housner, io, run, signatures, simulate
 from rockdec import validate as checks
 from rockdec.cli import main
 
@@ -230,7 +230,7 @@ def test_internal_error_is_one_line_and_debug_shows_the_traceback(tmp_path, caps
     def broken(*args, **kwargs):
         raise KeyError("boom")
 
-    monkeypatch.setattr(simulate, "scene_parameters", broken)
+    monkeypatch.setattr(run, "calibrate", broken)
     argv = ["simulate", "--out", str(tmp_path / "o.nc"), *FAST]
     assert main(argv) == 1
     err = capsys.readouterr().err

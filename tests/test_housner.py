@@ -407,15 +407,17 @@ def test_parameters_are_checked():
 
 
 def test_scene_records_which_model_ran_and_why():
-    from rockdec import config
+    from rockdec import config, run
 
     small = config.validate_scene({"model": "auto"})
-    params = simulate.scene_parameters(small)
-    assert params["model"] == "simplified" and params["model_reason"].startswith("auto:")
+    contract = run.calibrate(small)
+    assert contract.model == "simplified" and contract.model_reason.startswith("auto:")
     forced = config.validate_scene({"model": "housner"})
-    params_h = simulate.scene_parameters(forced)
-    assert params_h["model"] == "housner" and params_h["model_reason"] == "requested"
-    ds = simulate.scene_dataset(forced, params_h, [3, 4, 5])
+    housner_run = run.calibrate(forced)
+    assert housner_run.model == "housner" and housner_run.model_reason == "requested"
+    ds = housner_run.dataset([3, 4, 5], 6000)
     assert ds.attrs["model"] == "housner"
-    alone = simulate.regenerate(ds.attrs, [4], chunk_seeds=1).theta.values[0]
+    # the attributes are the contract: the run they describe regenerates any seed alone
+    assert run.Run.from_attrs(ds.attrs) == housner_run
+    alone = run.Run.from_attrs(ds.attrs).dataset([4], 6000, chunk_seeds=1).theta.values[0]
     np.testing.assert_array_equal(alone, ds.theta.sel(seed=4).values)  # seed-stable for Housner too

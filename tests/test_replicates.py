@@ -2,27 +2,88 @@
 
 import math
 
-import dask
 import numpy as np
+import pandas as pd
 import pytest
 import xarray as xr
 
-from rockdec import config, replicates, simulate, tables
+from rockdec import config, layout, replicates, run, series, tables
 
 
-def test_grouping_of_each_reading():
+def test_groups_of_each_reading():
     seeds = np.arange(3 * 250).reshape(3, 250)
-    used, group, rep = replicates.grouping(seeds, "pooled")
-    assert used.size == 750 and np.array_equal(group, np.repeat([0, 1, 2], 250)) and np.array_equal(rep, [0, 1, 2])
-    used, group, rep = replicates.grouping(seeds, "per_series")
+    group, rep = replicates.reading_groups(seeds, "pooled")
+    assert np.array_equal(group, np.repeat([0, 1, 2], 250)) and np.array_equal(rep, [0, 1, 2])
+    group, rep = replicates.reading_groups(seeds, "per_series")
+    used = seeds.ravel()[group >= 0]
     assert used.size == 300 and np.array_equal(used[:100], np.arange(100)) and np.array_equal(used[100:200], np.arange(250, 350))
-    assert np.array_equal(group, np.arange(300)) and np.array_equal(np.bincount(rep), [100, 100, 100])
-    used, group, rep = replicates.grouping(seeds, "groups_of_10")
-    assert used.size == 3 * 250 and np.array_equal(np.bincount(group), np.full(75, 10)) and np.array_equal(np.bincount(rep), [25] * 3)
+    assert np.array_equal(group[group >= 0], np.arange(300)) and np.array_equal(np.bincount(rep), [100, 100, 100])
+    group, rep = replicates.reading_groups(seeds, "groups_of_10")
+    assert np.array_equal(np.bincount(group), np.full(75, 10)) and np.array_equal(np.bincount(rep), [25] * 3)
     with pytest.raises(ValueError, match="unknown reading"):
-        replicates.grouping(seeds, "mystery")
+        replicates.reading_groups(seeds, "mystery")
     with pytest.raises(ValueError, match="at least 10"):
-        replicates.grouping(seeds[:, :5], "groups_of_10")
+        replicates.reading_groups(seeds[:, :5], "groups_of_10")
+
+
+def test_the_units_of_one_pass_rebuild_every_reading_exactly():
+    """Each reading's groups are unions of units, and no unit mixes two groups of a reading."""
+    seeds = np.arange(3 * 137).reshape(3, 137)  # not a multiple of 10: groups_of_10 leaves 7 a replicate out
+    unit, groups = replicates.pass_units(seeds, replicates.READINGS)
+    for reading in replicates.READINGS:
+        group, rep = replicates.reading_groups(seeds, reading)
+        group_of_unit, rep_of_group = groups[reading]
+        assert np.array_equal(rep_of_group, rep)
+        rebuilt = np.where(unit >= 0, group_of_unit[np.maximum(unit, 0)], -1)
+        assert np.array_equal(rebuilt, group), reading
+    # a series some reading keeps alone is a unit of its own; the others pool by tens
+    assert np.bincount(unit[unit >= 0]).max() == 10 and (unit >= 0).sum() == 3 * 137
+    assert unit.max() + 1 == 3 * (100 + 3 + 1)  # 100 alone, 3 tens, and the 7 left over
+
+
+@pytest.fixture(scope="module")
+def tiny():
+    """The tiny scene at 2 replicates of 20 series, and its run."""
+    scene = config.scene(config.load(), "tiny")
+    scene["records"].update(replicates=2, series_per_replicate=20, chunk_seeds=8, n_points=4000)
+    scene["excitation"].update(dt=0.0034, burn_in=2000)
+    return scene, run.calibrate(scene)
+
+
+def test_one_pass_gives_each_reading_as_its_own_pass_does(tiny):
+    """All readings from one pass equal one pass per reading (the former rule `readings`):
+    counts exactly, signature sums and extrapolated estimates to 1e-12."""
+    scene, contract = tiny
+    rec, sig = scene["records"], scene["signatures"]
+    one_pass = replicates.scene_cubes(contract, rec, sig, replicates.READINGS, threads=2)
+    for reading in replicates.READINGS:
+        group, rep = replicates.reading_groups(run_seeds := layout.scene_seeds(rec), reading)
+        used = run_seeds.ravel()[group >= 0]
+        theta = series.as_recorded(contract.dataset(used, rec["n_points"], chunk_seeds=rec["chunk_seeds"])["theta"])
+        alone = replicates.scene_signatures(
+            theta, sig, sigma_y=contract.sigma_y, sigma_ydot=contract.sigma_ydot, g=contract.g,
+            group=group[group >= 0], replicate_of_group=rep,
+        ).compute()
+        got = one_pass[reading]
+        assert np.array_equal(got["count"].values, alone["count"].values), reading
+        np.testing.assert_allclose(got["signature_sum"].values, alone["signature_sum"].values, rtol=1e-12, atol=1e-15)
+        est_got = replicates.replicate_estimates(got, fit_points=5)["e_hat0"].values
+        est_alone = replicates.replicate_estimates(alone, fit_points=5)["e_hat0"].values
+        np.testing.assert_allclose(est_got, est_alone, rtol=1e-12, atol=1e-12, err_msg=reading)
+        assert np.isfinite(est_got).sum() > 0
+
+
+def test_readings_table_lists_every_reading_with_the_true_e(tiny):
+    scene, contract = tiny
+    cubes = replicates.scene_cubes(contract, scene["records"], scene["signatures"], replicates.READINGS)
+    curves = replicates.reading_curves(cubes, fit_points=5)
+    assert curves.attrs["e_target"] == scene["system"]["e"]
+    combined, table = replicates.readings_estimates(curves, "window")
+    assert list(combined["reading"].values) == list(replicates.READINGS)
+    assert list(pd.unique(table["reading"])) == list(replicates.READINGS)
+    own, _ = replicates.scene_estimates(cubes["pooled"], scene["estimates"])
+    np.testing.assert_array_equal(combined["e_hat0"].sel(reading="pooled").values, own["e_hat0"].values)
+    assert own.attrs["e_target"] == scene["system"]["e"]
 
 
 def test_bias_row_matches_the_t_statistic_formula():
@@ -51,11 +112,9 @@ def reduced_paper():
     cfg = config.load()
     scene = config.scene(cfg, "paper")
     scene["records"].update(replicates=8, series_per_replicate=150, chunk_seeds=150)
-    params = simulate.scene_parameters(scene)
-    attrs = {**params, "n_points": scene["records"]["n_points"], "theta0": 0.0, "theta_dot0": 0.0}
-    with dask.config.set(scheduler="threads", num_workers=2):
-        cube = replicates.reading_cube(attrs, scene, "pooled").compute()
-    return replicates.replicate_estimates(cube, **replicates.estimate_options(scene))
+    contract = run.calibrate(scene)
+    cube = replicates.scene_cubes(contract, scene["records"], scene["signatures"], ["pooled"], threads=2)["pooled"]
+    return replicates.replicate_estimates(cube, fit_points=scene["estimates"]["fit_points"], weights=scene["estimates"]["weights"])
 
 
 def test_reduced_paper_scene_lands_near_the_papers_means(reduced_paper):

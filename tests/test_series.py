@@ -1,11 +1,10 @@
 """Every series on disk (`store_series: all`): the files, and signatures equal either way."""
 
-import dask
 import netCDF4
 import numpy as np
 import pytest
 
-from rockdec import config, replicates, series, simulate
+from rockdec import config, engine, layout, replicates, run, series, simulate
 
 READINGS = replicates.READINGS
 
@@ -20,41 +19,43 @@ def stored(tmp_path_factory):
             "signatures": {"windows": [0.5, 1.0]},
         }
     )
-    params = simulate.scene_parameters(scene)
-    attrs = {**params, "n_points": scene["records"]["n_points"], "theta0": 0.0, "theta_dot0": 0.0}
+    contract = run.calibrate(scene)
     folder = tmp_path_factory.mktemp("scene")
-    paths = series.replicate_files(folder, scene)
+    paths = layout.replicate_files(folder, scene["records"])
     (folder / "series").mkdir()
-    with dask.config.set(scheduler="threads", num_workers=2):
+    with engine.session(2):
         for r, path in enumerate(paths):
-            series.write_replicate(attrs, scene, r, path)
-    return {"scene": scene, "attrs": attrs, "paths": paths}
+            series.write_replicate(contract, scene["records"], r, path)
+    return {"scene": scene, "run": contract, "paths": paths}
 
 
 def test_store_series_is_a_count_or_all(tmp_path):
     with pytest.raises(config.ConfigError, match="store_series"):
         config.validate_scene({"records": {"store_series": "most"}})
     scene = config.validate_scene({"records": {"replicates": 3, "store_series": 5}})
-    assert series.replicate_files(tmp_path, scene) == []
-    assert series.simulation_seeds(scene).tolist() == [0, 1, 2, 3, 4]
-    scene["records"]["store_series"] = "all"
-    assert [p.name for p in series.replicate_files(tmp_path, scene)] == ["replicate_0.nc", "replicate_1.nc", "replicate_2.nc"]
-    assert series.simulation_seeds(scene).size == series.FIGURE_SERIES
+    rec = scene["records"]
+    assert layout.replicate_files(tmp_path, rec) == []
+    assert layout.simulation_seeds(rec).tolist() == [0, 1, 2, 3, 4]
+    rec["store_series"] = "all"
+    assert [p.name for p in layout.replicate_files(tmp_path, rec)] == ["replicate_0.nc", "replicate_1.nc", "replicate_2.nc"]
+    assert layout.simulation_seeds(rec).size == layout.FIGURE_SERIES
 
 
 def test_replicate_file_holds_its_seeds_as_float32_chunked_by_seed_and_compressed(stored):
-    scene, attrs = stored["scene"], stored["attrs"]
-    seeds = simulate.scene_seeds(scene)[1]
+    scene, contract = stored["scene"], stored["run"]
+    seeds = layout.scene_seeds(scene["records"])[1]
     with netCDF4.Dataset(stored["paths"][1]) as nc:
         var = nc["theta"]
         assert var.dtype == np.float32
         assert var.chunking() == [4, scene["records"]["n_points"]]
         assert var.filters()["zlib"]
         assert nc["seed"][:].tolist() == seeds.tolist()
-        assert nc.getncattr("replicate") == 1 and nc.getncattr("dt") == attrs["dt"]
+        assert nc.getncattr("replicate") == 1 and nc.getncattr("dt") == contract.dt
+        assert run.Run.from_attrs(nc.__dict__) == contract
         theta = var[:].data
     exact, _ = simulate.simulate_block(
-        seeds, scene["records"]["n_points"], dt=attrs["dt"], g=attrs["g"], e=attrs["e"], sigma_p=attrs["sigma_p"], burn_in=attrs["burn_in"]
+        seeds, scene["records"]["n_points"], dt=contract.dt, g=contract.g, e=contract.e, sigma_p=contract.sigma_p,
+        burn_in=contract.burn_in,
     )
     assert np.array_equal(theta, exact.astype(np.float32))
     assert not np.array_equal(theta.astype(np.float64), exact)  # float32 does round
@@ -62,10 +63,10 @@ def test_replicate_file_holds_its_seeds_as_float32_chunked_by_seed_and_compresse
 
 @pytest.mark.parametrize("reading", READINGS)
 def test_signatures_from_the_files_equal_those_from_the_seeds_bit_for_bit(stored, reading):
-    scene, attrs = stored["scene"], stored["attrs"]
-    with dask.config.set(scheduler="threads", num_workers=2):
-        from_seeds = replicates.reading_cube(attrs, scene, reading).compute()
-        from_files = replicates.reading_cube(attrs, scene, reading, stored["paths"]).compute()
+    scene, contract = stored["scene"], stored["run"]
+    rec, sig = scene["records"], scene["signatures"]
+    from_seeds = replicates.scene_cubes(contract, rec, sig, [reading], threads=2)[reading]
+    from_files = replicates.scene_cubes(contract, rec, sig, [reading], stored["paths"], threads=2)[reading]
     assert int(from_seeds["count"].sum()) > 0
     assert list(from_seeds.data_vars) == list(from_files.data_vars)
     for name in from_seeds.data_vars:
@@ -74,13 +75,14 @@ def test_signatures_from_the_files_equal_those_from_the_seeds_bit_for_bit(stored
 
 def test_signatures_from_the_seeds_are_those_of_the_rounded_series(stored):
     """The regenerated series are analysed as float32 stores them, not as computed."""
-    scene, attrs = stored["scene"], stored["attrs"]
-    used, group, rep = replicates.grouping(simulate.scene_seeds(scene), "pooled")
-    theta = simulate.regenerate(attrs, used, chunk_seeds=4)["theta"]
-    with dask.config.set(scheduler="threads", num_workers=2):
-        cube = replicates.reading_cube(attrs, scene, "pooled").compute()
-        rounded = replicates.scene_signatures(series.as_recorded(theta), scene, attrs, group, rep).compute()
-        unrounded = replicates.scene_signatures(theta, scene, attrs, group, rep).compute()
+    scene, contract = stored["scene"], stored["run"]
+    group, rep = replicates.reading_groups(layout.scene_seeds(scene["records"]), "pooled")
+    theta = contract.dataset(layout.scene_seeds(scene["records"]).ravel(), scene["records"]["n_points"], chunk_seeds=4)["theta"]
+    scales = {"sigma_y": contract.sigma_y, "sigma_ydot": contract.sigma_ydot, "g": contract.g}
+    cube = replicates.scene_cubes(contract, scene["records"], scene["signatures"], ["pooled"])["pooled"]
+    with engine.session(2):
+        rounded = replicates.scene_signatures(series.as_recorded(theta), scene["signatures"], **scales, group=group, replicate_of_group=rep).compute()
+        unrounded = replicates.scene_signatures(theta, scene["signatures"], **scales, group=group, replicate_of_group=rep).compute()
     assert np.array_equal(cube["signature_sum"].values, rounded["signature_sum"].values, equal_nan=True)
     assert not np.array_equal(cube["signature_sum"].values, unrounded["signature_sum"].values, equal_nan=True)
 

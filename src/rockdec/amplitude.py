@@ -11,59 +11,53 @@ only) are NaN from the fall on; the signatures skip their segments and the table
 from __future__ import annotations
 
 import copy
-import math
 
-import dask
 import numpy as np
 import pandas as pd
 import xarray as xr
 
-from rockdec import replicates, simulate, tables
-from rockdec.models import restoring_acceleration
+from rockdec import replicates, run, simulate, tables
+from rockdec.models import MODELS, noise_for_amplitude, restoring_acceleration, scale_constant
 
 RATIOS = (0.002, 0.005, 0.01, 0.02, 0.03, 0.05)
 """``sigma_Y / theta_cr`` of the sweep; eqs. 3 and 5 differ by 2 % near 3 sigma_Y = 0.047 theta_cr."""
-
-MODELS = ("simplified", "housner")
 
 
 def noise_for_ratios(scene: dict, ratios) -> list[float]:
     """The impulse std giving ``sigma_Y = ratio * theta_cr`` for the simplified model, per ratio.
 
-    With ``dt`` calibrated to ``N`` points per cycle, ``sigma_Y = sigma_p^2 N sqrt(c)/(4 sqrt(2) g)``
-    and ``c`` does not depend on ``sigma_p`` (scale invariance, docs/method.md §3.4); ``c`` is measured
-    once from a pilot at the scene's own noise.
+    With ``dt`` calibrated to ``N`` points per cycle the scale law gives ``sigma_p`` in closed
+    form (:func:`rockdec.models.noise_for_amplitude`), and its number ``c`` does not depend
+    on ``sigma_p`` (scale invariance, docs/method.md §3.4); ``c`` is measured once from a
+    pilot at the scene's own noise.
     """
     system, exc = scene["system"], scene["excitation"]
     g = restoring_acceleration(system["nu"], system["theta_cr"])
     cal = simulate.calibrate_dt(e=system["e"], g=g, sigma_p=exc["sigma_p"], points_per_cycle=exc["points_per_cycle"])
-    c = cal["sigma_y"] * cal["dt"] ** 2 * g**3 / exc["sigma_p"] ** 4
-    n = exc["points_per_cycle"]
-    return [math.sqrt(r * system["theta_cr"] * 4.0 * math.sqrt(2.0) * g / (n * math.sqrt(c))) for r in ratios]
+    c = scale_constant(cal["sigma_y"], cal["dt"], g, exc["sigma_p"])
+    return [noise_for_amplitude(c, r * system["theta_cr"], g, exc["points_per_cycle"]) for r in ratios]
 
 
 def sweep(scene: dict, ratios=RATIOS, threads: int = 1) -> xr.Dataset:
     """``e_hat0(ratio, model, estimator, replicate)``, the measured ``sigma_y_ratio(ratio, model)``
-    and ``skipped_fraction(ratio, model)`` (triggers lost to overturned stretches)."""
+    and ``skipped_fraction(ratio, model)`` (triggers lost to overturned stretches);
+    attribute ``e_target``, the scene's ``e``."""
     out = []
+    options = scene["estimates"]
+    reading = options["reading"]
     for sigma_p in noise_for_ratios(scene, ratios):
         per_model = []
         base = copy.deepcopy(scene)
         base["excitation"]["sigma_p"] = sigma_p
         for model in MODELS:
-            variant = copy.deepcopy(base)
-            variant["model"] = model
-            params = simulate.scene_parameters(variant)
-            attrs = {**params, "n_points": variant["records"]["n_points"], "theta0": 0.0, "theta_dot0": 0.0}
-            cube = replicates.reading_cube(attrs, variant, variant["estimates"]["reading"])
-            with dask.config.set(scheduler="threads", num_workers=threads):
-                cube = cube.compute()
-            est = replicates.replicate_estimates(cube, **replicates.estimate_options(variant))
+            contract = run.calibrate({**base, "model": model})
+            cube = replicates.scene_cubes(contract, base["records"], base["signatures"], [reading], threads=threads)[reading]
+            est = replicates.replicate_estimates(cube, fit_points=options["fit_points"], weights=options["weights"])
             skipped = float(cube["skipped"].sel(trigger="a").isel(window=-1).sum())
             counted = float(cube["count"].sel(trigger="a").isel(window=-1).sum())
             per_model.append(
                 est[["e_hat0"]].assign(
-                    sigma_y_ratio=params["sigma_y"] / params["theta_cr"],
+                    sigma_y_ratio=contract.sigma_y / contract.theta_cr,
                     skipped_fraction=skipped / max(skipped + counted, 1.0),
                 )
             )
@@ -72,6 +66,7 @@ def sweep(scene: dict, ratios=RATIOS, threads: int = 1) -> xr.Dataset:
     ds["ratio"].attrs = {"units": "1", "long_name": "target sigma_Y / theta_cr of the simplified model"}
     ds["sigma_y_ratio"].attrs = {"units": "1", "long_name": "measured sigma_Y / theta_cr of the model's pilot"}
     ds["skipped_fraction"].attrs = {"units": "1", "long_name": "D_a triggers lost to overturned (NaN) stretches"}
+    ds.attrs["e_target"] = float(scene["system"]["e"])
     return ds
 
 

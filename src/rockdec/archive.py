@@ -115,7 +115,7 @@ def rebuild(folder: str | Path, out: str | Path) -> dict[str, bool]:
     The steps after the simulation run again on the archived files, through files as in
     the workflow and with the functions its rules call: rule ``estimates`` on
     ``signatures.nc`` (:func:`rockdec.replicates.scene_estimates`), rule
-    ``table_readings`` when the scene compares readings
+    ``table_readings`` on ``readings.nc`` when the scene compares readings
     (:func:`rockdec.replicates.readings_estimates`), and every figure rule the archive
     holds the inputs of. Returns, for each rebuilt table and NetCDF file, whether it
     equals the archived one (tables byte for byte, NetCDF files by :func:`same_data`).
@@ -126,20 +126,20 @@ def rebuild(folder: str | Path, out: str | Path) -> dict[str, bool]:
     manifest = read_manifest(folder)
     scene = manifest["settings"]
     names = {entry["name"] for entry in manifest["files"]}
-    e_target = scene["system"]["e"]
     with io.open_dataset(folder / "signatures.nc") as sig_file:
         sig = sig_file.load()
-    est, table = replicates.scene_estimates(sig, scene)
+    est, table = replicates.scene_estimates(sig, scene["estimates"])
     est.attrs.update(io.provenance("estimates", scene["estimates"]))
     io.write_netcdf(est, out / "estimates.nc")
     tables.write_table(table, out / "table.csv", out / "table.md")
     rebuilt = ["estimates.nc", "table.csv", "table.md"]
     with io.open_dataset(out / "estimates.nc") as est_file:
         est = est_file.load()
-    if "estimates_other_readings.nc" in names:
-        with io.open_dataset(folder / "estimates_other_readings.nc") as other:
-            combined, table = replicates.readings_estimates(est, other.load(), scene)
-        combined.attrs = io.provenance("table_readings", scene["estimates"])
+    e_target = float(est.attrs["e_target"])
+    if "estimates_readings.nc" in names:
+        with io.open_dataset(folder / "readings.nc") as curves:
+            combined, table = replicates.readings_estimates(curves.load(), scene["estimates"]["weights"])
+        combined.attrs.update(io.provenance("table_readings", {"weights": scene["estimates"]["weights"]}))
         io.write_netcdf(combined, out / "estimates_readings.nc")
         tables.write_table(table, out / "table_readings.csv", out / "table_readings.md")
         rebuilt += ["estimates_readings.nc", "table_readings.csv", "table_readings.md"]
@@ -150,7 +150,7 @@ def rebuild(folder: str | Path, out: str | Path) -> dict[str, bool]:
         "fig_ev": figures.fig_ev(sig, est, e_target=e_target),
     }
     if "stored_signature.nc" in names:
-        with io.open_dataset(folder / "simulations.nc") as sim, io.open_dataset(folder / "stored_signature.nc") as stored:
+        with io.open_dataset(folder / "stored_series.nc") as sim, io.open_dataset(folder / "stored_signature.nc") as stored:
             drawn["fig2"] = figures.fig2(sim.load(), stored.load())
     (out / "figures").mkdir()
     for name, fig in drawn.items():

@@ -33,7 +33,7 @@ import dask
 import numpy as np
 import xarray as xr
 
-from rockdec import __version__, estimators, io, measured
+from rockdec import __version__, engine, estimators, io, measured
 from rockdec.simulate import default_burn_in, simulate_block
 
 #: True ``e`` of the calibration grid: denser where the estimators bend (near 1).
@@ -143,11 +143,11 @@ def _grid_point(j: int, e: float, cal_settings: dict, seed_base: int) -> np.ndar
 def build(cal_settings: dict) -> xr.Dataset:
     """Simulate and analyse the calibration records; ``raw(e_true, set, name)``.
 
-    Grid points run as Dask tasks (threads by default, or any scheduler the caller has
-    set with ``dask.config.set``); the simulation and signature kernels release the GIL.
+    Grid points run as Dask tasks on the engine of :mod:`rockdec.engine` (threads by
+    default); the simulation and signature kernels release the GIL.
     """
     tasks = [dask.delayed(_grid_point)(j, e, cal_settings, CALIBRATION_SEED_OFFSET) for j, e in enumerate(cal_settings["e_grid"])]
-    values = np.stack(dask.compute(*tasks))
+    values = np.stack(engine.compute(*tasks))
     ds = xr.Dataset(
         {"raw": (("e_true", "set", "name"), values, {"units": "1", "long_name": "zero-window estimate on a simulated record set (g in units of the true g)"})},
         coords={

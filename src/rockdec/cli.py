@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from rockdec import config as config_mod
-from rockdec import __version__, archive, io, records, replicates, signatures, simulate
+from rockdec import __version__, archive, estimators, io, layout, records, replicates, run, signatures, simulate
 from rockdec import validate as checks
 from rockdec.models import restoring_acceleration
 
@@ -148,13 +148,14 @@ def cmd_simulate(args) -> None:
     scene = _simulate_scene(args)
     checks.finite(args.theta0, "--theta0", "give the initial angle in rad")
     checks.finite(args.theta_dot0, "--theta-dot0", "give the initial angular velocity in rad/s")
-    seeds = parse_seeds(args.seeds) if args.seeds is not None else simulate.scene_seeds(scene).ravel()
+    seeds = parse_seeds(args.seeds) if args.seeds is not None else layout.scene_seeds(scene["records"]).ravel()
     _check_simulation_size(scene, seeds.size)
-    params = simulate.scene_parameters(scene, amplitude=abs(args.theta0))
-    ds = simulate.scene_dataset(scene, params, seeds, theta0=args.theta0, theta_dot0=args.theta_dot0)
+    contract = run.calibrate(scene, amplitude=abs(args.theta0), theta0=args.theta0, theta_dot0=args.theta_dot0)
+    ds = contract.dataset(seeds, scene["records"]["n_points"], chunk_seeds=scene["records"]["chunk_seeds"])
+    ds.attrs.update(io.provenance("simulate", scene))
     print(
         f"simulating {seeds.size} series x {scene['records']['n_points']} points "
-        f"(dt = {params['dt']:.6g} s, burn-in {params['burn_in']} steps) -> {out}",
+        f"(dt = {contract.dt:.6g} s, burn-in {contract.burn_in} steps) -> {out}",
         file=sys.stderr,
     )
     with _progress():
@@ -181,11 +182,10 @@ def cmd_signatures(args) -> None:
         raise UsageError(f"{args.input}: '{args.variable}' has no time coordinate and the file no 'dt' attribute; add either.")
     if np.isinf(theta.values).any():
         raise UsageError(f"{args.input}: '{args.variable}' holds infinite values; remove them or mark them as gaps (NaN).")
+    measured = simulate.pilot_statistics(theta.values, theta.attrs["dt"])
     stats = {
-        "sigma_y": _finite(attrs.get("sigma_y"), lambda: float(np.sqrt(np.nanmean(theta.values**2)))),
-        "sigma_ydot": _finite(
-            attrs.get("sigma_ydot"), lambda: float(np.sqrt(np.nanmean((np.diff(theta.values) / theta.attrs["dt"]) ** 2)))
-        ),
+        "sigma_y": _finite(attrs.get("sigma_y"), measured["sigma_y"]),
+        "sigma_ydot": _finite(attrs.get("sigma_ydot"), measured["sigma_ydot"]),
         "g": args.g if args.g is not None else attrs.get("g"),
     }
     if stats["g"] is None:
@@ -204,18 +204,18 @@ def cmd_signatures(args) -> None:
         "raise --g or lower --n-periods (or pool fewer series with --group-size)",
     )
     if size == 1:  # one signature per series: the cube keeps the seed dimension
-        cube = replicates.scene_signatures(theta, scene, stats, None, np.zeros(theta.sizes["seed"], dtype=int))
+        cube = replicates.scene_signatures(theta, sig, **stats, group=None, replicate_of_group=np.zeros(theta.sizes["seed"], dtype=int))
     else:
         group = np.arange(theta.sizes["seed"]) // size
-        cube = replicates.scene_signatures(theta, scene, stats, group, np.arange(group.max() + 1))
+        cube = replicates.scene_signatures(theta, sig, **stats, group=group, replicate_of_group=np.arange(group.max() + 1))
     cube.attrs.update(io.provenance("signatures", scene["signatures"], inputs=[args.input]))
     io.write_netcdf(cube, out, overwrite=args.overwrite)
     counts = cube["count"].sum(replicates.series_dim(cube))
     print(f"triggers per window: D_a {counts.sel(trigger='a').values}, D_v {counts.sel(trigger='v').values}", file=sys.stderr)
 
 
-def _finite(value, fallback):
-    return float(value) if value is not None and np.isfinite(value) else fallback()
+def _finite(value, fallback: float) -> float:
+    return float(value) if value is not None and np.isfinite(value) else fallback
 
 
 def cmd_estimates(args) -> None:
@@ -387,7 +387,7 @@ def build_parser() -> argparse.ArgumentParser:
     est = sub.add_parser("estimates", help="estimate e (eqs. 25-27, e_v) and extrapolate to zero window")
     est.add_argument("input", help="signature file from 'rockdec signatures'")
     est.add_argument("--out", required=True, help="NetCDF file to write")
-    est.add_argument("--fit-points", type=int, default=5, help="points per side of the e_v slope fits")
+    est.add_argument("--fit-points", type=int, default=estimators.DEFAULT_FIT_POINTS, help="points per side of the e_v slope fits")
     est.add_argument("--weights", choices=["window", "count"], default="window", help="extrapolation weights")
     est.add_argument("--overwrite", action="store_true", help="replace --out if it exists")
     est.set_defaults(func=cmd_estimates)

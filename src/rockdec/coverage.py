@@ -22,7 +22,7 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from rockdec import belt, calibration, estimators, measured
+from rockdec import belt, calibration, engine, estimators, measured
 from rockdec.loading import pole_for_corner
 from rockdec.simulate import calibrate_dt, simulate_block
 
@@ -68,7 +68,7 @@ def run(e_values, n_records: int, n_points: int, cache_dir, *, points_per_cycle:
             dask.delayed(_record_batch)(e, np.arange(start, min(start + batch, n_records)) + seed0, n_points, cal, pole)
             for start in range(0, n_records, batch)
         ]
-        analyses = [a for part in dask.compute(*tasks) for a in part]
+        analyses = [a for part in engine.compute(*tasks) for a in part]
         print(f"coverage: e = {e}: {n_records} records of {n_points} samples analysed; correcting", file=sys.stderr, flush=True)
         for k, analysis in enumerate(analyses):
             if analysis is None:

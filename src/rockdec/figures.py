@@ -34,6 +34,7 @@ import xarray as xr  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
 from rockdec import models  # noqa: E402
+from rockdec.layout import FIGURES  # noqa: E402  (the workflow's file names, drawn here)
 from rockdec.models import period_from_g  # noqa: E402
 
 # rockdec.signatures (numba, dask), rockdec.tables (scipy.stats) and scipy.optimize are
@@ -41,9 +42,6 @@ from rockdec.models import period_from_g  # noqa: E402
 # double its start-up time for the figures that do not need them.
 
 __all__ = ["FIGURES", "fig1b", "fig2", "fig3", "fig4", "fig_ev", "fig_record", "free_rocking", "save"]
-
-FIGURES = ("fig1b", "fig2", "fig3", "fig4", "fig_ev")
-"""Names of the figures; the workflow writes ``results/{scene}/figures/{name}.png|pdf``."""
 
 WINDOW_LABEL = r"relative window size $\Delta a/\Delta a_{max}$"
 TARGET_STYLE = {"color": "k", "ls": "--", "lw": 1.0}
@@ -423,7 +421,7 @@ def fig_amplitude(ds: xr.Dataset, e_target: float | None = None, estimators=("e_
     """
     fig = _new_figure(4.0 * len(estimators), 4.0)
     axes = np.atleast_1d(fig.subplots(1, len(estimators), sharey=False))
-    switch = models.amplitude_limit(0.02) / 3.0
+    switch = models.auto_switch_ratio()
     for ax, name in zip(axes, estimators):
         for model, color, marker in (("simplified", "tab:blue", "o"), ("housner", "tab:red", "s")):
             values = ds["e_hat0"].sel(model=model, estimator=name)

@@ -53,7 +53,7 @@ import numba
 import numpy as np
 
 from rockdec import validate as checks
-from rockdec.models import amplitude_limit, check_finite_series, check_run, period_mismatch
+from rockdec.models import MODEL_TOLERANCE, amplitude_limit, check_finite_series, check_run, period_mismatch
 from rockdec.loading import draw_impulses, series_rng
 
 #: Bounces from ``theta = 0`` with ``w/c`` at most this are counted in closed form.
@@ -66,8 +66,6 @@ _COUNT_FIX = 4
 #: Passes of the event loop beyond the long bounces before giving up with NaN: a valid
 #: state needs a handful; only NaN or overflow could loop for ever.
 _MAX_PASSES = 64
-
-MODELS = ("simplified", "housner")
 
 
 @numba.njit(nogil=True, cache=True)
@@ -354,7 +352,7 @@ def simulate_block_housner(seeds, n_points, *, dt, nu, theta_cr, e, sigma_p, the
     return theta, theta_dot, overturned_at
 
 
-def choose_model(amplitude_ratio: float, tolerance: float = 0.02) -> tuple[str, str]:
+def choose_model(amplitude_ratio: float, tolerance: float = MODEL_TOLERANCE) -> tuple[str, str]:
     """The cheapest model valid at ``theta/theta_cr = amplitude_ratio`` (docs/method.md §2.4): ``(name, reason)``.
 
     ``"simplified"`` (eq. 4) while its period (eq. 5) is within ``tolerance`` (relative) of the

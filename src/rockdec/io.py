@@ -51,10 +51,11 @@ def git_commit() -> str:
 #: The ``title`` of each product, by the step that writes it (CF 1.10 section 2.6.2).
 TITLES = {
     "simulate": "Random rocking response of a rigid block, simulated exactly (paper eqs. 21-24)",
+    "stored_series": "Random rocking response of a rigid block, simulated exactly (paper eqs. 21-24): the stored series",
     "signatures": "Random Decrement signatures D_a and D_v of the rocking response (paper eqs. 8, 19)",
     "stored_signature": "Random Decrement signatures of the stored series, pooled (paper fig. 2c)",
     "estimates": "Coefficient of restitution per replicate and window, extrapolated to zero window (paper eqs. 25-27)",
-    "readings": "Coefficient of restitution under the other readings of the paper's sizes",
+    "readings": "Coefficient of restitution against the window size under each reading of the paper's sizes (paper eq. 27, section 5)",
     "table_readings": "Coefficient of restitution under every reading of the paper's sizes",
     "choices": "Coefficient of restitution with one analysis choice changed at a time",
     "amplitude": "Simplified (eq. 4) and linearized Housner (eq. 2) models over sigma_Y/theta_cr",
@@ -72,9 +73,12 @@ REFERENCES = (
 
 
 def input_history(paths) -> list[str]:
-    """The ``history`` lines of the NetCDF files ``paths``, oldest first, each line once."""
+    """The ``history`` lines of the NetCDF files among ``paths``, oldest first, each line once
+    (other inputs, such as a run's JSON file, have none)."""
     lines: list[str] = []
     for path in paths:
+        if Path(path).suffix != ".nc":
+            continue
         with open_dataset(path) as ds:
             text = str(ds.attrs.get("history", ""))
         lines += [line for line in text.splitlines() if line.strip() and line not in lines]

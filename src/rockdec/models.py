@@ -14,6 +14,17 @@ from scipy.optimize import brentq
 
 from rockdec import validate as checks
 
+MODELS = ("simplified", "housner")
+"""The rocking models: simplified (eq. 4) and linearized Housner (eq. 2)."""
+
+MODEL_TOLERANCE = 0.02
+"""Largest relative difference of the periods of eqs. 3 and 5 at which ``auto`` keeps the
+simplified model."""
+
+MODEL_PEAK_SIGMAS = 3.0
+"""The amplitude ``auto`` guards, in units of ``sigma_Y``: ``3 sigma_Y`` is a large but
+typical peak of the heavy-tailed response (kurtosis 15-20)."""
+
 
 def restoring_acceleration(nu: float, theta_cr: float) -> float:
     """``g = nu^2 * theta_cr`` in rad/s^2: the constant restoring term of eq. 4 (``inf`` on overflow)."""
@@ -71,6 +82,36 @@ def amplitude_limit(tolerance: float = 0.02) -> float:
     if not tolerance > 0.0:
         raise ValueError(f"tolerance must be > 0 (got {tolerance})")
     return float(brentq(lambda x: period_mismatch(x) - tolerance, 1e-12, 1.0 - 1e-12, xtol=1e-15, rtol=1e-14))
+
+
+def auto_switch_ratio() -> float:
+    """``sigma_Y/theta_cr`` at which ``auto`` switches from eq. 4 to eq. 2: the amplitude
+    limit of :data:`MODEL_TOLERANCE` (:func:`amplitude_limit`) over :data:`MODEL_PEAK_SIGMAS`."""
+    return amplitude_limit(MODEL_TOLERANCE) / MODEL_PEAK_SIGMAS
+
+
+def scale_constant(sigma_y: float, dt: float, g: float, sigma_p: float) -> float:
+    """The number ``c = sigma_Y dt^2 g^3 / sigma_p^4`` of the stationary scale law.
+
+    Under eq. 4 with white velocity impulses the only scales are ``g`` and the noise
+    intensity ``S = sigma_p^2/dt``, so ``sigma_Y = c S^2/g^3`` with ``c`` a number that
+    depends on ``e`` and, weakly, on the sampling (docs/method.md §3.4).
+    """
+    return sigma_y * dt**2 * g**3 / sigma_p**4
+
+
+def step_for_density(c: float, sigma_p: float, g: float, points_per_cycle: float) -> float:
+    """The step giving ``points_per_cycle`` samples per cycle at ``sigma_Y`` (eq. 5) under the
+    scale law of :func:`scale_constant`: ``T(sigma_Y) = 4 sqrt(2 sigma_Y/g) = N dt`` gives
+    ``dt = (sigma_p/g) sqrt(4 sqrt(2 c)/N)``."""
+    return sigma_p / g * math.sqrt(4.0 * math.sqrt(2.0 * c) / points_per_cycle)
+
+
+def noise_for_amplitude(c: float, sigma_y: float, g: float, points_per_cycle: float) -> float:
+    """The impulse std giving ``sigma_Y`` at ``points_per_cycle`` samples per cycle: the
+    scale law of :func:`scale_constant` with the step of :func:`step_for_density`, solved
+    for ``sigma_p`` (``sigma_Y = sigma_p^2 N sqrt(c)/(4 sqrt(2) g)``)."""
+    return math.sqrt(sigma_y * 4.0 * math.sqrt(2.0) * g / (points_per_cycle * math.sqrt(c)))
 
 
 def check_run(*, dt, e, sigma_p, theta0, theta_dot0, burn_in, n_points) -> None:

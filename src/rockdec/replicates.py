@@ -14,6 +14,12 @@ how a replicate's series become signatures and estimates:
     replicate's estimate the mean over its groups.
 
 Extrapolation to zero window then runs per replicate on the window curve (paper §5).
+
+All readings come from one pass over the series (:func:`scene_cubes`): signature sums pool
+exactly by adding (docs/method.md §4.4), so the pass sums each series into the finest
+partition every reading can be built from -- one *unit* per series that some reading keeps
+alone, otherwise the largest block of series that every reading pools together -- and each
+reading's signatures are sums of units.
 """
 
 from __future__ import annotations
@@ -22,20 +28,20 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from rockdec import estimators, series, signatures, simulate, tables
-
-READINGS = ("pooled", "per_series", "groups_of_10")
-"""The readings, in the order tables list them."""
+from rockdec import engine, estimators, series, signatures, tables
+from rockdec.layout import READINGS, scene_seeds
+from rockdec.run import Run
 
 PER_SERIES_LIMIT = 100
 """Series per replicate in the ``per_series`` reading (the paper's 100 values a point)."""
 
 
-def grouping(seeds: np.ndarray, reading: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Seeds used by a reading and their labels.
+def reading_groups(seeds: np.ndarray, reading: str) -> tuple[np.ndarray, np.ndarray]:
+    """The group of every seed under a reading, and the replicate of every group.
 
-    ``seeds`` is ``(replicate, series)``. Returns ``(used_seeds, group_of_seed,
-    replicate_of_group)``, 1-D arrays: group labels run 0..G-1 in seed order.
+    ``seeds`` is ``(replicate, series)``. Returns ``(group_of_seed, replicate_of_group)``:
+    ``group_of_seed`` follows ``seeds.ravel()``, with labels 0..G-1 in seed order and -1
+    for a seed the reading leaves out.
     """
     n_rep, n_series = seeds.shape
     if reading == "pooled":
@@ -49,10 +55,26 @@ def grouping(seeds: np.ndarray, reading: str) -> tuple[np.ndarray, np.ndarray, n
             raise ValueError(f"the groups_of_10 reading needs at least 10 series per replicate; the scene has {n_series}")
     else:
         raise ValueError(f"unknown reading '{reading}'; use pooled, per_series or groups_of_10")
-    used_seeds = seeds[:, :used]
     per_rep = used // size
-    group = np.repeat(np.arange(n_rep * per_rep), size)
-    return used_seeds.ravel(), group, np.repeat(np.arange(n_rep), per_rep)
+    group = np.full((n_rep, n_series), -1, dtype=np.int64)
+    group[:, :used] = (np.arange(n_rep)[:, None] * per_rep + np.arange(used)[None, :] // size)
+    return group.ravel(), np.repeat(np.arange(n_rep), per_rep)
+
+
+def pass_units(seeds: np.ndarray, readings) -> tuple[np.ndarray, dict]:
+    """The units of one pass that serves every reading of ``readings`` (module docstring).
+
+    Returns ``(unit_of_seed, groups)``: ``unit_of_seed`` follows ``seeds.ravel()`` (-1 for a
+    seed no reading uses); ``groups[reading] = (group_of_unit, replicate_of_group)``, with
+    ``group_of_unit`` -1 for a unit the reading leaves out.
+    """
+    labels = {reading: reading_groups(seeds, reading) for reading in readings}
+    stacked = np.stack([labels[r][0] for r in readings])
+    used = np.any(stacked >= 0, axis=0)
+    keys, inverse = np.unique(stacked[:, used].T, axis=0, return_inverse=True)
+    unit_of_seed = np.full(stacked.shape[1], -1, dtype=np.int64)
+    unit_of_seed[used] = inverse.ravel()
+    return unit_of_seed, {r: (keys[:, k], labels[r][1]) for k, r in enumerate(readings)}
 
 
 def series_dim(cube: xr.Dataset) -> str:
@@ -61,41 +83,86 @@ def series_dim(cube: xr.Dataset) -> str:
 
 
 def scene_signatures(
-    theta: xr.DataArray, scene: dict, stats: dict, group: np.ndarray | None, replicate_of_group
+    theta: xr.DataArray, settings: dict, *, sigma_y: float, sigma_ydot: float, g: float,
+    group: np.ndarray | None, replicate_of_group,
 ) -> xr.Dataset:
-    """The scene's signature cube of ``theta(seed, time)``, summed within groups.
+    """The signature cube of ``theta(seed, time)`` under a scene's ``signatures`` settings.
 
     ``group=None`` keeps one signature per series: the cube's ``seed`` dimension holds the
-    seeds, and ``replicate_of_group`` gives each seed's replicate. ``stats`` holds the
-    stationary ``sigma_y``, ``sigma_ydot`` and ``g`` of the scene (one trigger level for
-    every series, docs/method.md §4.4).
+    seeds, and ``replicate_of_group`` gives each seed's replicate; otherwise the sums of
+    the series of each group label are pooled. ``sigma_y``, ``sigma_ydot`` (stationary, of
+    the run) and ``g`` set one trigger level and lag range for every series
+    (docs/method.md §4.4).
     """
-    sig = scene["signatures"]
     cube = signatures.signature_cube(
         theta,
-        sigma_y=stats["sigma_y"],
-        sigma_ydot=stats["sigma_ydot"],
-        level=sig["level"],
-        windows=sig["windows"],
-        window_max=sig["window_max"],
-        v_level=sig["v_level"],
-        dv_max=sig["dv_max"],
-        n_periods=sig["n_periods"],
-        g=stats["g"],
-        both_signs=sig["both_signs"],
+        sigma_y=sigma_y,
+        sigma_ydot=sigma_ydot,
+        level=settings["level"],
+        windows=settings["windows"],
+        window_max=settings["window_max"],
+        v_level=settings["v_level"],
+        dv_max=settings["dv_max"],
+        n_periods=settings["n_periods"],
+        g=g,
+        both_signs=settings["both_signs"],
         group=None if group is None else xr.DataArray(group, dims="seed", coords={"seed": theta["seed"]}),
     )
     dim = series_dim(cube)
     return cube.assign_coords(replicate=(dim, np.asarray(replicate_of_group), {"long_name": f"replicate of the {dim}"}))
 
 
-def replicate_estimates(cube: xr.Dataset, *, fit_points: int, weights: str = "window") -> xr.Dataset:
-    """Estimates per replicate and their zero-window extrapolation.
+def scene_cubes(run: Run, records: dict, settings: dict, readings, series_files=(), threads: int = 1) -> dict:
+    """The signature cube of every reading of ``readings``, from one pass over the series.
 
-    ``e_hat(estimator, replicate, window)``: every estimator on every group's signature,
-    averaged over the groups of a replicate (NaN-aware); ``e_hat0(estimator, replicate)``
-    and its standard error from :func:`rockdec.estimators.extrapolate`, weighted by the
-    window size (paper §5) or by the replicate's trigger count (``weights="count"``).
+    Every series is simulated from its seed under ``run`` (Dask over seeds, chunks of
+    ``records["chunk_seeds"]``) or, with ``series_files`` (the per-replicate files of
+    ``store_series: all``), read back; either way it is analysed as float32 stores it
+    (:func:`rockdec.series.as_recorded`), so both give the same cubes bit for bit. The
+    series are reduced at once to the sums of the pass's units (:func:`pass_units`), which
+    add up to each reading's groups. Computed on the engine of :mod:`rockdec.engine`
+    (``threads`` threads by default). Each cube's attributes hold the run
+    (:meth:`rockdec.run.Run.to_attrs`) and its ``reading``.
+    """
+    return variant_cubes(run, records, [settings], readings, series_files, threads)[0]
+
+
+def variant_cubes(run: Run, records: dict, variants, readings, series_files=(), threads: int = 1) -> list[dict]:
+    """:func:`scene_cubes` for several signature settings ``variants`` at once: one Dask
+    graph, so each series is simulated (or read) once for all of them."""
+    seeds = scene_seeds(records)
+    unit_of_seed, groups = pass_units(seeds, list(readings))
+    used = unit_of_seed >= 0
+    chunk_seeds = records["chunk_seeds"]
+    if len(series_files):
+        theta = series.stored_theta(series_files, seeds.ravel()[used], chunk_seeds)
+    else:
+        theta = series.as_recorded(run.dataset(seeds.ravel()[used], records["n_points"], chunk_seeds=chunk_seeds)["theta"])
+    n_units = int(unit_of_seed.max()) + 1
+    lazy = [
+        scene_signatures(
+            theta, settings, sigma_y=run.sigma_y, sigma_ydot=run.sigma_ydot, g=run.g,
+            group=unit_of_seed[used], replicate_of_group=np.zeros(n_units, dtype=np.int64),
+        )
+        for settings in variants
+    ]
+    out = []
+    for units in engine.compute(*lazy, threads=threads):
+        cubes = {}
+        for reading, (group_of_unit, replicate_of_group) in groups.items():
+            cube = signatures.pool(units, "group", by=group_of_unit)
+            cube = cube.assign_coords(replicate=("group", replicate_of_group, {"long_name": "replicate of the group"}))
+            cube.attrs.update({**run.to_attrs(), "reading": reading})
+            cubes[reading] = cube
+        out.append(cubes)
+    return out
+
+
+def replicate_curves(cube: xr.Dataset, *, fit_points: int) -> xr.Dataset:
+    """Every estimator on every signature of ``cube``, averaged per replicate: the window curves.
+
+    ``e_hat(estimator, replicate, window)``: NaN-aware mean over the groups (or series) of
+    a replicate; ``count(replicate, trigger, window)``: triggers pooled in the replicate.
     """
     dt = float(cube.attrs["dt"])
     per_group = estimators.estimate_cube(
@@ -105,8 +172,20 @@ def replicate_estimates(cube: xr.Dataset, *, fit_points: int, weights: str = "wi
     e_hat = per_group.groupby(cube["replicate"]).mean(dim, skipna=True)
     e_hat.attrs = per_group.attrs
     count = cube["count"].groupby(cube["replicate"]).sum(dim)
+    count.attrs = {"units": "1", "long_name": "triggers pooled in the replicate"}
+    return xr.Dataset({"e_hat": e_hat, "count": count}, attrs={"fit_points": fit_points, "dt": dt})
+
+
+def extrapolated(curves: xr.Dataset, weights: str = "window") -> xr.Dataset:
+    """The window curves of :func:`replicate_curves` extrapolated to zero window.
+
+    ``e_hat0(estimator, replicate)`` and its standard error from
+    :func:`rockdec.estimators.extrapolate`, weighted by the window size (paper §5) or by
+    the replicate's trigger count (``weights="count"``; ``e_v`` rests on the ``D_v``
+    triggers, every other estimator on the ``D_a`` triggers); the curves are kept.
+    """
+    e_hat, count = curves["e_hat"], curves["count"]
     if weights == "count":
-        # e_v rests on the D_v triggers, every other estimator on the D_a triggers
         w = xr.concat(
             [count.sel(trigger="v" if name == "e_v" else "a", drop=True) for name in e_hat["estimator"].values],
             dim=e_hat["estimator"],
@@ -115,63 +194,54 @@ def replicate_estimates(cube: xr.Dataset, *, fit_points: int, weights: str = "wi
     else:
         extrap = estimators.extrapolate(e_hat)
     out = extrap.assign(e_hat=e_hat, count=count)
-    out["count"].attrs = {"units": "1", "long_name": "triggers pooled in the replicate"}
-    out.attrs.update({"weights": weights, "fit_points": fit_points, "dt": dt})
+    out.attrs.update({**curves.attrs, "weights": weights})
     return out
 
 
-def reading_cube(simulation_attrs: dict, scene: dict, reading: str, series_files=()) -> xr.Dataset:
-    """Lazy signature cube of a reading, every series regenerated from its seed or read back.
+def replicate_estimates(cube: xr.Dataset, *, fit_points: int, weights: str = "window") -> xr.Dataset:
+    """Estimates per replicate and their zero-window extrapolation: :func:`extrapolated` of
+    :func:`replicate_curves`."""
+    return extrapolated(replicate_curves(cube, fit_points=fit_points), weights)
 
-    ``simulation_attrs`` are the global attributes of the scene's simulation file (step,
-    burn-in, stationary statistics); the series are simulated chunk by chunk (Dask over
-    seeds) and reduced to signature sums at once, so no full record is ever stored. With
-    ``series_files`` (the per-replicate files of ``store_series: all``) the series are read
-    from them instead; both ways give the same cube bit for bit (see :mod:`rockdec.series`).
+
+def scene_estimates(cube: xr.Dataset, options: dict) -> tuple[xr.Dataset, pd.DataFrame]:
+    """Rule `estimates`: the estimates of a signature cube, and its table beside the paper.
+
+    ``options`` is a scene's ``estimates`` section (``fit_points``, ``weights``); the true
+    ``e`` is the run's, from the cube's attributes, and is stored as ``e_target``. The table
+    adds the replicate mean and std of the other extrapolation weighting (window size or
+    trigger count, :func:`rockdec.tables.with_alternative`).
     """
-    used, group, replicate_of_group = grouping(simulate.scene_seeds(scene), reading)
-    chunk_seeds = scene["records"]["chunk_seeds"]
-    if len(series_files):
-        theta = series.stored_theta(series_files, used, chunk_seeds)
-    else:
-        theta = series.as_recorded(simulate.regenerate(simulation_attrs, used, chunk_seeds=chunk_seeds)["theta"])
-    cube = scene_signatures(theta, scene, simulation_attrs, group, replicate_of_group)
-    cube.attrs["reading"] = reading
-    return cube
-
-
-def estimate_options(scene: dict) -> dict:
-    """Keyword arguments of :func:`replicate_estimates` from a scene's ``estimates`` section."""
-    return {"fit_points": scene["estimates"]["fit_points"], "weights": scene["estimates"]["weights"]}
-
-
-def scene_estimates(cube: xr.Dataset, scene: dict) -> tuple[xr.Dataset, pd.DataFrame]:
-    """Rule `estimates`: the scene's estimates of a signature cube, and its table beside the paper.
-
-    The table adds the replicate mean and std of the other extrapolation weighting
-    (window size or trigger count, :func:`rockdec.tables.with_alternative`).
-    """
-    options = estimate_options(scene)
-    est = replicate_estimates(cube, **options)
+    curves = replicate_curves(cube, fit_points=options["fit_points"])
+    est = extrapolated(curves, options["weights"])
     other_weights = "count" if options["weights"] == "window" else "window"
-    alternative = replicate_estimates(cube, **{**options, "weights": other_weights})
-    e_target = scene["system"]["e"]
+    alternative = extrapolated(curves, other_weights)
+    e_target = float(cube.attrs["e"])
+    est.attrs["e_target"] = e_target
     table = tables.summary_table(est["e_hat0"], e_target)
     return est, tables.with_alternative(table, alternative["e_hat0"], f"{other_weights}_weights", e_target)
 
 
-def readings_estimates(own: xr.Dataset, other: xr.Dataset, scene: dict) -> tuple[xr.Dataset, pd.DataFrame]:
-    """Rule `table_readings`: the scene's own reading beside the other readings, and their table.
+def reading_curves(cubes: dict, fit_points: int) -> xr.Dataset:
+    """The window curves (:func:`replicate_curves`) of every reading's cube, along ``reading``
+    in the order of :data:`READINGS`; ``e_target`` from the run."""
+    names = [r for r in READINGS if r in cubes]
+    curves = xr.concat([replicate_curves(cubes[r], fit_points=fit_points) for r in names], dim=pd.Index(names, name="reading"))
+    curves.attrs["e_target"] = float(next(iter(cubes.values())).attrs["e"])
+    return curves
 
-    ``own`` holds the scene's estimates, ``other`` the ``e_hat0`` of the other readings
-    (dimension ``reading``); the result lists every reading of :data:`READINGS`, in
-    that order.
+
+def readings_estimates(curves: xr.Dataset, weights: str) -> tuple[xr.Dataset, pd.DataFrame]:
+    """Rule `table_readings`: every reading's estimates side by side, and their table.
+
+    ``curves`` from :func:`reading_curves`; the result holds ``e_hat0`` and its standard
+    error per reading, extrapolated with ``weights``.
     """
-    own_reading = own[["e_hat0", "e_hat0_stderr"]].expand_dims(reading=[scene["estimates"]["reading"]])
-    combined = xr.concat([own_reading, other], dim="reading").sel(reading=list(READINGS))
-    e_target = scene["system"]["e"]
+    e_target = float(curves.attrs["e_target"])
+    combined = extrapolated(curves, weights)[["e_hat0", "e_hat0_stderr"]]
+    combined.attrs = {"e_target": e_target}
     table = pd.concat(
-        [tables.summary_table(combined["e_hat0"].sel(reading=r), e_target).assign(reading=r) for r in READINGS],
+        [tables.summary_table(combined["e_hat0"].sel(reading=r), e_target).assign(reading=str(r)) for r in combined["reading"].values],
         ignore_index=True,
     )
     return combined, table[["reading"] + [c for c in table.columns if c != "reading"]]

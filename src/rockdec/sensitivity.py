@@ -9,13 +9,11 @@ between different records.
 
 from __future__ import annotations
 
-import copy
-
-import dask
 import pandas as pd
 import xarray as xr
 
 from rockdec import replicates, tables
+from rockdec.run import Run
 
 CHOICES = {
     "lag range 1.5 periods": ("n_periods", 1.5),
@@ -27,26 +25,26 @@ CHOICES = {
 """Variant name -> (signature setting, value); every other setting stays the scene's."""
 
 
-def variant_scenes(scene: dict) -> dict[str, dict]:
-    """The scene itself (``"as configured"``) and one copy per entry of :data:`CHOICES`."""
-    out = {"as configured": scene}
+def variant_settings(settings: dict) -> dict[str, dict]:
+    """A scene's signature settings as configured (``"as configured"``) and one copy per
+    entry of :data:`CHOICES`."""
+    out = {"as configured": settings}
     for name, (key, value) in CHOICES.items():
-        variant = copy.deepcopy(scene)
-        variant["signatures"][key] = value
-        out[name] = variant
+        out[name] = {**settings, key: value}
     return out
 
 
-def choice_estimates(simulation_attrs: dict, scene: dict, threads: int = 1, series_files=()) -> xr.Dataset:
-    """``e_hat0(choice, estimator, replicate)`` for every variant, from one simulation pass
-    (or one pass over ``series_files``, see :func:`rockdec.replicates.reading_cube`)."""
-    reading = scene["estimates"]["reading"]
-    variants = variant_scenes(scene)
-    cubes = [replicates.reading_cube(simulation_attrs, variant, reading, series_files) for variant in variants.values()]
-    with dask.config.set(scheduler="threads", num_workers=threads):
-        cubes = dask.compute(*cubes)
-    est = [replicates.replicate_estimates(cube, **replicates.estimate_options(scene))["e_hat0"] for cube in cubes]
-    return xr.concat(est, dim=pd.Index(list(variants), name="choice")).to_dataset(name="e_hat0")
+def choice_estimates(run: Run, records: dict, settings: dict, options: dict, threads: int = 1, series_files=()) -> xr.Dataset:
+    """``e_hat0(choice, estimator, replicate)`` for every variant of the signature
+    ``settings``, from one pass over the series (:func:`rockdec.replicates.variant_cubes`);
+    ``options`` is the scene's ``estimates`` section."""
+    reading = options["reading"]
+    variants = variant_settings(settings)
+    cubes = replicates.variant_cubes(run, records, list(variants.values()), [reading], series_files, threads)
+    est = [replicates.replicate_estimates(c[reading], fit_points=options["fit_points"], weights=options["weights"])["e_hat0"] for c in cubes]
+    out = xr.concat(est, dim=pd.Index(list(variants), name="choice")).to_dataset(name="e_hat0")
+    out.attrs["e_target"] = run.e
+    return out
 
 
 def choice_table(est: xr.Dataset, e_target: float) -> pd.DataFrame:

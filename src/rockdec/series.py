@@ -1,7 +1,7 @@
 """Every series of a scene on disk (``records.store_series: all``), and the series a signature sees.
 
-By default a scene's ``simulations.nc`` keeps ``store_series`` series and every rule that
-needs the others regenerates them from their seeds (:func:`rockdec.simulate.regenerate`).
+By default a scene's ``stored_series.nc`` keeps ``store_series`` series and every rule that
+needs the others regenerates them from their seeds (:meth:`rockdec.run.Run.dataset`).
 With ``store_series: all`` every series is also written, one file per replicate
 (``series/replicate_{r}.nc``: ``theta(seed, time)``, float32, zlib, one on-disk chunk per
 ``chunk_seeds`` seeds), and the signature rules read those files instead.
@@ -25,49 +25,26 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from rockdec import io, simulate
+from rockdec import io
+from rockdec.layout import scene_seeds
+from rockdec.run import Run
 
-FIGURE_SERIES = 10
-"""Series ``simulations.nc`` keeps when every series is stored apart: the pooling of fig. 2c."""
-
-
-def stores_all(scene: dict) -> bool:
-    """Whether the scene writes every series (``records.store_series: all``)."""
-    return scene["records"]["store_series"] == "all"
-
-
-def simulation_seeds(scene: dict) -> np.ndarray:
-    """Seeds whose series ``simulations.nc`` holds: the first ``store_series`` of the scene
-    (the first :data:`FIGURE_SERIES` with ``store_series: all``)."""
-    count = FIGURE_SERIES if stores_all(scene) else scene["records"]["store_series"]
-    return simulate.scene_seeds(scene).ravel()[:count]
-
-
-def replicate_files(folder: str | Path, scene: dict) -> list[Path]:
-    """Paths of the per-replicate series files under ``folder`` (none unless ``store_series: all``)."""
-    if not stores_all(scene):
-        return []
-    return [Path(folder) / "series" / f"replicate_{r}.nc" for r in range(scene["records"]["replicates"])]
-
-
-def replicate_dataset(simulation_attrs: dict, scene: dict, replicate: int) -> xr.Dataset:
+def replicate_dataset(run: Run, records: dict, replicate: int) -> xr.Dataset:
     """Lazy ``theta(seed, time)`` of every series of one replicate, as the scene simulates them.
 
-    ``simulation_attrs`` are the global attributes of the scene's ``simulations.nc``; the
-    file's attributes repeat them (so one file says how to regenerate its series) and add
-    the replicate number.
+    The file's attributes hold the run (:meth:`rockdec.run.Run.to_attrs`, so one file says
+    how to regenerate its series) and the replicate number.
     """
-    seeds = simulate.scene_seeds(scene)[replicate]
-    sim = simulate.regenerate(simulation_attrs, seeds, chunk_seeds=scene["records"]["chunk_seeds"])
-    ds = sim[["theta"]]
-    ds.attrs = {**simulation_attrs, **io.provenance("series", scene), "replicate": int(replicate)}
+    seeds = scene_seeds(records)[replicate]
+    ds = run.dataset(seeds, records["n_points"], chunk_seeds=records["chunk_seeds"])[["theta"]]
+    ds.attrs = {**run.to_attrs(), **io.provenance("series", records), "replicate": int(replicate)}
     return ds
 
 
-def write_replicate(simulation_attrs: dict, scene: dict, replicate: int, path: str | Path) -> Path:
+def write_replicate(run: Run, records: dict, replicate: int, path: str | Path) -> Path:
     """Simulate one replicate and write it: float32, compressed, chunked by ``chunk_seeds`` seeds."""
-    ds = replicate_dataset(simulation_attrs, scene, replicate)
-    return io.write_netcdf(ds, path, float32=("theta",), chunks={"seed": scene["records"]["chunk_seeds"]})
+    ds = replicate_dataset(run, records, replicate)
+    return io.write_netcdf(ds, path, float32=("theta",), chunks={"seed": records["chunk_seeds"]})
 
 
 def as_recorded(theta: xr.DataArray) -> xr.DataArray:
@@ -79,7 +56,7 @@ def stored_theta(paths, seeds, chunk_seeds: int) -> xr.DataArray:
     """Lazy float64 ``theta(seed, time)`` of ``seeds`` read from per-replicate series files.
 
     Cut into Dask chunks of ``chunk_seeds`` seeds over ``seeds``, as
-    :func:`rockdec.simulate.regenerate` cuts the same seeds, so reductions over seeds sum
+    :meth:`rockdec.run.Run.dataset` cuts the same seeds, so reductions over seeds sum
     in the same order either way. A seed that no file holds raises ``ValueError``.
     """
     paths = [Path(p) for p in paths]

@@ -480,13 +480,26 @@ def _finish(sums: xr.Dataset) -> xr.Dataset:
     return out.assign_coords(lag_pos=("lag_pos", sums["lag"].values[n_lag:], {"units": "s", "long_name": "time lag tau >= 0"}))
 
 
-def pool(ds: xr.Dataset, dim) -> xr.Dataset:
+def pool(ds: xr.Dataset, dim, by=None) -> xr.Dataset:
     """Pool a signature cube over ``dim`` (a name or a list): sum of sums / sum of counts.
 
     Exact: the pooled signature is the mean over the union of the triggers of the pooled
     series (docs/method.md §4.4). NaN (with a :class:`NoTriggerWarning`) where the pooled count is 0.
+    ``by`` (integer labels along the one dimension ``dim``, NumPy) pools within each label
+    instead: the result has a ``group`` dimension, one per label >= 0 in ascending order;
+    entries labelled -1 are left out.
     """
-    summed = ds[list(_SUM_VARS)].sum(dim, keep_attrs=True)
+    sums = ds[list(_SUM_VARS)]
+    if by is None:
+        return _finish(sums.sum(dim, keep_attrs=True))
+    by = np.asarray(by)
+    keep = by >= 0
+    sums = sums.isel({dim: keep})
+    sums = sums.drop_vars([name for name, c in sums.coords.items() if dim in c.dims]).rename({dim: "pooled_unit"})
+    labels = xr.DataArray(by[keep], dims="pooled_unit", name="group", attrs={"long_name": "group of series pooled into one signature"})
+    summed = sums.groupby(labels).sum(keep_attrs=True)
+    summed["group"].attrs["long_name"] = "group of series pooled into one signature"
+    summed.attrs = ds.attrs
     return _finish(summed)
 
 

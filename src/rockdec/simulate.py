@@ -27,7 +27,6 @@ Kernels take and return NumPy arrays; :func:`simulate_dataset` adds labels and D
 from __future__ import annotations
 
 import math
-import warnings
 
 import dask.array as da
 import numba
@@ -35,11 +34,10 @@ import numpy as np
 import xarray as xr
 
 from rockdec.fixed_step import step as grid_step
-from rockdec.housner import choose_model, simulate_block_housner
-from rockdec.io import provenance
+from rockdec.housner import simulate_block_housner
 from rockdec.loading import draw_impulses, series_rng
 from rockdec import validate as checks
-from rockdec.models import check_finite_series, check_run, period_from_g, restoring_acceleration
+from rockdec.models import check_finite_series, check_run, period_from_g, scale_constant, step_for_density
 
 #: Largest number of correction steps when the closed-form flight count is off by rounding.
 _COUNT_FIX = 4
@@ -236,11 +234,10 @@ def calibrate_dt(
 ) -> dict:
     """Time step giving ``points_per_cycle`` samples per cycle at amplitude ``sigma_Y`` (eq. 5).
 
-    The only scales are ``g`` and the noise intensity ``S = sigma_p^2/dt``, so
-    ``sigma_Y = c S^2/g^3`` with ``c`` a number that depends on ``e`` and, weakly, on the
-    sampling. Setting ``T(sigma_Y) = 4 sqrt(2 sigma_Y/g) = N dt`` gives the fixed point
-    ``dt = (sigma_p/g) sqrt(4 sqrt(2 c)/N)``; ``c`` is measured by pilot runs (seeds of
-    their own, burn-in discarded) and the step updated ``iterations`` times. The response
+    Under the scale law ``sigma_Y = c S^2/g^3`` (:func:`rockdec.models.scale_constant`)
+    the step is :func:`rockdec.models.step_for_density` of ``c``; ``c`` is measured by
+    pilot runs (seeds of their own, burn-in discarded) and the step updated
+    ``iterations`` times. The response
     is heavy-tailed (kurtosis near 15), so the pilot is large: 256 x 40000 points pins
     ``sigma_Y`` to about 2 %.
 
@@ -266,7 +263,7 @@ def calibrate_dt(
         raise checks.InputError("time-step calibration needs noise: sigma_p must be > 0 (or give --dt)")
     burn_in = default_burn_in(e, points_per_cycle)
     seeds = np.arange(pilot_seeds) + PILOT_SEED_OFFSET
-    dt = sigma_p / g * math.sqrt(4.0 * math.sqrt(2.0 * 290.0) / points_per_cycle)  # c is near 290 at e = 0.95
+    dt = step_for_density(290.0, sigma_p, g, points_per_cycle)  # c is near 290 at e = 0.95
     outside = checks.InputError(
         f"the time-step calibration at g = {g}, sigma_p = {sigma_p} leaves the floating-point range; "
         "give the time step explicitly (--dt)"
@@ -280,8 +277,8 @@ def calibrate_dt(
         if i < iterations - 1:
             try:
                 if pole == 0.0:
-                    c = stats["sigma_y"] * dt**2 * g**3 / sigma_p**4
-                    dt = sigma_p / g * math.sqrt(4.0 * math.sqrt(2.0 * c) / points_per_cycle)
+                    c = scale_constant(stats["sigma_y"], dt, g, sigma_p)
+                    dt = step_for_density(c, sigma_p, g, points_per_cycle)
                 else:
                     dt = _secant_step(history, dt, stats["points_per_cycle"], points_per_cycle)
             except (OverflowError, ZeroDivisionError):  # float ** raises where * gives inf
@@ -307,12 +304,16 @@ def _secant_step(history: list, dt: float, achieved: float, target: float) -> fl
     return dt * (achieved / target) ** (1.0 / k)
 
 
-def pilot_statistics(theta: np.ndarray, dt: float, g: float) -> dict:
-    """Stationary statistics of simulated series ``theta(seed, time)``: ``sigma_y``,
-    ``sigma_ydot`` (of ``diff(theta)/dt``) and samples per cycle at ``sigma_y`` (eq. 5)."""
-    sigma_y = float(np.sqrt(np.mean(theta**2)))
-    sigma_ydot = float(np.sqrt(np.mean((np.diff(theta, axis=-1) / dt) ** 2)))
-    return {"sigma_y": sigma_y, "sigma_ydot": sigma_ydot, "points_per_cycle": float(period_from_g(sigma_y, g) / dt)}
+def pilot_statistics(theta: np.ndarray, dt: float, g: float | None = None) -> dict:
+    """Stationary statistics of series ``theta(seed, time)``: ``sigma_y``, ``sigma_ydot`` (of
+    ``diff(theta)/dt``) and, given ``g``, samples per cycle at ``sigma_y`` (eq. 5); NaN
+    samples left out."""
+    sigma_y = float(np.sqrt(np.nanmean(theta**2)))
+    sigma_ydot = float(np.sqrt(np.nanmean((np.diff(theta, axis=-1) / dt) ** 2)))
+    out = {"sigma_y": sigma_y, "sigma_ydot": sigma_ydot}
+    if g is not None:
+        out["points_per_cycle"] = float(period_from_g(sigma_y, g) / dt)
+    return out
 
 
 def simulation_dataset(
@@ -392,131 +393,6 @@ def simulation_dataset(
         {"model": model, "dt": dt, "g": g, "e": e, "sigma_p": sigma_p, "burn_in": burn_in, "theta0": theta0, "theta_dot0": theta_dot0}
     )
     return ds
-
-
-def scene_seeds(scene: dict) -> np.ndarray:
-    """Seeds of a scene as ``(replicate, series)``: consecutive integers from ``first_seed``."""
-    rec = scene["records"]
-    n = rec["replicates"] * rec["series_per_replicate"]
-    return (rec["first_seed"] + np.arange(n, dtype=np.int64)).reshape(rec["replicates"], rec["series_per_replicate"])
-
-
-def scene_parameters(scene: dict, amplitude: float = 0.0) -> dict:
-    """Everything needed to simulate a scene: the system, and the step from calibration.
-
-    ``dt`` comes from the scene or from :func:`calibrate_dt`; the burn-in from the scene or
-    :func:`default_burn_in`. Stationary statistics are measured by a pilot at that step.
-    Refuses ``e`` so close to 1 that the default burn-in would exceed
-    :data:`MAX_DEFAULT_BURN_IN` steps. Without noise (``sigma_p = 0``, a free response) there is no ``sigma_Y``: the step then
-    gives ``points_per_cycle`` samples per cycle at ``amplitude`` (eq. 5), no burn-in.
-    """
-    system, exc = scene["system"], scene["excitation"]
-    g = restoring_acceleration(system["nu"], system["theta_cr"])
-    e, sigma_p = system["e"], exc["sigma_p"]
-    if sigma_p == 0.0:
-        if exc["dt"] is None and amplitude <= 0.0:
-            raise checks.InputError("a free response (sigma_p = 0) needs --theta0 > 0 to set the step, or --dt")
-        dt = exc["dt"] if exc["dt"] is not None else float(period_from_g(abs(amplitude), g)) / exc["points_per_cycle"]
-        nan = float("nan")
-        cal = {"dt": dt, "burn_in": 0, "sigma_y": nan, "sigma_ydot": nan, "points_per_cycle": nan}
-    elif exc["dt"] is None:
-        cal = calibrate_dt(e=e, g=g, sigma_p=sigma_p, points_per_cycle=exc["points_per_cycle"])
-    else:
-        burn_in = exc["burn_in"] if exc["burn_in"] is not None else default_burn_in(e, exc["points_per_cycle"])
-        theta, _ = simulate_block(np.arange(64) + PILOT_SEED_OFFSET, 40_000, dt=exc["dt"], g=g, e=e, sigma_p=sigma_p, burn_in=burn_in)
-        cal = {"dt": exc["dt"], "burn_in": burn_in, **pilot_statistics(theta, exc["dt"], g)}
-    if exc["burn_in"] is not None:
-        cal["burn_in"] = exc["burn_in"]
-    model, reason = _model_for(scene["model"], cal["sigma_y"], system["theta_cr"])
-    if model == "housner" and sigma_p > 0.0:
-        # the trigger level and sampling follow the model that runs: re-measure the pilot
-        theta, _, _ = simulate_block_housner(
-            np.arange(64) + PILOT_SEED_OFFSET, 40_000, dt=cal["dt"], nu=system["nu"], theta_cr=system["theta_cr"],
-            e=e, sigma_p=sigma_p, burn_in=cal["burn_in"],
-        )
-        standing = np.all(np.isfinite(theta), axis=1)
-        if standing.mean() < 0.5:
-            raise checks.InputError(
-                f"the block overturns in {1 - standing.mean():.0%} of the pilot series (3 sigma_Y/theta_cr = "
-                f"{3 * cal['sigma_y'] / system['theta_cr']:.2g}): no stationary rocking exists; lower sigma_p"
-            )
-        cal.update(pilot_statistics(theta[standing], cal["dt"], g))
-    return {
-        "model": model,
-        "model_reason": reason,
-        "e": e,
-        "nu": system["nu"],
-        "theta_cr": system["theta_cr"],
-        "g": g,
-        "sigma_p": sigma_p,
-        "points_per_cycle_target": exc["points_per_cycle"],
-        **cal,
-    }
-
-
-def _model_for(requested: str, sigma_y: float, theta_cr: float) -> tuple[str, str]:
-    """The model a scene runs, and why: as requested, or for ``auto`` by the amplitude.
-
-    ``auto`` judges the amplitude by ``3 sigma_Y / theta_cr`` (the response is heavy-tailed:
-    peaks of 3 sigma_Y are common) with :func:`rockdec.housner.choose_model`: the
-    simplified model while the periods of eqs. 3 and 5 agree within 2 %, Housner beyond.
-    A requested model is kept, with a warning in ``reason`` when it leaves its validity.
-    """
-    ratio = 3.0 * sigma_y / theta_cr if np.isfinite(sigma_y) else 0.0
-    chosen, why = choose_model(ratio)
-    if requested == "auto":
-        return chosen, f"auto: {why}"
-    if requested == "simplified" and chosen == "housner":
-        warnings.warn(f"the simplified model is outside its validity region: {why}", RuntimeWarning, stacklevel=3)
-        return requested, f"requested; outside its validity: {why}"
-    return requested, "requested"
-
-
-def scene_dataset(scene: dict, params: dict, seeds, theta0: float = 0.0, theta_dot0: float = 0.0) -> xr.Dataset:
-    """The lazy simulation Dataset of ``seeds`` for a scene, with the attributes of docs/method.md §11.
-
-    The attributes hold everything needed to regenerate any other seed of the scene bit
-    for bit (see :func:`regenerate`).
-    """
-    ds = simulation_dataset(
-        seeds,
-        scene["records"]["n_points"],
-        dt=params["dt"],
-        g=params["g"],
-        e=params["e"],
-        sigma_p=params["sigma_p"],
-        theta0=theta0,
-        theta_dot0=theta_dot0,
-        burn_in=params["burn_in"],
-        chunk_seeds=scene["records"]["chunk_seeds"],
-        model=params["model"],
-        theta_cr=params["theta_cr"],
-    )
-    ds.attrs.update({k: v for k, v in params.items()})
-    ds.attrs["n_points"] = scene["records"]["n_points"]
-    ds.attrs.update(provenance("simulate", scene))
-    return ds
-
-
-def regenerate(attrs: dict, seeds, chunk_seeds: int = 100) -> xr.Dataset:
-    """Series of any ``seeds`` simulated as the run described by ``attrs`` simulated its own.
-
-    ``attrs`` are the global attributes of a simulation file written by :func:`scene_dataset`.
-    """
-    return simulation_dataset(
-        seeds,
-        int(attrs["n_points"]),
-        dt=float(attrs["dt"]),
-        g=float(attrs["g"]),
-        e=float(attrs["e"]),
-        sigma_p=float(attrs["sigma_p"]),
-        theta0=float(attrs["theta0"]),
-        theta_dot0=float(attrs["theta_dot0"]),
-        burn_in=int(attrs["burn_in"]),
-        chunk_seeds=chunk_seeds,
-        model=str(attrs.get("model", "simplified")),
-        theta_cr=float(attrs["theta_cr"]) if "theta_cr" in attrs else None,
-    )
 
 
 def long_series(seed: int, n_points: int, chunk: int, *, dt, g, e, sigma_p, theta0=0.0, theta_dot0=0.0, burn_in=0):

@@ -51,18 +51,19 @@ share a simulation also share its series. Moving one knob at a time cannot find 
 from __future__ import annotations
 
 import copy
+import dataclasses
 import json
 import math
 import time
 import warnings
 from concurrent.futures import ThreadPoolExecutor
 
-import dask
 import numpy as np
 import pandas as pd
 import xarray as xr
 
 from rockdec import fixed_step, replicates, simulate
+from rockdec.run import Run
 from rockdec.models import restoring_acceleration
 
 KNOBS = {
@@ -193,31 +194,35 @@ def variant_scene(scene: dict, settings: dict) -> dict:
 
 
 def _calibrate(scene: dict, points_per_cycle: float, simulators: set, pilot: dict) -> dict:
-    """Step, burn-in and stationary statistics at one density, per simulator; CPU s of this thread."""
+    """The run at one density, per simulator (:class:`rockdec.run.Run`), and the CPU s of
+    this thread: ``{simulator: (run, cpu_s)}``."""
     start = time.thread_time()
     system, exc = scene["system"], scene["excitation"]
     g = restoring_acceleration(system["nu"], system["theta_cr"])
     e, sigma_p = system["e"], exc["sigma_p"]
     cal = simulate.calibrate_dt(e=e, g=g, sigma_p=sigma_p, points_per_cycle=points_per_cycle, **pilot)
-    out = {"exact": {**cal, "g": g}}
+    exact = Run(
+        model="simplified", e=e, nu=system["nu"], theta_cr=system["theta_cr"], sigma_p=sigma_p, dt=cal["dt"],
+        burn_in=cal["burn_in"], sigma_y=cal["sigma_y"], sigma_ydot=cal["sigma_ydot"],
+        points_per_cycle=cal["points_per_cycle"], points_per_cycle_target=float(points_per_cycle),
+    )
+    out = {"exact": exact}
     if fixed_step.KIND in simulators:
         seeds = np.arange(min(FIXED_STEP_PILOT_SEEDS, pilot["pilot_seeds"])) + simulate.PILOT_SEED_OFFSET
         theta, _ = simulate.simulate_block(
             seeds, pilot["pilot_points"], dt=cal["dt"], g=g, e=e, sigma_p=sigma_p, burn_in=cal["burn_in"], grid_impacts=True
         )
-        out[fixed_step.KIND] = {"dt": cal["dt"], "burn_in": cal["burn_in"], "g": g, **simulate.pilot_statistics(theta, cal["dt"], g)}
+        out[fixed_step.KIND] = dataclasses.replace(exact, model="fixed_step", **simulate.pilot_statistics(theta, cal["dt"], g))
     cpu = time.thread_time() - start
-    for entry in out.values():
-        entry["calibration_cpu_s"] = cpu
-    return out
+    return {kind: (entry, cpu) for kind, entry in out.items()}
 
 
 def calibrations(scene: dict, settings: list[dict], threads: int = 1, pilot: dict | None = None) -> dict:
     """Calibration of every density the configurations use, computed once each.
 
-    Returns ``{(points_per_cycle, simulator): {"dt", "burn_in", "g", "sigma_y",
-    "sigma_ydot", "points_per_cycle", "calibration_cpu_s"}}``; the densities run in
-    ``threads`` threads (the kernels release the GIL).
+    Returns ``{(points_per_cycle, simulator): (run, calibration_cpu_s)}``
+    (:class:`rockdec.run.Run`); the densities run in ``threads`` threads (the kernels
+    release the GIL).
     """
     pilot = PILOT if pilot is None else pilot
     wanted: dict[float, set] = {}
@@ -233,32 +238,19 @@ def calibrations(scene: dict, settings: list[dict], threads: int = 1, pilot: dic
 # --------------------------------------------------------------------------- one configuration
 
 
-def configuration_estimates(scene: dict, settings: dict, calibration: dict, threads: int = 1) -> tuple[xr.DataArray, float, float]:
+def configuration_estimates(scene: dict, settings: dict, contract: Run, threads: int = 1) -> tuple[xr.DataArray, float, float]:
     """Run one configuration end to end; returns ``(e_hat0(estimator, replicate), cpu_s, wall_s)``.
 
-    ``calibration`` is the entry of :func:`calibrations` for its density and simulator.
-    Timed: graph construction, simulation, signatures (Dask, ``threads`` threads),
+    ``contract`` is the run of :func:`calibrations` for its density and simulator. Timed:
+    graph construction, simulation, signatures (Dask threads: the cost is CPU seconds of
+    this process, so the study stays on threads whatever :mod:`rockdec.engine` says),
     estimates and extrapolation.
     """
     start_cpu, start_wall = time.process_time(), time.perf_counter()
     variant = variant_scene(scene, settings)
-    rec = variant["records"]
-    used, group, replicate_of_group = replicates.grouping(simulate.scene_seeds(variant), variant["estimates"]["reading"])
-    sim = simulate.simulation_dataset(
-        used,
-        rec["n_points"],
-        dt=calibration["dt"],
-        g=calibration["g"],
-        e=variant["system"]["e"],
-        sigma_p=variant["excitation"]["sigma_p"],
-        burn_in=calibration["burn_in"],
-        chunk_seeds=rec["chunk_seeds"],
-        model="fixed_step" if settings["simulator"] == fixed_step.KIND else "simplified",
-    )
-    cube = replicates.scene_signatures(sim["theta"], variant, calibration, group, replicate_of_group)
-    with dask.config.set(scheduler="threads", num_workers=threads):
-        cube = cube.compute()
-    e_hat0 = replicates.replicate_estimates(cube, **replicates.estimate_options(variant))["e_hat0"]
+    reading, options = variant["estimates"]["reading"], variant["estimates"]
+    cube = replicates.scene_cubes(contract, variant["records"], variant["signatures"], [reading], threads=threads)[reading]
+    e_hat0 = replicates.replicate_estimates(cube, fit_points=options["fit_points"], weights=options["weights"])["e_hat0"]
     return e_hat0, time.process_time() - start_cpu, time.perf_counter() - start_wall
 
 
@@ -268,10 +260,10 @@ def _warm_up(scene: dict, calibration: dict, simulators: set) -> None:
     small["records"].update(replicates=1, series_per_replicate=2, n_points=2000, chunk_seeds=2)
     for kind in simulators:
         settings = {**base_settings(small), "simulator": kind}
-        cal = next(entry for (_, k), entry in calibration.items() if k == kind)
+        contract = next(entry for (_, k), (entry, _) in calibration.items() if k == kind)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            configuration_estimates(small, settings, cal)
+            configuration_estimates(small, settings, contract)
 
 
 # --------------------------------------------------------------------------- the study
@@ -309,10 +301,11 @@ def run_study(
     _warm_up(scene, cal, {s["simulator"] for s in unique.values()})
     results = {}
     for key, settings in unique.items():
-        results[key] = configuration_estimates(scene, settings, cal[(settings["points_per_cycle"], settings["simulator"])], threads)
+        results[key] = configuration_estimates(scene, settings, cal[(settings["points_per_cycle"], settings["simulator"])][0], threads)
         say(f"{settings}: {results[key][1]:.2f} CPU s, {results[key][2]:.2f} s wall")
     rows = [results[_key(s)] for _, _, s in configs]
     cals = [cal[(s["points_per_cycle"], s["simulator"])] for _, _, s in configs]
+    runs, cal_cpu = [c[0] for c in cals], [c[1] for c in cals]
     variants = [variant_scene(scene, s) for _, _, s in configs]
     e_hat0 = xr.concat([r[0] for r in rows], dim="config")
     e_hat0.attrs = {"units": "1", "long_name": "estimate of e extrapolated to zero window, per replicate"}
@@ -326,14 +319,14 @@ def run_study(
             "cpu_s": per_config([r[1] for r in rows], "s", "CPU time of the configuration (all threads)"),
             "wall_s": per_config([r[2] for r in rows], "s", "wall-clock time of the configuration"),
             "calibration_cpu_s": per_config(
-                [c["calibration_cpu_s"] for c in cals], "s", "CPU time of the one-off step calibration at this density"
+                cal_cpu, "s", "CPU time of the one-off step calibration at this density"
             ),
-            "dt": per_config([c["dt"] for c in cals], "s", "time step"),
-            "burn_in": per_config([c["burn_in"] for c in cals], "1", "steps discarded before recording", dtype=np.int64),
-            "sigma_y": per_config([c["sigma_y"] for c in cals], "rad", "stationary response standard deviation (pilot)"),
-            "sigma_ydot": per_config([c["sigma_ydot"] for c in cals], "rad s-1", "std of the sampled slope (pilot)"),
+            "dt": per_config([r.dt for r in runs], "s", "time step"),
+            "burn_in": per_config([r.burn_in for r in runs], "1", "steps discarded before recording", dtype=np.int64),
+            "sigma_y": per_config([r.sigma_y for r in runs], "rad", "stationary response standard deviation (pilot)"),
+            "sigma_ydot": per_config([r.sigma_ydot for r in runs], "rad s-1", "std of the sampled slope (pilot)"),
             "points_per_cycle_at_sigma_y": per_config(
-                [c["points_per_cycle"] for c in cals], "1", "achieved samples per cycle at sigma_Y of the simulator used (eq. 5)"
+                [r.points_per_cycle for r in runs], "1", "achieved samples per cycle at sigma_Y of the simulator used (eq. 5)"
             ),
         },
         coords={

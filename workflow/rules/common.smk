@@ -3,7 +3,7 @@ import sys
 from importlib.util import find_spec
 
 from rockdec import config as rockdec_config
-from rockdec import series as rockdec_series
+from rockdec import layout
 
 # Name the file the user passed (--configfile), not always the default one; one sentence, exit code 2.
 try:
@@ -25,29 +25,53 @@ def scene(name):
     return config["scenes"][name]
 
 
+# What each rule reads of a scene: a rule receives only its own settings as params, so
+# editing another setting (or a description) reruns nothing of it.
+def physics(name):
+    """What rule `calibrate` reads: the model, the system and the excitation."""
+    return {key: scene(name)[key] for key in ("model", "system", "excitation")}
+
+
+def records(name):
+    """The scene's records: seeds, sizes and chunks."""
+    return scene(name)["records"]
+
+
+def signature_settings(name):
+    """What the signature pass reads: its settings, the readings it serves and the fits
+    of their window curves."""
+    est = scene(name)["estimates"]
+    return {"signatures": scene(name)["signatures"], "readings": layout.compared_readings(est), "fit_points": est["fit_points"]}
+
+
+def estimate_options(name):
+    """What rule `estimates` reads: the fits and the extrapolation weights."""
+    return {key: scene(name)["estimates"][key] for key in ("fit_points", "weights")}
+
+
 def figure_names(name):
     """The figures scene ``name`` can draw: fig. 2 needs at least one stored series."""
-    figures = ["fig1b", "fig2", "fig3", "fig4", "fig_ev"]
-    if rockdec_series.simulation_seeds(scene(name)).size < 1:
+    figures = list(layout.FIGURES)
+    if layout.simulation_seeds(records(name)).size < 1:
         figures.remove("fig2")
     return figures
 
 
 def series_files(name):
     """The per-replicate series files of scene ``name`` (none unless `store_series: all`)."""
-    return [str(path) for path in rockdec_series.replicate_files(f"results/{name}", scene(name))]
+    return [str(path) for path in layout.replicate_files(f"results/{name}", records(name))]
 
 
 def archive_files(name):
-    """What the archive of scene ``name`` holds: every NetCDF its tables and figures are made
-    from, and the tables; each with the rule that writes it (under results/{name}/)."""
-    files = {"simulations.nc": "simulate"}
-    files.update({str(path): "series" for path in rockdec_series.replicate_files("", scene(name))})
-    files.update({"signatures.nc": "signatures", "estimates.nc": "estimates", "table.csv": "estimates", "table.md": "estimates"})
+    """What the archive of scene ``name`` holds: the run, every NetCDF its tables and figures
+    are made from, and the tables; each with the rule that writes it (under results/{name}/)."""
+    files = {"run.json": "calibrate", "stored_series.nc": "stored_series"}
+    files.update({str(path): "series" for path in layout.replicate_files("", records(name))})
+    files.update({"signatures.nc": "signatures", "readings.nc": "signatures"})
+    files.update({"estimates.nc": "estimates", "table.csv": "estimates", "table.md": "estimates"})
     if "fig2" in figure_names(name):
         files["stored_signature.nc"] = "stored_signature"
     if scene(name)["estimates"]["compare_readings"]:
-        files["estimates_other_readings.nc"] = "readings"
         files.update({f: "table_readings" for f in ("estimates_readings.nc", "table_readings.csv", "table_readings.md")})
     return files
 

@@ -12,34 +12,15 @@ rule estimates:
         "results/{scene}/benchmarks/estimates.tsv"
     threads: 1
     params:
-        scene=lambda w: scene(w.scene),
+        options=lambda w: estimate_options(w.scene),
     script:
         "../scripts/estimates.py"
-
-
-rule readings:
-    """The other readings of the paper's sizes, end to end in memory (runs beside `signatures`)."""
-    input:
-        sim="results/{scene}/simulations.nc",
-        series=lambda w: series_files(w.scene),
-    output:
-        "results/{scene}/estimates_other_readings.nc",
-    log:
-        "results/{scene}/logs/readings.log",
-    benchmark:
-        "results/{scene}/benchmarks/readings.tsv"
-    threads: 1  # its cost is the GIL-bound fits of eq. 27; one core leaves the other to `signatures`
-    params:
-        scene=lambda w: scene(w.scene),
-    script:
-        "../scripts/readings.py"
 
 
 rule table_readings:
     """Every reading side by side: the scene's own estimates beside the other readings'."""
     input:
-        own="results/{scene}/estimates.nc",
-        other="results/{scene}/estimates_other_readings.nc",
+        "results/{scene}/readings.nc",
     output:
         estimates="results/{scene}/estimates_readings.nc",
         csv=report("results/{scene}/table_readings.csv", category="Tables", caption="../report/table_readings.rst"),
@@ -50,7 +31,7 @@ rule table_readings:
         "results/{scene}/benchmarks/table_readings.tsv"
     threads: 1
     params:
-        scene=lambda w: scene(w.scene),
+        weights=lambda w: scene(w.scene)["estimates"]["weights"],
     script:
         "../scripts/table_readings.py"
 
@@ -58,7 +39,7 @@ rule table_readings:
 rule choices:
     """One unstated choice at a time (lag range, mirrored triggers, level): what moves which estimator."""
     input:
-        sim="results/{scene}/simulations.nc",
+        run="results/{scene}/run.json",
         series=lambda w: series_files(w.scene),
     output:
         estimates="results/{scene}/estimates_choices.nc",
@@ -70,6 +51,8 @@ rule choices:
         "results/{scene}/benchmarks/choices.tsv"
     threads: 2
     params:
-        scene=lambda w: scene(w.scene),
+        records=lambda w: records(w.scene),
+        signatures=lambda w: scene(w.scene)["signatures"],
+        estimates=lambda w: scene(w.scene)["estimates"],
     script:
         "../scripts/choices.py"

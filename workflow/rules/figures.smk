@@ -4,7 +4,7 @@
 rule stored_signature:
     """Signature cube of the stored series pooled into one group (the estimate of fig. 2c)."""
     input:
-        "results/{scene}/simulations.nc",
+        "results/{scene}/stored_series.nc",
     output:
         "results/{scene}/stored_signature.nc",
     log:
@@ -13,7 +13,7 @@ rule stored_signature:
         "results/{scene}/benchmarks/stored_signature.tsv"
     threads: 1
     params:
-        scene=lambda w: scene(w.scene),
+        signatures=lambda w: scene(w.scene)["signatures"],
     script:
         "../scripts/stored_signature.py"
 
@@ -37,7 +37,7 @@ rule fig2:
     """Paper fig. 2: two simulated responses and the free-response estimate of the stored series."""
     input:
         code=FIGURES_CODE,
-        sim="results/{scene}/simulations.nc",
+        sim="results/{scene}/stored_series.nc",
         sig="results/{scene}/stored_signature.nc",
     output:
         **figure_outputs("fig2"),
@@ -62,8 +62,6 @@ rule fig3:
     benchmark:
         "results/{scene}/benchmarks/fig3.tsv"
     threads: 1
-    params:
-        e=lambda w: scene(w.scene)["system"]["e"],
     script:
         "../scripts/fig_3.py"
 
@@ -80,8 +78,6 @@ rule fig4:
     benchmark:
         "results/{scene}/benchmarks/fig4.tsv"
     threads: 1
-    params:
-        e=lambda w: scene(w.scene)["system"]["e"],
     script:
         "../scripts/fig_4.py"
 
@@ -99,7 +95,5 @@ rule fig_ev:
     benchmark:
         "results/{scene}/benchmarks/fig_ev.tsv"
     threads: 1
-    params:
-        e=lambda w: scene(w.scene)["system"]["e"],
     script:
         "../scripts/fig_ev.py"

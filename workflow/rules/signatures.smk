@@ -1,17 +1,19 @@
 rule signatures:
-    """RDD signature cube of every series of the scene, pooled per group of its reading."""
+    """One pass over every series: the signature cube of the scene's reading, and the window
+    curves of every reading it compares (signature sums pool exactly by adding)."""
     input:
-        sim="results/{scene}/simulations.nc",
+        run="results/{scene}/run.json",
         series=lambda w: series_files(w.scene),
     output:
-        "results/{scene}/signatures.nc",
+        cube="results/{scene}/signatures.nc",
+        readings="results/{scene}/readings.nc",
     log:
         "results/{scene}/logs/signatures.log",
     benchmark:
         "results/{scene}/benchmarks/signatures.tsv"
-    threads: 1  # runs beside `readings`: one core each is the better schedule on 2 cores
+    threads: 2
     params:
-        scene=lambda w: scene(w.scene),
-        reading=lambda w: scene(w.scene)["estimates"]["reading"],
+        records=lambda w: records(w.scene),
+        settings=lambda w: signature_settings(w.scene),
     script:
         "../scripts/signatures.py"

@@ -1,22 +1,40 @@
-rule simulate:
-    """Calibrate the step and write the scene's stored series with its full provenance."""
+rule calibrate:
+    """The run contract of the scene: model, step and burn-in from pilot simulations, and the
+    stationary statistics that set every trigger level."""
     output:
-        "results/{scene}/simulations.nc",
+        "results/{scene}/run.json",
     log:
-        "results/{scene}/logs/simulate.log",
+        "results/{scene}/logs/calibrate.log",
     benchmark:
-        "results/{scene}/benchmarks/simulate.tsv"
-    threads: 2
+        "results/{scene}/benchmarks/calibrate.tsv"
+    threads: 1
     params:
-        scene=lambda w: scene(w.scene),
+        physics=lambda w: physics(w.scene),
     script:
-        "../scripts/simulate.py"
+        "../scripts/calibrate.py"
+
+
+rule stored_series:
+    """The series the scene keeps (fig. 2), simulated under its run."""
+    input:
+        "results/{scene}/run.json",
+    output:
+        "results/{scene}/stored_series.nc",
+    log:
+        "results/{scene}/logs/stored_series.log",
+    benchmark:
+        "results/{scene}/benchmarks/stored_series.tsv"
+    threads: 1
+    params:
+        records=lambda w: records(w.scene),
+    script:
+        "../scripts/stored_series.py"
 
 
 rule series:
     """Every series of one replicate (scenes with `store_series: all`): float32, chunked by seed."""
     input:
-        "results/{scene}/simulations.nc",
+        "results/{scene}/run.json",
     output:
         "results/{scene}/series/replicate_{replicate}.nc",
     log:
@@ -25,6 +43,6 @@ rule series:
         "results/{scene}/benchmarks/series_{replicate}.tsv"
     threads: 1
     params:
-        scene=lambda w: scene(w.scene),
+        records=lambda w: records(w.scene),
     script:
         "../scripts/series.py"

@@ -3,13 +3,13 @@
 import sys
 
 from rockdec import io, sensitivity, tables
+from rockdec.run import Run
 
 sys.stderr = open(snakemake.log[0], "w")
-scene = snakemake.params.scene
-with io.open_dataset(snakemake.input.sim) as sim:
-    attrs = dict(sim.attrs)
-est = sensitivity.choice_estimates(attrs, scene, threads=snakemake.threads, series_files=snakemake.input.series)
+est = sensitivity.choice_estimates(
+    Run.read(snakemake.input.run), snakemake.params.records, snakemake.params.signatures, snakemake.params.estimates,
+    threads=snakemake.threads, series_files=snakemake.input.series,
+)
 est.attrs.update(io.provenance("choices", {"choices": {k: list(v) for k, v in sensitivity.CHOICES.items()}}, inputs=snakemake.input))
 io.write_netcdf(est, snakemake.output.estimates)
-table = sensitivity.choice_table(est, scene["system"]["e"])
-tables.write_table(table, snakemake.output.csv, snakemake.output.md)
+tables.write_table(sensitivity.choice_table(est, est.attrs["e_target"]), snakemake.output.csv, snakemake.output.md)

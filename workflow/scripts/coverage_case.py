@@ -2,13 +2,11 @@
 
 import sys
 
-import dask
-
-from rockdec import coverage, io
+from rockdec import coverage, engine, io
 
 sys.stderr = open(snakemake.log[0], "w")
 n_points, corner = coverage.CASES[snakemake.wildcards.case]
-with dask.config.set(num_workers=snakemake.threads):
+with engine.session(snakemake.threads):
     ds = coverage.run(coverage.E_VALUES, coverage.RECORDS_PER_E, n_points, snakemake.params.cache, corner=corner)
 ds.attrs.update(io.provenance("coverage", {"case": snakemake.wildcards.case}))
 io.write_netcdf(ds, snakemake.output[0])

@@ -5,10 +5,10 @@ import sys
 from rockdec import io, replicates, tables
 
 sys.stderr = open(snakemake.log[0], "w")
-scene = snakemake.params.scene
+options = snakemake.params.options
 with io.open_dataset(snakemake.input[0]) as cube:
     cube = cube.load()
-est, table = replicates.scene_estimates(cube, scene)
-est.attrs.update(io.provenance("estimates", scene["estimates"], inputs=snakemake.input))
+est, table = replicates.scene_estimates(cube, options)
+est.attrs.update(io.provenance("estimates", options, inputs=snakemake.input))
 io.write_netcdf(est, snakemake.output.estimates)
 tables.write_table(table, snakemake.output.csv, snakemake.output.md)

@@ -6,5 +6,5 @@ from rockdec import figures, io
 
 sys.stderr = open(snakemake.log[0], "w")
 with io.open_dataset(snakemake.input.est) as est:
-    fig = figures.fig4(est.load(), e_target=snakemake.params.e)
+    fig = figures.fig4(est.load(), e_target=est.attrs["e_target"])
 figures.save(fig, [snakemake.output.png, snakemake.output.pdf])

@@ -2,14 +2,11 @@
 
 import sys
 
-import dask
-
-from rockdec import io, series
+from rockdec import engine, series
+from rockdec.run import Run
 
 sys.stderr = open(snakemake.log[0], "w")
-with io.open_dataset(snakemake.input[0]) as sim:
-    attrs = dict(sim.attrs)
 replicate = int(snakemake.wildcards.replicate)
 print(f"replicate {replicate} -> {snakemake.output[0]}", file=sys.stderr)
-with dask.config.set(scheduler="threads", num_workers=snakemake.threads):
-    series.write_replicate(attrs, snakemake.params.scene, replicate, snakemake.output[0])
+with engine.session(snakemake.threads):
+    series.write_replicate(Run.read(snakemake.input[0]), snakemake.params.records, replicate, snakemake.output[0])

@@ -1,17 +1,22 @@
-"""Rule `signatures`: the scene's signature cube for its reading."""
+"""Rule `signatures`: one pass over the series; the scene's cube and every reading's window curves."""
 
 import sys
 
-import dask
 from dask.diagnostics import ProgressBar
 
 from rockdec import io, replicates
+from rockdec.run import Run
 
 sys.stderr = open(snakemake.log[0], "w")
-with io.open_dataset(snakemake.input.sim) as sim:
-    attrs = dict(sim.attrs)
-cube = replicates.reading_cube(attrs, snakemake.params.scene, snakemake.params.reading, snakemake.input.series)
-cube.attrs.update(io.provenance("signatures", snakemake.params.scene["signatures"], inputs=snakemake.input))
-with dask.config.set(scheduler="threads", num_workers=snakemake.threads), ProgressBar(out=sys.stderr, dt=0.5):
-    cube = cube.compute()
-io.write_netcdf(cube, snakemake.output[0])
+settings = snakemake.params.settings
+with ProgressBar(out=sys.stderr, dt=0.5):
+    cubes = replicates.scene_cubes(
+        Run.read(snakemake.input.run), snakemake.params.records, settings["signatures"], settings["readings"],
+        snakemake.input.series, threads=snakemake.threads,
+    )
+cube = cubes[settings["readings"][0]]
+cube.attrs.update(io.provenance("signatures", settings["signatures"], inputs=snakemake.input))
+io.write_netcdf(cube, snakemake.output.cube)
+curves = replicates.reading_curves(cubes, settings["fit_points"])
+curves.attrs.update(io.provenance("readings", settings, inputs=snakemake.input))
+io.write_netcdf(curves, snakemake.output.readings)

@@ -5,14 +5,17 @@ import sys
 import numpy as np
 
 from rockdec import io, replicates
+from rockdec.run import Run
 
 sys.stderr = open(snakemake.log[0], "w")
-scene = snakemake.params.scene
 with io.open_dataset(snakemake.input[0]) as sim:
-    attrs = dict(sim.attrs)
-    theta = sim["theta"].astype(np.float64).load().assign_attrs(dt=attrs["dt"])
+    run = Run.from_attrs(sim.attrs)
+    theta = sim["theta"].astype(np.float64).load().assign_attrs(dt=run.dt)
 n = theta.sizes["seed"]
 print(f"signature of {n} stored series x {theta.sizes['time']} points", file=sys.stderr)
-cube = replicates.scene_signatures(theta, scene, attrs, group=np.zeros(n, dtype=np.int64), replicate_of_group=[0])
-cube.attrs.update(io.provenance("stored_signature", scene["signatures"], inputs=snakemake.input))
+cube = replicates.scene_signatures(
+    theta, snakemake.params.signatures, sigma_y=run.sigma_y, sigma_ydot=run.sigma_ydot, g=run.g,
+    group=np.zeros(n, dtype=np.int64), replicate_of_group=[0],
+)
+cube.attrs.update({**run.to_attrs(), **io.provenance("stored_signature", snakemake.params.signatures, inputs=snakemake.input)})
 io.write_netcdf(cube, snakemake.output[0])

@@ -1,0 +1,54 @@
+"""What a scene's seeds and products are called: light enough for the Snakefile to import.
+
+The workflow (``workflow/rules/common.smk``) turns scenes into file names with these names
+and functions only; importing them loads NumPy and nothing of the numerical core, so a
+Snakemake run that has nothing to do stays fast.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+FIGURES = ("fig1b", "fig2", "fig3", "fig4", "fig_ev")
+"""The paper's figures a scene draws (fig. 2 only when it stores series), and ``fig_ev``."""
+
+READINGS = ("pooled", "per_series", "groups_of_10")
+"""The readings of the paper's sizes (docs/method.md §8), in the order tables list them."""
+
+FIGURE_SERIES = 10
+"""Series ``stored_series.nc`` keeps when every series is stored apart: the pooling of fig. 2c."""
+
+
+def scene_seeds(records: dict) -> np.ndarray:
+    """Seeds of a scene's ``records`` section as ``(replicate, series)``: consecutive integers
+    from ``first_seed``."""
+    n = records["replicates"] * records["series_per_replicate"]
+    return (records["first_seed"] + np.arange(n, dtype=np.int64)).reshape(records["replicates"], records["series_per_replicate"])
+
+
+def stores_all(records: dict) -> bool:
+    """Whether a scene's ``records`` section writes every series (``store_series: all``)."""
+    return records["store_series"] == "all"
+
+
+def simulation_seeds(records: dict) -> np.ndarray:
+    """Seeds whose series ``stored_series.nc`` holds: the first ``store_series`` of the scene
+    (the first :data:`FIGURE_SERIES` with ``store_series: all``)."""
+    count = FIGURE_SERIES if stores_all(records) else records["store_series"]
+    return scene_seeds(records).ravel()[:count]
+
+
+def replicate_files(folder: str | Path, records: dict) -> list[Path]:
+    """Paths of the per-replicate series files under ``folder`` (none unless ``store_series: all``)."""
+    if not stores_all(records):
+        return []
+    return [Path(folder) / "series" / f"replicate_{r}.nc" for r in range(records["replicates"])]
+
+
+def compared_readings(estimates: dict) -> list[str]:
+    """The readings a scene's ``estimates`` section asks for: its own first, then the others
+    when it compares readings."""
+    own = estimates["reading"]
+    return [own] + ([r for r in READINGS if r != own] if estimates["compare_readings"] else [])
