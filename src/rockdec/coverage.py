@@ -136,15 +136,6 @@ def summary(ds: xr.Dataset) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-#: The study's cases: name -> (record length, load corner in rocking frequencies or None).
-CASES = {
-    "white_200000": (200_000, None),
-    "white_20000": (20_000, None),
-    "corner1": (200_000, 1.0),
-    "corner3": (200_000, 3.0),
-    "corner10": (200_000, 10.0),
-}
-
 #: True ``e`` of the study, and records per ``e``.
 E_VALUES = (0.6, 0.8, 0.9, 0.95, 0.98)
 RECORDS_PER_E = 200

@@ -17,6 +17,16 @@ FIGURES = ("fig1b", "fig2", "fig3", "fig4", "fig_ev")
 READINGS = ("pooled", "per_series", "groups_of_10")
 """The readings of the paper's sizes (docs/method.md §8), in the order tables list them."""
 
+COVERAGE_CASES = {
+    "white_200000": (200_000, None),
+    "white_20000": (20_000, None),
+    "corner1": (200_000, 1.0),
+    "corner3": (200_000, 3.0),
+    "corner10": (200_000, 10.0),
+}
+"""The coverage study's cases (``results/studies/coverage/{case}.nc``): name -> (record
+length, load corner in rocking frequencies or ``None`` for white noise)."""
+
 FIGURE_SERIES = 10
 """Series ``stored_series.nc`` keeps when every series is stored apart: the pooling of fig. 2c."""
 

@@ -1,5 +1,5 @@
 # Coverage of `rockdec estimate`'s interval on simulated records of known e (white and coloured load).
-from rockdec.coverage import CASES
+from rockdec.layout import COVERAGE_CASES as CASES
 
 
 rule coverage_case:
