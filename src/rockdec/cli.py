@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from rockdec import config as config_mod
-from rockdec import __version__, archive, estimators, io, layout, records, replicates, run, signatures, simulate
+from rockdec import __version__, archive, engine, estimators, io, layout, records, replicates, run, signatures, simulate
 from rockdec import validate as checks
 from rockdec.models import restoring_acceleration
 
@@ -333,6 +333,11 @@ def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="rockdec", description=__doc__.splitlines()[0])
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     parser.add_argument("--debug", action="store_true", help="show the traceback of an unexpected error")
+    parser.add_argument(
+        "--dask-scheduler", metavar="ENGINE",
+        help=f"where Dask computes: threads (default), processes:N (N local worker processes) or tcp://host:port "
+        f"(a running scheduler); default ${engine.VARIABLE}",
+    )
     sub = parser.add_subparsers(dest="command", required=True)
 
     est1 = sub.add_parser("estimate", help="e of a measured record, bias-corrected, with a 95 % interval (calibrated by simulation)")
@@ -407,7 +412,8 @@ def main(argv: list[str] | None = None) -> int:
     except SystemExit as exc:  # --help (0) or a usage error (2), printed already
         return exc.code if isinstance(exc.code, int) else 2
     try:
-        args.func(args)
+        with engine.session(scheduler=args.dask_scheduler):
+            args.func(args)
     except checks.InputError as exc:
         if args.debug:
             raise

@@ -28,6 +28,8 @@ import os
 
 import dask
 
+from rockdec.validate import InputError
+
 #: The environment variable that names the engine.
 VARIABLE = "ROCKDEC_DASK_SCHEDULER"
 
@@ -35,7 +37,7 @@ VARIABLE = "ROCKDEC_DASK_SCHEDULER"
 DEFAULT = "threads"
 
 
-class SchedulerError(ValueError):
+class SchedulerError(InputError):
     """A scheduler setting that names no engine; the message says what is accepted."""
 
 
@@ -44,6 +46,7 @@ def setting(scheduler: str | None = None) -> tuple[str, int | str | None]:
 
     Returns ``("threads", None)``, ``("processes", N)`` or ``("address", "tcp://...")``.
     """
+    source = "the Dask engine" if scheduler is not None else VARIABLE
     text = (scheduler if scheduler is not None else os.environ.get(VARIABLE, DEFAULT)).strip()
     if text == "threads":
         return "threads", None
@@ -54,7 +57,7 @@ def setting(scheduler: str | None = None) -> tuple[str, int | str | None]:
     elif text.startswith("tcp://") and len(text) > len("tcp://"):
         return "address", text
     raise SchedulerError(
-        f"{VARIABLE}={text!r} names no Dask engine; use 'threads', 'processes:N' (N >= 1 local worker "
+        f"{source} {text!r} names no Dask engine; use 'threads', 'processes:N' (N >= 1 local worker "
         "processes) or a scheduler address 'tcp://host:port'."
     )
 
