@@ -143,3 +143,21 @@ def test_alternative_weights_sit_beside_the_table():
     table = tables.with_alternative(tables.summary_table(e_hat0, 0.95), e_hat0 + 0.01, "count_weights", 0.95)
     np.testing.assert_allclose(table["mean_count_weights"], table["mean"] + 0.01)
     np.testing.assert_allclose(table["std_count_weights"], table["std"])
+
+
+def test_a_scene_split_into_jobs_gathers_to_the_whole_scene(tiny):
+    """Jobs of `replicates_per_job` replicates (a cluster's DAG) give the one-job numbers: the
+    same seeds, chunks aligned with the jobs, so the sums are equal bit for bit."""
+    scene, contract = tiny
+    rec = {**scene["records"], "replicates": 3, "series_per_replicate": 16, "chunk_seeds": 8, "replicates_per_job": 2}
+    sig, readings = scene["signatures"], list(replicates.READINGS)
+    whole = replicates.scene_cubes(contract, {**rec, "replicates_per_job": None}, sig, readings)
+    parts = [layout.part_records(rec, part) for part in layout.signature_parts(rec)]
+    assert [(p["replicates"], first) for p, first in parts] == [(2, 0), (1, 2)]
+    cubes = [replicates.scene_cubes(contract, p, sig, readings, first_replicate=first) for p, first in parts]
+    cube, curves = replicates.gathered([c["pooled"] for c in cubes], [replicates.reading_curves(c, 5) for c in cubes])
+    for name in ("signature_sum", "count", "skipped", "replicate", "group"):
+        assert np.array_equal(cube[name].values, whole["pooled"][name].values, equal_nan=True), name
+    np.testing.assert_array_equal(curves["e_hat"].values, replicates.reading_curves(whole, 5)["e_hat"].values)
+    with pytest.raises(ValueError, match="outside"):
+        layout.part_records(rec, 2)

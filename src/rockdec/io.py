@@ -53,6 +53,7 @@ TITLES = {
     "simulate": "Random rocking response of a rigid block, simulated exactly (paper eqs. 21-24)",
     "stored_series": "Random rocking response of a rigid block, simulated exactly (paper eqs. 21-24): the stored series",
     "signatures": "Random Decrement signatures D_a and D_v of the rocking response (paper eqs. 8, 19)",
+    "signature_part": "Random Decrement signatures D_a and D_v of the rocking response (paper eqs. 8, 19), one job's replicates",
     "stored_signature": "Random Decrement signatures of the stored series, pooled (paper fig. 2c)",
     "estimates": "Coefficient of restitution per replicate and window, extrapolated to zero window (paper eqs. 25-27)",
     "readings": "Coefficient of restitution against the window size under each reading of the paper's sizes (paper eq. 27, section 5)",

@@ -57,6 +57,31 @@ def replicate_files(folder: str | Path, records: dict) -> list[Path]:
     return [Path(folder) / "series" / f"replicate_{r}.nc" for r in range(records["replicates"])]
 
 
+def signature_parts(records: dict) -> list[int]:
+    """The jobs the signature pass is split into: ``replicates_per_job`` replicates each
+    (the last may hold fewer); none when the scene runs it as one job."""
+    per_job = records.get("replicates_per_job")
+    if not per_job:
+        return []
+    return list(range(-(-records["replicates"] // per_job)))
+
+
+def part_records(records: dict, part: int) -> tuple[dict, int]:
+    """The ``records`` of one job of :func:`signature_parts`, and its first replicate.
+
+    A part is a scene of its own: ``replicates_per_job`` replicates whose seeds start where
+    its first replicate's do, so its series are the scene's, seed for seed.
+    """
+    per_job = records["replicates_per_job"]
+    first = part * per_job
+    count = min(per_job, records["replicates"] - first)
+    if not 0 <= first < records["replicates"]:
+        raise ValueError(f"part {part} is outside the scene's {len(signature_parts(records))} signature jobs")
+    shifted = {**records, "replicates": count, "first_seed": records["first_seed"] + first * records["series_per_replicate"],
+               "replicates_per_job": None}
+    return shifted, first
+
+
 def compared_readings(estimates: dict) -> list[str]:
     """The readings a scene's ``estimates`` section asks for: its own first, then the others
     when it compares readings."""

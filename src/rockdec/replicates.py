@@ -112,7 +112,7 @@ def scene_signatures(
     return cube.assign_coords(replicate=(dim, np.asarray(replicate_of_group), {"long_name": f"replicate of the {dim}"}))
 
 
-def scene_cubes(run: Run, records: dict, settings: dict, readings, series_files=(), threads: int = 1) -> dict:
+def scene_cubes(run: Run, records: dict, settings: dict, readings, series_files=(), threads: int = 1, first_replicate: int = 0) -> dict:
     """The signature cube of every reading of ``readings``, from one pass over the series.
 
     Every series is simulated from its seed under ``run`` (Dask over seeds, chunks of
@@ -122,12 +122,14 @@ def scene_cubes(run: Run, records: dict, settings: dict, readings, series_files=
     series are reduced at once to the sums of the pass's units (:func:`pass_units`), which
     add up to each reading's groups. Computed on the engine of :mod:`rockdec.engine`
     (``threads`` threads by default). Each cube's attributes hold the run
-    (:meth:`rockdec.run.Run.to_attrs`) and its ``reading``.
+    (:meth:`rockdec.run.Run.to_attrs`) and its ``reading``. ``first_replicate`` numbers
+    the replicates of a part of a scene (:func:`rockdec.layout.part_records`) as the
+    whole scene does.
     """
-    return variant_cubes(run, records, [settings], readings, series_files, threads)[0]
+    return variant_cubes(run, records, [settings], readings, series_files, threads, first_replicate)[0]
 
 
-def variant_cubes(run: Run, records: dict, variants, readings, series_files=(), threads: int = 1) -> list[dict]:
+def variant_cubes(run: Run, records: dict, variants, readings, series_files=(), threads: int = 1, first_replicate: int = 0) -> list[dict]:
     """:func:`scene_cubes` for several signature settings ``variants`` at once: one Dask
     graph, so each series is simulated (or read) once for all of them."""
     seeds = scene_seeds(records)
@@ -151,11 +153,19 @@ def variant_cubes(run: Run, records: dict, variants, readings, series_files=(), 
         cubes = {}
         for reading, (group_of_unit, replicate_of_group) in groups.items():
             cube = signatures.pool(units, "group", by=group_of_unit)
-            cube = cube.assign_coords(replicate=("group", replicate_of_group, {"long_name": "replicate of the group"}))
+            cube = cube.assign_coords(replicate=("group", replicate_of_group + first_replicate, {"long_name": "replicate of the group"}))
             cube.attrs.update({**run.to_attrs(), "reading": reading})
             cubes[reading] = cube
         out.append(cubes)
     return out
+
+
+def gathered(cubes: list[xr.Dataset], curves: list[xr.Dataset]) -> tuple[xr.Dataset, xr.Dataset]:
+    """The whole scene from its parts (:func:`rockdec.layout.part_records`): the cubes one
+    after another along ``group`` (renumbered), the window curves along ``replicate``."""
+    cube = xr.concat(cubes, dim="group", data_vars="minimal", coords="minimal", compat="override", combine_attrs="override")
+    cube = cube.assign_coords(group=("group", np.arange(cube.sizes["group"]), cubes[0]["group"].attrs))
+    return cube, xr.concat(curves, dim="replicate", data_vars="minimal", coords="minimal", compat="override", combine_attrs="override")
 
 
 def replicate_curves(cube: xr.Dataset, *, fit_points: int) -> xr.Dataset:

@@ -49,6 +49,24 @@ def estimate_options(name):
     return {key: scene(name)["estimates"][key] for key in ("fit_points", "weights")}
 
 
+def signature_memory_mb(name, part=None):
+    """Memory a signature job asks of a cluster (resources: mem_mb), from the scene's sizes.
+
+    Sums, signatures and free responses of every unit of the pass (about 3 x 8 bytes x
+    2 triggers x windows x lags each; the lag range is about n_periods sqrt(level) samples
+    per cycle at sigma_Y a side, eq. 5), the series of the chunks in flight (about 6 float64
+    copies of chunk_seeds x n_points per thread), and 1 GB for the interpreter and libraries.
+    """
+    rec = records(name) if part is None else layout.part_records(records(name), part)[0]
+    sig, est, exc = scene(name)["signatures"], scene(name)["estimates"], scene(name)["excitation"]
+    spr = rec["series_per_replicate"]
+    units = rec["replicates"] * (min(spr, 100 + spr // 10) if est["compare_readings"] else spr)
+    lags = 2 * sig["n_periods"] * sig["level"] ** 0.5 * exc["points_per_cycle"] + 1
+    sums = 3 * 8 * 2 * len(sig["windows"]) * lags * units
+    series = 2 * 6 * 8 * rec["chunk_seeds"] * rec["n_points"]
+    return int((sums + series) / 1e6) + 1000
+
+
 def figure_names(name):
     """The figures scene ``name`` can draw: fig. 2 needs at least one stored series."""
     figures = list(layout.FIGURES)

@@ -1,9 +1,23 @@
+def part_files(name, kind):
+    """The signature jobs' files of scene ``name`` (none when its pass runs as one job)."""
+    return [f"results/{name}/parts/{kind}_{part}.nc" for part in layout.signature_parts(records(name))]
+
+
+def part_series(name, part):
+    """The per-replicate series files one signature job reads (`store_series: all`)."""
+    rec, first = layout.part_records(records(name), int(part))
+    return series_files(name)[first : first + rec["replicates"]]
+
+
 rule signatures:
     """One pass over every series: the signature cube of the scene's reading, and the window
-    curves of every reading it compares (signature sums pool exactly by adding)."""
+    curves of every reading it compares (signature sums pool exactly by adding). A scene
+    with `replicates_per_job` gathers its jobs' results instead."""
     input:
         run="results/{scene}/run.json",
-        series=lambda w: series_files(w.scene),
+        series=lambda w: [] if part_files(w.scene, "signatures") else series_files(w.scene),
+        cubes=lambda w: part_files(w.scene, "signatures"),
+        curves=lambda w: part_files(w.scene, "readings"),
     output:
         cube="results/{scene}/signatures.nc",
         readings="results/{scene}/readings.nc",
@@ -12,8 +26,38 @@ rule signatures:
     benchmark:
         "results/{scene}/benchmarks/signatures.tsv"
     threads: 2
+    resources:
+        mem_mb=lambda w: signature_memory_mb(w.scene),
+        runtime=60,
     params:
         records=lambda w: records(w.scene),
         settings=lambda w: signature_settings(w.scene),
+        first_replicate=0,
+    script:
+        "../scripts/signatures.py"
+
+
+rule signature_part:
+    """The signature pass over one job's replicates (scenes with `replicates_per_job`)."""
+    input:
+        run="results/{scene}/run.json",
+        series=lambda w: part_series(w.scene, w.part),
+    output:
+        cube="results/{scene}/parts/signatures_{part}.nc",
+        readings="results/{scene}/parts/readings_{part}.nc",
+    log:
+        "results/{scene}/logs/signatures_{part}.log",
+    benchmark:
+        "results/{scene}/benchmarks/signatures_{part}.tsv"
+    wildcard_constraints:
+        part=r"\d+",
+    threads: 2
+    resources:
+        mem_mb=lambda w: signature_memory_mb(w.scene, int(w.part)),
+        runtime=60,
+    params:
+        records=lambda w: layout.part_records(records(w.scene), int(w.part))[0],
+        settings=lambda w: signature_settings(w.scene),
+        first_replicate=lambda w: layout.part_records(records(w.scene), int(w.part))[1],
     script:
         "../scripts/signatures.py"

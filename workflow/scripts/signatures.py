@@ -1,4 +1,5 @@
-"""Rule `signatures`: one pass over the series; the scene's cube and every reading's window curves."""
+"""Rules `signatures` and `signature_part`: one pass over the series (or the gathered jobs of
+one); the scene's cube and every reading's window curves."""
 
 import sys
 
@@ -9,14 +10,23 @@ from rockdec.run import Run
 
 sys.stderr = open(snakemake.log[0], "w")
 settings = snakemake.params.settings
-with ProgressBar(out=sys.stderr, dt=0.5):
-    cubes = replicates.scene_cubes(
-        Run.read(snakemake.input.run), snakemake.params.records, settings["signatures"], settings["readings"],
-        snakemake.input.series, threads=snakemake.threads,
-    )
-cube = cubes[settings["readings"][0]]
-cube.attrs.update(io.provenance("signatures", settings["signatures"], inputs=snakemake.input))
+inputs = snakemake.input
+if snakemake.rule == "signatures" and inputs.cubes:
+    print(f"gathering {len(inputs.cubes)} signature jobs", file=sys.stderr)
+    loaded = {}
+    for path in [*inputs.cubes, *inputs.curves]:
+        with io.open_dataset(path) as ds:
+            loaded[path] = ds.load()
+    cube, curves = replicates.gathered([loaded[p] for p in inputs.cubes], [loaded[p] for p in inputs.curves])
+else:
+    with ProgressBar(out=sys.stderr, dt=0.5):
+        cubes = replicates.scene_cubes(
+            Run.read(inputs.run), snakemake.params.records, settings["signatures"], settings["readings"],
+            inputs.series, threads=snakemake.threads, first_replicate=snakemake.params.first_replicate,
+        )
+    cube = cubes[settings["readings"][0]]
+    curves = replicates.reading_curves(cubes, settings["fit_points"])
+cube.attrs.update(io.provenance(snakemake.rule, settings["signatures"], inputs=inputs))
 io.write_netcdf(cube, snakemake.output.cube)
-curves = replicates.reading_curves(cubes, settings["fit_points"])
-curves.attrs.update(io.provenance("readings", settings, inputs=snakemake.input))
+curves.attrs.update(io.provenance("readings", settings, inputs=inputs))
 io.write_netcdf(curves, snakemake.output.readings)
