@@ -44,7 +44,8 @@ def noise_for_ratios(scene: dict, ratios) -> list[float]:
 
 def sweep(scene: dict, ratios=RATIOS, threads: int = 1) -> xr.Dataset:
     """``e_hat0(ratio, model, estimator, replicate)``, the measured ``sigma_y_ratio(ratio, model)``
-    and ``skipped_fraction(ratio, model)`` (triggers lost to overturned stretches)."""
+    and ``skipped_fraction(ratio, model)`` (triggers lost to overturned stretches); the
+    scene's ``e`` as the attribute ``e_target``."""
     out = []
     for sigma_p in noise_for_ratios(scene, ratios):
         per_model = []
@@ -72,16 +73,19 @@ def sweep(scene: dict, ratios=RATIOS, threads: int = 1) -> xr.Dataset:
     ds["ratio"].attrs = {"units": "1", "long_name": "target sigma_Y / theta_cr of the simplified model"}
     ds["sigma_y_ratio"].attrs = {"units": "1", "long_name": "measured sigma_Y / theta_cr of the model's pilot"}
     ds["skipped_fraction"].attrs = {"units": "1", "long_name": "D_a triggers lost to overturned (NaN) stretches"}
+    ds.attrs["e_target"] = float(scene["system"]["e"])
     return ds
 
 
-def sweep_table(ds: xr.Dataset, e_target: float) -> pd.DataFrame:
-    """Per (ratio, model, estimator): mean, std, bias; for Housner rows the paired drift.
+def sweep_table(ds: xr.Dataset) -> pd.DataFrame:
+    """Per (ratio, model, estimator): mean, std, bias against ``ds.attrs["e_target"]``; for
+    Housner rows the paired drift.
 
     Both models ran the same seeds, so the replicate-by-replicate difference
     ``housner - simplified`` removes most of the sampling noise: ``drift`` is its mean and
     ``drift_se`` its standard error.
     """
+    e_target = float(ds.attrs["e_target"])
     rows = []
     for ratio in ds["ratio"].values:
         for model in ds["model"].values:
