@@ -4,6 +4,11 @@ Paper values: ``e_g`` and ``e_0`` at zero window from §5 / fig. 3 (no spread pr
 ``e1..e4`` mean and standard deviation over 20 repetitions, eq. 28. The paper's ``e4`` is
 its printed ``t1/(t2 - t1)`` evaluated on its estimates; we compute the corrected
 ``(t2 - t1)/t1`` (see :mod:`rockdec.estimators`), the quantity the paper meant.
+
+:func:`bias_row` is the one place replicate statistics are computed (the paper table, the
+amplitude sweep, the speed/accuracy study); this module also formats every table as
+Markdown (:func:`to_markdown`, the richer :func:`tradeoff_markdown`) and writes it with its
+CSV (:func:`write_table`).
 """
 
 from __future__ import annotations
