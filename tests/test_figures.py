@@ -22,6 +22,7 @@ matplotlib.use("Agg")
 import matplotlib.image  # noqa: E402
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
 import pytest  # noqa: E402
 import xarray as xr  # noqa: E402
 import yaml  # noqa: E402
@@ -203,6 +204,38 @@ def test_save_writes_png_at_150_dpi_and_pdf_reproducibly(tmp_path):
     first = png.read_bytes(), pdf.read_bytes()
     figures.save(fig, [png, pdf])
     assert (png.read_bytes(), pdf.read_bytes()) == first
+
+
+# --- the studies' figures --------------------------------------------------------------
+
+
+def test_fig_amplitude_draws_the_target_stored_in_the_sweep():
+    shape = {"ratio": [0.002, 0.01], "model": ["simplified", "housner"], "estimator": ["e_0", "e4", "e_v"], "replicate": [0, 1]}
+    values = np.random.default_rng(0).normal(0.8, 0.01, [len(v) for v in shape.values()])
+    ds = xr.Dataset({"e_hat0": (tuple(shape), values)}, coords=shape, attrs={"e_target": 0.8})
+    fig = figures.fig_amplitude(ds)
+    assert_labelled(fig)
+    for ax in fig.axes:
+        targets = [line for line in ax.lines if line.get_label() == "target e = 0.8"]
+        assert len(targets) == 1 and list(targets[0].get_ydata()) == [0.8, 0.8]
+
+
+def test_pareto_figure_labels_the_front_and_marks_the_base():
+    # two estimators, three configurations each; the base costs most and is the most accurate
+    rows = [(knob, value, cost, name, rmse, knob == "level" and value == "2")
+            for name in ("e4", "e_v")
+            for knob, value, cost, rmse in (("n_points", "1500", 1.0, 0.03), ("n_points", "3000", 2.0, 0.04),
+                                            ("level", "2", 4.0, 0.01))]
+    table = pd.DataFrame(rows, columns=["knob", "value", "cpu_s_per_replicate", "estimator", "rmse", "base"])
+    # the settings that tell configurations apart (one marker each)
+    table = table.assign(kind="exact", points_per_cycle=75.0, n_points=table["value"], series_per_replicate=200,
+                         n_windows=10, level=2.0, n_periods=2.5)
+    fig = figures.pareto_figure(table)
+    shown = [ax for ax in fig.axes if ax.get_visible()]
+    assert [ax.get_title().split(":")[0] for ax in shown] == ["e4", "e_v"]
+    for ax in shown:
+        assert sorted(text.get_text() for text in ax.texts) == ["base", "points 1500"]  # 3000 is dominated
+    assert "base scene" in legend_texts(fig)
 
 
 # --- the workflow, end to end ---------------------------------------------------------

@@ -4,7 +4,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from rockdec import config, io, tradeoff
+from rockdec import config, figures, io, tables, tradeoff
 
 
 @pytest.fixture
@@ -37,18 +37,6 @@ def test_every_knob_lists_the_base_value_once(scene):
     on_base = [knob for knob, _, s in configs if s == base]
     assert on_base == [k for k in tradeoff.KNOBS if k != "fixed_step_points_per_cycle"]
     assert len(configs) == sum(len(v) for v in tradeoff.KNOBS.values())
-
-
-def test_accuracy_definitions():
-    x = np.array([0.94, 0.955, 0.962, np.nan, 0.951])
-    row = tradeoff.accuracy(x, 0.95)
-    finite = x[np.isfinite(x)]
-    assert row["n"] == 4
-    assert row["bias"] == pytest.approx(finite.mean() - 0.95, abs=1e-15)
-    assert row["std"] == pytest.approx(finite.std(ddof=1), rel=1e-14)
-    assert row["rmse"] == pytest.approx(np.sqrt(np.mean((finite - 0.95) ** 2)), rel=1e-14)
-    assert row["ci95"] == pytest.approx(abs(row["bias"]) + 1.96 * row["std"], rel=1e-14)
-    assert np.isnan(tradeoff.accuracy([np.nan], 0.95)["rmse"])
 
 
 def _synthetic_table():
@@ -111,12 +99,15 @@ def test_tiny_study_end_to_end(scene, tmp_path):
     io.write_netcdf(ds, tmp_path / "tradeoff.nc")
     with io.open_dataset(tmp_path / "tradeoff.nc") as back:
         pd.testing.assert_frame_equal(tradeoff.study_table(back.load()), table)
-    for col in ("knob", "value", "kind", "cpu_s", "estimator", "bias", "std", "rmse", "n"):
+    for col in ("knob", "value", "kind", "cpu_s", "estimator", "bias", "std", "rmse", "n", "ci95"):
         assert col in table.columns
+    assert "t" not in table.columns and "p_value" not in table.columns  # the study's columns as before
     assert len(table) == 4 * 7
     ok = table[table["n"] > 1]
     assert len(ok) > 0
     np.testing.assert_allclose(ok["rmse"] ** 2, ok["bias"] ** 2 + ok["std"] ** 2 * (ok["n"] - 1) / ok["n"], rtol=1e-12)
-    assert "## Cheapest configuration" in tradeoff.table_markdown(table)
-    fig = tradeoff.pareto_figure(table)
+    recommendations = {criterion: tradeoff.recommend(table, criterion=criterion) for criterion in tradeoff.CRITERIA}
+    markdown = tables.tradeoff_markdown(table, recommendations)
+    assert markdown.count("## Cheapest configuration") == 2 and "Target e = 0.95" in markdown
+    fig = figures.pareto_figure(table)
     assert len([ax for ax in fig.axes if ax.get_visible()]) == 4

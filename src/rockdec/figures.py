@@ -1,4 +1,6 @@
-"""The paper's figures (1b, 2, 3, 4) and the figure of its §6 proposal, ``e_v``.
+"""The paper's figures (1b, 2, 3, 4), the figure of its §6 proposal, ``e_v``, and those of
+the studies beyond the paper (amplitude sweep, speed/accuracy Pareto plot, coverage) and of
+a measured record.
 
 One function per figure: labelled datasets in, a :class:`matplotlib.figure.Figure` out.
 Figures are made without :mod:`matplotlib.pyplot`, so no global figure state is created
@@ -14,8 +16,9 @@ Inputs are the workflow's products (:mod:`rockdec.io`):
 - ``est``: estimates, ``e_hat(estimator, replicate, window)``, ``e_hat0`` and ``slope``
   ``(estimator, replicate)`` (:func:`rockdec.replicates.replicate_estimates`).
 
-The target ``e`` is passed in (the estimates do not store it); the paper's values are
-drawn only when it is the paper's ``e = 0.95`` (as in :func:`rockdec.tables.summary_table`).
+The target ``e`` is passed in (the estimates do not store it; the studies' datasets do);
+the paper's values are drawn only when it is the paper's ``e = 0.95`` (as in
+:func:`rockdec.tables.summary_table`).
 Window sizes are relative, ``da/da_max`` (``dv/dv_max`` for ``e_v``).
 """
 
@@ -37,15 +40,31 @@ from rockdec import models  # noqa: E402
 from rockdec.layout import FIGURES  # noqa: E402  (the workflow's file names, drawn here)
 from rockdec.models import period_from_g  # noqa: E402
 
-# rockdec.signatures (numba, dask), rockdec.tables (scipy.stats) and scipy.optimize are
-# imported where they are used: each plot rule is a fresh process, and these imports would
-# double its start-up time for the figures that do not need them.
+# rockdec.signatures (numba, dask), rockdec.tables (scipy.stats), rockdec.tradeoff (numba,
+# dask) and scipy.optimize are imported where they are used: each plot rule is a fresh
+# process, and these imports would double its start-up time for the figures that do not
+# need them.
 
 __all__ = ["FIGURES", "fig1b", "fig2", "fig3", "fig4", "fig_ev", "fig_record", "free_rocking", "save"]
 
 WINDOW_LABEL = r"relative window size $\Delta a/\Delta a_{max}$"
 TARGET_STYLE = {"color": "k", "ls": "--", "lw": 1.0}
 PAPER_STYLE = {"color": "tab:red", "marker": "D", "ms": 6, "ls": "none", "zorder": 5}
+
+PARETO_ESTIMATORS = ("e4", "e_v", "e_0", "e1")
+"""Estimators drawn by :func:`pareto_figure` by default."""
+
+KNOB_LABELS = {
+    "points_per_cycle": "ppc",
+    "n_points": "points",
+    "series_per_replicate": "series",
+    "n_windows": "windows",
+    "level": "level",
+    "n_periods": "lag periods",
+    "simulator": "",
+    "fixed_step_points_per_cycle": "fixed-step ppc",
+}
+"""Short knob names (:data:`rockdec.tradeoff.KNOBS`) for the labels of the Pareto front."""
 
 
 # --------------------------------------------------------------------------- helpers
@@ -412,13 +431,15 @@ def fig_ev(sig: xr.Dataset, est: xr.Dataset, e_target: float | None = None) -> F
     return fig
 
 
-def fig_amplitude(ds: xr.Dataset, e_target: float | None = None, estimators=("e_0", "e4", "e_v")) -> Figure:
+def fig_amplitude(ds: xr.Dataset, estimators=("e_0", "e4", "e_v")) -> Figure:
     """Simplified (eq. 4) vs linearized Housner (eq. 2) estimates against ``sigma_Y/theta_cr``.
 
-    ``ds`` from :func:`rockdec.amplitude.sweep`. Points: mean over replicates, error bars one
-    standard error. The dotted line marks where ``auto`` switches model: ``3 sigma_Y`` at the
-    amplitude where eqs. 3 and 5 differ by 2 % (:func:`rockdec.models.amplitude_limit`).
+    ``ds`` from :func:`rockdec.amplitude.sweep` (the target ``e`` is its attribute
+    ``e_target``). Points: mean over replicates, error bars one standard error. The dotted
+    line marks where ``auto`` switches model: ``3 sigma_Y`` at the amplitude where eqs. 3
+    and 5 differ by 2 % (:func:`rockdec.models.amplitude_limit`).
     """
+    e_target = float(ds.attrs["e_target"])
     fig = _new_figure(4.0 * len(estimators), 4.0)
     axes = np.atleast_1d(fig.subplots(1, len(estimators), sharey=False))
     switch = models.auto_switch_ratio()
@@ -436,6 +457,60 @@ def fig_amplitude(ds: xr.Dataset, e_target: float | None = None, estimators=("e_
         ax.set_ylabel(f"{name} at zero window")
         ax.set_title(name, fontsize="medium")
     axes[0].legend(fontsize="small")
+    return fig
+
+
+def pareto_figure(table, estimators_shown=PARETO_ESTIMATORS) -> Figure:
+    """The speed/accuracy study: CPU seconds per replicate (log) against RMSE (log), one
+    panel per estimator.
+
+    ``table``: :func:`rockdec.tradeoff.study_table`. One marker per configuration, coloured
+    by the knob moved (the base scene a black star); the Pareto front
+    (:func:`rockdec.tradeoff.pareto_front`) as a step line with its points labelled; grey
+    lines at the RMSE of the accuracy classes.
+    """
+    from rockdec import tradeoff
+
+    shown = [name for name in estimators_shown if name in set(table["estimator"])]
+    n_col = 2 if len(shown) > 1 else 1
+    n_row = math.ceil(len(shown) / n_col)
+    fig = _new_figure(6.0 * n_col, 4.6 * n_row)
+    axes = np.atleast_1d(fig.subplots(n_row, n_col, sharex=True, sharey=True)).ravel()
+    knobs = list(table.loc[~table["base"], "knob"].unique())
+    colors = {k: matplotlib.colormaps["tab10"](i % 10) for i, k in enumerate(knobs)}
+    handles = {}
+    for ax, name in zip(axes, shown):
+        # one marker per distinct configuration (the base and the fixed-step run at the
+        # base density are listed under two knobs each)
+        points = table[table["estimator"] == name].drop_duplicates(tradeoff.SETTING_COLUMNS)
+        for knob in knobs:
+            sel = points[(points["knob"] == knob) & ~points["base"]]
+            handles[knob] = ax.scatter(sel["cpu_s_per_replicate"], sel["rmse"], s=28, color=colors[knob],
+                                       label=knob.replace("_", " "), zorder=3)
+        base = points[points["base"]]
+        if not base.empty:
+            handles["base"] = ax.scatter(base["cpu_s_per_replicate"], base["rmse"], s=110, marker="*", color="k",
+                                         label="base scene", zorder=4)
+        front = points.iloc[tradeoff.pareto_front(points["cpu_s_per_replicate"], points["rmse"])]
+        ax.step(front["cpu_s_per_replicate"], front["rmse"], where="post", color="0.3", lw=1.2, zorder=2)
+        for k, (_, row) in enumerate(front.iterrows()):
+            text = "base" if row["base"] else f"{KNOB_LABELS.get(row['knob'], row['knob'])} {row['value']}".strip()
+            ax.annotate(text, (row["cpu_s_per_replicate"], row["rmse"]), textcoords="offset points",
+                        xytext=(4, 4) if k % 2 == 0 else (-4, -11), ha="left" if k % 2 == 0 else "right",
+                        fontsize=6.5, color="0.25")
+        for tol in tradeoff.ACCURACY_CLASSES:
+            ax.axhline(tol, color="0.75", lw=0.7, ls=":", zorder=1)
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_title(f"{name}: Pareto front of cost and RMSE", fontsize="medium")
+        ax.grid(True, which="major", lw=0.3, alpha=0.5)
+    for ax in axes[len(shown):]:
+        ax.set_visible(False)
+    for ax in axes[-n_col:]:
+        ax.set_xlabel("CPU seconds per replicate")
+    for ax in axes[::n_col]:
+        ax.set_ylabel("RMSE of the estimate of e")
+    fig.legend(handles=list(handles.values()), loc="outside lower center", ncol=min(5, len(handles)), fontsize="small")
     return fig
 
 

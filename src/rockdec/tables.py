@@ -4,6 +4,11 @@ Paper values: ``e_g`` and ``e_0`` at zero window from §5 / fig. 3 (no spread pr
 ``e1..e4`` mean and standard deviation over 20 repetitions, eq. 28. The paper's ``e4`` is
 its printed ``t1/(t2 - t1)`` evaluated on its estimates; we compute the corrected
 ``(t2 - t1)/t1`` (see :mod:`rockdec.estimators`), the quantity the paper meant.
+
+:func:`bias_row` is the one place replicate statistics are computed (the paper table, the
+amplitude sweep, the speed/accuracy study); this module also formats every table as
+Markdown (:func:`to_markdown`, the richer :func:`tradeoff_markdown`) and writes it with its
+CSV (:func:`write_table`).
 """
 
 from __future__ import annotations
@@ -12,6 +17,8 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 from scipy import stats
+
+from rockdec.belt import Z95
 
 PAPER = {
     "e_g": (0.8083, np.nan),
@@ -25,20 +32,42 @@ PAPER = {
 
 PAPER_E_TARGET = 0.95
 
+STATISTICS = ("n", "mean", "std", "bias", "rmse", "ci95", "t", "p_value")
+"""What :func:`bias_row` returns, in this order."""
 
-def bias_row(values: np.ndarray, e_target: float) -> dict:
-    """Mean, std, bias and a one-sample t-test of the bias for one estimator's replicates."""
-    values = np.asarray(values, dtype=float)
-    values = values[np.isfinite(values)]
-    n = values.size
-    mean = values.mean() if n else np.nan
-    std = values.std(ddof=1) if n > 1 else np.nan
-    if n > 1 and std > 0:
-        test = stats.ttest_1samp(values, e_target)
-        t, p = float(test.statistic), float(test.pvalue)
-    else:
-        t, p = np.nan, np.nan
-    return {"n": n, "mean": mean, "std": std, "bias": mean - e_target, "t": t, "p_value": p}
+PAPER_COLUMNS = ["n", "mean", "std", "bias", "t", "p_value"]
+"""The statistics :func:`summary_table` prints for each estimator."""
+
+
+def bias_row(values, e_target: float) -> dict:
+    """The replicate statistics of one estimator against the true ``e_target``.
+
+    NaN estimates (an estimator that failed on a replicate) are left out; ``n`` counts the
+    rest. ``std`` has ``ddof = 1``; ``bias = mean - e_target``; ``rmse = sqrt(mean((x -
+    e_target)^2))``, hence ``rmse^2 = bias^2 + std^2 (n - 1)/n``; ``ci95 = |bias| + Z95 std``
+    (:data:`rockdec.belt.Z95`, 1.96): one replicate's estimate lies within ``+-ci95`` of
+    ``e_target`` in about 95 % of cases (normal errors). ``t = bias / (std / sqrt(n))`` and
+    its two-sided ``p_value`` (Student, ``n - 1`` degrees of freedom) test the bias. What
+    needs two values (``std``, ``ci95``, ``t``, ``p_value``) is NaN for ``n = 1``, the test
+    also for ``std = 0``; everything but ``n`` is NaN for ``n = 0``.
+    """
+    x = np.asarray(values, dtype=float).ravel()
+    x = x[np.isfinite(x)]
+    n = x.size
+    out = dict.fromkeys(STATISTICS, np.nan)
+    out["n"] = n
+    if n == 0:
+        return out
+    mean = float(x.mean())
+    bias = mean - e_target
+    out.update(mean=mean, bias=bias, rmse=float(np.sqrt(np.mean((x - e_target) ** 2))))
+    if n > 1:
+        std = float(x.std(ddof=1))
+        out.update(std=std, ci95=abs(bias) + Z95 * std)
+        if std > 0:
+            t = bias * np.sqrt(n) / std
+            out.update(t=float(t), p_value=float(2.0 * stats.t.sf(abs(t), n - 1)))
+    return out
 
 
 def summary_table(e_hat0: xr.DataArray, e_target: float) -> pd.DataFrame:
@@ -49,7 +78,8 @@ def summary_table(e_hat0: xr.DataArray, e_target: float) -> pd.DataFrame:
     """
     rows = []
     for name in e_hat0["estimator"].values:
-        row = {"estimator": str(name), **bias_row(e_hat0.sel(estimator=name).values, e_target), "e_target": e_target}
+        every = bias_row(e_hat0.sel(estimator=name).values, e_target)
+        row = {"estimator": str(name), **{k: every[k] for k in PAPER_COLUMNS}, "e_target": e_target}
         paper_mean, paper_std = PAPER.get(str(name), (np.nan, np.nan)) if e_target == PAPER_E_TARGET else (np.nan, np.nan)
         row.update({"paper_mean": paper_mean, "paper_std": paper_std, "mean_minus_paper": row["mean"] - paper_mean})
         rows.append(row)
@@ -77,9 +107,41 @@ def with_alternative(table: pd.DataFrame, e_hat0: xr.DataArray, label: str, e_ta
     return table.assign(**{f"mean_{label}": [r["mean"] for r in rows], f"std_{label}": [r["std"] for r in rows]})
 
 
-def write_table(table: pd.DataFrame, csv_path, md_path) -> None:
-    """Write ``table`` as CSV (every digit) and as Markdown (:func:`to_markdown`)."""
+def tradeoff_markdown(table: pd.DataFrame, recommendations: dict[str, pd.DataFrame],
+                      estimators_shown=("e4", "e_v", "e_0", "e1", "e2", "e3", "e_g")) -> str:
+    """The speed/accuracy study as Markdown: cost per configuration, accuracy per estimator,
+    and the cheapest configurations.
+
+    ``table``: :func:`rockdec.tradeoff.study_table`; ``recommendations``: criterion ->
+    :func:`rockdec.tradeoff.recommend` by that criterion (``"ci95"``, ``"rmse"``).
+    """
+    configs = table.drop_duplicates(["knob", "value"])
+    cost = configs[["knob", "value", "kind", "points_per_cycle", "n_points", "series_per_replicate", "n_windows",
+                    "level", "n_periods", "dt", "cpu_s", "cpu_s_per_replicate", "calibration_cpu_s"]]
+    e_target = table.attrs.get("e_target")
+    parts = ["# Speed against accuracy (rule tradeoff)\n",
+             "One knob at a time moved from the scene `tradeoff`. Cost: CPU seconds of one configuration "
+             "(simulation + signatures + estimates, all replicates; per replicate in `cpu_s_per_replicate`); "
+             "the step calibration is a one-off (`calibration_cpu_s`). Accuracy over the replicates: "
+             "`bias = mean - e`, `std` (ddof 1), `rmse` (so `rmse^2 = bias^2 + std^2 (n-1)/n`), "
+             "`ci95 = |bias| + 1.96 std`."
+             + (f" Target e = {e_target:g}." if e_target is not None else "") + "\n",
+             "## Cost\n", to_markdown(cost)]
+    for name in estimators_shown:
+        part = table[table["estimator"] == name]
+        if part.empty:
+            continue
+        parts += [f"## {name}\n", to_markdown(
+            part[["knob", "value", "kind", "cpu_s_per_replicate", "n", "mean", "bias", "std", "rmse", "ci95"]])]
+    criteria = {"ci95": "|bias| + 1.96 std <= tolerance (e within +-tolerance, 95 %)", "rmse": "rmse <= tolerance"}
+    for criterion, rec in recommendations.items():
+        parts += [f"## Cheapest configuration: {criteria[criterion]}\n", to_markdown(rec.drop(columns="criterion"))]
+    return "\n".join(parts)
+
+
+def write_table(table: pd.DataFrame, csv_path, md_path, markdown: str | None = None) -> None:
+    """Write ``table`` as CSV (every digit) and as Markdown: ``markdown`` when given (a
+    richer text made from the table), else :func:`to_markdown` of the table."""
     table.to_csv(csv_path, index=False)
     with open(md_path, "w") as f:
-        f.write(to_markdown(table))
-
+        f.write(to_markdown(table) if markdown is None else markdown)

@@ -11,10 +11,13 @@ replicate of the scene) and measured twice:
   simulate.calibrate_dt`, a one-off per density, cached within the run) is reported apart,
   as ``calibration_cpu_s``. ``cpu_s_per_replicate`` is the cost of one estimate of ``e``.
 * **accuracy** of each estimator over the replicates, against the scene's ``e``
-  (:func:`accuracy`): ``bias = mean - e``, ``std`` (``ddof = 1``) and
+  (:func:`rockdec.tables.bias_row`): ``bias = mean - e``, ``std`` (``ddof = 1``) and
   ``rmse = sqrt(mean((x - e)^2))``, so that ``rmse^2 = bias^2 + std^2 (n - 1)/n`` exactly,
   and ``ci95 = |bias| + 1.96 std``: an estimate of one replicate lies within ``+-ci95`` of
   the true ``e`` in about 95 % of the cases (normal errors).
+
+The Markdown of the study is :func:`rockdec.tables.tradeoff_markdown`, its Pareto plot
+:func:`rockdec.figures.pareto_figure`; this module runs the study and reduces it to data.
 
 Choices written down here (the issue leaves them open):
 
@@ -53,7 +56,6 @@ from __future__ import annotations
 import copy
 import dataclasses
 import json
-import math
 import time
 import warnings
 from concurrent.futures import ThreadPoolExecutor
@@ -62,7 +64,7 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from rockdec import fixed_step, replicates, simulate
+from rockdec import fixed_step, replicates, simulate, tables
 from rockdec.run import Run
 from rockdec.models import restoring_acceleration
 
@@ -90,28 +92,14 @@ SETTINGS = ("simulator", "points_per_cycle", "n_points", "series_per_replicate",
 ACCURACY_CLASSES = (0.005, 0.01, 0.02, 0.05)
 """Half-widths of the accuracy classes of :func:`recommend` ("e within +-0.01 (95 %)")."""
 
-Z95 = 1.96
-"""Normal quantile of a two-sided 95 % interval."""
-
 CRITERIA = ("ci95", "rmse")
+"""What :func:`recommend` can hold to a tolerance."""
+
+ACCURACY_COLUMNS = ["n", "mean", "bias", "std", "rmse", "ci95"]
+"""The replicate statistics (:func:`rockdec.tables.bias_row`) of :func:`study_table`."""
 
 SETTING_COLUMNS = ["kind", "points_per_cycle", "n_points", "series_per_replicate", "n_windows", "level", "n_periods"]
 """Columns of :func:`study_table` that identify a configuration."""
-
-_SHORT = {
-    "points_per_cycle": "ppc",
-    "n_points": "points",
-    "series_per_replicate": "series",
-    "n_windows": "windows",
-    "level": "level",
-    "n_periods": "lag periods",
-    "simulator": "",
-    "fixed_step_points_per_cycle": "fixed-step ppc",
-}
-"""Short knob names for the labels of the Pareto front."""
-
-PARETO_ESTIMATORS = ("e4", "e_v", "e_0", "e1")
-"""Estimators drawn by :func:`pareto_figure` by default."""
 
 PILOT = {"pilot_seeds": 256, "pilot_points": 40_000}
 """Size of the calibration pilots (as :func:`rockdec.simulate.calibrate_dt`)."""
@@ -362,32 +350,6 @@ def run_study(
 # --------------------------------------------------------------------------- statistics
 
 
-def accuracy(values, e_target: float) -> dict:
-    """Bias, std, RMSE and the 95 % half-width of one estimator's replicate estimates.
-
-    NaN estimates (an estimator that failed on a replicate) are left out; ``n`` counts the
-    rest. ``std`` has ``ddof = 1``; ``rmse = sqrt(mean((x - e)^2))``, hence
-    ``rmse^2 = bias^2 + std^2 (n - 1)/n``; ``ci95 = |bias| + 1.96 std``.
-    """
-    x = np.asarray(values, dtype=float)
-    x = x[np.isfinite(x)]
-    n = x.size
-    nan = float("nan")
-    if n == 0:
-        return {"n": 0, "mean": nan, "bias": nan, "std": nan, "rmse": nan, "ci95": nan}
-    mean = float(x.mean())
-    std = float(x.std(ddof=1)) if n > 1 else nan
-    bias = mean - e_target
-    return {
-        "n": n,
-        "mean": mean,
-        "bias": bias,
-        "std": std,
-        "rmse": float(math.sqrt(np.mean((x - e_target) ** 2))),
-        "ci95": abs(bias) + Z95 * std,
-    }
-
-
 def study_table(ds: xr.Dataset) -> pd.DataFrame:
     """The tidy table: one row per (configuration, estimator).
 
@@ -420,8 +382,9 @@ def study_table(ds: xr.Dataset) -> pd.DataFrame:
             "calibration_cpu_s": float(c["calibration_cpu_s"]),
         }
         for name in ds["estimator"].values:
-            stats = accuracy(c["e_hat0"].sel(estimator=name).values, e_target)
-            rows.append({**head, "estimator": str(name), "replicates": n_rep, **stats, **tail})
+            stats = tables.bias_row(c["e_hat0"].sel(estimator=name).values, e_target)
+            accuracy = {k: stats[k] for k in ACCURACY_COLUMNS}
+            rows.append({**head, "estimator": str(name), "replicates": n_rep, **accuracy, **tail})
     table = pd.DataFrame(rows)
     table.attrs["e_target"] = e_target
     return table
@@ -475,90 +438,3 @@ def pareto_front(cost, error) -> np.ndarray:
             front.append(i)
             best = error[i]
     return np.asarray(front, dtype=int)
-
-
-# --------------------------------------------------------------------------- outputs
-
-
-def table_markdown(table: pd.DataFrame, estimators_shown=("e4", "e_v", "e_0", "e1", "e2", "e3", "e_g")) -> str:
-    """Markdown: cost per configuration, accuracy per estimator, and the recommendations."""
-    from rockdec import tables
-
-    configs = table.drop_duplicates(["knob", "value"])
-    cost = configs[["knob", "value", "kind", "points_per_cycle", "n_points", "series_per_replicate", "n_windows",
-                    "level", "n_periods", "dt", "cpu_s", "cpu_s_per_replicate", "calibration_cpu_s"]]
-    e_target = table.attrs.get("e_target")
-    parts = ["# Speed against accuracy (rule tradeoff)\n",
-             "One knob at a time moved from the scene `tradeoff`. Cost: CPU seconds of one configuration "
-             "(simulation + signatures + estimates, all replicates; per replicate in `cpu_s_per_replicate`); "
-             "the step calibration is a one-off (`calibration_cpu_s`). Accuracy over the replicates: "
-             "`bias = mean - e`, `std` (ddof 1), `rmse` (so `rmse^2 = bias^2 + std^2 (n-1)/n`), "
-             "`ci95 = |bias| + 1.96 std`."
-             + (f" Target e = {e_target:g}." if e_target is not None else "") + "\n",
-             "## Cost\n", tables.to_markdown(cost)]
-    for name in estimators_shown:
-        part = table[table["estimator"] == name]
-        if part.empty:
-            continue
-        parts += [f"## {name}\n", tables.to_markdown(
-            part[["knob", "value", "kind", "cpu_s_per_replicate", "n", "mean", "bias", "std", "rmse", "ci95"]])]
-    for criterion, text in (("ci95", "|bias| + 1.96 std <= tolerance (e within +-tolerance, 95 %)"),
-                            ("rmse", "rmse <= tolerance")):
-        rec = recommend(table, ACCURACY_CLASSES, criterion=criterion)
-        parts += [f"## Cheapest configuration: {text}\n", tables.to_markdown(rec.drop(columns="criterion"))]
-    return "\n".join(parts)
-
-
-def pareto_figure(table: pd.DataFrame, estimators_shown=PARETO_ESTIMATORS):
-    """CPU seconds per replicate (log) against RMSE (log), one panel per estimator.
-
-    One marker per configuration, coloured by the knob moved (the base scene a black
-    star); the Pareto front (:func:`pareto_front`) as a step line with its points labelled;
-    grey lines at the RMSE of the accuracy classes. Returns a matplotlib Figure.
-    """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    from matplotlib.figure import Figure
-
-    shown = [name for name in estimators_shown if name in set(table["estimator"])]
-    n_col = 2 if len(shown) > 1 else 1
-    n_row = math.ceil(len(shown) / n_col)
-    fig = Figure(figsize=(6.0 * n_col, 4.6 * n_row), layout="constrained")
-    axes = np.atleast_1d(fig.subplots(n_row, n_col, sharex=True, sharey=True)).ravel()
-    knobs = list(pd.unique(table.loc[~table["base"], "knob"]))
-    colors = {k: matplotlib.colormaps["tab10"](i % 10) for i, k in enumerate(knobs)}
-    handles = {}
-    for ax, name in zip(axes, shown):
-        # one marker per distinct configuration (the base and the fixed-step run at the
-        # base density are listed under two knobs each)
-        points = table[table["estimator"] == name].drop_duplicates(SETTING_COLUMNS)
-        for knob in knobs:
-            sel = points[(points["knob"] == knob) & ~points["base"]]
-            handles[knob] = ax.scatter(sel["cpu_s_per_replicate"], sel["rmse"], s=28, color=colors[knob],
-                                       label=knob.replace("_", " "), zorder=3)
-        base = points[points["base"]]
-        if not base.empty:
-            handles["base"] = ax.scatter(base["cpu_s_per_replicate"], base["rmse"], s=110, marker="*", color="k",
-                                         label="base scene", zorder=4)
-        front = points.iloc[pareto_front(points["cpu_s_per_replicate"], points["rmse"])]
-        ax.step(front["cpu_s_per_replicate"], front["rmse"], where="post", color="0.3", lw=1.2, zorder=2)
-        for k, (_, row) in enumerate(front.iterrows()):
-            text = "base" if row["base"] else f"{_SHORT.get(row['knob'], row['knob'])} {row['value']}".strip()
-            ax.annotate(text, (row["cpu_s_per_replicate"], row["rmse"]), textcoords="offset points",
-                        xytext=(4, 4) if k % 2 == 0 else (-4, -11), ha="left" if k % 2 == 0 else "right",
-                        fontsize=6.5, color="0.25")
-        for tol in ACCURACY_CLASSES:
-            ax.axhline(tol, color="0.75", lw=0.7, ls=":", zorder=1)
-        ax.set_xscale("log")
-        ax.set_yscale("log")
-        ax.set_title(f"{name}: Pareto front of cost and RMSE", fontsize="medium")
-        ax.grid(True, which="major", lw=0.3, alpha=0.5)
-    for ax in axes[len(shown):]:
-        ax.set_visible(False)
-    for ax in axes[-n_col:]:
-        ax.set_xlabel("CPU seconds per replicate")
-    for ax in axes[::n_col]:
-        ax.set_ylabel("RMSE of the estimate of e")
-    fig.legend(handles=list(handles.values()), loc="outside lower center", ncol=min(5, len(handles)), fontsize="small")
-    return fig

@@ -13,6 +13,9 @@ rule coverage_case:
     wildcard_constraints:
         case="|".join(CASES),
     threads: 2
+    resources:
+        mem_mb=4000,
+        runtime=60,
     params:
         cache="results/studies/coverage/calibration",
     script:

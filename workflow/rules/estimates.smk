@@ -50,6 +50,9 @@ rule choices:
     benchmark:
         "results/{scene}/benchmarks/choices.tsv"
     threads: 2
+    resources:
+        mem_mb=6000,
+        runtime=60,
     params:
         records=lambda w: records(w.scene),
         signatures=lambda w: scene(w.scene)["signatures"],

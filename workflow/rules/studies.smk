@@ -1,20 +1,48 @@
-# Studies beyond the paper; each writes data, and its figure rule only reads it.
+# Studies beyond the paper, under results/studies/ (apart from the per-scene results/{scene}/).
+# Each compute rule lists the source of every rockdec module its numbers come from, so a
+# change to the study's code reruns it; each plot rule lists only the drawing code
+# (rockdec.figures) and the study's data, so a change to a plot never reruns the study.
+import ast
+from importlib.util import find_spec
+from pathlib import Path
 
-# results/amplitude/table.csv|md also match rule `estimates` (scene amplitude): the study's are meant.
-ruleorder: amplitude > estimates
+
+def package_sources(module):
+    """Source files of rockdec module ``module`` and of every rockdec module it imports,
+    directly or through others (anywhere in a module, imports inside functions included)."""
+    found, todo = {}, [module]
+    while todo:
+        name = todo.pop()
+        spec = None if name in found else find_spec(name)
+        if spec is None:  # seen already, or no module (`from rockdec import __version__`)
+            continue
+        found[name] = spec.origin
+        for node in ast.walk(ast.parse(Path(spec.origin).read_text())):
+            if isinstance(node, ast.ImportFrom) and node.level == 0 and node.module == "rockdec":
+                todo += [f"rockdec.{alias.name}" for alias in node.names]
+            elif isinstance(node, ast.ImportFrom) and node.level == 0 and (node.module or "").startswith("rockdec."):
+                todo.append(node.module)
+            elif isinstance(node, ast.Import):
+                todo += [alias.name for alias in node.names if alias.name.startswith("rockdec.")]
+    return sorted(found.values())
 
 
 rule amplitude:
     """Simplified vs Housner model over sigma_Y/theta_cr: where the simplified model's estimates drift."""
+    input:
+        code=package_sources("rockdec.amplitude"),
     output:
-        estimates="results/amplitude/amplitude.nc",
-        csv=report("results/amplitude/table.csv", category="Amplitude", caption="../report/amplitude.rst"),
-        md="results/amplitude/table.md",
+        estimates="results/studies/amplitude/amplitude.nc",
+        csv=report("results/studies/amplitude/table.csv", category="Amplitude", caption="../report/amplitude.rst"),
+        md="results/studies/amplitude/table.md",
     log:
-        "results/amplitude/logs/amplitude.log",
+        "results/studies/amplitude/logs/amplitude.log",
     benchmark:
-        "results/amplitude/benchmarks/amplitude.tsv"
+        "results/studies/amplitude/benchmarks/amplitude.tsv"
     threads: 2
+    resources:
+        mem_mb=4000,
+        runtime=60,
     params:
         scene=scene("amplitude"),
     script:
@@ -24,16 +52,22 @@ rule amplitude:
 rule fig_amplitude:
     """Estimates of both models against the amplitude ratio."""
     input:
-        "results/amplitude/amplitude.nc",
+        code=FIGURES_CODE,
+        nc="results/studies/amplitude/amplitude.nc",
     output:
-        png=report("results/amplitude/figures/amplitude.png", category="Amplitude", caption="../report/amplitude.rst"),
-        pdf="results/amplitude/figures/amplitude.pdf",
+        png=report("results/studies/amplitude/figures/amplitude.png", category="Amplitude", caption="../report/amplitude.rst"),
+        pdf="results/studies/amplitude/figures/amplitude.pdf",
     log:
-        "results/amplitude/logs/fig_amplitude.log",
+        "results/studies/amplitude/logs/fig_amplitude.log",
     benchmark:
-        "results/amplitude/benchmarks/fig_amplitude.tsv"
+        "results/studies/amplitude/benchmarks/fig_amplitude.tsv"
     threads: 1
-    params:
-        e_target=scene("amplitude")["system"]["e"],
     script:
         "../scripts/fig_amplitude.py"
+
+
+rule amplitude_study:
+    """The whole amplitude sweep, table and figure (`snakemake --cores 2 amplitude_study`)."""
+    input:
+        rules.amplitude.output,
+        rules.fig_amplitude.output,

@@ -1,30 +1,28 @@
 # Speed against accuracy (scene `tradeoff`): every knob of rockdec.tradeoff.KNOBS moved one at a
-# time from the scene; one compute rule writes the study, one plot rule only reads it.
-from importlib.util import find_spec
-
-TRADEOFF_CODE = find_spec("rockdec.tradeoff").origin
-
-
-# results/tradeoff/table.csv|md are also a pattern of rule `estimates` (scene tradeoff):
-# the study's tables are the ones meant under results/tradeoff/.
-ruleorder: tradeoff > estimates
+# time from the scene; one compute rule writes the study, one plot rule only reads it
+# (package_sources: workflow/rules/studies.smk, included before this file).
 
 
 rule tradeoff:
     """CPU cost and bias/std/RMSE of every estimator for each configuration of the study."""
+    input:
+        code=package_sources("rockdec.tradeoff"),
     output:
-        nc="results/tradeoff/tradeoff.nc",
+        nc="results/studies/tradeoff/tradeoff.nc",
         csv=report(
-            "results/tradeoff/table.csv",
+            "results/studies/tradeoff/table.csv",
             category="Speed vs accuracy",
             caption="../report/tradeoff_table.rst",
         ),
-        md="results/tradeoff/table.md",
+        md="results/studies/tradeoff/table.md",
     log:
-        "results/tradeoff/logs/tradeoff.log",
+        "results/studies/tradeoff/logs/tradeoff.log",
     benchmark:
-        "results/tradeoff/benchmarks/tradeoff.tsv"
+        "results/studies/tradeoff/benchmarks/tradeoff.tsv"
     threads: 2
+    resources:
+        mem_mb=8000,
+        runtime=120,
     params:
         scene=lambda w: scene("tradeoff"),
     script:
@@ -34,12 +32,12 @@ rule tradeoff:
 rule fig_tradeoff:
     """Pareto plot: CPU seconds per replicate against RMSE, one marker per configuration."""
     input:
-        code=TRADEOFF_CODE,
-        nc="results/tradeoff/tradeoff.nc",
+        code=FIGURES_CODE,
+        nc="results/studies/tradeoff/tradeoff.nc",
     output:
         **{
             fmt: report(
-                f"results/tradeoff/figures/pareto.{fmt}",
+                f"results/studies/tradeoff/figures/pareto.{fmt}",
                 caption="../report/tradeoff_pareto.rst",
                 category="Speed vs accuracy",
                 labels={"figure": "pareto", "format": fmt.upper()},
@@ -47,9 +45,16 @@ rule fig_tradeoff:
             for fmt in ("png", "pdf")
         },
     log:
-        "results/tradeoff/logs/fig_tradeoff.log",
+        "results/studies/tradeoff/logs/fig_tradeoff.log",
     benchmark:
-        "results/tradeoff/benchmarks/fig_tradeoff.tsv"
+        "results/studies/tradeoff/benchmarks/fig_tradeoff.tsv"
     threads: 1
     script:
         "../scripts/fig_tradeoff.py"
+
+
+rule tradeoff_study:
+    """The whole speed/accuracy study, table and Pareto plot (`snakemake --cores 2 tradeoff_study`)."""
+    input:
+        rules.tradeoff.output,
+        rules.fig_tradeoff.output,

@@ -9,5 +9,4 @@ scene = snakemake.params.scene
 ds = amplitude.sweep(scene, threads=snakemake.threads)
 ds.attrs.update(io.provenance("amplitude", scene))
 io.write_netcdf(ds, snakemake.output.estimates)
-table = amplitude.sweep_table(ds, scene["system"]["e"])
-tables.write_table(table, snakemake.output.csv, snakemake.output.md)
+tables.write_table(amplitude.sweep_table(ds), snakemake.output.csv, snakemake.output.md)

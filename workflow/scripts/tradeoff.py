@@ -2,7 +2,7 @@
 
 import sys
 
-from rockdec import io, tradeoff
+from rockdec import io, tables, tradeoff
 
 sys.stderr = open(snakemake.log[0], "w")
 scene = snakemake.params.scene
@@ -10,6 +10,5 @@ ds = tradeoff.run_study(scene, threads=snakemake.threads, progress=lambda text: 
 ds.attrs.update(io.provenance("tradeoff", scene))
 io.write_netcdf(ds, snakemake.output.nc)
 table = tradeoff.study_table(ds)
-table.to_csv(snakemake.output.csv, index=False)
-with open(snakemake.output.md, "w") as f:
-    f.write(tradeoff.table_markdown(table))
+recommendations = {criterion: tradeoff.recommend(table, criterion=criterion) for criterion in tradeoff.CRITERIA}
+tables.write_table(table, snakemake.output.csv, snakemake.output.md, markdown=tables.tradeoff_markdown(table, recommendations))
