@@ -1,18 +1,9 @@
-"""Figures (paper figs. 1b, 2-4 and the e_v figure) and the workflow that draws them.
-
-Unit tests draw every figure from small synthetic products; the workflow tests copy the
-repository's workflow into a temporary folder, shrink the ``tiny`` scene, build its whole
-DAG once with Snakemake and check the products, the dry-run job list and what reruns
-after a plotting script changes.
-"""
+"""Figures (paper figs. 1b, 2-4, the e_v figure and the studies' figures), drawn from small
+synthetic products; the workflow that draws them is tested in :mod:`test_workflow`."""
 
 from __future__ import annotations
 
 import math
-import re
-import shutil
-import subprocess
-import sys
 from pathlib import Path
 
 import matplotlib
@@ -25,12 +16,9 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 import pytest  # noqa: E402
 import xarray as xr  # noqa: E402
-import yaml  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
 from rockdec import figures, models, replicates, signatures, simulate  # noqa: E402
-
-from cf_check import cf_findings  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -236,132 +224,3 @@ def test_pareto_figure_labels_the_front_and_marks_the_base():
     for ax in shown:
         assert sorted(text.get_text() for text in ax.texts) == ["base", "points 1500"]  # 3000 is dominated
     assert "base scene" in legend_texts(fig)
-
-
-# --- the workflow, end to end ---------------------------------------------------------
-
-SCENE = "tiny"
-FIGURE_FILES = [f"figures/{name}.{fmt}" for name in figures.FIGURES for fmt in ("png", "pdf")]
-PRODUCTS = [
-    "simulations.nc",
-    "signatures.nc",
-    "stored_signature.nc",
-    "estimates.nc",
-    "estimates_other_readings.nc",
-    "estimates_readings.nc",
-    "table.csv",
-    "table.md",
-    "table_readings.csv",
-    "table_readings.md",
-    *FIGURE_FILES,
-]
-JOBS = {
-    "simulate": 1,
-    "signatures": 1,
-    "estimates": 1,
-    "readings": 1,
-    "table_readings": 1,
-    "stored_signature": 1,
-    **{name: 1 for name in figures.FIGURES},
-    "all": 1,
-}
-
-
-def snakemake(workdir, *args):
-    proc = subprocess.run(
-        [sys.executable, "-m", "snakemake", "--cores", "2", *args],
-        cwd=workdir,
-        capture_output=True,
-        text=True,
-        timeout=600,
-    )
-    return proc.returncode, proc.stdout + proc.stderr
-
-
-def job_stats(output: str) -> dict[str, int]:
-    """The first "Job stats" table of a Snakemake log as {rule: count}; {} if nothing to do."""
-    if "Nothing to be done" in output:
-        return {}
-    table = output.split("Job stats:", 1)[1].splitlines()[3:]
-    counts = {}
-    for line in table:
-        match = re.fullmatch(r"\s*(\S+)\s+(\d+)\s*", line)
-        if not match or match[1] == "total":
-            break
-        counts[match[1]] = int(match[2])
-    return counts
-
-
-@pytest.fixture(scope="module")
-def workflow(tmp_path_factory):
-    """A copy of the workflow with a shrunken tiny scene, dry-run and then built once."""
-    root = tmp_path_factory.mktemp("workflow")
-    shutil.copy(REPO / "Snakefile", root)
-    for folder in ("workflow", "config", "profiles"):
-        shutil.copytree(REPO / folder, root / folder, symlinks=False)  # resolves config/schema.yaml
-    config = yaml.safe_load((REPO / "config" / "config.yaml").read_text())
-    config["default_scene"] = SCENE
-    # 2 replicates of 10 series: the fewest the groups_of_10 reading accepts
-    config["scenes"][SCENE]["records"].update(replicates=2, series_per_replicate=10, store_series=10, chunk_seeds=10)
-    (root / "config" / "config.yaml").write_text(yaml.safe_dump(config, sort_keys=False))
-    code, dry = snakemake(root, "-n")
-    assert code == 0, dry
-    code, log = snakemake(root)
-    assert code == 0, log
-    return {"root": root, "dry_run": dry}
-
-
-@pytest.mark.slow
-def test_dry_run_lists_exactly_the_jobs_of_the_default_scene(workflow):
-    assert job_stats(workflow["dry_run"]) == JOBS
-
-
-@pytest.mark.slow
-def test_workflow_builds_every_product_and_each_opens(workflow):
-    results = workflow["root"] / "results" / SCENE
-    for name in PRODUCTS:
-        path = results / name
-        assert path.is_file() and path.stat().st_size > 0, name
-        if path.suffix == ".nc":
-            with xr.open_dataset(path) as ds:
-                assert ds.data_vars
-        elif path.suffix == ".png":
-            assert matplotlib.image.imread(path).ndim == 3
-        elif path.suffix == ".pdf":
-            assert path.read_bytes().startswith(b"%PDF")
-    with xr.open_dataset(results / "stored_signature.nc") as stored:
-        assert stored.sizes["group"] == 1
-        assert int(stored["count"].sel(trigger="a").max()) > 0
-
-
-@pytest.mark.slow
-def test_every_netcdf_product_is_cf_clean_and_carries_its_inputs_history(workflow, tmp_path):
-    root = workflow["root"]
-    products = sorted((root / "results" / SCENE).glob("*.nc"))
-    assert len(products) == 6, products
-    with xr.open_dataset(root / "results" / SCENE / "simulations.nc") as sim:
-        origin = sim.attrs["history"]
-    for path in products:
-        assert cf_findings(path, tmp_path) == {"errors": [], "warnings": []}, path.name
-        with xr.open_dataset(path) as ds:
-            attrs = ds.attrs
-        history = attrs["history"].splitlines()
-        assert history[0] == origin and len(set(history)) == len(history), path.name
-        if path.name == "simulations.nc":
-            continue
-        for source in attrs["source_files"].splitlines():
-            with xr.open_dataset(root / source) as src:  # paths as the rule gave them
-                before = src.attrs["history"].splitlines()
-            assert set(before) <= set(history[:-1]), (path.name, source)
-        assert history[-1].endswith(" ".join(attrs["source_files"].splitlines()))
-
-
-@pytest.mark.slow
-def test_touching_a_plotting_script_reruns_only_that_figure(workflow):
-    root = workflow["root"]
-    code, out = snakemake(root, "-n")
-    assert code == 0 and job_stats(out) == {}, out
-    script = root / "workflow" / "scripts" / "fig_3.py"
-    script.touch()  # now: newer than the figures, built before the dry run above
-    code, out = snakemake(root, "-n")
-    assert code == 0 and job_stats(out) == {"fig3": 1, "all": 1}, out

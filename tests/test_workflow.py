@@ -1,18 +1,222 @@
 """The Snakemake workflow as a whole: what reruns after which change, by dry runs only.
 
-Organised by topic, one section each; the dry runs use the helpers of the workflow tests of
-:mod:`test_figures` (``snakemake``, ``job_stats``).
+Organised by topic, one section each; the end-to-end section builds a shrunken ``tiny`` scene
+once and checks its products, its job list and what reruns after a script or a setting
+changes; the others use dry runs only.
 """
 
 from __future__ import annotations
 
+import contextlib
 import os
+import re
 import shutil
+import subprocess
+import sys
 from pathlib import Path
 
+import matplotlib.image
 import pytest
+import xarray as xr
+import yaml
 
-from test_figures import REPO, job_stats, snakemake
+from cf_check import cf_findings
+from rockdec import figures, run
+
+REPO = Path(__file__).resolve().parents[1]
+
+# --- the workflow, end to end ---------------------------------------------------------
+
+SCENE = "tiny"
+FIGURE_FILES = [f"figures/{name}.{fmt}" for name in figures.FIGURES for fmt in ("png", "pdf")]
+PRODUCTS = [
+    "run.json",
+    "stored_series.nc",
+    "signatures.nc",
+    "readings.nc",
+    "stored_signature.nc",
+    "estimates.nc",
+    "estimates_readings.nc",
+    "table.csv",
+    "table.md",
+    "table_readings.csv",
+    "table_readings.md",
+    *FIGURE_FILES,
+]
+JOBS = {
+    "calibrate": 1,
+    "stored_series": 1,
+    "signatures": 1,
+    "estimates": 1,
+    "table_readings": 1,
+    "stored_signature": 1,
+    **{name: 1 for name in figures.FIGURES},
+    "all": 1,
+}
+
+
+def snakemake(workdir, *args):
+    """``python -m snakemake --cores 2 *args`` in ``workdir``: exit code and output."""
+    proc = subprocess.run(
+        [sys.executable, "-m", "snakemake", "--cores", "2", *args],
+        cwd=workdir,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    return proc.returncode, proc.stdout + proc.stderr
+
+
+def job_stats(output: str) -> dict[str, int]:
+    """The first "Job stats" table of a Snakemake log as {rule: count}; {} if nothing to do."""
+    if "Nothing to be done" in output:
+        return {}
+    table = output.split("Job stats:", 1)[1].splitlines()[3:]
+    counts = {}
+    for line in table:
+        match = re.fullmatch(r"\s*(\S+)\s+(\d+)\s*", line)
+        if not match or match[1] == "total":
+            break
+        counts[match[1]] = int(match[2])
+    return counts
+
+
+@pytest.fixture(scope="module")
+def workflow(tmp_path_factory):
+    """A copy of the workflow with a shrunken tiny scene, dry-run and then built once."""
+    root = tmp_path_factory.mktemp("workflow")
+    shutil.copy(REPO / "Snakefile", root)
+    for folder in ("workflow", "config", "profiles"):
+        shutil.copytree(REPO / folder, root / folder, symlinks=False)  # resolves config/schema.yaml
+    config = yaml.safe_load((REPO / "config" / "config.yaml").read_text())
+    config["default_scene"] = SCENE
+    # 2 replicates of 10 series: the fewest the groups_of_10 reading accepts
+    config["scenes"][SCENE]["records"].update(replicates=2, series_per_replicate=10, store_series=10, chunk_seeds=10)
+    (root / "config" / "config.yaml").write_text(yaml.safe_dump(config, sort_keys=False))
+    code, dry = snakemake(root, "-n")
+    assert code == 0, dry
+    code, log = snakemake(root)
+    assert code == 0, log
+    return {"root": root, "dry_run": dry}
+
+
+@pytest.mark.slow
+def test_dry_run_lists_exactly_the_jobs_of_the_default_scene(workflow):
+    assert job_stats(workflow["dry_run"]) == JOBS
+
+
+@pytest.mark.slow
+def test_workflow_builds_every_product_and_each_opens(workflow):
+    results = workflow["root"] / "results" / SCENE
+    for name in PRODUCTS:
+        path = results / name
+        assert path.is_file() and path.stat().st_size > 0, name
+        if path.suffix == ".json":
+            assert run.Run.read(path).e == 0.95
+        elif path.suffix == ".nc":
+            with xr.open_dataset(path) as ds:
+                assert ds.data_vars
+        elif path.suffix == ".png":
+            assert matplotlib.image.imread(path).ndim == 3
+        elif path.suffix == ".pdf":
+            assert path.read_bytes().startswith(b"%PDF")
+    with xr.open_dataset(results / "stored_signature.nc") as stored:
+        assert stored.sizes["group"] == 1
+        assert int(stored["count"].sel(trigger="a").max()) > 0
+
+
+@pytest.mark.slow
+def test_every_netcdf_product_is_cf_clean_and_carries_its_inputs_history(workflow, tmp_path):
+    root = workflow["root"]
+    products = sorted((root / "results" / SCENE).glob("*.nc"))
+    assert len(products) == 6, products
+    contract = run.Run.read(root / "results" / SCENE / "run.json")
+    for path in products:
+        assert cf_findings(path, tmp_path) == {"errors": [], "warnings": []}, path.name
+        with xr.open_dataset(path) as ds:
+            attrs = ds.attrs
+        history = attrs["history"].splitlines()
+        assert len(set(history)) == len(history), path.name
+        if path.name in ("stored_series.nc", "signatures.nc", "stored_signature.nc"):  # the run travels with the data
+            assert run.Run.from_attrs(attrs) == contract, path.name
+        for source in attrs["source_files"].splitlines():
+            if not source.endswith(".nc"):  # run.json: read whole, no history
+                continue
+            with xr.open_dataset(root / source) as src:  # paths as the rule gave them
+                before = src.attrs["history"].splitlines()
+            assert set(before) <= set(history[:-1]), (path.name, source)
+        assert history[-1].endswith(" ".join(attrs["source_files"].splitlines()))
+
+
+@pytest.mark.slow
+def test_touching_a_plotting_script_reruns_only_that_figure(workflow):
+    root = workflow["root"]
+    code, out = snakemake(root, "-n")
+    assert code == 0 and job_stats(out) == {}, out
+    script = root / "workflow" / "scripts" / "fig_3.py"
+    script.touch()  # now: newer than the figures, built before the dry run above
+    code, out = snakemake(root, "-n")
+    assert code == 0 and job_stats(out) == {"fig3": 1, "all": 1}, out
+    code, out = snakemake(root, "--touch", "-q")  # mark it done again for the next tests
+    assert code == 0, out
+
+
+@contextlib.contextmanager
+def edited_scene(root: Path, edit):
+    """The copy's config with ``edit(scene)`` applied to the tiny scene, restored afterwards."""
+    path = root / "config" / "config.yaml"
+    before = path.read_text()
+    config = yaml.safe_load(before)
+    edit(config["scenes"][SCENE])
+    path.write_text(yaml.safe_dump(config, sort_keys=False))
+    try:
+        yield
+    finally:
+        path.write_text(before)
+
+
+def dry_run_after(root: Path, edit) -> dict[str, int]:
+    with edited_scene(root, edit):
+        code, out = snakemake(root, "-n")
+    assert code == 0, out
+    return job_stats(out)
+
+
+@pytest.mark.slow
+def test_editing_a_description_reruns_nothing(workflow):
+    assert dry_run_after(workflow["root"], lambda scene: scene.update(description="another text")) == {}
+
+
+@pytest.mark.slow
+def test_editing_the_extrapolation_weights_reruns_only_what_reads_them(workflow):
+    jobs = dry_run_after(workflow["root"], lambda scene: scene["estimates"].update(weights="count"))
+    # the estimates and the readings' table read the weights; the figures read the estimates
+    assert jobs == {"estimates": 1, "table_readings": 1, "fig3": 1, "fig4": 1, "fig_ev": 1, "all": 1}
+
+
+@pytest.mark.slow
+def test_editing_a_signature_setting_reruns_the_pass_but_not_the_run(workflow):
+    jobs = dry_run_after(workflow["root"], lambda scene: scene["signatures"].update(level=2.5))
+    assert "calibrate" not in jobs and "stored_series" not in jobs and "fig1b" not in jobs
+    assert jobs["signatures"] == 1 and jobs["stored_signature"] == 1 and jobs["estimates"] == 1
+
+
+@pytest.mark.slow
+def test_editing_the_system_reruns_from_the_run_contract(workflow):
+    jobs = dry_run_after(workflow["root"], lambda scene: scene["system"].update(e=0.9))
+    assert jobs["calibrate"] == 1 and jobs["stored_series"] == 1 and jobs["signatures"] == 1
+
+
+# --- a cluster: the large scene's signature pass is split into jobs a cluster spreads
+
+
+@pytest.mark.slow
+def test_the_slurm_profile_lists_the_large_scenes_signature_jobs(workflow):
+    code, out = snakemake(workflow["root"], "-n", "--profile", "profiles/slurm", "results/large/table.csv")
+    assert code == 0, out
+    assert job_stats(out) == {"calibrate": 1, "signature_part": 20, "signatures": 1, "estimates": 1}
+    assert re.search(r"resources: .*mem_mb=\d+", out) and "runtime=60" in out, out
+
 
 # --- studies: a change to a study's compute code reruns it; a change to drawing code only redraws
 
