@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import errno
 import math
-import os
 import subprocess
 import sys
 import textwrap
@@ -21,7 +20,7 @@ import xarray as xr
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from rockdec import config, estimators, fixed_step, housner, io, run, signatures, simulate
+from rockdec import estimators, fixed_step, housner, io, run, signatures, simulate
 from rockdec import validate as checks
 from rockdec.cli import main
 
@@ -159,59 +158,6 @@ def test_files_are_refused(files, tmp_path, capsys, argv, keywords):
         argv += ["--out", str(tmp_path / "o.nc")]
     refused(argv, tmp_path, capsys, keywords)
     assert sorted(p.name for p in files.iterdir()) == ["notes.txt", "sig.nc", "sim.nc"]
-
-
-CONFIG_CASES = {
-    "e .nan": ("system: {e: .nan}", ["scenes.s.system.e", "not a finite number"]),
-    "nu .inf": ("system: {nu: .inf}", ["scenes.s.system.nu", "not a finite number"]),
-    "n_points decimal": ("records: {n_points: 6000.0}", ["scenes.s.records.n_points", "write 6000"]),
-    "burn_in decimal": ("excitation: {burn_in: 10.0}", ["scenes.s.excitation.burn_in", "write 10"]),
-    "windows with nan": ("signatures: {windows: [0.5, .nan]}", ["scenes.s.signatures.windows.1", "finite"]),
-    "groups_of_10 with 5 series": (
-        "records: {series_per_replicate: 5}\n    estimates: {reading: groups_of_10}",
-        ["scenes.s.estimates.reading", "at least 10 series", "series_per_replicate' is 5"],
-    ),
-    "compare_readings with 5 series": (
-        "records: {series_per_replicate: 5}",
-        ["scenes.s.estimates.compare_readings", "compare_readings: false"],
-    ),
-    "reading unknown": ("estimates: {reading: all}", ["scenes.s.estimates.reading", "use one of pooled"]),
-}
-
-
-@pytest.mark.parametrize("body, keywords", CONFIG_CASES.values(), ids=CONFIG_CASES.keys())
-def test_config_refused_naming_the_file_passed(tmp_path, capsys, body, keywords):
-    path = config_file(tmp_path, f"default_scene: s\nscenes:\n  s:\n    {body}\n")
-    argv = ["simulate", "--config", str(path), "--scene", "s", "--out", str(tmp_path / "o.nc")]
-    refused(argv, tmp_path, capsys, [*keywords, str(path)])
-
-
-@pytest.mark.parametrize(
-    "text, keywords",
-    [
-        ("default_scene: ../evil\nscenes:\n  ../evil: {}\n", ["'../evil'", "not a plain name"]),
-        ("default_scene: a\nscenes:\n  a/b: {}\n  a: {}\n", ["'a/b'", "not a plain name"]),
-        ("scenes: [1, 2\n", ["not valid YAML"]),
-        ("- just\n- a list\n", ["not a mapping"]),
-        ("default_scene: nope\nscenes:\n  s: {}\n", ["default_scene", "'nope' is not a scene"]),
-    ],
-    ids=["scene name ../", "scene name with /", "YAML syntax", "not a mapping", "default scene missing"],
-)
-def test_config_file_refused(tmp_path, capsys, text, keywords):
-    path = config_file(tmp_path, text)
-    argv = ["simulate", "--config", str(path), "--scene", "s", "--out", str(tmp_path / "o.nc")]
-    refused(argv, tmp_path, capsys, [*keywords, str(path)])
-
-
-def test_workflow_names_the_configfile_passed(tmp_path):
-    path = config_file(tmp_path, "default_scene: s\nscenes:\n  s:\n    system: {e: .nan}\n")
-    proc = subprocess.run(
-        [sys.executable, "-m", "snakemake", "-n", "--cores", "1", "--configfile", str(path)],
-        cwd=ROOT, capture_output=True, text=True, timeout=120,
-    )
-    assert proc.returncode == 2
-    assert f"Fix it in {path}" in proc.stderr and "scenes.s.system.e" in proc.stderr
-    assert "Traceback" not in proc.stderr
 
 
 def test_memory_check_names_the_flag(tmp_path, capsys, monkeypatch, files):

@@ -29,18 +29,6 @@ def stored(tmp_path_factory):
     return {"scene": scene, "run": contract, "paths": paths}
 
 
-def test_store_series_is_a_count_or_all(tmp_path):
-    with pytest.raises(config.ConfigError, match="store_series"):
-        config.validate_scene({"records": {"store_series": "most"}})
-    scene = config.validate_scene({"records": {"replicates": 3, "store_series": 5}})
-    rec = scene["records"]
-    assert layout.replicate_files(tmp_path, rec) == []
-    assert layout.simulation_seeds(rec).tolist() == [0, 1, 2, 3, 4]
-    rec["store_series"] = "all"
-    assert [p.name for p in layout.replicate_files(tmp_path, rec)] == ["replicate_0.nc", "replicate_1.nc", "replicate_2.nc"]
-    assert layout.simulation_seeds(rec).size == layout.FIGURE_SERIES
-
-
 def test_replicate_file_holds_its_seeds_as_float32_chunked_by_seed_and_compressed(stored):
     scene, contract = stored["scene"], stored["run"]
     seeds = layout.scene_seeds(scene["records"])[1]
