@@ -173,8 +173,9 @@ def _fit2(t, y):
 
     Returns ``(tc, c0, c1, c2)``. Solved by the 3x3 normal equations in the scaled variable
     ``u = (t - tc)/h`` in ``[-1, 1]`` (``tc``, ``h`` the centre and half-range of ``t``,
-    at least 3 points), by Gaussian elimination with partial pivoting: well conditioned
-    for the few points of each fit, and far cheaper than a general polynomial fit.
+    at least 3 points), by Gaussian elimination with partial pivoting as ``np.linalg.solve``
+    does: well conditioned for the few points of each fit, and far cheaper than a general
+    polynomial fit.
     """
     n = t.size
     tc = 0.5 * (t[0] + t[n - 1])
@@ -191,7 +192,7 @@ def _fit2(t, y):
         b1 += u * y[j]
         b2 += u2 * y[j]
     a = np.array([[float(n), s1, s2, b0], [s1, s2, s3, b1], [s2, s3, s4, b2]])
-    for col in range(3):
+    for col in range(3):  # LU with partial pivoting, the order of operations of LAPACK's gesv
         pivot = col
         for row in range(col + 1, 3):
             if abs(a[row, col]) > abs(a[pivot, col]):
@@ -199,13 +200,16 @@ def _fit2(t, y):
         if pivot != col:
             for k in range(col, 4):
                 a[col, k], a[pivot, k] = a[pivot, k], a[col, k]
+        inverse = 1.0 / a[col, col]
         for row in range(col + 1, 3):
-            factor = a[row, col] / a[col, col]
+            factor = a[row, col] * inverse
             for k in range(col + 1, 4):
                 a[row, k] -= factor * a[col, k]
-    a2 = a[2, 3] / a[2, 2]
-    a1 = (a[1, 3] - a[1, 2] * a2) / a[1, 1]
-    a0 = (a[0, 3] - a[0, 1] * a1 - a[0, 2] * a2) / a[0, 0]
+    for col in range(2, -1, -1):  # back substitution by columns
+        a[col, 3] /= a[col, col]
+        for row in range(col):
+            a[row, 3] -= a[row, col] * a[col, 3]
+    a0, a1, a2 = a[0, 3], a[1, 3], a[2, 3]
     return tc, a0, a1 / h, a2 / (h * h)
 
 
