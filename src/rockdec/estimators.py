@@ -389,6 +389,9 @@ def _e_impact_slope(d, dt, fit_points):
 def _estimate_rows(r, d, dt, fit_points):
     """Every estimator of :data:`ESTIMATORS` on every row: ``(values[n, 7], codes[n, 7])``.
 
+    ``e_g`` (eqs. 25, 7), ``e_0`` (eq. 26), ``e1..e4`` (eq. 27) from one lobe search and
+    one set of half-cycle fits per free response, ``e_v`` (eq. 6) from its ``D_v`` row.
+
     ``r[n, lag_pos]`` free responses, ``d[n, lag]`` their ``D_v`` signatures or ``None``
     (``e_v`` NaN, "no D_v signature"); ``dt`` and ``fit_points`` already checked.
     The batch kernel of :func:`estimate_cube` and :func:`estimate_all`.
@@ -434,6 +437,7 @@ def _check_options(dt, fit_points, with_dv: bool) -> tuple[float, int]:
 
 
 def _lobes_of(r, lobes):
+    """``lobes`` when the caller has them (the result of :func:`_lobes` on ``r``), else found."""
     return _lobes(r) if lobes is None else lobes
 
 
@@ -545,7 +549,7 @@ _EXTRAPOLATION_REASONS = ("", "fewer than 2 usable points", "all points at one w
 
 
 def _extrapolate_rows(x, y, w):
-    """:func:`extrapolate_to_zero` on every row at once (last axis; ``x``, ``y``, ``w``
+    """:func:`extrapolate_to_zero` (§5) on every row at once (last axis; ``x``, ``y``, ``w``
     broadcast): arrays ``value``, ``stderr``, ``slope`` and the reason code (index of
     :data:`_EXTRAPOLATION_REASONS`)."""
     x, y, w = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (x, y, w)))
