@@ -11,9 +11,14 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from rockdec import signatures, simulate
 from rockdec.estimators import (
     ESTIMATORS,
+    LOCAL_ESTIMATORS,
     Estimate,
+    _lobes,
+    _reference_half_cycle,
+    _reference_lobes,
     e_first_peak,
     e_global,
     e_impact_slope,
@@ -23,6 +28,7 @@ from rockdec.estimators import (
     extrapolate_to_zero,
     half_cycle,
     local_measures,
+    reference_estimate_all,
 )
 
 G = 2.0  # rad/s^2: with A = 1 rad the first crossing is at t1 = 1 s
@@ -322,7 +328,7 @@ def signature_cube():
 
 
 @pytest.mark.parametrize("use_dask", [False, True])
-def test_estimate_cube_equals_kernel(use_dask):
+def test_estimate_cube_equals_reference(use_dask):
     free, dv, dt = signature_cube()
     if use_dask:
         free, dv = free.chunk({"e_true": 1}), dv.chunk({"e_true": 1})
@@ -334,9 +340,9 @@ def test_estimate_cube_equals_kernel(use_dask):
     e_hat = out["e_hat"].compute()
     for i in range(3):
         for j in range(4):
-            expected = estimate_all(free.values[i, j], dv.values[i], dt, 5)
+            expected = reference_estimate_all(free.values[i, j], dv.values[i], dt, 5)
             got = e_hat.isel(e_true=i, window=j)
-            np.testing.assert_array_equal(got.values, [v.value for v in expected.values()])
+            np.testing.assert_allclose(got.values, [v.value for v in expected.values()], rtol=1e-12, atol=0)
 
 
 def test_estimate_cube_without_dv_signature_gives_nan_e_v():
@@ -367,3 +373,216 @@ def test_extrapolate_equals_kernel(use_dask):
                 np.testing.assert_array_equal(
                     [got["e_hat0"], got["e_hat0_stderr"], got["slope"]], expected[:3]
                 )
+
+
+# --- the batch kernel against the per-signature reference -----------------------------
+#
+# ``reference_estimate_all`` is the former per-signature NumPy implementation
+# (np.linalg.solve per fit, NumPy runs for the lobes); the kernels must give its values to
+# 1e-12 (relative on real signatures), the same NaN and the same reasons.
+
+
+def assert_same_estimates(got, expected, rtol=1e-12, atol=0.0):
+    """Two lists of ``{name: Estimate}``: same reasons (so the same NaN), values to ``rtol``/``atol``."""
+    assert [[e.reason for e in row.values()] for row in got] == [[e.reason for e in row.values()] for row in expected]
+    values = np.array([[e.value for e in row.values()] for row in got])
+    reference = np.array([[e.value for e in row.values()] for row in expected])
+    np.testing.assert_array_equal(np.isnan(values), np.isnan(reference))
+    np.testing.assert_allclose(values, reference, rtol=rtol, atol=atol)
+    return reference
+
+
+@pytest.fixture(scope="module")
+def simulated_signatures():
+    """Per-series and pooled signatures of 6 simulated series at 75 and at 9 samples per cycle
+    (the coarse step leaves the half-cycle fits too few points), each free response also cut
+    to a half and a third of its lags (minima beyond the range), each ``D_v`` also cut to 3
+    lags a side (too few for the fits): ``[(r, d, dt)]``."""
+    cases = []
+    for dt in (0.00343, 0.0286):
+        theta, _ = simulate.simulate_block(np.arange(6), 3000, dt=dt, g=1.0, e=0.95, sigma_p=0.003, burn_in=2000)
+        stats = simulate.pilot_statistics(theta, dt, 1.0)
+        theta = xr.DataArray(theta, dims=("seed", "time"), attrs={"dt": dt})
+        kw = dict(sigma_y=stats["sigma_y"], sigma_ydot=stats["sigma_ydot"], windows=np.arange(1, 11) / 10, g=1.0)
+        for group in (None, xr.DataArray([0, 0, 0, 1, 1, 1], dims="seed")):
+            cube = signatures.signature_cube(theta, group=group, **kw)
+            r = cube["free_response"].values.reshape(-1, cube.sizes["lag_pos"])
+            d = cube["signature"].sel(trigger="v").values.reshape(-1, cube.sizes["lag"])
+            lag0 = d.shape[1] // 2
+            for i in range(r.shape[0]):
+                for n_lag in (r.shape[1], r.shape[1] // 2, r.shape[1] // 3):
+                    cases.append((r[i, :n_lag], d[i], dt))
+                cases.append((r[i], d[i, lag0 - 3 : lag0 + 4], dt))
+    return cases
+
+
+def test_kernel_equals_reference_on_simulated_signatures(simulated_signatures):
+    got = [estimate_all(r, d, dt) for r, d, dt in simulated_signatures]
+    expected = [reference_estimate_all(r, d, dt) for r, d, dt in simulated_signatures]
+    reference = assert_same_estimates(got, expected)
+    reasons = {e.reason for row in expected for e in row.values()}
+    assert {"fewer than 3 points for a fit", "first minimum beyond the lag range", "no zero crossing"} <= reasons
+    assert {"NaN in signature", "fewer than fit_points=5 lags on a side"} <= reasons
+    assert np.isfinite(reference).sum() > 2000  # most signatures give values
+
+
+def test_estimate_cube_equals_reference_on_simulated_cube():
+    dt = 0.00343
+    theta, _ = simulate.simulate_block(np.arange(4), 3000, dt=dt, g=1.0, e=0.95, sigma_p=0.003, burn_in=2000)
+    stats = simulate.pilot_statistics(theta, dt, 1.0)
+    theta = xr.DataArray(theta, dims=("seed", "time"), attrs={"dt": dt})
+    cube = signatures.signature_cube(theta, sigma_y=stats["sigma_y"], sigma_ydot=stats["sigma_ydot"], windows=np.arange(1, 9) / 8, g=1.0)
+    free, dv = cube["free_response"], cube["signature"].sel(trigger="v", drop=True)
+    loaded = estimate_cube(free, dv, dt)["e_hat"]
+    chunked = estimate_cube(free.chunk({"seed": 3, "window": 5}), dv.chunk({"seed": 1}), dt)["e_hat"]
+    assert chunked.chunks is not None
+    xr.testing.assert_identical(chunked.compute(), loaded)  # the same kernel on every block
+    without_dv = estimate_cube(free.chunk({"seed": 2}), None, dt)["e_hat"].compute()
+    xr.testing.assert_identical(without_dv.drop_sel(estimator="e_v"), loaded.drop_sel(estimator="e_v"))
+    assert without_dv.sel(estimator="e_v").isnull().all()
+    expected = [
+        reference_estimate_all(free.values[i, j], dv.values[i, j], dt) for i in range(free.sizes["seed"]) for j in range(free.sizes["window"])
+    ]
+    values = loaded.transpose("seed", "window", "estimator").values.reshape(-1, len(ESTIMATORS))
+    reference = np.array([[e.value for e in row.values()] for row in expected])
+    np.testing.assert_array_equal(np.isnan(values), np.isnan(reference))
+    np.testing.assert_allclose(values, reference, rtol=1e-12, atol=0)
+
+
+def test_single_estimator_functions_equal_reference(simulated_signatures):
+    """The public one-estimator functions run the same kernels as the batch."""
+    for r, d, dt in simulated_signatures[::7]:
+        expected = reference_estimate_all(r, d, dt)
+        lobes = _lobes(r)
+        for name, func in (("e_g", e_global), ("e_0", e_first_peak)):
+            assert func(r).reason == func(r, lobes).reason == expected[name].reason
+            np.testing.assert_allclose(func(r).value, expected[name].value, rtol=1e-12, atol=0)
+        local = local_measures(r, dt, lobes)
+        assert_same_estimates([local], [{name: expected[name] for name in LOCAL_ESTIMATORS}])
+        assert_same_estimates([{"e_v": e_impact_slope(d, dt)}], [{"e_v": expected["e_v"]}])
+        h, h_ref = half_cycle(r, dt), _reference_half_cycle(r, dt, _reference_lobes(r))
+        assert h.reason == h_ref.reason
+        np.testing.assert_allclose(h[:6], h_ref[:6], rtol=1e-12, atol=0)
+
+
+def test_kernel_equals_reference_on_arbitrary_input():
+    """Noise, random walks and crafted corners reach every way a fit fails. Values here can
+    be near zero after cancellation (e2 = v2/v1 of two noise slopes), so the tolerance is
+    1e-12 absolute or relative, whichever is larger."""
+    rng = np.random.default_rng(11)
+    cases = []
+    for k in range(3000):
+        r = rng.standard_normal(rng.integers(1, 80))
+        if k % 2:
+            r[0] = abs(r[0]) + 0.5
+        if k % 3 == 0:
+            r = 0.1 * np.cumsum(r) + np.cos(np.arange(r.size) * rng.uniform(0.05, 0.5))
+            r[0] = 1.0
+        if k % 7 == 0:
+            r[rng.integers(r.size)] = 0.0  # a zero inside a run or between runs
+        d = rng.standard_normal(2 * rng.integers(0, 12) + 1)
+        if k % 11 == 0:
+            d[d.size // 2 - 3 : d.size // 2] = 1.0  # flat before the impact
+        cases.append((r, d))
+    cases += [
+        (np.array([]), np.zeros(4)),  # empty, even D_v
+        (np.zeros((3, 3)), np.zeros((3, 3))),  # not one-dimensional
+        (np.r_[1e-300, -1e300, 1.0, 1.0, 0.5], np.r_[1e300, -1e300, 1.0, 1e300, 1e-300, 1e300, -1e300]),  # overflow
+        (np.r_[1.0, 0.0, 0.0, -1.0, 0.0, 1.0, 0.0], None),
+    ]
+    got = [estimate_all(r, d, 0.05, 3) for r, d in cases]
+    expected = [reference_estimate_all(r, d, 0.05, 3) for r, d in cases]
+    assert_same_estimates(got, expected, rtol=1e-12, atol=1e-12)
+    reasons = {e.reason for row in expected for e in row.values()}
+    assert {
+        "empty signature",
+        "r[0] not positive",
+        "before-crossing fit has no real root",
+        "minimum fit has no minimum",
+        "fitted crossing t1 not between 0 and t2",
+        "not finite: the signature values overflow the arithmetic",
+        "D_v signature length not odd: no lag 0",
+        "zero slope before the impact",
+        "no D_v signature",
+    } <= reasons
+
+
+@pytest.mark.parametrize("use_dask", [False, True])
+def test_estimate_cube_recovers_e_on_ideal_responses(use_dask):
+    """Closed-form responses (eqs. 4, 6) through the batch kernel: e1..e4 and e_v exact to rounding."""
+    dt = dt_of()
+    lag_pos, lag = dt * np.arange(188), dt * np.arange(-10, 11)
+    e_true = np.array(E_VALUES)
+    free = xr.DataArray(np.stack([free_rocking(e, lag_pos) for e in e_true]), dims=("e_true", "lag_pos"), coords={"e_true": e_true})
+    dv = xr.DataArray(np.stack([through_impact(e, lag) for e in e_true]), dims=("e_true", "lag"), coords={"e_true": e_true})
+    if use_dask:
+        free, dv = free.chunk({"e_true": 2}), dv.chunk({"e_true": 3})
+    e_hat = estimate_cube(free, dv, dt)["e_hat"].compute()
+    exact = e_hat.sel(estimator=[*LOCAL_ESTIMATORS, "e_v"])
+    np.testing.assert_allclose(exact.values, np.broadcast_to(e_true, exact.shape), rtol=0, atol=1e-9)
+
+
+def test_kernels_check_their_inputs():
+    r, dt = sampled_free_response(0.9)
+    with pytest.raises(ValueError, match="dt"):
+        estimate_all(r, None, 0.0)
+    with pytest.raises(ValueError, match="fit_points=2"):
+        estimate_all(r, np.zeros(21), dt, 2)
+    assert estimate_all(r, None, dt, 2)["e_v"].reason == "no D_v signature"  # fit_points unused
+    free = xr.DataArray(r[None], dims=("seed", "lag_pos"))
+    with pytest.raises(ValueError, match="dt"):
+        estimate_cube(free, None, -1.0)
+    with pytest.raises(ValueError, match="fit_points=2"):
+        estimate_cube(free, xr.DataArray(np.zeros((1, 21)), dims=("seed", "lag")), dt, 2)
+
+
+# --- batched extrapolation against an independent weighted least squares -------------
+
+
+def lstsq_extrapolation(x, y, w):
+    """Weighted least squares by ``lstsq`` on ``sqrt(w)``-scaled rows, the covariance
+    ``s^2 (X^T W X)^-1`` for the standard error: independent of the normal-equation sums of
+    :func:`extrapolate_to_zero`, with the same point and NaN rules."""
+    use = np.isfinite(x) & np.isfinite(y) & np.isfinite(w) & (w > 0)
+    x, y, w = x[use], y[use], w[use]
+    if x.size < 2 or np.all(x == x[0]):
+        return np.nan, np.nan, np.nan
+    design = np.stack([np.ones_like(x), x], axis=1)
+    root = np.sqrt(w)
+    (value, slope), *_ = np.linalg.lstsq(design * root[:, None], y * root, rcond=None)
+    if x.size == 2:
+        return value, np.nan, slope
+    s2 = np.sum(w * (y - value - slope * x) ** 2) / (x.size - 2)
+    cov = s2 * np.linalg.inv(design.T @ (w[:, None] * design))
+    return value, np.sqrt(cov[0, 0]), slope
+
+
+@pytest.mark.parametrize("use_dask", [False, True])
+def test_extrapolate_equals_independent_least_squares(use_dask):
+    rng = np.random.default_rng(6)
+    n_rows = 300
+    y = 0.95 - 0.05 * WINDOWS + 0.01 * rng.standard_normal((n_rows, WINDOWS.size))
+    y[rng.random(y.shape) < 0.3] = np.nan  # rows with 0 .. 8 usable points
+    y[:20, 2:] = np.nan  # two points: no stderr
+    counts = rng.integers(0, 5, size=(n_rows, WINDOWS.size)).astype(float)  # some weights zero
+    counts[20:30] = np.where(np.arange(WINDOWS.size) == 4, 1.0, 0.0)  # a single usable point
+    e_hat = xr.DataArray(y, dims=("row", "window"), coords={"window": WINDOWS})
+    w = xr.DataArray(counts, dims=("row", "window"))
+    if use_dask:
+        e_hat, w = e_hat.chunk({"row": 70}), w.chunk({"row": 110})
+    for weights in (None, w):
+        out = extrapolate(e_hat, weights).compute()
+        expected = np.array(
+            [lstsq_extrapolation(WINDOWS, y[i], WINDOWS if weights is None else counts[i]) for i in range(n_rows)]
+        )
+        got = np.stack([out["e_hat0"].values, out["e_hat0_stderr"].values, out["slope"].values], axis=1)
+        np.testing.assert_array_equal(np.isnan(got), np.isnan(expected))
+        np.testing.assert_allclose(got, expected, rtol=1e-12, atol=1e-12)
+        assert np.isnan(expected[:, 0]).sum() > 5 and np.isnan(expected[:, 1]).sum() > 15  # every NaN rule met
+
+
+def test_extrapolation_refuses_negative_weights_and_flags_one_window():
+    with pytest.raises(ValueError, match="non-negative"):
+        extrapolate_to_zero(WINDOWS, WINDOWS, -WINDOWS)
+    same = extrapolate_to_zero(np.full(4, 0.5), np.arange(4.0))
+    assert np.isnan(same.value) and same.reason == "all points at one window size"

@@ -16,9 +16,15 @@ Estimators (each returns :class:`Estimate`: a value and, when the value is NaN, 
 Then :func:`extrapolate_to_zero` takes an estimator over the window sizes ``da`` of eq. 19
 to zero window by weighted least squares (§5).
 
-Kernels take NumPy arrays and never raise on bad data: a NaN comes with a reason.
-:func:`estimate_cube` and :func:`extrapolate` are the labelled (xarray/Dask) wrappers; they
-keep the values only, and :func:`estimate_all` on one signature gives the reasons.
+Kernels are numba functions on NumPy arrays that never raise on bad data: a NaN comes with
+an integer reason code (:data:`_REASONS`). :func:`_estimate_rows` runs every estimator on
+a batch of signatures ``r[n, lag_pos]``, ``d[n, lag]``; :func:`estimate_cube` (labelled,
+xarray/Dask) hands it whole blocks and keeps the values, :func:`estimate_all` hands it one
+signature and turns the codes into reasons. The single-estimator functions
+(:func:`e_global`, :func:`half_cycle`, ...) call the same kernels. :func:`extrapolate` is
+batched NumPy over every row at once. :func:`reference_estimate_all` is the former
+per-signature NumPy implementation, kept only to check the kernels (tests) and to time
+them (``benchmarks/bench_estimators.py``).
 
 Units: ``r`` and ``d`` in rad, ``dt`` and the fitted times in s, slopes in rad/s; every
 ``e`` estimate is dimensionless.
@@ -26,10 +32,12 @@ Units: ``r`` and ``d`` in rad, ``dt`` and the fitted times in s, slopes in rad/s
 
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
 import numpy as np
 import xarray as xr
+from numba import njit
 
 from rockdec import __version__
 from rockdec import validate as checks
@@ -42,6 +50,7 @@ LOCAL_ESTIMATORS = ("e1", "e2", "e3", "e4")
 MIN_FIT_POINTS = 3
 """Fewest points of any second-order fit: three coefficients need three points (with three
 the fit interpolates). Fits that would get fewer give NaN, ``"fewer than 3 points for a fit"``."""
+
 
 def min_points_per_cycle(e: float, level: float) -> float:
     """Fewest samples per cycle at amplitude ``sigma_Y`` for which ``e1..e4`` can be fitted.
@@ -93,99 +102,343 @@ class Extrapolation(NamedTuple):
     reason: str = ""
 
 
-class _Parabola(NamedTuple):
-    """``y = c0 + c1 (t - tc) + c2 (t - tc)^2``: a least-squares parabola about ``tc``."""
+# --------------------------------------------------------------------------- reason codes
 
-    tc: float
-    c0: float
-    c1: float
-    c2: float
+_REASONS = (
+    "",
+    "empty signature",
+    "NaN in signature",
+    "r[0] not positive",
+    "no zero crossing",
+    "first minimum beyond the lag range",
+    f"fewer than {MIN_FIT_POINTS} points for a fit",
+    "before-crossing fit has no real root",
+    "before-crossing fit touches zero without crossing",
+    "minimum fit has no minimum",
+    "fitted c1 not positive",
+    "fitted crossing t1 not between 0 and t2",
+    "not finite: the signature values overflow the arithmetic",
+    "D_v signature length not odd: no lag 0",
+    "fewer than fit_points={fit_points} lags on a side",
+    "zero slope before the impact",
+    "no D_v signature",
+)
+"""Why a kernel's value is NaN, indexed by its integer code (0: no NaN)."""
 
-    def value(self, t):
-        u = t - self.tc
-        return self.c0 + u * (self.c1 + u * self.c2)
-
-    def slope(self, t):
-        return self.c1 + 2.0 * self.c2 * (t - self.tc)
-
-    def vertex(self):
-        return self.tc - self.c1 / (2.0 * self.c2)
-
-    def roots(self) -> np.ndarray:
-        """Real roots in ``t``, computed without cancellation."""
-        c0, c1, c2 = self.c0, self.c1, self.c2
-        if c2 == 0.0:
-            return np.array([self.tc - c0 / c1]) if c1 != 0.0 else np.array([])
-        disc = c1 * c1 - 4.0 * c2 * c0
-        if disc < 0.0:
-            return np.array([])
-        q = -0.5 * (c1 + np.copysign(np.sqrt(disc), c1))
-        us = [q / c2] + ([c0 / q] if q != 0.0 else [])
-        return self.tc + np.array(us)
-
-
-def _fit2(t: np.ndarray, y: np.ndarray) -> _Parabola:
-    """Least-squares parabola through ``(t, y)`` (at least 3 points).
-
-    Solved by the 3x3 normal equations in the scaled variable ``u = (t - tc)/h`` in
-    ``[-1, 1]`` (``tc``, ``h`` the centre and half-range of ``t``): well conditioned for
-    the few points of each fit, and far cheaper than a general polynomial fit.
-    """
-    tc = 0.5 * (t[0] + t[-1])
-    h = 0.5 * (t[-1] - t[0])
-    u = (t - tc) / h
-    u2 = u * u
-    s = (u.size, u.sum(), u2.sum(), (u2 * u).sum(), (u2 * u2).sum())
-    normal = np.array([[s[0], s[1], s[2]], [s[1], s[2], s[3]], [s[2], s[3], s[4]]])
-    a0, a1, a2 = np.linalg.solve(normal, np.array([y.sum(), (u * y).sum(), (u2 * y).sum()]))
-    return _Parabola(float(tc), float(a0), float(a1 / h), float(a2 / h**2))
+(
+    _OK,
+    _EMPTY,
+    _NAN,
+    _R0_NOT_POSITIVE,
+    _NO_CROSSING,
+    _BEYOND_LAGS,
+    _FEW_POINTS,
+    _NO_ROOT,
+    _TOUCHES_ZERO,
+    _NO_MINIMUM,
+    _C1_NOT_POSITIVE,
+    _T1_OUTSIDE,
+    _NOT_FINITE,
+    _EVEN_LENGTH,
+    _FEW_LAGS,
+    _ZERO_SLOPE,
+    _NO_DV,
+) = range(len(_REASONS))
 
 
-def _failed(reason: str) -> Estimate:
-    return Estimate(np.nan, reason)
+def _reason(code, fit_points=None) -> str:
+    return _REASONS[code].format(fit_points=fit_points)
 
 
-def _estimate(value: float) -> Estimate:
-    """An estimate, or NaN with a reason when the arithmetic left the floating-point range."""
+def _as_estimate(value, code, fit_points=None) -> Estimate:
+    return Estimate(float(value), _reason(code, fit_points))
+
+
+# --------------------------------------------------------------------------- numba kernels
+
+_jit = njit(nogil=True, cache=True, error_model="numpy")  # IEEE results (inf, NaN), never raise
+
+
+@_jit
+def _finite(value):
+    """``(value, 0)``, or ``(NaN, not finite)`` when the arithmetic left the floating-point range."""
     if np.isfinite(value):
-        return Estimate(float(value))
-    return _failed("not finite: the signature values overflow the arithmetic")
+        return value, _OK
+    return np.nan, _NOT_FINITE
 
 
-def _failed_half_cycle(reason: str) -> HalfCycle:
-    return HalfCycle(*([np.nan] * 6), reason=reason)
+@_jit
+def _fit2(t, y):
+    """Least-squares parabola ``y = c0 + c1 (t - tc) + c2 (t - tc)^2`` through ``(t, y)``.
+
+    Returns ``(tc, c0, c1, c2)``. Solved by the 3x3 normal equations in the scaled variable
+    ``u = (t - tc)/h`` in ``[-1, 1]`` (``tc``, ``h`` the centre and half-range of ``t``,
+    at least 3 points), by Gaussian elimination with partial pivoting as ``np.linalg.solve``
+    does: well conditioned for the few points of each fit, and far cheaper than a general
+    polynomial fit.
+    """
+    n = t.size
+    tc = 0.5 * (t[0] + t[n - 1])
+    h = 0.5 * (t[n - 1] - t[0])
+    s1 = s2 = s3 = s4 = b0 = b1 = b2 = 0.0
+    for j in range(n):
+        u = (t[j] - tc) / h
+        u2 = u * u
+        s1 += u
+        s2 += u2
+        s3 += u2 * u
+        s4 += u2 * u2
+        b0 += y[j]
+        b1 += u * y[j]
+        b2 += u2 * y[j]
+    a = np.array([[float(n), s1, s2, b0], [s1, s2, s3, b1], [s2, s3, s4, b2]])
+    for col in range(3):  # LU with partial pivoting, the order of operations of LAPACK's gesv
+        pivot = col
+        for row in range(col + 1, 3):
+            if abs(a[row, col]) > abs(a[pivot, col]):
+                pivot = row
+        if pivot != col:
+            for k in range(col, 4):
+                a[col, k], a[pivot, k] = a[pivot, k], a[col, k]
+        inverse = 1.0 / a[col, col]
+        for row in range(col + 1, 3):
+            factor = a[row, col] * inverse
+            for k in range(col + 1, 4):
+                a[row, k] -= factor * a[col, k]
+    for col in range(2, -1, -1):  # back substitution by columns
+        a[col, 3] /= a[col, col]
+        for row in range(col):
+            a[row, 3] -= a[row, col] * a[col, 3]
+    a0, a1, a2 = a[0, 3], a[1, 3], a[2, 3]
+    return tc, a0, a1 / h, a2 / (h * h)
 
 
-def _lobes(r: np.ndarray) -> tuple[list[tuple[int, int, int]], str]:
-    """Half cycles of ``r`` and their sampled extremes.
+@_jit
+def _value(p, t):
+    u = t - p[0]
+    return p[1] + u * (p[2] + u * p[3])
+
+
+@_jit
+def _slope(p, t):
+    return p[2] + 2.0 * p[3] * (t - p[0])
+
+
+@_jit
+def _root_nearest(p, target):
+    """``(found, t)``: the real root of parabola ``p`` nearest ``target``, computed without
+    cancellation (``q = -(c1 + sign(c1) sqrt(disc))/2``, roots ``q/c2`` and ``c0/q``); a NaN
+    root counts as nearest (as ``argmin`` does)."""
+    tc, c0, c1, c2 = p
+    if c2 == 0.0:
+        if c1 == 0.0:
+            return False, np.nan
+        return True, tc - c0 / c1
+    disc = c1 * c1 - 4.0 * c2 * c0
+    if disc < 0.0:
+        return False, np.nan
+    q = -0.5 * (c1 + math.copysign(np.sqrt(disc), c1))
+    first = tc + q / c2
+    if q == 0.0:
+        return True, first
+    second = tc + c0 / q
+    d0, d1 = abs(first - target), abs(second - target)
+    if not np.isnan(d0) and (np.isnan(d1) or d1 < d0):
+        return True, second
+    return True, first
+
+
+@_jit
+def _lobes(r):
+    """Half cycles of ``r`` and their sampled extremes: ``(code, table)``.
 
     A lobe is a maximal run of samples of one sign; samples exactly zero belong to no lobe
-    and do not split a run of one sign (touching zero is no crossing). Returns
-    ``(start, stop, k_extreme)`` per lobe (``stop`` exclusive, ``k_extreme`` the sample of
-    largest ``|r|``), and a reason when fewer than two lobes remain. The last lobe is
-    dropped when its extreme is the last sample of the record: ``|r|`` is still growing,
-    so its extreme lies beyond the lag range.
+    and do not split a run of one sign (touching zero is no crossing). ``table[i]`` is
+    ``(start, stop, k_extreme)`` of lobe ``i`` (``stop`` exclusive, ``k_extreme`` the first
+    sample of largest ``|r|``); no rows and a reason code when fewer than two lobes remain.
+    The last lobe is dropped when its extreme is the last sample of the record: ``|r|`` is
+    still growing, so its extreme lies beyond the lag range.
     """
-    if r.ndim != 1 or r.size == 0:
-        return [], "empty signature"
-    if not np.all(np.isfinite(r)):
-        return [], "NaN in signature"
-    if r[0] <= 0:
-        return [], "r[0] not positive"
-    nonzero = np.flatnonzero(r)
-    sign = np.sign(r[nonzero])
-    runs = np.split(nonzero, np.flatnonzero(sign[1:] != sign[:-1]) + 1)
-    if len(runs) < 2:
-        return [], "no zero crossing"
-    lobes = []
-    for run in runs:
-        start, stop = int(run[0]), int(run[-1]) + 1
-        lobes.append((start, stop, start + int(np.argmax(np.abs(r[start:stop])))))
-    if lobes[-1][2] == r.size - 1:
-        lobes.pop()
-    if len(lobes) < 2:
-        return [], "first minimum beyond the lag range"
-    return lobes, ""
+    table = np.empty((r.size, 3), np.int64)
+    if r.size == 0:
+        return _EMPTY, table[:0]
+    for k in range(r.size):
+        if not np.isfinite(r[k]):
+            return _NAN, table[:0]
+    if r[0] <= 0.0:
+        return _R0_NOT_POSITIVE, table[:0]
+    n, sign, largest = 0, 0.0, 0.0
+    for k in range(r.size):
+        if r[k] == 0.0:
+            continue
+        size = abs(r[k])
+        if (r[k] > 0.0) != (sign > 0.0) or n == 0:
+            sign = 1.0 if r[k] > 0.0 else -1.0
+            table[n, 0], table[n, 1], table[n, 2] = k, k + 1, k
+            largest = size
+            n += 1
+        else:
+            table[n - 1, 1] = k + 1
+            if size > largest:
+                largest = size
+                table[n - 1, 2] = k
+    if n < 2:
+        return _NO_CROSSING, table[:0]
+    if table[n - 1, 2] == r.size - 1:
+        n -= 1
+    if n < 2:
+        return _BEYOND_LAGS, table[:0]
+    return _OK, table[:n]
+
+
+@_jit
+def _e_global(r, code, lobes):
+    """``e_g`` (eqs. 25, 7) from the lobes of ``r``: ``(value, code)``."""
+    if code != _OK:
+        return np.nan, code
+    n = lobes.shape[0]
+    num = den = 0.0
+    for j in range(n):
+        i = j - 0.5 * (n - 1)  # centred index: the slope needs no intercept
+        num += i * (2.0 * np.log(abs(r[lobes[j, 2]])))
+        den += i * i
+    return _finite(np.exp(num / den / 4.0))
+
+
+@_jit
+def _e_first_peak(r, code, lobes):
+    """``e_0`` (eq. 26) from the lobes of ``r``: ``(value, code)``."""
+    if code != _OK:
+        return np.nan, code
+    return _finite(np.sqrt(abs(r[lobes[1, 2]]) / r[lobes[0, 2]]))
+
+
+@_jit
+def _half_cycle(r, dt, code, lobes):
+    """The fits of eq. 27 (see :func:`half_cycle`): ``((c1, t1, v1, v2, t2, c2), code)``."""
+    nan6 = (np.nan, np.nan, np.nan, np.nan, np.nan, np.nan)
+    if code != _OK:
+        return nan6, code
+    end0 = lobes[0, 1]
+    start1, end1, m = lobes[1, 0], lobes[1, 1], lobes[1, 2]
+    n_h = m + 1
+    n8 = max(MIN_FIT_POINTS, n_h // 8)
+    n4 = max(MIN_FIT_POINTS, n_h // 4)
+    a_start, b_start = 0, min(n8, end0)
+    a_before, b_before = max(0, end0 - n8), end0
+    a_after, b_after = start1, min(start1 + n8, end1)
+    a_min, b_min = max(start1, m - (n4 - 1) // 2), min(end1, m + n4 // 2 + 1)
+    if min(b_start - a_start, b_before - a_before, b_after - a_after, b_min - a_min) < MIN_FIT_POINTS:
+        return nan6, _FEW_POINTS
+    tau = dt * np.arange(r.size)
+    before = _fit2(tau[a_before:b_before], r[a_before:b_before])
+    found, t1 = _root_nearest(before, 0.5 * (tau[end0 - 1] + tau[start1]))
+    if not found:
+        return nan6, _NO_ROOT
+    v1 = _slope(before, t1)
+    if v1 == 0.0:
+        return nan6, _TOUCHES_ZERO
+    minimum = _fit2(tau[a_min:b_min], r[a_min:b_min])
+    if not minimum[3] > 0.0:
+        return nan6, _NO_MINIMUM
+    t2 = minimum[0] - minimum[2] / (2.0 * minimum[3])
+    c1 = _value(_fit2(tau[a_start:b_start], r[a_start:b_start]), 0.0)
+    if not c1 > 0.0:
+        return nan6, _C1_NOT_POSITIVE
+    if not 0.0 < t1 < t2:
+        return nan6, _T1_OUTSIDE
+    v2 = _slope(_fit2(tau[a_after:b_after], r[a_after:b_after]), t1)
+    return (c1, t1, v1, v2, t2, _value(minimum, t2)), _OK
+
+
+@_jit
+def _local_measures(h, code, values, codes):
+    """``e1..e4`` of eq. 27 from the half-cycle features ``h`` into ``values[:4]``, ``codes[:4]``."""
+    if code != _OK:
+        values[:4] = np.nan
+        codes[:4] = code
+        return
+    c1, t1, v1, v2, t2, c2 = h
+    ratio = abs(c2) / c1
+    values[0], codes[0] = _finite(np.sqrt(ratio))
+    values[1], codes[1] = _finite(v2 / v1)
+    values[2], codes[2] = _finite(ratio * t1 / (t2 - t1))
+    values[3], codes[3] = _finite((t2 - t1) / t1)
+
+
+@_jit
+def _e_impact_slope(d, dt, fit_points):
+    """``e_v`` (eq. 6, see :func:`e_impact_slope`): ``(value, code)``."""
+    if d.size % 2 == 0:
+        return np.nan, _EVEN_LENGTH
+    for k in range(d.size):
+        if not np.isfinite(d[k]):
+            return np.nan, _NAN
+    lag0 = d.size // 2
+    if lag0 < fit_points:
+        return np.nan, _FEW_LAGS
+    tau = dt * np.arange(1, fit_points + 1)
+    before = _slope(_fit2(-tau[::-1], d[lag0 - fit_points : lag0]), 0.0)
+    after = _slope(_fit2(tau, d[lag0 + 1 : lag0 + 1 + fit_points]), 0.0)
+    if before == 0.0:
+        return np.nan, _ZERO_SLOPE
+    return _finite(after / before)
+
+
+@_jit
+def _estimate_rows(r, d, dt, fit_points):
+    """Every estimator of :data:`ESTIMATORS` on every row: ``(values[n, 7], codes[n, 7])``.
+
+    ``e_g`` (eqs. 25, 7), ``e_0`` (eq. 26), ``e1..e4`` (eq. 27) from one lobe search and
+    one set of half-cycle fits per free response, ``e_v`` (eq. 6) from its ``D_v`` row.
+
+    ``r[n, lag_pos]`` free responses, ``d[n, lag]`` their ``D_v`` signatures or ``None``
+    (``e_v`` NaN, "no D_v signature"); ``dt`` and ``fit_points`` already checked.
+    The batch kernel of :func:`estimate_cube` and :func:`estimate_all`.
+    """
+    n = r.shape[0]
+    values = np.empty((n, 7))
+    codes = np.empty((n, 7), np.int64)
+    for i in range(n):
+        row = r[i]
+        code, lobes = _lobes(row)
+        values[i, 0], codes[i, 0] = _e_global(row, code, lobes)
+        values[i, 1], codes[i, 1] = _e_first_peak(row, code, lobes)
+        h, h_code = _half_cycle(row, dt, code, lobes)
+        _local_measures(h, h_code, values[i, 2:6], codes[i, 2:6])
+        if d is None:
+            values[i, 6], codes[i, 6] = np.nan, _NO_DV
+        else:
+            values[i, 6], codes[i, 6] = _e_impact_slope(d[i], dt, fit_points)
+    return values, codes
+
+
+# --------------------------------------------------------------------------- one signature
+
+
+def _as_row(a) -> np.ndarray:
+    """``a`` as a contiguous float64 row; anything not one-dimensional as an empty row (whose
+    kernels then say "empty signature" for ``r`` and "length not odd" for ``d``)."""
+    a = np.asarray(a, dtype=float)
+    return np.ascontiguousarray(a) if a.ndim == 1 else np.empty(0)
+
+
+def _check_options(dt, fit_points, with_dv: bool) -> tuple[float, int]:
+    """The input checks: ``fit_points`` (only when there is a ``D_v`` signature), then ``dt``.
+
+    Returns ``dt`` and ``fit_points`` as the kernels take them (``fit_points`` 0, unused,
+    without ``D_v``).
+    """
+    if not with_dv:
+        return checks.positive(dt, "dt", "give the sampling interval in s, > 0"), 0
+    if not (checks.is_whole(fit_points) and fit_points >= MIN_FIT_POINTS):
+        raise checks.InputError(f"fit_points={fit_points}: need a whole number of at least {MIN_FIT_POINTS} points")
+    return checks.positive(dt, "dt", "give the sampling interval in s, > 0"), int(fit_points)
+
+
+def _lobes_of(r, lobes):
+    """``lobes`` when the caller has them (the result of :func:`_lobes` on ``r``), else found."""
+    return _lobes(r) if lobes is None else lobes
 
 
 def e_global(r, lobes=None) -> Estimate:
@@ -199,18 +452,11 @@ def e_global(r, lobes=None) -> Estimate:
     step off the vertex of a parabola of curvature ``g``, when the half cycle is longer
     than a step). With ``2 ln|r_i| = 2 ln r_0 - i delta``
     (eq. 25), the least-squares slope of ``2 ln|r_i|`` on ``i`` is ``-delta``, and
-    ``e = exp(-delta/4)`` (eq. 7). ``lobes``: the result of :func:`_lobes` when the caller
-    has it already (:func:`estimate_all`).
+    ``e = exp(-delta/4)`` (eq. 7). ``lobes``: the result of :func:`_lobes` on ``r`` when
+    the caller has it already.
     """
-    r = np.asarray(r, dtype=float)
-    lobes, reason = _lobes(r) if lobes is None else lobes
-    if reason:
-        return _failed(reason)
-    k = np.array([extreme for _, _, extreme in lobes])
-    i = np.arange(k.size) - 0.5 * (k.size - 1)  # centred index: the slope needs no intercept
-    slope = float(np.dot(i, 2.0 * np.log(np.abs(r[k]))) / np.dot(i, i))
-    with np.errstate(over="ignore"):
-        return _estimate(np.exp(slope / 4.0))
+    r = _as_row(r)
+    return _as_estimate(*_e_global(r, *_lobes_of(r, lobes)))
 
 
 def e_first_peak(r, lobes=None) -> Estimate:
@@ -219,13 +465,8 @@ def e_first_peak(r, lobes=None) -> Estimate:
     ``r_0`` is the maximum and ``r_1`` the first minimum, located as in :func:`e_global`;
     for a decaying response they are the maximum and minimum of the whole estimate.
     """
-    r = np.asarray(r, dtype=float)
-    lobes, reason = _lobes(r) if lobes is None else lobes
-    if reason:
-        return _failed(reason)
-    r0, r1 = r[lobes[0][2]], r[lobes[1][2]]
-    with np.errstate(over="ignore"):
-        return _estimate(np.sqrt(abs(r1) / r0))
+    r = _as_row(r)
+    return _as_estimate(*_e_first_peak(r, *_lobes_of(r, lobes)))
 
 
 def half_cycle(r, dt: float, lobes=None) -> HalfCycle:
@@ -248,50 +489,10 @@ def half_cycle(r, dt: float, lobes=None) -> HalfCycle:
     response (eqs. 4, 6) every window holds samples of one parabola and the features are
     exact to rounding.
     """
-    checks.positive(dt, "dt", "give the sampling interval in s, > 0")
-    r = np.asarray(r, dtype=float)
-    lobes, reason = _lobes(r) if lobes is None else lobes
-    if reason:
-        return _failed_half_cycle(reason)
-    (_, end0, _), (start1, end1, m) = lobes[0], lobes[1]
-    n_h = m + 1
-    n8 = max(MIN_FIT_POINTS, n_h // 8)
-    n4 = max(MIN_FIT_POINTS, n_h // 4)
-    windows = {
-        "start": (0, min(n8, end0)),
-        "before": (max(0, end0 - n8), end0),
-        "after": (start1, min(start1 + n8, end1)),
-        "minimum": (max(start1, m - (n4 - 1) // 2), min(end1, m + n4 // 2 + 1)),
-    }
-    if any(stop - start < MIN_FIT_POINTS for start, stop in windows.values()):
-        return _failed_half_cycle(f"fewer than {MIN_FIT_POINTS} points for a fit")
-    tau = dt * np.arange(r.size)
-    fit = {name: _fit2(tau[a:b], r[a:b]) for name, (a, b) in windows.items()}
-
-    roots = fit["before"].roots()
-    if roots.size == 0:
-        return _failed_half_cycle("before-crossing fit has no real root")
-    crossing = 0.5 * (tau[end0 - 1] + tau[start1])
-    t1 = roots[np.argmin(np.abs(roots - crossing))]
-    v1 = fit["before"].slope(t1)
-    if v1 == 0:
-        return _failed_half_cycle("before-crossing fit touches zero without crossing")
-    if not fit["minimum"].c2 > 0:
-        return _failed_half_cycle("minimum fit has no minimum")
-    t2 = fit["minimum"].vertex()
-    c1 = fit["start"].value(0.0)
-    if not c1 > 0:
-        return _failed_half_cycle("fitted c1 not positive")
-    if not 0 < t1 < t2:
-        return _failed_half_cycle("fitted crossing t1 not between 0 and t2")
-    return HalfCycle(
-        c1=float(c1),
-        t1=float(t1),
-        v1=float(v1),
-        v2=float(fit["after"].slope(t1)),
-        t2=float(t2),
-        c2=float(fit["minimum"].value(t2)),
-    )
+    dt = checks.positive(dt, "dt", "give the sampling interval in s, > 0")
+    r = _as_row(r)
+    features, code = _half_cycle(r, dt, *_lobes_of(r, lobes))
+    return HalfCycle(*features, reason=_reason(code))
 
 
 def local_measures(r, dt: float, lobes=None) -> dict[str, Estimate]:
@@ -308,17 +509,11 @@ def local_measures(r, dt: float, lobes=None) -> dict[str, Estimate]:
     The paper prints ``e4 = t1/(t2 - t1)``, which is ``1/e`` for this response; ``e4``
     here is its reciprocal.
     """
-    h = half_cycle(r, dt, lobes)
-    if h.reason:
-        return {name: _failed(h.reason) for name in LOCAL_ESTIMATORS}
-    with np.errstate(all="ignore"):
-        ratio = np.float64(abs(h.c2)) / h.c1
-        return {
-            "e1": _estimate(np.sqrt(ratio)),
-            "e2": _estimate(np.float64(h.v2) / h.v1),
-            "e3": _estimate(ratio * h.t1 / (h.t2 - h.t1)),
-            "e4": _estimate(np.float64(h.t2 - h.t1) / h.t1),
-        }
+    dt = checks.positive(dt, "dt", "give the sampling interval in s, > 0")
+    r = _as_row(r)
+    values, codes = np.empty(len(LOCAL_ESTIMATORS)), np.empty(len(LOCAL_ESTIMATORS), np.int64)
+    _local_measures(*_half_cycle(r, dt, *_lobes_of(r, lobes)), values, codes)
+    return {name: _as_estimate(v, c) for name, v, c in zip(LOCAL_ESTIMATORS, values, codes)}
 
 
 def e_impact_slope(d, dt: float, fit_points: int = DEFAULT_FIT_POINTS) -> Estimate:
@@ -334,33 +529,52 @@ def e_impact_slope(d, dt: float, fit_points: int = DEFAULT_FIT_POINTS) -> Estima
 
     ``fit_points`` below :data:`MIN_FIT_POINTS` is a caller error (``ValueError``).
     """
-    if not (checks.is_whole(fit_points) and fit_points >= MIN_FIT_POINTS):
-        raise checks.InputError(f"fit_points={fit_points}: need a whole number of at least {MIN_FIT_POINTS} points")
-    checks.positive(dt, "dt", "give the sampling interval in s, > 0")
-    d = np.asarray(d, dtype=float)
-    if d.ndim != 1 or d.size % 2 == 0:
-        return _failed("D_v signature length not odd: no lag 0")
-    if not np.all(np.isfinite(d)):
-        return _failed("NaN in signature")
-    lag0 = d.size // 2
-    if lag0 < fit_points:
-        return _failed(f"fewer than fit_points={fit_points} lags on a side")
-    tau = dt * np.arange(1, fit_points + 1)
-    before = _fit2(-tau[::-1], d[lag0 - fit_points : lag0]).slope(0.0)
-    after = _fit2(tau, d[lag0 + 1 : lag0 + 1 + fit_points]).slope(0.0)
-    if before == 0:
-        return _failed("zero slope before the impact")
-    with np.errstate(all="ignore"):
-        return _estimate(after / before)
+    dt, fit_points = _check_options(dt, fit_points, with_dv=True)
+    return _as_estimate(*_e_impact_slope(_as_row(d), dt, fit_points), fit_points)
 
 
 def estimate_all(r, d, dt: float, fit_points: int = DEFAULT_FIT_POINTS) -> dict[str, Estimate]:
     """Every estimator of :data:`ESTIMATORS` on one free response ``r`` and one ``D_v``
-    signature ``d`` (``None`` when there is none: ``e_v`` is then NaN)."""
-    r = np.asarray(r, dtype=float)
-    lobes = _lobes(r)
-    e_v = _failed("no D_v signature") if d is None else e_impact_slope(d, dt, fit_points)
-    return {"e_g": e_global(r, lobes), "e_0": e_first_peak(r, lobes), **local_measures(r, dt, lobes), "e_v": e_v}
+    signature ``d`` (``None`` when there is none: ``e_v`` is then NaN): the batch kernel
+    :func:`_estimate_rows` on a batch of one."""
+    dt, points = _check_options(dt, fit_points, with_dv=d is not None)
+    rows = None if d is None else _as_row(d)[None]
+    values, codes = _estimate_rows(_as_row(r)[None], rows, dt, points)
+    return {name: _as_estimate(v, c, fit_points) for name, v, c in zip(ESTIMATORS, values[0], codes[0])}
+
+
+# --------------------------------------------------------------------------- zero window
+
+_EXTRAPOLATION_REASONS = ("", "fewer than 2 usable points", "all points at one window size")
+
+
+def _extrapolate_rows(x, y, w):
+    """:func:`extrapolate_to_zero` (§5) on every row at once (last axis; ``x``, ``y``, ``w``
+    broadcast): arrays ``value``, ``stderr``, ``slope`` and the reason code (index of
+    :data:`_EXTRAPOLATION_REASONS`)."""
+    x, y, w = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (x, y, w)))
+    if np.any(w < 0):
+        raise ValueError("weights must be non-negative")
+    use = np.isfinite(x) & np.isfinite(y) & np.isfinite(w) & (w > 0)
+    n = use.sum(axis=-1)
+
+    def wsum(terms):  # sum of w * terms over the usable points only
+        return np.where(use, w * terms, 0.0).sum(axis=-1)
+
+    with np.errstate(all="ignore"):
+        total = wsum(1.0)
+        xm = wsum(x) / total
+        ym = wsum(y) / total
+        dx, dy = x - xm[..., None], y - ym[..., None]
+        sxx = wsum(dx**2)
+        slope = wsum(dx * dy) / sxx
+        value = ym - slope * xm
+        s2 = wsum((y - value[..., None] - slope[..., None] * x) ** 2) / (n - 2)
+        stderr = np.sqrt(s2 * (1.0 / total + xm**2 / sxx))
+    code = np.where(n < 2, 1, np.where(sxx == 0, 2, 0))
+    value, slope = (np.where(code == 0, a, np.nan) for a in (value, slope))
+    stderr = np.where((code == 0) & (n > 2), stderr, np.nan)
+    return value, stderr, slope, code
 
 
 def extrapolate_to_zero(x, y, weights=None) -> Extrapolation:
@@ -382,32 +596,23 @@ def extrapolate_to_zero(x, y, weights=None) -> Extrapolation:
     Fewer than two usable points, or all at one ``x``: everything NaN, with a reason.
     Negative weights are a caller error (``ValueError``).
     """
-    x = np.asarray(x, dtype=float)
-    y = np.asarray(y, dtype=float)
-    w = x if weights is None else np.asarray(weights, dtype=float)
-    if np.any(w < 0):
-        raise ValueError("weights must be non-negative")
-    use = np.isfinite(x) & np.isfinite(y) & np.isfinite(w) & (w > 0)
-    x, y, w = x[use], y[use], w[use]
-    if x.size < 2:
-        return Extrapolation(np.nan, np.nan, np.nan, "fewer than 2 usable points")
-    total = w.sum()
-    xm = np.dot(w, x) / total
-    ym = np.dot(w, y) / total
-    sxx = np.dot(w, (x - xm) ** 2)
-    if sxx == 0:
-        return Extrapolation(np.nan, np.nan, np.nan, "all points at one window size")
-    slope = np.dot(w, (x - xm) * (y - ym)) / sxx
-    value = ym - slope * xm
-    if x.size == 2:
-        return Extrapolation(float(value), np.nan, float(slope))
-    s2 = np.dot(w, (y - value - slope * x) ** 2) / (x.size - 2)
-    stderr = np.sqrt(s2 * (1.0 / total + xm**2 / sxx))
-    return Extrapolation(float(value), float(stderr), float(slope))
+    value, stderr, slope, code = _extrapolate_rows(x, y, x if weights is None else weights)
+    return Extrapolation(float(value), float(stderr), float(slope), _EXTRAPOLATION_REASONS[int(code)])
 
 
-def _estimate_values(r, d, dt, fit_points) -> np.ndarray:
-    return np.array([est.value for est in estimate_all(r, d, dt, fit_points).values()])
+# --------------------------------------------------------------------------- labelled
+
+
+def _estimate_block(r, d, dt, fit_points):
+    """:func:`_estimate_rows` on a block ``r[..., lag_pos]``, ``d[..., lag]`` (leading axes
+    broadcast) -> ``values[..., estimator]``."""
+    shape = r.shape[:-1] if d is None else np.broadcast_shapes(r.shape[:-1], d.shape[:-1])
+
+    def rows(a):
+        return np.ascontiguousarray(np.broadcast_to(a, shape + a.shape[-1:]), dtype=float).reshape(math.prod(shape), a.shape[-1])
+
+    values, _ = _estimate_rows(rows(r), None if d is None else rows(d), dt, fit_points)
+    return values.reshape(shape + (len(ESTIMATORS),))
 
 
 def estimate_cube(
@@ -420,12 +625,13 @@ def estimate_cube(
 
     ``free_response`` has core dimension ``lag_pos`` (``tau >= 0``), ``dv_signature`` core
     dimension ``lag`` (two-sided) or is ``None``; their other dimensions broadcast by
-    name. Dask arrays chunked along the other dimensions stay lazy. Returns ``e_hat``
-    with dimension ``estimator`` (:data:`ESTIMATORS`) first; NaN where an estimator
-    failed (:func:`estimate_all` on that signature says why).
+    name. Each block (all of a NumPy cube, each chunk of a Dask one, which stays lazy)
+    goes to the batch kernel :func:`_estimate_rows` at once. Returns ``e_hat`` with
+    dimension ``estimator`` (:data:`ESTIMATORS`) first; NaN where an estimator failed
+    (:func:`estimate_all` on that signature says why).
     """
+    dt, points = _check_options(dt, fit_points, with_dv=dv_signature is not None)
     common = dict(
-        vectorize=True,
         dask="parallelized",
         output_core_dims=[["estimator"]],
         output_dtypes=[float],
@@ -433,14 +639,14 @@ def estimate_cube(
     )
     if dv_signature is None:
         e_hat = xr.apply_ufunc(
-            lambda r: _estimate_values(r, None, dt, fit_points),
+            lambda r: _estimate_block(r, None, dt, points),
             free_response,
             input_core_dims=[["lag_pos"]],
             **common,
         )
     else:
         e_hat = xr.apply_ufunc(
-            lambda r, d: _estimate_values(r, d, dt, fit_points),
+            lambda r, d: _estimate_block(r, d, dt, points),
             free_response,
             dv_signature,
             input_core_dims=[["lag_pos"], ["lag"]],
@@ -456,28 +662,27 @@ def estimate_cube(
     return xr.Dataset({"e_hat": e_hat}, attrs={"history": f"rockdec {__version__}: estimate_cube"})
 
 
-def _extrapolation_values(x, y, w) -> tuple[float, float, float]:
-    value, stderr, slope, _ = extrapolate_to_zero(x, y, w)
-    return value, stderr, slope
+def _extrapolation_block(x, y, w):
+    return _extrapolate_rows(x, y, w)[:3]
 
 
 def extrapolate(e_hat: xr.DataArray, weights: xr.DataArray | None = None) -> xr.Dataset:
     """:func:`extrapolate_to_zero` along ``window`` for every other index of ``e_hat``.
 
     ``x`` is the ``window`` coordinate; ``weights`` default to it (paper §5), or pass the
-    trigger counts (dimension ``window``, broadcast by name). Returns ``e_hat0`` (value at
-    zero window), ``e_hat0_stderr`` and ``slope``; reasons are dropped (NaN stays NaN).
+    trigger counts (dimension ``window``, broadcast by name). All rows of a block are
+    fitted at once (:func:`_extrapolate_rows`). Returns ``e_hat0`` (value at zero window),
+    ``e_hat0_stderr`` and ``slope``; reasons are dropped (NaN stays NaN).
     """
     window = e_hat["window"]
     w = window if weights is None else weights
     value, stderr, slope = xr.apply_ufunc(
-        _extrapolation_values,
+        _extrapolation_block,
         window,
         e_hat,
         w,
         input_core_dims=[["window"]] * 3,
         output_core_dims=[[], [], []],
-        vectorize=True,
         dask="parallelized",
         output_dtypes=[float] * 3,
     )
@@ -497,3 +702,178 @@ def extrapolate(e_hat: xr.DataArray, weights: xr.DataArray | None = None) -> xr.
         },
         attrs={"history": f"rockdec {__version__}: extrapolate"},
     )
+
+
+# --------------------------------------------------------------------------- reference
+
+
+class _Parabola(NamedTuple):
+    """``y = c0 + c1 (t - tc) + c2 (t - tc)^2``: a least-squares parabola about ``tc``."""
+
+    tc: float
+    c0: float
+    c1: float
+    c2: float
+
+    def value(self, t):
+        u = t - self.tc
+        return self.c0 + u * (self.c1 + u * self.c2)
+
+    def slope(self, t):
+        return self.c1 + 2.0 * self.c2 * (t - self.tc)
+
+    def vertex(self):
+        return self.tc - self.c1 / (2.0 * self.c2)
+
+    def roots(self) -> np.ndarray:
+        c0, c1, c2 = self.c0, self.c1, self.c2
+        if c2 == 0.0:
+            return np.array([self.tc - c0 / c1]) if c1 != 0.0 else np.array([])
+        disc = c1 * c1 - 4.0 * c2 * c0
+        if disc < 0.0:
+            return np.array([])
+        q = -0.5 * (c1 + np.copysign(np.sqrt(disc), c1))
+        us = [q / c2] + ([c0 / q] if q != 0.0 else [])
+        return self.tc + np.array(us)
+
+
+def _reference_fit2(t: np.ndarray, y: np.ndarray) -> _Parabola:
+    tc = 0.5 * (t[0] + t[-1])
+    h = 0.5 * (t[-1] - t[0])
+    u = (t - tc) / h
+    u2 = u * u
+    s = (u.size, u.sum(), u2.sum(), (u2 * u).sum(), (u2 * u2).sum())
+    normal = np.array([[s[0], s[1], s[2]], [s[1], s[2], s[3]], [s[2], s[3], s[4]]])
+    a0, a1, a2 = np.linalg.solve(normal, np.array([y.sum(), (u * y).sum(), (u2 * y).sum()]))
+    return _Parabola(float(tc), float(a0), float(a1 / h), float(a2 / h**2))
+
+
+def _reference_lobes(r: np.ndarray) -> tuple[list[tuple[int, int, int]], str]:
+    if r.ndim != 1 or r.size == 0:
+        return [], "empty signature"
+    if not np.all(np.isfinite(r)):
+        return [], "NaN in signature"
+    if r[0] <= 0:
+        return [], "r[0] not positive"
+    nonzero = np.flatnonzero(r)
+    sign = np.sign(r[nonzero])
+    runs = np.split(nonzero, np.flatnonzero(sign[1:] != sign[:-1]) + 1)
+    if len(runs) < 2:
+        return [], "no zero crossing"
+    lobes = []
+    for run in runs:
+        start, stop = int(run[0]), int(run[-1]) + 1
+        lobes.append((start, stop, start + int(np.argmax(np.abs(r[start:stop])))))
+    if lobes[-1][2] == r.size - 1:
+        lobes.pop()
+    if len(lobes) < 2:
+        return [], "first minimum beyond the lag range"
+    return lobes, ""
+
+
+def _reference_estimate(value: float) -> Estimate:
+    if np.isfinite(value):
+        return Estimate(float(value))
+    return Estimate(np.nan, _REASONS[_NOT_FINITE])
+
+
+def _reference_half_cycle(r: np.ndarray, dt: float, lobes) -> HalfCycle:
+    def failed(code):
+        return HalfCycle(*([np.nan] * 6), reason=_REASONS[code])
+
+    lobes, reason = lobes
+    if reason:
+        return HalfCycle(*([np.nan] * 6), reason=reason)
+    (_, end0, _), (start1, end1, m) = lobes[0], lobes[1]
+    n_h = m + 1
+    n8 = max(MIN_FIT_POINTS, n_h // 8)
+    n4 = max(MIN_FIT_POINTS, n_h // 4)
+    windows = {
+        "start": (0, min(n8, end0)),
+        "before": (max(0, end0 - n8), end0),
+        "after": (start1, min(start1 + n8, end1)),
+        "minimum": (max(start1, m - (n4 - 1) // 2), min(end1, m + n4 // 2 + 1)),
+    }
+    if any(stop - start < MIN_FIT_POINTS for start, stop in windows.values()):
+        return failed(_FEW_POINTS)
+    tau = dt * np.arange(r.size)
+    fit = {name: _reference_fit2(tau[a:b], r[a:b]) for name, (a, b) in windows.items()}
+    roots = fit["before"].roots()
+    if roots.size == 0:
+        return failed(_NO_ROOT)
+    crossing = 0.5 * (tau[end0 - 1] + tau[start1])
+    t1 = roots[np.argmin(np.abs(roots - crossing))]
+    v1 = fit["before"].slope(t1)
+    if v1 == 0:
+        return failed(_TOUCHES_ZERO)
+    if not fit["minimum"].c2 > 0:
+        return failed(_NO_MINIMUM)
+    t2 = fit["minimum"].vertex()
+    c1 = fit["start"].value(0.0)
+    if not c1 > 0:
+        return failed(_C1_NOT_POSITIVE)
+    if not 0 < t1 < t2:
+        return failed(_T1_OUTSIDE)
+    return HalfCycle(
+        c1=float(c1),
+        t1=float(t1),
+        v1=float(v1),
+        v2=float(fit["after"].slope(t1)),
+        t2=float(t2),
+        c2=float(fit["minimum"].value(t2)),
+    )
+
+
+def _reference_e_impact_slope(d, dt: float, fit_points: int) -> Estimate:
+    d = np.asarray(d, dtype=float)
+    if d.ndim != 1 or d.size % 2 == 0:
+        return Estimate(np.nan, _REASONS[_EVEN_LENGTH])
+    if not np.all(np.isfinite(d)):
+        return Estimate(np.nan, _REASONS[_NAN])
+    lag0 = d.size // 2
+    if lag0 < fit_points:
+        return Estimate(np.nan, _reason(_FEW_LAGS, fit_points))
+    tau = dt * np.arange(1, fit_points + 1)
+    before = _reference_fit2(-tau[::-1], d[lag0 - fit_points : lag0]).slope(0.0)
+    after = _reference_fit2(tau, d[lag0 + 1 : lag0 + 1 + fit_points]).slope(0.0)
+    if before == 0:
+        return Estimate(np.nan, _REASONS[_ZERO_SLOPE])
+    with np.errstate(all="ignore"):
+        return _reference_estimate(after / before)
+
+
+def reference_estimate_all(r, d, dt: float, fit_points: int = DEFAULT_FIT_POINTS) -> dict[str, Estimate]:
+    """Reference implementation of :func:`estimate_all`: per-signature NumPy, as before the
+    numba kernels (``np.linalg.solve`` for each parabola fit, NumPy runs for the lobes).
+
+    Same conventions, reasons and input checks; slower by about two orders of magnitude.
+    Kept only to check the kernels (tests) and to time them
+    (``benchmarks/bench_estimators.py``).
+    """
+    dt, fit_points = _check_options(dt, fit_points, with_dv=d is not None)
+    r = np.asarray(r, dtype=float)
+    lobes = _reference_lobes(r)
+    (ks, reason) = lobes
+    if reason:
+        e_g = e_0 = Estimate(np.nan, reason)
+    else:
+        k = np.array([extreme for _, _, extreme in ks])
+        i = np.arange(k.size) - 0.5 * (k.size - 1)
+        slope = float(np.dot(i, 2.0 * np.log(np.abs(r[k]))) / np.dot(i, i))
+        with np.errstate(over="ignore"):
+            e_g = _reference_estimate(np.exp(slope / 4.0))
+            e_0 = _reference_estimate(np.sqrt(abs(r[k[1]]) / r[k[0]]))
+    h = _reference_half_cycle(r, dt, lobes)
+    if h.reason:
+        local = {name: Estimate(np.nan, h.reason) for name in LOCAL_ESTIMATORS}
+    else:
+        with np.errstate(all="ignore"):
+            ratio = np.float64(abs(h.c2)) / h.c1
+            local = {
+                "e1": _reference_estimate(np.sqrt(ratio)),
+                "e2": _reference_estimate(np.float64(h.v2) / h.v1),
+                "e3": _reference_estimate(ratio * h.t1 / (h.t2 - h.t1)),
+                "e4": _reference_estimate(np.float64(h.t2 - h.t1) / h.t1),
+            }
+    e_v = Estimate(np.nan, _REASONS[_NO_DV]) if d is None else _reference_e_impact_slope(d, dt, fit_points)
+    return {"e_g": e_g, "e_0": e_0, **local, "e_v": e_v}
