@@ -124,7 +124,7 @@ def _nan_prefix(row, out):
 
 @njit(nogil=True, cache=True)
 def _close_windows(sums, counts, skipped):
-    """Per-bin accumulators of one series -> cumulative over the nested windows."""
+    """Per-bin accumulators of one output row -> cumulative over the nested windows."""
     for w in range(1, counts.size):
         counts[w] += counts[w - 1]
         skipped[w] += skipped[w - 1]
@@ -141,14 +141,18 @@ def _add_interpolated(seg, row, base, k0, k1, sign, frac):
 
 
 @njit(nogil=True, cache=True)
-def _extremum_kernel(y, level, edges, n_lag, both_signs, lo, hi, sums, counts, skipped):
-    """One pass of the extremum trigger over ``y[row, time]`` for all windows ``edges``."""
+def _extremum_kernel(y, rows_to, level, edges, n_lag, both_signs, lo, hi, sums, counts, skipped):
+    """One pass of the extremum trigger over ``y[row, time]`` for all windows ``edges``.
+
+    Row ``r`` adds its segments, counts and skips into output row ``rows_to[r]``.
+    """
     n_rows, n = y.shape
     widest = edges[edges.size - 1]
     reach = max(n_lag, 1)
     nan_before = np.empty(n + 1, np.int64)
     for r in range(n_rows):
         row = y[r]
+        out = rows_to[r]
         _nan_prefix(row, nan_before)
         for i in range(max(lo, reach), min(hi, n - reach)):
             y0 = np.float64(row[i])
@@ -164,24 +168,29 @@ def _extremum_kernel(y, level, edges, n_lag, both_signs, lo, hi, sums, counts, s
                 continue
             w = np.searchsorted(edges, dist)  # smallest window holding the trigger
             if nan_before[i + n_lag + 1] != nan_before[i - n_lag]:
-                skipped[r, w] += 1
+                skipped[out, w] += 1
                 continue
-            counts[r, w] += 1
-            seg = sums[r, w]
+            counts[out, w] += 1
+            seg = sums[out, w]
             base = i - n_lag
             for k in range(2 * n_lag + 1):
                 seg[k] += sign * row[base + k]
-        _close_windows(sums[r], counts[r], skipped[r])
+    for out in range(sums.shape[0]):
+        _close_windows(sums[out], counts[out], skipped[out])
 
 
 @njit(nogil=True, cache=True)
-def _crossing_kernel(y, velocity, edges, n_lag, inv_dt, both_signs, lo, hi, sums, counts, skipped):
-    """One pass of the zero-crossing trigger over ``y[row, time]`` for all windows ``edges``."""
+def _crossing_kernel(y, rows_to, velocity, edges, n_lag, inv_dt, both_signs, lo, hi, sums, counts, skipped):
+    """One pass of the zero-crossing trigger over ``y[row, time]`` for all windows ``edges``.
+
+    Row ``r`` adds its segments, counts and skips into output row ``rows_to[r]``.
+    """
     n_rows, n = y.shape
     widest = edges[edges.size - 1]
     nan_before = np.empty(n + 1, np.int64)
     for r in range(n_rows):
         row = y[r]
+        out = rows_to[r]
         _nan_prefix(row, nan_before)
         for i in range(max(lo, n_lag, 2), min(hi, n - n_lag - 1)):
             y0 = np.float64(row[i])
@@ -202,19 +211,24 @@ def _crossing_kernel(y, velocity, edges, n_lag, inv_dt, both_signs, lo, hi, sums
                 continue
             w = np.searchsorted(edges, dist)
             if nan_before[i + n_lag + 2] != nan_before[i - n_lag]:
-                skipped[r, w] += 1
+                skipped[out, w] += 1
                 continue
-            counts[r, w] += 1
-            seg = sums[r, w]
+            counts[out, w] += 1
+            seg = sums[out, w]
             base = i - n_lag
             # lag 0 is the chord root, where the interpolant is 0: left out, stays exactly 0
             _add_interpolated(seg, row, base, 0, n_lag, sign, frac)
             _add_interpolated(seg, row, base, n_lag + 1, 2 * n_lag + 1, sign, frac)
-        _close_windows(sums[r], counts[r], skipped[r])
+    for out in range(sums.shape[0]):
+        _close_windows(sums[out], counts[out], skipped[out])
 
 
-def _run(trigger, y, target, half_widths, n_lag, dt, both_signs, owned):
-    """Shape checks and output allocation around a numba kernel; ``time`` is the last axis."""
+def _run(trigger, y, target, half_widths, n_lag, dt, both_signs, owned, rows_to):
+    """Shape checks and output allocation around a numba kernel; ``time`` is the last axis.
+
+    Without ``rows_to`` every series has its own output row (shape ``y.shape[:-1]``);
+    with it, series ``j`` adds into row ``rows_to[j]`` of ``rows_to.max() + 1`` rows.
+    """
     y = np.asarray(y)
     if y.ndim == 0:
         raise ValueError("the record must have a time axis (the last axis)")
@@ -230,23 +244,38 @@ def _run(trigger, y, target, half_widths, n_lag, dt, both_signs, owned):
     checks.positive(dt, "dt")
     lead_shape, n = y.shape[:-1], y.shape[-1]
     rows = int(np.prod(lead_shape, dtype=np.int64))
+    if rows_to is None:
+        out_shape = lead_shape
+        rows_to = np.arange(rows, dtype=np.int64)
+    else:
+        rows_to = np.asarray(rows_to)
+        if rows_to.shape != lead_shape or rows_to.dtype.kind not in "iu" or (rows_to.size and rows_to.min() < 0):
+            raise checks.InputError(
+                f"rows_to must hold a non-negative integer output row for each series, shape {lead_shape}; "
+                f"got shape {rows_to.shape}, dtype {rows_to.dtype}"
+            )
+        out_shape = (int(rows_to.max()) + 1 if rows_to.size else 0,)
+        rows_to = rows_to.reshape(rows).astype(np.int64)
+    n_out = int(np.prod(out_shape, dtype=np.int64))
     lo, hi = (0, n) if owned is None else (int(owned[0]), int(owned[1]))
-    sums = np.zeros((rows, edges.size, 2 * n_lag + 1))
-    counts = np.zeros((rows, edges.size), np.int64)
-    skipped = np.zeros((rows, edges.size), np.int64)
+    sums = np.zeros((n_out, edges.size, 2 * n_lag + 1))
+    counts = np.zeros((n_out, edges.size), np.int64)
+    skipped = np.zeros((n_out, edges.size), np.int64)
     y = np.ascontiguousarray(y.reshape(rows, n))
     if trigger == "a":
-        _extremum_kernel(y, float(target), edges, n_lag, bool(both_signs), lo, hi, sums, counts, skipped)
+        _extremum_kernel(y, rows_to, float(target), edges, n_lag, bool(both_signs), lo, hi, sums, counts, skipped)
     else:
-        _crossing_kernel(y, float(target), edges, n_lag, 1.0 / float(dt), bool(both_signs), lo, hi, sums, counts, skipped)
+        _crossing_kernel(
+            y, rows_to, float(target), edges, n_lag, 1.0 / float(dt), bool(both_signs), lo, hi, sums, counts, skipped
+        )
     return SignatureSums(
-        sums.reshape(lead_shape + sums.shape[1:]),
-        counts.reshape(lead_shape + counts.shape[1:]),
-        skipped.reshape(lead_shape + skipped.shape[1:]),
+        sums.reshape(out_shape + sums.shape[1:]),
+        counts.reshape(out_shape + counts.shape[1:]),
+        skipped.reshape(out_shape + skipped.shape[1:]),
     )
 
 
-def extremum_sums(y, level, half_widths, n_lag, *, both_signs=True, owned=None) -> SignatureSums:
+def extremum_sums(y, level, half_widths, n_lag, *, both_signs=True, owned=None, rows_to=None) -> SignatureSums:
     """Sums and counts of the extremum-triggered signature ``D_a`` (eq. 19, first line).
 
     Parameters
@@ -265,17 +294,22 @@ def extremum_sums(y, level, half_widths, n_lag, *, both_signs=True, owned=None) 
     owned : (int, int), optional
         Only samples ``lo <= i < hi`` may be triggers (time chunks with overlap); the
         segment may reach outside ``[lo, hi)``. Default: the whole record.
+    rows_to : int array of shape ``y.shape[:-1]``, optional
+        Output row of each series: the sums and counts of series ``j`` are added into row
+        ``rows_to[j]`` inside the kernel (group sums without per-series arrays; exact,
+        since signatures pool by adding sums and counts). Default: one row per series.
 
     Returns
     -------
     SignatureSums
         ``sum (..., W, 2L+1)``, ``count (..., W)``, ``skipped (..., W)``, cumulative over
-        the windows. The signature is ``sum / count`` (:func:`mean_signature`).
+        the windows, with ``...`` = ``y.shape[:-1]``, or ``rows_to.max() + 1`` rows when
+        ``rows_to`` is given. The signature is ``sum / count`` (:func:`mean_signature`).
     """
-    return _run("a", y, level, half_widths, n_lag, 1.0, both_signs, owned)
+    return _run("a", y, level, half_widths, n_lag, 1.0, both_signs, owned, rows_to)
 
 
-def crossing_sums(y, velocity, half_widths, n_lag, dt, *, both_signs=True, owned=None) -> SignatureSums:
+def crossing_sums(y, velocity, half_widths, n_lag, dt, *, both_signs=True, owned=None, rows_to=None) -> SignatureSums:
     """Sums and counts of the zero-crossing signature ``D_v`` (eq. 19, second line).
 
     ``velocity`` is the trigger velocity ``v`` and ``half_widths`` the ascending ``dv_w``,
@@ -284,7 +318,7 @@ def crossing_sums(y, velocity, half_widths, n_lag, dt, *, both_signs=True, owned
     the sampling interval in s. The segment is interpolated at ``t_c + k dt``,
     ``k = -L .. L``. Other parameters and the result as in :func:`extremum_sums`.
     """
-    return _run("v", y, velocity, half_widths, n_lag, dt, both_signs, owned)
+    return _run("v", y, velocity, half_widths, n_lag, dt, both_signs, owned, rows_to)
 
 
 def reference_per_window(y, trigger, target, half_widths, n_lag, *, dt=1.0, both_signs=True) -> SignatureSums:
@@ -296,7 +330,7 @@ def reference_per_window(y, trigger, target, half_widths, n_lag, *, dt=1.0, both
     only to check the one-pass binning (tests) and to time it
     (``benchmarks/bench_signatures.py``).
     """
-    parts = [_run(trigger, y, target, [width], n_lag, dt, both_signs, None) for width in np.atleast_1d(half_widths)]
+    parts = [_run(trigger, y, target, [width], n_lag, dt, both_signs, None, None) for width in np.atleast_1d(half_widths)]
     return SignatureSums(
         np.concatenate([part.sum for part in parts], axis=-2),
         np.concatenate([part.count for part in parts], axis=-1),
