@@ -424,23 +424,37 @@ def mean_signature(sums, counts, *, triggers=TRIGGERS, windows=None):
 # --------------------------------------------------------------------------- xarray / Dask
 
 
-def _cube_block(y, *, a, a_widths, v, v_widths, n_lag, dt, both_signs, owned=None):
-    """Both triggers on one block: sums ``(..., 2, W, 2L+1)``, count and skipped ``(..., 2, W)``."""
-    sa = extremum_sums(y, a, a_widths, n_lag, both_signs=both_signs, owned=owned)
-    sv = crossing_sums(y, v, v_widths, n_lag, dt, both_signs=both_signs, owned=owned)
+def _cube_block(y, *, a, a_widths, v, v_widths, n_lag, dt, both_signs, owned=None, groups=None):
+    """Both triggers on one block: sums ``(..., 2, W, 2L+1)``, count and skipped ``(..., 2, W)``.
+
+    ``groups = (inverse, n_groups)`` sums the series along the first axis within groups
+    inside the kernels (series ``j`` into group ``inverse[j]``, ``0 <= inverse < n_groups``):
+    the leading shape ``y.shape[:-1]`` becomes ``(n_groups, *y.shape[1:-1])``.
+    """
+    lead = y.shape[:-1]
+    rows_to = None
+    if groups is not None:
+        inverse, n_groups = groups
+        lead = (n_groups, *y.shape[1:-1])
+        n_rest = int(np.prod(lead[1:], dtype=np.int64))
+        rows_to = (np.asarray(inverse, dtype=np.int64)[:, None] * n_rest + np.arange(n_rest)).reshape(y.shape[:-1])
+    sa = extremum_sums(y, a, a_widths, n_lag, both_signs=both_signs, owned=owned, rows_to=rows_to)
+    sv = crossing_sums(y, v, v_widths, n_lag, dt, both_signs=both_signs, owned=owned, rows_to=rows_to)
     return (
-        np.stack([sa.sum, sv.sum], axis=-3),
-        np.stack([sa.count, sv.count], axis=-2),
-        np.stack([sa.skipped, sv.skipped], axis=-2),
+        np.stack([sa.sum, sv.sum], axis=-3).reshape(lead + (2, *sa.sum.shape[-2:])),
+        np.stack([sa.count, sv.count], axis=-2).reshape(lead + (2, sa.count.shape[-1])),
+        np.stack([sa.skipped, sv.skipped], axis=-2).reshape(lead + (2, sa.count.shape[-1])),
     )
 
 
-def _cube_time_chunked(x, **kw):
-    """:func:`_cube_block` on a Dask array chunked along time (the last axis).
+def _cube_time_chunked(x, groups=None, **kw):
+    """:func:`_cube_block` on a Dask array, possibly chunked along time (the last axis).
 
     Each time chunk is extended by ``depth`` samples from its neighbours (none past the
     record's ends), counts only the triggers at its own samples, and the per-chunk sums
     are added. ``depth`` covers the segment and the incoming-velocity stencil.
+    ``groups`` holds one ``(inverse, n_groups)`` of :func:`_cube_block` per chunk of the
+    first axis: each block then sums its series into its own groups.
     """
     n_lag, n_win = kw["n_lag"], len(kw["a_widths"])
     axis = x.ndim - 1
@@ -454,17 +468,19 @@ def _cube_time_chunked(x, **kw):
     width = 2 * n_lag + 1
 
     def block(b, block_info=None):
-        loc = block_info[0]["chunk-location"][axis]
+        where = block_info[0]["chunk-location"]
+        loc = where[axis]
         lo = 0 if loc == 0 else depth
         hi = b.shape[-1] - (0 if loc == n_chunks - 1 else depth)
-        s, c, k = _cube_block(b, owned=(lo, hi), **kw)
+        s, c, k = _cube_block(b, owned=(lo, hi), groups=None if groups is None else groups[where[0]], **kw)
         packed = np.concatenate([s, c[..., None].astype(np.float64), k[..., None].astype(np.float64)], axis=-1)
         return packed[..., None, :, :, :]
 
+    lead_chunks = x.chunks[:axis] if groups is None else (tuple(n for _, n in groups), *x.chunks[1:axis])
     packed = extended.map_blocks(
         block,
         new_axis=[axis + 1, axis + 2, axis + 3],
-        chunks=x.chunks[:axis] + ((1,) * n_chunks, (2,), (n_win,), (width + 2,)),
+        chunks=lead_chunks + ((1,) * n_chunks, (2,), (n_win,), (width + 2,)),
         dtype=np.float64,
         meta=np.empty((0,) * (axis + 4)),
     ).sum(axis=axis)
@@ -473,6 +489,39 @@ def _cube_time_chunked(x, **kw):
         packed[..., width].astype(np.int64),
         packed[..., width + 1].astype(np.int64),
     )
+
+
+def _group_sums(theta: xr.DataArray, group: xr.DataArray, kw: dict):
+    """``signature_sum``, ``count`` and ``skipped`` of ``theta``'s series summed within ``group``, and their labels.
+
+    The kernels add each series into its group (``rows_to``), so no per-series sums are
+    made. Each block of series -- the whole array, or each Dask chunk along the group's
+    dimension -- sums into the groups it holds, in label order; the result's ``group``
+    coordinate lists these parts, block after block, so a label repeats when its group
+    straddles chunks (and labels go out of order when they are not sorted along the
+    dimension). Adding the parts of a label then gives the group's sums exactly, since
+    signatures pool by adding sums and counts. Returns the three DataArrays, with a
+    ``group`` dimension, and the labels of its parts.
+    """
+    dim = group.dims[0] if group.ndim == 1 else None
+    if dim is None or dim == "time" or dim not in theta.dims:
+        raise ValueError(f"group must be one-dimensional along a dimension of theta other than time; it has {group.dims}")
+    theta, group = xr.align(theta, group, join="exact", copy=False)
+    labels = np.asarray(group.values)
+    x = theta.transpose(dim, ..., "time")
+    sizes = (labels.size,) if x.chunks is None else x.chunks[0]
+    bounds = np.cumsum((0, *sizes))
+    parts = [np.unique(labels[lo:hi], return_inverse=True) for lo, hi in zip(bounds[:-1], bounds[1:])]
+    groups = [(inverse, unique.size) for unique, inverse in parts]
+    if x.chunks is None:
+        out = _cube_block(x.values, groups=groups[0], **kw)
+    else:
+        out = _cube_time_chunked(x.data, groups=groups, **kw)
+    dims = ("group", *x.dims[1:-1])
+    coords = {name: coord for name, coord in x.coords.items() if not {dim, "time"} & set(coord.dims)}
+    core = (("trigger", "window", "lag"), ("trigger", "window"), ("trigger", "window"))
+    arrays = tuple(xr.DataArray(data, dims=dims + extra, coords=coords) for data, extra in zip(out, core))
+    return arrays, np.concatenate([unique for unique, _ in parts])
 
 
 def _sampling_interval(theta: xr.DataArray) -> float:
@@ -627,19 +676,22 @@ def signature_cube(
     core_out = [["trigger", "window", "lag"], ["trigger", "window"], ["trigger", "window"]]
     dtypes = [np.float64, np.int64, np.int64]
     chunks = theta.chunksizes.get("time") if theta.chunks is not None else None
-    if chunks is not None and len(chunks) > 1:
-        ufunc_kw = {"dask": "allowed"}
-        func = _cube_time_chunked
+    if group is not None:
+        (s, c, k), part_labels = _group_sums(theta, group, kw)
     else:
-        ufunc_kw = {
-            "dask": "parallelized",
-            "dask_gufunc_kwargs": {"output_sizes": {"trigger": 2, "window": windows.size, "lag": width}},
-            "output_dtypes": dtypes,
-        }
-        func = _cube_block
-    s, c, k = xr.apply_ufunc(
-        func, theta, input_core_dims=[["time"]], output_core_dims=core_out, kwargs=kw, keep_attrs=False, **ufunc_kw
-    )
+        if chunks is not None and len(chunks) > 1:
+            ufunc_kw = {"dask": "allowed"}
+            func = _cube_time_chunked
+        else:
+            ufunc_kw = {
+                "dask": "parallelized",
+                "dask_gufunc_kwargs": {"output_sizes": {"trigger": 2, "window": windows.size, "lag": width}},
+                "output_dtypes": dtypes,
+            }
+            func = _cube_block
+        s, c, k = xr.apply_ufunc(
+            func, theta, input_core_dims=[["time"]], output_core_dims=core_out, kwargs=kw, keep_attrs=False, **ufunc_kw
+        )
     units = theta.attrs.get("units", "rad")
     vel_units = f"{units} s-1"
     lag = np.arange(-kw["n_lag"], kw["n_lag"] + 1) * dt
@@ -658,8 +710,10 @@ def signature_cube(
         },
     )
     if group is not None:
-        sums = sums.groupby(group.rename("group")).sum(keep_attrs=True)
-        sums["group"].attrs["long_name"] = "group of series pooled into one signature"
+        sums = sums.assign_coords(group=part_labels)
+        if np.any(np.diff(part_labels) <= 0):  # parts of one group in several chunks, or unsorted labels
+            sums = sums.groupby("group").sum(keep_attrs=True)
+        sums["group"].attrs = {**group.attrs, "long_name": "group of series pooled into one signature"}
     sums.attrs = {
         "level": float(level),
         "sigma_y": float(sigma_y),
