@@ -3,6 +3,7 @@
 A plain script (not a test): prints timings, never asserts them.
 
     python benchmarks/bench_signatures.py [--series 2000] [--points 6000] [--windows 10]
+    python benchmarks/bench_signatures.py --threads [--chunk 250] [--groups 1000 10]
 
 The record is like the paper's: ``--series`` stationary series of ``--points`` samples at
 about 75 samples per rocking cycle at amplitude ``sigma_Y``, simulated by
@@ -11,6 +12,13 @@ about 75 samples per rocking cycle at amplitude ``sigma_Y``, simulated by
 noise (AR(2), 75 samples per period). Trigger settings are the package defaults: level
 ``2 sigma_Y``, ``da_max = 0.28 a``, windows ``da_max * (1..W)/W``, lags 2.5 periods at
 amplitude ``a`` (eq. 5), ``D_v`` at ``v = sigma_Ydot`` with ``dv_max = 0.28 v``.
+
+``--threads`` times ``signature_cube`` on Dask chunks of ``--chunk`` series pooled into
+groups of ``--groups`` series (1000 as in the paper's scene, 10 as in its groups of ten),
+with the threaded scheduler on 1 and on 2 workers, two ways: per-series sums then an
+xarray groupby (the path before the kernels summed groups) and the kernels summing
+each chunk's groups (``group=``). Runs are interleaved; it prints the best and the
+median of ``--repeat`` runs and the ratios.
 """
 
 from __future__ import annotations
@@ -19,12 +27,22 @@ import argparse
 import math
 import os
 import time
+import warnings
 
+import dask
 import numpy as np
 import xarray as xr
 from scipy.signal import lfilter
 
-from rockdec.signatures import crossing_sums, extremum_sums, lag_samples, reference_per_window, signature_cube
+from rockdec.signatures import (
+    NoTriggerWarning,
+    _finish,
+    crossing_sums,
+    extremum_sums,
+    lag_samples,
+    reference_per_window,
+    signature_cube,
+)
 
 POINTS_PER_CYCLE = 75.0
 
@@ -68,6 +86,41 @@ def best_of(repeat, func):
     return min(times), out
 
 
+def thread_scaling(theta, kw, group_sizes, repeat):
+    """Time the grouped cube, per-series + groupby against in-kernel groups, on 1 and 2 threads."""
+    n = theta.sizes["seed"]
+    print(f"signature_cube on {n} series in chunks of {theta.chunksizes['seed'][0]}, threaded scheduler")
+    for size in group_sizes:
+        group = xr.DataArray(np.arange(n) // size, dims="seed", coords={"seed": theta["seed"]})
+        variants = {
+            "per-series + groupby": lambda: _finish(
+                signature_cube(theta, **kw)[["signature_sum", "count", "skipped"]].groupby(group.rename("group")).sum()
+            ).compute(),
+            "in-kernel groups": lambda: signature_cube(theta, **kw, group=group).compute(),
+        }
+        times = {(name, workers): [] for name in variants for workers in (1, 2)}
+        results = {}
+        for _ in range(repeat):  # interleaved: the machine's load drifts
+            for name, run in variants.items():
+                for workers in (1, 2):
+                    with dask.config.set(scheduler="threads", num_workers=workers):
+                        t0 = time.perf_counter()
+                        results[name] = run()
+                        times[name, workers].append(time.perf_counter() - t0)
+        old, new = results.values()
+        rel = float(np.abs(old.signature_sum - new.signature_sum).max() / np.abs(old.signature_sum).max())
+        same = bool((old["count"] == new["count"]).all() and (old["skipped"] == new["skipped"]).all())
+        print(f"groups of {size} ({n // size} groups): counts equal {same}, max |sum difference| / max |sum| {rel:.1e}")
+        print(f"  {'path':24}{'1 thread s':>16}{'2 threads s':>16}{'1/2 threads':>13}")
+        best = {key: min(t) for key, t in times.items()}
+        for name in variants:
+            cells = [f"{best[name, w]:7.2f} ({np.median(times[name, w]):5.2f})" for w in (1, 2)]
+            print(f"  {name:24}{cells[0]:>16}{cells[1]:>16}{best[name, 1] / best[name, 2]:>13.2f}")
+        for w in (1, 2):
+            print(f"  old / new on {w} thread(s): {best['per-series + groupby', w] / best['in-kernel groups', w]:.2f}")
+    print("  (best of the runs, median in parentheses)")
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--series", type=int, default=2000)
@@ -75,6 +128,9 @@ def main(argv=None):
     parser.add_argument("--windows", type=int, default=10)
     parser.add_argument("--repeat", type=int, default=3, help="best of this many runs")
     parser.add_argument("--source", choices=["auto", "simulate", "ar2"], default="auto")
+    parser.add_argument("--threads", action="store_true", help="time the grouped cube on 1 and 2 Dask threads instead")
+    parser.add_argument("--chunk", type=int, default=250, help="series per Dask chunk (--threads)")
+    parser.add_argument("--groups", type=int, nargs="+", default=[1000, 10], help="series per group (--threads)")
     args = parser.parse_args(argv)
 
     use_sim = args.source == "simulate"
@@ -91,6 +147,14 @@ def main(argv=None):
 
     rel = np.arange(1, args.windows + 1) / args.windows
     a, v = 2.0 * sigma_y, sigma_ydot
+    if args.threads:
+        theta = xr.DataArray(y, dims=("seed", "time"), coords={"seed": np.arange(args.series)}, attrs={"dt": dt})
+        kw = dict(sigma_y=sigma_y, sigma_ydot=sigma_ydot, windows=rel, n_lag=n_lag)
+        with warnings.catch_warnings():  # compile (or load the cache) outside the timings; few triggers
+            warnings.simplefilter("ignore", NoTriggerWarning)
+            signature_cube(theta[:2, :500], **dict(kw, n_lag=5), group=xr.DataArray([0, 0], dims="seed"))
+        thread_scaling(theta.chunk({"seed": args.chunk}), kw, args.groups, args.repeat)
+        return
     cases = {
         "D_a": (lambda: extremum_sums(y, a, rel * 0.28 * a, n_lag), lambda: reference_per_window(y, "a", a, rel * 0.28 * a, n_lag)),
         "D_v": (

@@ -477,13 +477,15 @@ def _cube_time_chunked(x, groups=None, **kw):
         return packed[..., None, :, :, :]
 
     lead_chunks = x.chunks[:axis] if groups is None else (tuple(n for _, n in groups), *x.chunks[1:axis])
-    packed = extended.map_blocks(
+    per_chunk = extended.map_blocks(
         block,
         new_axis=[axis + 1, axis + 2, axis + 3],
         chunks=lead_chunks + ((1,) * n_chunks, (2,), (n_win,), (width + 2,)),
         dtype=np.float64,
         meta=np.empty((0,) * (axis + 4)),
-    ).sum(axis=axis)
+    )
+    # one time chunk: nothing to add (a Dask sum would add two layers of tasks)
+    packed = per_chunk.sum(axis=axis) if n_chunks > 1 else per_chunk[(slice(None),) * axis + (0,)]
     return (
         packed[..., :width],
         packed[..., width].astype(np.int64),
