@@ -447,14 +447,16 @@ def _cube_block(y, *, a, a_widths, v, v_widths, n_lag, dt, both_signs, owned=Non
     )
 
 
-def _cube_time_chunked(x, groups=None, **kw):
-    """:func:`_cube_block` on a Dask array, possibly chunked along time (the last axis).
+def _cube_packed(x, groups=None, **kw):
+    """:func:`_cube_block` on a Dask array, possibly chunked along time (the last axis), packed.
 
     Each time chunk is extended by ``depth`` samples from its neighbours (none past the
     record's ends), counts only the triggers at its own samples, and the per-chunk sums
     are added. ``depth`` covers the segment and the incoming-velocity stencil.
     ``groups`` holds one ``(inverse, n_groups)`` of :func:`_cube_block` per chunk of the
-    first axis: each block then sums its series into its own groups.
+    first axis: each block then sums its series into its own groups. Returns one float64
+    array ``(..., 2, W, 2L+3)``: the sums, then count and skipped (exact below 2**53;
+    :func:`_unpack` splits it).
     """
     n_lag, n_win = kw["n_lag"], len(kw["a_widths"])
     axis = x.ndim - 1
@@ -485,12 +487,18 @@ def _cube_time_chunked(x, groups=None, **kw):
         meta=np.empty((0,) * (axis + 4)),
     )
     # one time chunk: nothing to add (a Dask sum would add two layers of tasks)
-    packed = per_chunk.sum(axis=axis) if n_chunks > 1 else per_chunk[(slice(None),) * axis + (0,)]
-    return (
-        packed[..., :width],
-        packed[..., width].astype(np.int64),
-        packed[..., width + 1].astype(np.int64),
-    )
+    return per_chunk.sum(axis=axis) if n_chunks > 1 else per_chunk[(slice(None),) * axis + (0,)]
+
+
+def _unpack(packed):
+    """``(sums, count, skipped)`` from a packed array of :func:`_cube_packed`."""
+    width = packed.shape[-1] - 2
+    return packed[..., :width], packed[..., width].astype(np.int64), packed[..., width + 1].astype(np.int64)
+
+
+def _cube_time_chunked(x, **kw):
+    """:func:`_cube_block` on a Dask array chunked along time: :func:`_cube_packed`, unpacked."""
+    return _unpack(_cube_packed(x, **kw))
 
 
 def _group_sums(theta: xr.DataArray, group: xr.DataArray, kw: dict):
@@ -498,12 +506,12 @@ def _group_sums(theta: xr.DataArray, group: xr.DataArray, kw: dict):
 
     The kernels add each series into its group (``rows_to``), so no per-series sums are
     made. Each block of series -- the whole array, or each Dask chunk along the group's
-    dimension -- sums into the groups it holds, in label order; the result's ``group``
-    coordinate lists these parts, block after block, so a label repeats when its group
-    straddles chunks (and labels go out of order when they are not sorted along the
-    dimension). Adding the parts of a label then gives the group's sums exactly, since
-    signatures pool by adding sums and counts. Returns the three DataArrays, with a
-    ``group`` dimension, and the labels of its parts.
+    dimension -- sums into the groups it holds, in label order. A group that straddles
+    chunks has a part in each of them (and labels not sorted along the dimension put the
+    parts out of order): the packed parts are then added by label, once for the three
+    variables. Exact up to the order of the additions, since signatures pool by adding
+    sums and counts. Returns the three DataArrays, ``group`` first as with xarray's
+    groupby, and the sorted labels along ``group``.
     """
     dim = group.dims[0] if group.ndim == 1 else None
     if dim is None or dim == "time" or dim not in theta.dims:
@@ -515,15 +523,21 @@ def _group_sums(theta: xr.DataArray, group: xr.DataArray, kw: dict):
     bounds = np.cumsum((0, *sizes))
     parts = [np.unique(labels[lo:hi], return_inverse=True) for lo, hi in zip(bounds[:-1], bounds[1:])]
     groups = [(inverse, unique.size) for unique, inverse in parts]
-    if x.chunks is None:
+    dims = ("group", *x.dims[1:-1])
+    if x.chunks is None:  # one block: its groups are all the groups, sorted
         out = _cube_block(x.values, groups=groups[0], **kw)
     else:
-        out = _cube_time_chunked(x.data, groups=groups, **kw)
-    dims = ("group", *x.dims[1:-1])
+        part_labels = np.concatenate([unique for unique, _ in parts])
+        packed = xr.DataArray(
+            _cube_packed(x.data, groups=groups, **kw), dims=dims + ("trigger", "window", "packed"), coords={"group": part_labels}
+        )
+        if np.any(np.diff(part_labels) <= 0):  # parts of one group in several chunks, or unsorted labels
+            packed = packed.groupby("group").sum().transpose(*packed.dims)
+        out = _unpack(packed.data)
     coords = {name: coord for name, coord in x.coords.items() if not {dim, "time"} & set(coord.dims)}
     core = (("trigger", "window", "lag"), ("trigger", "window"), ("trigger", "window"))
     arrays = tuple(xr.DataArray(data, dims=dims + extra, coords=coords) for data, extra in zip(out, core))
-    return arrays, np.concatenate([unique for unique, _ in parts])
+    return arrays, np.unique(labels)
 
 
 def _sampling_interval(theta: xr.DataArray) -> float:
@@ -679,7 +693,7 @@ def signature_cube(
     dtypes = [np.float64, np.int64, np.int64]
     chunks = theta.chunksizes.get("time") if theta.chunks is not None else None
     if group is not None:
-        (s, c, k), part_labels = _group_sums(theta, group, kw)
+        (s, c, k), labels = _group_sums(theta, group, kw)
     else:
         if chunks is not None and len(chunks) > 1:
             ufunc_kw = {"dask": "allowed"}
@@ -712,9 +726,7 @@ def signature_cube(
         },
     )
     if group is not None:
-        sums = sums.assign_coords(group=part_labels)
-        if np.any(np.diff(part_labels) <= 0):  # parts of one group in several chunks, or unsorted labels
-            sums = sums.groupby("group").sum(keep_attrs=True)
+        sums = sums.assign_coords(group=labels)
         sums["group"].attrs = {**group.attrs, "long_name": "group of series pooled into one signature"}
     sums.attrs = {
         "level": float(level),
