@@ -49,8 +49,11 @@ so they are neither triggers nor skipped.
 
 All window sizes in one pass: the half-widths ``da_1 <= ... <= da_W`` are nested, so each
 trigger is added once, into the bin of the smallest window that holds it, and a cumulative
-sum over the window axis finishes the job. Kernels return per-series *sums* and *counts*,
-so signatures pool exactly by adding (docs/method.md §4.4): over series, seeds, groups or time chunks.
+sum over the window axis finishes the job. Kernels return *sums* and *counts*, so
+signatures pool exactly by adding (docs/method.md §4.4): over series, seeds, groups or time
+chunks. The adding of series into groups is done inside the kernels (``rows_to``: each
+series adds its segments into its group's row, and the cumulative sum over the windows runs
+once per group), so a grouped cube never holds per-series sums.
 
 Layers: NumPy/numba kernels (:func:`extremum_sums`, :func:`crossing_sums`), the
 :func:`reference_per_window` used by tests and the benchmark, small helpers
@@ -637,8 +640,10 @@ def signature_cube(
     both_signs : bool
         Also use the mirrored triggers (minima at ``-a``, downward crossings), sign-flipped.
     group : DataArray of int labels along one dimension of ``theta``, optional
-        Sum the per-series sums and counts within groups; the output then has a ``group``
-        dimension instead of that one. The labels must be in memory (NumPy).
+        Sum the sums and counts of the series within groups; the output then has a
+        ``group`` dimension (first, labels sorted) instead of that one. The kernels add
+        each series into its group, per block of series; groups spread over several Dask
+        chunks get one part from each, added by label. The labels must be in memory (NumPy).
 
     Returns
     -------
