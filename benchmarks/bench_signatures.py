@@ -15,7 +15,8 @@ amplitude ``a`` (eq. 5), ``D_v`` at ``v = sigma_Ydot`` with ``dv_max = 0.28 v``.
 
 ``--threads`` times ``signature_cube`` on Dask chunks of ``--chunk`` series pooled into
 groups of ``--groups`` series (1000 as in the paper's scene, 10 as in its groups of ten),
-with the threaded scheduler on 1 and on 2 workers, two ways: per-series sums then an
+with the threaded scheduler on 1 and on 2 workers (and, as the bound, the kernels
+alone on a thread pool of 1 and 2 threads), two ways: per-series sums then an
 xarray groupby (the path before the kernels summed groups) and the kernels summing
 each chunk's groups (``group=``). Runs are interleaved; it prints the best and the
 median of ``--repeat`` runs and the ratios.
@@ -28,6 +29,7 @@ import math
 import os
 import time
 import warnings
+from concurrent.futures import ThreadPoolExecutor
 
 import dask
 import numpy as np
@@ -86,6 +88,27 @@ def best_of(repeat, func):
     return min(times), out
 
 
+def kernel_scaling(y, a, a_widths, v, v_widths, n_lag, dt, chunk, repeat):
+    """The kernels alone, without Dask or xarray: chunks of series each summed into one row,
+    on a thread pool of 1 and of 2 threads (the bound for the Dask runs)."""
+    blocks = [y[i : i + chunk] for i in range(0, y.shape[0], chunk)]
+
+    def one(block):
+        rows_to = np.zeros(block.shape[0], dtype=np.int64)
+        extremum_sums(block, a, a_widths, n_lag, rows_to=rows_to)
+        crossing_sums(block, v, v_widths, n_lag, dt, rows_to=rows_to)
+
+    times = {1: [], 2: []}
+    for _ in range(repeat):
+        for workers in (1, 2):
+            with ThreadPoolExecutor(workers) as pool:
+                t0 = time.perf_counter()
+                list(pool.map(one, blocks))
+                times[workers].append(time.perf_counter() - t0)
+    t1, t2 = min(times[1]), min(times[2])
+    print(f"kernels alone, {len(blocks)} chunks on a thread pool: 1 thread {t1:.3f} s, 2 threads {t2:.3f} s, ratio {t1 / t2:.2f}")
+
+
 def thread_scaling(theta, kw, group_sizes, repeat):
     """Time the grouped cube, per-series + groupby against in-kernel groups, on 1 and 2 threads.
 
@@ -122,17 +145,25 @@ def thread_scaling(theta, kw, group_sizes, repeat):
         rel = float(np.abs(old.signature_sum - new.signature_sum).max() / np.abs(old.signature_sum).max())
         same = bool((old["count"] == new["count"]).all() and (old["skipped"] == new["skipped"]).all())
         print(f"groups of {size} ({n // size} groups): counts equal {same}, max |sum difference| / max |sum| {rel:.1e}")
-        print(f"  {'path':22}{'build s':>9}{'compute 1 thr':>15}{'compute 2 thr':>15}{'cpu/wall 2':>12}"
-              f"{'total 1/2 thr':>15}{'compute 1/2':>13}")
         total = {key: min(np.add(build[key], compute[key])) for key in build}
         best = {key: min(t) for key, t in compute.items()}
+        head = ("build s", "compute 1 thr", "compute 2 thr", "cpu/wall 2", "total 1 thr", "total 2 thr", "total 1/2", "compute 1/2")
+        print(f"  {'path':22}" + "".join(f"{h:>15}" for h in head))
         for name in builds:
-            print(
-                f"  {name:22}{min(build[name, 1]):>9.3f}{best[name, 1]:>15.3f}{best[name, 2]:>15.3f}"
-                f"{np.median(cpu[name, 2]):>12.2f}{total[name, 1] / total[name, 2]:>15.2f}{best[name, 1] / best[name, 2]:>13.2f}"
+            cells = (
+                min(build[name, 1]),
+                best[name, 1],
+                best[name, 2],
+                np.median(cpu[name, 2]),
+                total[name, 1],
+                total[name, 2],
+                total[name, 1] / total[name, 2],
+                best[name, 1] / best[name, 2],
             )
+            print(f"  {name:22}" + "".join(f"{cell:>15.3f}" for cell in cells))
         for w in (1, 2):
-            print(f"  old / new, build + compute on {w} thread(s): {total['per-series + groupby', w] / total['in-kernel groups', w]:.2f}")
+            ratio = total["per-series + groupby", w] / total["in-kernel groups", w]
+            print(f"  old / new, build + compute on {w} thread(s): {ratio:.2f}")
     print(f"  (best of {repeat} runs)")
 
 
@@ -168,6 +199,7 @@ def main(argv=None):
         with warnings.catch_warnings():  # compile (or load the cache) outside the timings; few triggers
             warnings.simplefilter("ignore", NoTriggerWarning)
             signature_cube(theta[:2, :500], **dict(kw, n_lag=5), group=xr.DataArray([0, 0], dims="seed"))
+        kernel_scaling(y, a, rel * 0.28 * a, v, rel * 0.28 * v, n_lag, dt, args.chunk, args.repeat)
         thread_scaling(theta.chunk({"seed": args.chunk}), kw, args.groups, args.repeat)
         return
     cases = {
