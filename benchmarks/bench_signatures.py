@@ -3,6 +3,7 @@
 A plain script (not a test): prints timings, never asserts them.
 
     python benchmarks/bench_signatures.py [--series 2000] [--points 6000] [--windows 10]
+    python benchmarks/bench_signatures.py --threads [--chunk 250] [--groups 1000 10]
 
 The record is like the paper's: ``--series`` stationary series of ``--points`` samples at
 about 75 samples per rocking cycle at amplitude ``sigma_Y``, simulated by
@@ -11,6 +12,14 @@ about 75 samples per rocking cycle at amplitude ``sigma_Y``, simulated by
 noise (AR(2), 75 samples per period). Trigger settings are the package defaults: level
 ``2 sigma_Y``, ``da_max = 0.28 a``, windows ``da_max * (1..W)/W``, lags 2.5 periods at
 amplitude ``a`` (eq. 5), ``D_v`` at ``v = sigma_Ydot`` with ``dv_max = 0.28 v``.
+
+``--threads`` times ``signature_cube`` on Dask chunks of ``--chunk`` series pooled into
+groups of ``--groups`` series (1000 as in the paper's scene, 10 as in its groups of ten),
+with the threaded scheduler on 1 and on 2 workers (and, as the bound, the kernels
+alone on a thread pool of 1 and 2 threads), two ways: per-series sums then an
+xarray groupby (the path before the kernels summed groups) and the kernels summing
+each chunk's groups (``group=``). Runs are interleaved; it prints the best and the
+median of ``--repeat`` runs and the ratios.
 """
 
 from __future__ import annotations
@@ -19,12 +28,23 @@ import argparse
 import math
 import os
 import time
+import warnings
+from concurrent.futures import ThreadPoolExecutor
 
+import dask
 import numpy as np
 import xarray as xr
 from scipy.signal import lfilter
 
-from rockdec.signatures import crossing_sums, extremum_sums, lag_samples, reference_per_window, signature_cube
+from rockdec.signatures import (
+    NoTriggerWarning,
+    _finish,
+    crossing_sums,
+    extremum_sums,
+    lag_samples,
+    reference_per_window,
+    signature_cube,
+)
 
 POINTS_PER_CYCLE = 75.0
 
@@ -68,6 +88,85 @@ def best_of(repeat, func):
     return min(times), out
 
 
+def kernel_scaling(y, a, a_widths, v, v_widths, n_lag, dt, chunk, repeat):
+    """The kernels alone, without Dask or xarray: chunks of series each summed into one row,
+    on a thread pool of 1 and of 2 threads (the bound for the Dask runs)."""
+    blocks = [y[i : i + chunk] for i in range(0, y.shape[0], chunk)]
+
+    def one(block):
+        rows_to = np.zeros(block.shape[0], dtype=np.int64)
+        extremum_sums(block, a, a_widths, n_lag, rows_to=rows_to)
+        crossing_sums(block, v, v_widths, n_lag, dt, rows_to=rows_to)
+
+    times = {1: [], 2: []}
+    for _ in range(repeat):
+        for workers in (1, 2):
+            with ThreadPoolExecutor(workers) as pool:
+                t0 = time.perf_counter()
+                list(pool.map(one, blocks))
+                times[workers].append(time.perf_counter() - t0)
+    t1, t2 = min(times[1]), min(times[2])
+    print(f"kernels alone, {len(blocks)} chunks on a thread pool: 1 thread {t1:.3f} s, 2 threads {t2:.3f} s, ratio {t1 / t2:.2f}")
+
+
+def thread_scaling(theta, kw, group_sizes, repeat):
+    """Time the grouped cube, per-series + groupby against in-kernel groups, on 1 and 2 threads.
+
+    Building the lazy cube (graph construction, serial) and computing it are timed apart;
+    ``cpu/wall`` of the 2-thread compute shows how much of the second core was had (the
+    machine may be shared).
+    """
+    n = theta.sizes["seed"]
+    print(f"signature_cube on {n} series in chunks of {theta.chunksizes['seed'][0]}, threaded scheduler")
+    for size in group_sizes:
+        group = xr.DataArray(np.arange(n) // size, dims="seed", coords={"seed": theta["seed"]})
+        builds = {
+            # the path before the kernels summed groups: per-series sums, then xarray's groupby
+            "per-series + groupby": lambda: _finish(
+                signature_cube(theta, **kw)[["signature_sum", "count", "skipped"]].groupby(group.rename("group")).sum()
+            ),
+            "in-kernel groups": lambda: signature_cube(theta, **kw, group=group),
+        }
+        build, compute, cpu = ({(name, w): [] for name in builds for w in (1, 2)} for _ in range(3))
+        results = {}
+        for _ in range(repeat):  # interleaved: the machine's load drifts
+            for name, make in builds.items():
+                for workers in (1, 2):
+                    with dask.config.set(scheduler="threads", num_workers=workers):
+                        t0 = time.perf_counter()
+                        lazy = make()
+                        t1, c1 = time.perf_counter(), time.process_time()
+                        results[name] = lazy.compute()
+                        t2, c2 = time.perf_counter(), time.process_time()
+                    build[name, workers].append(t1 - t0)
+                    compute[name, workers].append(t2 - t1)
+                    cpu[name, workers].append((c2 - c1) / (t2 - t1))
+        old, new = results.values()
+        rel = float(np.abs(old.signature_sum - new.signature_sum).max() / np.abs(old.signature_sum).max())
+        same = bool((old["count"] == new["count"]).all() and (old["skipped"] == new["skipped"]).all())
+        print(f"groups of {size} ({n // size} groups): counts equal {same}, max |sum difference| / max |sum| {rel:.1e}")
+        total = {key: min(np.add(build[key], compute[key])) for key in build}
+        best = {key: min(t) for key, t in compute.items()}
+        head = ("build s", "compute 1 thr", "compute 2 thr", "cpu/wall 2", "total 1 thr", "total 2 thr", "total 1/2", "compute 1/2")
+        print(f"  {'path':22}" + "".join(f"{h:>15}" for h in head))
+        for name in builds:
+            cells = (
+                min(build[name, 1]),
+                best[name, 1],
+                best[name, 2],
+                np.median(cpu[name, 2]),
+                total[name, 1],
+                total[name, 2],
+                total[name, 1] / total[name, 2],
+                best[name, 1] / best[name, 2],
+            )
+            print(f"  {name:22}" + "".join(f"{cell:>15.3f}" for cell in cells))
+        for w in (1, 2):
+            ratio = total["per-series + groupby", w] / total["in-kernel groups", w]
+            print(f"  old / new, build + compute on {w} thread(s): {ratio:.2f}")
+    print(f"  (best of {repeat} runs)")
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--series", type=int, default=2000)
@@ -75,6 +174,9 @@ def main(argv=None):
     parser.add_argument("--windows", type=int, default=10)
     parser.add_argument("--repeat", type=int, default=3, help="best of this many runs")
     parser.add_argument("--source", choices=["auto", "simulate", "ar2"], default="auto")
+    parser.add_argument("--threads", action="store_true", help="time the grouped cube on 1 and 2 Dask threads instead")
+    parser.add_argument("--chunk", type=int, default=250, help="series per Dask chunk (--threads)")
+    parser.add_argument("--groups", type=int, nargs="+", default=[1000, 10], help="series per group (--threads)")
     args = parser.parse_args(argv)
 
     use_sim = args.source == "simulate"
@@ -91,6 +193,15 @@ def main(argv=None):
 
     rel = np.arange(1, args.windows + 1) / args.windows
     a, v = 2.0 * sigma_y, sigma_ydot
+    if args.threads:
+        theta = xr.DataArray(y, dims=("seed", "time"), coords={"seed": np.arange(args.series)}, attrs={"dt": dt})
+        kw = dict(sigma_y=sigma_y, sigma_ydot=sigma_ydot, windows=rel, n_lag=n_lag)
+        with warnings.catch_warnings():  # compile (or load the cache) outside the timings; few triggers
+            warnings.simplefilter("ignore", NoTriggerWarning)
+            signature_cube(theta[:2, :500], **dict(kw, n_lag=5), group=xr.DataArray([0, 0], dims="seed"))
+        kernel_scaling(y, a, rel * 0.28 * a, v, rel * 0.28 * v, n_lag, dt, args.chunk, args.repeat)
+        thread_scaling(theta.chunk({"seed": args.chunk}), kw, args.groups, args.repeat)
+        return
     cases = {
         "D_a": (lambda: extremum_sums(y, a, rel * 0.28 * a, n_lag), lambda: reference_per_window(y, "a", a, rel * 0.28 * a, n_lag)),
         "D_v": (

@@ -315,18 +315,94 @@ def test_pooled_signature_is_the_mean_over_the_union_of_triggers():
     assert set(pooled.dims) == {"trigger", "window", "lag", "lag_pos"}
 
 
-def test_group_sums_equal_sums_of_their_seeds():
+def test_kernels_sum_series_into_their_output_rows():
+    """``rows_to`` adds each series into its row inside the kernel: the per-series sums added."""
+    y = np.stack([ar2(8000, seed=s) for s in range(7)])
+    y[4, 900::400] = np.nan  # some segments reach a gap: skipped
+    rows_to = np.array([3, 0, 3, 1, 0, 3, 1])  # unsorted; row 2 gets no series
+    sigma, sigma_v = y[0].std(), np.diff(y[0]).std()
+    widths = np.array([0.1, 0.2, 0.28])
+    for kernel, args in (
+        (extremum_sums, (1.5 * sigma, widths * 1.5 * sigma, 20)),
+        (crossing_sums, (sigma_v, widths * sigma_v, 20, 1.0)),
+    ):
+        per_series, grouped = kernel(y, *args), kernel(y, *args, rows_to=rows_to)
+        assert grouped.sum.shape == (4, 3, 41) and grouped.count.shape == (4, 3)
+        for row in range(4):
+            members = rows_to == row
+            assert np.array_equal(grouped.count[row], per_series.count[members].sum(axis=0))
+            assert np.array_equal(grouped.skipped[row], per_series.skipped[members].sum(axis=0))
+            np.testing.assert_allclose(grouped.sum[row], per_series.sum[members].sum(axis=0), rtol=1e-12, atol=1e-12)
+        assert grouped.count[2].sum() == 0 and grouped.sum[2].max() == 0  # no series: zeros
+        assert grouped.skipped[0, -1] > 0 and grouped.count[[0, 1, 3], 0].min() > 0
+        with pytest.raises(ValueError, match="rows_to"):
+            kernel(y, *args, rows_to=rows_to[:-1])
+        with pytest.raises(ValueError, match="rows_to"):
+            kernel(y, *args, rows_to=rows_to - 1)
+
+
+def sums_by_label(per_seed, labels, dim="seed"):
+    """Group sums the old way: per-series sums, added with NumPy label by label."""
+    out = {}
+    for label in np.unique(labels):
+        members = per_seed.isel({dim: np.flatnonzero(labels == label)})
+        out[label] = {name: members[name].sum(dim).values for name in ("signature_sum", "count", "skipped")}
+    return out
+
+
+GROUPINGS = {
+    "aligned with chunks": [3, 3, 5, 5, 9, 9],
+    "straddling chunks": [3, 3, 5, 5, 5, 9],
+    "unsorted": [9, 3, 5, 3, 9, 5],
+    "one group": [7, 7, 7, 7, 7, 7],
+}
+
+
+@pytest.mark.parametrize("labels", GROUPINGS.values(), ids=GROUPINGS.keys())
+@pytest.mark.parametrize("chunks", [None, {"seed": 2}, {"seed": 4}, {"seed": 2, "time": 500}], ids=str)
+def test_group_sums_equal_sums_of_their_seeds(labels, chunks):
     theta = seeds_block()
-    labels = xr.DataArray([3, 3, 5, 5, 5, 9], dims="seed", coords={"seed": theta.seed})
+    labels = np.array(labels)
+    group = xr.DataArray(labels, dims="seed", coords={"seed": theta.seed}, attrs={"description": "scene groups"})
     per_seed = signature_cube(theta, **cube_kwargs())
-    grouped = signature_cube(theta.chunk({"seed": 4}), **cube_kwargs(), group=labels).compute()
-    assert list(grouped.group.values) == [3, 5, 9]
-    for label in (3, 5, 9):
-        members = per_seed.sel(seed=labels.seed.values[labels.values == label])
-        for name in ("count", "skipped"):
-            assert np.array_equal(grouped[name].sel(group=label).values, members[name].sum("seed").values)
-        np.testing.assert_allclose(grouped.signature_sum.sel(group=label), members.signature_sum.sum("seed"), rtol=1e-12)
+    data = theta if chunks is None else theta.chunk(chunks)
+    cube = signature_cube(data, **cube_kwargs(), group=group)
+    assert (cube["count"].chunks is None) == (chunks is None)
+    grouped = cube.compute()
+    assert list(grouped.group.values) == sorted(set(labels))  # xarray's groupby order: sorted labels
+    assert grouped.group.attrs == {"description": "scene groups", "long_name": "group of series pooled into one signature"}
+    assert grouped.signature_sum.dims == ("group", "trigger", "window", "lag") and grouped["count"].dtype == np.int64
+    expected = sums_by_label(per_seed, labels)
+    assert grouped.skipped.sel(group=labels[2]).max() > 0  # seed 102 has a gap
+    for label, sums in expected.items():
+        assert np.array_equal(grouped["count"].sel(group=label).values, sums["count"])
+        assert np.array_equal(grouped["skipped"].sel(group=label).values, sums["skipped"])
+        np.testing.assert_allclose(grouped.signature_sum.sel(group=label), sums["signature_sum"], rtol=1e-12, atol=1e-12)
+    for name in ("window", "lag", "lag_pos", "da", "dv", "trigger"):
+        xr.testing.assert_identical(grouped[name], per_seed[name])
+    assert grouped.attrs == per_seed.attrs
     xr.testing.assert_allclose(pool(grouped, "group").signature, pool(per_seed, "seed").signature, rtol=1e-12)
+
+
+def test_dask_group_sums_equal_numpy_ones_with_more_dimensions():
+    """Groups along ``seed`` of a ``(replicate, seed, time)`` record: the other dimension and
+    its coordinate stay, ``group`` comes first (as with xarray's groupby), Dask equals NumPy."""
+    one = seeds_block()
+    theta = xr.concat([one, 0.9 * one], dim="replicate").assign_coords(replicate=[10, 20], run=("seed", np.arange(6)))
+    group = xr.DataArray([5, 3, 3, 9, 5, 5], dims="seed", coords={"seed": theta.seed})
+    whole = signature_cube(theta, **cube_kwargs(), group=group)
+    lazy = signature_cube(theta.chunk({"seed": 4, "replicate": 1}), **cube_kwargs(), group=group).compute()
+    assert whole.signature_sum.dims == ("group", "replicate", "trigger", "window", "lag")
+    assert "run" not in whole.coords and list(whole.replicate.values) == [10, 20]
+    xr.testing.assert_allclose(whole, lazy, rtol=1e-12, atol=1e-12)
+    assert np.array_equal(whole["count"].values, lazy["count"].values)
+    per_seed = signature_cube(theta, **cube_kwargs())
+    for replicate in (10, 20):
+        expected = sums_by_label(per_seed.sel(replicate=replicate), group.values)
+        for label, sums in expected.items():
+            got = lazy.sel(group=label, replicate=replicate)
+            assert np.array_equal(got["count"].values, sums["count"])
+            np.testing.assert_allclose(got.signature_sum, sums["signature_sum"], rtol=1e-12, atol=1e-12)
 
 
 def test_cube_is_labelled_with_units_and_settings():

@@ -49,8 +49,11 @@ so they are neither triggers nor skipped.
 
 All window sizes in one pass: the half-widths ``da_1 <= ... <= da_W`` are nested, so each
 trigger is added once, into the bin of the smallest window that holds it, and a cumulative
-sum over the window axis finishes the job. Kernels return per-series *sums* and *counts*,
-so signatures pool exactly by adding (docs/method.md §4.4): over series, seeds, groups or time chunks.
+sum over the window axis finishes the job. Kernels return *sums* and *counts*, so
+signatures pool exactly by adding (docs/method.md §4.4): over series, seeds, groups or time
+chunks. The adding of series into groups is done inside the kernels (``rows_to``: each
+series adds its segments into its group's row, and the cumulative sum over the windows runs
+once per group), so a grouped cube never holds per-series sums.
 
 Layers: NumPy/numba kernels (:func:`extremum_sums`, :func:`crossing_sums`), the
 :func:`reference_per_window` used by tests and the benchmark, small helpers
@@ -124,7 +127,7 @@ def _nan_prefix(row, out):
 
 @njit(nogil=True, cache=True)
 def _close_windows(sums, counts, skipped):
-    """Per-bin accumulators of one series -> cumulative over the nested windows."""
+    """Per-bin accumulators of one output row -> cumulative over the nested windows."""
     for w in range(1, counts.size):
         counts[w] += counts[w - 1]
         skipped[w] += skipped[w - 1]
@@ -141,14 +144,18 @@ def _add_interpolated(seg, row, base, k0, k1, sign, frac):
 
 
 @njit(nogil=True, cache=True)
-def _extremum_kernel(y, level, edges, n_lag, both_signs, lo, hi, sums, counts, skipped):
-    """One pass of the extremum trigger over ``y[row, time]`` for all windows ``edges``."""
+def _extremum_kernel(y, rows_to, level, edges, n_lag, both_signs, lo, hi, sums, counts, skipped):
+    """One pass of the extremum trigger over ``y[row, time]`` for all windows ``edges``.
+
+    Row ``r`` adds its segments, counts and skips into output row ``rows_to[r]``.
+    """
     n_rows, n = y.shape
     widest = edges[edges.size - 1]
     reach = max(n_lag, 1)
     nan_before = np.empty(n + 1, np.int64)
     for r in range(n_rows):
         row = y[r]
+        out = rows_to[r]
         _nan_prefix(row, nan_before)
         for i in range(max(lo, reach), min(hi, n - reach)):
             y0 = np.float64(row[i])
@@ -164,24 +171,29 @@ def _extremum_kernel(y, level, edges, n_lag, both_signs, lo, hi, sums, counts, s
                 continue
             w = np.searchsorted(edges, dist)  # smallest window holding the trigger
             if nan_before[i + n_lag + 1] != nan_before[i - n_lag]:
-                skipped[r, w] += 1
+                skipped[out, w] += 1
                 continue
-            counts[r, w] += 1
-            seg = sums[r, w]
+            counts[out, w] += 1
+            seg = sums[out, w]
             base = i - n_lag
             for k in range(2 * n_lag + 1):
                 seg[k] += sign * row[base + k]
-        _close_windows(sums[r], counts[r], skipped[r])
+    for out in range(sums.shape[0]):
+        _close_windows(sums[out], counts[out], skipped[out])
 
 
 @njit(nogil=True, cache=True)
-def _crossing_kernel(y, velocity, edges, n_lag, inv_dt, both_signs, lo, hi, sums, counts, skipped):
-    """One pass of the zero-crossing trigger over ``y[row, time]`` for all windows ``edges``."""
+def _crossing_kernel(y, rows_to, velocity, edges, n_lag, inv_dt, both_signs, lo, hi, sums, counts, skipped):
+    """One pass of the zero-crossing trigger over ``y[row, time]`` for all windows ``edges``.
+
+    Row ``r`` adds its segments, counts and skips into output row ``rows_to[r]``.
+    """
     n_rows, n = y.shape
     widest = edges[edges.size - 1]
     nan_before = np.empty(n + 1, np.int64)
     for r in range(n_rows):
         row = y[r]
+        out = rows_to[r]
         _nan_prefix(row, nan_before)
         for i in range(max(lo, n_lag, 2), min(hi, n - n_lag - 1)):
             y0 = np.float64(row[i])
@@ -202,19 +214,24 @@ def _crossing_kernel(y, velocity, edges, n_lag, inv_dt, both_signs, lo, hi, sums
                 continue
             w = np.searchsorted(edges, dist)
             if nan_before[i + n_lag + 2] != nan_before[i - n_lag]:
-                skipped[r, w] += 1
+                skipped[out, w] += 1
                 continue
-            counts[r, w] += 1
-            seg = sums[r, w]
+            counts[out, w] += 1
+            seg = sums[out, w]
             base = i - n_lag
             # lag 0 is the chord root, where the interpolant is 0: left out, stays exactly 0
             _add_interpolated(seg, row, base, 0, n_lag, sign, frac)
             _add_interpolated(seg, row, base, n_lag + 1, 2 * n_lag + 1, sign, frac)
-        _close_windows(sums[r], counts[r], skipped[r])
+    for out in range(sums.shape[0]):
+        _close_windows(sums[out], counts[out], skipped[out])
 
 
-def _run(trigger, y, target, half_widths, n_lag, dt, both_signs, owned):
-    """Shape checks and output allocation around a numba kernel; ``time`` is the last axis."""
+def _run(trigger, y, target, half_widths, n_lag, dt, both_signs, owned, rows_to):
+    """Shape checks and output allocation around a numba kernel; ``time`` is the last axis.
+
+    Without ``rows_to`` every series has its own output row (shape ``y.shape[:-1]``);
+    with it, series ``j`` adds into row ``rows_to[j]`` of ``rows_to.max() + 1`` rows.
+    """
     y = np.asarray(y)
     if y.ndim == 0:
         raise ValueError("the record must have a time axis (the last axis)")
@@ -230,23 +247,38 @@ def _run(trigger, y, target, half_widths, n_lag, dt, both_signs, owned):
     checks.positive(dt, "dt")
     lead_shape, n = y.shape[:-1], y.shape[-1]
     rows = int(np.prod(lead_shape, dtype=np.int64))
+    if rows_to is None:
+        out_shape = lead_shape
+        rows_to = np.arange(rows, dtype=np.int64)
+    else:
+        rows_to = np.asarray(rows_to)
+        if rows_to.shape != lead_shape or rows_to.dtype.kind not in "iu" or (rows_to.size and rows_to.min() < 0):
+            raise checks.InputError(
+                f"rows_to must hold a non-negative integer output row for each series, shape {lead_shape}; "
+                f"got shape {rows_to.shape}, dtype {rows_to.dtype}"
+            )
+        out_shape = (int(rows_to.max()) + 1 if rows_to.size else 0,)
+        rows_to = rows_to.reshape(rows).astype(np.int64)
+    n_out = int(np.prod(out_shape, dtype=np.int64))
     lo, hi = (0, n) if owned is None else (int(owned[0]), int(owned[1]))
-    sums = np.zeros((rows, edges.size, 2 * n_lag + 1))
-    counts = np.zeros((rows, edges.size), np.int64)
-    skipped = np.zeros((rows, edges.size), np.int64)
+    sums = np.zeros((n_out, edges.size, 2 * n_lag + 1))
+    counts = np.zeros((n_out, edges.size), np.int64)
+    skipped = np.zeros((n_out, edges.size), np.int64)
     y = np.ascontiguousarray(y.reshape(rows, n))
     if trigger == "a":
-        _extremum_kernel(y, float(target), edges, n_lag, bool(both_signs), lo, hi, sums, counts, skipped)
+        _extremum_kernel(y, rows_to, float(target), edges, n_lag, bool(both_signs), lo, hi, sums, counts, skipped)
     else:
-        _crossing_kernel(y, float(target), edges, n_lag, 1.0 / float(dt), bool(both_signs), lo, hi, sums, counts, skipped)
+        _crossing_kernel(
+            y, rows_to, float(target), edges, n_lag, 1.0 / float(dt), bool(both_signs), lo, hi, sums, counts, skipped
+        )
     return SignatureSums(
-        sums.reshape(lead_shape + sums.shape[1:]),
-        counts.reshape(lead_shape + counts.shape[1:]),
-        skipped.reshape(lead_shape + skipped.shape[1:]),
+        sums.reshape(out_shape + sums.shape[1:]),
+        counts.reshape(out_shape + counts.shape[1:]),
+        skipped.reshape(out_shape + skipped.shape[1:]),
     )
 
 
-def extremum_sums(y, level, half_widths, n_lag, *, both_signs=True, owned=None) -> SignatureSums:
+def extremum_sums(y, level, half_widths, n_lag, *, both_signs=True, owned=None, rows_to=None) -> SignatureSums:
     """Sums and counts of the extremum-triggered signature ``D_a`` (eq. 19, first line).
 
     Parameters
@@ -265,17 +297,22 @@ def extremum_sums(y, level, half_widths, n_lag, *, both_signs=True, owned=None) 
     owned : (int, int), optional
         Only samples ``lo <= i < hi`` may be triggers (time chunks with overlap); the
         segment may reach outside ``[lo, hi)``. Default: the whole record.
+    rows_to : int array of shape ``y.shape[:-1]``, optional
+        Output row of each series: the sums and counts of series ``j`` are added into row
+        ``rows_to[j]`` inside the kernel (group sums without per-series arrays; exact,
+        since signatures pool by adding sums and counts). Default: one row per series.
 
     Returns
     -------
     SignatureSums
         ``sum (..., W, 2L+1)``, ``count (..., W)``, ``skipped (..., W)``, cumulative over
-        the windows. The signature is ``sum / count`` (:func:`mean_signature`).
+        the windows, with ``...`` = ``y.shape[:-1]``, or ``rows_to.max() + 1`` rows when
+        ``rows_to`` is given. The signature is ``sum / count`` (:func:`mean_signature`).
     """
-    return _run("a", y, level, half_widths, n_lag, 1.0, both_signs, owned)
+    return _run("a", y, level, half_widths, n_lag, 1.0, both_signs, owned, rows_to)
 
 
-def crossing_sums(y, velocity, half_widths, n_lag, dt, *, both_signs=True, owned=None) -> SignatureSums:
+def crossing_sums(y, velocity, half_widths, n_lag, dt, *, both_signs=True, owned=None, rows_to=None) -> SignatureSums:
     """Sums and counts of the zero-crossing signature ``D_v`` (eq. 19, second line).
 
     ``velocity`` is the trigger velocity ``v`` and ``half_widths`` the ascending ``dv_w``,
@@ -284,7 +321,7 @@ def crossing_sums(y, velocity, half_widths, n_lag, dt, *, both_signs=True, owned
     the sampling interval in s. The segment is interpolated at ``t_c + k dt``,
     ``k = -L .. L``. Other parameters and the result as in :func:`extremum_sums`.
     """
-    return _run("v", y, velocity, half_widths, n_lag, dt, both_signs, owned)
+    return _run("v", y, velocity, half_widths, n_lag, dt, both_signs, owned, rows_to)
 
 
 def reference_per_window(y, trigger, target, half_widths, n_lag, *, dt=1.0, both_signs=True) -> SignatureSums:
@@ -296,7 +333,7 @@ def reference_per_window(y, trigger, target, half_widths, n_lag, *, dt=1.0, both
     only to check the one-pass binning (tests) and to time it
     (``benchmarks/bench_signatures.py``).
     """
-    parts = [_run(trigger, y, target, [width], n_lag, dt, both_signs, None) for width in np.atleast_1d(half_widths)]
+    parts = [_run(trigger, y, target, [width], n_lag, dt, both_signs, None, None) for width in np.atleast_1d(half_widths)]
     return SignatureSums(
         np.concatenate([part.sum for part in parts], axis=-2),
         np.concatenate([part.count for part in parts], axis=-1),
@@ -390,23 +427,39 @@ def mean_signature(sums, counts, *, triggers=TRIGGERS, windows=None):
 # --------------------------------------------------------------------------- xarray / Dask
 
 
-def _cube_block(y, *, a, a_widths, v, v_widths, n_lag, dt, both_signs, owned=None):
-    """Both triggers on one block: sums ``(..., 2, W, 2L+1)``, count and skipped ``(..., 2, W)``."""
-    sa = extremum_sums(y, a, a_widths, n_lag, both_signs=both_signs, owned=owned)
-    sv = crossing_sums(y, v, v_widths, n_lag, dt, both_signs=both_signs, owned=owned)
+def _cube_block(y, *, a, a_widths, v, v_widths, n_lag, dt, both_signs, owned=None, groups=None):
+    """Both triggers on one block: sums ``(..., 2, W, 2L+1)``, count and skipped ``(..., 2, W)``.
+
+    ``groups = (inverse, n_groups)`` sums the series along the first axis within groups
+    inside the kernels (series ``j`` into group ``inverse[j]``, ``0 <= inverse < n_groups``):
+    the leading shape ``y.shape[:-1]`` becomes ``(n_groups, *y.shape[1:-1])``.
+    """
+    lead = y.shape[:-1]
+    rows_to = None
+    if groups is not None:
+        inverse, n_groups = groups
+        lead = (n_groups, *y.shape[1:-1])
+        n_rest = int(np.prod(lead[1:], dtype=np.int64))
+        rows_to = (np.asarray(inverse, dtype=np.int64)[:, None] * n_rest + np.arange(n_rest)).reshape(y.shape[:-1])
+    sa = extremum_sums(y, a, a_widths, n_lag, both_signs=both_signs, owned=owned, rows_to=rows_to)
+    sv = crossing_sums(y, v, v_widths, n_lag, dt, both_signs=both_signs, owned=owned, rows_to=rows_to)
     return (
-        np.stack([sa.sum, sv.sum], axis=-3),
-        np.stack([sa.count, sv.count], axis=-2),
-        np.stack([sa.skipped, sv.skipped], axis=-2),
+        np.stack([sa.sum, sv.sum], axis=-3).reshape(lead + (2, *sa.sum.shape[-2:])),
+        np.stack([sa.count, sv.count], axis=-2).reshape(lead + (2, sa.count.shape[-1])),
+        np.stack([sa.skipped, sv.skipped], axis=-2).reshape(lead + (2, sa.count.shape[-1])),
     )
 
 
-def _cube_time_chunked(x, **kw):
-    """:func:`_cube_block` on a Dask array chunked along time (the last axis).
+def _cube_packed(x, groups=None, **kw):
+    """:func:`_cube_block` on a Dask array, possibly chunked along time (the last axis), packed.
 
     Each time chunk is extended by ``depth`` samples from its neighbours (none past the
     record's ends), counts only the triggers at its own samples, and the per-chunk sums
     are added. ``depth`` covers the segment and the incoming-velocity stencil.
+    ``groups`` holds one ``(inverse, n_groups)`` of :func:`_cube_block` per chunk of the
+    first axis: each block then sums its series into its own groups. Returns one float64
+    array ``(..., 2, W, 2L+3)``: the sums, then count and skipped (exact below 2**53;
+    :func:`_unpack` splits it).
     """
     n_lag, n_win = kw["n_lag"], len(kw["a_widths"])
     axis = x.ndim - 1
@@ -420,25 +473,74 @@ def _cube_time_chunked(x, **kw):
     width = 2 * n_lag + 1
 
     def block(b, block_info=None):
-        loc = block_info[0]["chunk-location"][axis]
+        where = block_info[0]["chunk-location"]
+        loc = where[axis]
         lo = 0 if loc == 0 else depth
         hi = b.shape[-1] - (0 if loc == n_chunks - 1 else depth)
-        s, c, k = _cube_block(b, owned=(lo, hi), **kw)
+        s, c, k = _cube_block(b, owned=(lo, hi), groups=None if groups is None else groups[where[0]], **kw)
         packed = np.concatenate([s, c[..., None].astype(np.float64), k[..., None].astype(np.float64)], axis=-1)
         return packed[..., None, :, :, :]
 
-    packed = extended.map_blocks(
+    lead_chunks = x.chunks[:axis] if groups is None else (tuple(n for _, n in groups), *x.chunks[1:axis])
+    per_chunk = extended.map_blocks(
         block,
         new_axis=[axis + 1, axis + 2, axis + 3],
-        chunks=x.chunks[:axis] + ((1,) * n_chunks, (2,), (n_win,), (width + 2,)),
+        chunks=lead_chunks + ((1,) * n_chunks, (2,), (n_win,), (width + 2,)),
         dtype=np.float64,
         meta=np.empty((0,) * (axis + 4)),
-    ).sum(axis=axis)
-    return (
-        packed[..., :width],
-        packed[..., width].astype(np.int64),
-        packed[..., width + 1].astype(np.int64),
     )
+    # one time chunk: nothing to add (a Dask sum would add two layers of tasks)
+    return per_chunk.sum(axis=axis) if n_chunks > 1 else per_chunk[(slice(None),) * axis + (0,)]
+
+
+def _unpack(packed):
+    """``(sums, count, skipped)`` from a packed array of :func:`_cube_packed`."""
+    width = packed.shape[-1] - 2
+    return packed[..., :width], packed[..., width].astype(np.int64), packed[..., width + 1].astype(np.int64)
+
+
+def _cube_time_chunked(x, **kw):
+    """:func:`_cube_block` on a Dask array chunked along time: :func:`_cube_packed`, unpacked."""
+    return _unpack(_cube_packed(x, **kw))
+
+
+def _group_sums(theta: xr.DataArray, group: xr.DataArray, kw: dict):
+    """``signature_sum``, ``count`` and ``skipped`` of ``theta``'s series summed within ``group``, and their labels.
+
+    The kernels add each series into its group (``rows_to``), so no per-series sums are
+    made. Each block of series -- the whole array, or each Dask chunk along the group's
+    dimension -- sums into the groups it holds, in label order. A group that straddles
+    chunks has a part in each of them (and labels not sorted along the dimension put the
+    parts out of order): the packed parts are then added by label, once for the three
+    variables. Exact up to the order of the additions, since signatures pool by adding
+    sums and counts. Returns the three DataArrays, ``group`` first as with xarray's
+    groupby, and the sorted labels along ``group``.
+    """
+    dim = group.dims[0] if group.ndim == 1 else None
+    if dim is None or dim == "time" or dim not in theta.dims:
+        raise ValueError(f"group must be one-dimensional along a dimension of theta other than time; it has {group.dims}")
+    theta, group = xr.align(theta, group, join="exact", copy=False)
+    labels = np.asarray(group.values)
+    x = theta.transpose(dim, ..., "time")
+    sizes = (labels.size,) if x.chunks is None else x.chunks[0]
+    bounds = np.cumsum((0, *sizes))
+    parts = [np.unique(labels[lo:hi], return_inverse=True) for lo, hi in zip(bounds[:-1], bounds[1:])]
+    groups = [(inverse, unique.size) for unique, inverse in parts]
+    dims = ("group", *x.dims[1:-1])
+    if x.chunks is None:  # one block: its groups are all the groups, sorted
+        out = _cube_block(x.values, groups=groups[0], **kw)
+    else:
+        part_labels = np.concatenate([unique for unique, _ in parts])
+        packed = xr.DataArray(
+            _cube_packed(x.data, groups=groups, **kw), dims=dims + ("trigger", "window", "packed"), coords={"group": part_labels}
+        )
+        if np.any(np.diff(part_labels) <= 0):  # parts of one group in several chunks, or unsorted labels
+            packed = packed.groupby("group").sum().transpose(*packed.dims)
+        out = _unpack(packed.data)
+    coords = {name: coord for name, coord in x.coords.items() if not {dim, "time"} & set(coord.dims)}
+    core = (("trigger", "window", "lag"), ("trigger", "window"), ("trigger", "window"))
+    arrays = tuple(xr.DataArray(data, dims=dims + extra, coords=coords) for data, extra in zip(out, core))
+    return arrays, np.unique(labels)
 
 
 def _sampling_interval(theta: xr.DataArray) -> float:
@@ -551,8 +653,10 @@ def signature_cube(
     both_signs : bool
         Also use the mirrored triggers (minima at ``-a``, downward crossings), sign-flipped.
     group : DataArray of int labels along one dimension of ``theta``, optional
-        Sum the per-series sums and counts within groups; the output then has a ``group``
-        dimension instead of that one. The labels must be in memory (NumPy).
+        Sum the sums and counts of the series within groups; the output then has a
+        ``group`` dimension (first, labels sorted) instead of that one. The kernels add
+        each series into its group, per block of series; groups spread over several Dask
+        chunks get one part from each, added by label. The labels must be in memory (NumPy).
 
     Returns
     -------
@@ -606,19 +710,22 @@ def signature_cube(
     core_out = [["trigger", "window", "lag"], ["trigger", "window"], ["trigger", "window"]]
     dtypes = [np.float64, np.int64, np.int64]
     chunks = theta.chunksizes.get("time") if theta.chunks is not None else None
-    if chunks is not None and len(chunks) > 1:
-        ufunc_kw = {"dask": "allowed"}
-        func = _cube_time_chunked
+    if group is not None:
+        (s, c, k), labels = _group_sums(theta, group, kw)
     else:
-        ufunc_kw = {
-            "dask": "parallelized",
-            "dask_gufunc_kwargs": {"output_sizes": {"trigger": 2, "window": windows.size, "lag": width}},
-            "output_dtypes": dtypes,
-        }
-        func = _cube_block
-    s, c, k = xr.apply_ufunc(
-        func, theta, input_core_dims=[["time"]], output_core_dims=core_out, kwargs=kw, keep_attrs=False, **ufunc_kw
-    )
+        if chunks is not None and len(chunks) > 1:
+            ufunc_kw = {"dask": "allowed"}
+            func = _cube_time_chunked
+        else:
+            ufunc_kw = {
+                "dask": "parallelized",
+                "dask_gufunc_kwargs": {"output_sizes": {"trigger": 2, "window": windows.size, "lag": width}},
+                "output_dtypes": dtypes,
+            }
+            func = _cube_block
+        s, c, k = xr.apply_ufunc(
+            func, theta, input_core_dims=[["time"]], output_core_dims=core_out, kwargs=kw, keep_attrs=False, **ufunc_kw
+        )
     units = theta.attrs.get("units", "rad")
     vel_units = f"{units} s-1"
     lag = np.arange(-kw["n_lag"], kw["n_lag"] + 1) * dt
@@ -637,8 +744,8 @@ def signature_cube(
         },
     )
     if group is not None:
-        sums = sums.groupby(group.rename("group")).sum(keep_attrs=True)
-        sums["group"].attrs["long_name"] = "group of series pooled into one signature"
+        sums = sums.assign_coords(group=labels)
+        sums["group"].attrs = {**group.attrs, "long_name": "group of series pooled into one signature"}
     sums.attrs = {
         "level": float(level),
         "sigma_y": float(sigma_y),
