@@ -595,14 +595,18 @@ def pool(ds: xr.Dataset, dim, by=None) -> xr.Dataset:
     if by is None:
         return _finish(sums.sum(dim, keep_attrs=True))
     by = np.asarray(by)
-    keep = by >= 0
-    sums = sums.isel({dim: keep})
-    sums = sums.drop_vars([name for name, c in sums.coords.items() if dim in c.dims]).rename({dim: "pooled_unit"})
-    labels = xr.DataArray(by[keep], dims="pooled_unit", name="group", attrs={"long_name": "group of series pooled into one signature"})
-    summed = sums.groupby(labels).sum(keep_attrs=True)
-    summed["group"].attrs["long_name"] = "group of series pooled into one signature"
-    summed.attrs = ds.attrs
-    return _finish(summed)
+    kept = np.flatnonzero(by >= 0)
+    order = kept[np.argsort(by[kept], kind="stable")]  # each label's entries together, in their order
+    labels = by[order]
+    starts = np.flatnonzero(np.r_[True, labels[1:] != labels[:-1]])
+    out = {}
+    for name, var in sums.data_vars.items():
+        axis = var.get_axis_num(dim)
+        values = np.add.reduceat(np.take(var.values, order, axis=axis), starts, axis=axis)
+        out[name] = (tuple("group" if d == dim else d for d in var.dims), values, var.attrs)
+    coords = {name: c for name, c in sums.coords.items() if dim not in c.dims}
+    coords["group"] = ("group", labels[starts], {"long_name": "group of series pooled into one signature"})
+    return _finish(xr.Dataset(out, coords=coords, attrs=ds.attrs))
 
 
 def signature_cube(

@@ -26,6 +26,7 @@ rule signatures:
     benchmark:
         "results/{scene}/benchmarks/signatures.tsv"
     threads: 2
+    priority: 10  # the longest path of the paper's DAG: start it as soon as the run exists
     resources:
         mem_mb=lambda w: signature_memory_mb(w.scene),
         runtime=60,
