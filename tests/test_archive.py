@@ -30,7 +30,7 @@ from rockdec.cli import main
 
 REPO = Path(__file__).resolve().parents[1]
 SCENE = "tiny"
-TABLE_SUFFIXES = (".nc", ".csv", ".md")
+TABLE_SUFFIXES = (".nc", ".csv", ".md", ".json")
 
 
 def copy_workflow(root: Path) -> Path:
@@ -152,7 +152,7 @@ def test_manifest_records_size_checksum_settings_versions_and_commit(reference):
         assert (folder / entry["name"]).read_bytes() == original
     config = yaml.safe_load((reference / "config" / "config.yaml").read_text())
     assert manifest["scene"] == SCENE
-    assert manifest["settings"]["records"] == {**config["scenes"][SCENE]["records"], "first_seed": 0}
+    assert manifest["settings"]["records"] == {**config["scenes"][SCENE]["records"], "first_seed": 0, "replicates_per_job": None}
     assert set(manifest["versions"]) >= {"rockdec", "numpy", "xarray", "numba", "dask", "snakemake"}
     assert re.fullmatch(r"[0-9a-f]{40}|unknown", manifest["git_commit"])
     assert manifest["git_dirty"] in (True, False, None)
@@ -216,18 +216,20 @@ def test_rebuild_remakes_tables_and_figures_from_the_archive_without_simulating(
 
 # --- killed and resumed -------------------------------------------------------------------
 
-#: What rule `readings` makes (its work takes seconds after its log opens) and what is made from it.
-AFTER_READINGS = ("estimates_other_readings.nc", "estimates_readings.nc", "table_readings.csv", "table_readings.md")
+#: What rule `signatures` makes (its pass over the series runs after its log opens), and
+#: what rule `table_readings` makes from it.
+AFTER_SIGNATURES = ("signatures.nc", "readings.nc", "estimates_readings.nc", "table_readings.csv", "table_readings.md")
 
 
 def half_built(reference: Path, root: Path) -> Path:
     """A copy of the finished reference run (results and Snakemake's records) without the
-    products of rule `readings` and of the rule after it."""
+    products of rule `signatures` and of rule `table_readings` (the other rules after it
+    rerun too, their inputs being newer)."""
     shutil.copytree(reference, root, dirs_exist_ok=True)
     results = root / "results" / SCENE
-    for name in AFTER_READINGS:
+    for name in AFTER_SIGNATURES:
         (results / name).unlink()
-    (results / "logs" / "readings.log").unlink()
+    (results / "logs" / "signatures.log").unlink()
     return results
 
 
@@ -236,12 +238,12 @@ def test_sigterm_then_the_readmes_command_gives_the_uninterrupted_outputs(refere
     results = half_built(reference, tmp_path)
     proc = start(tmp_path)
     try:
-        wait_for(results / "logs" / "readings.log", proc)  # rule `readings` runs
+        wait_for(results / "logs" / "signatures.log", proc)  # rule `signatures` runs
         os.killpg(proc.pid, signal.SIGTERM)  # to Snakemake and its jobs, as Ctrl-C, systemd or a batch system do
         assert proc.wait(timeout=120) != 0
     finally:
         end_group(proc)
-    assert not (results / "estimates_other_readings.nc").exists()  # it was stopped on the way
+    assert not (results / "readings.nc").exists()  # it was stopped on the way
     assert_no_half_written_netcdf(results)
     code, out = run(tmp_path, "snakemake --cores 2")  # the README's command
     assert code == 0, out
@@ -254,11 +256,11 @@ def test_sigkill_then_the_readmes_recovery_command_gives_the_uninterrupted_outpu
     results = half_built(reference, tmp_path)
     proc = start(tmp_path)
     try:
-        wait_for(results / "logs" / "readings.log", proc)
+        wait_for(results / "logs" / "signatures.log", proc)
         os.killpg(proc.pid, signal.SIGKILL)  # Snakemake and its jobs at once, as a power loss
     finally:
         end_group(proc)
-    assert not (results / "estimates_other_readings.nc").exists()  # it was killed on the way
+    assert not (results / "readings.nc").exists()  # it was killed on the way
     assert_no_half_written_netcdf(results)
     code, out = run(tmp_path, "snakemake --cores 2")
     assert code != 0 and "LockException" in out
