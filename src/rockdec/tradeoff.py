@@ -64,7 +64,7 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from rockdec import fixed_step, replicates, simulate, tables
+from rockdec import engine, fixed_step, replicates, simulate, tables
 from rockdec.run import Run
 from rockdec.models import restoring_acceleration
 
@@ -237,7 +237,8 @@ def configuration_estimates(scene: dict, settings: dict, contract: Run, threads:
     start_cpu, start_wall = time.process_time(), time.perf_counter()
     variant = variant_scene(scene, settings)
     reading, options = variant["estimates"]["reading"], variant["estimates"]
-    cube = replicates.scene_cubes(contract, variant["records"], variant["signatures"], [reading], threads=threads)[reading]
+    with engine.session(threads, scheduler="threads"):  # CPU seconds of this process: threads only
+        cube = replicates.scene_cubes(contract, variant["records"], variant["signatures"], [reading], threads=threads)[reading]
     e_hat0 = replicates.replicate_estimates(cube, fit_points=options["fit_points"], weights=options["weights"])["e_hat0"]
     return e_hat0, time.process_time() - start_cpu, time.perf_counter() - start_wall
 
