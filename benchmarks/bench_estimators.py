@@ -24,7 +24,6 @@ of NaN that differ.
 from __future__ import annotations
 
 import argparse
-import math
 import os
 import time
 
@@ -34,28 +33,19 @@ import xarray as xr
 
 from rockdec import estimators, signatures, simulate
 
-POINTS_PER_CYCLE = 75.0
+from bench_signatures import best_of, rocking_record  # noqa: E402  (benchmarks/ is on sys.path)
 
 
-def best_of(repeat, func):
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        out = func()
-        times.append(time.perf_counter() - t0)
-    return min(times), out
 
-
-def paper_cube(n_series, n_points, n_windows, e=0.95, g=1.0, sigma_p=1.0):
-    """Per-series signature cube of a simulated record, and ``dt``."""
-    dt = sigma_p / g * math.sqrt(4.0 * math.sqrt(2.0 * 290.0) / POINTS_PER_CYCLE)
-    burn_in = simulate.default_burn_in(e, POINTS_PER_CYCLE)
-    theta, _ = simulate.simulate_block(np.arange(n_series), n_points, dt=dt, g=g, e=e, sigma_p=sigma_p, burn_in=burn_in)
-    stats = simulate.pilot_statistics(theta, dt, g)
+def paper_cube(n_series, n_points, n_windows):
+    """Per-series signature cube of a simulated record (:func:`bench_signatures.rocking_record`),
+    its ``dt`` and its samples per cycle at ``sigma_Y``."""
+    theta, dt, sigma_y, sigma_ydot, _, g, _ = rocking_record(n_series, n_points)
+    points_per_cycle = simulate.pilot_statistics(theta, dt, g)["points_per_cycle"]
     theta = xr.DataArray(theta, dims=("seed", "time"), attrs={"dt": dt})
     windows = np.arange(1, n_windows + 1) / n_windows
-    cube = signatures.signature_cube(theta, sigma_y=stats["sigma_y"], sigma_ydot=stats["sigma_ydot"], windows=windows, g=g)
-    return cube, dt, stats["points_per_cycle"]
+    cube = signatures.signature_cube(theta, sigma_y=sigma_y, sigma_ydot=sigma_ydot, windows=windows, g=g)
+    return cube, dt, points_per_cycle
 
 
 def main(argv=None):
