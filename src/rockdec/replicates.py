@@ -84,13 +84,14 @@ def series_dim(cube: xr.Dataset) -> str:
 
 def scene_signatures(
     theta: xr.DataArray, settings: dict, *, sigma_y: float, sigma_ydot: float, g: float,
-    group: np.ndarray | None, replicate_of_group,
+    group: np.ndarray | None, replicate_of_group=None,
 ) -> xr.Dataset:
     """The signature cube of ``theta(seed, time)`` under a scene's ``signatures`` settings.
 
     ``group=None`` keeps one signature per series: the cube's ``seed`` dimension holds the
     seeds, and ``replicate_of_group`` gives each seed's replicate; otherwise the sums of
-    the series of each group label are pooled. ``sigma_y``, ``sigma_ydot`` (stationary, of
+    the series of each group label are pooled (``replicate_of_group=None``: no
+    ``replicate`` coordinate). ``sigma_y``, ``sigma_ydot`` (stationary, of
     the run) and ``g`` set one trigger level and lag range for every series
     (docs/method.md §4.4).
     """
@@ -108,6 +109,8 @@ def scene_signatures(
         both_signs=settings["both_signs"],
         group=None if group is None else xr.DataArray(group, dims="seed", coords={"seed": theta["seed"]}),
     )
+    if replicate_of_group is None:
+        return cube
     dim = series_dim(cube)
     return cube.assign_coords(replicate=(dim, np.asarray(replicate_of_group), {"long_name": f"replicate of the {dim}"}))
 
@@ -140,12 +143,11 @@ def variant_cubes(run: Run, records: dict, variants, readings, series_files=(), 
         theta = series.stored_theta(series_files, seeds.ravel()[used], chunk_seeds)
     else:
         theta = series.as_recorded(run.dataset(seeds.ravel()[used], records["n_points"], chunk_seeds=chunk_seeds)["theta"])
-    n_units = int(unit_of_seed.max()) + 1
+    # only the sums of the units: their signatures would be computed and thrown away
     lazy = [
-        scene_signatures(
-            theta, settings, sigma_y=run.sigma_y, sigma_ydot=run.sigma_ydot, g=run.g,
-            group=unit_of_seed[used], replicate_of_group=np.zeros(n_units, dtype=np.int64),
-        )
+        scene_signatures(theta, settings, sigma_y=run.sigma_y, sigma_ydot=run.sigma_ydot, g=run.g, group=unit_of_seed[used])[
+            list(signatures.SUM_VARS)
+        ]
         for settings in variants
     ]
     out = []

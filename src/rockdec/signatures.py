@@ -94,7 +94,8 @@ DEFAULT_WINDOWS = (0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0)
 """Window half-widths relative to the largest one (``da/da_max``, ``dv/dv_max``)."""
 
 TRIGGERS = ("a", "v")
-_SUM_VARS = ("signature_sum", "count", "skipped")
+SUM_VARS = ("signature_sum", "count", "skipped")
+"""The variables of a cube that pool by adding (:func:`pool`); the rest derive from them."""
 
 
 class NoTriggerWarning(RuntimeWarning):
@@ -591,7 +592,7 @@ def pool(ds: xr.Dataset, dim, by=None) -> xr.Dataset:
     instead: the result has a ``group`` dimension, one per label >= 0 in ascending order;
     entries labelled -1 are left out.
     """
-    sums = ds[list(_SUM_VARS)]
+    sums = ds[list(SUM_VARS)]
     if by is None:
         return _finish(sums.sum(dim, keep_attrs=True))
     by = np.asarray(by)
