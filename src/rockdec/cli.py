@@ -182,10 +182,13 @@ def cmd_signatures(args) -> None:
         raise UsageError(f"{args.input}: '{args.variable}' has no time coordinate and the file no 'dt' attribute; add either.")
     if np.isinf(theta.values).any():
         raise UsageError(f"{args.input}: '{args.variable}' holds infinite values; remove them or mark them as gaps (NaN).")
-    measured = simulate.pilot_statistics(theta.values, theta.attrs["dt"])
+    scales = {name: attrs.get(name) for name in ("sigma_y", "sigma_ydot")}
+    missing = [name for name, value in scales.items() if value is None or not np.isfinite(value)]
+    if missing:  # the file's stationary statistics, else measured (one pass over the record)
+        measured = simulate.pilot_statistics(theta.values, theta.attrs["dt"])
+        scales.update({name: measured[name] for name in missing})
     stats = {
-        "sigma_y": _finite(attrs.get("sigma_y"), measured["sigma_y"]),
-        "sigma_ydot": _finite(attrs.get("sigma_ydot"), measured["sigma_ydot"]),
+        **{name: float(value) for name, value in scales.items()},
         "g": args.g if args.g is not None else attrs.get("g"),
     }
     if stats["g"] is None:
@@ -212,10 +215,6 @@ def cmd_signatures(args) -> None:
     io.write_netcdf(cube, out, overwrite=args.overwrite)
     counts = cube["count"].sum(replicates.series_dim(cube))
     print(f"triggers per window: D_a {counts.sel(trigger='a').values}, D_v {counts.sel(trigger='v').values}", file=sys.stderr)
-
-
-def _finite(value, fallback: float) -> float:
-    return float(value) if value is not None and np.isfinite(value) else fallback
 
 
 def cmd_estimates(args) -> None:
