@@ -33,7 +33,7 @@ import dask
 import numpy as np
 import xarray as xr
 
-from rockdec import __version__, engine, estimators, io, measured
+from rockdec import __version__, engine, estimators, io, measured, registry
 from rockdec.simulate import default_burn_in, simulate_block
 
 #: True ``e`` of the calibration grid: denser where the estimators bend (near 1).
@@ -49,7 +49,7 @@ PILOT_SETS, PILOT_ITERATIONS = 8, 3
 PPC_BIN = 0.1
 
 #: Names calibrated: every estimator of e, and g.
-NAMES = (*estimators.ESTIMATORS, measured.G_NAME)
+NAMES = (*registry.ESTIMATORS, measured.G_NAME)
 
 #: Seeds of calibration records start here (apart from scene seeds and pilot seeds).
 CALIBRATION_SEED_OFFSET = 2**61

@@ -22,7 +22,8 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from rockdec import belt, calibration, engine, estimators, measured
+from rockdec import belt, calibration, engine, measured, registry
+from rockdec.registry import DEFAULT_ESTIMATOR
 from rockdec.loading import pole_for_corner
 from rockdec.simulate import calibrate_dt, simulate_block
 
@@ -51,10 +52,8 @@ def run(e_values, n_records: int, n_points: int, cache_dir, *, points_per_cycle:
     estimator). Records are analysed in Dask tasks of ``batch``; calibrations are built
     as their settings come up and stored in ``cache_dir`` for reuse.
     """
-    from rockdec.inference import DEFAULT_ESTIMATOR
-
     e_values = [float(e) for e in e_values]
-    names = list(estimators.ESTIMATORS)
+    names = list(registry.ESTIMATORS)
     shape = (len(e_values), n_records, len(names))
     raw, e_hat, low, high = (np.full(shape, np.nan) for _ in range(4))
     g_hat = np.full(shape[:2], np.nan)

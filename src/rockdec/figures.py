@@ -36,7 +36,7 @@ import numpy as np  # noqa: E402
 import xarray as xr  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
-from rockdec import models  # noqa: E402
+from rockdec import models, registry  # noqa: E402
 from rockdec.layout import FIGURES  # noqa: E402  (the workflow's file names, drawn here)
 from rockdec.models import period_from_g  # noqa: E402
 
@@ -51,8 +51,8 @@ WINDOW_LABEL = r"relative window size $\Delta a/\Delta a_{max}$"
 TARGET_STYLE = {"color": "k", "ls": "--", "lw": 1.0}
 PAPER_STYLE = {"color": "tab:red", "marker": "D", "ms": 6, "ls": "none", "zorder": 5}
 
-PARETO_ESTIMATORS = ("e4", "e_v", "e_0", "e1")
-"""Estimators drawn by :func:`pareto_figure` by default."""
+PARETO_ESTIMATORS = registry.BY_RANK[:4]
+"""Estimators drawn by :func:`pareto_figure` by default: the first four of the studies' order."""
 
 KNOB_LABELS = {
     "points_per_cycle": "ppc",
@@ -281,8 +281,9 @@ def fig3(est: xr.Dataset, e_target: float | None = None) -> Figure:
     fig = _new_figure(6.5, 4.5)
     ax = fig.subplots()
     handles = []
-    for name, symbol, label, color in (("e_g", r"$\hat e_g$", "global, eq. 25", "tab:blue"),
-                                       ("e_0", r"$\hat e_0$", "first peak, eq. 26", "tab:green")):
+    for name, color in (("e_g", "tab:blue"), ("e_0", "tab:green")):
+        spec = registry.spec(name)
+        symbol, label = spec.symbol, f"{spec.label}, {spec.equation}"
         mean, _, sem = _replicate_stats(est["e_hat"].sel(estimator=name))
         handles.append(ax.errorbar(w, mean, yerr=sem, color=color, marker="o", ls="none", capsize=3,
                                    label=f"{symbol} ({label}): mean ± std. error"))
@@ -315,12 +316,6 @@ def fig4(est: xr.Dataset, e_target: float | None = None) -> Figure:
     w_line = np.linspace(0.0, w.max(), 50)
     fig = _new_figure(9.0, 7.0)
     axes = fig.subplots(2, 2)
-    formulas = {
-        "e1": r"$\hat e_1 = \sqrt{|c_2|/c_1}$",
-        "e2": r"$\hat e_2 = v_2/v_1$",
-        "e3": r"$\hat e_3 = (|c_2|/c_1)\,t_1/(t_2 - t_1)$",
-        "e4": r"$\hat e_4 = (t_2 - t_1)/t_1$ (corrected)",
-    }
     for ax, name in zip(axes.flat, ("e1", "e2", "e3", "e4")):
         curves = est["e_hat"].sel(estimator=name)
         for k, rep in enumerate(curves["replicate"].values):
@@ -339,7 +334,7 @@ def fig4(est: xr.Dataset, e_target: float | None = None) -> Figure:
             ax.errorbar(0.0, paper, yerr=paper_std, capsize=3, **PAPER_STYLE,
                         label=f"paper (eq. 28): {paper:.4f} ± {paper_std:.4f}")
         _draw_target(ax, e_target)
-        ax.set_title(formulas[name], fontsize="medium")
+        ax.set_title(registry.spec(name).symbol, fontsize="medium")
         ax.set_ylabel(r"estimate of $e$")
         ax.set_xlim(-0.04, 1.03 * w.max())
         ax.set_xlabel(WINDOW_LABEL)
@@ -355,7 +350,7 @@ def fig_ev(sig: xr.Dataset, est: xr.Dataset, e_target: float | None = None) -> F
     ``sigma_Y`` against the lag in rocking periods ``T(a)`` (eq. 5). (b) The same near lag 0
     with the free flight through an impact at ``(0, v)``: slope ``v`` before, ``e v`` after
     (eqs. 4, 6); the kink is the estimator ``e_v`` (slope ratio,
-    :func:`rockdec.estimators.e_impact_slope`). (c) ``e_v`` of every replicate against
+    docs/method.md §5.4). (c) ``e_v`` of every replicate against
     ``dv/dv_max``, the mean extrapolated line and the target.
     """
     pooled = _pooled(sig)
@@ -431,7 +426,7 @@ def fig_ev(sig: xr.Dataset, est: xr.Dataset, e_target: float | None = None) -> F
     return fig
 
 
-def fig_amplitude(ds: xr.Dataset, estimators=("e_0", "e4", "e_v")) -> Figure:
+def fig_amplitude(ds: xr.Dataset, estimators=registry.CANDIDATES) -> Figure:
     """Simplified (eq. 4) vs linearized Housner (eq. 2) estimates against ``sigma_Y/theta_cr``.
 
     ``ds`` from :func:`rockdec.amplitude.sweep` (the target ``e`` is its attribute
@@ -553,7 +548,7 @@ def fig_record(result: dict) -> Figure:
     return fig
 
 
-def fig_coverage(table, estimators_shown=("e_0", "e4", "e_v")) -> Figure:
+def fig_coverage(table, estimators_shown=registry.CANDIDATES) -> Figure:
     """Coverage of the 95 % interval and bias of the corrected estimate against the load.
 
     ``table``: :func:`rockdec.coverage.summary` of every case. x axis: the load's corner in

@@ -14,12 +14,10 @@ import warnings
 
 import numpy as np
 
-from rockdec import belt, calibration, estimators, measured
+from rockdec import belt, calibration, estimators, measured, registry
 from rockdec.records import Record, RecordError, same_step
 
-#: The estimator reported as ``e``: the calibration's coverage study shows it best
-#: (smallest spread and bias of the corrected value, coverage closest to 95 %).
-DEFAULT_ESTIMATOR = "e_v"
+from rockdec.registry import DEFAULT_ESTIMATOR
 
 #: Fewest triggers in the largest window before the result is called unreliable.
 FEW_TRIGGERS = 100
@@ -85,9 +83,9 @@ def estimate(records: list[Record], *, cache_dir, g: float | None = None, settin
     built_s = time.perf_counter() - started
     per = {}
     belts = belt.belts(cal)
-    for name in estimators.ESTIMATORS:
+    for name in registry.ESTIMATORS:
         c = belt.correct(belts[name], analysis.raw[name])
-        trigger = "v" if name == "e_v" else "a"
+        trigger = registry.trigger(name)
         per[name] = {
             "raw": _num(analysis.raw[name]),
             "e": _num(c.value),

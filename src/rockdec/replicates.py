@@ -28,7 +28,7 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from rockdec import engine, estimators, series, signatures, tables
+from rockdec import engine, estimators, registry, series, signatures, tables
 from rockdec.layout import READINGS, scene_seeds
 from rockdec.run import Run
 
@@ -193,13 +193,13 @@ def extrapolated(curves: xr.Dataset, weights: str = "window") -> xr.Dataset:
 
     ``e_hat0(estimator, replicate)`` and its standard error from
     :func:`rockdec.estimators.extrapolate`, weighted by the window size (paper §5) or by
-    the replicate's trigger count (``weights="count"``; ``e_v`` rests on the ``D_v``
-    triggers, every other estimator on the ``D_a`` triggers); the curves are kept.
+    the replicate's trigger count (``weights="count"``: the counts of the trigger each
+    estimator reads, :func:`rockdec.registry.trigger`); the curves are kept.
     """
     e_hat, count = curves["e_hat"], curves["count"]
     if weights == "count":
         w = xr.concat(
-            [count.sel(trigger="v" if name == "e_v" else "a", drop=True) for name in e_hat["estimator"].values],
+            [count.sel(trigger=registry.trigger(name), drop=True) for name in e_hat["estimator"].values],
             dim=e_hat["estimator"],
         ).astype(float)
         extrap = estimators.extrapolate(e_hat, weights=w)
