@@ -26,15 +26,15 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-import sys
 from pathlib import Path
 
 import dask
 import numpy as np
 import xarray as xr
 
-from rockdec import __version__, engine, estimators, io, measured, registry
+from rockdec import __version__, engine, io, measured, registry
 from rockdec.simulate import default_burn_in, simulate_block
+from rockdec.sources import package_sources
 
 #: True ``e`` of the calibration grid: denser where the estimators bend (near 1).
 E_GRID = (0.4, 0.5, 0.6, 0.7, 0.75, 0.8, 0.85, 0.88, 0.91, 0.93, 0.95, 0.965, 0.98, 0.99, 0.995)
@@ -74,14 +74,13 @@ def calibration_settings(lengths, points_per_cycle: float, settings: dict | None
 
 
 def pipeline_fingerprint() -> str:
-    """SHA-256 (16 hex digits) of the source of every module the calibrated pipeline runs:
-    a change to the simulator, the signatures, the estimators, the analysis or this module makes every
-    stored calibration stale, whatever the version number says."""
-    from rockdec import loading, signatures, simulate
-
+    """SHA-256 (16 hex digits) of the source of every module this one reaches by import
+    (:func:`rockdec.sources.package_sources`, the list the workflow's rules declare too): a
+    change to the simulator, the models, the signatures, the estimators, the analysis or this
+    module makes every stored calibration stale, whatever the version number says."""
     digest = hashlib.sha256()
-    for module in (loading, simulate, signatures, estimators, measured, sys.modules[__name__]):
-        digest.update(Path(module.__file__).read_bytes())
+    for path in package_sources(__name__):
+        digest.update(Path(path).read_bytes())
     return digest.hexdigest()[:16]
 
 

@@ -93,10 +93,11 @@ def provenance(step: str, settings: dict | None = None, inputs=()) -> dict:
     appended, never overwritten: the history lines of every input file
     (:func:`input_history`), then this step's line ``<UTC time>: rockdec <version> <step>
     <inputs>``; ``source_files``: the input files (``inputs``, paths as given), one a line,
-    when there are any.
+    when there are any. Python sources among ``inputs`` (a rule's code inputs,
+    :func:`rockdec.sources.package_sources`) are left out: the version and commit name the code.
     """
     now = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
-    inputs = [str(path) for path in inputs]
+    inputs = [str(path) for path in inputs if not str(path).endswith(".py")]
     line = " ".join([f"{now}: rockdec {__version__} {step}", *inputs])
     attrs = {
         "Conventions": "CF-1.10",

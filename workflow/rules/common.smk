@@ -4,6 +4,7 @@ from importlib.util import find_spec
 
 from rockdec import config as rockdec_config
 from rockdec import layout
+from rockdec.sources import package_sources
 
 # Name the file the user passed (--configfile), not always the default one; one sentence, exit code 2.
 try:
@@ -105,6 +106,13 @@ def default_products():
 
 
 FIGURES_CODE = find_spec("rockdec.figures").origin
+
+
+def step_code(script):
+    """Source of every rockdec module workflow script ``script`` runs
+    (:func:`rockdec.sources.package_sources`): a compute rule's code input, so an edit to
+    any of them reruns it."""
+    return package_sources(f"{workflow.basedir}/workflow/scripts/{script}")
 
 
 def figure_outputs(name):
