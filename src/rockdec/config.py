@@ -15,6 +15,7 @@ import jsonschema
 import yaml
 
 from rockdec import validate as checks
+from rockdec.record_model import Load
 from rockdec.estimators import DEFAULT_FIT_POINTS, min_points_per_cycle
 
 #: The config file the workflow reads unless told otherwise.
@@ -122,6 +123,10 @@ def validate(config: dict, source: str | Path = DEFAULT_PATH) -> dict:
                 f"scenes.{name}.signatures.windows", f"{windows} must be strictly ascending; sort it and drop repeats", fix
             )
         exc = scene["excitation"]
+        try:
+            Load.from_dict(exc["load"])
+        except checks.InputError as err:
+            raise _field_error(f"scenes.{name}.excitation.load", str(err).rstrip("."), fix) from None
         floor = min_points_per_cycle(scene["system"]["e"], scene["signatures"]["level"])
         if exc["dt"] is None and exc["points_per_cycle"] < floor:
             raise _field_error(
