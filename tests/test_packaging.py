@@ -53,3 +53,19 @@ def test_citation_and_licence_agree_with_the_package_metadata():
     paper = cff["references"][0]
     assert paper["title"] in " ".join((REPO / "README.md").read_text().split())  # the paper the README names
     assert paper["authors"] and all(a.get("family-names") or a.get("name") for a in paper["authors"])  # CFF: a person or an entity
+
+
+def test_readme_layout_map_lists_every_module():
+    readme = (REPO / "README.md").read_text()
+    layout = readme[readme.index("## Layout") :]
+    modules = [p.name for p in PACKAGE.glob("*.py") if p.name != "__init__.py"]
+    assert [m for m in modules if m not in layout] == []
+
+
+def test_package_holds_no_reference_implementations():
+    """Reference implementations serve tests and benchmarks only; they live under tests/."""
+    import ast
+
+    for path in PACKAGE.glob("*.py"):
+        names = [node.name for node in ast.walk(ast.parse(path.read_text())) if isinstance(node, (ast.FunctionDef, ast.ClassDef))]
+        assert [n for n in names if n.lstrip("_").startswith("reference")] == [], path.name

@@ -44,3 +44,9 @@ def test_editing_models_changes_the_calibration_cache_key(monkeypatch):
     monkeypatch.setattr(Path, "read_bytes", lambda self: read_bytes(self) + (b"\n# edited\n" if self.resolve() == models_file else b""))
     after = calibration.settings_hash(calibration.calibration_settings([20_000], 75.0))
     assert after != before
+
+
+def test_kernels_do_not_reach_the_record_reader():
+    """The simulation, signature and estimator modules never import the user-file reader."""
+    for module in ("rockdec.signatures", "rockdec.estimators", "rockdec.simulate", "rockdec.replicates"):
+        assert "records.py" not in names(package_sources(module)), module

@@ -21,8 +21,8 @@ an integer reason code (:data:`_REASONS`). :func:`_estimate_rows` runs every est
 a batch of signatures ``r[n, lag_pos]``, ``d[n, lag]`` and writes each into its column of
 :mod:`rockdec.registry`; :func:`estimate_cube` (labelled, xarray/Dask) hands it whole
 blocks and keeps the values, :func:`estimate_all` hands it one signature and turns the
-codes into reasons. The single-estimator functions (:func:`e_global`, :func:`half_cycle`,
-...) call the same kernels. :func:`extrapolate` is batched NumPy over every row at once.
+codes into reasons; :func:`half_cycle` (the fits of eq. 27, which also give ``g``) calls the
+same kernels. :func:`extrapolate` is batched NumPy over every row at once.
 
 Units: ``r`` and ``d`` in rad, ``dt`` and the fitted times in s, slopes in rad/s; every
 ``e`` estimate is dimensionless.
@@ -42,7 +42,7 @@ from rockdec import validate as checks
 from rockdec.registry import ESTIMATORS
 
 LOCAL_ESTIMATORS = ("e1", "e2", "e3", "e4")
-"""The estimators of eq. 27, computed from one set of half-cycle fits (:func:`local_measures`)."""
+"""The estimators of eq. 27, computed from one set of half-cycle fits (:func:`_local_measures`)."""
 
 _KERNEL_OUTPUTS = ("e_g", "e_0", *LOCAL_ESTIMATORS, "e_v")
 """What :func:`_estimate_rows` computes, in its order of work; :data:`_COLUMNS` places each
@@ -288,7 +288,13 @@ def _lobes(r):
 
 @_jit
 def _e_global(r, code, lobes):
-    """``e_g`` (eqs. 25, 7) from the lobes of ``r``: ``(value, code)``."""
+    """``e_g`` (eqs. 25, 7) from the lobes of ``r``: ``(value, code)``.
+
+    The extremes ``r_i`` are the sampled values of largest ``|r|`` of each lobe (no
+    derivative, no threshold: robust on noisy estimates; off the true extreme by at most
+    ``g dt^2/8``). With ``2 ln|r_i| = 2 ln r_0 - i delta`` (eq. 25) the least-squares slope
+    of ``2 ln|r_i|`` on ``i`` is ``-delta``, and ``e = exp(-delta/4)`` (eq. 7).
+    """
     if code != _OK:
         return np.nan, code
     n = lobes.shape[0]
@@ -302,7 +308,7 @@ def _e_global(r, code, lobes):
 
 @_jit
 def _e_first_peak(r, code, lobes):
-    """``e_0`` (eq. 26) from the lobes of ``r``: ``(value, code)``."""
+    """``e_0 = sqrt(|r_1| / r_0)`` (eq. 26), the first two sampled extremes of ``r``: ``(value, code)``."""
     if code != _OK:
         return np.nan, code
     return _finite(np.sqrt(abs(r[lobes[1, 2]]) / r[lobes[0, 2]]))
@@ -349,7 +355,12 @@ def _half_cycle(r, dt, code, lobes):
 @_jit
 def _local_measures(h, code, values, codes, columns):
     """``e1..e4`` of eq. 27 from the half-cycle features ``h`` into ``values[columns[k]]``,
-    ``codes[columns[k]]`` (``columns``: the columns of ``e1..e4``)."""
+    ``codes[columns[k]]`` (``columns``: the columns of ``e1..e4``).
+
+    ``e1 = sqrt(|c2|/c1)``, ``e2 = v2/v1``, ``e3 = (|c2|/c1) t1/(t2 - t1)``,
+    ``e4 = (t2 - t1)/t1`` (the paper prints its reciprocal, ``1/e`` on the ideal response;
+    docs/method.md §5.3, §6).
+    """
     if code != _OK:
         for k in range(4):
             values[columns[k]] = np.nan
@@ -365,7 +376,15 @@ def _local_measures(h, code, values, codes, columns):
 
 @_jit
 def _e_impact_slope(d, dt, fit_points):
-    """``e_v`` (eq. 6, see :func:`e_impact_slope`): ``(value, code)``."""
+    """``e_v`` (eq. 6): the ratio of the slopes of a ``D_v`` signature ``d`` after and before
+    lag 0, ``(value, code)``.
+
+    Lag 0 (index ``L`` of the ``2L+1`` lags) is a zero crossing where the velocity is
+    multiplied by ``e``. Each side is fitted by a parabola (the free flight of eq. 4 is one,
+    so the fit has no curvature bias) on the ``fit_points`` lags strictly on that side;
+    lag 0 belongs to neither, because the slope is discontinuous there. Both fits are
+    differentiated at ``tau = 0``: ``e_v = slope_after / slope_before``.
+    """
     if d.size % 2 == 0:
         return np.nan, _EVEN_LENGTH
     for k in range(d.size):
@@ -445,7 +464,7 @@ def half_cycle(r, dt: float, lobes=None) -> HalfCycle:
     """Fit the first half cycle of ``r`` with second-order polynomials (eq. 27).
 
     ``N_h = m + 1`` is the number of samples from ``tau = 0`` to the sampled first minimum
-    ``m`` (see :func:`e_global`). Fits, each least squares of degree 2
+    ``m`` (:func:`_lobes`). Fits, each least squares of degree 2
     (:func:`_fit2`) in ``tau = k*dt``:
 
     - start: the first ``N_h // 8`` samples; ``c1`` = the fit at ``tau = 0``;
