@@ -28,6 +28,7 @@ from rockdec.estimators import (
     _TOUCHES_ZERO,
     _ZERO_SLOPE,
     DEFAULT_FIT_POINTS,
+    FLAT_ULPS,
     LOCAL_ESTIMATORS,
     MIN_FIT_POINTS,
     Estimate,
@@ -247,7 +248,7 @@ def _reference_e_impact_slope(d, dt: float, fit_points: int) -> Estimate:
     tau = dt * np.arange(1, fit_points + 1)
     before = reference_fit2(-tau[::-1], d[lag0 - fit_points : lag0]).slope(0.0)
     after = reference_fit2(tau, d[lag0 + 1 : lag0 + 1 + fit_points]).slope(0.0)
-    if before == 0:
+    if abs(before) * tau[-1] <= FLAT_ULPS * np.finfo(float).eps * np.abs(d[lag0 - fit_points : lag0]).max():
         return Estimate(np.nan, _reason(_ZERO_SLOPE))
     with np.errstate(all="ignore"):
         return _reference_estimate(after / before)
