@@ -9,10 +9,10 @@ import math
 import numpy as np
 import pytest
 
-from rockdec import config, replicates, run
+from rockdec import calibration, config, replicates, run
 from rockdec.housner import housner_flight, integrate_housner
 from rockdec.loading import low_pass, series_rng
-from rockdec.record_model import Load, RecordModel, SensorNoise
+from rockdec.record_model import PAPER, Load, RecordModel, SensorNoise
 from rockdec.simulate import integrate
 from rockdec.validate import InputError
 
@@ -86,6 +86,7 @@ def test_housner_scene_with_lowpass_load_simulates_coloured_impulses():
 @pytest.mark.filterwarnings("ignore::rockdec.signatures.NoTriggerWarning")
 def test_run_json_and_every_product_name_the_load(tmp_path):
     contract = housner_lowpass_run()
+    assert contract.record_model == RecordModel("housner", Load("lowpass", 1.0))
     stored = json.loads(contract.write(tmp_path / "run.json").read_text())
     assert stored["load"] == "lowpass" and stored["load_corner"] == 1.0 and stored["load_pole"] == pytest.approx(contract.pole)
     assert run.Run.read(tmp_path / "run.json") == contract
@@ -128,3 +129,23 @@ def test_sensor_noise_is_added_to_the_angle_from_its_own_stream():
     diff = (a["theta"] - b["theta"]).values[0]
     assert diff.std() == pytest.approx(noisy.sensor_std, rel=0.03)
     assert abs(np.corrcoef(diff[1:], diff[:-1])[0, 1]) < 0.02
+
+
+def test_calibration_key_names_the_record_model():
+    white = calibration.calibration_settings([20_000], 75.0)
+    assert white["record_model"] == PAPER.key()
+    others = [RecordModel(load=Load("lowpass", 3.0)), RecordModel(sensor=SensorNoise(0.1))]
+    hashes = {calibration.settings_hash(calibration.calibration_settings([20_000], 75.0, model=m)) for m in [PAPER, *others]}
+    assert len(hashes) == 3
+    with pytest.raises(ValueError, match="simplified model"):
+        calibration.calibration_settings([20_000], 75.0, model=RecordModel("housner"))
+
+
+def test_calibration_records_follow_the_record_model():
+    """The calibration's records carry the model's load and its sensor noise (relative to their rms)."""
+    args = (5, [30_000], 0.36, 0.95, 1000)
+    white = calibration._simulate_set(*args, PAPER, 0.0)[0]
+    coloured = RecordModel(load=Load("lowpass", 3.0))
+    assert not np.array_equal(calibration._simulate_set(*args, coloured, coloured.load.pole(75.0))[0], white)
+    noisy = calibration._simulate_set(*args, RecordModel(sensor=SensorNoise(0.1)), 0.0)[0]
+    assert (noisy - white).std() == pytest.approx(0.1 * np.sqrt(np.mean(white**2)), rel=0.03)

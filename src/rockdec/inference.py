@@ -8,6 +8,7 @@ lists what looks wrong with the records (:func:`diagnose`).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 import warnings
@@ -15,6 +16,7 @@ import warnings
 import numpy as np
 
 from rockdec import belt, calibration, estimators, measured, registry
+from rockdec.record_model import PAPER, RecordModel, SensorNoise
 from rockdec.records import Record, RecordError, same_step
 
 from rockdec.registry import DEFAULT_ESTIMATOR
@@ -52,8 +54,12 @@ def diagnose(records: list[Record], analysis: measured.Analysis, settings: dict)
     return notes
 
 
-def estimate(records: list[Record], *, cache_dir, g: float | None = None, settings: dict | None = None) -> dict:
+def estimate(records: list[Record], *, cache_dir, g: float | None = None, settings: dict | None = None, model: RecordModel = PAPER) -> dict:
     """Calibrated estimates of ``e`` from ``records`` of one block (pooled).
+
+    ``model``: the record model the calibration simulates (its load and sensor noise, e.g.
+    measured off the records; :mod:`rockdec.record_model`); the paper's white load and a
+    perfect sensor by default. A sensor noise in rad is expressed in the records' ``sigma_Y``.
 
     Returns a JSON-able dict: ``e``, ``interval`` (95 %), ``estimator``, ``coverage`` (the
     share of the calibration's simulated record sets whose interval held their true ``e``,
@@ -77,7 +83,9 @@ def estimate(records: list[Record], *, cache_dir, g: float | None = None, settin
             f"{', '.join(r.source for r in records)}: only {int(analysis.count['a'][-1])} extremum and "
             f"{int(analysis.count['v'][-1])} zero-crossing triggers, too few for the fits; give a longer record."
         )
-    cal_settings = calibration.calibration_settings([r.theta.size for r in records], analysis.points_per_cycle, settings)
+    if model.sensor.units == "rad":
+        model = dataclasses.replace(model, sensor=SensorNoise(model.sensor.std / analysis.sigma_y, "sigma_y"))
+    cal_settings = calibration.calibration_settings([r.theta.size for r in records], analysis.points_per_cycle, settings, model)
     started = time.perf_counter()
     cal, cached = calibration.load_or_build(cal_settings, cache_dir)
     built_s = time.perf_counter() - started

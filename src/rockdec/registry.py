@@ -78,7 +78,3 @@ def trigger(name: str) -> str:
     """The trigger (``"a"`` or ``"v"``) of the signature estimator ``name`` reads."""
     return spec(name).trigger
 
-
-def with_trigger(kind: str) -> tuple[str, ...]:
-    """The estimators reading the signature of trigger ``kind``, in registry order."""
-    return tuple(s.name for s in REGISTRY if s.trigger == kind)
