@@ -503,7 +503,7 @@ def test_a_rebuild_that_fails_half_way_leaves_no_folder(reference, tmp_path, cap
     def broken(*args, **kwargs):
         raise OSError(28, "No space left on device")
 
-    monkeypatch.setattr(steps, "fig4", broken)
+    monkeypatch.setattr(steps, "fig1b", broken)  # after the tables are written
     folder = copy_archive(reference, tmp_path)
     code, text = verify([folder, "--rebuild", tmp_path / "rebuilt"], capsys)
     assert code != 0

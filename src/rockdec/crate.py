@@ -30,7 +30,6 @@ from rocrate.rocrate import ROCrate
 
 from rockdec.io import PAPER_TITLE
 
-CRATE = "ro-crate-metadata.json"
 RO_CRATE_VERSION = "1.1"
 WORKFLOW_RUN_CONTEXT = "https://w3id.org/ro/terms/workflow-run/context"
 
