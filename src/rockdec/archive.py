@@ -234,12 +234,17 @@ def _read_inside(folder: Path, name: str) -> bytes:
     path = folder / name
     try:
         mode = os.lstat(path).st_mode
-    except FileNotFoundError:
+    except (FileNotFoundError, NotADirectoryError):
         raise ArchiveError(f"'{folder}' holds no {name}: pass the folder rule `archive` wrote (results/<scene>/archive).") from None
+    except OSError as exc:
+        raise ArchiveError(f"cannot read '{path}' ({exc.strerror}); check its permissions.") from None
     if not stat.S_ISREG(mode):
         raise ArchiveError(f"'{path}' is not a regular file (a link or a folder); an archive's {name} must be the file itself.")
-    with os.fdopen(os.open(path, os.O_RDONLY | os.O_NOFOLLOW), "rb") as f:
-        return f.read()
+    try:
+        with os.fdopen(os.open(path, os.O_RDONLY | os.O_NOFOLLOW), "rb") as f:
+            return f.read()
+    except OSError as exc:
+        raise ArchiveError(f"cannot read '{path}' ({exc.strerror}); check its permissions.") from None
 
 
 def read_manifest(folder: str | Path) -> dict:
@@ -248,8 +253,8 @@ def read_manifest(folder: str | Path) -> dict:
     folder = Path(folder)
     try:
         manifest = json.loads(_read_inside(folder, MANIFEST))
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise ArchiveError(f"'{folder / MANIFEST}' is not valid JSON ({exc}); the manifest itself was changed.") from None
+    except (json.JSONDecodeError, UnicodeDecodeError, RecursionError) as exc:
+        raise ArchiveError(f"'{folder / MANIFEST}' is not valid JSON ({type(exc).__name__}); the manifest itself was changed.") from None
     return check_manifest(manifest, folder / MANIFEST)
 
 
@@ -268,8 +273,11 @@ def _file_problem(folder: Path, entry: dict) -> str | None:
             return f"not a plain file: {name} ('{path.relative_to(folder).as_posix()}' is a symbolic link; an archive holds no links)"
     if not stat.S_ISREG(mode):
         return f"not a plain file: {name} (a folder or a device; an archive holds regular files)"
-    if os.lstat(path).st_size != entry["size"] or sha256(path) != entry["sha256"]:
-        return f"changed: {name} (SHA-256 differs from the manifest)"
+    try:
+        if os.lstat(path).st_size != entry["size"] or sha256(path) != entry["sha256"]:
+            return f"changed: {name} (SHA-256 differs from the manifest)"
+    except OSError as exc:
+        return f"unreadable: {name} ({exc.strerror})"
     return None
 
 
@@ -301,7 +309,7 @@ def _crate_problems(folder: Path, manifest: dict) -> list[str]:
         stored = json.loads(_read_inside(folder, CRATE))
     except ArchiveError:
         return [f"not a plain file: {CRATE} (a link or a folder; an archive holds regular files)"]
-    except (json.JSONDecodeError, UnicodeDecodeError):
+    except (json.JSONDecodeError, UnicodeDecodeError, RecursionError):
         return [f"changed: {CRATE} (not valid JSON)"]
     entry = {"name": MANIFEST, "size": os.lstat(folder / MANIFEST).st_size, "sha256": sha256(folder / MANIFEST)}
     problems = []
@@ -361,7 +369,10 @@ def rebuild(folder: str | Path, out: str | Path) -> dict[str, bool]:
     for needed in ("signatures.nc", "readings.nc") if "estimates_readings.nc" in names else ("signatures.nc",):
         if needed not in names:
             raise ArchiveError(f"'{folder}' holds no {needed}, which the rebuild starts from; pass a folder rule `archive` wrote.")
-    work = Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".partial", dir=out.parent))
+    try:
+        work = Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".partial", dir=out.parent))
+    except OSError as exc:
+        raise io.OutputError(f"--rebuild '{out}': cannot write in '{out.parent}' ({exc.strerror}); choose another folder.") from None
     try:
         rebuilt = ["estimates.nc", "table.csv", "table.md"]
         steps.estimates(folder / "signatures.nc", *(work / name for name in rebuilt), scene["estimates"])
