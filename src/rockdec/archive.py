@@ -159,13 +159,9 @@ def write_archive(
     return path
 
 
-def _kind(value) -> str:
-    """How a manifest's value reads in a sentence ("a list", "an integer")."""
-    kinds = {dict: "an object", list: "a list", str: "a string", bool: "a boolean", int: "an integer", float: "a number"}
-    return "null" if value is None else kinds.get(type(value), type(value).__name__)
-
-
-_SCHEMA_KINDS = {"object": "an object", "array": "a list", "string": "a string", "boolean": "a boolean", "integer": "an integer", "null": "null"}
+#: How a JSON value's type reads in a sentence, by its JSON Schema name and by its Python type.
+_KINDS = {"object": "an object", "array": "a list", "string": "a string", "boolean": "a boolean", "integer": "an integer", "number": "a number", "null": "null"}
+_JSON_TYPES = {dict: "object", list: "array", str: "string", bool: "boolean", int: "integer", float: "number", type(None): "null"}
 
 
 def _schema_problem(err: jsonschema.ValidationError) -> str:
@@ -174,7 +170,7 @@ def _schema_problem(err: jsonschema.ValidationError) -> str:
         return f"lacks the key '{next(key for key in err.validator_value if key not in err.instance)}'"
     if err.validator == "type":
         wanted = [err.validator_value] if isinstance(err.validator_value, str) else err.validator_value
-        return f"is {_kind(err.instance)}, not {' or '.join(_SCHEMA_KINDS[t] for t in wanted)}"
+        return f"is {_KINDS[_JSON_TYPES[type(err.instance)]]}, not {' or '.join(_KINDS[t] for t in wanted)}"
     if err.validator == "minItems":
         return "is empty: an archive lists at least one file"
     if err.validator == "pattern":
