@@ -256,6 +256,7 @@ def test_crate_of_the_archive_is_a_workflow_run_crate_of_exactly_its_files(refer
     ref = lambda value: [v["@id"] for v in (value if isinstance(value, list) else [value])]  # noqa: E731
     context = doc["@context"][0] if isinstance(doc["@context"], list) else doc["@context"]
     assert re.fullmatch(r"https://w3id\.org/ro/crate/1\.[1-9]\d*/context", context)
+    assert {"sha256": "https://w3id.org/ro/terms/workflow-run#sha256"} in doc["@context"]  # no RO-Crate 1.1 term
     root = graph[ref(graph["ro-crate-metadata.json"]["about"])[0]]
     assert root["@type"] == "Dataset" and root["name"] and root["description"] and root["license"]
     assert iso(root["datePublished"])

@@ -33,6 +33,10 @@ from rockdec.io import PAPER_TITLE
 RO_CRATE_VERSION = "1.1"
 WORKFLOW_RUN_CONTEXT = "https://w3id.org/ro/terms/workflow-run/context"
 
+#: ``sha256`` is no RO-Crate 1.1 term: the workflow-run context defines it, and the crate
+#: repeats that definition inline so that a reader without network resolves it too.
+TERMS = {"sha256": "https://w3id.org/ro/terms/workflow-run#sha256"}
+
 #: The profiles the root dataset conforms to: permalink -> (name, version).
 PROFILES = {
     "https://w3id.org/ro/wfrun/process/0.5": ("Process Run Crate", "0.5"),
@@ -109,6 +113,7 @@ def crate_from_manifest(manifest: dict, manifest_entry: dict) -> dict:
     and ``sha256`` (``manifest_entry``)."""
     crate = ROCrate(version=RO_CRATE_VERSION)
     crate.metadata.extra_contexts.append(WORKFLOW_RUN_CONTEXT)
+    crate.metadata.extra_terms = dict(TERMS)
     scene, run, settings = manifest["scene"], manifest["run"], manifest["settings"]
     root = crate.root_dataset
     root["name"] = f"rockdec archive of the scene '{scene}'"
