@@ -426,3 +426,167 @@ def test_cli_simulate_options_give_a_finite_file_or_one_sentence(tmp_path_factor
             assert np.isfinite(ds["theta"].values).all() and np.isfinite(ds["theta_dot"].values).all()
     else:
         assert code == 2 and list(folder.iterdir()) == []
+
+
+# --------------------------------------------------------------------------- round two: rockdec estimate
+# Records of 20,000 samples and a calibration of 6 e x 5 sets keep each answered case near 1 s;
+# refusals come before any calibration.
+
+from rockdec import calibration, engine, inference  # noqa: E402
+from rockdec import records as records_mod  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def tiny_calibration():
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(calibration, "E_GRID", (0.5, 0.65, 0.75, 0.85, 0.92, 0.97))
+        mp.setattr(calibration, "SETS_PER_E", 5)
+        yield
+
+
+@pytest.fixture(scope="module")
+def rocking(tmp_path_factory):
+    """A simulated rocking record (e = 0.85, g = 1 rad/s^2, 20,000 samples) as CSV, and its parts."""
+    folder = tmp_path_factory.mktemp("rocking")
+    cal = simulate.calibrate_dt(e=0.85, g=1.0, sigma_p=0.003, points_per_cycle=75)
+    theta = simulate.simulate_block([11], 20_000, dt=cal["dt"], g=1.0, e=0.85, sigma_p=0.003, burn_in=cal["burn_in"])[0][0]
+    dt = cal["dt"]
+    t = np.arange(theta.size) * dt
+    np.savetxt(folder / "rec.csv", np.c_[t, theta], delimiter=",", header="time,theta", comments="", fmt="%.10g")
+    return {"folder": folder, "theta": theta, "dt": dt, "t": t, "csv": folder / "rec.csv"}
+
+
+def _estimate(argv, cache):
+    """``rockdec estimate ARGV --json --cache CACHE``: exit code, parsed JSON (or None), stderr."""
+    import io as _io
+    from contextlib import redirect_stderr, redirect_stdout
+
+    out, err = _io.StringIO(), _io.StringIO()
+    with redirect_stdout(out), redirect_stderr(err):
+        code = main(["estimate", *map(str, argv), "--json", "--cache", str(cache)])
+    return code, (json.loads(out.getvalue()) if code == 0 else None), err.getvalue()
+
+
+def _nc(path, theta, dt, theta_units=None, time_units=None, attrs=None):
+    var_attrs = {"units": theta_units} if theta_units else {}
+    time_attrs = {"units": time_units} if time_units else {}
+    t = np.arange(theta.shape[-1]) * dt
+    dims = ("seed", "time") if theta.ndim == 2 else ("time",)
+    ds = xr.Dataset({"theta": (dims, theta, var_attrs)}, coords={"time": ("time", t, time_attrs)}, attrs=attrs or {})
+    ds.to_netcdf(path)
+    return path
+
+
+def _sparse(path, head: bytes, size: int):
+    """A file of ``size`` bytes that starts with ``head`` and is a hole after it (no disk used)."""
+    with open(path, "wb") as f:
+        f.write(head)
+        f.truncate(size)
+    return path
+
+
+def _estimate_cases(r):
+    """name -> (argv, words in the refusal); ``r``: the rocking fixture."""
+    f, theta, dt, t = r["folder"], r["theta"], r["dt"], r["t"]
+    rng = np.random.default_rng(0)
+    cases = {}
+
+    def csv(name, y, tt=t, sep=","):
+        path = f / name
+        np.savetxt(path, np.c_[tt, y], delimiter=sep, header=f"time{sep}theta", comments="", fmt="%.10g")
+        return path
+
+    cases["white noise"] = ([csv("noise.csv", rng.standard_normal(theta.size) * 1e-3)], ["does not look like a rocking record", "white noise"])
+    cases["white noise with --g"] = ([f / "noise.csv", "--g", "1"], ["does not look like a rocking record"])
+    for g in ("57.3", "100", "1e-3", "1e308", "0.4", "3"):
+        cases[f"--g {g} off the record's own"] = ([r["csv"], "--g", g], [f"--g {float(g):g}", "times the g the records show"])
+    cases["same file twice"] = ([r["csv"], r["csv"]], ["same samples"])
+    cases["a copy of the file"] = ([r["csv"], csv("copy.csv", theta)], ["copy.csv", "same samples"])
+    cases["two identical series in a file"] = ([_nc(f / "twice.nc", np.stack([theta, theta]), dt)], ["[1] holds the same samples as", "[0]"])
+    cases["angle units unknown"] = ([_nc(f / "grad.nc", theta, dt, theta_units="furlong")], ["units 'furlong'", "rad or degrees"])
+    cases["time units unknown"] = ([_nc(f / "fortnight.nc", theta, dt, time_units="fortnight")], ["units 'fortnight'", "s or ms"])
+    xr.Dataset({"theta": ("time", theta)}, attrs={"dt": "abc"}).to_netcdf(f / "abc.nc")
+    cases["dt attribute 'abc'"] = ([f / "abc.nc"], ["attribute dt 'abc'", "not a number of seconds"])
+    one_col = f / "one_col.csv"
+    np.savetxt(one_col, theta)
+    npy = f / "rec.npy"
+    np.save(npy, theta)
+    for flag, value, words in (
+        ("--fs", "0", ["--fs 0", "> 0"]), ("--fs", "1e-320", ["--fs 1e-320"]), ("--fs", "-5", ["--fs -5"]),
+        ("--fs", "inf", ["--fs inf"]), ("--fs", "nan", ["--fs nan"]), ("--dt", "0", ["--dt 0"]), ("--dt", "-1", ["--dt -1"]),
+        ("--dt", "nan", ["--dt nan"]), ("--dt", "inf", ["--dt inf"]),
+        ("--dt", "1e308", ["1e+308 s", "beyond the range of a float"]), ("--dt", "5e-324", ["beyond the range of a float"]),
+        ("--dt", "1e300", ["1e+300 s"]),
+    ):
+        cases[f"{flag} {value} (npy)"] = ([npy, flag, value], words)
+        cases[f"{flag} {value} (one-column csv)"] = ([one_col, flag, value], words)
+    long_name = f / ("r" * 300 + ".csv")
+    cases["record name of 300 characters"] = ([long_name], ["bytes, longer than the 255", "shorter name"])
+    cases["--plot .txt"] = ([r["csv"], "--plot", f / "p.txt"], ["--plot", ".txt is not a format", ".png or .pdf"])
+    cases["--plot .svg"] = ([r["csv"], "--plot", f / "p.svg"], [".svg is not a format"])
+    cases["--plot without suffix"] = ([r["csv"], "--plot", f / "plot"], ["no format suffix"])
+    cases["--plot onto the input"] = ([r["csv"], "--plot", r["csv"]], ["is the record"])
+    cases["--plot onto the input with --overwrite"] = ([r["csv"], "--plot", r["csv"], "--overwrite"], ["is the record"])
+    cases["--plot name of 300 characters"] = ([r["csv"], "--plot", f / ("p" * 300 + ".png")], ["bytes, longer than the 255", "shorter name"])
+    cases["--plot exists"] = ([r["csv"], "--plot", csv("exists.png", theta[:10], t[:10])], ["exists already", "--overwrite"])
+    cases["--plot in a missing folder"] = ([r["csv"], "--plot", f / "no" / "p.png"], ["does not exist"])
+    cases["--cache on a file"] = ([r["csv"], "--cache-file"], ["--cache", "is a file"])
+    cases["2 GiB of NUL as CSV"] = ([_sparse(f / "nul.csv", b"", 2 * 2**30)], ["NUL bytes", "binary"])
+    cases["NUL bytes after a header"] = ([_sparse(f / "nul2.csv", b"time,theta\n0,1\n", 2**20)], ["NUL bytes"])
+    cases["no line break"] = ([_csv_bytes(f / "oneline.csv", b"1," * 40_000)], ["no line break"])
+    big_npy = f / "big.npy"
+    with open(big_npy, "wb") as handle:  # a header for 50 million float64 samples, then a hole
+        np.lib.format.write_array_header_1_0(handle, {"descr": "<f8", "fortran_order": False, "shape": (50_000_000,)})
+        handle.truncate(handle.tell() + 8 * 50_000_000)
+    cases["50 million samples (npy)"] = ([big_npy, "--dt", "0.01"], ["5e+07 samples", "pass --yes"])
+    head = b"time,theta\n" + b"".join(f"{k * 0.01:.2f},{v:.8f}\n".encode() for k, v in enumerate(theta[:4000]))
+    cases["50 million samples (csv)"] = ([_sparse(f / "big.csv", head, 50_000_000 * (len(head) // 4001))], ["samples", "pass --yes"])
+    spiky = theta.copy()
+    spiky[::2000] = 1e3 * np.std(theta)
+    cases["spikes"] = ([csv("spikes.csv", spiky)], ["spike of", "times the rms", "remove the spikes"])
+    gaps = theta.copy()
+    gaps[rng.choice(theta.size, theta.size // 20, replace=False)] = np.nan
+    cases["5 % scattered NaN"] = ([csv("gaps.csv", gaps)], ["NaN, scattered", "fill short gaps"])
+    cases["constant record"] = ([csv("const.csv", np.full_like(theta, 0.01))], ["constant"])
+    return cases
+
+
+def _csv_bytes(path, data: bytes):
+    path.write_bytes(data)
+    return path
+
+
+ESTIMATE_CASE_NAMES = [
+    "white noise", "white noise with --g", *[f"--g {g} off the record's own" for g in ("57.3", "100", "1e-3", "1e308", "0.4", "3")],
+    "same file twice", "a copy of the file", "two identical series in a file", "angle units unknown", "time units unknown",
+    *[f"{flag} {value} ({kind})" for flag, value in (
+        ("--fs", "0"), ("--fs", "1e-320"), ("--fs", "-5"), ("--fs", "inf"), ("--fs", "nan"), ("--dt", "0"), ("--dt", "-1"),
+        ("--dt", "nan"), ("--dt", "inf"), ("--dt", "1e308"), ("--dt", "5e-324"), ("--dt", "1e300"),
+    ) for kind in ("npy", "one-column csv")],
+    "record name of 300 characters", "--plot .txt", "--plot .svg", "--plot without suffix", "--plot onto the input",
+    "--plot onto the input with --overwrite", "--plot name of 300 characters", "--plot exists", "--plot in a missing folder",
+    "--cache on a file", "2 GiB of NUL as CSV", "NUL bytes after a header", "no line break", "50 million samples (npy)",
+    "50 million samples (csv)", "spikes", "5 % scattered NaN", "constant record", "dt attribute 'abc'",
+]
+
+
+@pytest.mark.parametrize("name", ESTIMATE_CASE_NAMES)
+def test_estimate_refuses_in_one_sentence_before_any_calibration(name, rocking, tmp_path, capsys):
+    case = _estimate_cases(rocking)[name]
+    argv, words = list(case[0]), case[1]
+    cache = tmp_path / "cache"
+    if "--cache-file" in argv:
+        argv.remove("--cache-file")
+        cache = tmp_path / "cachefile"
+        cache.write_text("not a folder")
+    before = sorted(p.name for p in rocking["folder"].iterdir())
+    start = time.perf_counter()
+    code, _, err = _estimate(argv, cache)
+    assert time.perf_counter() - start < 60, "a refusal must come quickly"
+    assert code == 2, err
+    lines = [line for line in err.splitlines() if "error:" in line]
+    assert len(lines) == 1 and "Traceback" not in err and "internal error" not in err, err
+    for word in words:
+        assert word in lines[0], (word, err)
+    assert not (cache.is_dir() and any(cache.glob("*.nc"))), "a calibration was built for a refused record"
+    assert sorted(p.name for p in rocking["folder"].iterdir()) == before  # no plot, lock or partial file
