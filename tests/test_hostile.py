@@ -6,6 +6,7 @@ non-finite number (issue 13). Record time axes are checked in the records tests.
 from __future__ import annotations
 
 import errno
+import json
 import math
 import subprocess
 import sys
@@ -590,3 +591,245 @@ def test_estimate_refuses_in_one_sentence_before_any_calibration(name, rocking, 
         assert word in lines[0], (word, err)
     assert not (cache.is_dir() and any(cache.glob("*.nc"))), "a calibration was built for a refused record"
     assert sorted(p.name for p in rocking["folder"].iterdir()) == before  # no plot, lock or partial file
+
+
+OTHER_CASES = {
+    "simulate 1e8 seeds of 50 points": (["simulate", "--out", "{out}/o.nc", "--dt", "0.0034", "--seeds", "0-99999999", "--n-points", "50"],
+                                        ["--seeds '0-99999999'", "pass --yes"]),
+    "simulate --dt 5e-324": (["simulate", "--out", "{out}/o.nc", *_argv(["--dt", "5e-324"])], ["too small to tell", "time stamps"]),
+    "simulate --dt 1e-320": (["simulate", "--out", "{out}/o.nc", *_argv(["--dt", "1e-320"])], ["too small to tell"]),
+    "housner started beyond theta_cr": (["simulate", "--out", "{out}/o.nc", *_argv(["--model", "housner", "--theta0", "0.3"])],
+                                        ["--theta0 0.3", "critical angle", "overturns"]),
+    "housner started at -theta_cr": (["simulate", "--out", "{out}/o.nc", *_argv(["--model", "housner", "--theta0", "-0.25"])],
+                                     ["critical angle"]),
+    "simulate --out name of 300 characters": (["simulate", "--out", "{out}/" + "o" * 300 + ".nc", *FAST], ["bytes, longer than the 255"]),
+    "signatures --n-periods 1e-300": (["signatures", "{files}/sim.nc", "--out", "{out}/s.nc", "--n-periods", "1e-300"],
+                                      ["--n-periods 1e-300", "lag range of 0 samples"]),
+    "signatures --g 1e308": (["signatures", "{files}/sim.nc", "--out", "{out}/s.nc", "--g", "1e308"], ["--g 1e+308", "lag range of 0"]),
+    "signatures of a constant record": (["signatures", "{files}/const.nc", "--out", "{out}/s.nc", "--g", "1"], ["series 0", "constant"]),
+    "signatures dt attribute 'abc'": (["signatures", "{files}/abc.nc", "--out", "{out}/s.nc", "--g", "1"], ["attribute dt 'abc'"]),
+    "signatures --group-size 1e23 (as a float)": (["signatures", "{files}/sim.nc", "--out", "{out}/s.nc", "--group-size", "1e23"],
+                                                  ["--group-size", "invalid int"]),
+    "estimates --fit-points 10**20": (["estimates", "{files}/sig.nc", "--out", "{out}/e.nc", "--fit-points", str(10**20)],
+                                      ["--fit-points 100000000000000000000", "more than the"]),
+    "estimates --fit-points 1e20 (as a float)": (["estimates", "{files}/sig.nc", "--out", "{out}/e.nc", "--fit-points", "1e20"],
+                                                 ["--fit-points", "invalid int"]),
+    "unreachable tcp scheduler": (["--dask-scheduler", "tcp://127.0.0.1:9", "simulate", "--out", "{out}/o.nc", *FAST],
+                                  ["cannot be reached", "tcp://127.0.0.1:9"]),
+}
+
+
+@pytest.fixture(scope="module")
+def more_files(files):
+    xr.Dataset({"theta": ("time", np.full(3000, 0.01))}, coords={"time": np.arange(3000) * 0.01}).to_netcdf(files / "const.nc")
+    xr.Dataset({"theta": ("time", np.sin(np.arange(3000) * 0.1))}, attrs={"dt": "abc"}).to_netcdf(files / "abc.nc")
+    return files
+
+
+@pytest.mark.parametrize("argv, keywords", OTHER_CASES.values(), ids=OTHER_CASES.keys())
+def test_other_commands_refuse_in_one_sentence(more_files, tmp_path, capsys, argv, keywords):
+    argv = [a.format(files=more_files, out=tmp_path) for a in argv]
+    start = time.perf_counter()
+    try:
+        refused(argv, tmp_path, capsys, keywords)
+    except SystemExit as exc:  # argparse refuses before the command runs
+        assert exc.code == 2
+    assert time.perf_counter() - start < 30
+
+
+def test_a_listener_that_is_not_dask_is_refused_at_once(tmp_path, capsys):
+    import socket
+
+    server = socket.socket()
+    server.bind(("127.0.0.1", 0))
+    server.listen()
+    port = server.getsockname()[1]
+
+    def greet():
+        conn, _ = server.accept()
+        conn.sendall(b"SSH-2.0-OpenSSH_9.6\r\n")  # read as a frame length, this asks for exabytes
+        time.sleep(2)
+        conn.close()
+
+    thread = threading.Thread(target=greet, daemon=True)
+    thread.start()
+    try:
+        start = time.perf_counter()
+        refused(["--dask-scheduler", f"tcp://127.0.0.1:{port}", "simulate", "--out", str(tmp_path / "o.nc"), *FAST], tmp_path, capsys,
+                ["answers, but not as a Dask scheduler"])
+        assert time.perf_counter() - start < 10
+    finally:
+        server.close()
+
+
+def test_a_file_size_limit_is_one_sentence(tmp_path):
+    script = (
+        "import resource, sys; resource.setrlimit(resource.RLIMIT_FSIZE, (20000, 20000)); "
+        "from rockdec.cli import main; "
+        f"sys.exit(main(['simulate', '--out', {str(tmp_path / 'o.nc')!r}, '--dt', '0.0034', '--burn-in', '0', '--seeds', '0-9', '--n-points', '20000']))"
+    )
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 2, proc.stderr
+    assert "ulimit -f" in proc.stderr and "internal error" not in proc.stderr
+    assert list(tmp_path.iterdir()) == []
+
+
+# --------------------------------------------------------------------------- answered, with the right note
+
+
+def test_units_degrees_and_milliseconds_give_the_radian_second_answer(rocking, tiny_calibration, tmp_path):
+    theta, dt = rocking["theta"], rocking["dt"]
+    cache = tmp_path / "cache"
+    _, plain, _ = _estimate([_nc(tmp_path / "rad.nc", theta, dt, theta_units="rad", time_units="s")], cache)
+    _, deg, _ = _estimate([_nc(tmp_path / "deg.nc", np.degrees(theta), dt, theta_units="degrees")], cache)
+    _, ms, _ = _estimate([_nc(tmp_path / "ms.nc", theta, dt * 1e3, time_units="ms")], cache)
+    for other in (deg, ms):
+        assert other["sigma_y"] == pytest.approx(plain["sigma_y"], rel=1e-9)
+        assert other["dt"] == pytest.approx(plain["dt"], rel=1e-9)
+        assert other["g"] == pytest.approx(plain["g"], rel=1e-6)
+        assert other["e"] == pytest.approx(plain["e"], abs=1e-6)
+
+
+@pytest.mark.parametrize("sep", [";", "\t", " "], ids=["semicolon", "tab", "space"])
+def test_csv_separators_give_the_comma_answer(rocking, tiny_calibration, tmp_path, sep):
+    path = tmp_path / "rec.csv"
+    np.savetxt(path, np.c_[rocking["t"], rocking["theta"]], delimiter=sep, header=f"time{sep}theta", comments="", fmt="%.10g")
+    cache = tmp_path / "cache"
+    _, comma, _ = _estimate([rocking["csv"]], cache)
+    code, other, err = _estimate([path], cache)
+    assert code == 0, err
+    assert other["e"] == comma["e"] and other["interval"] == comma["interval"]
+
+
+def test_a_given_g_near_the_records_own_is_used(rocking, tiny_calibration, tmp_path):
+    code, res, err = _estimate([rocking["csv"], "--g", "1.0"], tmp_path / "cache")
+    assert code == 0, err
+    assert res["g"] == 1.0 and res["g_given"]
+
+
+def test_a_null_e_always_carries_a_reason(rocking, tiny_calibration, tmp_path):
+    drifting = rocking["theta"] * np.linspace(0.2, 3.0, rocking["theta"].size)
+    path = tmp_path / "drift.csv"
+    np.savetxt(path, np.c_[rocking["t"], drifting], delimiter=",", header="time,theta", comments="", fmt="%.10g")
+    code, res, err = _estimate([path], tmp_path / "cache")
+    assert code in (0, 2), err
+    if code == 0:
+        assert any("not stationary" in w for w in res["warnings"])
+        assert (res["e"] is None) == bool(res["reason"])
+
+
+def test_the_text_report_prints_when_g_is_given(rocking, tiny_calibration, tmp_path, capsys):
+    code = main(["estimate", str(rocking["csv"]), "--g", "1.0", "--cache", str(tmp_path / "cache")])
+    out = capsys.readouterr()
+    assert code == 0, out.err
+    assert "g = 1 rad/s^2 (given (--g))" in out.out
+
+
+# --------------------------------------------------------------------------- the calibration cache
+
+
+def _cached_file(cache):
+    (path,) = cache.glob("calibration-*.nc")
+    return path
+
+
+@pytest.mark.parametrize("damage", ["tampered value", "truncated", "settings edited", "checksum removed", "not NetCDF"])
+def test_a_damaged_cache_file_is_rebuilt_with_a_note(rocking, tiny_calibration, tmp_path, damage):
+    cache = tmp_path / "cache"
+    _, fresh, _ = _estimate([rocking["csv"]], cache)
+    path = _cached_file(cache)
+    if damage == "tampered value":
+        with xr.open_dataset(path) as ds:
+            ds = ds.load()
+        ds["raw"][:] = ds["raw"].values * 0.97
+        path.unlink()
+        ds.to_netcdf(path)
+    elif damage == "truncated":
+        path.write_bytes(path.read_bytes()[: path.stat().st_size // 2])
+    elif damage in ("settings edited", "checksum removed"):
+        with xr.open_dataset(path) as ds:
+            ds = ds.load()
+        if damage == "settings edited":
+            ds.attrs["settings"] = ds.attrs["settings"].replace('"sets_per_e": 5', '"sets_per_e": 6')
+        else:
+            del ds.attrs["content_sha256"]
+        path.unlink()
+        ds.to_netcdf(path)
+    else:
+        path.write_text("hello")
+    code, again, err = _estimate([rocking["csv"]], cache)
+    assert code == 0, err
+    assert again["calibration"]["cached"] is False
+    assert any("was rebuilt" in w for w in again["warnings"])
+    assert again["e"] == fresh["e"] and again["interval"] == fresh["interval"]
+    _, third, _ = _estimate([rocking["csv"]], cache)
+    assert third["calibration"]["cached"] is True and not any("rebuilt" in w for w in third["warnings"])
+
+
+def test_concurrent_builds_of_one_calibration_build_it_once(tmp_path, monkeypatch):
+    built = []
+    gate = threading.Event()
+
+    def slow_build(settings):
+        built.append(threading.get_ident())
+        gate.wait(10)
+        return xr.Dataset({"raw": (("e_true", "set", "name"), np.ones((2, 2, 1)))}, coords={"e_true": [0.5, 0.9]},
+                          attrs={"settings": json.dumps(settings)})
+
+    monkeypatch.setattr(calibration, "build", slow_build)
+    monkeypatch.setattr(calibration, "POLL_S", 0.05)
+    settings_ = {"lengths": [1000], "x": 1}
+    results = []
+    threads = [threading.Thread(target=lambda: results.append(calibration.load_or_build(settings_, tmp_path))) for _ in range(3)]
+    for t in threads:
+        t.start()
+    time.sleep(0.5)
+    gate.set()
+    for t in threads:
+        t.join(30)
+    assert len(built) == 1
+    assert sorted(cached for _, cached in results) == [False, True, True]
+    assert sorted(p.name for p in tmp_path.iterdir()) == [f"calibration-{calibration.settings_hash(settings_)}.nc"]
+
+
+def test_a_build_lock_is_waited_for_while_fresh_and_taken_over_when_stale(tmp_path, monkeypatch):
+    """The lock's liveness is its mtime (host and pid are for the reader): a lock from
+    another node whose process is unknown here is still waited for while it is touched."""
+    import os
+
+    monkeypatch.setattr(calibration, "build", lambda s: xr.Dataset(
+        {"raw": (("e_true", "set", "name"), np.ones((2, 2, 1)))}, coords={"e_true": [0.5, 0.9]}, attrs={"settings": json.dumps(s)}))
+    settings_ = {"lengths": [1000], "y": 2}
+    lock = tmp_path / f"calibration-{calibration.settings_hash(settings_)}.building"
+    lock.write_text("host elsewhere pid 999999999 started 2026-01-01T00:00:00Z\n")
+    notes = []
+    assert calibration._take_lock(lock, notes) is False and lock.exists()  # fresh: another node's live build
+    old = time.time() - calibration.STALE_S - 5
+    os.utime(lock, (old, old))
+    assert calibration._take_lock(lock, notes) is False and not lock.exists()
+    assert "took over" in notes[0] and "host elsewhere" in notes[0]
+    ds, cached = calibration.load_or_build(settings_, tmp_path)
+    assert cached is False and not lock.exists()
+
+
+# --------------------------------------------------------------------------- the plot
+
+
+def test_a_plot_claimed_by_a_running_estimate_is_refused_at_once(rocking, tmp_path, capsys):
+    plot = tmp_path / "p.png"
+    with io.claimed(plot):
+        refused(["estimate", str(rocking["csv"]), "--plot", str(plot), "--cache", str(tmp_path / "c")], tmp_path, capsys,
+                ["being written by another run"])
+
+
+def test_overwrite_replaces_a_symlinked_plot_not_its_target(rocking, tiny_calibration, tmp_path):
+    target = tmp_path / "precious.png"
+    target.write_bytes(b"keep me")
+    link = tmp_path / "p.png"
+    link.symlink_to(target)
+    code, _, err = _estimate([rocking["csv"], "--plot", link], tmp_path / "cache")
+    assert code == 2 and "exists already" in err
+    code, _, err = _estimate([rocking["csv"], "--plot", link, "--overwrite"], tmp_path / "cache")
+    assert code == 0, err
+    assert target.read_bytes() == b"keep me" and not link.is_symlink() and link.stat().st_size > 10_000
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cache", "p.png", "precious.png"]

@@ -51,9 +51,9 @@ SIGNATURE_OPTIONS = {
 #: Threads a ``simulate`` run computes on at once (Dask's default scheduler, one per core).
 SIMULATE_THREADS = 2
 
-#: Seconds one simulation step takes on one core (exact kernel, measured), and bytes a
-#: stored sample takes at most (float32 angle and velocity, before compression).
-SIMULATE_STEP_SECONDS, SIMULATE_SAMPLE_BYTES = 7e-8, 8.0
+#: Seconds one simulation step and one series (its seed, impulses and chunk) take on one
+#: core, and bytes a stored sample takes at most (float32 angle and velocity, before compression).
+SIMULATE_STEP_SECONDS, SIMULATE_SERIES_SECONDS, SIMULATE_SAMPLE_BYTES = 7e-8, 2e-5, 8.0
 
 #: A run estimated to take longer than this (s) is refused unless ``--yes`` is given.
 MAX_SECONDS = 600.0
@@ -169,7 +169,7 @@ def _check_simulation_size(scene: dict, n_seeds: int, out: Path, yes: bool, burn
             f"{free / 2**30:.3g} GiB free beside '{out}'; give fewer seeds or points."
         )
     steps = float(n_seeds) * (burn_in + rec["n_points"])
-    seconds = steps * SIMULATE_STEP_SECONDS / SIMULATE_THREADS
+    seconds = (steps * SIMULATE_STEP_SECONDS + n_seeds * SIMULATE_SERIES_SECONDS) / SIMULATE_THREADS
     if seconds > MAX_SECONDS and not yes:
         raise UsageError(
             f"{series} of {burn_in} burn-in and {rec['n_points']} recorded steps need about {steps:.2g} simulation "
