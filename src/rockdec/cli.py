@@ -337,9 +337,10 @@ def _plot_path(args) -> str:
     return plot
 
 
-def _check_estimate_size(args) -> None:
+def _check_estimate_size(args) -> float:
     """Refuse, before reading the records, a run beyond the memory, or longer than
-    :data:`MAX_SECONDS` without ``--yes`` (:func:`rockdec.inference.cost`, from the files' headers or sizes)."""
+    :data:`MAX_SECONDS` without ``--yes`` (:func:`rockdec.inference.cost`, from the files'
+    headers or sizes); returns the estimated seconds."""
     from rockdec import inference
 
     samples = sum(records.record_size(path, args.variable) for path in args.records)
@@ -353,6 +354,7 @@ def _check_estimate_size(args) -> None:
             f"{len(inference.calibration.E_GRID) * inference.calibration.SETS_PER_E} records as long); pass --yes to go on, "
             "or give a shorter record."
         )
+    return seconds
 
 
 def cmd_estimate(args) -> None:
@@ -368,21 +370,25 @@ def cmd_estimate(args) -> None:
         raise UsageError(f"--cache '{args.cache}' is a file, not a folder; give a folder for the stored calibrations.")
     with contextlib.ExitStack() as stack:
         plot = stack.enter_context(io.claimed(_plot_path(args), args.overwrite)) if args.plot else None
-        _check_estimate_size(args)
+        seconds = _check_estimate_size(args)
         recs = [
             rec
             for path in args.records
             for rec in records.read_records(path, column=args.column, variable=args.variable, dt=args.dt, fs=args.fs)
         ]
         if not args.json:
-            print(f"rockdec estimate: {len(recs)} record(s), {sum(r.theta.size for r in recs)} samples; calibrating ...", file=sys.stderr)
+            print(
+                f"rockdec estimate: {len(recs)} record(s), {sum(r.theta.size for r in recs)} samples; analysing and calibrating "
+                f"(up to about {_duration(seconds)} when the calibration is not stored yet) ...",
+                file=sys.stderr,
+            )
         with _progress():  # a calibration not in the cache is built first (about 10 s for 200,000 samples)
             result = inference.estimate(recs, cache_dir=args.cache, g=args.g)
         if plot is not None:
             from rockdec import figures
 
             fig = figures.fig_record(result)
-            io.write_claimed(plot, lambda tmp: figures.save(fig, tmp), args.overwrite)
+            io.write_claimed(plot, lambda tmp: figures.save(fig, tmp), args.overwrite, keep_suffix=True)
     public = {k: v for k, v in result.items() if not k.startswith("_")}
     if args.json:
         print(json.dumps(public, indent=2))

@@ -209,19 +209,7 @@ def write_netcdf(
     for name in ds.coords:
         encoding[name] = {"_FillValue": None}  # CF 2.5.1: no missing values in coordinates
     with _claim(path):
-        fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".partial", dir=path.parent)
-        os.close(fd)
-        tmp = Path(name)
-        try:
-            ds.to_netcdf(tmp, encoding=encoding, engine="netcdf4")
-            if (path.exists() or path.is_symlink()) and not overwrite:  # made meanwhile by a writer that takes no lock
-                raise OutputError(f"output '{path}' appeared while this run wrote it; remove it or pass --overwrite.")
-            os.replace(tmp, path)
-        except (OSError, RuntimeError) as exc:
-            raise _write_failure(exc, path) from None
-        finally:
-            tmp.unlink(missing_ok=True)
-    return path
+        return write_claimed(path, lambda tmp: ds.to_netcdf(tmp, encoding=encoding, engine="netcdf4"), overwrite)
 
 
 def _write_failure(exc: BaseException, path: Path) -> BaseException:
@@ -253,16 +241,18 @@ def claimed(path: str | Path, overwrite: bool = False):
         yield path
 
 
-def write_claimed(path: Path, write, overwrite: bool = False) -> Path:
+def write_claimed(path: Path, write, overwrite: bool = False, keep_suffix: bool = False) -> Path:
     """Write ``path`` (claimed with :func:`claimed`) atomically: ``write(tmp)`` fills a
-    temporary file beside it, renamed over ``path`` when complete. A symlink at ``path``
-    is replaced itself (with ``overwrite``), never written through."""
-    fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=f".partial{path.suffix}", dir=path.parent)
+    temporary file ``.<name>.<random>.partial`` beside it (ending in ``path``'s suffix too
+    with ``keep_suffix``, for writers that pick the format by it), renamed over ``path``
+    when complete. A symlink at ``path`` is replaced itself (with ``overwrite``), never
+    written through."""
+    fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".partial" + (path.suffix if keep_suffix else ""), dir=path.parent)
     os.close(fd)
-    tmp = Path(name)  # ends in the suffix of ``path``: writers that pick the format by suffix pick it right
+    tmp = Path(name)
     try:
         write(tmp)
-        if (path.exists() or path.is_symlink()) and not overwrite:
+        if (path.exists() or path.is_symlink()) and not overwrite:  # made meanwhile by a writer that takes no lock
             raise OutputError(f"output '{path}' appeared while this run wrote it; remove it or pass --overwrite.")
         os.replace(tmp, path)
     except (OSError, RuntimeError) as exc:
