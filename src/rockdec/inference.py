@@ -7,11 +7,13 @@ with the records' own, fetches or builds the calibration for their lengths and s
 corrects ``g`` the same way, and lists what looks wrong with the records
 (:func:`diagnose`). When no ``e`` can be given, ``reason`` says why.
 
-The calibration simulates records as long as the measured ones, so its cost grows with
-their length (:func:`cost`); the command line refuses, before reading the records, a run
-the machine cannot finish soon. Calibrating long records on shorter ones with the spread
-scaled by the square root of the length ratio does not cover: the bias itself changes
-with the length (measured in the README).
+The calibration simulates records as long as the measured ones (calibrating long records
+on shorter ones with the spread scaled by the square root of the length ratio does not
+cover: the bias itself changes with the length, measured in the README). To bound its
+cost, long records get fewer simulated sets per ``e`` (:func:`calibration_sets`, at
+least :data:`MIN_SETS`); the belt's smooth fits pool the grid points, and the uncertainty
+of its fitted mean widens the interval. The command line refuses, before reading the
+records, a run the machine cannot finish soon (:func:`cost`).
 """
 
 from __future__ import annotations
@@ -32,6 +34,13 @@ DEFAULT_ESTIMATOR = "e_v"
 #: Fewest triggers in the largest window before the result is called unreliable.
 FEW_TRIGGERS = 100
 
+#: Simulated samples a calibration may take (grid x sets x record samples; about 100 s
+#: on 2 idle cores); records longer than this allows at full sets get fewer sets per ``e``.
+CALIBRATION_BUDGET = 1.5e9
+
+#: Fewest simulated sets per ``e`` a calibration runs.
+MIN_SETS = 5
+
 #: A given ``g`` off the records' own by more than this factor is refused before any
 #: calibration (the calibrated 95 % spread of ``g`` is a few per cent).
 G_FACTOR = 2.0
@@ -45,10 +54,18 @@ SPIKE_SIGMAS = 15.0
 CSV_SECONDS, ANALYSIS_SECONDS, CALIBRATION_SECONDS, BYTES_PER_SAMPLE = 5e-7, 1.2e-7, 1.3e-7, 96.0
 
 
+def calibration_sets(samples: int) -> int:
+    """Simulated sets per ``e`` for records of ``samples`` in all: all of
+    :data:`rockdec.calibration.SETS_PER_E` within :data:`CALIBRATION_BUDGET`, fewer beyond
+    it, never fewer than :data:`MIN_SETS`."""
+    fit = int(CALIBRATION_BUDGET // (len(calibration.E_GRID) * max(samples, 1)))
+    return max(min(calibration.SETS_PER_E, fit), min(MIN_SETS, calibration.SETS_PER_E))
+
+
 def cost(samples: int, csv: bool, g_given: bool, cores: int = 2) -> tuple[float, float]:
     """``(seconds, bytes)`` that :func:`estimate` needs for records of ``samples`` in all,
     calibration included (:data:`CSV_SECONDS` and the other constants of the model)."""
-    calibrated = samples * len(calibration.E_GRID) * calibration.SETS_PER_E
+    calibrated = samples * len(calibration.E_GRID) * calibration_sets(samples)
     seconds = samples * (CSV_SECONDS * csv + ANALYSIS_SECONDS * (1 + g_given)) + calibrated * CALIBRATION_SECONDS / cores
     return seconds, samples * BYTES_PER_SAMPLE
 
@@ -170,6 +187,7 @@ def estimate(records: list[Record], *, cache_dir, g: float | None = None, settin
     if shape:
         raise RecordError(f"{names} does not look like a rocking record: {shape}; rockdec estimate gives e only for rocking records.")
     cal_settings = calibration.calibration_settings([r.theta.size for r in records], analysis.points_per_cycle, settings)
+    cal_settings["sets_per_e"] = calibration_sets(sum(r.theta.size for r in records))
     started = time.perf_counter()
     cal, cached = calibration.load_or_build(cal_settings, cache_dir, notes)
     built_s = time.perf_counter() - started
