@@ -214,7 +214,7 @@ def cmd_simulate(args) -> None:
     if not (contract.dt >= np.finfo(np.float64).tiny and np.spacing((n_points - 1) * contract.dt) <= 0.5 * contract.dt):
         raise UsageError(
             f"a time step of {contract.dt:g} s is too small to tell {n_points} time stamps apart in floating point; "
-            "give --dt of at least 1e-300 s (or the time in other units)."
+            "give a larger --dt (the time in larger units)."
         )
     _check_simulation_size(scene, seeds.size, out, args.yes, burn_in=contract.burn_in, seeds_text=args.seeds)
     ds = contract.dataset(seeds, scene["records"]["n_points"], chunk_seeds=scene["records"]["chunk_seeds"])
@@ -242,11 +242,10 @@ def cmd_signatures(args) -> None:
     theta = theta.transpose("seed", "time").astype(float)
     if "dt" in attrs:
         try:
-            theta.attrs["dt"] = checks.positive(float(np.asarray(attrs["dt"]).ravel()[0]), f"the attribute dt of {args.input}", "fix it (the sampling step in s)")
-        except (TypeError, ValueError, IndexError) as exc:
-            if isinstance(exc, checks.InputError):
-                raise
+            step = float(np.asarray(attrs["dt"]).ravel()[0])
+        except (TypeError, ValueError, IndexError):
             raise UsageError(f"{args.input}: its attribute dt {attrs['dt']!r} is not a number of seconds; fix it.") from None
+        theta.attrs["dt"] = checks.positive(step, f"the attribute dt of {args.input}", "fix it (the sampling step in s)")
     elif "time" in theta.coords:
         theta.attrs["dt"] = records.sampling_step(theta["time"].values, f"{args.input}: '{args.variable}'")
     else:
