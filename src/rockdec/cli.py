@@ -274,6 +274,11 @@ def cmd_signatures(args) -> None:
     scene = _validated(_with_options({}, args, SIGNATURE_OPTIONS), SIGNATURE_OPTIONS)
     if args.group_size is not None:
         checks.integer(args.group_size, "--group-size", 1, "give at least 1 series per signature (or leave it out: all)")
+        if args.group_size > theta.sizes["seed"]:
+            raise UsageError(
+                f"--group-size {args.group_size}: more than the {theta.sizes['seed']} series in {args.input}; "
+                f"give at most {theta.sizes['seed']} (or leave it out: all)."
+            )
     size = args.group_size or theta.sizes["seed"]
     sig = scene["signatures"]
     n_lag = signatures.lag_samples(sig["n_periods"], sig["level"] * stats["sigma_y"], stats["g"], theta.attrs["dt"])
