@@ -508,6 +508,9 @@ def _estimate_cases(r):
     cases["time units unknown"] = ([_nc(f / "fortnight.nc", theta, dt, time_units="fortnight")], ["units 'fortnight'", "s or ms"])
     xr.Dataset({"theta": ("time", theta)}, attrs={"dt": "abc"}).to_netcdf(f / "abc.nc")
     cases["dt attribute 'abc'"] = ([f / "abc.nc"], ["attribute dt 'abc'", "not a number of seconds"])
+    xr.Dataset({"theta": ("time", theta)}, attrs={"dt": np.array([0.01, 0.02])}).to_netcdf(f / "dt2.nc")
+    cases["dt attribute of two values"] = ([f / "dt2.nc"], ["attribute dt", "not a number of seconds"])
+    cases["a folder as record"] = ([f], ["a folder, not a record file"])
     one_col = f / "one_col.csv"
     np.savetxt(one_col, theta)
     npy = f / "rec.npy"
@@ -568,7 +571,7 @@ ESTIMATE_CASE_NAMES = [
     "record name of 300 characters", "--plot .txt", "--plot .svg", "--plot without suffix", "--plot onto the input",
     "--plot onto the input with --overwrite", "--plot name of 300 characters", "--plot exists", "--plot in a missing folder",
     "--cache on a file", "2 GiB of NUL as CSV", "NUL bytes after a header", "no line break", "200 million samples (npy)",
-    "200 million samples (csv)", "spikes", "5 % scattered NaN", "constant record", "dt attribute 'abc'",
+    "200 million samples (csv)", "spikes", "5 % scattered NaN", "constant record", "dt attribute 'abc'", "dt attribute of two values", "a folder as record",
 ]
 
 

@@ -242,8 +242,8 @@ def cmd_signatures(args) -> None:
     theta = theta.transpose("seed", "time").astype(float)
     if "dt" in attrs:
         try:
-            step = float(np.asarray(attrs["dt"]).ravel()[0])
-        except (TypeError, ValueError, IndexError):
+            (step,) = np.asarray(attrs["dt"], dtype=np.float64).ravel()
+        except (TypeError, ValueError):
             raise UsageError(f"{args.input}: its attribute dt {attrs['dt']!r} is not a number of seconds; fix it.") from None
         theta.attrs["dt"] = checks.positive(step, f"the attribute dt of {args.input}", "fix it (the sampling step in s)")
     elif "time" in theta.coords:

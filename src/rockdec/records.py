@@ -187,8 +187,8 @@ def _read_netcdf(path: Path, variable: str, step: float | None) -> tuple[np.ndar
             elif "dt" in var.attrs or "dt" in ds.attrs:
                 text = var.attrs.get("dt", ds.attrs.get("dt"))
                 try:
-                    step = float(np.asarray(text).ravel()[0])
-                except (TypeError, ValueError, IndexError):
+                    (step,) = np.asarray(text, dtype=np.float64).ravel()
+                except (TypeError, ValueError):
                     raise RecordError(f"{path}: its attribute dt {text!r} is not a number of seconds; fix it or give --dt SECONDS.") from None
             else:
                 raise RecordError(f"{path}: '{variable}' has no time coordinate and no 'dt' attribute; give --dt SECONDS or --fs HZ.")
@@ -207,6 +207,8 @@ def read_records(path, *, column: str = "theta", variable: str = "theta", dt: fl
     path = path_name(path, "record")
     source = str(path)
     step = _step_from_options(dt, fs, source)
+    if path.is_dir():
+        raise RecordError(f"{path}: a folder, not a record file; give the file.")
     if not path.is_file():
         raise RecordError(f"{path}: no such file; check the path.")
     if path.stat().st_size == 0:
