@@ -433,8 +433,10 @@ def test_cli_simulate_options_give_a_finite_file_or_one_sentence(tmp_path_factor
 # Records of 20,000 samples and a calibration of 6 e x 5 sets keep each answered case near 1 s;
 # refusals come before any calibration.
 
-from rockdec import calibration, engine, inference  # noqa: E402
-from rockdec import records as records_mod  # noqa: E402
+from rockdec import calibration, inference  # noqa: E402
+
+#: The calibration's own grid and sets, before any test shrinks them.
+FULL_CALIBRATION = (calibration.E_GRID, calibration.SETS_PER_E)
 
 
 @pytest.fixture(scope="module")
@@ -843,3 +845,22 @@ def test_overwrite_replaces_a_symlinked_plot_not_its_target(rocking, tiny_calibr
     assert code == 0, err
     assert target.read_bytes() == b"keep me" and not link.is_symlink() and link.stat().st_size > 10_000
     assert sorted(p.name for p in tmp_path.iterdir()) == ["cache", "p.png", "precious.png"]
+
+
+def test_a_long_record_is_warned_that_its_interval_may_cover_less(rocking, tiny_calibration, tmp_path, monkeypatch):
+    monkeypatch.setattr(inference, "LONG_SAMPLES", 10_000)  # the rocking record has 20,000
+    code, res, err = _estimate([rocking["csv"]], tmp_path / "cache")
+    assert code == 0, err
+    assert any("narrower than the accuracy" in w for w in res["warnings"])
+
+
+def test_a_20_million_sample_record_is_refused_with_its_time_unless_yes(tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(calibration, "E_GRID", FULL_CALIBRATION[0])
+    monkeypatch.setattr(calibration, "SETS_PER_E", FULL_CALIBRATION[1])
+    path = tmp_path / "long.npy"
+    with open(path, "wb") as handle:  # a header for 20 million float64 samples, then a hole
+        np.lib.format.write_array_header_1_0(handle, {"descr": "<f8", "fortran_order": False, "shape": (20_000_000,)})
+        handle.truncate(handle.tell() + 8 * 20_000_000)
+    seconds, _ = inference.cost(20_000_000, False, False)
+    assert seconds > 600
+    refused(["estimate", str(path), "--dt", "0.01", "--cache", str(tmp_path / "c")], tmp_path, capsys, ["2e+07 samples", "min", "--yes"])
