@@ -864,3 +864,26 @@ def test_a_20_million_sample_record_is_refused_with_its_time_unless_yes(tmp_path
     seconds, _ = inference.cost(20_000_000, False, False)
     assert seconds > 600
     refused(["estimate", str(path), "--dt", "0.01", "--cache", str(tmp_path / "c")], tmp_path, capsys, ["2e+07 samples", "min", "--yes"])
+
+
+ESTIMATE_PROCESS = """
+import json, sys
+from rockdec import calibration
+calibration.E_GRID = (0.5, 0.65, 0.75, 0.85, 0.92, 0.97)
+calibration.SETS_PER_E = 5
+from rockdec.cli import main
+sys.exit(main(["estimate", sys.argv[1], "--json", "--cache", sys.argv[2]]))
+"""
+
+
+def test_two_concurrent_estimates_on_one_record_build_one_calibration(rocking, tmp_path):
+    """Issue 19: two processes, same settings; the second waits for the first's build."""
+    cache = tmp_path / "cache"
+    procs = [subprocess.Popen([sys.executable, "-c", ESTIMATE_PROCESS, str(rocking["csv"]), str(cache)],
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True) for _ in range(2)]
+    outs = [p.communicate(timeout=300) for p in procs]
+    assert [p.returncode for p in procs] == [0, 0], [err for _, err in outs]
+    results = [json.loads(out) for out, _ in outs]
+    assert sorted(r["calibration"]["cached"] for r in results) == [False, True]
+    assert results[0]["e"] == results[1]["e"] and results[0]["interval"] == results[1]["interval"]
+    assert [p.name for p in cache.iterdir()] == [results[0]["calibration"]["file"]]

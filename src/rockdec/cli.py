@@ -425,6 +425,8 @@ def _estimate_text(res: dict) -> str:
         f"coverage: the interval held the true e on {pct(res['coverage'])} of the calibration's simulated records "
         "(in-sample; the README's coverage study checks it on independent records)",
     ]
+    if res.get("reason"):
+        lines.append(f"no e: {res['reason']}")
     lines += [f"warning: {w}" for w in res["warnings"]]
     return "\n".join(lines)
 
