@@ -887,3 +887,20 @@ def test_two_concurrent_estimates_on_one_record_build_one_calibration(rocking, t
     assert sorted(r["calibration"]["cached"] for r in results) == [False, True]
     assert results[0]["e"] == results[1]["e"] and results[0]["interval"] == results[1]["interval"]
     assert [p.name for p in cache.iterdir()] == [results[0]["calibration"]["file"]]
+
+
+def test_signatures_read_degrees_and_milliseconds_as_rad_and_s(rocking, tmp_path):
+    theta, dt = rocking["theta"], rocking["dt"]
+    files = {
+        "rad": _nc(tmp_path / "rad.nc", theta, dt, theta_units="rad", time_units="s"),
+        "deg": _nc(tmp_path / "deg.nc", np.degrees(theta), dt, theta_units="degree"),
+        "ms": _nc(tmp_path / "ms.nc", theta, dt * 1e3, time_units="ms"),
+    }
+    cubes = {}
+    for name, path in files.items():
+        out = tmp_path / f"{name}_sig.nc"
+        assert main(["signatures", str(path), "--out", str(out), "--g", "1"]) == 0
+        with xr.open_dataset(out) as ds:
+            cubes[name] = ds["free_response"].values
+    np.testing.assert_allclose(cubes["deg"], cubes["rad"], rtol=1e-9, equal_nan=True)
+    np.testing.assert_allclose(cubes["ms"], cubes["rad"], rtol=1e-9, equal_nan=True)

@@ -240,6 +240,7 @@ def cmd_signatures(args) -> None:
     if set(theta.dims) != {"seed", "time"}:
         raise UsageError(f"'{args.variable}' must have dimensions (seed, time) or (time); it has {theta.dims}.")
     theta = theta.transpose("seed", "time").astype(float)
+    theta = theta.copy(data=theta.values * records.angle_factor(theta.attrs.get("units"), args.input, args.variable))
     if "dt" in attrs:
         try:
             (step,) = np.asarray(attrs["dt"], dtype=np.float64).ravel()
@@ -247,7 +248,9 @@ def cmd_signatures(args) -> None:
             raise UsageError(f"{args.input}: its attribute dt {attrs['dt']!r} is not a number of seconds; fix it.") from None
         theta.attrs["dt"] = checks.positive(step, f"the attribute dt of {args.input}", "fix it (the sampling step in s)")
     elif "time" in theta.coords:
-        theta.attrs["dt"] = records.sampling_step(theta["time"].values, f"{args.input}: '{args.variable}'")
+        theta.attrs["dt"] = records.sampling_step(theta["time"].values, f"{args.input}: '{args.variable}'") * records.time_factor(
+            theta["time"].attrs.get("units"), args.input, "time"
+        )
     else:
         raise UsageError(f"{args.input}: '{args.variable}' has no time coordinate and the file no 'dt' attribute; add either.")
     if np.isinf(theta.values).any():

@@ -161,6 +161,16 @@ def _factor(units, table: dict, source: str, what: str, fix: str) -> float:
     return table[unit.lower()]
 
 
+def angle_factor(units, source: str, variable: str) -> float:
+    """The factor from an angle in ``units`` (a NetCDF ``units`` attribute, ``None``: rad) to rad."""
+    return _factor(units, ANGLE_UNITS, source, f"'{variable}'", "store the angle in rad or degrees")
+
+
+def time_factor(units, source: str, name: str) -> float:
+    """The factor from a time coordinate in ``units`` (``None``: s) to s."""
+    return _factor(units, TIME_UNITS, source, f"the time coordinate '{name}'", "store it in s or ms")
+
+
 def _read_netcdf(path: Path, variable: str, step: float | None) -> tuple[np.ndarray, float]:
     import xarray as xr
 
@@ -176,14 +186,12 @@ def _read_netcdf(path: Path, variable: str, step: float | None) -> tuple[np.ndar
             var = var.transpose(..., "time")  # one record per row, e.g. theta(seed, time) of `rockdec simulate`
         elif var.ndim != 1:
             raise RecordError(f"{path}: variable '{variable}' has dimensions {var.dims}; give theta(time) or theta(seed, time).")
-        to_rad = _factor(var.attrs.get("units"), ANGLE_UNITS, str(path), f"'{variable}'", "store the angle in rad or degrees")
-        values = var.values.astype(np.float64) * to_rad
+        values = var.values.astype(np.float64) * angle_factor(var.attrs.get("units"), str(path), variable)
         dim = var.dims[-1]
         if step is None:
             if dim in ds.coords:
                 coord = ds[dim]
-                to_s = _factor(coord.attrs.get("units"), TIME_UNITS, str(path), f"the time coordinate '{dim}'", "store it in s or ms")
-                step = sampling_step(coord.values, str(path)) * to_s
+                step = sampling_step(coord.values, str(path)) * time_factor(coord.attrs.get("units"), str(path), dim)
             elif "dt" in var.attrs or "dt" in ds.attrs:
                 text = var.attrs.get("dt", ds.attrs.get("dt"))
                 try:
