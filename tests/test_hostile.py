@@ -904,3 +904,13 @@ def test_signatures_read_degrees_and_milliseconds_as_rad_and_s(rocking, tmp_path
             cubes[name] = ds["free_response"].values
     np.testing.assert_allclose(cubes["deg"], cubes["rad"], rtol=1e-9, equal_nan=True)
     np.testing.assert_allclose(cubes["ms"], cubes["rad"], rtol=1e-9, equal_nan=True)
+
+
+def test_a_running_dask_scheduler_passes_the_probe(tmp_path):
+    from dask.distributed import LocalCluster
+
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, protocol="tcp", dashboard_address=None) as cluster:
+        argv = ["--dask-scheduler", cluster.scheduler_address, "simulate", "--out", str(tmp_path / "o.nc"), *FAST]
+        assert main(argv) == 0
+    with xr.open_dataset(tmp_path / "o.nc") as ds:
+        assert np.isfinite(ds["theta"].values).all()
