@@ -25,13 +25,15 @@ def _sample_r(d, lags):
     return np.array([np.mean(d[:-m] * d[m:]) for m in lags]) / np.mean(d * d)
 
 
-def _one_side_record(d):
-    """A record whose second differences are ``d`` and whose samples never cross zero:
-    the double sum of ``d`` lifted far onto one side, then a copy far on the other."""
+def _one_side_record(d, segment=500):
+    """A record whose second differences are ``d`` within segments of ``segment`` samples
+    that never cross zero, alternately far above and far below it (like rocking, with no
+    drift): the double sum of ``d``, lifted."""
     x = np.cumsum(np.cumsum(d))
-    x -= np.linspace(x[0], x[-1], x.size)  # no slope, so the lift can be small
+    x -= np.linspace(x[0], x[-1], x.size)
     lift = 10.0 * np.abs(x).max() + 1e3
-    return np.concatenate([lift + x, -lift + x[::-1]])
+    sign = np.where((np.arange(x.size) // segment) % 2 == 0, 1.0, -1.0)
+    return sign * lift + x
 
 
 def test_mixed_autocorrelation_matches_long_simulation():
@@ -42,26 +44,42 @@ def test_mixed_autocorrelation_matches_long_simulation():
     d = p + noise[2:] - 2.0 * noise[1:-1] + noise[:-2]
     q = sigma_n**2 / sigma_p**2
     lags = np.arange(1, 7)
-    expected = (alpha**lags + q * np.array([-4.0, 1.0, 0, 0, 0, 0])) / (1.0 + 6.0 * q)
-    np.testing.assert_allclose(rm.mixed_autocorrelation(lags, 1.0 / (1.0 + 6.0 * q), alpha), expected, rtol=1e-12)
+    expected = (alpha**lags + q * np.array([-4.0, 1.0, 0, 0, 0, 0])) / (1.0 + 6.0 * q)  # r(m) of the docstring
+    gamma = rm.mixed_autocovariance(np.arange(7), sigma_p**2, sigma_n**2, alpha)
+    np.testing.assert_allclose(gamma[1:] / gamma[0], expected, rtol=1e-12)
     np.testing.assert_allclose(_sample_r(d, lags), expected, atol=0.006)
 
 
-def test_fit_mixed_inverts_the_closed_form():
-    for share, alpha in ((1.0, 0.9), (0.3, 0.8), (0.05, 0.95), (0.6, 0.0), (1.0, 0.0)):
-        got = rm.fit_mixed(rm.mixed_autocorrelation(np.arange(1, rm.MAX_LAG + 1), share, alpha))
-        np.testing.assert_allclose(got, (share, alpha), atol=1e-5)
+def test_structure_function_is_the_variance_of_span_differences():
+    """S(L) from the autocovariance of one-step differences equals the variance of
+    y[k+L] - 2 y[k] + y[k-L] measured directly, and the white, noise-only closed forms."""
+    rng = np.random.default_rng(4)
+    alpha, sigma_n = 0.8, 0.7
+    p = lfilter([1.0], [1.0, -alpha], rng.standard_normal(300_000))
+    y = np.cumsum(np.cumsum(p)) + sigma_n * rng.standard_normal(p.size)
+    direct = np.array([np.var(y[2 * L :] - 2 * y[L:-L] + y[: -2 * L]) for L in rm.SPANS])
+    model = rm.structure_model(1.0 / (1 - alpha**2), sigma_n**2, alpha)
+    np.testing.assert_allclose(direct, model, rtol=0.03)
+    spans = np.array(rm.SPANS)
+    np.testing.assert_allclose(rm.structure_model(1.0, 0.0, 0.0), spans * (2 * spans**2 + 1) / 3, rtol=1e-12)
+    np.testing.assert_allclose(rm.structure_model(0.0, 1.0, 0.5), 6.0, rtol=1e-12)
+
+
+def test_fit_structure_inverts_the_model():
+    for a, s2, alpha in ((1.0, 0.0, 0.9), (1.0, 3.0, 0.8), (0.01, 1.0, 0.95), (1.0, 0.5, 0.0), (1.0, 0.0, 0.0)):
+        got = rm.fit_structure(rm.mixed_autocovariance(np.arange(rm.MAX_LAG + 1), a, s2, alpha))
+        np.testing.assert_allclose(got, (a, s2, alpha), atol=1e-5)
 
 
 def test_pure_noise_second_differences_are_ma2():
     rng = np.random.default_rng(2)
     sigma_n = 0.5
-    y = _one_side_record(np.zeros(100_000)) + sigma_n * rng.standard_normal(200_000)
+    y = _one_side_record(np.zeros(200_000)) + sigma_n * rng.standard_normal(200_000)
     m = rm.measure(y, 1.0)
     assert m.r[0] == pytest.approx(-2.0 / 3.0, abs=0.01)
     assert m.r[1] == pytest.approx(1.0 / 6.0, abs=0.01)
     assert m.noise_sd.value == pytest.approx(sigma_n, rel=0.01)
-    assert m.noisy and m.impulse_share.value == pytest.approx(0.0, abs=0.01)
+    assert m.noisy and m.impulse_var.value == pytest.approx(0.0, abs=0.01 * sigma_n**2)
 
 
 def test_low_pass_second_differences_are_ar1():
@@ -83,7 +101,7 @@ def test_white_load_record_reads_white_with_its_g():
     m = rm.measure(_simulated(11), DT_WHITE)
     assert m.kind == "white"
     assert abs(m.g.value - 1.0) < 0.04  # the selection of triples biases g by about -2 %
-    assert m.impulse_sd.value == pytest.approx(1.0, rel=0.03)
+    assert m.impulse_sd.value == pytest.approx(1.0, rel=0.1)  # biased about +7 % (docs/method.md)
     assert m.noise_ratio.value < 0.002
 
 
@@ -98,12 +116,19 @@ def test_sensor_noise_is_measured_in_units_of_sigma_y(share):
     assert abs(m.g.value - 1.0) < 0.06
 
 
-def test_low_pass_load_corner_is_recovered():
+@pytest.mark.parametrize("noise, kind", [(0.0, "coloured"), (0.02, "both")])
+def test_low_pass_load_corner_is_recovered_under_sensor_noise(noise, kind):
     pole = pole_for_corner(1.0, 75.0)
-    m = rm.measure(_simulated(13, pole=pole, dt=DT_CORNER_1), DT_CORNER_1)
-    assert m.kind == "coloured"
-    true_hz = -math.log(pole) / (2 * math.pi * DT_CORNER_1)
-    assert m.corner_hz.value == pytest.approx(true_hz, rel=0.15)
+    y = _simulated(13, pole=pole, dt=DT_CORNER_1)
+    m = rm.measure(y + noise * y.std() * series_rng(98).standard_normal(y.size), DT_CORNER_1)
+    assert m.kind == kind
+    if noise:  # seen through the structure function only, whose tail pulls the pole up
+        assert m.noise_ratio.value == pytest.approx(noise, rel=0.1)
+        assert pole - 0.02 < m.pole.value < 1.0
+    else:
+        assert m.pole.value == pytest.approx(pole, abs=0.01)
+        true_hz = -math.log(pole) / (2 * math.pi * DT_CORNER_1)
+        assert m.corner_hz.value == pytest.approx(true_hz, rel=0.15)
 
 
 def test_reference_flight_record_with_sensor_noise():
@@ -133,7 +158,7 @@ def test_scale_invariance(pole, dt, noise):
     a = rm.measure(y, dt)
     b = rm.measure(y * 3e-3, dt * 0.05)
     assert a.kind == b.kind
-    for name in ("noise_ratio", "corner_ratio", "pole", "impulse_share"):
+    for name in ("noise_ratio", "corner_ratio", "pole"):
         assert getattr(b, name).value == pytest.approx(getattr(a, name).value, rel=1e-9)
         assert getattr(b, name).se == pytest.approx(getattr(a, name).se, rel=1e-6, nan_ok=True)
     assert b.g.value == pytest.approx(a.g.value * 3e-3 / 0.05**2, rel=1e-9)
@@ -149,7 +174,7 @@ def test_split_record_and_gaps_agree_with_whole():
     holed = rm.measure(gappy, DT_WHITE)
     for other in (parts, holed):
         assert other.g.value == pytest.approx(whole.g.value, abs=whole.g.se)
-        assert other.impulse_share.value == pytest.approx(whole.impulse_share.value, abs=whole.impulse_share.se)
+        assert other.impulse_var.value == pytest.approx(whole.impulse_var.value, abs=whole.impulse_var.se)
         assert other.kind == whole.kind
 
 

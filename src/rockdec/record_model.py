@@ -40,19 +40,34 @@ and ``A = 1/(1 + 6 q)`` (the share of the impulses in the variance of ``d``)
 
 White noise alone (``A = 0``) gives ``r(1) = -2/3``, ``r(2) = 1/6``; white impulses with
 noise (``alpha = 0``) give ``r(1) = -4q/(1 + 6q)``, ``r(2) = q/(1 + 6q)``; a coloured load
-without noise (``A = 1``) gives ``r(m) = alpha^m``. The fit (:func:`fit_mixed`) is least
-squares of this form on ``r(1..M)``: for a given ``alpha`` it is linear in ``A``, so ``A``
-is solved in closed form and ``alpha`` found by a grid then a bounded scalar search.
-``A`` and ``alpha`` are fitted without the physical bounds (``A`` may exceed 1, ``alpha``
-may be negative), so that on a white record both scatter about their null values
-``A = 1``, ``alpha = 0`` and their z scores are near normal; the physical quantities are
-read off the fit clipped to their ranges. From the variance ``v`` of ``d``:
+without noise (``A = 1``) gives ``r(m) = alpha^m`` (:func:`mixed_autocovariance`).
 
-    sigma_n = sqrt((1 - A) v / 6),   sigma_p = sqrt(A v) / dt,   f_c = -ln(alpha) / (2 pi dt),
+The fit. A sensor noise of 2 % of ``sigma_Y`` already outweighs the impulses in ``d``
+hundreds of times under a low-pass load (``A`` near ``1e-3``), so a fit to ``r(1..M)``
+cannot see the colour beneath it. The span-``L`` second difference
+``y[k+L] - 2 y[k] + y[k-L]`` is the sum of ``d`` with triangle weights
+``w = 1, 2, .., L, .., 2, 1``; its variance, the structure function, grows with ``L``
+for the impulses and not for the noise:
+
+    S(L) = sigma_p^2 dt^2 V_L(alpha) + 6 sigma_n^2,   V_L(alpha) = sum_ij w_i w_j alpha^|i-j|,
+
+``V_L(0) = L (2 L^2 + 1) / 3`` for a white load and about ``L^4`` for a load correlated
+over more than ``L`` steps. ``S(L)`` is computed from the autocovariance of the kept
+``d`` (:func:`structure_function`, spans :data:`SPANS`), so the triples are chosen once,
+and :func:`fit_structure` fits ``(sigma_p^2 dt^2, sigma_n^2, alpha)`` in relative least
+squares: for a given ``alpha`` linear in the two variances, ``alpha`` by a grid then a
+bounded scalar search. The variances are not held positive and ``alpha`` may be
+negative, so that on a white noise-free record they scatter about 0 and their z scores
+are near normal; the reported ``sigma_n``, ``sigma_p`` clip them at 0. Then
+
+    f_c = -ln(alpha) / (2 pi dt)   (the corner of :mod:`rockdec.loading`),
 
 and the corner in units of the rocking frequency is ``f_c T(sigma_Y)`` with
 ``T(sigma_Y) = 4 sqrt(2 sigma_Y / g)`` (eq. 5), ``g`` from the side means and ``sigma_Y``
-the record's standard deviation with the noise variance taken out.
+the record's standard deviation with the noise variance taken out. Spans up to 8 are
+used: under a low-pass load the block's side follows the load, so removing the side
+means leaves a slow remainder that lengthens the tail of ``r(m)`` beyond ``alpha^m``, and
+longer spans weigh that tail more (they bias ``alpha`` upward).
 
 Drift. A slow offset does not change second differences (a trend's are of order
 ``dt^2`` times its curvature); it shows in the means of consecutive blocks of the
@@ -61,8 +76,12 @@ b_i)^2 / sum (b_i - mean b)^2``: about 2 when block means are independent (a sta
 record whose blocks are many correlation times long), well below 2 when a smooth drift
 dominates them. ``drift_z = (2 - eta) / sd0`` with ``sd0^2 = 4 (B - 2) / (B^2 - 1)`` (its
 null spread for ``B`` independent normal blocks); its measured null distribution on
-simulated records is in docs/method.md. The asymmetry of the two sides' ``g`` (a
-leaning block) is reported beside it.
+simulated records is in docs/method.md. When drift is detected the second differences
+are read off the record less the piecewise-linear line through its block means, so that
+the drift does not move the zero the sides are read from (not otherwise: under a
+low-pass load the block means of a stationary record are large, and taking them out
+would distort the excursions the colour is read from). The asymmetry of the two sides' ``g`` (a leaning
+block) is reported beside it.
 
 Standard errors. The records are cut into :data:`JACKKNIFE_BLOCKS` consecutive blocks; every
 quantity is a function of sums over triples and pairs, which add over blocks, so each
@@ -70,7 +89,7 @@ is recomputed with one block left out and the delete-one-block jackknife gives i
 standard error. This holds for correlated second differences (a coloured load) where a
 count-based ``1/sqrt(N)`` would not.
 
-Detection. ``noisy``: the noise share ``1 - A`` exceeds :data:`DETECT_Z` standard errors;
+Detection. ``noisy``: ``sigma_n^2`` exceeds :data:`DETECT_Z` standard errors;
 ``coloured``: ``alpha`` exceeds :data:`DETECT_Z` standard errors; ``drifting``:
 ``drift_z`` exceeds :data:`DRIFT_Z`. These say the defect is present, not that it moves
 ``e``; the rates are measured by :mod:`rockdec.record_model_study`.
@@ -87,16 +106,21 @@ from scipy.optimize import minimize_scalar
 from rockdec import validate as checks
 from rockdec.models import period_from_g
 
-#: Lags of the second differences' autocorrelation that the fit uses, ``r(1..MAX_LAG)``.
-#: Short: under a low-pass load the block's side follows the load, so removing the side
-#: means leaves a slow remainder that lengthens the tail of ``r(m)`` beyond ``alpha^m``.
-MAX_LAG = 8
+#: Spans ``L`` of the structure function ``S(L)`` that the fit uses.
+SPANS = (1, 2, 3, 4, 6, 8)
+
+#: Lags of the second differences' autocovariance that ``S(L)`` needs, ``0..2 max(L) - 2``.
+MAX_LAG = 2 * max(SPANS) - 2
+
+#: Lags ``0..DIRECT_LAGS`` of the autocovariance fitted directly beside ``S(L)``.
+DIRECT_LAGS = 8
 
 #: Consecutive blocks of the delete-one-block jackknife (over all records together).
 JACKKNIFE_BLOCKS = 20
 
-#: Blocks per record of the drift statistic (fewer for records too short, at least 4).
-DRIFT_BLOCKS = 20
+#: Blocks per record of the drift statistic and of the detrending, each of at least
+#: ``DRIFT_BLOCK_MIN`` samples (fewer blocks for short records; none below 4).
+DRIFT_BLOCKS, DRIFT_BLOCK_MIN = 20, 1000
 
 #: Standard errors above zero at which noise (``1 - A``) or colour (``alpha``) is detected.
 DETECT_Z = 4.0
@@ -141,10 +165,11 @@ class RecordModel:
 
     Units: ``g`` rad/s^2, ``impulse_sd`` (``sigma_p``) rad/s, ``noise_sd`` (``sigma_n``) rad,
     ``sigma_y`` rad, ``corner_hz`` Hz; ``noise_ratio`` is ``sigma_n / sigma_Y``,
-    ``corner_ratio`` the corner times ``T(sigma_Y)`` (eq. 5), ``impulse_share`` ``A`` and
-    ``pole`` ``alpha`` of the mixed model (module docstring; fitted without bounds),
+    ``corner_ratio`` the corner times ``T(sigma_Y)`` (eq. 5); ``impulse_var``
+    (``sigma_p^2 dt^2``, rad^2), ``noise_var`` (``sigma_n^2``, rad^2) and ``pole`` (``alpha``)
+    are the fit of the mixed model as fitted, without bounds (module docstring);
     ``asymmetry`` ``(g_+ - g_-) / (g_+ + g_-)``, ``drift_rms`` the rms of the block means
-    over ``sigma_Y``. ``r`` holds ``r(1..MAX_LAG)`` and ``r_se`` their standard errors.
+    over the record's rms. ``r`` holds ``r(1..MAX_LAG)`` and ``r_se`` their standard errors.
     A corner is infinite (and its error NaN) when the fitted pole is not in ``(0, 1)``.
     """
 
@@ -153,7 +178,8 @@ class RecordModel:
     sigma_y: float
     g: Quantity
     asymmetry: Quantity
-    impulse_share: Quantity
+    impulse_var: Quantity
+    noise_var: Quantity
     pole: Quantity
     impulse_sd: Quantity
     noise_sd: Quantity
@@ -167,13 +193,13 @@ class RecordModel:
 
     @property
     def noisy(self) -> bool:
-        """Sensor noise detected: the noise share ``1 - A`` is :data:`DETECT_Z` errors above 0."""
-        return (1.0 - self.impulse_share.value) > DETECT_Z * self.impulse_share.se
+        """Sensor noise detected: ``sigma_n^2`` is :data:`DETECT_Z` errors above 0."""
+        return self.noise_var.z > DETECT_Z
 
     @property
     def coloured(self) -> bool:
         """A low-pass load detected: ``alpha`` is :data:`DETECT_Z` errors above 0."""
-        return self.pole.value > DETECT_Z * self.pole.se
+        return self.pole.z > DETECT_Z
 
     @property
     def drifting(self) -> bool:
@@ -188,47 +214,82 @@ class RecordModel:
         ]
 
 
-def mixed_autocorrelation(m, share: float, pole: float) -> np.ndarray:
-    """``r(m) = A alpha^m + (1 - A) h(m) / 6`` (module docstring), ``m >= 1``: the
-    autocorrelation of second differences of a record under a first-order low-pass load
-    of pole ``alpha`` plus white sensor noise, ``A = 1/(1 + 6q)`` the impulses' share."""
-    m = np.asarray(m)
-    return share * np.power(float(pole), m) + (1.0 - share) * _noise_shape(m)
+def mixed_autocovariance(m, impulse_var: float, noise_var: float, pole: float) -> np.ndarray:
+    """``gamma(m) = sigma_p^2 dt^2 alpha^|m| + sigma_n^2 h(m)`` (module docstring): the
+    autocovariance of the second differences of a record under a first-order low-pass
+    load of pole ``alpha`` (``impulse_var = sigma_p^2 dt^2``) plus white sensor noise of
+    variance ``noise_var``; ``gamma(m) / gamma(0)`` is ``r(m)``."""
+    m = np.abs(np.asarray(m))
+    h = np.zeros(m.shape)
+    for lag, value in enumerate(NOISE_PATTERN):
+        h[m == lag] = value
+    return impulse_var * np.power(float(pole), m) + noise_var * h
 
 
-def _noise_shape(m: np.ndarray) -> np.ndarray:
-    """``h(m) / 6`` for lags ``m >= 1``: ``-2/3, 1/6, 0, 0, ...``."""
-    h = np.zeros(np.shape(m))
-    h[m == 1] = NOISE_PATTERN[1] / NOISE_PATTERN[0]
-    h[m == 2] = NOISE_PATTERN[2] / NOISE_PATTERN[0]
-    return h
+def _triangle_products() -> np.ndarray:
+    """``C[L, m] = sum_i w_i w_{i+|m|}`` (``m = 0..MAX_LAG``, doubled for ``m > 0``) of the
+    triangle weights ``w = 1, 2, .., L, .., 2, 1`` of :data:`SPANS`: ``S(L) = C @ gamma``."""
+    out = np.zeros((len(SPANS), MAX_LAG + 1))
+    for row, span in enumerate(SPANS):
+        w = span - np.abs(np.arange(-(span - 1), span))
+        full = np.correlate(w, w, mode="full")[w.size - 1 :]
+        out[row, : full.size] = full * np.where(np.arange(full.size) == 0, 1.0, 2.0)
+    return out
 
 
-def fit_mixed(r: np.ndarray) -> tuple[float, float]:
-    """Least-squares ``(A, alpha)`` of :func:`mixed_autocorrelation` on ``r = r(1..M)``.
+_TRIANGLES = _triangle_products()
 
-    For fixed ``alpha`` the model is linear in ``A``: with ``x_m = alpha^m - h(m)/6`` and
-    ``y_m = r(m) - h(m)/6``, ``A = sum x y / sum x^2``. ``alpha`` minimises the profiled
+
+def structure_function(gamma: np.ndarray) -> np.ndarray:
+    """``S(L) = Var(y[k+L] - 2 y[k] + y[k-L])`` for ``L`` in :data:`SPANS` from the
+    autocovariance ``gamma(0..MAX_LAG)`` of the one-step second differences (the span-``L``
+    difference is their sum with triangle weights)."""
+    return _TRIANGLES @ np.asarray(gamma, dtype=float)
+
+
+def structure_model(impulse_var: float, noise_var: float, pole: float) -> np.ndarray:
+    """``S(L) = sigma_p^2 dt^2 V_L(alpha) + 6 sigma_n^2`` (module docstring) for :data:`SPANS`:
+    :func:`structure_function` of :func:`mixed_autocovariance`."""
+    return structure_function(mixed_autocovariance(np.arange(MAX_LAG + 1), impulse_var, noise_var, pole))
+
+
+def fit_structure(gamma: np.ndarray) -> tuple[float, float, float]:
+    """Least-squares ``(sigma_p^2 dt^2, sigma_n^2, alpha)`` of the mixed model on the
+    autocovariance ``gamma(0..MAX_LAG)`` of the second differences.
+
+    The residuals are those of ``gamma(0..DIRECT_LAGS)`` over ``gamma(0)`` (the model of
+    :func:`mixed_autocovariance`, which pins a weak colour through ``r(1)``) and those of
+    the structure function over itself, ``S_model(L) / S(L) - 1`` (:func:`structure_model`,
+    which sums many lags and sees a colour under noise). For fixed ``alpha`` all are linear
+    in the two variances, solved in closed form; ``alpha`` minimises the profiled
     residual: a grid over ``(-0.9, MAX_POLE)`` then a bounded Brent search around its best
-    point.
+    point. Neither variance is held positive.
     """
-    r = np.asarray(r, dtype=float)
-    m = np.arange(1, r.size + 1)
-    h = _noise_shape(m)
-    y = r - h
+    gamma = np.asarray(gamma, dtype=float)
+    s = structure_function(gamma)
+    lags = np.arange(DIRECT_LAGS + 1)
+    target = np.concatenate([gamma[: DIRECT_LAGS + 1] / gamma[0], np.ones(s.size)])
+    noise = np.concatenate([mixed_autocovariance(lags, 0.0, 1.0, 0.0) / gamma[0], structure_model(0.0, 1.0, 0.0) / s])
 
     def profile(alpha):
-        x = np.power(alpha, m) - h
-        share = float(x @ y / (x @ x))
-        return share, float(np.sum((y - share * x) ** 2))
+        """Variances and residual sum of squares at each pole of ``alpha`` (1-D)."""
+        powers = np.power(alpha[:, None], np.arange(MAX_LAG + 1))
+        impulse = np.concatenate([powers[:, : DIRECT_LAGS + 1] / gamma[0], (powers @ _TRIANGLES.T) / s], axis=1)
+        a11, a12, a22 = np.sum(impulse**2, axis=1), impulse @ noise, noise @ noise
+        b1, b2 = impulse @ target, noise @ target
+        det = a11 * a22 - a12**2
+        coef = np.stack([(a22 * b1 - a12 * b2) / det, (a11 * b2 - a12 * b1) / det], axis=1)
+        rss = np.sum((impulse * coef[:, :1] + noise * coef[:, 1:] - target) ** 2, axis=1)
+        return coef, rss
 
     grid = np.concatenate([np.linspace(-0.9, 0.9, 91), 1.0 - np.geomspace(0.1, 1.0 - MAX_POLE, 60)])
-    rss = np.array([profile(a)[1] for a in grid])
-    best = int(np.argmin(rss))
+    rss = profile(grid)[1]
+    best = int(np.nanargmin(rss))
     lo, hi = grid[max(best - 1, 0)], grid[min(best + 1, grid.size - 1)]
-    res = minimize_scalar(lambda a: profile(a)[1], bounds=(lo, hi), method="bounded", options={"xatol": 1e-7})
+    res = minimize_scalar(lambda a: profile(np.array([a]))[1][0], bounds=(lo, hi), method="bounded", options={"xatol": 1e-7})
     alpha = float(res.x) if res.fun <= rss[best] else float(grid[best])
-    return profile(alpha)[0], alpha
+    impulse_var, noise_var = profile(np.array([alpha]))[0][0]
+    return float(impulse_var), float(noise_var), alpha
 
 
 def second_differences(y: np.ndarray, margin: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
@@ -307,22 +368,39 @@ def _lag_sums(sums: dict, means: np.ndarray, max_lag: int, n_blocks: int) -> tup
     return prod, count
 
 
-def _drift(records, sigma_y: float, n_blocks: int) -> tuple[float, float]:
+def _block_means(y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(centres, means)`` of the finite samples of ``y`` cut into up to
+    :data:`DRIFT_BLOCKS` consecutive blocks of at least :data:`DRIFT_BLOCK_MIN` samples
+    (centres as sample indices); empty when fewer than 4 such blocks fit."""
+    where = np.flatnonzero(np.isfinite(y))
+    b = min(DRIFT_BLOCKS, where.size // DRIFT_BLOCK_MIN)
+    if b < 4:
+        return np.empty(0), np.empty(0)
+    pieces = np.array_split(where, b)
+    return np.array([p.mean() for p in pieces]), np.array([y[p].mean() for p in pieces])
+
+
+def _detrend(y: np.ndarray) -> np.ndarray:
+    """``y`` less the piecewise-linear line through its block means (:func:`_block_means`),
+    so that a slow drift does not move the zero the sides are read from."""
+    centres, means = _block_means(y)
+    return y - np.interp(np.arange(y.size), centres, means) if centres.size else y
+
+
+def _drift(records, sigma_y: float) -> tuple[float, float]:
     """``(rms of block means / sigma_Y, z)`` of von Neumann's ratio pooled over records
     (module docstring); NaN when no record has 4 blocks."""
     num = den = 0.0
     blocks = 0
     means_all = []
     for y in records:
-        finite = y[np.isfinite(y)]
-        b = min(n_blocks, finite.size // max(MAX_LAG, 1))
-        if b < 4:
+        _, means = _block_means(y)
+        if not means.size:
             continue
-        means = np.array([piece.mean() for piece in np.array_split(finite, b)])
-        means -= means.mean()
+        means = means - means.mean()
         num += float(np.sum(np.diff(means) ** 2))
         den += float(np.sum(means**2))
-        blocks += b
+        blocks += means.size
         means_all.append(means)
     if not means_all or den == 0.0:
         return math.nan, math.nan
@@ -337,11 +415,9 @@ def _quantities(n, sy, syy, n_side, s_side, prod, count, dt):
     sigma2 = syy / n - (sy / n) ** 2
     means = s_side / n_side
     g_minus, g_plus = means[0] / dt**2, -means[1] / dt**2
-    r0 = prod[0] / count[0]
-    r = (prod[1:] / count[1:]) / r0
-    share, alpha = fit_mixed(r)
-    noise_var = max(1.0 - share, 0.0) * r0 / 6.0
-    sigma_y = math.sqrt(max(sigma2 - noise_var, 0.0))
+    gamma = prod / count
+    impulse_var, noise_var, alpha = fit_structure(gamma)
+    sigma_y = math.sqrt(max(sigma2 - max(noise_var, 0.0), 0.0))
     g = 0.5 * (g_minus + g_plus)
     if 0.0 < alpha < 1.0:
         corner = -math.log(alpha) / (2.0 * math.pi * dt)
@@ -351,18 +427,19 @@ def _quantities(n, sy, syy, n_side, s_side, prod, count, dt):
         "sigma_y": sigma_y,
         "g": g,
         "asymmetry": (g_plus - g_minus) / (g_plus + g_minus) if g_plus + g_minus != 0.0 else math.nan,
-        "impulse_share": share,
+        "impulse_var": impulse_var,
+        "noise_var": noise_var,
         "pole": alpha,
-        "impulse_sd": math.sqrt(max(share, 0.0) * r0) / dt,
-        "noise_sd": math.sqrt(noise_var),
-        "noise_ratio": math.sqrt(noise_var) / sigma_y,
+        "impulse_sd": math.sqrt(max(impulse_var, 0.0)) / dt,
+        "noise_sd": math.sqrt(max(noise_var, 0.0)),
+        "noise_ratio": math.sqrt(max(noise_var, 0.0)) / sigma_y,
         "corner_hz": corner,
         "corner_ratio": corner * float(period_from_g(sigma_y, g)) if g > 0 else math.nan,
-        "r": r,
+        "r": gamma[1:] / gamma[0],
     }
 
 
-def measure(records, dt: float, *, max_lag: int = MAX_LAG, n_blocks: int = JACKKNIFE_BLOCKS) -> RecordModel:
+def measure(records, dt: float, *, n_blocks: int = JACKKNIFE_BLOCKS) -> RecordModel:
     """The record's model (module docstring) from ``records`` of one block sampled at ``dt``.
 
     ``records``: one 1-D array of angles (rad) or a sequence of them, NaN allowed (triples
@@ -375,10 +452,18 @@ def measure(records, dt: float, *, max_lag: int = MAX_LAG, n_blocks: int = JACKK
         records = [records]
     records = [np.asarray(y, dtype=np.float64).ravel() for y in records]
     records = [y - np.nanmean(y) if np.isfinite(y).any() else y for y in records]
+    finite = sum(int(np.isfinite(y).sum()) for y in records)
+    if finite < MIN_TRIPLES:
+        raise checks.InputError(
+            f"the records hold {finite} finite samples (at least {MIN_TRIPLES} are needed) to measure their model; give a longer record"
+        )
+    sigma_raw = math.sqrt(float(np.nanmean(np.concatenate(records) ** 2)))
+    drift_rms, drift_z = _drift(records, sigma_raw)
+    level = [_detrend(y) for y in records] if drift_z > DRIFT_Z else records
     keys = ("n", "sy", "syy", "n_side", "s_side")
     margin = 0.0
     for _ in range(MARGIN_PASSES + 1):
-        sums = _block_sums(records, n_blocks, margin)
+        sums = _block_sums(level, n_blocks, margin)
         triples = int(sums["n_side"].sum())
         if triples < MIN_TRIPLES or (sums["n_side"].sum(axis=0) == 0).any():
             raise checks.InputError(
@@ -386,7 +471,7 @@ def measure(records, dt: float, *, max_lag: int = MAX_LAG, n_blocks: int = JACKK
                 "sides, are needed) to measure their model; give a longer record"
             )
         means = sums["s_side"].sum(axis=0) / sums["n_side"].sum(axis=0)
-        prod, count = _lag_sums(sums, means, max_lag, n_blocks)
+        prod, count = _lag_sums(sums, means, MAX_LAG, n_blocks)
         whole = _quantities(*(sums[k].sum(axis=0) for k in keys), prod.sum(axis=0), count.sum(axis=0), dt)
         margin = max(MARGIN_G * abs(whole["g"]) * dt**2, MARGIN_NOISE * whole["noise_sd"])
     used = [j for j in range(n_blocks) if sums["n"][j] > 0]
@@ -404,8 +489,7 @@ def measure(records, dt: float, *, max_lag: int = MAX_LAG, n_blocks: int = JACKK
 
     r_reps = np.array([rep["r"] for rep in reps])
     r_se = np.sqrt((jack - 1) / jack * np.sum((r_reps - r_reps.mean(axis=0)) ** 2, axis=0))
-    drift_rms, drift_z = _drift(records, whole["sigma_y"], DRIFT_BLOCKS)
-    names = ("g", "asymmetry", "impulse_share", "pole", "impulse_sd", "noise_sd", "noise_ratio", "corner_hz", "corner_ratio")
+    names = ("g", "asymmetry", "impulse_var", "noise_var", "pole", "impulse_sd", "noise_sd", "noise_ratio", "corner_hz", "corner_ratio")
     return RecordModel(
         dt=dt,
         triples=triples,

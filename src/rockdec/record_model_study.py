@@ -5,14 +5,15 @@ share of ``sigma_Y``, a first-order low-pass load with its corner a multiple of 
 rocking frequency ``1/T(sigma_Y)`` (eq. 5), or both) records are simulated with
 :func:`rockdec.simulate.simulate_block` at about :data:`POINTS_PER_CYCLE` samples per cycle
 (``g = 1``, ``sigma_p = 1``: the model is scale-free), noise is added to the sampled angle,
-and each record is measured. Noise conditions reuse the clean records with noise added,
-so clean and noisy rows differ by the noise only.
+and each record is measured. Noise and drift conditions reuse the clean records with noise
+or a trend added, so their rows differ from the clean ones by that only.
 
 The truth of each record: the noise share is the one added (of the clean record's own
 ``sigma_Y``); the corner is ``-ln(c) / (2 pi dt)`` times ``T(sigma_Y)`` of the clean record
 at the true ``g``. :func:`summarise` reduces the rows to one line per ``(e, condition)``:
 the share classified as the true kind, the bias and spread of ``sigma_n / sigma_Y`` and of
-the corner, of ``g``, and the rate at which noise, colour and drift are flagged.
+the corner, of ``g``, and the rate at which noise, colour and drift are flagged (drift conditions add a linear
+trend to the clean records).
 """
 
 from __future__ import annotations
@@ -25,16 +26,19 @@ import pandas as pd
 from rockdec import loading, record_model, simulate
 from rockdec.models import period_from_g
 
-#: ``name: (noise share of sigma_Y, corner in rocking frequencies or None for white)``.
+#: ``name: (noise share of sigma_Y, corner in rocking frequencies or None for white,
+#: linear drift from start to end of the record in sigma_Y)``.
 CONDITIONS = {
-    "clean": (0.0, None),
-    "noise 1%": (0.01, None),
-    "noise 3%": (0.03, None),
-    "noise 5%": (0.05, None),
-    "corner 0.5x": (0.0, 0.5),
-    "corner 1x": (0.0, 1.0),
-    "corner 3x": (0.0, 3.0),
-    "corner 1x + noise 2%": (0.02, 1.0),
+    "clean": (0.0, None, 0.0),
+    "noise 1%": (0.01, None, 0.0),
+    "noise 3%": (0.03, None, 0.0),
+    "noise 5%": (0.05, None, 0.0),
+    "corner 0.5x": (0.0, 0.5, 0.0),
+    "corner 1x": (0.0, 1.0, 0.0),
+    "corner 3x": (0.0, 3.0, 0.0),
+    "corner 1x + noise 2%": (0.02, 1.0, 0.0),
+    "drift 0.1": (0.0, None, 0.1),
+    "drift 0.3": (0.0, None, 0.3),
 }
 
 #: Samples per cycle at ``sigma_Y`` of the study's records (the paper's sampling).
@@ -66,7 +70,7 @@ def run(e_values=(0.6, 0.8, 0.9, 0.95, 0.98), conditions=CONDITIONS, n_records: 
     rows = []
     for e in e_values:
         by_corner = {}
-        for name, (noise, corner) in conditions.items():
+        for name, (noise, corner, drift) in conditions.items():
             if corner not in by_corner:
                 by_corner[corner] = records(e, corner, n_records, n_points)
             theta, dt, pole = by_corner[corner]
@@ -74,6 +78,8 @@ def run(e_values=(0.6, 0.8, 0.9, 0.95, 0.98), conditions=CONDITIONS, n_records: 
                 sigma_y = float(np.std(clean))
                 rng = loading.series_rng(STUDY_SEED_OFFSET + 10_000 * (1 + list(conditions).index(name)) + i)
                 y = clean + noise * sigma_y * rng.standard_normal(clean.size) if noise > 0.0 else clean
+                if drift > 0.0:
+                    y = y + drift * sigma_y * np.linspace(-0.5, 0.5, y.size)
                 m = record_model.measure(y, dt)
                 true_hz = math.nan if corner is None else -math.log(pole) / (2.0 * math.pi * dt)
                 rows.append(
@@ -83,6 +89,7 @@ def run(e_values=(0.6, 0.8, 0.9, 0.95, 0.98), conditions=CONDITIONS, n_records: 
                         "kind_true": truth_kind(noise, corner),
                         "kind": m.kind,
                         "noise_true": noise,
+                        "drift_true": drift,
                         "noise_ratio": m.noise_ratio.value,
                         "noise_ratio_se": m.noise_ratio.se,
                         "corner_hz_true": true_hz,
@@ -96,7 +103,7 @@ def run(e_values=(0.6, 0.8, 0.9, 0.95, 0.98), conditions=CONDITIONS, n_records: 
                         "coloured": m.coloured,
                         "drifting": m.drifting,
                         "drift_z": m.drift_z,
-                        "noise_z": (1.0 - m.impulse_share.value) / m.impulse_share.se,
+                        "noise_z": m.noise_var.z,
                         "colour_z": m.pole.z,
                     }
                 )
