@@ -55,28 +55,35 @@ def truth_kind(noise: float, corner) -> str:
     ]
 
 
-def records(e: float, corner, n_records: int, n_points: int, *, pilot_seeds: int = 32):
+def records(e: float, corner, n_records: int, n_points: int, *, pilot_seeds: int = 32, seed_offset: int = STUDY_SEED_OFFSET):
     """Clean records ``theta(record, time)`` at ``e`` under a white load (``corner`` None) or a
-    low-pass load of that corner; returns ``(theta, dt, pole)``."""
+    low-pass load of that corner, seeds from ``seed_offset``; returns ``(theta, dt, pole)``."""
     pole = 0.0 if corner is None else loading.pole_for_corner(corner, POINTS_PER_CYCLE)
     cal = simulate.calibrate_dt(e=e, g=1.0, sigma_p=1.0, points_per_cycle=POINTS_PER_CYCLE, pilot_seeds=pilot_seeds, iterations=8, pole=pole)
-    seeds = STUDY_SEED_OFFSET + np.arange(n_records)
+    seeds = seed_offset + np.arange(n_records)
     theta, _ = simulate.simulate_block(seeds, n_points, dt=cal["dt"], g=1.0, e=e, sigma_p=1.0, burn_in=cal["burn_in"], pole=pole)
     return theta, cal["dt"], pole
 
 
-def run(e_values=(0.6, 0.8, 0.9, 0.95, 0.98), conditions=CONDITIONS, n_records: int = 50, n_points: int = 200_000) -> pd.DataFrame:
-    """One row per measured record: the condition, the truth and what was measured."""
+def run(
+    e_values=(0.6, 0.8, 0.9, 0.95, 0.98),
+    conditions=CONDITIONS,
+    n_records: int = 50,
+    n_points: int = 200_000,
+    seed_offset: int = STUDY_SEED_OFFSET,
+) -> pd.DataFrame:
+    """One row per measured record: the condition, the truth and what was measured
+    (records and noise from seeds at ``seed_offset``)."""
     rows = []
     for e in e_values:
         by_corner = {}
         for name, (noise, corner, drift) in conditions.items():
             if corner not in by_corner:
-                by_corner[corner] = records(e, corner, n_records, n_points)
+                by_corner[corner] = records(e, corner, n_records, n_points, seed_offset=seed_offset)
             theta, dt, pole = by_corner[corner]
             for i, clean in enumerate(theta):
                 sigma_y = float(np.std(clean))
-                rng = loading.series_rng(STUDY_SEED_OFFSET + 10_000 * (1 + list(conditions).index(name)) + i)
+                rng = loading.series_rng(seed_offset + 10_000 * (1 + list(conditions).index(name)) + i)
                 y = clean + noise * sigma_y * rng.standard_normal(clean.size) if noise > 0.0 else clean
                 if drift > 0.0:
                     y = y + drift * sigma_y * np.linspace(-0.5, 0.5, y.size)
@@ -113,8 +120,9 @@ def run(e_values=(0.6, 0.8, 0.9, 0.95, 0.98), conditions=CONDITIONS, n_records: 
 def summarise(rows: pd.DataFrame) -> pd.DataFrame:
     """One line per ``(e, condition)``: ``correct`` (share of records of the true kind),
     ``noise_bias``/``noise_sd`` of ``sigma_n/sigma_Y`` (relative to the truth where noise was
-    added, absolute otherwise), ``corner_bias``/``corner_sd`` (relative to the true corner in
-    rocking frequencies) and ``hz_bias``/``hz_sd`` (of the corner in Hz),
+    added, absolute otherwise), ``corner_true`` (median true corner in rocking frequencies:
+    the records' own ``sigma_Y`` sets it), ``corner_bias``/``corner_sd`` (relative to the
+    true corner) and ``hz_bias``/``hz_sd`` (of the corner in Hz),
     ``g_bias`` (relative), and the flag rates ``noisy``, ``coloured``, ``drifting``."""
     out = []
     for (e, cond), grp in rows.groupby(["e", "condition"], sort=False):
@@ -130,6 +138,7 @@ def summarise(rows: pd.DataFrame) -> pd.DataFrame:
                 "correct": float(np.mean(grp.kind == grp.kind_true)),
                 "noise_bias": float(noise_err.mean()),
                 "noise_sd": float(noise_err.std()),
+                "corner_true": float(grp.corner_true.median()) if coloured else math.nan,
                 "corner_bias": float(corner_err.mean()) if coloured else math.nan,
                 "corner_sd": float(corner_err.std()) if coloured else math.nan,
                 "hz_bias": float(hz_err.mean()) if coloured else math.nan,
