@@ -25,6 +25,7 @@ import pandas as pd
 
 from rockdec import loading, record_model, simulate
 from rockdec.models import period_from_g
+from rockdec.validate import InputError
 
 #: ``name: (noise share of sigma_Y, corner in rocking frequencies or None for white,
 #: linear drift from start to end of the record in sigma_Y)``.
@@ -87,34 +88,42 @@ def run(
                 y = clean + noise * sigma_y * rng.standard_normal(clean.size) if noise > 0.0 else clean
                 if drift > 0.0:
                     y = y + drift * sigma_y * np.linspace(-0.5, 0.5, y.size)
-                m = record_model.measure(y, dt)
                 true_hz = math.nan if corner is None else -math.log(pole) / (2.0 * math.pi * dt)
-                rows.append(
-                    {
-                        "e": e,
-                        "condition": name,
-                        "kind_true": truth_kind(noise, corner),
-                        "kind": m.kind,
-                        "noise_true": noise,
-                        "drift_true": drift,
-                        "noise_ratio": m.noise_ratio.value,
-                        "noise_ratio_se": m.noise_ratio.se,
-                        "corner_hz_true": true_hz,
-                        "corner_hz": m.corner_hz.value,
-                        "corner_true": true_hz * float(period_from_g(sigma_y, 1.0)),
-                        "corner_ratio": m.corner_ratio.value,
-                        "corner_ratio_se": m.corner_ratio.se,
-                        "g": m.g.value,
-                        "g_se": m.g.se,
-                        "noisy": m.noisy,
-                        "coloured": m.coloured,
-                        "drifting": m.drifting,
-                        "drift_z": m.drift_z,
-                        "noise_z": m.noise_var.z,
-                        "colour_z": m.pole.z,
-                    }
-                )
+                row = {
+                    "e": e,
+                    "condition": name,
+                    "kind_true": truth_kind(noise, corner),
+                    "noise_true": noise,
+                    "drift_true": drift,
+                    "corner_hz_true": true_hz,
+                    "corner_true": true_hz * float(period_from_g(sigma_y, 1.0)),
+                }
+                try:
+                    row.update(_measured(record_model.measure(y, dt)))
+                except InputError:  # too few triples beyond the margin: a refusal, counted
+                    row["kind"] = "refused"
+                rows.append(row)
     return pd.DataFrame(rows)
+
+
+def _measured(m: record_model.RecordModel) -> dict:
+    """The columns of one measured record."""
+    return {
+        "kind": m.kind,
+        "noise_ratio": m.noise_ratio.value,
+        "noise_ratio_se": m.noise_ratio.se,
+        "corner_hz": m.corner_hz.value,
+        "corner_ratio": m.corner_ratio.value,
+        "corner_ratio_se": m.corner_ratio.se,
+        "g": m.g.value,
+        "g_se": m.g.se,
+        "noisy": m.noisy,
+        "coloured": m.coloured,
+        "drifting": m.drifting,
+        "drift_z": m.drift_z,
+        "noise_z": m.noise_var.z,
+        "colour_z": m.pole.z,
+    }
 
 
 def summarise(rows: pd.DataFrame) -> pd.DataFrame:
@@ -123,7 +132,9 @@ def summarise(rows: pd.DataFrame) -> pd.DataFrame:
     added, absolute otherwise), ``corner_true`` (median true corner in rocking frequencies:
     the records' own ``sigma_Y`` sets it), ``corner_bias``/``corner_sd`` (relative to the
     true corner) and ``hz_bias``/``hz_sd`` (of the corner in Hz),
-    ``g_bias`` (relative), and the flag rates ``noisy``, ``coloured``, ``drifting``."""
+    ``g_bias`` (relative), and the flag rates ``noisy``, ``coloured``, ``drifting``;
+    ``refused`` counts records with too few usable triples (they count as misclassified,
+    and are left out of the other columns)."""
     out = []
     for (e, cond), grp in rows.groupby(["e", "condition"], sort=False):
         noise_err = (grp.noise_ratio / grp.noise_true - 1.0) if grp.noise_true.iloc[0] > 0 else grp.noise_ratio
@@ -135,6 +146,7 @@ def summarise(rows: pd.DataFrame) -> pd.DataFrame:
                 "e": e,
                 "condition": cond,
                 "records": len(grp),
+                "refused": int(np.sum(grp.kind == "refused")),
                 "correct": float(np.mean(grp.kind == grp.kind_true)),
                 "noise_bias": float(noise_err.mean()),
                 "noise_sd": float(noise_err.std()),
@@ -144,9 +156,9 @@ def summarise(rows: pd.DataFrame) -> pd.DataFrame:
                 "hz_bias": float(hz_err.mean()) if coloured else math.nan,
                 "hz_sd": float(hz_err.std()) if coloured else math.nan,
                 "g_bias": float((grp.g - 1.0).mean()),
-                "noisy": float(grp.noisy.mean()),
-                "coloured": float(grp.coloured.mean()),
-                "drifting": float(grp.drifting.mean()),
+                "noisy": float(grp.noisy.astype(float).mean()),
+                "coloured": float(grp.coloured.astype(float).mean()),
+                "drifting": float(grp.drifting.astype(float).mean()),
             }
         )
     return pd.DataFrame(out)
