@@ -1,4 +1,4 @@
-"""How well :func:`rockdec.record_model.measure` reads a record's model: records of known model.
+"""How well :func:`rockdec.record_measure.measure` reads a record's model: records of known model.
 
 For each ``e`` and condition (:data:`CONDITIONS`: white load, white sensor noise of a
 share of ``sigma_Y``, a first-order low-pass load with its corner a multiple of the
@@ -23,7 +23,7 @@ import math
 import numpy as np
 import pandas as pd
 
-from rockdec import loading, record_model, simulate
+from rockdec import loading, record_measure, simulate
 from rockdec.models import period_from_g
 from rockdec.validate import InputError
 
@@ -50,7 +50,7 @@ STUDY_SEED_OFFSET = 3 * 2**60
 
 
 def truth_kind(noise: float, corner) -> str:
-    """The kind :attr:`rockdec.record_model.RecordModel.kind` should report."""
+    """The kind :attr:`rockdec.record_measure.MeasuredModel.kind` should report."""
     return {(False, False): "white", (True, False): "noisy", (False, True): "coloured", (True, True): "both"}[
         (noise > 0.0, corner is not None)
     ]
@@ -99,14 +99,14 @@ def run(
                     "corner_true": true_hz * float(period_from_g(sigma_y, 1.0)),
                 }
                 try:
-                    row.update(_measured(record_model.measure(y, dt)))
+                    row.update(_measured(record_measure.measure(y, dt)))
                 except InputError:  # too few triples beyond the margin: a refusal, counted
                     row["kind"] = "refused"
                 rows.append(row)
     return pd.DataFrame(rows)
 
 
-def _measured(m: record_model.RecordModel) -> dict:
+def _measured(m: record_measure.MeasuredModel) -> dict:
     """The columns of one measured record."""
     return {
         "kind": m.kind,

@@ -93,7 +93,7 @@ Detection. ``noisy``: ``sigma_n^2`` exceeds :data:`DETECT_Z` standard errors and
 ``sigma_n / sigma_Y`` exceeds :data:`NOISE_FLOOR`; ``coloured``: ``alpha`` exceeds
 :data:`DETECT_Z` standard errors (:data:`COLOUR_Z_NOISY` on a noisy record); ``drifting``:
 ``drift_z`` exceeds :data:`DRIFT_Z`. These say the defect is present, not that it moves
-``e``; the rates are measured by :mod:`rockdec.record_model_study`.
+``e``; the rates are measured by :mod:`rockdec.record_measure_study`.
 """
 
 from __future__ import annotations
@@ -170,7 +170,7 @@ class Quantity:
 
 
 @dataclass(frozen=True)
-class RecordModel:
+class MeasuredModel:
     """What :func:`measure` reads off a set of records of one block.
 
     Units: ``g`` rad/s^2, ``impulse_sd`` (``sigma_p``) rad/s, ``noise_sd`` (``sigma_n``) rad,
@@ -451,7 +451,7 @@ def _quantities(n, sy, syy, n_side, s_side, prod, count, dt):
     }
 
 
-def measure(records, dt: float, *, n_blocks: int = JACKKNIFE_BLOCKS) -> RecordModel:
+def measure(records, dt: float, *, n_blocks: int = JACKKNIFE_BLOCKS) -> MeasuredModel:
     """The record's model (module docstring) from ``records`` of one block sampled at ``dt``.
 
     ``records``: one 1-D array of angles (rad) or a sequence of them, NaN allowed (triples
@@ -502,7 +502,7 @@ def measure(records, dt: float, *, n_blocks: int = JACKKNIFE_BLOCKS) -> RecordMo
     r_reps = np.array([rep["r"] for rep in reps])
     r_se = np.sqrt((jack - 1) / jack * np.sum((r_reps - r_reps.mean(axis=0)) ** 2, axis=0))
     names = ("g", "asymmetry", "impulse_var", "noise_var", "pole", "impulse_sd", "noise_sd", "noise_ratio", "corner_hz", "corner_ratio")
-    return RecordModel(
+    return MeasuredModel(
         dt=dt,
         triples=triples,
         sigma_y=whole["sigma_y"],

@@ -1,4 +1,4 @@
-"""The record's own model read off its second differences (rockdec.record_model)."""
+"""The record's own model read off its second differences (rockdec.record_measure)."""
 
 import math
 
@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.signal import lfilter
 
-from rockdec import record_model as rm
+from rockdec import record_measure as rm
 from rockdec.loading import pole_for_corner, series_rng
 from rockdec.simulate import simulate_block
 from rockdec.validate import InputError
