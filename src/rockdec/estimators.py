@@ -588,8 +588,8 @@ def _estimate_block(r, d, dt, fit_points):
     broadcast) -> ``values[..., estimator]``."""
     shape = r.shape[:-1] if d is None else np.broadcast_shapes(r.shape[:-1], d.shape[:-1])
 
-    def rows(a):
-        return np.ascontiguousarray(np.broadcast_to(a, shape + a.shape[-1:]), dtype=float).reshape(math.prod(shape), a.shape[-1])
+    def rows(a):  # a writable copy: the kernel then has the one type estimate_all gives it, compiled once
+        return np.array(np.broadcast_to(a, shape + a.shape[-1:]), dtype=float, order="C").reshape(math.prod(shape), a.shape[-1])
 
     values, _ = _estimate_rows(rows(r), None if d is None else rows(d), dt, fit_points)
     return values.reshape(shape + (len(ESTIMATORS),))
