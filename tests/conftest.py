@@ -55,3 +55,22 @@ def tiny_workflow(tmp_path_factory) -> dict:
     code, log = snakemake(root, "all", "archive")
     assert code == 0, log
     return {"root": root, "dry_run": dry}
+
+
+#: The test modules that use :func:`tiny_workflow` (one worker runs them: one build, and no
+#: two tests change it at once).
+WORKFLOW_MODULES = ("tests/test_workflow.py", "tests/test_archive.py")
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_make_scheduler(config, log):
+    """With pytest-xdist (``-n``, pyproject.toml): a worker runs every test of a module, so
+    each module-scoped fixture is built once, and one worker runs :data:`WORKFLOW_MODULES`."""
+    from xdist.scheduler import LoadFileScheduling
+
+    class ByModule(LoadFileScheduling):
+        def _split_scope(self, nodeid: str) -> str:
+            module = super()._split_scope(nodeid)
+            return WORKFLOW_MODULES[0] if module in WORKFLOW_MODULES else module
+
+    return ByModule(config, log)
