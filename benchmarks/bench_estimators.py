@@ -36,6 +36,7 @@ from bench_signatures import best_of, rocking_record  # benchmarks/ is on sys.pa
 from reference_estimators import reference_estimate_all
 
 from rockdec import estimators, signatures, simulate
+from rockdec.fits import DEFAULT_FIT_POINTS
 
 
 
@@ -79,7 +80,7 @@ def main(argv=None):
         return np.array([[est.value for est in reference_estimate_all(r[i], d[i], dt).values()] for i in range(n)])
 
     t_ref, ref = best_of(1, reference)
-    t_rows, (values, _) = best_of(args.repeat, lambda: estimators._estimate_rows(r, d, dt, estimators.DEFAULT_FIT_POINTS, estimators._COLUMNS))
+    t_rows, (values, _) = best_of(args.repeat, lambda: estimators._estimate_rows(r, d, dt, DEFAULT_FIT_POINTS, estimators._COLUMNS))
     t_cube, _ = best_of(args.repeat, lambda: estimators.estimate_cube(free, dv, dt))
     chunked = (free.chunk({"seed": args.chunk}), dv.chunk({"seed": args.chunk}))
     with dask.config.set(scheduler="threads"):
@@ -88,7 +89,7 @@ def main(argv=None):
     complete = ~(np.isnan(r).any(axis=1) | np.isnan(d).any(axis=1))  # windows with triggers in both
     t_ref_c, _ = best_of(1, lambda: [reference_estimate_all(r[i], d[i], dt) for i in np.flatnonzero(complete)])
     rc, dc = r[complete], d[complete]
-    t_rows_c, _ = best_of(args.repeat, lambda: estimators._estimate_rows(rc, dc, dt, estimators.DEFAULT_FIT_POINTS, estimators._COLUMNS))
+    t_rows_c, _ = best_of(args.repeat, lambda: estimators._estimate_rows(rc, dc, dt, DEFAULT_FIT_POINTS, estimators._COLUMNS))
 
     both = np.isfinite(ref) & np.isfinite(values)
     diff = np.abs(values[both] - ref[both])

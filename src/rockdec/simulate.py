@@ -32,7 +32,6 @@ from __future__ import annotations
 
 import math
 
-import dask.array as da
 import numba
 import numpy as np
 import xarray as xr
@@ -381,6 +380,8 @@ def simulation_dataset(
     the recorded angle (:func:`rockdec.loading.add_sensor_noise`; ``theta_dot`` stays the
     model's).
     """
+    import dask.array as da  # the lazy dataset only: simulate_block's callers never load dask.array
+
     seeds = np.atleast_1d(np.asarray(seeds, dtype=np.int64))
     seed_chunks = da.from_array(seeds, chunks=chunk_seeds)
     if model not in ("simplified", "housner", "fixed_step"):
