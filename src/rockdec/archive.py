@@ -15,7 +15,6 @@ import hashlib
 import json
 import os
 import shutil
-import subprocess
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
@@ -47,17 +46,6 @@ def package_versions() -> dict[str, str]:
     return out
 
 
-def git_dirty() -> bool | None:
-    """Whether the source tree of this package has uncommitted changes (None outside git)."""
-    try:
-        out = subprocess.run(
-            ["git", "status", "--porcelain"], cwd=Path(__file__).parent, capture_output=True, text=True, timeout=10
-        )
-    except (OSError, subprocess.TimeoutExpired):
-        return None
-    return bool(out.stdout.strip()) if out.returncode == 0 else None
-
-
 def write_archive(folder: str | Path, results: str | Path, producers: dict[str, str], scene_name: str, scene: dict) -> Path:
     """Copy the files ``producers`` names (paths relative to ``results``) into ``folder`` with a manifest.
 
@@ -75,7 +63,7 @@ def write_archive(folder: str | Path, results: str | Path, producers: dict[str, 
         "settings": scene,
         "versions": package_versions(),
         "git_commit": io.git_commit(),
-        "git_dirty": git_dirty(),
+        "git_dirty": io.git_dirty(),
         "files": entries,
     }
     path = folder / MANIFEST

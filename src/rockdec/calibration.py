@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import logging
 import math
 import sys
 from pathlib import Path
@@ -35,6 +36,8 @@ import xarray as xr
 
 from rockdec import __version__, engine, estimators, io, measured
 from rockdec.simulate import default_burn_in, simulate_block
+
+log = logging.getLogger(__name__)
 
 #: True ``e`` of the calibration grid: denser where the estimators bend (near 1).
 E_GRID = (0.4, 0.5, 0.6, 0.7, 0.75, 0.8, 0.85, 0.88, 0.91, 0.93, 0.95, 0.965, 0.98, 0.99, 0.995)
@@ -146,6 +149,10 @@ def build(cal_settings: dict) -> xr.Dataset:
     Grid points run as Dask tasks on the engine of :mod:`rockdec.engine` (threads by
     default); the simulation and signature kernels release the GIL.
     """
+    log.info(
+        f"calibrating: simulating {cal_settings['sets_per_e']} record sets at each of {len(cal_settings['e_grid'])} values of e "
+        "like the measured records (once; stored for every record with the same settings)"
+    )
     tasks = [dask.delayed(_grid_point)(j, e, cal_settings, CALIBRATION_SEED_OFFSET) for j, e in enumerate(cal_settings["e_grid"])]
     values = np.stack(engine.compute(*tasks))
     ds = xr.Dataset(

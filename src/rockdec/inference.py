@@ -14,7 +14,7 @@ import warnings
 
 import numpy as np
 
-from rockdec import belt, calibration, estimators, measured
+from rockdec import __version__, belt, calibration, estimators, measured
 from rockdec.records import Record, RecordError, same_step
 
 #: The estimator reported as ``e``: the calibration's coverage study shows it best
@@ -62,7 +62,11 @@ def estimate(records: list[Record], *, cache_dir, g: float | None = None, settin
     :func:`rockdec.belt.calibration_coverage`), ``raw`` (of the default estimator), ``g`` (rad/s^2: corrected, or as given), ``g_raw``,
     ``points_per_cycle``, ``sigma_y``, ``dt``, ``samples``, ``nan_samples``,
     ``estimators`` (per estimator: ``raw``, ``e``, ``interval``, ``coverage``, ``triggers``,
-    ``notes``),
+    ``notes``, ``calibrated_range`` and ``beyond``: ``"below"``, ``"above"`` or
+    ``"unreached"`` when the raw value lies beyond what any calibrated ``e`` produces on
+    average, and ``e`` is then ``None``, :func:`beyond`),
+    ``g_interval`` (``None``: the calibration corrects ``g`` but gives it no interval;
+    ``g_interval_note`` says so), ``rockdec_version``,
     ``warnings``, ``calibration`` (file, and whether it came from the cache), and, under
     keys starting with ``_``, the analysis and belts for plots.
     """
@@ -88,13 +92,16 @@ def estimate(records: list[Record], *, cache_dir, g: float | None = None, settin
     for name in estimators.ESTIMATORS:
         c = belt.correct(belts[name], analysis.raw[name])
         trigger = "v" if name == "e_v" else "a"
+        side = beyond(belts[name], analysis.raw[name], c)
         per[name] = {
             "raw": _num(analysis.raw[name]),
-            "e": _num(c.value),
+            "e": None if side else _num(c.value),
+            "beyond": side,
+            "calibrated_range": [_num(belts[name].e[0]), _num(belts[name].e[-1])] if belts[name].e.size else None,
             "interval": [_num(c.low), _num(c.high)],
             "coverage": _num(belt.calibration_coverage(cal, name, belts[name])),
             "triggers": int(analysis.count[trigger][-1]),
-            "notes": list(c.notes),
+            "notes": [note for note in c.notes if not (side and "nearest point" in note)],  # no value is shown
         }
     default = per[DEFAULT_ESTIMATOR]
     e_default = math.nan if default["e"] is None else default["e"]
@@ -108,6 +115,11 @@ def estimate(records: list[Record], *, cache_dir, g: float | None = None, settin
         "g": _num(g_value),
         "g_given": g is not None,
         "g_raw": _num(analysis.raw[measured.G_NAME]),
+        "g_interval": None,
+        "g_interval_note": "as given (--g)" if g is not None else (
+            "no interval: the calibration corrects g's bias at the corrected e but does not give g an interval "
+            "whose coverage has been checked"
+        ),
         "points_per_cycle": _num(analysis.points_per_cycle),
         "sigma_y": _num(analysis.sigma_y),
         "dt": dt,
@@ -116,10 +128,26 @@ def estimate(records: list[Record], *, cache_dir, g: float | None = None, settin
         "nan_samples": int(analysis.nan_samples),
         "estimators": per,
         "warnings": diagnose(records, analysis, settings),
+        "rockdec_version": __version__,
         "calibration": {"file": f"calibration-{calibration.settings_hash(cal_settings)}.nc", "cached": cached, "seconds": round(built_s, 2)},
         "_analysis": analysis,
         "_belts": belts,
     }
+
+
+def beyond(b: belt.Belt, raw: float, c: belt.Corrected) -> str | None:
+    """Why the corrected value ``c`` of the raw value ``raw`` is no estimate, or ``None``.
+
+    When ``raw`` lies outside every value the belt's mean curve takes, :func:`belt.correct`
+    returns the nearest point of the curve, which estimates nothing: ``"below"`` or
+    ``"above"`` when that point is an end of the calibrated range of ``e`` (which then
+    bounds ``e``), ``"unreached"`` when it is inside the range.
+    """
+    if b.e.size == 0 or not (np.isfinite(raw) and np.isfinite(c.value)) or b.mean.min() <= raw <= b.mean.max():
+        return None
+    if c.value == b.e[0]:
+        return "below"
+    return "above" if c.value == b.e[-1] else "unreached"
 
 
 def _num(x) -> float | None:
