@@ -317,3 +317,19 @@ def test_a_corrected_value_at_the_end_of_the_calibrated_range_is_shown_as_a_boun
     if side:
         assert "0.4000 " not in row.split("[")[0] and "0.9950 " not in row.split("[")[0]  # the end is not printed as a value
         assert f"{side} the calibrated range" in _estimate_text(res)
+
+
+def test_readme_explains_every_estimator_and_word_of_the_estimate_report():
+    from pathlib import Path
+
+    from rockdec import estimators
+    from rockdec.cli import READS
+
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    glossary = readme[readme.index("**The words of its report**"):]
+    glossary = glossary[: glossary.index("\n\n", glossary.index("| word |"))]
+    rows = [line.split("|")[1] for line in glossary.splitlines() if line.startswith("| ")]
+    assert set(READS) == set(estimators.ESTIMATORS)
+    named = " ".join(rows)
+    for word in (*estimators.ESTIMATORS, "D_a", "D_v", "raw", "corrected", "95 % interval", "coverage", "triggers", "sigma_Y"):
+        assert word in named or (word in ("e1", "e2", "e3", "e4") and "`e1` .. `e4`" in named), word
