@@ -333,3 +333,12 @@ def test_readme_explains_every_estimator_and_word_of_the_estimate_report():
     named = " ".join(rows)
     for word in (*estimators.ESTIMATORS, "D_a", "D_v", "raw", "corrected", "95 % interval", "coverage", "triggers", "sigma_Y"):
         assert word in named or (word in ("e1", "e2", "e3", "e4") and "`e1` .. `e4`" in named), word
+
+
+def test_a_scene_is_found_from_any_folder(tmp_path, monkeypatch):
+    """Outside a checkout (no ./config/config.yaml), --scene reads the workflow's own config."""
+    monkeypatch.chdir(tmp_path)
+    args = ["simulate", "--scene", "tiny", "--seeds", "0", "--n-points", "100", "--dt", "0.01", "--burn-in", "0", "--out", "x.nc"]
+    assert main(args) == 0
+    with xr.open_dataset(tmp_path / "x.nc") as ds:
+        assert json.loads(ds.attrs["settings"])["system"]["e"] == 0.95  # the tiny scene's e

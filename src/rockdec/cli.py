@@ -91,7 +91,7 @@ def _simulate_scene(args) -> dict:
     from rockdec.models import restoring_acceleration
 
     if args.scene:
-        scene = json.loads(json.dumps(config_mod.scene(config_mod.load(args.config), args.scene)))
+        scene = json.loads(json.dumps(config_mod.scene(config_mod.load(args.config or _default_config()), args.scene)))
     else:
         scene = config_mod.validate_scene({})
     scene = _validated(_with_options(scene, args, SIMULATE_OPTIONS), SIMULATE_OPTIONS)
@@ -400,6 +400,15 @@ def cmd_verify(args) -> None:
             raise SystemExit(1)
 
 
+def _default_config() -> str:
+    """The config ``--scene`` reads by default: ``config/config.yaml`` in this folder if there
+    is one, else the workflow's own (:func:`workflow_root`)."""
+    from rockdec.config import DEFAULT_PATH
+
+    root = workflow_root()
+    return DEFAULT_PATH if Path(DEFAULT_PATH).is_file() or root is None else str(root / DEFAULT_PATH)
+
+
 def _default_cache() -> str:
     """Where calibrations are stored: ``$ROCKDEC_CACHE``, else the user's cache folder."""
     import os
@@ -411,6 +420,7 @@ def _default_cache() -> str:
 
 #: What the workflow needs besides the package: the extra that installs it.
 WORKFLOW_EXTRA = "rockdec[workflow]"
+
 
 def workflow_root() -> Path | None:
     """The folder holding the workflow's Snakefile: the copy the wheel carries
@@ -509,7 +519,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sim.add_argument("--out", required=True, help="NetCDF file to write")
     sim.add_argument("--scene", help="take every setting from this scene of the config")
-    sim.add_argument("--config", default="config/config.yaml", help="config file (default: %(default)s)")
+    sim.add_argument("--config", help="config file of --scene (default: config/config.yaml here, else the workflow's own)")
     sim.add_argument("--seeds", help="seeds, e.g. 0-99 or 3,7 (default: the scene's)")
     sim.add_argument("--model", help="simplified (eq. 4), housner (eq. 2) or auto (by amplitude; default: the scene's)")
     sim.add_argument("--e", type=float, help="coefficient of restitution, 0..1")
