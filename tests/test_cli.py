@@ -2,6 +2,7 @@
 
 import io as io_module
 import json
+import logging
 import subprocess
 import sys
 import time
@@ -216,6 +217,8 @@ def test_quiet_hides_the_progress_messages_and_verbose_keeps_them(tmp_path, caps
     assert capsys.readouterr().err == ""
     assert main(["-v", *args, "--out", str(tmp_path / "c.nc")]) == 0
     assert "rockdec: simulating" in capsys.readouterr().err
+    package_log = logging.getLogger("rockdec")  # left as found: library use after a command logs nothing of ours
+    assert package_log.handlers == [] and package_log.propagate and package_log.level == logging.NOTSET
 
 
 class _Terminal(io_module.StringIO):
@@ -232,8 +235,7 @@ def test_progress_bar_is_labelled_on_a_terminal_and_absent_in_a_log(terminal, mo
     stream = _Terminal() if terminal else io_module.StringIO()
     monkeypatch.setattr(sys, "stderr", stream)
     monkeypatch.setattr(console, "BAR_AFTER_S", 0.0)
-    console.configure(0)
-    with console.progress("calibrating"):
+    with console.configured(0), console.progress("calibrating"):
         dask.delayed(time.sleep)(0.3).compute(scheduler="threads")
     text = stream.getvalue()
     if terminal:

@@ -598,9 +598,8 @@ def main(argv: list[str] | None = None) -> int:
         parser.print_help()
         return 2
     args.snakemake_args = unknown
-    console.configure(args.verbose - args.quiet)
     try:
-        with engine.session(scheduler=args.dask_scheduler):
+        with console.configured(args.verbose - args.quiet), engine.session(scheduler=args.dask_scheduler):
             args.func(args)
     except checks.InputError as exc:
         if args.debug:

@@ -1,7 +1,7 @@
 """What a run shows on the terminal: its messages (``logging``) and its progress bars.
 
 Messages go through the ``rockdec`` logger (``logging.getLogger("rockdec")`` and its
-children); :func:`configure` sends them to stderr at the level ``-q``/``-v`` choose. A
+children); :func:`configured` sends them to stderr at the level ``-q``/``-v`` choose. A
 progress bar (:func:`progress`) is drawn only on a terminal: redirected to a file (a
 Snakemake log, a batch job's output) it would be a stream of carriage-return frames, so
 there the message the caller logs before the computation is all that is written.
@@ -23,28 +23,36 @@ LEVELS = {-1: logging.WARNING, 0: logging.INFO, 1: logging.DEBUG}
 BAR_AFTER_S = 2.0
 
 
-class _Handler(logging.StreamHandler):
-    """Writes to the ``sys.stderr`` of the moment (a test or a caller may have replaced it)."""
-
-    def __init__(self):
-        super().__init__(sys.stderr)
+class _Handler(logging.Handler):
+    """Writes each message to the ``sys.stderr`` of the moment (a test or a caller may have
+    replaced it since the handler was made)."""
 
     def emit(self, record):
-        self.setStream(sys.stderr)
-        super().emit(record)
+        try:
+            sys.stderr.write(self.format(record) + "\n")
+            sys.stderr.flush()
+        except Exception:
+            self.handleError(record)
 
 
-def configure(verbosity: int = 0) -> None:
-    """Send the package's messages to stderr as ``rockdec: <message>``: ``verbosity`` -1
-    (``-q``: warnings and errors), 0 (progress messages) or 1 (``-v``: details)."""
+@contextlib.contextmanager
+def configured(verbosity: int = 0):
+    """Inside the block, send the package's messages to stderr as ``rockdec: <message>``:
+    ``verbosity`` -1 (``-q``: warnings and errors), 0 (progress messages) or 1 (``-v``:
+    details). The logger is left as it was found afterwards."""
     log = logging.getLogger(LOGGER)
-    for handler in [h for h in log.handlers if isinstance(h, _Handler)]:
-        log.removeHandler(handler)
+    before = log.level, log.propagate
     handler = _Handler()
     handler.setFormatter(logging.Formatter("rockdec: %(message)s"))
     log.addHandler(handler)
     log.setLevel(LEVELS[max(-1, min(1, verbosity))])
     log.propagate = False
+    try:
+        yield
+    finally:
+        log.removeHandler(handler)
+        log.setLevel(before[0])
+        log.propagate = before[1]
 
 
 class _Labelled:
