@@ -310,10 +310,12 @@ GLOSSARY = """glossary:
   raw        the estimator on your record, extrapolated to a zero trigger window (biased)
   corrected  the raw value with the bias removed, read off records simulated at known e
              with your record's length and sampling (the calibration)
-  95 % interval  every e whose simulated records give your raw value 95 % of the time
+  95 % interval  every e at which your raw value lies within the central 95 % of the raw
+             values its simulated records give
   coverage   how often that interval held the true e on the calibration's records
              (near 95 % means the interval can be trusted)
-  triggers   stretches of the record averaged into the signature (more: less scatter)
+  triggers   stretches of the record averaged into the signature, in the largest
+             trigger window (more: less scatter)
   below / above the calibrated range (< 0.400, > 0.995)  the raw value lies beyond what
              any calibrated e (0.4 to 0.995) produces: e is outside that range, not
              estimated; "none": beyond every calibrated mean, not estimated
