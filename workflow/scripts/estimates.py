@@ -2,13 +2,8 @@
 
 import sys
 
-from rockdec import io, replicates, tables
+from rockdec import steps
 
 sys.stderr = open(snakemake.log[0], "w")
-options = snakemake.params.options
-with io.open_dataset(snakemake.input[0]) as cube:
-    cube = cube.load()
-est, table = replicates.scene_estimates(cube, options)
-est.attrs.update(io.provenance("estimates", options, inputs=snakemake.input))
-io.write_netcdf(est, snakemake.output.estimates)
-tables.write_table(table, snakemake.output.csv, snakemake.output.md)
+out = snakemake.output
+steps.estimates(snakemake.input[0], out.estimates, out.csv, out.md, snakemake.params.options)

@@ -2,7 +2,7 @@
 
 import sys
 
-from rockdec import figures
+from rockdec import steps
 
 sys.stderr = open(snakemake.log[0], "w")
-figures.save(figures.fig1b(), [snakemake.output.png, snakemake.output.pdf])
+steps.fig1b([snakemake.output.png, snakemake.output.pdf])

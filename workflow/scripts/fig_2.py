@@ -2,9 +2,7 @@
 
 import sys
 
-from rockdec import figures, io
+from rockdec import steps
 
 sys.stderr = open(snakemake.log[0], "w")
-with io.open_dataset(snakemake.input.sim) as sim, io.open_dataset(snakemake.input.sig) as sig:
-    fig = figures.fig2(sim.load(), sig.load())
-figures.save(fig, [snakemake.output.png, snakemake.output.pdf])
+steps.fig2(snakemake.input.sim, snakemake.input.sig, [snakemake.output.png, snakemake.output.pdf])

@@ -2,9 +2,7 @@
 
 import sys
 
-from rockdec import figures, io
+from rockdec import steps
 
 sys.stderr = open(snakemake.log[0], "w")
-with io.open_dataset(snakemake.input.est) as est:
-    fig = figures.fig3(est.load(), e_target=est.attrs["e_target"])
-figures.save(fig, [snakemake.output.png, snakemake.output.pdf])
+steps.fig3(snakemake.input.est, [snakemake.output.png, snakemake.output.pdf])

@@ -2,9 +2,7 @@
 
 import sys
 
-from rockdec import figures, io
+from rockdec import steps
 
 sys.stderr = open(snakemake.log[0], "w")
-with io.open_dataset(snakemake.input.sig) as sig, io.open_dataset(snakemake.input.est) as est:
-    fig = figures.fig_ev(sig.load(), est.load(), e_target=est.attrs["e_target"])
-figures.save(fig, [snakemake.output.png, snakemake.output.pdf])
+steps.fig_ev(snakemake.input.sig, snakemake.input.est, [snakemake.output.png, snakemake.output.pdf])

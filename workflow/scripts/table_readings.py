@@ -2,11 +2,8 @@
 
 import sys
 
-from rockdec import io, replicates, tables
+from rockdec import steps
 
 sys.stderr = open(snakemake.log[0], "w")
-with io.open_dataset(snakemake.input[0]) as curves:
-    combined, table = replicates.readings_estimates(curves.load(), snakemake.params.weights)
-combined.attrs.update(io.provenance("table_readings", {"weights": snakemake.params.weights}, inputs=snakemake.input))
-io.write_netcdf(combined, snakemake.output.estimates)
-tables.write_table(table, snakemake.output.csv, snakemake.output.md)
+out = snakemake.output
+steps.table_readings(snakemake.input[0], out.estimates, out.csv, out.md, snakemake.params.weights)
