@@ -471,14 +471,14 @@ def _estimate_text(res: dict) -> str:
     pct = lambda x: "-" if x is None else f"{x:.0%}"  # noqa: E731
     cal = res["calibration"]
     if res["g_given"]:
-        g_how = "as given (--g)"
+        g_how = "given (--g)"
     else:
         g_how = f"read off the record: raw {res['g_raw']:.4g}, corrected for the trigger window's bias"
     lines = [
         f"records: {', '.join(res['records'])}",
         f"  {res['samples']} samples at dt = {res['dt']:.6g} s ({res['nan_samples']} NaN skipped); rms angle "
         f"sigma_Y = {res['sigma_y']:.4g} rad, {res['points_per_cycle']:.1f} samples per rocking cycle at sigma_Y",
-        f"  restoring acceleration g = {res['g']:.5g} rad/s^2, {g_how}" if res["g"] is not None else "  restoring acceleration g: not determined",
+        f"  restoring acceleration g = {res['g']:.5g} rad/s^2 ({g_how})" if res["g"] is not None else "  restoring acceleration g: not determined",
         f"  calibration: {cal['file']}, "
         + ("from the cache" if cal["cached"] else f"built in {cal['seconds']:.1f} s and stored for the next record like these"),
         "",
