@@ -11,8 +11,6 @@ import contextlib
 import os
 import re
 import shutil
-import subprocess
-import sys
 from pathlib import Path
 
 import matplotlib.image
@@ -21,6 +19,7 @@ import xarray as xr
 import yaml
 
 from cf_check import cf_findings
+from conftest import snakemake
 from rockdec import figures, run
 
 REPO = Path(__file__).resolve().parents[1]
@@ -45,6 +44,7 @@ PRODUCTS = [
 ]
 JOBS = {
     "calibrate": 1,
+    "series": 2,  # every series stored, one file a replicate
     "stored_series": 1,
     "signatures": 1,
     "estimates": 1,
@@ -53,18 +53,6 @@ JOBS = {
     **{name: 1 for name in figures.FIGURES},
     "all": 1,
 }
-
-
-def snakemake(workdir, *args):
-    """``python -m snakemake --cores 2 *args`` in ``workdir``: exit code and output."""
-    proc = subprocess.run(
-        [sys.executable, "-m", "snakemake", "--cores", "2", *args],
-        cwd=workdir,
-        capture_output=True,
-        text=True,
-        timeout=600,
-    )
-    return proc.returncode, proc.stdout + proc.stderr
 
 
 def job_stats(output: str) -> dict[str, int]:
@@ -82,22 +70,10 @@ def job_stats(output: str) -> dict[str, int]:
 
 
 @pytest.fixture(scope="module")
-def workflow(tmp_path_factory):
-    """A copy of the workflow with a shrunken tiny scene, dry-run and then built once."""
-    root = tmp_path_factory.mktemp("workflow")
-    shutil.copy(REPO / "Snakefile", root)
-    for folder in ("workflow", "config", "profiles"):
-        shutil.copytree(REPO / folder, root / folder, symlinks=False)  # resolves config/schema.yaml
-    config = yaml.safe_load((REPO / "config" / "config.yaml").read_text())
-    config["default_scene"] = SCENE
-    # 2 replicates of 10 series: the fewest the groups_of_10 reading accepts
-    config["scenes"][SCENE]["records"].update(replicates=2, series_per_replicate=10, store_series=10, chunk_seeds=10)
-    (root / "config" / "config.yaml").write_text(yaml.safe_dump(config, sort_keys=False))
-    code, dry = snakemake(root, "-n")
-    assert code == 0, dry
-    code, log = snakemake(root)
-    assert code == 0, log
-    return {"root": root, "dry_run": dry}
+def workflow(tiny_workflow):
+    """The copy of the workflow with a shrunken tiny scene, dry-run and then built once (the
+    session's build, tests/conftest.py)."""
+    return tiny_workflow
 
 
 @pytest.mark.slow

@@ -45,13 +45,11 @@ import threading
 import time
 from pathlib import Path
 
-import dask
 import numpy as np
 import xarray as xr
 
 from rockdec import __version__, engine, estimators, io, measured
 from rockdec.validate import InputError
-from rockdec.simulate import default_burn_in, simulate_block
 
 log = logging.getLogger(__name__)
 
@@ -117,6 +115,8 @@ def settings_hash(cal_settings: dict) -> str:
 
 def _simulate_set(seed0: int, lengths, dt: float, e: float, burn_in: int) -> list[np.ndarray]:
     """One set of records (one per length), seeds ``seed0, seed0 + 1, ...``; ``g = sigma_p = 1``."""
+    from rockdec.simulate import simulate_block  # the simulators load only when a calibration is built
+
     return [
         simulate_block([seed0 + k], n, dt=dt, g=1.0, e=e, sigma_p=1.0, burn_in=burn_in)[0][0] for k, n in enumerate(lengths)
     ]
@@ -130,6 +130,8 @@ def step_for(e: float, points_per_cycle: float, lengths, settings: dict, seed0: 
     ``S^2/g^3`` with ``S = sigma_p^2/dt``, and eq. 5), so ``dt <- dt sqrt(N_read / N)``;
     :data:`PILOT_SETS` sets of at most 50,000 samples a record per iteration.
     """
+    from rockdec.simulate import default_burn_in
+
     burn_in = default_burn_in(e, points_per_cycle)
     dt = math.sqrt(4.0 * math.sqrt(2.0 * 290.0) / points_per_cycle)  # sigma_Y c S^2/g^3, c near 290 at e = 0.95
     pilot = [min(int(n), 50_000) for n in lengths]
@@ -171,6 +173,8 @@ def build(cal_settings: dict) -> xr.Dataset:
     Grid points run as Dask tasks on the engine of :mod:`rockdec.engine` (threads by
     default); the simulation and signature kernels release the GIL.
     """
+    import dask
+
     log.info(
         f"calibrating: simulating {cal_settings['sets_per_e']} record sets at each of {len(cal_settings['e_grid'])} values of e "
         "like the measured records (once; stored for every record with the same settings)"

@@ -21,7 +21,7 @@ import traceback
 import warnings
 from pathlib import Path
 
-from rockdec import __version__, console, engine
+from rockdec import __version__, console, engine, fits
 from rockdec import validate as checks
 
 log = logging.getLogger(__name__)
@@ -325,10 +325,8 @@ def cmd_signatures(args) -> None:
 def cmd_estimates(args) -> None:
     import numpy as np
 
-    from rockdec import estimators, io, replicates
+    from rockdec import io, replicates
 
-    if args.fit_points is None:
-        args.fit_points = estimators.DEFAULT_FIT_POINTS
     out = io.check_output(args.out, args.overwrite)
     checks.integer(args.fit_points, "--fit-points", 3, "give at least 3 points per side (a parabola needs 3)")
     with io.open_dataset(args.input) as src:
@@ -710,7 +708,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     est.add_argument("input", help="signature file from 'rockdec signatures'")
     est.add_argument("--out", required=True, help="NetCDF file to write")
-    est.add_argument("--fit-points", type=int, help="points per side of the e_v slope fits (default 5)")
+    est.add_argument("--fit-points", type=int, default=fits.DEFAULT_FIT_POINTS, help="points per side of the e_v slope fits (default %(default)s)")
     est.add_argument("--weights", choices=["window", "count"], default="window", help="extrapolation weights")
     est.add_argument("--overwrite", action="store_true", help="replace --out if it exists")
     est.set_defaults(func=cmd_estimates)

@@ -25,7 +25,7 @@ import warnings
 
 import numpy as np
 
-from rockdec import __version__, belt, calibration, estimators, measured
+from rockdec import __version__, belt, calibration, estimators, fits, measured
 from rockdec.records import Record, RecordError, distinct, same_step
 
 #: The estimator reported as ``e``: the calibration's coverage study shows it best
@@ -68,7 +68,7 @@ def diagnose(records: list[Record], analysis: measured.Analysis, settings: dict)
         if n < FEW_TRIGGERS:
             notes.append(f"only {n} {name} triggers in the largest window: the estimates rest on few segments; pool longer records")
     level = settings.get("level", measured.DEFAULT_SETTINGS["level"])
-    floor = estimators.min_points_per_cycle(analysis.raw[DEFAULT_ESTIMATOR] if np.isfinite(analysis.raw[DEFAULT_ESTIMATOR]) else 0.95, level)
+    floor = fits.min_points_per_cycle(analysis.raw[DEFAULT_ESTIMATOR] if np.isfinite(analysis.raw[DEFAULT_ESTIMATOR]) else 0.95, level)
     if analysis.points_per_cycle < floor:
         notes.append(
             f"{analysis.points_per_cycle:.1f} samples per cycle at sigma_Y is below {floor:.1f}, too coarse for the local fits "

@@ -33,7 +33,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from rockdec import estimators, signatures
+from rockdec import estimators, fits, signatures
 from rockdec.models import period_from_g
 
 #: Settings of the analysis and their defaults (the workflow's scene defaults, see the schema).
@@ -45,7 +45,7 @@ DEFAULT_SETTINGS = {
     "dv_max": 0.28,
     "n_periods": 2.5,
     "both_signs": True,
-    "fit_points": estimators.DEFAULT_FIT_POINTS,
+    "fit_points": fits.DEFAULT_FIT_POINTS,
     "weights": "window",
 }
 

@@ -143,9 +143,11 @@ def _numeric(series, path: Path, column: str) -> np.ndarray:
     import pandas as pd
 
     values = pd.to_numeric(series, errors="coerce").to_numpy(dtype=np.float64)
-    bad = np.isnan(values) & series.notna().to_numpy() & ~series.astype(str).str.strip().str.lower().isin(["nan", ""]).to_numpy()
-    if np.any(bad):
-        row = int(np.flatnonzero(bad)[0])
+    nan_rows = np.flatnonzero(np.isnan(values))  # blank, "nan" or text: only these cells are read as text
+    cells = series.iloc[nan_rows]
+    bad = nan_rows[cells.notna().to_numpy() & ~cells.astype(str).str.strip().str.lower().isin(["nan", ""]).to_numpy()]
+    if bad.size:
+        row = int(bad[0])
         raise RecordError(f"{path}: column '{column}' row {row + 1} holds '{series.iloc[row]}', not a number; fix or blank that cell.")
     return values
 
