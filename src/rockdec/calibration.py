@@ -36,6 +36,7 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import json
+import logging
 import math
 import os
 import socket
@@ -52,6 +53,8 @@ from rockdec.models import SCALE_CONSTANT_GUESS, step_for_density
 from rockdec.record_model import PAPER, RecordModel
 from rockdec.sources import package_sources
 from rockdec.validate import InputError
+
+log = logging.getLogger(__name__)
 
 #: True ``e`` of the calibration grid: denser where the estimators bend (near 1).
 E_GRID = (0.4, 0.5, 0.6, 0.7, 0.75, 0.8, 0.85, 0.88, 0.91, 0.93, 0.95, 0.965, 0.98, 0.99, 0.995)
@@ -198,6 +201,10 @@ def build(cal_settings: dict) -> xr.Dataset:
     """
     import dask
 
+    log.info(
+        f"calibrating: simulating {cal_settings['sets_per_e']} record sets at each of {len(cal_settings['e_grid'])} values of e "
+        "like the measured records (once; stored for every record with the same settings)"
+    )
     tasks = [dask.delayed(_grid_point)(j, e, cal_settings, CALIBRATION_SEED_OFFSET) for j, e in enumerate(cal_settings["e_grid"])]
     values = np.stack(engine.compute(*tasks))
     ds = xr.Dataset(

@@ -3,9 +3,7 @@ one); the scene's cube and every reading's window curves."""
 
 import sys
 
-from dask.diagnostics import ProgressBar
-
-from rockdec import io, replicates
+from rockdec import console, io, replicates
 from rockdec.run import Run
 
 sys.stderr = open(snakemake.log[0], "w")
@@ -19,7 +17,8 @@ if snakemake.rule == "signatures" and inputs.cubes:
             loaded[path] = ds.load()
     cube, curves = replicates.gathered([loaded[p] for p in inputs.cubes], [loaded[p] for p in inputs.curves])
 else:
-    with ProgressBar(out=sys.stderr, dt=0.5):
+    print(f"signature pass over {snakemake.params.records['replicates']} replicates", file=sys.stderr)
+    with console.progress("signatures"):  # a bar on a terminal only: this log gets no frames
         cubes = replicates.scene_cubes(
             Run.read(inputs.run), snakemake.params.records, settings["signatures"], settings["readings"],
             inputs.series, threads=snakemake.threads, first_replicate=snakemake.params.first_replicate,
