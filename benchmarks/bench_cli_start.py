@@ -26,6 +26,7 @@ CASES = {
     "rockdec --help": ["-m", "rockdec", "--help"],
     "rockdec estimate --help": ["-m", "rockdec", "estimate", "--help"],
     "rockdec simulate --bogus (refused)": ["-m", "rockdec", "simulate", "--out", "x.nc", "--bogus"],
+    "rockdec simulate --e 2 (refused value)": ["-m", "rockdec", "simulate", "--out", "x.nc", "--e", "2"],
     "import of a running command": ["-c", "import rockdec.cli, rockdec.inference"],
 }
 

@@ -206,14 +206,15 @@ def _field(scene: dict, sections) -> dict:
 
 
 def cmd_simulate(args) -> None:
+    scene = _simulate_scene(args)  # settings first: a bad value is refused before the numerical modules load
+    checks.finite(args.theta0, "--theta0", "give the initial angle in rad")
+    checks.finite(args.theta_dot0, "--theta-dot0", "give the initial angular velocity in rad/s")
+
     import numpy as np
 
     from rockdec import io, layout, run
 
     out = io.check_output(args.out, args.overwrite)
-    scene = _simulate_scene(args)
-    checks.finite(args.theta0, "--theta0", "give the initial angle in rad")
-    checks.finite(args.theta_dot0, "--theta-dot0", "give the initial angular velocity in rad/s")
     n_seeds = sum(stop - start for start, stop in seed_ranges(args.seeds)) if args.seeds is not None else None
     _check_simulation_size(scene, n_seeds or layout.scene_seeds(scene["records"]).size, out, args.yes, seeds_text=args.seeds)
     seeds = parse_seeds(args.seeds) if args.seeds is not None else layout.scene_seeds(scene["records"]).ravel()
