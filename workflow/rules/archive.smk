@@ -21,5 +21,7 @@ rule archive_scene:
     params:
         scene=lambda w: scene(w.scene),
         producers=lambda w: archive_files(w.scene),
+    conda:
+        "../envs/rockdec.yaml"
     script:
         "../scripts/archive.py"

@@ -18,6 +18,8 @@ rule coverage_case:
         runtime=60,
     params:
         cache="results/studies/coverage/calibration",
+    conda:
+        "../envs/rockdec.yaml"
     script:
         "../scripts/coverage_case.py"
 
@@ -34,6 +36,8 @@ rule coverage_table:
     benchmark:
         "results/studies/coverage/benchmarks/table.tsv"
     threads: 1
+    conda:
+        "../envs/rockdec.yaml"
     script:
         "../scripts/coverage_table.py"
 
@@ -50,6 +54,8 @@ rule fig_coverage:
     benchmark:
         "results/studies/coverage/benchmarks/fig_coverage.tsv"
     threads: 1
+    conda:
+        "../envs/rockdec.yaml"
     script:
         "../scripts/fig_coverage.py"
 

@@ -14,6 +14,8 @@ rule stored_signature:
     threads: 1
     params:
         signatures=lambda w: scene(w.scene)["signatures"],
+    conda:
+        "../envs/rockdec.yaml"
     script:
         "../scripts/stored_signature.py"
 
@@ -29,6 +31,8 @@ rule fig1b:
     benchmark:
         "results/{scene}/benchmarks/fig1b.tsv"
     threads: 1
+    conda:
+        "../envs/rockdec.yaml"
     script:
         "../scripts/fig_1b.py"
 
@@ -46,6 +50,8 @@ rule fig2:
     benchmark:
         "results/{scene}/benchmarks/fig2.tsv"
     threads: 1
+    conda:
+        "../envs/rockdec.yaml"
     script:
         "../scripts/fig_2.py"
 
@@ -62,6 +68,8 @@ rule fig3:
     benchmark:
         "results/{scene}/benchmarks/fig3.tsv"
     threads: 1
+    conda:
+        "../envs/rockdec.yaml"
     script:
         "../scripts/fig_3.py"
 
@@ -78,6 +86,8 @@ rule fig4:
     benchmark:
         "results/{scene}/benchmarks/fig4.tsv"
     threads: 1
+    conda:
+        "../envs/rockdec.yaml"
     script:
         "../scripts/fig_4.py"
 
@@ -95,5 +105,7 @@ rule fig_ev:
     benchmark:
         "results/{scene}/benchmarks/fig_ev.tsv"
     threads: 1
+    conda:
+        "../envs/rockdec.yaml"
     script:
         "../scripts/fig_ev.py"

@@ -10,6 +10,8 @@ rule calibrate:
     threads: 1
     params:
         physics=lambda w: physics(w.scene),
+    conda:
+        "../envs/rockdec.yaml"
     script:
         "../scripts/calibrate.py"
 
@@ -27,6 +29,8 @@ rule stored_series:
     threads: 1
     params:
         records=lambda w: records(w.scene),
+    conda:
+        "../envs/rockdec.yaml"
     script:
         "../scripts/stored_series.py"
 
@@ -44,5 +48,7 @@ rule series:
     threads: 1
     params:
         records=lambda w: records(w.scene),
+    conda:
+        "../envs/rockdec.yaml"
     script:
         "../scripts/series.py"

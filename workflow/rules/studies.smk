@@ -1,30 +1,8 @@
 # Studies beyond the paper, under results/studies/ (apart from the per-scene results/{scene}/).
-# Each compute rule lists the source of every rockdec module its numbers come from, so a
-# change to the study's code reruns it; each plot rule lists only the drawing code
-# (rockdec.figures) and the study's data, so a change to a plot never reruns the study.
-import ast
-from importlib.util import find_spec
-from pathlib import Path
-
-
-def package_sources(module):
-    """Source files of rockdec module ``module`` and of every rockdec module it imports,
-    directly or through others (anywhere in a module, imports inside functions included)."""
-    found, todo = {}, [module]
-    while todo:
-        name = todo.pop()
-        spec = None if name in found else find_spec(name)
-        if spec is None:  # seen already, or no module (`from rockdec import __version__`)
-            continue
-        found[name] = spec.origin
-        for node in ast.walk(ast.parse(Path(spec.origin).read_text())):
-            if isinstance(node, ast.ImportFrom) and node.level == 0 and node.module == "rockdec":
-                todo += [f"rockdec.{alias.name}" for alias in node.names]
-            elif isinstance(node, ast.ImportFrom) and node.level == 0 and (node.module or "").startswith("rockdec."):
-                todo.append(node.module)
-            elif isinstance(node, ast.Import):
-                todo += [alias.name for alias in node.names if alias.name.startswith("rockdec.")]
-    return sorted(found.values())
+# Each compute rule lists the source of every rockdec module its numbers come from
+# (package_sources, in common.smk), so a change to the study's code reruns it; each plot
+# rule lists only the drawing code (rockdec.figures) and the study's data, so a change to
+# a plot never reruns the study.
 
 
 rule amplitude:
@@ -45,6 +23,8 @@ rule amplitude:
         runtime=60,
     params:
         scene=scene("amplitude"),
+    conda:
+        "../envs/rockdec.yaml"
     script:
         "../scripts/amplitude.py"
 
@@ -62,6 +42,8 @@ rule fig_amplitude:
     benchmark:
         "results/studies/amplitude/benchmarks/fig_amplitude.tsv"
     threads: 1
+    conda:
+        "../envs/rockdec.yaml"
     script:
         "../scripts/fig_amplitude.py"
 

@@ -1,10 +1,13 @@
 """Rule `fig2`: paper fig. 2, two stored series and their pooled free-response estimate."""
 
-import sys
+from rockdec import figures, io, job
 
-from rockdec import figures, io
 
-sys.stderr = open(snakemake.log[0], "w")
-with io.open_dataset(snakemake.input.sim) as sim, io.open_dataset(snakemake.input.sig) as sig:
-    fig = figures.fig2(sim.load(), sig.load())
-figures.save(fig, [snakemake.output.png, snakemake.output.pdf])
+def main(smk):
+    with io.open_dataset(smk.input.sim) as sim, io.open_dataset(smk.input.sig) as sig:
+        fig = figures.fig2(sim.load(), sig.load())
+    figures.save(fig, [smk.output.png, smk.output.pdf])
+
+
+if __name__ == "__main__":
+    job.run(main, snakemake)
