@@ -269,8 +269,8 @@ def _check_size(name: str, scene: dict, fix) -> None:
         raise _field_error(
             where,
             f"the scene needs about {samples:.2g} samples (replicates x series_per_replicate x n_points), "
-            f"about {hours:.2g} CPU-hours at {SAMPLES_PER_CPU_SECOND:.2g} samples per CPU-second, more than the "
-            f"{MAX_SAMPLES:.0e} a run takes; lower n_points, replicates or series_per_replicate",
+            f"about {hours:,.0f} CPU-hours at {SAMPLES_PER_CPU_SECOND:.2g} samples per CPU-second, more than the "
+            f"{MAX_SAMPLES:.0e} samples a run may simulate; lower n_points, replicates or series_per_replicate",
             fix(where),
         )
     parts = layout.signature_parts(rec)
