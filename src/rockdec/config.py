@@ -192,6 +192,14 @@ def validate(config: dict, source: str | Path = DEFAULT_PATH, overrides: dict | 
             where = f"scenes.{name}.signatures.windows"
             raise _field_error(where, f"{windows} must be strictly ascending; sort it and drop repeats", fix(where))
         exc = scene["excitation"]
+        if scene["system"]["e"] == 1.0 and (exc["dt"] is None or exc["burn_in"] is None):
+            where = f"scenes.{name}.system.e"
+            raise _field_error(
+                where,
+                "e = 1 dissipates no energy, so the response never becomes stationary: neither the step (from "
+                "points_per_cycle at sigma_Y) nor the burn-in can be derived; give excitation.dt and excitation.burn_in",
+                fix(where),
+            )
         floor = min_points_per_cycle(scene["system"]["e"], scene["signatures"]["level"])
         if exc["dt"] is None and exc["points_per_cycle"] < floor:
             where = f"scenes.{name}.excitation.points_per_cycle"

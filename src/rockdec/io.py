@@ -241,7 +241,7 @@ def coordinate_encoding(ds: xr.Dataset) -> dict:
     encoding = {}
     for name, coord in ds.coords.items():
         encoding[name] = {"_FillValue": None}
-        if coord.dtype.kind in "OUS":
+        if coord.dtype.kind in "OUST":  # object, unicode, bytes, NumPy StringDType (pandas 3 string indexes)
             encoding[name]["dtype"] = "S1"
     return encoding
 
