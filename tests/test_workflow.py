@@ -152,14 +152,23 @@ def test_every_netcdf_product_is_cf_clean_and_carries_its_inputs_history(workflo
         assert history[-1].endswith(" ".join(attrs["source_files"].splitlines()))
 
 
+def declared_localrules() -> set[str]:
+    """The rules the Snakefile's ``localrules:`` block names (Snakemake refuses unknown names)."""
+    block = (REPO / "Snakefile").read_text().split("\nlocalrules:\n", 1)[1]
+    return set(re.findall(r"^    (\w+),$", block.split("\n\n", 1)[0], re.M))
+
+
+def test_figure_table_and_archive_rules_run_on_the_submitting_node_and_compute_rules_do_not():
+    local = declared_localrules()
+    assert {"estimates", "table_readings", *figures.FIGURES, "fig_amplitude", "fig_tradeoff", "fig_coverage",
+            "coverage_table", "archive_scene", "all"} <= local
+    assert not local & {"calibrate", "stored_series", "series", "signatures", "signature_part", "stored_signature",
+                        "choices", "amplitude", "tradeoff", "coverage_case"}
+
+
 @pytest.mark.slow
-def test_figures_and_tables_run_on_the_submitting_node_and_no_job_prints_an_empty_shell_command(workflow):
-    dry, log = workflow["dry_run"], workflow["log"]
-    for name in ("estimates", "table_readings", *figures.FIGURES, "all"):
-        assert re.search(rf"^localrule {name}:", dry, re.M), name
-    for name in ("calibrate", "stored_series", "signatures", "stored_signature"):
-        assert re.search(rf"^rule {name}:", dry, re.M), name
-    assert "Shell command" not in log
+def test_no_job_prints_an_empty_shell_command(workflow):
+    assert "rule signatures:" in workflow["log"] and "Shell command" not in workflow["log"]
 
 
 @pytest.mark.slow
