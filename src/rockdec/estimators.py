@@ -224,6 +224,20 @@ def _slope(p, t):
     return p[2] + 2.0 * p[3] * (t - p[0])
 
 
+#: A slope within this many rounding units of the fitted values' scale over the fit's
+#: span is zero: a flat stretch fits to 0 or to +-1e-17, depending on the order of operations.
+FLAT_ULPS = 64.0
+
+
+@_jit
+def _flat(slope, y, span):
+    """Whether ``slope`` (rad/s) is zero to rounding, given values ``y`` fitted over ``span`` s."""
+    scale = 0.0
+    for k in range(y.size):
+        scale = max(scale, abs(y[k]))
+    return abs(slope) * span <= FLAT_ULPS * np.finfo(np.float64).eps * scale
+
+
 @_jit
 def _root_nearest(p, target):
     """``(found, t)``: the real root of parabola ``p`` nearest ``target``, computed without
@@ -380,7 +394,7 @@ def _e_impact_slope(d, dt, fit_points):
     tau = dt * np.arange(1, fit_points + 1)
     before = _slope(_fit2(-tau[::-1], d[lag0 - fit_points : lag0]), 0.0)
     after = _slope(_fit2(tau, d[lag0 + 1 : lag0 + 1 + fit_points]), 0.0)
-    if before == 0.0:
+    if _flat(before, d[lag0 - fit_points : lag0], tau[-1]):
         return np.nan, _ZERO_SLOPE
     return _finite(after / before)
 
@@ -836,7 +850,7 @@ def _reference_e_impact_slope(d, dt: float, fit_points: int) -> Estimate:
     tau = dt * np.arange(1, fit_points + 1)
     before = _reference_fit2(-tau[::-1], d[lag0 - fit_points : lag0]).slope(0.0)
     after = _reference_fit2(tau, d[lag0 + 1 : lag0 + 1 + fit_points]).slope(0.0)
-    if before == 0:
+    if abs(before) * tau[-1] <= FLAT_ULPS * np.finfo(float).eps * np.abs(d[lag0 - fit_points : lag0]).max():
         return Estimate(np.nan, _REASONS[_ZERO_SLOPE])
     with np.errstate(all="ignore"):
         return _reference_estimate(after / before)
