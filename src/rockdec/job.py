@@ -14,9 +14,9 @@ as its one sentence both to the log and to the console Snakemake runs in, and th
 exits with code 2; any other exception leaves its traceback in the log and a line on the
 console that says where it is.
 
-Recovery after ``kill -9`` of Snakemake alone (README, "When a run is interrupted"): the
-job Snakemake had started goes on as an orphan. Each job records its process, and the
-processes above it (Snakemake), in ``<log>.pid`` while it runs; a rerun of the same rule
+Recovery after ``kill -9`` of Snakemake alone (README, "If a run was killed"): the job
+Snakemake had started goes on as an orphan. Each job records its process, and the processes
+between it and Snakemake (Snakemake included), in ``<log>.pid`` while it runs; a rerun of the same rule
 that finds a live job there whose Snakemake is gone stops that orphan (and its worker
 processes) before it starts, and removes whatever outputs of the rule exist, so that a
 file the orphan wrote never blocks the rerun. A live job whose Snakemake still runs is
@@ -100,11 +100,19 @@ def _process(pid: int, created: float):
 
 
 def _record() -> dict:
-    """This job's process and the processes above it (pid 1 left out), as ``<log>.pid`` keeps them."""
+    """This job's process and the processes above it up to the nearest Snakemake (all of them,
+    pid 1 left out, when none is a Snakemake), as ``<log>.pid`` keeps them."""
     import psutil
 
     me = psutil.Process()
-    parents = [[p.pid, p.create_time()] for p in me.parents() if p.pid != 1]
+    parents = []
+    for p in me.parents():
+        if p.pid == 1:
+            break
+        parents.append([p.pid, p.create_time()])
+        with contextlib.suppress(psutil.Error):
+            if any("snakemake" in part for part in p.cmdline()):
+                break
     return {"host": socket.gethostname(), "pid": me.pid, "created": me.create_time(), "parents": parents}
 
 
