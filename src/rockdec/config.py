@@ -197,7 +197,8 @@ def validate(config: dict, source: str | Path = DEFAULT_PATH, overrides: dict | 
             raise _field_error(
                 where,
                 "e = 1 dissipates no energy, so the response never becomes stationary: neither the step (from "
-                "points_per_cycle at sigma_Y) nor the burn-in can be derived; give excitation.dt and excitation.burn_in",
+                "points_per_cycle at sigma_Y) nor the burn-in can be derived; give both (excitation.dt and "
+                "excitation.burn_in in a scene, --dt and --burn-in on the command line)",
                 fix(where),
             )
         floor = min_points_per_cycle(scene["system"]["e"], scene["signatures"]["level"])
