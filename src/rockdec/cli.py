@@ -302,10 +302,12 @@ def cmd_verify(args) -> None:
         print(line)
     if problems:
         raise SystemExit(1)
-    files = archive.read_manifest(args.folder)["files"]
-    print(f"OK: {len(files)} files in {args.folder} match its {archive.MANIFEST}")
+    manifest = archive.read_manifest(args.folder)
+    print(
+        f"OK: {len(manifest['files'])} products and {len(manifest['workflow'])} workflow files in {args.folder} match its "
+        f"{archive.MANIFEST}, and {archive.CRATE} agrees with it and meets the Workflow Run Crate's required points"
+    )
     if out is not None:
-        out.mkdir()
         same = archive.rebuild(args.folder, out)
         for name, equal in same.items():
             print(f"rebuilt {out / name}: {'same as' if equal else 'DIFFERS from'} the archived {name}")
@@ -396,8 +398,10 @@ def build_parser() -> argparse.ArgumentParser:
     est.add_argument("--overwrite", action="store_true", help="replace --out if it exists")
     est.set_defaults(func=cmd_estimates)
 
-    ver = sub.add_parser("verify", help="re-check the SHA-256 of every file of an archive (snakemake archive)")
-    ver.add_argument("folder", help="archive folder holding manifest.json, e.g. results/paper/archive")
+    ver = sub.add_parser(
+        "verify", help="re-check every file of an archive (snakemake archive) and its Workflow Run Crate against its manifest"
+    )
+    ver.add_argument("folder", help="archive folder holding manifest.json and ro-crate-metadata.json, e.g. results/paper/archive")
     ver.add_argument("--rebuild", metavar="OUT", help="then remake the tables and figures from the archive alone into the new folder OUT")
     ver.set_defaults(func=cmd_verify)
     return parser

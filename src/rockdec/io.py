@@ -66,11 +66,11 @@ TITLES = {
     "coverage": "Coverage of the 95 % interval of rockdec estimate on simulated records of known e",
 }
 
+#: The title of the paper rockdec reproduces (the copy we have names no authors or venue).
+PAPER_TITLE = "Estimation of the Coefficient of Restitution of Rocking Systems by the Random Decrement Technique"
+
 #: What every product cites for its method (CF attribute ``references``).
-REFERENCES = (
-    "Estimation of the Coefficient of Restitution of Rocking Systems by the Random Decrement "
-    "Technique; the method as implemented: docs/method.md of rockdec"
-)
+REFERENCES = f"{PAPER_TITLE}; the method as implemented: docs/method.md of rockdec"
 
 
 def input_history(paths) -> list[str]:

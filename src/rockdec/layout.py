@@ -88,3 +88,21 @@ def compared_readings(estimates: dict) -> list[str]:
     when it compares readings."""
     own = estimates["reading"]
     return [own] + ([r for r in READINGS if r != own] if estimates["compare_readings"] else [])
+
+
+#: What :func:`workflow_sources` lists of the workflow: the Snakefile, then every file under
+#: these folders (hidden files and Python caches left out).
+SOURCE_FOLDERS = ("workflow", "config")
+
+
+def workflow_sources(root: str | Path) -> list[str]:
+    """The workflow's own files under ``root`` (the folder of its Snakefile), as relative
+    names, Snakefile first: what an archive holds of the workflow (rule ``archive_scene``)."""
+    root = Path(root)
+    names = [
+        path.relative_to(root).as_posix()
+        for folder in SOURCE_FOLDERS
+        for path in sorted((root / folder).rglob("*"))
+        if path.is_file() and not any(part.startswith(".") or part == "__pycache__" for part in path.relative_to(root).parts)
+    ]
+    return ["Snakefile", *names]

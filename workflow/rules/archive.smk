@@ -1,6 +1,8 @@
-# Archive: every NetCDF the tables and figures of a scene are made from, the tables, and a
-# manifest (size, SHA-256, producing rule, settings, versions, commit) that
-# `rockdec verify` re-checks.
+# Archive: every NetCDF the tables and figures of a scene are made from, the tables, the
+# workflow's own files, a manifest (size, SHA-256, producing rule, settings, versions,
+# commit, times) that `rockdec verify` re-checks, and the Workflow Run Crate derived from it.
+
+from rockdec.layout import workflow_sources
 
 
 rule archive:
@@ -10,9 +12,11 @@ rule archive:
 
 
 rule archive_scene:
-    """Copy the scene's NetCDF products and tables into one folder with manifest.json."""
+    """Copy the scene's NetCDF products, tables and workflow into one folder with
+    manifest.json and ro-crate-metadata.json."""
     input:
-        lambda w: [f"results/{w.scene}/{name}" for name in archive_files(w.scene)],
+        products=lambda w: [f"results/{w.scene}/{name}" for name in archive_files(w.scene)],
+        workflow=[f"{workflow.basedir}/{name}" for name in workflow_sources(workflow.basedir)],
     output:
         directory("results/{scene}/archive"),
     log:
@@ -21,6 +25,7 @@ rule archive_scene:
     params:
         scene=lambda w: scene(w.scene),
         producers=lambda w: archive_files(w.scene),
+        root=workflow.basedir,
     conda:
         "../envs/rockdec.yaml"
     script:

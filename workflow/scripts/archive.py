@@ -1,4 +1,5 @@
-"""Rule `archive_scene`: the scene's NetCDF products and tables, with manifest.json."""
+"""Rule `archive_scene`: the scene's NetCDF products, tables and workflow, with manifest.json
+and the Workflow Run Crate derived from it (ro-crate-metadata.json)."""
 
 import sys
 from pathlib import Path
@@ -7,7 +8,6 @@ from rockdec import archive
 
 sys.stderr = open(snakemake.log[0], "w")
 folder = Path(snakemake.output[0])
-manifest = archive.write_archive(
-    folder, folder.parent, snakemake.params.producers, snakemake.wildcards.scene, snakemake.params.scene
-)
-print(f"{len(snakemake.params.producers)} files -> {manifest}", file=sys.stderr)
+params = snakemake.params
+manifest = archive.write_archive(folder, folder.parent, params.producers, snakemake.wildcards.scene, params.scene, params.root)
+print(f"{len(params.producers)} products and the workflow -> {manifest}", file=sys.stderr)

@@ -1,10 +1,10 @@
 """Rule `fig1b`: paper fig. 1b, the free-rocking periods of eqs. 3 and 5 (no input data)."""
 
-from rockdec import figures, job
+from rockdec import job, steps
 
 
 def main(smk):
-    figures.save(figures.fig1b(), [smk.output.png, smk.output.pdf])
+    steps.fig1b([smk.output.png, smk.output.pdf])
 
 
 if __name__ == "__main__":
