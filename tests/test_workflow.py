@@ -443,7 +443,7 @@ SIZES = {
 def test_a_scene_too_large_is_refused_at_validation_with_the_estimate(records, words):
     scene = {"records": {"replicates": 4, "series_per_replicate": 40, **records}}
     with pytest.raises(config.ConfigError, match="scenes.tiny.records") as refused:
-        config.validate_scene(scene, "tiny")
+        config.validate_scene(scene, "tiny", sizes=True)
     assert words in str(refused.value) and str(refused.value).count(". ") == 1  # one sentence, then the fix
 
 

@@ -11,7 +11,7 @@ from rockdec import layout
 # the bad field was set (--config, or the file the user passed with --configfile); one
 # sentence, exit code 2, before any job (so `snakemake -n` refuses too).
 try:
-    overrides = workflow.config_settings.overwrite_config
+    overrides = dict(workflow.config_settings.config)  # --config KEY=VALUE alone (overwrite_config adds --configfile)
     rockdec_config.validate(
         rockdec_config.apply_overrides(config, overrides),
         source=", ".join(map(str, workflow.overwrite_configfiles)) or rockdec_config.DEFAULT_PATH,
