@@ -32,6 +32,7 @@ import numpy as np
 import xarray as xr
 
 from rockdec import estimators, signatures, simulate
+from rockdec.fits import DEFAULT_FIT_POINTS
 
 from bench_signatures import best_of, rocking_record  # noqa: E402  (benchmarks/ is on sys.path)
 
@@ -77,7 +78,7 @@ def main(argv=None):
         return np.array([[est.value for est in estimators.reference_estimate_all(r[i], d[i], dt).values()] for i in range(n)])
 
     t_ref, ref = best_of(1, reference)
-    t_rows, (values, _) = best_of(args.repeat, lambda: estimators._estimate_rows(r, d, dt, estimators.DEFAULT_FIT_POINTS))
+    t_rows, (values, _) = best_of(args.repeat, lambda: estimators._estimate_rows(r, d, dt, DEFAULT_FIT_POINTS))
     t_cube, _ = best_of(args.repeat, lambda: estimators.estimate_cube(free, dv, dt))
     chunked = (free.chunk({"seed": args.chunk}), dv.chunk({"seed": args.chunk}))
     with dask.config.set(scheduler="threads"):
@@ -86,7 +87,7 @@ def main(argv=None):
     complete = ~(np.isnan(r).any(axis=1) | np.isnan(d).any(axis=1))  # windows with triggers in both
     t_ref_c, _ = best_of(1, lambda: [estimators.reference_estimate_all(r[i], d[i], dt) for i in np.flatnonzero(complete)])
     rc, dc = r[complete], d[complete]
-    t_rows_c, _ = best_of(args.repeat, lambda: estimators._estimate_rows(rc, dc, dt, estimators.DEFAULT_FIT_POINTS))
+    t_rows_c, _ = best_of(args.repeat, lambda: estimators._estimate_rows(rc, dc, dt, DEFAULT_FIT_POINTS))
 
     both = np.isfinite(ref) & np.isfinite(values)
     diff = np.abs(values[both] - ref[both])

@@ -39,20 +39,6 @@ SCENE = "tiny"
 TABLE_SUFFIXES = (".nc", ".csv", ".md", ".json")
 
 
-def copy_workflow(root: Path) -> Path:
-    """The repository's workflow in ``root``, its default scene the shrunk tiny scene."""
-    shutil.copy(REPO / "Snakefile", root)
-    for folder in ("workflow", "config", "profiles"):
-        shutil.copytree(REPO / folder, root / folder)  # resolves config/schema.yaml
-    config = yaml.safe_load((REPO / "config" / "config.yaml").read_text())
-    config["default_scene"] = SCENE
-    scene = config["scenes"][SCENE]
-    scene["records"].update(replicates=2, series_per_replicate=10, store_series="all", chunk_seeds=10)
-    scene["excitation"]["dt"] = 0.0034
-    (root / "config" / "config.yaml").write_text(yaml.safe_dump(config, sort_keys=False))
-    return root
-
-
 def environment() -> dict:
     """The environment of the test, with this interpreter's scripts (snakemake) first on PATH."""
     return {**os.environ, "PATH": f"{Path(sys.executable).parent}{os.pathsep}{os.environ['PATH']}"}
@@ -124,12 +110,9 @@ def partial_files(root: Path) -> list[Path]:
 
 
 @pytest.fixture(scope="module")
-def reference(tmp_path_factory):
-    """The uninterrupted run, with the archive of its scene."""
-    root = copy_workflow(tmp_path_factory.mktemp("reference"))
-    code, out = run(root, "snakemake --cores 2 all archive")
-    assert code == 0, out
-    return root
+def reference(tiny_workflow):
+    """The uninterrupted run, with the archive of its scene (the session's build, tests/conftest.py)."""
+    return tiny_workflow["root"]
 
 
 # --- the archive ------------------------------------------------------------------------

@@ -5,14 +5,14 @@ import sys
 
 import pytest
 
-from rockdec import config, estimators, layout
+from rockdec import config, fits, layout
 
 from test_hostile import ROOT, config_file, refused
 
 
 def test_defaults_are_filled_in_and_the_fit_points_come_from_the_estimators():
     scene = config.validate_scene({})
-    assert scene["estimates"]["fit_points"] == estimators.DEFAULT_FIT_POINTS
+    assert scene["estimates"]["fit_points"] == fits.DEFAULT_FIT_POINTS
     assert scene["records"]["replicates_per_job"] is None and layout.signature_parts(scene["records"]) == []
     assert scene["system"]["e"] == 0.95 and scene["model"] == "auto"
 
@@ -91,3 +91,11 @@ def test_workflow_names_the_configfile_passed(tmp_path):
     assert "Traceback" not in proc.stderr
 
 
+
+
+def test_the_configuration_and_the_snakefiles_names_load_neither_numba_nor_xarray():
+    """What the Snakefile's start imports (``rockdec.config``, ``rockdec.layout``) stays light,
+    so a Snakemake run that has nothing to do starts fast."""
+    probe = "import sys, rockdec.config, rockdec.layout; print(sorted({'numba', 'xarray', 'dask', 'scipy'} & set(sys.modules)))"
+    proc = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=120, check=True)
+    assert proc.stdout.strip() == "[]"

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from rockdec import config, estimators, replicates, simulate
+from rockdec import config, estimators, fits, replicates, simulate
 
 DT, G, SIGMA_P = 0.003432651166459561, 1.0, 0.003
 STATS = {"sigma_y": 0.001992454115749987, "sigma_ydot": 0.03410016419092972, "g": G}
@@ -102,7 +102,7 @@ def test_local_fits_have_a_sampling_floor():
     with a reason once it does not (5 points per cycle); at and above the floor they are exact
     on the ideal response, up to 5000 points per cycle.
     """
-    floor = estimators.min_points_per_cycle(0.95, 2.0)
+    floor = fits.min_points_per_cycle(0.95, 2.0)
     for ppc in (math.ceil(floor), 75, 5000):
         r, dt = analytic_free_response(ppc)
         for name, est in estimators.local_measures(r, dt).items():

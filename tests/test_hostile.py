@@ -6,6 +6,7 @@ non-finite number (issue 13). Record time axes are checked in the records tests.
 from __future__ import annotations
 
 import errno
+import json
 import math
 import subprocess
 import sys
@@ -426,3 +427,490 @@ def test_cli_simulate_options_give_a_finite_file_or_one_sentence(tmp_path_factor
             assert np.isfinite(ds["theta"].values).all() and np.isfinite(ds["theta_dot"].values).all()
     else:
         assert code == 2 and list(folder.iterdir()) == []
+
+
+# --------------------------------------------------------------------------- round two: rockdec estimate
+# Records of 20,000 samples and a calibration of 6 e x 5 sets keep each answered case near 1 s;
+# refusals come before any calibration.
+
+from rockdec import calibration, inference  # noqa: E402
+
+#: The calibration's own grid and sets, before any test shrinks them.
+FULL_CALIBRATION = (calibration.E_GRID, calibration.SETS_PER_E)
+
+
+@pytest.fixture(scope="module")
+def tiny_calibration():
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(calibration, "E_GRID", (0.5, 0.65, 0.75, 0.85, 0.92, 0.97))
+        mp.setattr(calibration, "SETS_PER_E", 5)
+        yield
+
+
+@pytest.fixture(scope="module")
+def rocking(tmp_path_factory):
+    """A simulated rocking record (e = 0.85, g = 1 rad/s^2, 20,000 samples) as CSV, and its parts."""
+    folder = tmp_path_factory.mktemp("rocking")
+    cal = simulate.calibrate_dt(e=0.85, g=1.0, sigma_p=0.003, points_per_cycle=75)
+    theta = simulate.simulate_block([11], 20_000, dt=cal["dt"], g=1.0, e=0.85, sigma_p=0.003, burn_in=cal["burn_in"])[0][0]
+    dt = cal["dt"]
+    t = np.arange(theta.size) * dt
+    np.savetxt(folder / "rec.csv", np.c_[t, theta], delimiter=",", header="time,theta", comments="", fmt="%.10g")
+    return {"folder": folder, "theta": theta, "dt": dt, "t": t, "csv": folder / "rec.csv"}
+
+
+def _estimate(argv, cache):
+    """``rockdec estimate ARGV --json --cache CACHE``: exit code, parsed JSON (or None), stderr."""
+    import io as _io
+    from contextlib import redirect_stderr, redirect_stdout
+
+    out, err = _io.StringIO(), _io.StringIO()
+    with redirect_stdout(out), redirect_stderr(err):
+        code = main(["estimate", *map(str, argv), "--json", "--cache", str(cache)])
+    return code, (json.loads(out.getvalue()) if code == 0 else None), err.getvalue()
+
+
+def _nc(path, theta, dt, theta_units=None, time_units=None, attrs=None):
+    var_attrs = {"units": theta_units} if theta_units else {}
+    time_attrs = {"units": time_units} if time_units else {}
+    t = np.arange(theta.shape[-1]) * dt
+    dims = ("seed", "time") if theta.ndim == 2 else ("time",)
+    ds = xr.Dataset({"theta": (dims, theta, var_attrs)}, coords={"time": ("time", t, time_attrs)}, attrs=attrs or {})
+    ds.to_netcdf(path)
+    return path
+
+
+def _sparse(path, head: bytes, size: int):
+    """A file of ``size`` bytes that starts with ``head`` and is a hole after it (no disk used)."""
+    with open(path, "wb") as f:
+        f.write(head)
+        f.truncate(size)
+    return path
+
+
+def _estimate_cases(r):
+    """name -> (argv, words in the refusal); ``r``: the rocking fixture."""
+    f, theta, dt, t = r["folder"], r["theta"], r["dt"], r["t"]
+    rng = np.random.default_rng(0)
+    cases = {}
+
+    def csv(name, y, tt=t, sep=","):
+        path = f / name
+        np.savetxt(path, np.c_[tt, y], delimiter=sep, header=f"time{sep}theta", comments="", fmt="%.10g")
+        return path
+
+    cases["white noise"] = ([csv("noise.csv", rng.standard_normal(theta.size) * 1e-3)], ["does not look like a rocking record", "white noise"])
+    cases["white noise with --g"] = ([f / "noise.csv", "--g", "1"], ["does not look like a rocking record"])
+    for g in ("57.3", "100", "1e-3", "1e308", "0.4", "3"):
+        cases[f"--g {g} off the record's own"] = ([r["csv"], "--g", g], [f"--g {float(g):g}", "times the g the records show"])
+    cases["same file twice"] = ([r["csv"], r["csv"]], ["same samples"])
+    cases["a copy of the file"] = ([r["csv"], csv("copy.csv", theta)], ["copy.csv", "same samples"])
+    cases["two identical series in a file"] = ([_nc(f / "twice.nc", np.stack([theta, theta]), dt)], ["[1] holds the same samples as", "[0]"])
+    cases["angle units unknown"] = ([_nc(f / "grad.nc", theta, dt, theta_units="furlong")], ["units 'furlong'", "rad or degrees"])
+    cases["time units unknown"] = ([_nc(f / "fortnight.nc", theta, dt, time_units="fortnight")], ["units 'fortnight'", "s or ms"])
+    xr.Dataset({"theta": ("time", theta)}, attrs={"dt": "abc"}).to_netcdf(f / "abc.nc")
+    cases["dt attribute 'abc'"] = ([f / "abc.nc"], ["attribute dt 'abc'", "not a number of seconds"])
+    xr.Dataset({"theta": ("time", theta)}, attrs={"dt": np.array([0.01, 0.02])}).to_netcdf(f / "dt2.nc")
+    cases["dt attribute of two values"] = ([f / "dt2.nc"], ["attribute dt", "not a number of seconds"])
+    cases["a folder as record"] = ([f], ["a folder, not a record file"])
+    one_col = f / "one_col.csv"
+    np.savetxt(one_col, theta)
+    npy = f / "rec.npy"
+    np.save(npy, theta)
+    for flag, value, words in (
+        ("--fs", "0", ["--fs 0", "> 0"]), ("--fs", "1e-320", ["--fs 1e-320"]), ("--fs", "-5", ["--fs -5"]),
+        ("--fs", "inf", ["--fs inf"]), ("--fs", "nan", ["--fs nan"]), ("--dt", "0", ["--dt 0"]), ("--dt", "-1", ["--dt -1"]),
+        ("--dt", "nan", ["--dt nan"]), ("--dt", "inf", ["--dt inf"]),
+        ("--dt", "1e308", ["1e+308 s", "beyond the range of a float"]), ("--dt", "5e-324", ["beyond the range of a float"]),
+        ("--dt", "1e300", ["1e+300 s"]),
+    ):
+        cases[f"{flag} {value} (npy)"] = ([npy, flag, value], words)
+        cases[f"{flag} {value} (one-column csv)"] = ([one_col, flag, value], words)
+    long_name = f / ("r" * 300 + ".csv")
+    cases["record name of 300 characters"] = ([long_name], ["bytes, longer than the 255", "shorter name"])
+    cases["--plot .txt"] = ([r["csv"], "--plot", f / "p.txt"], ["--plot", ".txt is not a format", ".png or .pdf"])
+    cases["--plot .svg"] = ([r["csv"], "--plot", f / "p.svg"], [".svg is not a format"])
+    cases["--plot without suffix"] = ([r["csv"], "--plot", f / "plot"], ["no format suffix"])
+    cases["--plot onto the input"] = ([r["csv"], "--plot", r["csv"]], ["is the record"])
+    cases["--plot onto the input with --overwrite"] = ([r["csv"], "--plot", r["csv"], "--overwrite"], ["is the record"])
+    cases["--plot name of 300 characters"] = ([r["csv"], "--plot", f / ("p" * 300 + ".png")], ["bytes, longer than the 255", "shorter name"])
+    cases["--plot exists"] = ([r["csv"], "--plot", csv("exists.png", theta[:10], t[:10])], ["exists already", "--overwrite"])
+    cases["--plot in a missing folder"] = ([r["csv"], "--plot", f / "no" / "p.png"], ["does not exist"])
+    cases["--cache on a file"] = ([r["csv"], "--cache-file"], ["--cache", "is a file"])
+    cases["2 GiB of NUL as CSV"] = ([_sparse(f / "nul.csv", b"", 2 * 2**30)], ["NUL bytes", "binary"])
+    cases["NUL bytes after a header"] = ([_sparse(f / "nul2.csv", b"time,theta\n0,1\n", 2**20)], ["NUL bytes"])
+    cases["no line break"] = ([_csv_bytes(f / "oneline.csv", b"1," * 40_000)], ["no line break"])
+    big_npy = f / "big.npy"
+    with open(big_npy, "wb") as handle:  # a header for 200 million float64 samples, then a hole
+        np.lib.format.write_array_header_1_0(handle, {"descr": "<f8", "fortran_order": False, "shape": (200_000_000,)})
+        handle.truncate(handle.tell() + 8 * 200_000_000)
+    # refused for the time (pass --yes) or, on a small machine, for the memory: both name the size
+    cases["200 million samples (npy)"] = ([big_npy, "--dt", "0.01"], ["records of about 2e+08 samples need"])
+    head = b"time,theta\n" + b"".join(f"{k * 0.01:.2f},{v:.8f}\n".encode() for k, v in enumerate(theta[:4000]))
+    cases["200 million samples (csv)"] = ([_sparse(f / "big.csv", head, 200_000_000 * (len(head) // 4001))], ["e+08 samples need"])
+    spiky = theta.copy()
+    spiky[::2000] = 1e3 * np.std(theta)
+    cases["spikes"] = ([csv("spikes.csv", spiky)], ["spike of", "times the rms", "remove the spikes"])
+    gaps = theta.copy()
+    gaps[rng.choice(theta.size, theta.size // 20, replace=False)] = np.nan
+    cases["5 % scattered NaN"] = ([csv("gaps.csv", gaps)], ["NaN, scattered", "fill short gaps"])
+    cases["constant record"] = ([csv("const.csv", np.full_like(theta, 0.01))], ["constant"])
+    return cases
+
+
+def _csv_bytes(path, data: bytes):
+    path.write_bytes(data)
+    return path
+
+
+ESTIMATE_CASE_NAMES = [
+    "white noise", "white noise with --g", *[f"--g {g} off the record's own" for g in ("57.3", "100", "1e-3", "1e308", "0.4", "3")],
+    "same file twice", "a copy of the file", "two identical series in a file", "angle units unknown", "time units unknown",
+    *[f"{flag} {value} ({kind})" for flag, value in (
+        ("--fs", "0"), ("--fs", "1e-320"), ("--fs", "-5"), ("--fs", "inf"), ("--fs", "nan"), ("--dt", "0"), ("--dt", "-1"),
+        ("--dt", "nan"), ("--dt", "inf"), ("--dt", "1e308"), ("--dt", "5e-324"), ("--dt", "1e300"),
+    ) for kind in ("npy", "one-column csv")],
+    "record name of 300 characters", "--plot .txt", "--plot .svg", "--plot without suffix", "--plot onto the input",
+    "--plot onto the input with --overwrite", "--plot name of 300 characters", "--plot exists", "--plot in a missing folder",
+    "--cache on a file", "2 GiB of NUL as CSV", "NUL bytes after a header", "no line break", "200 million samples (npy)",
+    "200 million samples (csv)", "spikes", "5 % scattered NaN", "constant record", "dt attribute 'abc'", "dt attribute of two values", "a folder as record",
+]
+
+
+@pytest.mark.parametrize("name", ESTIMATE_CASE_NAMES)
+def test_estimate_refuses_in_one_sentence_before_any_calibration(name, rocking, tmp_path, capsys):
+    case = _estimate_cases(rocking)[name]
+    argv, words = list(case[0]), case[1]
+    cache = tmp_path / "cache"
+    if "--cache-file" in argv:
+        argv.remove("--cache-file")
+        cache = tmp_path / "cachefile"
+        cache.write_text("not a folder")
+    before = sorted(p.name for p in rocking["folder"].iterdir())
+    start = time.perf_counter()
+    code, _, err = _estimate(argv, cache)
+    assert time.perf_counter() - start < 60, "a refusal must come quickly"
+    assert code == 2, err
+    lines = [line for line in err.splitlines() if "error:" in line]
+    assert len(lines) == 1 and "Traceback" not in err and "internal error" not in err, err
+    for word in words:
+        assert word in lines[0], (word, err)
+    assert not (cache.is_dir() and any(cache.glob("*.nc"))), "a calibration was built for a refused record"
+    assert sorted(p.name for p in rocking["folder"].iterdir()) == before  # no plot, lock or partial file
+
+
+OTHER_CASES = {
+    "simulate 1e8 seeds of 50 points": (["simulate", "--out", "{out}/o.nc", "--dt", "0.0034", "--seeds", "0-99999999", "--n-points", "50"],
+                                        ["--seeds '0-99999999'", "pass --yes"]),
+    "simulate --dt 5e-324": (["simulate", "--out", "{out}/o.nc", *_argv(["--dt", "5e-324"])], ["too small to tell", "time stamps"]),
+    "simulate --dt 1e-320": (["simulate", "--out", "{out}/o.nc", *_argv(["--dt", "1e-320"])], ["too small to tell"]),
+    "housner started beyond theta_cr": (["simulate", "--out", "{out}/o.nc", *_argv(["--model", "housner", "--theta0", "0.3"])],
+                                        ["--theta0 0.3", "critical angle", "overturns"]),
+    "housner started at -theta_cr": (["simulate", "--out", "{out}/o.nc", *_argv(["--model", "housner", "--theta0", "-0.25"])],
+                                     ["critical angle"]),
+    "simulate --out name of 300 characters": (["simulate", "--out", "{out}/" + "o" * 300 + ".nc", *FAST], ["bytes, longer than the 255"]),
+    "signatures --n-periods 1e-300": (["signatures", "{files}/sim.nc", "--out", "{out}/s.nc", "--n-periods", "1e-300"],
+                                      ["--n-periods 1e-300", "lag range of 0 samples"]),
+    "signatures --g 1e308": (["signatures", "{files}/sim.nc", "--out", "{out}/s.nc", "--g", "1e308"], ["--g 1e+308", "lag range of 0"]),
+    "signatures of a constant record": (["signatures", "{files}/const.nc", "--out", "{out}/s.nc", "--g", "1"], ["series 0", "constant"]),
+    "signatures dt attribute 'abc'": (["signatures", "{files}/abc.nc", "--out", "{out}/s.nc", "--g", "1"], ["attribute dt 'abc'"]),
+    "signatures --group-size 1e23 (as a float)": (["signatures", "{files}/sim.nc", "--out", "{out}/s.nc", "--group-size", "1e23"],
+                                                  ["--group-size", "invalid int"]),
+    "signatures --group-size 10**23": (["signatures", "{files}/sim.nc", "--out", "{out}/s.nc", "--group-size", str(10**23)],
+                                       ["--group-size 100000000000000000000000", "more than the 4 series"]),
+    "signatures --group-size 2**63": (["signatures", "{files}/sim.nc", "--out", "{out}/s.nc", "--group-size", str(2**63)],
+                                      ["more than the 4 series"]),
+    "signatures --group-size 5 of 4 series": (["signatures", "{files}/sim.nc", "--out", "{out}/s.nc", "--group-size", "5"],
+                                              ["--group-size 5", "at most 4"]),
+    "estimates --fit-points 10**20": (["estimates", "{files}/sig.nc", "--out", "{out}/e.nc", "--fit-points", str(10**20)],
+                                      ["--fit-points 100000000000000000000", "more than the"]),
+    "estimates --fit-points 1e20 (as a float)": (["estimates", "{files}/sig.nc", "--out", "{out}/e.nc", "--fit-points", "1e20"],
+                                                 ["--fit-points", "invalid int"]),
+    "unreachable tcp scheduler": (["--dask-scheduler", "tcp://127.0.0.1:9", "simulate", "--out", "{out}/o.nc", *FAST],
+                                  ["cannot be reached", "tcp://127.0.0.1:9"]),
+}
+
+
+@pytest.fixture(scope="module")
+def more_files(files):
+    xr.Dataset({"theta": ("time", np.full(3000, 0.01))}, coords={"time": np.arange(3000) * 0.01}).to_netcdf(files / "const.nc")
+    xr.Dataset({"theta": ("time", np.sin(np.arange(3000) * 0.1))}, attrs={"dt": "abc"}).to_netcdf(files / "abc.nc")
+    return files
+
+
+@pytest.mark.parametrize("argv, keywords", OTHER_CASES.values(), ids=OTHER_CASES.keys())
+def test_other_commands_refuse_in_one_sentence(more_files, tmp_path, capsys, argv, keywords):
+    argv = [a.format(files=more_files, out=tmp_path) for a in argv]
+    start = time.perf_counter()
+    try:
+        refused(argv, tmp_path, capsys, keywords)
+    except SystemExit as exc:  # argparse refuses before the command runs
+        assert exc.code == 2
+    assert time.perf_counter() - start < 30
+
+
+def test_a_listener_that_is_not_dask_is_refused_at_once(tmp_path, capsys):
+    import socket
+
+    server = socket.socket()
+    server.bind(("127.0.0.1", 0))
+    server.listen()
+    port = server.getsockname()[1]
+
+    def greet():
+        conn, _ = server.accept()
+        conn.sendall(b"SSH-2.0-OpenSSH_9.6\r\n")  # read as a frame length, this asks for exabytes
+        time.sleep(2)
+        conn.close()
+
+    thread = threading.Thread(target=greet, daemon=True)
+    thread.start()
+    try:
+        start = time.perf_counter()
+        refused(["--dask-scheduler", f"tcp://127.0.0.1:{port}", "simulate", "--out", str(tmp_path / "o.nc"), *FAST], tmp_path, capsys,
+                ["answers, but not as a Dask scheduler"])
+        assert time.perf_counter() - start < 10
+    finally:
+        server.close()
+
+
+def test_a_file_size_limit_is_one_sentence(tmp_path):
+    script = (
+        "import resource, sys; resource.setrlimit(resource.RLIMIT_FSIZE, (20000, 20000)); "
+        "from rockdec.cli import main; "
+        f"sys.exit(main(['simulate', '--out', {str(tmp_path / 'o.nc')!r}, '--dt', '0.0034', '--burn-in', '0', '--seeds', '0-9', '--n-points', '20000']))"
+    )
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 2, proc.stderr
+    assert "ulimit -f" in proc.stderr and "internal error" not in proc.stderr
+    assert list(tmp_path.iterdir()) == []
+
+
+# --------------------------------------------------------------------------- answered, with the right note
+
+
+def test_units_degrees_and_milliseconds_give_the_radian_second_answer(rocking, tiny_calibration, tmp_path):
+    theta, dt = rocking["theta"], rocking["dt"]
+    cache = tmp_path / "cache"
+    _, plain, _ = _estimate([_nc(tmp_path / "rad.nc", theta, dt, theta_units="rad", time_units="s")], cache)
+    _, deg, _ = _estimate([_nc(tmp_path / "deg.nc", np.degrees(theta), dt, theta_units="degrees")], cache)
+    _, ms, _ = _estimate([_nc(tmp_path / "ms.nc", theta, dt * 1e3, time_units="ms")], cache)
+    for other in (deg, ms):
+        assert other["sigma_y"] == pytest.approx(plain["sigma_y"], rel=1e-9)
+        assert other["dt"] == pytest.approx(plain["dt"], rel=1e-9)
+        assert other["g"] == pytest.approx(plain["g"], rel=1e-6)
+        assert other["e"] == pytest.approx(plain["e"], abs=1e-6)
+
+
+@pytest.mark.parametrize("sep", [";", "\t", " "], ids=["semicolon", "tab", "space"])
+def test_csv_separators_give_the_comma_answer(rocking, tiny_calibration, tmp_path, sep):
+    path = tmp_path / "rec.csv"
+    np.savetxt(path, np.c_[rocking["t"], rocking["theta"]], delimiter=sep, header=f"time{sep}theta", comments="", fmt="%.10g")
+    cache = tmp_path / "cache"
+    _, comma, _ = _estimate([rocking["csv"]], cache)
+    code, other, err = _estimate([path], cache)
+    assert code == 0, err
+    assert other["e"] == comma["e"] and other["interval"] == comma["interval"]
+
+
+def test_a_given_g_near_the_records_own_is_used(rocking, tiny_calibration, tmp_path):
+    code, res, err = _estimate([rocking["csv"], "--g", "1.0"], tmp_path / "cache")
+    assert code == 0, err
+    assert res["g"] == 1.0 and res["g_given"]
+
+
+def test_a_null_e_always_carries_a_reason(rocking, tiny_calibration, tmp_path):
+    drifting = rocking["theta"] * np.linspace(0.2, 3.0, rocking["theta"].size)
+    path = tmp_path / "drift.csv"
+    np.savetxt(path, np.c_[rocking["t"], drifting], delimiter=",", header="time,theta", comments="", fmt="%.10g")
+    code, res, err = _estimate([path], tmp_path / "cache")
+    assert code in (0, 2), err
+    if code == 0:
+        assert any("not stationary" in w for w in res["warnings"])
+        assert (res["e"] is None) == bool(res["reason"])
+
+
+def test_the_text_report_prints_when_g_is_given(rocking, tiny_calibration, tmp_path, capsys):
+    code = main(["estimate", str(rocking["csv"]), "--g", "1.0", "--cache", str(tmp_path / "cache")])
+    out = capsys.readouterr()
+    assert code == 0, out.err
+    assert "g = 1 rad/s^2 (given (--g))" in out.out
+
+
+# --------------------------------------------------------------------------- the calibration cache
+
+
+def _cached_file(cache):
+    (path,) = cache.glob("calibration-*.nc")
+    return path
+
+
+@pytest.mark.parametrize("damage", ["tampered value", "truncated", "settings edited", "checksum removed", "not NetCDF"])
+def test_a_damaged_cache_file_is_rebuilt_with_a_note(rocking, tiny_calibration, tmp_path, damage):
+    cache = tmp_path / "cache"
+    _, fresh, _ = _estimate([rocking["csv"]], cache)
+    path = _cached_file(cache)
+    if damage == "tampered value":
+        with xr.open_dataset(path) as ds:
+            ds = ds.load()
+        ds["raw"][:] = ds["raw"].values * 0.97
+        path.unlink()
+        ds.to_netcdf(path)
+    elif damage == "truncated":
+        path.write_bytes(path.read_bytes()[: path.stat().st_size // 2])
+    elif damage in ("settings edited", "checksum removed"):
+        with xr.open_dataset(path) as ds:
+            ds = ds.load()
+        if damage == "settings edited":
+            ds.attrs["settings"] = ds.attrs["settings"].replace('"sets_per_e": 5', '"sets_per_e": 6')
+        else:
+            del ds.attrs["content_sha256"]
+        path.unlink()
+        ds.to_netcdf(path)
+    else:
+        path.write_text("hello")
+    code, again, err = _estimate([rocking["csv"]], cache)
+    assert code == 0, err
+    assert again["calibration"]["cached"] is False
+    assert any("was rebuilt" in w for w in again["warnings"])
+    assert again["e"] == fresh["e"] and again["interval"] == fresh["interval"]
+    _, third, _ = _estimate([rocking["csv"]], cache)
+    assert third["calibration"]["cached"] is True and not any("rebuilt" in w for w in third["warnings"])
+
+
+def test_concurrent_builds_of_one_calibration_build_it_once(tmp_path, monkeypatch):
+    built = []
+    gate = threading.Event()
+
+    def slow_build(settings):
+        built.append(threading.get_ident())
+        gate.wait(10)
+        return xr.Dataset({"raw": (("e_true", "set", "name"), np.ones((2, 2, 1)))}, coords={"e_true": [0.5, 0.9]},
+                          attrs={"settings": json.dumps(settings)})
+
+    monkeypatch.setattr(calibration, "build", slow_build)
+    monkeypatch.setattr(calibration, "POLL_S", 0.05)
+    settings_ = {"lengths": [1000], "x": 1}
+    results = []
+    threads = [threading.Thread(target=lambda: results.append(calibration.load_or_build(settings_, tmp_path))) for _ in range(3)]
+    for t in threads:
+        t.start()
+    time.sleep(0.5)
+    gate.set()
+    for t in threads:
+        t.join(30)
+    assert len(built) == 1
+    assert sorted(cached for _, cached in results) == [False, True, True]
+    assert sorted(p.name for p in tmp_path.iterdir()) == [f"calibration-{calibration.settings_hash(settings_)}.nc"]
+
+
+def test_a_build_lock_is_waited_for_while_fresh_and_taken_over_when_stale(tmp_path, monkeypatch):
+    """The lock's liveness is its mtime (host and pid are for the reader): a lock from
+    another node whose process is unknown here is still waited for while it is touched."""
+    import os
+
+    monkeypatch.setattr(calibration, "build", lambda s: xr.Dataset(
+        {"raw": (("e_true", "set", "name"), np.ones((2, 2, 1)))}, coords={"e_true": [0.5, 0.9]}, attrs={"settings": json.dumps(s)}))
+    settings_ = {"lengths": [1000], "y": 2}
+    lock = tmp_path / f"calibration-{calibration.settings_hash(settings_)}.building"
+    lock.write_text("host elsewhere pid 999999999 started 2026-01-01T00:00:00Z\n")
+    notes = []
+    assert calibration._take_lock(lock, notes) is False and lock.exists()  # fresh: another node's live build
+    old = time.time() - calibration.STALE_S - 5
+    os.utime(lock, (old, old))
+    assert calibration._take_lock(lock, notes) is False and not lock.exists()
+    assert "took over" in notes[0] and "host elsewhere" in notes[0]
+    ds, cached = calibration.load_or_build(settings_, tmp_path)
+    assert cached is False and not lock.exists()
+
+
+# --------------------------------------------------------------------------- the plot
+
+
+def test_a_plot_claimed_by_a_running_estimate_is_refused_at_once(rocking, tmp_path, capsys):
+    plot = tmp_path / "p.png"
+    with io.claimed(plot):
+        refused(["estimate", str(rocking["csv"]), "--plot", str(plot), "--cache", str(tmp_path / "c")], tmp_path, capsys,
+                ["being written by another run"])
+
+
+def test_overwrite_replaces_a_symlinked_plot_not_its_target(rocking, tiny_calibration, tmp_path):
+    target = tmp_path / "precious.png"
+    target.write_bytes(b"keep me")
+    link = tmp_path / "p.png"
+    link.symlink_to(target)
+    code, _, err = _estimate([rocking["csv"], "--plot", link], tmp_path / "cache")
+    assert code == 2 and "exists already" in err
+    code, _, err = _estimate([rocking["csv"], "--plot", link, "--overwrite"], tmp_path / "cache")
+    assert code == 0, err
+    assert target.read_bytes() == b"keep me" and not link.is_symlink() and link.stat().st_size > 10_000
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cache", "p.png", "precious.png"]
+
+
+def test_a_long_record_is_warned_that_its_interval_may_cover_less(rocking, tiny_calibration, tmp_path, monkeypatch):
+    monkeypatch.setattr(inference, "LONG_SAMPLES", 10_000)  # the rocking record has 20,000
+    code, res, err = _estimate([rocking["csv"]], tmp_path / "cache")
+    assert code == 0, err
+    assert any("narrower than the accuracy" in w for w in res["warnings"])
+
+
+def test_a_20_million_sample_record_is_refused_with_its_time_unless_yes(tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(calibration, "E_GRID", FULL_CALIBRATION[0])
+    monkeypatch.setattr(calibration, "SETS_PER_E", FULL_CALIBRATION[1])
+    path = tmp_path / "long.npy"
+    with open(path, "wb") as handle:  # a header for 20 million float64 samples, then a hole
+        np.lib.format.write_array_header_1_0(handle, {"descr": "<f8", "fortran_order": False, "shape": (20_000_000,)})
+        handle.truncate(handle.tell() + 8 * 20_000_000)
+    seconds, _ = inference.cost(20_000_000, False, False)
+    assert seconds > 600
+    refused(["estimate", str(path), "--dt", "0.01", "--cache", str(tmp_path / "c")], tmp_path, capsys, ["2e+07 samples", "min", "--yes"])
+
+
+ESTIMATE_PROCESS = """
+import json, sys
+from rockdec import calibration
+calibration.E_GRID = (0.5, 0.65, 0.75, 0.85, 0.92, 0.97)
+calibration.SETS_PER_E = 5
+from rockdec.cli import main
+sys.exit(main(["estimate", sys.argv[1], "--json", "--cache", sys.argv[2]]))
+"""
+
+
+def test_two_concurrent_estimates_on_one_record_build_one_calibration(rocking, tmp_path):
+    """Issue 19: two processes, same settings; the second waits for the first's build."""
+    cache = tmp_path / "cache"
+    procs = [subprocess.Popen([sys.executable, "-c", ESTIMATE_PROCESS, str(rocking["csv"]), str(cache)],
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True) for _ in range(2)]
+    outs = [p.communicate(timeout=300) for p in procs]
+    assert [p.returncode for p in procs] == [0, 0], [err for _, err in outs]
+    results = [json.loads(out) for out, _ in outs]
+    assert sorted(r["calibration"]["cached"] for r in results) == [False, True]
+    assert results[0]["e"] == results[1]["e"] and results[0]["interval"] == results[1]["interval"]
+    assert [p.name for p in cache.iterdir()] == [results[0]["calibration"]["file"]]
+
+
+def test_signatures_read_degrees_and_milliseconds_as_rad_and_s(rocking, tmp_path):
+    theta, dt = rocking["theta"], rocking["dt"]
+    files = {
+        "rad": _nc(tmp_path / "rad.nc", theta, dt, theta_units="rad", time_units="s"),
+        "deg": _nc(tmp_path / "deg.nc", np.degrees(theta), dt, theta_units="degree"),
+        "ms": _nc(tmp_path / "ms.nc", theta, dt * 1e3, time_units="ms"),
+    }
+    cubes = {}
+    for name, path in files.items():
+        out = tmp_path / f"{name}_sig.nc"
+        assert main(["signatures", str(path), "--out", str(out), "--g", "1"]) == 0
+        with xr.open_dataset(out) as ds:
+            cubes[name] = ds["free_response"].values
+    np.testing.assert_allclose(cubes["deg"], cubes["rad"], rtol=1e-9, equal_nan=True)
+    np.testing.assert_allclose(cubes["ms"], cubes["rad"], rtol=1e-9, equal_nan=True)
+
+
+def test_a_running_dask_scheduler_passes_the_probe(tmp_path):
+    from dask.distributed import LocalCluster
+
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, protocol="tcp", dashboard_address=None) as cluster:
+        argv = ["--dask-scheduler", cluster.scheduler_address, "simulate", "--out", str(tmp_path / "o.nc"), *FAST]
+        assert main(argv) == 0
+    with xr.open_dataset(tmp_path / "o.nc") as ds:
+        assert np.isfinite(ds["theta"].values).all()

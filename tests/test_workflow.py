@@ -23,6 +23,7 @@ import xarray as xr
 import yaml
 
 from cf_check import NO_FINDINGS, cf_findings
+from conftest import snakemake
 from rockdec import config, figures, job, run
 from rockdec.validate import InputError
 
@@ -48,6 +49,7 @@ PRODUCTS = [
 ]
 JOBS = {
     "calibrate": 1,
+    "series": 2,  # every series stored, one file a replicate
     "stored_series": 1,
     "signatures": 1,
     "estimates": 1,
@@ -56,19 +58,6 @@ JOBS = {
     **{name: 1 for name in figures.FIGURES},
     "all": 1,
 }
-
-
-def snakemake(workdir, *args, env=None):
-    """``python -m snakemake --cores 2 *args`` in ``workdir``: exit code and output."""
-    proc = subprocess.run(
-        [sys.executable, "-m", "snakemake", "--cores", "2", *args],
-        cwd=workdir,
-        capture_output=True,
-        text=True,
-        timeout=600,
-        env=None if env is None else {**os.environ, **env},
-    )
-    return proc.returncode, proc.stdout + proc.stderr
 
 
 def job_stats(output: str) -> dict[str, int]:
@@ -86,22 +75,10 @@ def job_stats(output: str) -> dict[str, int]:
 
 
 @pytest.fixture(scope="module")
-def workflow(tmp_path_factory):
-    """A copy of the workflow with a shrunken tiny scene, dry-run and then built once."""
-    root = tmp_path_factory.mktemp("workflow")
-    shutil.copy(REPO / "Snakefile", root)
-    for folder in ("workflow", "config", "profiles"):
-        shutil.copytree(REPO / folder, root / folder, symlinks=False)  # resolves config/schema.yaml
-    config = yaml.safe_load((REPO / "config" / "config.yaml").read_text())
-    config["default_scene"] = SCENE
-    # 2 replicates of 10 series: the fewest the groups_of_10 reading accepts
-    config["scenes"][SCENE]["records"].update(replicates=2, series_per_replicate=10, store_series=10, chunk_seeds=10)
-    (root / "config" / "config.yaml").write_text(yaml.safe_dump(config, sort_keys=False))
-    code, dry = snakemake(root, "-n")
-    assert code == 0, dry
-    code, log = snakemake(root)
-    assert code == 0, log
-    return {"root": root, "dry_run": dry, "log": log}
+def workflow(tiny_workflow):
+    """The copy of the workflow with a shrunken tiny scene, dry-run and then built once (the
+    session's build, tests/conftest.py)."""
+    return tiny_workflow
 
 
 @pytest.mark.slow
@@ -202,10 +179,11 @@ def test_a_nested_config_override_is_read_as_yaml_values(workflow):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("scheduler", ["processes:2", "tcp"])
-def test_the_tiny_scene_on_worker_processes_gives_the_products_of_threads(workflow, tmp_path, scheduler):
+def test_the_tiny_scene_on_worker_processes_gives_the_products_of_threads(workflow, tmp_path, scheduler, monkeypatch):
     root = tmp_path / "copy"
     shutil.copytree(workflow["root"], root, symlinks=True)  # threads' products, mtimes kept
-    products = ["stored_series.nc", "signatures.nc", "readings.nc", "estimates.nc", "estimates_readings.nc"]
+    products = ["series/replicate_0.nc", "series/replicate_1.nc", "stored_series.nc", "signatures.nc", "readings.nc",
+                "estimates.nc", "estimates_readings.nc"]
     targets = [f"results/{SCENE}/{name}" for name in products]
     with contextlib.ExitStack() as stack:
         if scheduler == "tcp":  # a running scheduler on loopback, given by its address
@@ -214,8 +192,8 @@ def test_the_tiny_scene_on_worker_processes_gives_the_products_of_threads(workfl
             cluster = stack.enter_context(LocalCluster(n_workers=2, threads_per_worker=1, host="127.0.0.1",
                                                        dashboard_address=None))
             scheduler = cluster.scheduler_address
-        code, out = snakemake(root, "--forcerun", "stored_series", "signatures", "--", *targets,
-                              env={"ROCKDEC_DASK_SCHEDULER": scheduler})
+        monkeypatch.setenv("ROCKDEC_DASK_SCHEDULER", scheduler)  # the snakemake process inherits it
+        code, out = snakemake(root, "--forcerun", "series", "stored_series", "signatures", "--", *targets)
     assert code == 0, out
     assert job_stats(out)["signatures"] == 1
     for name in products:

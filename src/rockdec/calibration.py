@@ -19,22 +19,36 @@ The belt built on these values, and its inversion, are in :mod:`rockdec.belt`.
 
 The calibration is stored as NetCDF under a name hashed from everything it depends on, and
 reused; the name also hashes the source of the pipeline (:func:`pipeline_fingerprint`).
+A stored file is trusted only when its settings hash to its name and the SHA-256 of its
+values matches the one it carries (:func:`_read_checked`); a damaged, truncated or
+edited file is rebuilt with a note, never fatal.
+
+One build at a time: the builder holds ``calibration-<hash>.building`` (created
+exclusively, holding host name, process id and start time) and touches it every
+:data:`HEARTBEAT_S` seconds; another run on the same settings waits for the file instead
+of building it too. A lock not touched for :data:`STALE_S` seconds belongs to a run that
+died (on any node of a shared disk: the rule reads the file's mtime, not the process
+table) and is taken over.
 """
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import math
+import os
+import socket
 import sys
+import threading
+import time
 from pathlib import Path
 
-import dask
 import numpy as np
 import xarray as xr
 
 from rockdec import __version__, engine, estimators, io, measured
-from rockdec.simulate import default_burn_in, simulate_block
+from rockdec.validate import InputError
 
 #: True ``e`` of the calibration grid: denser where the estimators bend (near 1).
 E_GRID = (0.4, 0.5, 0.6, 0.7, 0.75, 0.8, 0.85, 0.88, 0.91, 0.93, 0.95, 0.965, 0.98, 0.99, 0.995)
@@ -53,6 +67,12 @@ NAMES = (*estimators.ESTIMATORS, measured.G_NAME)
 
 #: Seeds of calibration records start here (apart from scene seeds and pilot seeds).
 CALIBRATION_SEED_OFFSET = 2**61
+
+#: Seconds between touches of a build lock, and age of its mtime after which it is stale.
+HEARTBEAT_S, STALE_S = 10.0, 120.0
+
+#: Seconds between looks at a lock held by another run.
+POLL_S = 1.0
 
 
 def ppc_key(points_per_cycle: float) -> float:
@@ -92,6 +112,8 @@ def settings_hash(cal_settings: dict) -> str:
 
 def _simulate_set(seed0: int, lengths, dt: float, e: float, burn_in: int) -> list[np.ndarray]:
     """One set of records (one per length), seeds ``seed0, seed0 + 1, ...``; ``g = sigma_p = 1``."""
+    from rockdec.simulate import simulate_block  # the simulators load only when a calibration is built
+
     return [
         simulate_block([seed0 + k], n, dt=dt, g=1.0, e=e, sigma_p=1.0, burn_in=burn_in)[0][0] for k, n in enumerate(lengths)
     ]
@@ -105,6 +127,8 @@ def step_for(e: float, points_per_cycle: float, lengths, settings: dict, seed0: 
     ``S^2/g^3`` with ``S = sigma_p^2/dt``, and eq. 5), so ``dt <- dt sqrt(N_read / N)``;
     :data:`PILOT_SETS` sets of at most 50,000 samples a record per iteration.
     """
+    from rockdec.simulate import default_burn_in
+
     burn_in = default_burn_in(e, points_per_cycle)
     dt = math.sqrt(4.0 * math.sqrt(2.0 * 290.0) / points_per_cycle)  # sigma_Y c S^2/g^3, c near 290 at e = 0.95
     pilot = [min(int(n), 50_000) for n in lengths]
@@ -146,6 +170,8 @@ def build(cal_settings: dict) -> xr.Dataset:
     Grid points run as Dask tasks on the engine of :mod:`rockdec.engine` (threads by
     default); the simulation and signature kernels release the GIL.
     """
+    import dask
+
     tasks = [dask.delayed(_grid_point)(j, e, cal_settings, CALIBRATION_SEED_OFFSET) for j, e in enumerate(cal_settings["e_grid"])]
     values = np.stack(engine.compute(*tasks))
     ds = xr.Dataset(
@@ -160,19 +186,110 @@ def build(cal_settings: dict) -> xr.Dataset:
     return ds
 
 
-def load_or_build(cal_settings: dict, cache_dir: str | Path) -> tuple[xr.Dataset, bool]:
-    """The calibration for ``cal_settings`` from ``cache_dir``, built and stored when absent.
+def content_checksum(ds: xr.Dataset) -> str:
+    """SHA-256 of the calibration's values and true ``e`` grid (stored as an attribute)."""
+    digest = hashlib.sha256(np.ascontiguousarray(ds["raw"].values, dtype=np.float64).tobytes())
+    digest.update(np.ascontiguousarray(ds["e_true"].values, dtype=np.float64).tobytes())
+    return digest.hexdigest()
+
+
+def _read_checked(path: Path, expected_hash: str) -> tuple[xr.Dataset | None, str | None]:
+    """The calibration stored at ``path`` and ``None``, or ``None`` and why it cannot be trusted."""
+    try:
+        with xr.open_dataset(path, engine="netcdf4") as ds:
+            ds = ds.load()
+    except (OSError, ValueError, RuntimeError) as exc:
+        return None, f"it is not readable ({type(exc).__name__})"
+    try:
+        stored_hash = settings_hash(json.loads(ds.attrs["settings"]))
+        checksum = content_checksum(ds)
+    except (KeyError, TypeError, ValueError):
+        return None, "it lacks its settings or values"
+    if stored_hash != expected_hash:
+        return None, "its settings do not hash to its name"
+    if ds.attrs.get("content_sha256") != checksum:
+        return None, "its values do not match their checksum"
+    return ds, None
+
+
+@contextlib.contextmanager
+def _heartbeat(lock: Path):
+    """Touch ``lock`` every :data:`HEARTBEAT_S` seconds while the block runs."""
+    stop = threading.Event()
+
+    def beat():
+        while not stop.wait(HEARTBEAT_S):
+            with contextlib.suppress(OSError):
+                os.utime(lock)
+
+    thread = threading.Thread(target=beat, daemon=True)
+    thread.start()
+    try:
+        yield
+    finally:
+        stop.set()
+        thread.join()
+
+
+def _take_lock(lock: Path, notes: list) -> bool:
+    """Create ``lock`` exclusively; ``False`` while a live run (fresh mtime) holds it.
+
+    A lock older than :data:`STALE_S` seconds is removed (with a note) and taken.
+    """
+    try:
+        fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+    except FileExistsError:
+        try:
+            age = time.time() - lock.stat().st_mtime
+        except FileNotFoundError:  # released meanwhile
+            return False
+        if age < STALE_S:
+            return False
+        holder = lock.read_text(errors="replace").strip() if lock.exists() else ""
+        notes.append(f"took over the calibration lock {lock.name} of a run that stopped {age:.0f} s ago ({holder})")
+        lock.unlink(missing_ok=True)
+        return False
+    with os.fdopen(fd, "w") as f:
+        f.write(f"host {socket.gethostname()} pid {os.getpid()} started {time.strftime('%Y-%m-%dT%H:%M:%SZ', time.gmtime())}\n")
+    return True
+
+
+def load_or_build(cal_settings: dict, cache_dir: str | Path, notes: list | None = None) -> tuple[xr.Dataset, bool]:
+    """The calibration for ``cal_settings`` from ``cache_dir``, built and stored when absent
+    or damaged (module docstring; ``notes`` receives a sentence on each rebuild, wait or
+    takeover).
 
     Returns ``(dataset, from_cache)``.
     """
-    path = Path(cache_dir) / f"calibration-{settings_hash(cal_settings)}.nc"
-    if path.is_file():
-        with xr.open_dataset(path) as ds:
-            return ds.load(), True
-    ds = build(cal_settings)
-    path.parent.mkdir(parents=True, exist_ok=True)
+    notes = [] if notes is None else notes
+    folder = Path(cache_dir)
+    if folder.exists() and not folder.is_dir():
+        raise InputError(f"--cache '{folder}' is a file, not a folder; give a folder for the stored calibrations.")
+    expected = settings_hash(cal_settings)
+    path = folder / f"calibration-{expected}.nc"
+    lock = path.with_suffix(".building")
+    folder.mkdir(parents=True, exist_ok=True)
+    waited = False
+    while True:
+        if path.is_file():
+            ds, problem = _read_checked(path, expected)
+            if ds is not None:
+                return ds, True
+            if not waited:
+                notes.append(f"the stored calibration {path.name} was rebuilt: {problem}")
+        if _take_lock(lock, notes):
+            break
+        if not waited:
+            print(f"waiting for another run that builds {path.name} (lock {lock})", file=sys.stderr)
+            waited = True
+        time.sleep(POLL_S)
     try:
-        io.write_netcdf(ds, path)
-    except io.OutputError:  # another process stored the same calibration meanwhile
-        pass
+        with _heartbeat(lock):
+            if path.is_file() and _read_checked(path, expected)[0] is not None:  # stored while we took the lock
+                return _read_checked(path, expected)[0], True
+            ds = build(cal_settings)
+            ds.attrs["content_sha256"] = content_checksum(ds)
+            io.write_netcdf(ds, path, overwrite=True)
+    finally:
+        lock.unlink(missing_ok=True)
     return ds, False

@@ -11,8 +11,10 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 import traceback
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -49,6 +51,19 @@ SIGNATURE_OPTIONS = {
 #: Threads a ``simulate`` run computes on at once (Dask's default scheduler, one per core).
 SIMULATE_THREADS = 2
 
+#: Seconds one simulation step and one series (its seed, impulses and chunk) take on one
+#: core, and bytes a stored sample takes at most (float32 angle and velocity, before compression).
+SIMULATE_STEP_SECONDS, SIMULATE_SERIES_SECONDS, SIMULATE_SAMPLE_BYTES = 7e-8, 2e-5, 8.0
+
+#: A run estimated to take longer than this (s) is refused unless ``--yes`` is given.
+MAX_SECONDS = 600.0
+
+#: Formats ``--plot`` draws (by the file's suffix).
+PLOT_FORMATS = (".png", ".pdf")
+
+#: Fewest lags on each side of a signature for the fits of the estimators.
+MIN_LAGS = 8
+
 
 class UsageError(checks.InputError):
     """Bad command-line input; the message names the option."""
@@ -61,8 +76,8 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message}; see '{self.prog} --help'.\n")
 
 
-def parse_seeds(text: str) -> np.ndarray:
-    """Seeds from ``"0-99"``, ``"3,7"`` or a mix like ``"0-4,10"``; inclusive ranges."""
+def seed_ranges(text: str) -> list[tuple[int, int]]:
+    """Half-open ranges ``(first, stop)`` of the seeds ``"0-99"``, ``"3,7"`` or ``"0-4,10"`` name (inclusive)."""
     ranges: list[tuple[int, int]] = []
     try:
         for part in text.split(","):
@@ -73,6 +88,12 @@ def parse_seeds(text: str) -> np.ndarray:
             ranges.append((first, last + 1))
     except ValueError:
         raise UsageError(f"--seeds '{text}' is not a list of non-negative seeds; write it like 0-99 or 3,7.") from None
+    return ranges
+
+
+def parse_seeds(text: str) -> np.ndarray:
+    """Seeds from ``"0-99"``, ``"3,7"`` or a mix like ``"0-4,10"``; inclusive ranges."""
+    ranges = seed_ranges(text)
     # the seeds (int64) and the sorted copy that finds repeats
     checks.memory(16.0 * sum(stop - start for start, stop in ranges), f"--seeds '{text}'", "give fewer seeds per run")
     seeds = np.concatenate([np.arange(start, stop, dtype=np.int64) for start, stop in ranges])
@@ -121,18 +142,50 @@ def _validated(scene: dict, options: dict) -> dict:
         raise
 
 
-def _check_simulation_size(scene: dict, n_seeds: int) -> None:
-    """Refuse, before any work, a run whose series or burn-in would not fit in memory.
+def _check_simulation_size(scene: dict, n_seeds: int, out: Path, yes: bool, burn_in: int | None = None, seeds_text: str | None = None) -> None:
+    """Refuse, before any work, a run whose series or burn-in would not fit in memory, whose
+    file would not fit on the disk, or that would take longer than :data:`MAX_SECONDS`
+    without ``--yes``.
 
     Each of :data:`SIMULATE_THREADS` threads holds one chunk of series (float64 angle and
     velocity, stacked: 4 arrays of ``n_points``) and the impulses of one series
-    (``burn_in + n_points`` float64).
+    (``burn_in + n_points`` float64). ``burn_in``: the run's, once known (else the scene's, or 0).
     """
-    rec, burn_in = scene["records"], scene["excitation"]["burn_in"] or 0
+    import shutil
+
+    rec = scene["records"]
+    burn_in = burn_in if burn_in is not None else scene["excitation"]["burn_in"] or 0
     rows = min(rec["chunk_seeds"], n_seeds)
     need = SIMULATE_THREADS * 8.0 * (burn_in + rec["n_points"] + 4.0 * rows * rec["n_points"])
     what = f"--n-points {rec['n_points']} with --burn-in {burn_in} and --chunk-seeds {rec['chunk_seeds']}"
     checks.memory(need, what, "lower --n-points, --burn-in or --chunk-seeds")
+    samples = float(n_seeds) * rec["n_points"]
+    series = f"--seeds '{seeds_text}' ({n_seeds} series)" if seeds_text is not None else f"{n_seeds} series"
+    disk = samples * SIMULATE_SAMPLE_BYTES
+    free = shutil.disk_usage(out.parent if str(out.parent) else ".").free
+    if disk > free:
+        raise UsageError(
+            f"{series} x --n-points {rec['n_points']} need up to {disk / 2**30:.3g} GiB on disk, more than the "
+            f"{free / 2**30:.3g} GiB free beside '{out}'; give fewer seeds or points."
+        )
+    steps = float(n_seeds) * (burn_in + rec["n_points"])
+    seconds = (steps * SIMULATE_STEP_SECONDS + n_seeds * SIMULATE_SERIES_SECONDS) / SIMULATE_THREADS
+    if seconds > MAX_SECONDS and not yes:
+        raise UsageError(
+            f"{series} of {burn_in} burn-in and {rec['n_points']} recorded steps need about {steps:.2g} simulation "
+            f"steps, ~{_duration(seconds)} on {SIMULATE_THREADS} cores; pass --yes to go on, or give fewer seeds."
+        )
+
+
+def _duration(seconds: float) -> str:
+    """``seconds`` as a rounded duration: ``"40 s"``, ``"15 min"``, ``"3.2 h"``, ``"12 days"``."""
+    if seconds < 120:
+        return f"{seconds:.0f} s"
+    if seconds < 7200:
+        return f"{seconds / 60:.0f} min"
+    if seconds < 2 * 86400:
+        return f"{seconds / 3600:.2g} h"
+    return f"{seconds / 86400:.2g} days"
 
 
 def _field(scene: dict, sections) -> dict:
@@ -148,9 +201,22 @@ def cmd_simulate(args) -> None:
     scene = _simulate_scene(args)
     checks.finite(args.theta0, "--theta0", "give the initial angle in rad")
     checks.finite(args.theta_dot0, "--theta-dot0", "give the initial angular velocity in rad/s")
+    n_seeds = sum(stop - start for start, stop in seed_ranges(args.seeds)) if args.seeds is not None else None
+    _check_simulation_size(scene, n_seeds or layout.scene_seeds(scene["records"]).size, out, args.yes, seeds_text=args.seeds)
     seeds = parse_seeds(args.seeds) if args.seeds is not None else layout.scene_seeds(scene["records"]).ravel()
-    _check_simulation_size(scene, seeds.size)
     contract = run.calibrate(scene, amplitude=abs(args.theta0), theta0=args.theta0, theta_dot0=args.theta_dot0)
+    if contract.model == "housner" and abs(args.theta0) >= contract.theta_cr:
+        raise UsageError(
+            f"--theta0 {checks.show(args.theta0)} is beyond the critical angle {checks.show(contract.theta_cr)} rad, where the "
+            "block of the Housner model (eq. 2) overturns at once (every sample NaN); start inside it, or use --model simplified."
+        )
+    n_points = scene["records"]["n_points"]
+    if not (contract.dt >= np.finfo(np.float64).tiny and np.spacing((n_points - 1) * contract.dt) <= 0.5 * contract.dt):
+        raise UsageError(
+            f"a time step of {contract.dt:g} s is too small to tell {n_points} time stamps apart in floating point; "
+            "give a larger --dt (the time in larger units)."
+        )
+    _check_simulation_size(scene, seeds.size, out, args.yes, burn_in=contract.burn_in, seeds_text=args.seeds)
     ds = contract.dataset(seeds, scene["records"]["n_points"], chunk_seeds=scene["records"]["chunk_seeds"])
     ds.attrs.update(io.provenance("simulate", scene))
     print(
@@ -174,14 +240,27 @@ def cmd_signatures(args) -> None:
     if set(theta.dims) != {"seed", "time"}:
         raise UsageError(f"'{args.variable}' must have dimensions (seed, time) or (time); it has {theta.dims}.")
     theta = theta.transpose("seed", "time").astype(float)
+    theta = theta.copy(data=theta.values * records.angle_factor(theta.attrs.get("units"), args.input, args.variable))
     if "dt" in attrs:
-        theta.attrs["dt"] = float(attrs["dt"])
+        try:
+            (step,) = np.asarray(attrs["dt"], dtype=np.float64).ravel()
+        except (TypeError, ValueError):
+            raise UsageError(f"{args.input}: its attribute dt {attrs['dt']!r} is not a number of seconds; fix it.") from None
+        theta.attrs["dt"] = checks.positive(step, f"the attribute dt of {args.input}", "fix it (the sampling step in s)")
     elif "time" in theta.coords:
-        theta.attrs["dt"] = records.sampling_step(theta["time"].values, f"{args.input}: '{args.variable}'")
+        theta.attrs["dt"] = records.sampling_step(theta["time"].values, f"{args.input}: '{args.variable}'") * records.time_factor(
+            theta["time"].attrs.get("units"), args.input, "time"
+        )
     else:
         raise UsageError(f"{args.input}: '{args.variable}' has no time coordinate and the file no 'dt' attribute; add either.")
     if np.isinf(theta.values).any():
         raise UsageError(f"{args.input}: '{args.variable}' holds infinite values; remove them or mark them as gaps (NaN).")
+    with np.errstate(invalid="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # an all-NaN series is refused just below
+        still = ~(np.nanmax(theta.values, axis=1) > np.nanmin(theta.values, axis=1))
+    if still.any():
+        k = int(np.flatnonzero(still)[0])
+        raise UsageError(f"{args.input}: series {k} of '{args.variable}' is constant (or all NaN), so it has no trigger; a rocking record must move.")
     scales = {name: attrs.get(name) for name in ("sigma_y", "sigma_ydot")}
     missing = [name for name, value in scales.items() if value is None or not np.isfinite(value)]
     if missing:  # the file's stationary statistics, else measured (one pass over the record)
@@ -198,9 +277,19 @@ def cmd_signatures(args) -> None:
     scene = _validated(_with_options({}, args, SIGNATURE_OPTIONS), SIGNATURE_OPTIONS)
     if args.group_size is not None:
         checks.integer(args.group_size, "--group-size", 1, "give at least 1 series per signature (or leave it out: all)")
+        if args.group_size > theta.sizes["seed"]:
+            raise UsageError(
+                f"--group-size {args.group_size}: more than the {theta.sizes['seed']} series in {args.input}; "
+                f"give at most {theta.sizes['seed']} (or leave it out: all)."
+            )
     size = args.group_size or theta.sizes["seed"]
     sig = scene["signatures"]
     n_lag = signatures.lag_samples(sig["n_periods"], sig["level"] * stats["sigma_y"], stats["g"], theta.attrs["dt"])
+    if n_lag < MIN_LAGS:
+        raise UsageError(
+            f"{g_name} {checks.show(stats['g'])} with --n-periods {checks.show(sig['n_periods'])} gives a lag range of {n_lag} "
+            f"samples, fewer than the {MIN_LAGS} the fits need; give the right g, or --n-periods near 2.5 (the default)."
+        )
     signatures.check_lag_range(
         n_lag, theta.sizes["time"], theta.sizes["seed"], len(sig["windows"]),
         f"{g_name} {checks.show(stats['g'])} with --n-periods {checks.show(sig['n_periods'])}",
@@ -224,6 +313,9 @@ def cmd_estimates(args) -> None:
         if "free_response" not in src or not {"group", "seed"} & set(src.dims) or "count" not in src or "dt" not in src.attrs:
             raise UsageError(f"{args.input} is not a signature file; make one with 'rockdec signatures'.")
         cube = src.load()
+    lags = (cube.sizes[cube["free_response"].dims[-1]] - 1)
+    if args.fit_points > lags:
+        raise UsageError(f"--fit-points {args.fit_points}: more than the {lags} lags of the signatures in {args.input}; give at most {lags}.")
     if "replicate" not in cube.coords:
         dim = replicates.series_dim(cube)
         cube = cube.assign_coords(replicate=(dim, np.zeros(cube.sizes[dim], dtype=int)))
@@ -236,25 +328,74 @@ def cmd_estimates(args) -> None:
         print(f"{name:>4}: " + ", ".join(f"{v:.4f} +- {s:.4f}" for v, s in zip(value, err)))
 
 
-def cmd_estimate(args) -> None:
+def _plot_path(args) -> str:
+    """``--plot``, checked before any work: a format rockdec draws, and not one of the records."""
+    plot = str(checks.path_name(args.plot, "--plot"))
+    target = Path(os.path.abspath(plot))  # a symlink itself, not what it points at: it is replaced, never written through
+    for record in args.records:
+        if target == Path(os.path.abspath(record)) or (target.exists() and not target.is_symlink() and target.samefile(record)):
+            raise UsageError(f"--plot '{plot}' is the record {record}; give the plot a file name of its own.")
+    suffix = target.suffix.lower()
+    if suffix not in PLOT_FORMATS:
+        raise UsageError(
+            f"--plot '{plot}': {'no format suffix' if not suffix else f'{suffix} is not a format rockdec draws'}; "
+            f"name the file {' or '.join(PLOT_FORMATS)}."
+        )
+    return plot
+
+
+def _check_estimate_size(args) -> float:
+    """Refuse, before reading the records, a run beyond the memory, or longer than
+    :data:`MAX_SECONDS` without ``--yes`` (:func:`rockdec.inference.cost`, from the files'
+    headers or sizes); returns the estimated seconds."""
     from rockdec import inference
 
-    plot = io.check_output(args.plot, args.overwrite) if args.plot else None
-    recs = [
-        rec
-        for path in args.records
-        for rec in records.read_records(path, column=args.column, variable=args.variable, dt=args.dt, fs=args.fs)
-    ]
+    samples = sum(records.record_size(path, args.variable) for path in args.records)
+    csv = any(Path(path).suffix.lower() in (".csv", ".txt") for path in args.records)
+    seconds, nbytes = inference.cost(samples, csv, args.g is not None)
+    what = f"records of about {samples:.3g} samples"
+    checks.memory(nbytes, what, "give shorter records")
+    if seconds > MAX_SECONDS and not args.yes:
+        raise UsageError(
+            f"{what} need about {_duration(seconds)} on 2 cores to read, analyse and calibrate (the calibration simulates "
+            f"{len(inference.calibration.E_GRID) * inference.calibration.SETS_PER_E} records as long); pass --yes to go on, "
+            "or give a shorter record."
+        )
+    return seconds
+
+
+def cmd_estimate(args) -> None:
+    import contextlib
+
+    from rockdec import inference
+
+    for path in args.records:
+        checks.path_name(path, "record")
     if args.g is not None:
         checks.positive(args.g, "--g", "give the restoring acceleration nu^2 theta_cr in rad/s^2, or leave --g out")
-    if not args.json:
-        print(f"rockdec estimate: {len(recs)} record(s), {sum(r.theta.size for r in recs)} samples; calibrating ...", file=sys.stderr)
-    with _progress():  # a calibration not in the cache is built first (about 10 s for 200,000 samples)
-        result = inference.estimate(recs, cache_dir=args.cache, g=args.g)
-    if plot is not None:
-        from rockdec import figures
+    if Path(args.cache).exists() and not Path(args.cache).is_dir():
+        raise UsageError(f"--cache '{args.cache}' is a file, not a folder; give a folder for the stored calibrations.")
+    with contextlib.ExitStack() as stack:
+        plot = stack.enter_context(io.claimed(_plot_path(args), args.overwrite)) if args.plot else None
+        seconds = _check_estimate_size(args)
+        recs = [
+            rec
+            for path in args.records
+            for rec in records.read_records(path, column=args.column, variable=args.variable, dt=args.dt, fs=args.fs)
+        ]
+        if not args.json:
+            print(
+                f"rockdec estimate: {len(recs)} record(s), {sum(r.theta.size for r in recs)} samples; analysing and calibrating "
+                f"(up to about {_duration(seconds)} when the calibration is not stored yet) ...",
+                file=sys.stderr,
+            )
+        with _progress():  # a calibration not in the cache is built first (about 10 s for 200,000 samples)
+            result = inference.estimate(recs, cache_dir=args.cache, g=args.g)
+        if plot is not None:
+            from rockdec import figures
 
-        figures.save(figures.fig_record(result), plot)
+            fig = figures.fig_record(result)
+            io.write_claimed(plot, lambda tmp: figures.save(fig, tmp), args.overwrite, keep_suffix=True)
     public = {k: v for k, v in result.items() if not k.startswith("_")}
     if args.json:
         print(json.dumps(public, indent=2))
@@ -287,6 +428,8 @@ def _estimate_text(res: dict) -> str:
         f"coverage: the interval held the true e on {pct(res['coverage'])} of the calibration's simulated records "
         "(in-sample; the README's coverage study checks it on independent records)",
     ]
+    if res.get("reason"):
+        lines.append(f"no e: {res['reason']}")
     lines += [f"warning: {w}" for w in res["warnings"]]
     return "\n".join(lines)
 
@@ -353,6 +496,7 @@ def build_parser() -> argparse.ArgumentParser:
     est1.add_argument("--plot", help="draw the signature and the calibration curve to this PNG or PDF")
     est1.add_argument("--cache", default=_default_cache(), help="folder of stored calibrations (default: %(default)s)")
     est1.add_argument("--overwrite", action="store_true", help="replace --plot if it exists")
+    est1.add_argument("--yes", action="store_true", help="go on with records that need more than 10 min")
     est1.set_defaults(func=cmd_estimate)
 
     sim = sub.add_parser("simulate", help="simulate rocking series (exact, eqs. 21-24) to NetCDF")
@@ -374,6 +518,7 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--theta-dot0", type=float, default=0.0, help="initial angular velocity, rad/s (default 0)")
     sim.add_argument("--chunk-seeds", type=int, help="seeds per Dask chunk")
     sim.add_argument("--overwrite", action="store_true", help="replace --out if it exists")
+    sim.add_argument("--yes", action="store_true", help="go on with a run that needs more than 10 min")
     sim.set_defaults(func=cmd_simulate)
 
     sig = sub.add_parser("signatures", help="RDD signatures D_a and D_v (eq. 19) of a record or a simulation file")

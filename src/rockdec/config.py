@@ -17,7 +17,7 @@ import yaml
 
 from rockdec import layout
 from rockdec import validate as checks
-from rockdec.estimators import DEFAULT_FIT_POINTS, min_points_per_cycle
+from rockdec.fits import DEFAULT_FIT_POINTS, min_points_per_cycle
 
 #: The config file the workflow reads unless told otherwise.
 DEFAULT_PATH = "config/config.yaml"
@@ -52,7 +52,7 @@ def _field_error(where: str, problem: str, fix: str) -> ConfigError:
 
 def schema() -> dict:
     """The scene schema as a dict, with the defaults whose home is the code filled in
-    (``estimates.fit_points``: :data:`rockdec.estimators.DEFAULT_FIT_POINTS`)."""
+    (``estimates.fit_points``: :data:`rockdec.fits.DEFAULT_FIT_POINTS`)."""
     text = resources.files("rockdec").joinpath("scene_schema.yaml").read_text()
     out = yaml.safe_load(text)
     out["$defs"]["scene"]["properties"]["estimates"]["properties"]["fit_points"]["default"] = DEFAULT_FIT_POINTS

@@ -62,6 +62,33 @@ def setting(scheduler: str | None = None) -> tuple[str, int | str | None]:
     )
 
 
+#: Seconds to reach a ``tcp://`` scheduler before giving up.
+CONNECT_S = 5.0
+
+
+def _probe(address: str) -> None:
+    """Refuse at once a ``tcp://`` address that nothing listens on, or whose listener does
+    not greet like a Dask scheduler (its first 8 bytes are the little-endian length of a
+    small handshake message); the Dask client would wait, or read garbage as a length."""
+    import socket
+    import struct
+    from urllib.parse import urlsplit
+
+    where = urlsplit(address)
+    try:
+        with socket.create_connection((where.hostname, where.port), timeout=CONNECT_S) as sock:
+            head = b""
+            while len(head) < 8:
+                chunk = sock.recv(8 - len(head))
+                if not chunk:
+                    break
+                head += chunk
+    except (OSError, ValueError) as exc:
+        raise SchedulerError(f"the Dask scheduler {address!r} cannot be reached ({exc}); start it, or use 'threads'.") from None
+    if len(head) < 8 or not 0 < struct.unpack("<Q", head)[0] < 2**20:
+        raise SchedulerError(f"{address!r} answers, but not as a Dask scheduler; give the address of a running 'dask scheduler'.")
+
+
 _active = contextvars.ContextVar("rockdec_engine_active", default=False)
 
 
@@ -93,7 +120,8 @@ def session(threads: int | None = None, scheduler: str | None = None):
         else:
             from dask.distributed import Client
 
-            with Client(value) as client, dask.config.set(scheduler=client):
+            _probe(value)
+            with Client(value, timeout=f"{CONNECT_S}s") as client, dask.config.set(scheduler=client):
                 yield
     finally:
         _active.reset(token)

@@ -41,32 +41,12 @@ from numba import njit
 
 from rockdec import __version__
 from rockdec import validate as checks
+from rockdec.fits import DEFAULT_FIT_POINTS, MIN_FIT_POINTS
 
 ESTIMATORS = ("e_g", "e_0", "e1", "e2", "e3", "e4", "e_v")
 """Names of the estimators, in the order of the ``estimator`` coordinate."""
 
 LOCAL_ESTIMATORS = ("e1", "e2", "e3", "e4")
-
-MIN_FIT_POINTS = 3
-"""Fewest points of any second-order fit: three coefficients need three points (with three
-the fit interpolates). Fits that would get fewer give NaN, ``"fewer than 3 points for a fit"``."""
-
-
-def min_points_per_cycle(e: float, level: float) -> float:
-    """Fewest samples per cycle at amplitude ``sigma_Y`` for which ``e1..e4`` can be fitted.
-
-    The start and crossing fits of eq. 27 take ``N_h // 8`` points and need
-    :data:`MIN_FIT_POINTS`, so ``N_h >= 8 * MIN_FIT_POINTS``. For the free response from
-    ``a = level * sigma_Y`` the first minimum comes at ``(1 + e)/4`` of a period at
-    amplitude ``a``, which is ``sqrt(level)`` times the period at ``sigma_Y`` (eq. 5):
-    ``N_h = (1 + e)/4 * sqrt(level) * points_per_cycle``. At ``e = 0.95``, level 2: 35.
-    """
-    return 4.0 * 8 * MIN_FIT_POINTS / ((1.0 + e) * level**0.5)
-
-
-DEFAULT_FIT_POINTS = 5
-"""Points on each side of lag 0 for ``e_v``: about ``N_h/8`` at 75 points per cycle
-(``N_h`` about 37), the size of the slope fits of ``e2``."""
 
 
 class Estimate(NamedTuple):
@@ -622,8 +602,8 @@ def _estimate_block(r, d, dt, fit_points):
     broadcast) -> ``values[..., estimator]``."""
     shape = r.shape[:-1] if d is None else np.broadcast_shapes(r.shape[:-1], d.shape[:-1])
 
-    def rows(a):
-        return np.ascontiguousarray(np.broadcast_to(a, shape + a.shape[-1:]), dtype=float).reshape(math.prod(shape), a.shape[-1])
+    def rows(a):  # a writable copy: the kernel then has the one type estimate_all gives it, compiled once
+        return np.array(np.broadcast_to(a, shape + a.shape[-1:]), dtype=float, order="C").reshape(math.prod(shape), a.shape[-1])
 
     values, _ = _estimate_rows(rows(r), None if d is None else rows(d), dt, fit_points)
     return values.reshape(shape + (len(ESTIMATORS),))

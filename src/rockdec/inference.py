@@ -1,9 +1,20 @@
 """From measured records to a calibrated ``e``: what ``rockdec estimate`` computes.
 
-:func:`estimate` analyses the records (:func:`rockdec.measured.analyse`), fetches or
-builds the calibration for their lengths and sampling (:mod:`rockdec.calibration`),
-corrects every estimator and gives its 95 % interval, corrects ``g`` the same way, and
-lists what looks wrong with the records (:func:`diagnose`).
+:func:`estimate` analyses the records (:func:`rockdec.measured.analyse`), checks that they
+look like rocking (:func:`rockdec.measured.rocking_shape`) and that a given ``g`` agrees
+with the records' own, fetches or builds the calibration for their lengths and sampling
+(:mod:`rockdec.calibration`), corrects every estimator and gives its 95 % interval,
+corrects ``g`` the same way, and lists what looks wrong with the records
+(:func:`diagnose`). When no ``e`` can be given, ``reason`` says why.
+
+The calibration simulates records as long as the measured ones, so its cost grows with
+their length (:func:`cost`); the command line refuses, before reading the records, a run
+the machine cannot finish soon. Two shortcuts for long records were measured and do not
+cover (README): calibrating on shorter records with the spread scaled by the square
+root of the length ratio (the bias itself moves with the length), and fewer simulated
+sets per ``e`` (the belt's cubic mean then misses the true mean by about 0.001, more
+than the spread of a record of 20 million samples). Records longer than
+:data:`LONG_SAMPLES` are answered with a warning that says so.
 """
 
 from __future__ import annotations
@@ -14,8 +25,8 @@ import warnings
 
 import numpy as np
 
-from rockdec import belt, calibration, estimators, measured
-from rockdec.records import Record, RecordError, same_step
+from rockdec import belt, calibration, estimators, fits, measured
+from rockdec.records import Record, RecordError, distinct, same_step
 
 #: The estimator reported as ``e``: the calibration's coverage study shows it best
 #: (smallest spread and bias of the corrected value, coverage closest to 95 %).
@@ -23,6 +34,30 @@ DEFAULT_ESTIMATOR = "e_v"
 
 #: Fewest triggers in the largest window before the result is called unreliable.
 FEW_TRIGGERS = 100
+
+#: Records (in all) longer than this are warned about: their spread falls below the
+#: accuracy of the belt's fitted mean (about 0.001 at e = 0.95, measured on 20-million-sample records).
+LONG_SAMPLES = 2_000_000
+
+#: A given ``g`` off the records' own by more than this factor is refused before any
+#: calibration (the calibrated 95 % spread of ``g`` is a few per cent).
+G_FACTOR = 2.0
+
+#: Peaks beyond this many ``sigma_Y`` are called spikes (or overturning).
+SPIKE_SIGMAS = 15.0
+
+#: Cost model of :func:`cost`, measured on an idle 2-core machine: seconds per sample to
+#: read a CSV (pandas) and to analyse a record; seconds per simulated and analysed
+#: calibration sample on one core; bytes held per sample while reading and analysing.
+CSV_SECONDS, ANALYSIS_SECONDS, CALIBRATION_SECONDS, BYTES_PER_SAMPLE = 5e-7, 1.2e-7, 1.3e-7, 96.0
+
+
+def cost(samples: int, csv: bool, g_given: bool, cores: int = 2) -> tuple[float, float]:
+    """``(seconds, bytes)`` that :func:`estimate` needs for records of ``samples`` in all,
+    calibration included (:data:`CSV_SECONDS` and the other constants of the model)."""
+    calibrated = samples * len(calibration.E_GRID) * calibration.SETS_PER_E
+    seconds = samples * (CSV_SECONDS * csv + ANALYSIS_SECONDS * (1 + g_given)) + calibrated * CALIBRATION_SECONDS / cores
+    return seconds, samples * BYTES_PER_SAMPLE
 
 
 def diagnose(records: list[Record], analysis: measured.Analysis, settings: dict) -> list[str]:
@@ -33,7 +68,7 @@ def diagnose(records: list[Record], analysis: measured.Analysis, settings: dict)
         if n < FEW_TRIGGERS:
             notes.append(f"only {n} {name} triggers in the largest window: the estimates rest on few segments; pool longer records")
     level = settings.get("level", measured.DEFAULT_SETTINGS["level"])
-    floor = estimators.min_points_per_cycle(analysis.raw[DEFAULT_ESTIMATOR] if np.isfinite(analysis.raw[DEFAULT_ESTIMATOR]) else 0.95, level)
+    floor = fits.min_points_per_cycle(analysis.raw[DEFAULT_ESTIMATOR] if np.isfinite(analysis.raw[DEFAULT_ESTIMATOR]) else 0.95, level)
     if analysis.points_per_cycle < floor:
         notes.append(
             f"{analysis.points_per_cycle:.1f} samples per cycle at sigma_Y is below {floor:.1f}, too coarse for the local fits "
@@ -44,7 +79,7 @@ def diagnose(records: list[Record], analysis: measured.Analysis, settings: dict)
     skew = float(np.mean(y**3) / np.mean(y**2) ** 1.5)
     if abs(skew) > 0.5:
         notes.append(f"the response is asymmetric (skewness {skew:+.2f}): the block may lean on one side; the model assumes a symmetric block")
-    if float(np.max(np.abs(y))) > 15.0 * analysis.sigma_y:
+    if float(np.max(np.abs(y))) > SPIKE_SIGMAS * analysis.sigma_y:
         notes.append(f"a peak of {np.max(np.abs(y)) / analysis.sigma_y:.0f} sigma_Y: the record holds a spike or the block overturns")
     for r in records:
         quarters = np.array_split(r.theta - np.nanmean(r.theta), 4)
@@ -54,10 +89,60 @@ def diagnose(records: list[Record], analysis: measured.Analysis, settings: dict)
     return notes
 
 
+def _spike(records: list[Record]) -> str | None:
+    """A sentence on the largest spike of the records (beyond :data:`SPIKE_SIGMAS` times their
+    rms), or ``None``."""
+    y = np.concatenate([r.theta - np.nanmean(r.theta) for r in records])
+    rms = float(np.sqrt(np.nanmean(y**2)))
+    where = int(np.nanargmax(np.abs(y)))
+    peak = float(np.abs(y[where])) / rms
+    if not peak > SPIKE_SIGMAS:
+        return None
+    return (
+        f"a spike of {peak:.0f} times the rms (sample {where}) inflates sigma_Y and with it the trigger levels; "
+        "remove the spikes or mark them as gaps (NaN)"
+    )
+
+
+def _analyse(records: list[Record], dt: float, settings: dict, g: float | None) -> measured.Analysis:
+    """:func:`rockdec.measured.analyse`, its refusals as :class:`RecordError` naming the
+    records (a spike, when there is one, is named as the cause)."""
+    names = ", ".join(r.source for r in records)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # empty windows are reported through the trigger counts
+        try:
+            analysis = measured.analyse([r.theta for r in records], dt, settings, g=g)
+        except ValueError as exc:
+            raise RecordError(f"{names}: {_spike(records) or exc}.") from None
+    n_a, n_v = int(analysis.count["a"][-1]), int(analysis.count["v"][-1])
+    if n_v < 3 or n_a < 3:
+        spike = _spike(records)
+        if spike:
+            raise RecordError(f"{names}: only {n_a} extremum and {n_v} zero-crossing triggers: {spike}.")
+        raise RecordError(
+            f"{names}: only {n_a} extremum and {n_v} zero-crossing triggers, too few for the fits; give a longer record."
+        )
+    return analysis
+
+
+def _check_given_g(g: float, own: measured.Analysis | None, names: str) -> None:
+    """Refuse a given ``g`` off the records' own (read off their free response) by more
+    than :data:`G_FACTOR`."""
+    if own is None or not np.isfinite(own.raw[measured.G_NAME]):
+        return
+    ratio = g / own.raw[measured.G_NAME]
+    if not 1.0 / G_FACTOR <= ratio <= G_FACTOR:
+        raise RecordError(
+            f"--g {g:g} is {ratio:.3g} times the g the records show ({own.raw[measured.G_NAME]:.3g} rad/s^2, read off the "
+            f"free response of {names}); give g = nu^2 theta_cr in rad/s^2 (theta_cr in rad, not degrees), or leave --g out."
+        )
+
+
 def estimate(records: list[Record], *, cache_dir, g: float | None = None, settings: dict | None = None) -> dict:
     """Calibrated estimates of ``e`` from ``records`` of one block (pooled).
 
-    Returns a JSON-able dict: ``e``, ``interval`` (95 %), ``estimator``, ``coverage`` (the
+    Returns a JSON-able dict: ``e``, ``interval`` (95 %), ``reason`` (why ``e`` is null,
+    else ``None``), ``estimator``, ``coverage`` (the
     share of the calibration's simulated record sets whose interval held their true ``e``,
     :func:`rockdec.belt.calibration_coverage`), ``raw`` (of the default estimator), ``g`` (rad/s^2: corrected, or as given), ``g_raw``,
     ``points_per_cycle``, ``sigma_y``, ``dt``, ``samples``, ``nan_samples``,
@@ -65,23 +150,35 @@ def estimate(records: list[Record], *, cache_dir, g: float | None = None, settin
     ``notes``),
     ``warnings``, ``calibration`` (file, and whether it came from the cache), and, under
     keys starting with ``_``, the analysis and belts for plots.
+
+    Refuses (:class:`RecordError`) records given twice, records that do not look like
+    rocking (:func:`rockdec.measured.rocking_shape`), and a ``g`` off the records' own by
+    more than :data:`G_FACTOR`; a ``g`` outside the calibrated 95 % interval of the
+    records' own is warned about.
     """
     settings = {**measured.DEFAULT_SETTINGS, **(settings or {})}
+    records = distinct(records)
     dt = same_step(records)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # empty windows are reported through the trigger counts
-        try:
-            analysis = measured.analyse([r.theta for r in records], dt, settings, g=g)
-        except ValueError as exc:
-            raise RecordError(f"{', '.join(r.source for r in records)}: {exc}.") from None
-    if int(analysis.count["v"][-1]) < 3 or int(analysis.count["a"][-1]) < 3:
-        raise RecordError(
-            f"{', '.join(r.source for r in records)}: only {int(analysis.count['a'][-1])} extremum and "
-            f"{int(analysis.count['v'][-1])} zero-crossing triggers, too few for the fits; give a longer record."
-        )
+    names = ", ".join(r.source for r in records)
+    notes = []
+    try:
+        own = _analyse(records, dt, settings, None)
+    except RecordError:
+        if g is None:
+            raise
+        own = None
+        notes.append("g cannot be read off the records, so --g could not be checked against them")
+    if g is not None:
+        _check_given_g(g, own, names)
+        analysis = _analyse(records, dt, settings, g)
+    else:
+        analysis = own
+    shape = measured.rocking_shape(own if own is not None else analysis)
+    if shape:
+        raise RecordError(f"{names} does not look like a rocking record: {shape}; rockdec estimate gives e only for rocking records.")
     cal_settings = calibration.calibration_settings([r.theta.size for r in records], analysis.points_per_cycle, settings)
     started = time.perf_counter()
-    cal, cached = calibration.load_or_build(cal_settings, cache_dir)
+    cal, cached = calibration.load_or_build(cal_settings, cache_dir, notes)
     built_s = time.perf_counter() - started
     per = {}
     belts = belt.belts(cal)
@@ -98,10 +195,30 @@ def estimate(records: list[Record], *, cache_dir, g: float | None = None, settin
         }
     default = per[DEFAULT_ESTIMATOR]
     e_default = math.nan if default["e"] is None else default["e"]
-    g_value = g if g is not None else belt.correct_g(belts[measured.G_NAME], analysis.raw[measured.G_NAME], e_default)
+    g_belt = belts[measured.G_NAME]
+    g_value = g if g is not None else belt.correct_g(g_belt, analysis.raw[measured.G_NAME], e_default)
+    if g is not None and own is not None and g_belt.e.size and np.isfinite(e_default):
+        own_raw = own.raw[measured.G_NAME]
+        mean, spread = np.interp(e_default, g_belt.e, g_belt.mean), np.interp(e_default, g_belt.e, g_belt.spread)
+        low, high = own_raw / (mean + belt.Z95 * spread), own_raw / max(mean - belt.Z95 * spread, 1e-12)
+        if not low <= g <= high:
+            notes.append(
+                f"--g {g:g} lies outside the records' own g, {low:.4g}-{high:.4g} rad/s^2 (calibrated 95 % interval): "
+                "the estimate rests on the given g"
+            )
+    samples = int(sum(r.theta.size for r in records))
+    if samples > LONG_SAMPLES:
+        notes.append(
+            f"{samples} samples make the interval narrower than the accuracy of the calibration's fitted mean curve "
+            "(about 0.001 at e = 0.95): on 20-million-sample records it covered the true e 73-90 % of the time, not 95 %"
+        )
+    reason = None
+    if default["e"] is None:
+        reason = "; ".join(default["notes"]) or "the estimator gave no value on these records"
     return {
         "e": default["e"],
         "interval": default["interval"],
+        "reason": reason,
         "estimator": DEFAULT_ESTIMATOR,
         "coverage": default["coverage"],
         "raw": default["raw"],
@@ -112,11 +229,13 @@ def estimate(records: list[Record], *, cache_dir, g: float | None = None, settin
         "sigma_y": _num(analysis.sigma_y),
         "dt": dt,
         "records": [r.source for r in records],
-        "samples": int(sum(r.theta.size for r in records)),
+        "samples": samples,
         "nan_samples": int(analysis.nan_samples),
         "estimators": per,
-        "warnings": diagnose(records, analysis, settings),
-        "calibration": {"file": f"calibration-{calibration.settings_hash(cal_settings)}.nc", "cached": cached, "seconds": round(built_s, 2)},
+        "warnings": notes + diagnose(records, analysis, settings),
+        "calibration": {
+            "file": f"calibration-{calibration.settings_hash(cal_settings)}.nc", "cached": cached, "seconds": round(built_s, 2),
+        },
         "_analysis": analysis,
         "_belts": belts,
     }

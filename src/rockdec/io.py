@@ -24,7 +24,7 @@ import numpy as np
 import xarray as xr
 
 from rockdec import __version__
-from rockdec.validate import InputError
+from rockdec.validate import InputError, path_name
 
 #: Largest magnitude a float32 variable can store without becoming inf.
 FLOAT32_MAX = float(np.finfo(np.float32).max)
@@ -115,10 +115,10 @@ def provenance(step: str, settings: dict | None = None, inputs=()) -> dict:
 
 def check_output(path: str | Path, overwrite: bool = False) -> Path:
     """Check before any work that ``path`` can be written; raise :class:`OutputError` if not."""
-    path = Path(path)
+    path = path_name(path, "output")
     if path.is_dir():
         raise OutputError(f"output '{path}' is a folder; give a file name such as '{path / 'out.nc'}'.")
-    if path.exists() and not overwrite:
+    if (path.exists() or path.is_symlink()) and not overwrite:
         raise OutputError(f"output '{path}' exists already; remove it or pass --overwrite.")
     folder = path.parent if str(path.parent) else Path(".")
     if not folder.is_dir():
@@ -173,7 +173,7 @@ def _claim(path: Path):
         except FileExistsError:
             if attempt or _live_owner(lock) is not None:
                 raise _busy(path) from None
-            for stale in path.parent.glob(f".{path.name}.*.partial"):
+            for stale in path.parent.glob(f".{path.name}.*.partial*"):
                 stale.unlink(missing_ok=True)
             lock.unlink(missing_ok=True)
     try:
@@ -208,22 +208,56 @@ def write_netcdf(
         encoding[name] = enc
     encoding.update(coordinate_encoding(ds))
     with _claim(path):
-        fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".partial", dir=path.parent)
-        os.close(fd)
-        tmp = Path(name)
-        try:
-            ds.to_netcdf(tmp, encoding=encoding, engine="netcdf4")
-            if path.exists() and not overwrite:  # made meanwhile by a writer that takes no lock
-                raise OutputError(f"output '{path}' appeared while this run wrote it; remove it or pass --overwrite.")
-            os.replace(tmp, path)
-        except (OSError, RuntimeError) as exc:
-            if getattr(exc, "errno", None) in (errno.ENOSPC, errno.EDQUOT) or shutil.disk_usage(path.parent).free < DISK_FULL_BYTES:
-                raise OutputError(
-                    f"no space left on the disk of '{path}' while writing it; free some space or choose another --out."
-                ) from None
-            raise
-        finally:
-            tmp.unlink(missing_ok=True)
+        return write_claimed(path, lambda tmp: ds.to_netcdf(tmp, encoding=encoding, engine="netcdf4"), overwrite)
+
+
+def _write_failure(exc: BaseException, path: Path) -> BaseException:
+    """The one-sentence error of a failed write (full disk, file size limit), else ``exc``
+    itself (HDF5 hides the errno, so the disk and the limit are looked at)."""
+    import resource
+
+    code = getattr(exc, "errno", None)
+    limit = resource.getrlimit(resource.RLIMIT_FSIZE)[0]
+    if limit != resource.RLIM_INFINITY and (code == errno.EFBIG or code is None):
+        return OutputError(
+            f"the file size limit of this shell (ulimit -f, {limit} bytes) stopped the write of '{path}'; "
+            "raise the limit or write a smaller output."
+        )
+    if code == errno.EFBIG:
+        return OutputError(f"'{path}' grew beyond the largest file its disk stores; write a smaller output.")
+    if code in (errno.ENOSPC, errno.EDQUOT) or shutil.disk_usage(path.parent).free < DISK_FULL_BYTES:
+        return OutputError(f"no space left on the disk of '{path}' while writing it; free some space or choose another --out.")
+    return exc
+
+
+@contextlib.contextmanager
+def claimed(path: str | Path, overwrite: bool = False):
+    """Check ``path`` (:func:`check_output`) and hold its lock for the whole block, so that a
+    second run on the same output refuses at once; yields the path to give
+    :func:`write_claimed` at the end."""
+    path = check_output(path, overwrite)
+    with _claim(path):
+        yield path
+
+
+def write_claimed(path: Path, write, overwrite: bool = False, keep_suffix: bool = False) -> Path:
+    """Write ``path`` (claimed with :func:`claimed`) atomically: ``write(tmp)`` fills a
+    temporary file ``.<name>.<random>.partial`` beside it (ending in ``path``'s suffix too
+    with ``keep_suffix``, for writers that pick the format by it), renamed over ``path``
+    when complete. A symlink at ``path`` is replaced itself (with ``overwrite``), never
+    written through."""
+    fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".partial" + (path.suffix if keep_suffix else ""), dir=path.parent)
+    os.close(fd)
+    tmp = Path(name)
+    try:
+        write(tmp)
+        if (path.exists() or path.is_symlink()) and not overwrite:  # made meanwhile by a writer that takes no lock
+            raise OutputError(f"output '{path}' appeared while this run wrote it; remove it or pass --overwrite.")
+        os.replace(tmp, path)
+    except (OSError, RuntimeError) as exc:
+        raise _write_failure(exc, path) from None
+    finally:
+        tmp.unlink(missing_ok=True)
     return path
 
 

@@ -33,7 +33,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from rockdec import estimators, signatures
+from rockdec import estimators, fits, signatures
 from rockdec.models import period_from_g
 
 #: Settings of the analysis and their defaults (the workflow's scene defaults, see the schema).
@@ -45,12 +45,25 @@ DEFAULT_SETTINGS = {
     "dv_max": 0.28,
     "n_periods": 2.5,
     "both_signs": True,
-    "fit_points": estimators.DEFAULT_FIT_POINTS,
+    "fit_points": fits.DEFAULT_FIT_POINTS,
     "weights": "window",
 }
 
 #: Name of the ``g`` row beside the estimators of ``e``.
 G_NAME = "g"
+
+#: Fewest samples from lag 0 to the first zero crossing of a rocking free response (white
+#: noise crosses after 1 sample; simulated rocking at 20-90 samples per cycle after 5-30).
+MIN_HALF_CYCLE_SAMPLES = 3
+
+#: Largest rms misfit, relative to its start value, of the parabola of eq. 4 through the
+#: first half cycle of the free response: three times the largest measured on simulated
+#: rocking (0.043, e = 0.5, 5,000 to 200,000 samples, 55 to 90 samples per cycle).
+MAX_PARABOLA_MISFIT = 0.15
+
+#: Largest relative spread (std/mean) of ``g`` fitted at each window: three times the
+#: largest measured on simulated rocking (0.17, e = 0.5, 5,000 samples).
+MAX_G_SPREAD = 0.5
 
 
 class Analysis(NamedTuple):
@@ -113,6 +126,46 @@ def _crossing_interval(records) -> float:
     return samples / max(crossings, 1)
 
 
+def rocking_shape(analysis: Analysis) -> str | None:
+    """Why the free response does not look like rocking (eq. 4), or ``None`` when it does.
+
+    Three checks on the largest window: the free response stays positive for at least
+    :data:`MIN_HALF_CYCLE_SAMPLES` samples; its first half cycle fits the parabola
+    ``c - g tau^2 / 2`` of eq. 4 (least squares, no linear term: the velocity is zero at the
+    trigger) within :data:`MAX_PARABOLA_MISFIT` of ``c``; and ``g`` fitted at each window
+    (eq. 27) is found at half the windows at least and agrees between them within
+    :data:`MAX_G_SPREAD`. White noise fails the first; a record with no rocking half cycle
+    fails the others.
+    """
+    r = analysis.free_response
+    below = np.flatnonzero(~(r > 0.0))
+    k1 = int(below[0]) if below.size else r.size
+    if k1 < MIN_HALF_CYCLE_SAMPLES:
+        return (
+            f"its free response falls to zero {k1} sample(s) after the trigger, where rocking takes at least "
+            f"{MIN_HALF_CYCLE_SAMPLES} ({analysis.points_per_cycle:.1f} samples per cycle): the record looks like white "
+            "noise, not rocking, or is sampled far too coarsely"
+        )
+    tau2 = (np.arange(k1) * analysis.dt) ** 2
+    design = np.c_[np.ones(k1), tau2]
+    coef, *_ = np.linalg.lstsq(design, r[:k1], rcond=None)
+    misfit = float(np.sqrt(np.mean((design @ coef - r[:k1]) ** 2)) / r[0])
+    if not misfit <= MAX_PARABOLA_MISFIT:
+        return (
+            f"the first half cycle of its free response misses the parabola of free rocking (eq. 4) by {misfit:.0%} "
+            f"of its start value, where rocking stays within {MAX_PARABOLA_MISFIT:.0%}"
+        )
+    g = analysis.per_window[G_NAME]
+    found = g[np.isfinite(g)]
+    spread = float(np.std(found) / np.mean(found)) if found.size > 1 else np.inf
+    if found.size < g.size / 2 or not abs(spread) <= MAX_G_SPREAD:
+        return (
+            f"g fitted at each window is found at {found.size} of {g.size} windows and spreads by {spread:.0%}, "
+            f"where rocking gives one g at every window within {MAX_G_SPREAD:.0%}"
+        )
+    return None
+
+
 def analyse(records, dt: float, settings: dict | None = None, g: float | None = None) -> Analysis:
     """Every estimator of ``e`` and ``g`` on the pooled signatures of ``records``.
 
@@ -142,9 +195,20 @@ def analyse(records, dt: float, settings: dict | None = None, g: float | None = 
                 warnings.simplefilter("ignore", signatures.NoTriggerWarning)
                 r = signatures.free_response(signatures.mean_signature(total[None], count[None], triggers=("a",))[0, -1])
             g_first = _sampled_crossing_g(r, dt)
-            if np.isfinite(g_first) or n_lag >= cap:
+            if np.isfinite(g_first) or n_lag >= cap or not count.any():
                 break
             n_lag = min(2 * n_lag, cap)
+        if not count.any() and nan_samples:
+            raise ValueError(
+                f"{nan_samples} of {sum(y.size for y in records)} samples are NaN, scattered so that every segment of "
+                f"{2 * n_lag + 1} samples around a trigger holds one and no signature can be formed; fill short gaps "
+                "(interpolate them) or cut the record into pieces without gaps"
+            )
+        if np.isfinite(g_first) and not g_first >= np.finfo(np.float64).tiny:
+            raise ValueError(
+                f"g read off the record, {g_first:.3g} rad/s^2 at a step of {dt:g} s, is 0 in floating point; "
+                "give the sampling step in s"
+            )
         if not np.isfinite(g_first):
             raise ValueError(
                 "the free-response estimate never crosses zero inside the record, so g cannot be read off it; "

@@ -10,7 +10,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.optimize import brentq
 
 from rockdec import validate as checks
 
@@ -81,6 +80,8 @@ def amplitude_limit(tolerance: float = 0.02) -> float:
     """
     if not tolerance > 0.0:
         raise ValueError(f"tolerance must be > 0 (got {tolerance})")
+    from scipy.optimize import brentq  # scipy.optimize for this one root: imported when asked
+
     return float(brentq(lambda x: period_mismatch(x) - tolerance, 1e-12, 1.0 - 1e-12, xtol=1e-15, rtol=1e-14))
 
 

@@ -10,12 +10,13 @@ the signatures skip every segment that holds one, and the count is reported.
 
 from __future__ import annotations
 
+import hashlib
 from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
 
-from rockdec.validate import InputError
+from rockdec.validate import InputError, path_name, show
 
 #: Largest fraction of NaN samples a record may hold.
 MAX_NAN_FRACTION = 0.1
@@ -25,6 +26,21 @@ MIN_SAMPLES = 1000
 
 #: Relative tolerance on the spacing of a time axis (printed times are rounded).
 TIME_RTOL = 1e-3
+
+#: Bytes read from the start of a CSV file to sniff its separator and its line length.
+SNIFF_BYTES = 1 << 16
+
+#: CSV separators recognised in the header line, by preference.
+SEPARATORS = (",", ";", "\t")
+
+#: ``units`` of an angle variable and their factor to rad (CF/UDUNITS spellings).
+ANGLE_UNITS = {"rad": 1.0, "radian": 1.0, "radians": 1.0, "1": 1.0,
+               "degree": np.pi / 180, "degrees": np.pi / 180, "deg": np.pi / 180}
+
+#: ``units`` of a time coordinate (without a reference date) and their factor to s.
+TIME_UNITS = {"s": 1.0, "sec": 1.0, "second": 1.0, "seconds": 1.0,
+              "ms": 1e-3, "millisecond": 1e-3, "milliseconds": 1e-3,
+              "us": 1e-6, "microsecond": 1e-6, "microseconds": 1e-6, "min": 60.0, "minute": 60.0, "minutes": 60.0}
 
 
 class RecordError(InputError):
@@ -69,24 +85,47 @@ def sampling_step(time, source: str) -> float:
 def _step_from_options(dt, fs, source: str) -> float | None:
     if dt is not None and fs is not None:
         raise RecordError(f"{source}: give the sampling as --dt or --fs, not both.")
-    step = dt if dt is not None else (1.0 / fs if fs is not None else None)
-    if step is not None and not (np.isfinite(step) and step > 0):
-        raise RecordError(f"{source}: the sampling step must be a positive, finite number of seconds (got --dt {dt}, --fs {fs}).")
-    return step
+    if fs is not None:
+        if not (np.isfinite(fs) and fs > 0 and np.isfinite(1.0 / fs) and 1.0 / fs > 0):
+            raise RecordError(f"--fs {show(fs)}: not a positive, finite sampling rate with a finite step 1/fs; give the rate in Hz, > 0.")
+        return 1.0 / fs
+    if dt is not None and not (np.isfinite(dt) and dt > 0):
+        raise RecordError(f"--dt {show(dt)}: not a positive, finite number of seconds; give the sampling step in s, > 0.")
+    return dt
+
+
+def _sniff_csv(path: Path) -> tuple[str, float]:
+    """The separator of a CSV file (``","`` for one column, ``r"\\s+"`` for spaces) and its
+    mean bytes per line, from its first :data:`SNIFF_BYTES` bytes; refuses a binary file."""
+    with open(path, "rb") as f:
+        head = f.read(SNIFF_BYTES)
+    if b"\0" in head:
+        raise RecordError(f"{path}: holds NUL bytes in its first {len(head)} bytes, so it is a binary file, not a text CSV; give a CSV of numbers, a .nc or a .npy file.")
+    lines = head.count(b"\n") + (len(head) < SNIFF_BYTES and not head.endswith(b"\n"))
+    if lines == 0:
+        raise RecordError(f"{path}: its first {len(head)} bytes hold no line break, so it is not a CSV of one sample per line; give one sample per line.")
+    header = next((line for line in head.decode("utf-8", "replace").splitlines() if line.strip() and not line.lstrip().startswith("#")), "")
+    counts = {sep: header.count(sep) for sep in SEPARATORS}
+    best = max(counts, key=counts.get)
+    if counts[best]:
+        return best, len(head) / lines
+    return (r"\s+" if len(header.split()) > 1 else ","), len(head) / lines
 
 
 def _read_csv(path: Path, column: str, step: float | None) -> tuple[np.ndarray, float]:
     import pandas as pd
 
+    sep, _ = _sniff_csv(path)
+    options = {"comment": "#", "sep": sep, "skipinitialspace": sep != r"\s+"}
     try:
-        table = pd.read_csv(path, comment="#", skipinitialspace=True)
+        table = pd.read_csv(path, **options)
     except pd.errors.EmptyDataError:
         raise RecordError(f"{path}: the file is empty; give a CSV with a 'time,{column}' header or one column and --dt.") from None
     except (pd.errors.ParserError, UnicodeDecodeError) as exc:
         raise RecordError(f"{path}: not a readable CSV file ({str(exc).splitlines()[0]}).") from None
     if table.shape[1] == 1 and table.columns[0] not in ("time", column):
         # one headerless column: the header line is the first value
-        table = pd.read_csv(path, comment="#", header=None, names=[column])
+        table = pd.read_csv(path, header=None, names=[column], **options)
     table.columns = [str(c).strip() for c in table.columns]
     if column not in table.columns:
         raise RecordError(f"{path}: no column '{column}' (columns: {', '.join(table.columns)}); name it with --column.")
@@ -104,18 +143,41 @@ def _numeric(series, path: Path, column: str) -> np.ndarray:
     import pandas as pd
 
     values = pd.to_numeric(series, errors="coerce").to_numpy(dtype=np.float64)
-    bad = np.isnan(values) & series.notna().to_numpy() & ~series.astype(str).str.strip().str.lower().isin(["nan", ""]).to_numpy()
-    if np.any(bad):
-        row = int(np.flatnonzero(bad)[0])
+    nan_rows = np.flatnonzero(np.isnan(values))  # blank, "nan" or text: only these cells are read as text
+    cells = series.iloc[nan_rows]
+    bad = nan_rows[cells.notna().to_numpy() & ~cells.astype(str).str.strip().str.lower().isin(["nan", ""]).to_numpy()]
+    if bad.size:
+        row = int(bad[0])
         raise RecordError(f"{path}: column '{column}' row {row + 1} holds '{series.iloc[row]}', not a number; fix or blank that cell.")
     return values
+
+
+def _factor(units, table: dict, source: str, what: str, fix: str) -> float:
+    """The factor that converts ``what`` in ``units`` (``None``: not stated) to SI by ``table``."""
+    if units is None:
+        return 1.0
+    unit = str(units).split(" since ")[0].strip()
+    if unit.lower() not in table:
+        known = ", ".join(sorted({k for k in table if len(k) > 1}))
+        raise RecordError(f"{source}: {what} has units '{units}', which rockdec does not convert; {fix} (known: {known}).")
+    return table[unit.lower()]
+
+
+def angle_factor(units, source: str, variable: str) -> float:
+    """The factor from an angle in ``units`` (a NetCDF ``units`` attribute, ``None``: rad) to rad."""
+    return _factor(units, ANGLE_UNITS, source, f"'{variable}'", "store the angle in rad or degrees")
+
+
+def time_factor(units, source: str, name: str) -> float:
+    """The factor from a time coordinate in ``units`` (``None``: s) to s."""
+    return _factor(units, TIME_UNITS, source, f"the time coordinate '{name}'", "store it in s or ms")
 
 
 def _read_netcdf(path: Path, variable: str, step: float | None) -> tuple[np.ndarray, float]:
     import xarray as xr
 
-    try:
-        ds = xr.open_dataset(path)
+    try:  # times as stored, scaled by their units below (``units`` as a CF time unit, with or without "since")
+        ds = xr.open_dataset(path, decode_times=False, decode_timedelta=False)
     except (OSError, ValueError) as exc:
         raise RecordError(f"{path}: not a readable NetCDF file ({exc}).") from None
     with ds:
@@ -126,13 +188,18 @@ def _read_netcdf(path: Path, variable: str, step: float | None) -> tuple[np.ndar
             var = var.transpose(..., "time")  # one record per row, e.g. theta(seed, time) of `rockdec simulate`
         elif var.ndim != 1:
             raise RecordError(f"{path}: variable '{variable}' has dimensions {var.dims}; give theta(time) or theta(seed, time).")
-        values = var.values.astype(np.float64)
+        values = var.values.astype(np.float64) * angle_factor(var.attrs.get("units"), str(path), variable)
         dim = var.dims[-1]
         if step is None:
             if dim in ds.coords:
-                step = sampling_step(ds[dim].values, str(path))
+                coord = ds[dim]
+                step = sampling_step(coord.values, str(path)) * time_factor(coord.attrs.get("units"), str(path), dim)
             elif "dt" in var.attrs or "dt" in ds.attrs:
-                step = float(var.attrs.get("dt", ds.attrs.get("dt")))
+                text = var.attrs.get("dt", ds.attrs.get("dt"))
+                try:
+                    (step,) = np.asarray(text, dtype=np.float64).ravel()
+                except (TypeError, ValueError):
+                    raise RecordError(f"{path}: its attribute dt {text!r} is not a number of seconds; fix it or give --dt SECONDS.") from None
             else:
                 raise RecordError(f"{path}: '{variable}' has no time coordinate and no 'dt' attribute; give --dt SECONDS or --fs HZ.")
     return values, step
@@ -147,9 +214,11 @@ def read_records(path, *, column: str = "theta", variable: str = "theta", dt: fl
     ``dt``/``fs``; ``.npy``: a 1-D array with ``dt``/``fs``. Angles in rad, times in s.
     Raises :class:`RecordError`.
     """
-    path = Path(path)
+    path = path_name(path, "record")
     source = str(path)
     step = _step_from_options(dt, fs, source)
+    if path.is_dir():
+        raise RecordError(f"{path}: a folder, not a record file; give the file.")
     if not path.is_file():
         raise RecordError(f"{path}: no such file; check the path.")
     if path.stat().st_size == 0:
@@ -181,6 +250,11 @@ def check_values(theta, dt: float, source: str) -> Record:
     theta = np.asarray(theta, dtype=np.float64)
     if not (np.isfinite(dt) and dt > 0):
         raise RecordError(f"{source}: the sampling step {dt} is not a positive, finite number of seconds; give --dt.")
+    if not np.isfinite(dt * theta.size) or dt < np.finfo(np.float64).tiny:
+        raise RecordError(
+            f"{source}: a sampling step of {dt:g} s over {theta.size} samples is beyond the range of a float "
+            "(the record's length or its rocking period would be 0 or inf); give the step in s."
+        )
     if theta.size < MIN_SAMPLES:
         raise RecordError(f"{source}: the record has {theta.size} samples; the signatures need at least {MIN_SAMPLES} (many rocking cycles).")
     if np.any(np.isinf(theta)):
@@ -195,6 +269,43 @@ def check_values(theta, dt: float, source: str) -> Record:
     if finite.size == 0 or np.ptp(finite) == 0:
         raise RecordError(f"{source}: the record is constant ({finite[0] if finite.size else 'all NaN'}); a rocking record must move.")
     return Record(theta, float(dt), source)
+
+
+def record_size(path, variable: str = "theta") -> int:
+    """Samples a record file holds, read from its header (``.npy``, ``.nc``) or estimated
+    from its size and first lines (``.csv``), without reading the samples; 0 when the file
+    cannot tell (it is then refused when read)."""
+    path = Path(path)
+    try:
+        suffix = path.suffix.lower()
+        if suffix in (".csv", ".txt"):
+            _, line_bytes = _sniff_csv(path)
+            return int(path.stat().st_size / line_bytes) if line_bytes else 0
+        if suffix == ".npy":
+            return int(np.load(path, mmap_mode="r", allow_pickle=False).size)  # the header only
+        if suffix in (".nc", ".nc4", ".netcdf"):
+            import xarray as xr
+
+            with xr.open_dataset(path, decode_times=False, decode_timedelta=False) as ds:
+                return int(ds[variable].size) if variable in ds else 0
+    except (OSError, ValueError, KeyError):
+        return 0
+    return 0
+
+
+def distinct(records: list[Record]) -> list[Record]:
+    """``records``, refusing a record given twice (the same file, or identical samples):
+    a copy would count its triggers twice and narrow the interval for nothing."""
+    seen: dict[bytes, str] = {}
+    for r in records:
+        digest = hashlib.sha256(np.ascontiguousarray(r.theta).tobytes()).digest()
+        if digest in seen:
+            raise RecordError(
+                f"{r.source} holds the same samples as {seen[digest]}; give each record once "
+                "(a copy counts its triggers twice and makes the interval narrower than the data allow)."
+            )
+        seen[digest] = r.source
+    return records
 
 
 def same_step(records: list[Record]) -> float:

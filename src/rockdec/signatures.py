@@ -66,7 +66,6 @@ from __future__ import annotations
 import warnings
 from typing import NamedTuple
 
-import dask.array as da
 import numpy as np
 import xarray as xr
 from numba import njit
@@ -462,6 +461,8 @@ def _cube_packed(x, groups=None, **kw):
     array ``(..., 2, W, 2L+3)``: the sums, then count and skipped (exact below 2**53;
     :func:`_unpack` splits it).
     """
+    import dask.array as da  # only a Dask input comes here: NumPy callers never load dask.array
+
     n_lag, n_win = kw["n_lag"], len(kw["a_widths"])
     axis = x.ndim - 1
     depth = max(n_lag, 2) + 1

@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import math
 
-import dask.array as da
 import numba
 import numpy as np
 import xarray as xr
@@ -342,6 +341,8 @@ def simulation_dataset(
     overturns is NaN from the fall on); ``"fixed_step"`` runs the simplified model with the
     grid-impact integrator of :mod:`rockdec.fixed_step` (for the speed/accuracy study).
     """
+    import dask.array as da  # the lazy dataset only: simulate_block's callers never load dask.array
+
     seeds = np.atleast_1d(np.asarray(seeds, dtype=np.int64))
     seed_chunks = da.from_array(seeds, chunks=chunk_seeds)
     common = dict(e=e, sigma_p=sigma_p, theta0=theta0, theta_dot0=theta_dot0, burn_in=burn_in, dt=dt)

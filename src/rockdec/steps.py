@@ -3,8 +3,8 @@
 The rules' scripts (``workflow/scripts/estimates.py``, ``table_readings.py``, ``fig_1b.py``,
 ``fig_2.py``, ``fig_3.py``, ``fig_4.py``, ``fig_ev.py``) and ``rockdec verify --rebuild``
 (:func:`rockdec.archive.rebuild`) call these functions, so a product rebuilt from an
-archive is made by the code that made it in the workflow. Figures import matplotlib only
-when drawn.
+archive is made by the code that made it in the workflow. Figures import matplotlib, and
+the estimates the estimators' kernels, only when they run.
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from pathlib import Path
 
-from rockdec import io, replicates, tables
+from rockdec import io
 
 Paths = Sequence[str | Path]
 
@@ -21,6 +21,8 @@ def estimates(signatures: str | Path, nc: str | Path, csv: str | Path, md: str |
     """Rule ``estimates``: the estimators of eqs. 25-27 and e_v per replicate, their
     zero-window extrapolation (:func:`rockdec.replicates.scene_estimates`) and the table
     beside the paper's, from the signature file ``signatures``."""
+    from rockdec import replicates, tables  # the estimators' kernels: not loaded by the figure steps
+
     with io.open_dataset(signatures) as cube:
         cube = cube.load()
     est, table = replicates.scene_estimates(cube, options)
@@ -32,6 +34,8 @@ def estimates(signatures: str | Path, nc: str | Path, csv: str | Path, md: str |
 def table_readings(readings: str | Path, nc: str | Path, csv: str | Path, md: str | Path, weights: str) -> None:
     """Rule ``table_readings``: every reading of the paper's sizes in one dataset and one
     table (:func:`rockdec.replicates.readings_estimates`), from ``readings``."""
+    from rockdec import replicates, tables
+
     with io.open_dataset(readings) as curves:
         combined, table = replicates.readings_estimates(curves.load(), weights)
     combined.attrs.update(io.provenance("table_readings", {"weights": weights}, inputs=[readings]))

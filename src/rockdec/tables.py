@@ -16,7 +16,6 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 import xarray as xr
-from scipy import stats
 
 from rockdec.belt import Z95
 
@@ -66,6 +65,8 @@ def bias_row(values, e_target: float) -> dict:
         out.update(std=std, ci95=abs(bias) + Z95 * std)
         if std > 0:
             t = bias * np.sqrt(n) / std
+            from scipy import stats  # imported when a table needs a p-value: scipy.stats is slow to load
+
             out.update(t=float(t), p_value=float(2.0 * stats.t.sf(abs(t), n - 1)))
     return out
 

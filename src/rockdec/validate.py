@@ -107,6 +107,28 @@ def identifier(value, name: str) -> str:
     return value
 
 
+#: Longest file name (one path component) most file systems accept, in bytes.
+MAX_NAME_BYTES = 255
+
+
+def path_name(path, what: str):
+    """``path`` as a :class:`pathlib.Path`, refusing a name no file system stores (a component
+    longer than :data:`MAX_NAME_BYTES` bytes, or a NUL byte) before anything touches it."""
+    import os
+    from pathlib import Path
+
+    text = os.fspath(path)
+    if "\0" in text:
+        raise InputError(f"{what} {text!r}: holds a NUL byte, which no file name can; give a plain path.")
+    for part in Path(text).parts:
+        if len(os.fsencode(part)) > MAX_NAME_BYTES:
+            raise InputError(
+                f"{what} '{part[:40]}...': a name of {len(os.fsencode(part))} bytes, longer than the "
+                f"{MAX_NAME_BYTES} a file system stores; give a shorter name."
+            )
+    return Path(text)
+
+
 def available_memory() -> int:
     """Bytes of memory the machine can give this process now (``psutil``)."""
     import psutil

@@ -1,0 +1,76 @@
+"""What several test modules share: one build of the tiny workflow per test session.
+
+``tests/`` is on ``sys.path`` (pytest's rootdir-relative imports), so the test modules also
+import their helpers from one another (``cf_check``, ``test_hostile``).
+"""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import yaml
+
+REPO = Path(__file__).resolve().parents[1]
+
+TINY = "tiny"
+"""The default scene of the built copy."""
+
+
+def snakemake(workdir, *args) -> tuple[int, str]:
+    """``python -m snakemake --cores 2 *args`` in ``workdir``: exit code and output."""
+    proc = subprocess.run(
+        [sys.executable, "-m", "snakemake", "--cores", "2", *args], cwd=workdir, capture_output=True, text=True, timeout=900,
+    )
+    return proc.returncode, proc.stdout + proc.stderr
+
+
+def copy_workflow(root: Path) -> Path:
+    """The repository's workflow in ``root``, its default scene the tiny scene shrunk to 2
+    replicates of 10 series (the fewest the groups_of_10 reading accepts), every series
+    stored (``store_series: all``, so the archive holds them) and a fixed step."""
+    shutil.copy(REPO / "Snakefile", root)
+    for folder in ("workflow", "config", "profiles"):
+        shutil.copytree(REPO / folder, root / folder)  # resolves config/schema.yaml
+    config = yaml.safe_load((REPO / "config" / "config.yaml").read_text())
+    config["default_scene"] = TINY
+    scene = config["scenes"][TINY]
+    scene["records"].update(replicates=2, series_per_replicate=10, store_series="all", chunk_seeds=10)
+    scene["excitation"]["dt"] = 0.0034
+    (root / "config" / "config.yaml").write_text(yaml.safe_dump(config, sort_keys=False))
+    return root
+
+
+@pytest.fixture(scope="session")
+def tiny_workflow(tmp_path_factory) -> dict:
+    """A copy of the workflow (:func:`copy_workflow`), dry-run, then built once with the
+    archive of its scene (``snakemake --cores 2 all archive``): ``root`` and ``dry_run``
+    (the dry run's output, before the build) and ``log`` (the build's). Tests that change it put it back."""
+    root = copy_workflow(tmp_path_factory.mktemp("workflow"))
+    code, dry = snakemake(root, "-n")
+    assert code == 0, dry
+    code, log = snakemake(root, "all", "archive")
+    assert code == 0, log
+    return {"root": root, "dry_run": dry, "log": log}
+
+
+#: The test modules that use :func:`tiny_workflow` (one worker runs them: one build, and no
+#: two tests change it at once).
+WORKFLOW_MODULES = ("tests/test_workflow.py", "tests/test_archive.py")
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_make_scheduler(config, log):
+    """With pytest-xdist (``-n``, pyproject.toml): a worker runs every test of a module, so
+    each module-scoped fixture is built once, and one worker runs :data:`WORKFLOW_MODULES`."""
+    from xdist.scheduler import LoadFileScheduling
+
+    class ByModule(LoadFileScheduling):
+        def _split_scope(self, nodeid: str) -> str:
+            module = super()._split_scope(nodeid)
+            return WORKFLOW_MODULES[0] if module in WORKFLOW_MODULES else module
+
+    return ByModule(config, log)
