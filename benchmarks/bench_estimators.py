@@ -11,8 +11,8 @@ e = 0.95, the step from the scale law as in ``bench_signatures.py``), one ``D_a`
 periods at amplitude ``a``, so ``lag_pos`` about 266 and ``lag`` about 531). Every free
 response and ``D_v`` signature goes through
 
-- the reference, :func:`rockdec.estimators.reference_estimate_all`, one Python call per
-  signature (the implementation before the kernels);
+- the reference, :func:`reference_estimators.reference_estimate_all` (``tests/``), one Python call per
+  signature;
 - the batch kernel :func:`rockdec.estimators._estimate_rows`, all signatures in one call;
 - :func:`rockdec.estimators.estimate_cube` on the labelled cube, NumPy and Dask (chunks of
   ``--chunk`` series over the cores);
@@ -31,10 +31,12 @@ import dask
 import numpy as np
 import xarray as xr
 
+import tests_path  # noqa: F401  (tests/ on sys.path for the reference)
+from bench_signatures import best_of, rocking_record  # benchmarks/ is on sys.path
+from reference_estimators import reference_estimate_all
+
 from rockdec import estimators, signatures, simulate
 from rockdec.fits import DEFAULT_FIT_POINTS
-
-from bench_signatures import best_of, rocking_record  # noqa: E402  (benchmarks/ is on sys.path)
 
 
 
@@ -75,19 +77,19 @@ def main(argv=None):
     estimators.estimate_cube(free.isel(seed=slice(0, 2)), dv.isel(seed=slice(0, 2)), dt)
 
     def reference():
-        return np.array([[est.value for est in estimators.reference_estimate_all(r[i], d[i], dt).values()] for i in range(n)])
+        return np.array([[est.value for est in reference_estimate_all(r[i], d[i], dt).values()] for i in range(n)])
 
     t_ref, ref = best_of(1, reference)
-    t_rows, (values, _) = best_of(args.repeat, lambda: estimators._estimate_rows(r, d, dt, DEFAULT_FIT_POINTS))
+    t_rows, (values, _) = best_of(args.repeat, lambda: estimators._estimate_rows(r, d, dt, DEFAULT_FIT_POINTS, estimators._COLUMNS))
     t_cube, _ = best_of(args.repeat, lambda: estimators.estimate_cube(free, dv, dt))
     chunked = (free.chunk({"seed": args.chunk}), dv.chunk({"seed": args.chunk}))
     with dask.config.set(scheduler="threads"):
         t_dask, _ = best_of(args.repeat, lambda: estimators.estimate_cube(*chunked, dt)["e_hat"].compute())
 
     complete = ~(np.isnan(r).any(axis=1) | np.isnan(d).any(axis=1))  # windows with triggers in both
-    t_ref_c, _ = best_of(1, lambda: [estimators.reference_estimate_all(r[i], d[i], dt) for i in np.flatnonzero(complete)])
+    t_ref_c, _ = best_of(1, lambda: [reference_estimate_all(r[i], d[i], dt) for i in np.flatnonzero(complete)])
     rc, dc = r[complete], d[complete]
-    t_rows_c, _ = best_of(args.repeat, lambda: estimators._estimate_rows(rc, dc, dt, DEFAULT_FIT_POINTS))
+    t_rows_c, _ = best_of(args.repeat, lambda: estimators._estimate_rows(rc, dc, dt, DEFAULT_FIT_POINTS, estimators._COLUMNS))
 
     both = np.isfinite(ref) & np.isfinite(values)
     diff = np.abs(values[both] - ref[both])

@@ -34,6 +34,8 @@ from concurrent.futures import ThreadPoolExecutor
 import dask
 import numpy as np
 import xarray as xr
+import tests_path  # noqa: F401  (tests/ on sys.path for the reference)
+from reference_signatures import reference_per_window
 from scipy.signal import lfilter
 
 from rockdec.signatures import (
@@ -42,7 +44,6 @@ from rockdec.signatures import (
     crossing_sums,
     extremum_sums,
     lag_samples,
-    reference_per_window,
     signature_cube,
 )
 

@@ -8,17 +8,15 @@ one thread on 200 seeds). Nothing is asserted: the numbers are the result.
 from __future__ import annotations
 
 import argparse
-import sys
 import time
-from pathlib import Path
 
 import dask
 import numpy as np
 
-from rockdec import loading, simulate
+import tests_path  # noqa: F401  (tests/ on sys.path for the reference)
+from rocking_reference import flight_reference
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-from rocking_reference import flight_reference  # noqa: E402
+from rockdec import loading, simulate
 
 
 def best_of(repeats, func):

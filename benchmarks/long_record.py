@@ -1,6 +1,6 @@
 """A 1e8-point record processed in time chunks: wall time and peak memory (docs/method.md §4.4; issue 6).
 
-Step 1 (``write``) simulates one long series block by block (:func:`rockdec.simulate.long_series`)
+Step 1 (``write``) simulates one long series block by block (``tests/long_series.py``)
 into a NetCDF file, never holding more than one block. Step 2 (``analyse``, a fresh process so
 its peak RSS is its own) opens the file with Dask chunks in time and computes the signature cube
 with the overlap handled by :func:`rockdec.signatures.signature_cube`; it also computes the same
@@ -23,6 +23,9 @@ import netCDF4
 import numpy as np
 import xarray as xr
 
+import tests_path  # noqa: F401  (tests/ on sys.path for long_series)
+from long_series import long_series
+
 from rockdec import replicates, simulate
 
 DT, G, E, SIGMA_P = 0.003432651166459561, 1.0, 0.95, 0.003
@@ -38,7 +41,7 @@ def write(path: Path, points: int, chunk: int) -> None:
         var.units = "rad"
         nc.dt = DT
         done = 0
-        for theta, _ in simulate.long_series(0, points, chunk, dt=DT, g=G, e=E, sigma_p=SIGMA_P, burn_in=8087):
+        for theta, _ in long_series(0, points, chunk, dt=DT, g=G, e=E, sigma_p=SIGMA_P, burn_in=8087):
             var[0, done : done + theta.size] = theta
             done += theta.size
             print(f"\rwritten {done / points:6.1%}", end="", file=sys.stderr)

@@ -1,4 +1,5 @@
-"""What several test modules share: one build of the tiny workflow per test session.
+"""What several test modules share: one build of the tiny workflow per test session, and
+the hypothesis profile.
 
 ``tests/`` is on ``sys.path`` (pytest's rootdir-relative imports), so the test modules also
 import their helpers from one another (``cf_check``, ``test_hostile``).
@@ -6,6 +7,7 @@ import their helpers from one another (``cf_check``, ``test_hostile``).
 
 from __future__ import annotations
 
+import os
 import shutil
 import subprocess
 import sys
@@ -13,6 +15,14 @@ from pathlib import Path
 
 import pytest
 import yaml
+from hypothesis import settings
+
+# Property tests draw the same examples on every run (CI included): a failure is reproducible
+# and a passing suite cannot turn red by the luck of a draw. Explore with
+# HYPOTHESIS_PROFILE=explore (random draws, the example database on).
+settings.register_profile("rockdec", derandomize=True, database=None)
+settings.register_profile("explore", derandomize=False)
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "rockdec"))
 
 REPO = Path(__file__).resolve().parents[1]
 

@@ -1,7 +1,11 @@
 """The command line: clear one-sentence errors with exit code 2, no partial files."""
 
+import io as io_module
+import json
+import logging
 import subprocess
 import sys
+import time
 
 import numpy as np
 import pytest
@@ -135,3 +139,208 @@ def test_group_size_one_keeps_the_seeds_and_estimates_accepts_the_cube(tmp_path,
     with xr.open_dataset(est) as ds:
         assert ds["e_hat"].sizes["replicate"] == 1 and ds["e_hat"].sizes["estimator"] == 7
         assert np.isfinite(ds["e_hat0"].sel(estimator="e_v")).all()
+
+
+# --------------------------------------------------------------------------- help, start-up, output
+
+COMMANDS = ["estimate", "simulate", "signatures", "estimates", "verify", "workflow"]
+
+
+def rockdec(*args, **kwargs):
+    """``python -m rockdec args`` in a fresh interpreter."""
+    return subprocess.run([sys.executable, "-m", "rockdec", *args], capture_output=True, text=True, **kwargs)
+
+
+@pytest.mark.parametrize("args", [["--help"], ["-h"], *([name, "--help"] for name in COMMANDS)])
+def test_every_help_exits_0_with_a_description_and_an_example(args, capsys):
+    assert main(args) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("usage: rockdec")
+    assert "example" in out  # "examples:" atop, "example:" in each command
+
+
+def test_the_command_list_names_every_command_with_its_summary(capsys):
+    main(["--help"])
+    out = capsys.readouterr().out
+    assert all(f"    {name} " in out for name in COMMANDS)
+    assert "95 % interval" in out  # the summary's percent sign, printed as written
+
+
+def test_no_arguments_print_the_whole_help_and_exit_2(capsys):
+    assert main([]) == 2
+    out = capsys.readouterr().out
+    assert out.startswith("usage: rockdec") and all(name in out for name in COMMANDS)
+
+
+def test_estimate_help_explains_every_word_of_its_report(capsys):
+    from rockdec import estimators
+
+    main(["estimate", "--help"])
+    out = " ".join(capsys.readouterr().out.split())
+    for word in (*estimators.ESTIMATORS, "D_a", "D_v", "raw", "corrected", "95 % interval", "coverage", "triggers",
+                 "below / above the calibrated range", "sigma_Y"):
+        assert f" {word} " in out, word
+
+
+def test_fit_points_default_shown_in_help_is_the_estimators_default(capsys):
+    from rockdec import estimators
+
+    main(["estimates", "--help"])
+    assert f"(default {estimators.DEFAULT_FIT_POINTS})" in " ".join(capsys.readouterr().out.split())
+
+
+@pytest.mark.parametrize("args", [["--version"], ["--help"], ["estimate", "--help"], ["simulate", "--bogus"]])
+def test_version_help_and_a_refused_option_load_no_numerical_module(args):
+    proc = subprocess.run(
+        [sys.executable, "-X", "importtime", "-m", "rockdec", *args], capture_output=True, text=True
+    )
+    assert proc.returncode == (2 if "--bogus" in args else 0), proc.stderr[-500:]
+    imported = {line.split("|")[-1].strip().split(".")[0] for line in proc.stderr.splitlines() if line.startswith("import time:")}
+    assert "rockdec" in imported
+    assert not imported & {"numpy", "numba", "xarray", "scipy", "dask", "pandas", "matplotlib"}
+
+
+def test_python_dash_m_rockdec_is_the_rockdec_command():
+    from rockdec import __version__
+
+    proc = rockdec("--version")
+    assert proc.returncode == 0 and proc.stdout.strip() == f"rockdec {__version__}"
+    proc = rockdec("simulate", "--out", "x.nc", "--bogus")
+    assert proc.returncode == 2 and "unrecognized arguments: --bogus" in proc.stderr and "Traceback" not in proc.stderr
+
+
+def test_quiet_hides_the_progress_messages_and_verbose_keeps_them(tmp_path, capsys):
+    args = ["simulate", "--seeds", "0", "--n-points", "100", "--dt", "0.01", "--burn-in", "0", "--scene", "tiny"]
+    assert main([*args, "--out", str(tmp_path / "a.nc")]) == 0
+    assert "rockdec: simulating 1 series" in capsys.readouterr().err
+    assert main(["-q", *args, "--out", str(tmp_path / "b.nc")]) == 0
+    assert capsys.readouterr().err == ""
+    assert main(["-v", *args, "--out", str(tmp_path / "c.nc")]) == 0
+    assert "rockdec: simulating" in capsys.readouterr().err
+    package_log = logging.getLogger("rockdec")  # left as found: library use after a command logs nothing of ours
+    assert package_log.handlers == [] and package_log.propagate and package_log.level == logging.NOTSET
+
+
+class _Terminal(io_module.StringIO):
+    def isatty(self):
+        return True
+
+
+@pytest.mark.parametrize("terminal", [True, False])
+def test_progress_bar_is_labelled_on_a_terminal_and_absent_in_a_log(terminal, monkeypatch):
+    import dask
+
+    from rockdec import console
+
+    stream = _Terminal() if terminal else io_module.StringIO()
+    monkeypatch.setattr(sys, "stderr", stream)
+    monkeypatch.setattr(console, "BAR_AFTER_S", 0.0)
+    with console.configured(0), console.progress("calibrating"):
+        dask.delayed(time.sleep)(0.3).compute(scheduler="threads")
+    text = stream.getvalue()
+    if terminal:
+        assert "\rcalibrating [" in text and "100% Completed" in text
+    else:
+        assert text == ""  # a log file gets no carriage-return frames
+
+
+def test_workflow_without_snakemake_says_which_extra_to_install(monkeypatch, capsys):
+    import importlib.util
+
+    real = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, "find_spec", lambda name, *a: None if name == "snakemake" else real(name, *a))
+    assert main(["workflow", "--scene", "tiny"]) == 2
+    assert "pip install 'rockdec[workflow]'" in capsys.readouterr().err
+
+
+def test_workflow_passes_its_scene_and_every_other_option_to_snakemake(tmp_path, monkeypatch):
+    """A dry run (-n) of the tiny scene from an empty folder: Snakemake plans the tiny scene's jobs there."""
+    monkeypatch.chdir(tmp_path)
+    proc = subprocess.run(
+        [sys.executable, "-m", "rockdec", "workflow", "--scene", "tiny", "-n", "--quiet", "rules"],
+        capture_output=True, text=True, timeout=300,
+    )
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    text = proc.stdout + proc.stderr
+    assert "calibrate" in text and "signatures" in text
+    assert "results/paper" not in text
+    assert not (tmp_path / "results").exists()  # a dry run writes nothing
+
+
+def _fake_grid_point(j, e, cal_settings, seed_base):
+    """A calibration grid point without simulation: every estimator reads the true e, g its
+    true value (ratio 1), with a spread of 0.01."""
+    from rockdec import calibration
+
+    rng = np.random.default_rng(j)
+    out = e + 0.01 * rng.standard_normal((cal_settings["sets_per_e"], len(calibration.NAMES)))
+    out[:, calibration.NAMES.index("g")] = 1.0 + 0.01 * rng.standard_normal(cal_settings["sets_per_e"])
+    return out
+
+
+def test_calibrating_is_announced_only_when_a_calibration_is_built(tmp_path, capsys, monkeypatch):
+    from rockdec import __version__, calibration
+
+    monkeypatch.setattr(calibration, "_grid_point", _fake_grid_point)
+    record = tmp_path / "r.nc"
+    assert main(["simulate", "--e", "0.85", "--seeds", "1", "--n-points", "20000", "--out", str(record)]) == 0
+    capsys.readouterr()
+    args = ["estimate", str(record), "--cache", str(tmp_path / "cache"), "--json"]
+    assert main(args) == 0
+    first = capsys.readouterr()
+    assert "rockdec: calibrating" in first.err and "\r" not in first.err  # not a terminal: no bar frames
+    assert main(args) == 0
+    again = capsys.readouterr()
+    assert "calibrating" not in again.err
+    res = json.loads(again.out)
+    assert res["calibration"]["cached"] is True and res["rockdec_version"] == __version__
+    assert res["g_interval"] is None and "no interval" in res["g_interval_note"]
+
+
+@pytest.mark.parametrize("raw, side, shown", [(0.39, "below", "< 0.400"), (1.0, "above", "> 0.995"), (0.7, None, "0.7000")])
+def test_a_corrected_value_at_the_end_of_the_calibrated_range_is_shown_as_a_bound(raw, side, shown):
+    """Identity belt (mean e, spread 0.01) on [0.4, 0.995]: a raw value beyond the mean curve
+    is corrected to the range's end, which bounds e rather than estimating it."""
+    from rockdec import belt, inference
+    from rockdec.cli import _estimate_text
+
+    e = np.linspace(0.4, 0.995, 1191)
+    b = belt.Belt(e, e.copy(), np.full(e.size, 0.01), 0.0)
+    c = belt.correct(b, raw)
+    assert inference.beyond(b, raw, c) == side
+    est = {"raw": raw, "e": None if side else c.value, "beyond": side, "calibrated_range": [0.4, 0.995],
+           "interval": [c.low, c.high], "coverage": 0.95, "triggers": 100, "notes": []}
+    res = {"records": ["r.csv"], "samples": 1000, "dt": 0.01, "nan_samples": 0, "sigma_y": 0.01, "points_per_cycle": 75.0,
+           "g": 1.0, "g_given": True, "g_raw": 1.0, "calibration": {"file": "c.nc", "cached": True, "seconds": 0.0},
+           "estimators": {"e_v": est}, "estimator": "e_v", "e": est["e"], "interval": est["interval"], "coverage": 0.95,
+           "warnings": []}
+    row = next(line for line in _estimate_text(res).splitlines() if line.startswith("e_v *"))
+    assert shown in row
+    if side:
+        assert "0.4000 " not in row.split("[")[0] and "0.9950 " not in row.split("[")[0]  # the end is not printed as a value
+        assert f"{side} the calibrated range" in _estimate_text(res)
+
+
+def test_readme_explains_every_estimator_and_word_of_the_estimate_report():
+    from pathlib import Path
+
+    from rockdec import estimators
+    from rockdec.cli import READS
+
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    glossary = readme[readme.index("**The words of its report**"):]
+    glossary = glossary[: glossary.index("\n\n", glossary.index("| word |"))]
+    rows = [line.split("|")[1] for line in glossary.splitlines() if line.startswith("| ")]
+    assert set(READS) == set(estimators.ESTIMATORS)
+    named = " ".join(rows)
+    for word in (*estimators.ESTIMATORS, "D_a", "D_v", "raw", "corrected", "95 % interval", "coverage", "triggers", "sigma_Y"):
+        assert word in named or (word in ("e1", "e2", "e3", "e4") and "`e1` .. `e4`" in named), word
+
+
+def test_a_scene_is_found_from_any_folder(tmp_path, monkeypatch):
+    """Outside a checkout (no ./config/config.yaml), --scene reads the workflow's own config."""
+    monkeypatch.chdir(tmp_path)
+    args = ["simulate", "--scene", "tiny", "--seeds", "0", "--n-points", "100", "--dt", "0.01", "--burn-in", "0", "--out", "x.nc"]
+    assert main(args) == 0
+    with xr.open_dataset(tmp_path / "x.nc") as ds:
+        assert json.loads(ds.attrs["settings"])["system"]["e"] == 0.95  # the tiny scene's e

@@ -16,7 +16,8 @@ import xarray as xr
 
 from rockdec import belt, calibration, coverage, measured
 from rockdec.cli import main
-from rockdec.loading import draw_impulses, pole_for_corner, series_rng
+from rockdec.loading import draw_impulses, series_rng
+from rockdec.record_model import Load
 from rockdec.simulate import calibrate_dt, simulate_block
 
 G = 1.0  # nu = 2 rad/s, theta_cr = 0.25 rad
@@ -145,7 +146,7 @@ def test_nan_gaps_are_skipped_and_counted(short_record):
 
 
 def test_coloured_load_keeps_sigma_p_and_sets_the_pole():
-    pole = pole_for_corner(3.0, 75.0)
+    pole = Load("lowpass", 3.0).pole(75.0)
     p = draw_impulses(series_rng(4), np.empty(400_000), 2.0, pole)
     assert p.std() == pytest.approx(2.0, rel=0.02)
     assert np.corrcoef(p[1:], p[:-1])[0, 1] == pytest.approx(pole, abs=0.01)

@@ -13,22 +13,24 @@ import xarray as xr
 
 from rockdec import signatures, simulate
 from rockdec.estimators import (
-    ESTIMATORS,
     LOCAL_ESTIMATORS,
     Estimate,
     _lobes,
-    _reference_half_cycle,
-    _reference_lobes,
-    e_first_peak,
-    e_global,
-    e_impact_slope,
     estimate_all,
     estimate_cube,
     extrapolate,
     extrapolate_to_zero,
     half_cycle,
+)
+from rockdec.registry import ESTIMATORS
+from reference_estimators import (
+    e_first_peak,
+    e_global,
+    e_impact_slope,
     local_measures,
     reference_estimate_all,
+    reference_half_cycle,
+    reference_lobes,
 )
 
 G = 2.0  # rad/s^2: with A = 1 rad the first crossing is at t1 = 1 s
@@ -377,7 +379,7 @@ def test_extrapolate_equals_kernel(use_dask):
 
 # --- the batch kernel against the per-signature reference -----------------------------
 #
-# ``reference_estimate_all`` is the former per-signature NumPy implementation
+# ``reference_estimate_all`` (tests/reference_estimators.py) is the per-signature NumPy implementation
 # (np.linalg.solve per fit, NumPy runs for the lobes); the kernels must give its values to
 # 1e-12 (relative on real signatures), the same NaN and the same reasons.
 
@@ -460,7 +462,7 @@ def test_single_estimator_functions_equal_reference(simulated_signatures):
         local = local_measures(r, dt, lobes)
         assert_same_estimates([local], [{name: expected[name] for name in LOCAL_ESTIMATORS}])
         assert_same_estimates([{"e_v": e_impact_slope(d, dt)}], [{"e_v": expected["e_v"]}])
-        h, h_ref = half_cycle(r, dt), _reference_half_cycle(r, dt, _reference_lobes(r))
+        h, h_ref = half_cycle(r, dt), reference_half_cycle(r, dt, reference_lobes(r))
         assert h.reason == h_ref.reason
         np.testing.assert_allclose(h[:6], h_ref[:6], rtol=1e-12, atol=0)
 

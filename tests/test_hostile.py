@@ -281,7 +281,7 @@ ANY_FLOAT = st.one_of(
     st.sampled_from([math.nan, math.inf, -math.inf, 5e-324, -5e-324, 2.2e-308, 1e300, -1e300, 0.0, -0.0, 1.0]),
 )
 FUZZ = settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-TIME_BOUND = 5.0  # s, per call (the kernels are compiled by then; the sizes are small)
+TIME_BOUND = 60.0  # s, per call: a hang, not a slow call (a first call compiles its kernel, and CI machines are often shared)
 
 
 def bounded(func, *args, **kwargs):
@@ -421,7 +421,7 @@ def test_cli_simulate_options_give_a_finite_file_or_one_sentence(tmp_path_factor
     argv = ["simulate", "--out", str(out), *_argv([flag, repr(value)])]
     start = time.perf_counter()
     code = main(argv)
-    assert time.perf_counter() - start < 20 * TIME_BOUND
+    assert time.perf_counter() - start < 2 * TIME_BOUND  # a simulation of the fuzzed run: bounded, not hung
     if code == 0:
         with xr.open_dataset(out) as ds:
             assert np.isfinite(ds["theta"].values).all() and np.isfinite(ds["theta_dot"].values).all()

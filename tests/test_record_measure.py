@@ -7,7 +7,8 @@ import pytest
 from scipy.signal import lfilter
 
 from rockdec import record_measure as rm
-from rockdec.loading import pole_for_corner, series_rng
+from rockdec.loading import series_rng
+from rockdec.record_model import Load
 from rockdec.simulate import simulate_block
 from rockdec.validate import InputError
 
@@ -15,7 +16,7 @@ from rocking_reference import flight_reference
 
 # Steps giving about 75 samples per cycle at sigma_Y for g = 1, sigma_p = 1, e = 0.9
 # (rockdec.simulate.calibrate_dt): white load, and a low-pass load with its corner at the
-# rocking frequency (pole_for_corner(1, 75)).
+# rocking frequency (Load("lowpass", 1).pole(75)).
 DT_WHITE, DT_CORNER_1 = 0.8043, 2.513
 BURN_IN = 4362
 
@@ -118,7 +119,7 @@ def test_sensor_noise_is_measured_in_units_of_sigma_y(share):
 
 @pytest.mark.parametrize("noise, kind", [(0.0, "coloured"), (0.02, "both")])
 def test_low_pass_load_corner_is_recovered_under_sensor_noise(noise, kind):
-    pole = pole_for_corner(1.0, 75.0)
+    pole = Load("lowpass", 1.0).pole(75.0)
     y = _simulated(13, pole=pole, dt=DT_CORNER_1)
     m = rm.measure(y + noise * y.std() * series_rng(98).standard_normal(y.size), DT_CORNER_1)
     assert m.kind == kind
@@ -151,7 +152,7 @@ def test_reference_flight_record_with_sensor_noise():
     assert noisy.noise_ratio.value == pytest.approx(0.03, rel=0.08)
 
 
-@pytest.mark.parametrize("pole, dt, noise", [(0.0, DT_WHITE, 0.01), (pole_for_corner(1.0, 75.0), DT_CORNER_1, 0.0)])
+@pytest.mark.parametrize("pole, dt, noise", [(0.0, DT_WHITE, 0.01), (Load("lowpass", 1.0).pole(75.0), DT_CORNER_1, 0.0)])
 def test_scale_invariance(pole, dt, noise):
     y = _simulated(14, n=100_000, pole=pole, dt=dt)
     y = y + noise * y.std() * series_rng(5).standard_normal(y.size)

@@ -6,6 +6,7 @@ import dask
 import numpy as np
 import pytest
 import xarray as xr
+from reference_signatures import reference_per_window
 from scipy.signal import find_peaks, lfilter
 
 from rockdec.signatures import (
@@ -16,7 +17,6 @@ from rockdec.signatures import (
     lag_samples,
     mean_signature,
     pool,
-    reference_per_window,
     signature_cube,
 )
 

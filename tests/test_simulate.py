@@ -8,6 +8,7 @@ from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from rockdec import simulate
+from long_series import long_series
 from rocking_reference import flight_reference
 
 G = 1.0
@@ -193,6 +194,6 @@ def test_calibration_hits_points_per_cycle_and_refuses_e_one():
 def test_long_series_in_time_chunks_equals_the_whole_series(chunk):
     kwargs = dict(dt=0.0034, g=G, e=0.95, sigma_p=0.003, burn_in=500)
     whole = simulate.simulate_block([4], 10_007, **kwargs)[0][0]
-    blocks = list(simulate.long_series(4, 10_007, chunk, **kwargs))
+    blocks = list(long_series(4, 10_007, chunk, **kwargs))
     assert all(b[0].size <= chunk for b in blocks)
     np.testing.assert_array_equal(np.concatenate([b[0] for b in blocks]), whole)

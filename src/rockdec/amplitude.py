@@ -16,8 +16,10 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from rockdec import replicates, run, simulate, tables
-from rockdec.models import MODELS, noise_for_amplitude, restoring_acceleration, scale_constant
+from rockdec import replicates, run, tables
+from rockdec.models import MODELS, noise_for_amplitude, scale_constant
+from rockdec.record_model import Load
+from rockdec.validate import InputError
 
 RATIOS = (0.002, 0.005, 0.01, 0.02, 0.03, 0.05)
 """``sigma_Y / theta_cr`` of the sweep; eqs. 3 and 5 differ by 2 % near 3 sigma_Y = 0.047 theta_cr."""
@@ -28,14 +30,16 @@ def noise_for_ratios(scene: dict, ratios) -> list[float]:
 
     With ``dt`` calibrated to ``N`` points per cycle the scale law gives ``sigma_p`` in closed
     form (:func:`rockdec.models.noise_for_amplitude`), and its number ``c`` does not depend
-    on ``sigma_p`` (scale invariance, docs/method.md §3.4); ``c`` is measured once from a
-    pilot at the scene's own noise.
+    on ``sigma_p`` (scale invariance, docs/method.md §3.4); ``c`` is measured once from the
+    simplified model's run at the scene's own noise (:func:`rockdec.run.calibrate`). The law
+    is the white load's: a coloured load is refused.
     """
     system, exc = scene["system"], scene["excitation"]
-    g = restoring_acceleration(system["nu"], system["theta_cr"])
-    cal = simulate.calibrate_dt(e=system["e"], g=g, sigma_p=exc["sigma_p"], points_per_cycle=exc["points_per_cycle"])
-    c = scale_constant(cal["sigma_y"], cal["dt"], g, exc["sigma_p"])
-    return [noise_for_amplitude(c, r * system["theta_cr"], g, exc["points_per_cycle"]) for r in ratios]
+    if Load.from_dict(exc.get("load")).kind != "white":
+        raise InputError("the amplitude sweep sets the noise by the white-noise scale law; give the scene a white load")
+    contract = run.calibrate({**scene, "model": "simplified", "excitation": {**exc, "dt": None}})
+    c = scale_constant(contract.sigma_y, contract.dt, contract.g, exc["sigma_p"])
+    return [noise_for_amplitude(c, r * system["theta_cr"], contract.g, exc["points_per_cycle"]) for r in ratios]
 
 
 def sweep(scene: dict, ratios=RATIOS, threads: int = 1) -> xr.Dataset:

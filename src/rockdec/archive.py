@@ -21,10 +21,9 @@ import copy
 import hashlib
 import json
 import os
+import secrets
 import shutil
 import stat
-import subprocess
-import tempfile
 import uuid
 from datetime import datetime, timezone
 from importlib.metadata import PackageNotFoundError, version
@@ -99,17 +98,6 @@ def package_versions() -> dict[str, str]:
     return out
 
 
-def git_dirty() -> bool | None:
-    """Whether the source tree of this package has uncommitted changes (None outside git)."""
-    try:
-        out = subprocess.run(
-            ["git", "status", "--porcelain"], cwd=Path(__file__).parent, capture_output=True, text=True, timeout=10
-        )
-    except (OSError, subprocess.TimeoutExpired):
-        return None
-    return bool(out.stdout.strip()) if out.returncode == 0 else None
-
-
 def _utc(seconds: float | None = None) -> str:
     moment = datetime.now(timezone.utc) if seconds is None else datetime.fromtimestamp(seconds, timezone.utc)
     return moment.isoformat(timespec="seconds")
@@ -145,7 +133,7 @@ def write_archive(
         "settings": scene,
         "versions": package_versions(),
         "git_commit": io.git_commit(),
-        "git_dirty": git_dirty(),
+        "git_dirty": io.git_dirty(),
         "datePublished": _utc(),
         "run": {"id": f"#run-{uuid.uuid4()}", "startTime": _utc(min(written)), "endTime": _utc(max(written))},
         "workflow": sources,
@@ -366,7 +354,8 @@ def rebuild(folder: str | Path, out: str | Path) -> dict[str, bool]:
         if needed not in names:
             raise ArchiveError(f"'{folder}' holds no {needed}, which the rebuild starts from; pass a folder rule `archive` wrote.")
     try:
-        work = Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".partial", dir=out.parent))
+        work = out.parent / f".{out.name}.{secrets.token_hex(6)}.partial"
+        work.mkdir()  # mode 0777 less the umask, as the folder it becomes (mkdtemp would make it 0700)
     except OSError as exc:
         raise io.OutputError(f"--rebuild '{out}': cannot write in '{out.parent}' ({exc.strerror}); choose another folder.") from None
     try:

@@ -36,6 +36,7 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import json
+import logging
 import math
 import os
 import socket
@@ -47,8 +48,13 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from rockdec import __version__, engine, estimators, io, measured
+from rockdec import __version__, engine, io, measured, registry
+from rockdec.models import SCALE_CONSTANT_GUESS, step_for_density
+from rockdec.record_model import PAPER, RecordModel
+from rockdec.sources import package_sources
 from rockdec.validate import InputError
+
+log = logging.getLogger(__name__)
 
 #: True ``e`` of the calibration grid: denser where the estimators bend (near 1).
 E_GRID = (0.4, 0.5, 0.6, 0.7, 0.75, 0.8, 0.85, 0.88, 0.91, 0.93, 0.95, 0.965, 0.98, 0.99, 0.995)
@@ -56,14 +62,14 @@ E_GRID = (0.4, 0.5, 0.6, 0.7, 0.75, 0.8, 0.85, 0.88, 0.91, 0.93, 0.95, 0.965, 0.
 #: Simulated record sets per grid point.
 SETS_PER_E = 40
 
-#: Pilot sets of the step search, and their iterations.
-PILOT_SETS, PILOT_ITERATIONS = 8, 3
+#: Pilot sets of each iteration of the step search.
+PILOT_SETS = 8
 
 #: Calibrations are shared by records whose samples per cycle agree within this relative step.
 PPC_BIN = 0.1
 
 #: Names calibrated: every estimator of e, and g.
-NAMES = (*estimators.ESTIMATORS, measured.G_NAME)
+NAMES = (*registry.ESTIMATORS, measured.G_NAME)
 
 #: Seeds of calibration records start here (apart from scene seeds and pilot seeds).
 CALIBRATION_SEED_OFFSET = 2**61
@@ -80,11 +86,19 @@ def ppc_key(points_per_cycle: float) -> float:
     return float(round(math.exp(PPC_BIN * round(math.log(points_per_cycle) / PPC_BIN)), 3))
 
 
-def calibration_settings(lengths, points_per_cycle: float, settings: dict | None = None) -> dict:
-    """Everything a calibration depends on, as a JSON-able dict (hashed for the cache name)."""
+def calibration_settings(lengths, points_per_cycle: float, settings: dict | None = None, model: RecordModel = PAPER) -> dict:
+    """Everything a calibration depends on, as a JSON-able dict (hashed for the cache name).
+
+    ``model``: the record model the calibration simulates (:mod:`rockdec.record_model`): its
+    load and sensor noise (in units of ``sigma_Y``: the calibration is scale-free); the
+    rocking model is the simplified one (eq. 4).
+    """
+    if model.rocking != "simplified" or model.sensor.units != "sigma_y":
+        raise ValueError("a calibration simulates the simplified model (eq. 4), with any sensor noise in units of sigma_Y")
     return {
         "lengths": [int(n) for n in lengths],
         "points_per_cycle": ppc_key(points_per_cycle),
+        "record_model": model.key(),
         "analysis": {k: (list(v) if isinstance(v, tuple) else v) for k, v in {**measured.DEFAULT_SETTINGS, **(settings or {})}.items()},
         "e_grid": list(E_GRID),
         "sets_per_e": SETS_PER_E,
@@ -94,14 +108,13 @@ def calibration_settings(lengths, points_per_cycle: float, settings: dict | None
 
 
 def pipeline_fingerprint() -> str:
-    """SHA-256 (16 hex digits) of the source of every module the calibrated pipeline runs:
-    a change to the simulator, the signatures, the estimators, the analysis or this module makes every
-    stored calibration stale, whatever the version number says."""
-    from rockdec import loading, signatures, simulate
-
+    """SHA-256 (16 hex digits) of the source of every module this one reaches by import
+    (:func:`rockdec.sources.package_sources`, the list the workflow's rules declare too): a
+    change to the simulator, the models, the signatures, the estimators, the analysis or this
+    module makes every stored calibration stale, whatever the version number says."""
     digest = hashlib.sha256()
-    for module in (loading, simulate, signatures, estimators, measured, sys.modules[__name__]):
-        digest.update(Path(module.__file__).read_bytes())
+    for path in package_sources(__name__):
+        digest.update(Path(path).read_bytes())
     return digest.hexdigest()[:16]
 
 
@@ -110,38 +123,52 @@ def settings_hash(cal_settings: dict) -> str:
     return hashlib.sha256(json.dumps(cal_settings, sort_keys=True).encode()).hexdigest()[:16]
 
 
-def _simulate_set(seed0: int, lengths, dt: float, e: float, burn_in: int) -> list[np.ndarray]:
-    """One set of records (one per length), seeds ``seed0, seed0 + 1, ...``; ``g = sigma_p = 1``."""
-    from rockdec.simulate import simulate_block  # the simulators load only when a calibration is built
+def _simulate_set(seed0: int, lengths, dt: float, e: float, burn_in: int, model: RecordModel, pole: float) -> list[np.ndarray]:
+    """One set of records (one per length), seeds ``seed0, seed0 + 1, ...``; ``g = sigma_p = 1``,
+    the load's filter ``pole``, and the sensor noise of ``model`` relative to each record's rms."""
+    from rockdec.loading import add_sensor_noise  # the simulators load only when a calibration is built
+    from rockdec.simulate import simulate_block
 
-    return [
-        simulate_block([seed0 + k], n, dt=dt, g=1.0, e=e, sigma_p=1.0, burn_in=burn_in)[0][0] for k, n in enumerate(lengths)
-    ]
+    out = []
+    for k, n in enumerate(lengths):
+        theta = simulate_block([seed0 + k], n, dt=dt, g=1.0, e=e, sigma_p=1.0, burn_in=burn_in, pole=pole)[0]
+        if model.sensor.std > 0.0:
+            add_sensor_noise(theta, [seed0 + k], model.sensor.std_rad(float(np.sqrt(np.mean(theta**2)))))
+        out.append(theta[0])
+    return out
 
 
-def step_for(e: float, points_per_cycle: float, lengths, settings: dict, seed0: int) -> tuple[float, int]:
+def step_for(e: float, points_per_cycle: float, lengths, settings: dict, seed0: int, model: RecordModel = PAPER) -> tuple[float, int]:
     """Step ``dt`` (for ``g = sigma_p = 1``) at which :func:`rockdec.measured.analyse` reads
     ``points_per_cycle`` off simulated records at ``e``, and the burn-in.
 
     Fixed point on the scale law: ``points_per_cycle`` goes as ``1/dt^2`` (``sigma_Y`` as
     ``S^2/g^3`` with ``S = sigma_p^2/dt``, and eq. 5), so ``dt <- dt sqrt(N_read / N)``;
-    :data:`PILOT_SETS` sets of at most 50,000 samples a record per iteration.
+    under a coloured load the exponent is measured (:func:`rockdec.simulate.secant_step`).
+    :data:`PILOT_SETS` sets of at most 50,000 samples a record per iteration,
+    :data:`rockdec.simulate.STEP_ITERATIONS` iterations.
     """
-    from rockdec.simulate import default_burn_in
+    from rockdec.simulate import STEP_ITERATIONS, default_burn_in, secant_step
 
     burn_in = default_burn_in(e, points_per_cycle)
-    dt = math.sqrt(4.0 * math.sqrt(2.0 * 290.0) / points_per_cycle)  # sigma_Y c S^2/g^3, c near 290 at e = 0.95
+    dt = step_for_density(SCALE_CONSTANT_GUESS, 1.0, 1.0, points_per_cycle)
+    pole = model.load.pole(points_per_cycle)
     pilot = [min(int(n), 50_000) for n in lengths]
-    for i in range(PILOT_ITERATIONS):
+    history: list = []
+    for i in range(STEP_ITERATIONS[model.load.kind]):
         read = []
         for k in range(PILOT_SETS):
             try:
-                read.append(measured.analyse(_simulate_set(seed0 + k * len(pilot), pilot, dt, e, burn_in), dt, settings).points_per_cycle)
+                records = _simulate_set(seed0 + k * len(pilot), pilot, dt, e, burn_in, model, pole)
+                read.append(measured.analyse(records, dt, settings).points_per_cycle)
             except ValueError:
                 continue
         if not read:
             raise ValueError(f"no pilot record at e = {e} could be analysed; the records are too short for this sampling")
-        dt *= math.sqrt(float(np.median(read)) / points_per_cycle)
+        if model.load.kind == "white":
+            dt *= math.sqrt(float(np.median(read)) / points_per_cycle)
+        else:
+            dt = secant_step(history, dt, float(np.median(read)), points_per_cycle)
     return dt, burn_in
 
 
@@ -149,15 +176,17 @@ def _grid_point(j: int, e: float, cal_settings: dict, seed_base: int) -> np.ndar
     """Raw zero-window values ``(set, name)`` of one grid point; NaN for sets (or the whole
     point) that cannot be analysed, e.g. records too short for the lag range at this ``e``."""
     lengths, ppc, settings = cal_settings["lengths"], cal_settings["points_per_cycle"], cal_settings["analysis"]
+    model = RecordModel.from_key(cal_settings["record_model"])
     seed0 = seed_base + j * 10**7
     out = np.full((cal_settings["sets_per_e"], len(NAMES)), np.nan)
     try:
-        dt, burn_in = step_for(e, ppc, lengths, settings, seed0 + 9 * 10**6)
+        dt, burn_in = step_for(e, ppc, lengths, settings, seed0 + 9 * 10**6, model)
     except ValueError:  # no record at this e can be analysed: the belt leaves this e out
         return out
     for k in range(cal_settings["sets_per_e"]):
         try:
-            raw = measured.analyse(_simulate_set(seed0 + k * len(lengths), lengths, dt, e, burn_in), dt, settings).raw
+            records = _simulate_set(seed0 + k * len(lengths), lengths, dt, e, burn_in, model, model.load.pole(ppc))
+            raw = measured.analyse(records, dt, settings).raw
         except ValueError:
             continue
         out[k] = [raw[name] for name in NAMES]
@@ -172,6 +201,10 @@ def build(cal_settings: dict) -> xr.Dataset:
     """
     import dask
 
+    log.info(
+        f"calibrating: simulating {cal_settings['sets_per_e']} record sets at each of {len(cal_settings['e_grid'])} values of e "
+        "like the measured records (once; stored for every record with the same settings)"
+    )
     tasks = [dask.delayed(_grid_point)(j, e, cal_settings, CALIBRATION_SEED_OFFSET) for j, e in enumerate(cal_settings["e_grid"])]
     values = np.stack(engine.compute(*tasks))
     ds = xr.Dataset(

@@ -1,28 +1,30 @@
-"""The ``rockdec`` command: ``estimate``, ``simulate``, ``signatures``, ``estimates``, ``verify``.
+"""The ``rockdec`` command: ``estimate``, ``simulate``, ``signatures``, ``estimates``, ``verify``, ``workflow``.
 
 Errors a user can cause (bad options, unknown scene, unwritable output, a request larger
 than the memory) end with one sentence on stderr naming the problem and the fix, and exit
 code 2; no file is left behind. An unexpected internal error says so in one line (exit
 code 1); ``rockdec --debug ...`` shows its traceback. ``verify`` exits 1 when a file of the
 archive changed or is missing.
+
+The numerical modules (numpy, xarray, numba kernels, scipy, Dask) are imported by the
+command that runs them, so ``--version``, ``--help`` and a refused option answer at once.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import logging
 import os
 import sys
 import traceback
 import warnings
 from pathlib import Path
 
-import numpy as np
-
-from rockdec import config as config_mod
-from rockdec import __version__, archive, engine, estimators, io, layout, records, replicates, run, signatures, simulate
+from rockdec import __version__, console, engine, fits
 from rockdec import validate as checks
-from rockdec.models import restoring_acceleration
+
+log = logging.getLogger(__name__)
 
 #: Scene fields set by ``simulate`` options: option -> path of the field in the scene.
 SIMULATE_OPTIONS = {
@@ -93,6 +95,8 @@ def seed_ranges(text: str) -> list[tuple[int, int]]:
 
 def parse_seeds(text: str) -> np.ndarray:
     """Seeds from ``"0-99"``, ``"3,7"`` or a mix like ``"0-4,10"``; inclusive ranges."""
+    import numpy as np
+
     ranges = seed_ranges(text)
     # the seeds (int64) and the sorted copy that finds repeats
     checks.memory(16.0 * sum(stop - start for start, stop in ranges), f"--seeds '{text}'", "give fewer seeds per run")
@@ -104,8 +108,11 @@ def parse_seeds(text: str) -> np.ndarray:
 
 def _simulate_scene(args) -> dict:
     """The scene a ``simulate`` call describes: ``--scene`` (or the defaults), then options."""
+    from rockdec import config as config_mod
+    from rockdec.models import restoring_acceleration
+
     if args.scene:
-        scene = json.loads(json.dumps(config_mod.scene(config_mod.load(args.config), args.scene)))
+        scene = json.loads(json.dumps(config_mod.scene(config_mod.load(args.config or _default_config()), args.scene)))
     else:
         scene = config_mod.validate_scene({})
     scene = _validated(_with_options(scene, args, SIMULATE_OPTIONS), SIMULATE_OPTIONS)
@@ -130,6 +137,8 @@ def _with_options(scene: dict, args, options: dict) -> dict:
 
 def _validated(scene: dict, options: dict) -> dict:
     """``config.validate_scene``, with an error in a field set by an option named by that option."""
+    from rockdec import config as config_mod
+
     try:
         return config_mod.validate_scene(scene)
     except config_mod.ConfigError as exc:
@@ -197,10 +206,15 @@ def _field(scene: dict, sections) -> dict:
 
 
 def cmd_simulate(args) -> None:
-    out = io.check_output(args.out, args.overwrite)
-    scene = _simulate_scene(args)
+    scene = _simulate_scene(args)  # settings first: a bad value is refused before the numerical modules load
     checks.finite(args.theta0, "--theta0", "give the initial angle in rad")
     checks.finite(args.theta_dot0, "--theta-dot0", "give the initial angular velocity in rad/s")
+
+    import numpy as np
+
+    from rockdec import io, layout, run
+
+    out = io.check_output(args.out, args.overwrite)
     n_seeds = sum(stop - start for start, stop in seed_ranges(args.seeds)) if args.seeds is not None else None
     _check_simulation_size(scene, n_seeds or layout.scene_seeds(scene["records"]).size, out, args.yes, seeds_text=args.seeds)
     seeds = parse_seeds(args.seeds) if args.seeds is not None else layout.scene_seeds(scene["records"]).ravel()
@@ -219,16 +233,19 @@ def cmd_simulate(args) -> None:
     _check_simulation_size(scene, seeds.size, out, args.yes, burn_in=contract.burn_in, seeds_text=args.seeds)
     ds = contract.dataset(seeds, scene["records"]["n_points"], chunk_seeds=scene["records"]["chunk_seeds"])
     ds.attrs.update(io.provenance("simulate", scene))
-    print(
+    log.info(
         f"simulating {seeds.size} series x {scene['records']['n_points']} points "
-        f"(dt = {contract.dt:.6g} s, burn-in {contract.burn_in} steps) -> {out}",
-        file=sys.stderr,
+        f"(dt = {contract.dt:.6g} s, burn-in {contract.burn_in} steps) -> {out}"
     )
-    with _progress():
+    with console.progress("simulating"):
         io.write_netcdf(ds, out, float32=("theta", "theta_dot"), overwrite=args.overwrite)
 
 
 def cmd_signatures(args) -> None:
+    import numpy as np
+
+    from rockdec import io, records, replicates, signatures, simulate
+
     out = io.check_output(args.out, args.overwrite)
     with io.open_dataset(args.input) as src:
         if args.variable not in src:
@@ -303,10 +320,14 @@ def cmd_signatures(args) -> None:
     cube.attrs.update(io.provenance("signatures", scene["signatures"], inputs=[args.input]))
     io.write_netcdf(cube, out, overwrite=args.overwrite)
     counts = cube["count"].sum(replicates.series_dim(cube))
-    print(f"triggers per window: D_a {counts.sel(trigger='a').values}, D_v {counts.sel(trigger='v').values}", file=sys.stderr)
+    log.info(f"triggers per window: D_a {counts.sel(trigger='a').values}, D_v {counts.sel(trigger='v').values}")
 
 
 def cmd_estimates(args) -> None:
+    import numpy as np
+
+    from rockdec import io, replicates
+
     out = io.check_output(args.out, args.overwrite)
     checks.integer(args.fit_points, "--fit-points", 3, "give at least 3 points per side (a parabola needs 3)")
     with io.open_dataset(args.input) as src:
@@ -348,7 +369,7 @@ def _check_estimate_size(args) -> float:
     """Refuse, before reading the records, a run beyond the memory, or longer than
     :data:`MAX_SECONDS` without ``--yes`` (:func:`rockdec.inference.cost`, from the files'
     headers or sizes); returns the estimated seconds."""
-    from rockdec import inference
+    from rockdec import inference, records
 
     samples = sum(records.record_size(path, args.variable) for path in args.records)
     csv = any(Path(path).suffix.lower() in (".csv", ".txt") for path in args.records)
@@ -367,7 +388,7 @@ def _check_estimate_size(args) -> float:
 def cmd_estimate(args) -> None:
     import contextlib
 
-    from rockdec import inference
+    from rockdec import inference, io, records
 
     for path in args.records:
         checks.path_name(path, "record")
@@ -383,13 +404,11 @@ def cmd_estimate(args) -> None:
             for path in args.records
             for rec in records.read_records(path, column=args.column, variable=args.variable, dt=args.dt, fs=args.fs)
         ]
-        if not args.json:
-            print(
-                f"rockdec estimate: {len(recs)} record(s), {sum(r.theta.size for r in recs)} samples; analysing and calibrating "
-                f"(up to about {_duration(seconds)} when the calibration is not stored yet) ...",
-                file=sys.stderr,
-            )
-        with _progress():  # a calibration not in the cache is built first (about 10 s for 200,000 samples)
+        log.info(
+            f"estimate: {len(recs)} record(s), {sum(r.theta.size for r in recs)} samples "
+            f"(up to about {_duration(seconds)} when their calibration must be built)"
+        )
+        with console.progress("calibrating"):  # a bar only while a calibration missing from the cache is built
             result = inference.estimate(recs, cache_dir=args.cache, g=args.g)
         if plot is not None:
             from rockdec import figures
@@ -403,38 +422,108 @@ def cmd_estimate(args) -> None:
         print(_estimate_text(public))
 
 
+#: What each estimator of ``rockdec estimate`` reads, in a few words (the glossary says more).
+READS = {
+    "e_g": "decay of every peak of D_a",
+    "e_0": "first peak and trough of D_a",
+    "e1": "start and first trough of D_a",
+    "e2": "slopes of D_a at the impact",
+    "e3": "trough and impact time of D_a",
+    "e4": "impact and trough times of D_a",
+    "e_v": "slope jump of D_v at the impact",
+}
+
+#: The words of ``rockdec estimate``'s report, for its ``--help`` (the README holds the same list).
+GLOSSARY = """glossary:
+  e          coefficient of restitution: the share of its angular velocity the block keeps
+             at each impact (0 to 1)
+  D_a        Random Decrement signature triggered where the angle peaks near the level
+             a = 2 sigma_Y: the average free decay from rest (paper eq. 8)
+  D_v        signature triggered where the angle crosses zero at the speed sigma_Ydot: the
+             average motion through an impact (paper eq. 19)
+  e_v        slope of D_v just after the impact over the slope just before (eq. 6): the
+             reported e (marked *), least biased and least scattered
+  e_g        from how fast all the peaks of D_a decay (eqs. 25, 7); the most biased
+  e_0        from the first peak and first trough of D_a (eq. 26)
+  e1 .. e4   from fits to D_a's first half cycle (eq. 27): e1 start and trough values,
+             e2 slopes before and after the impact, e3 trough value and impact time,
+             e4 impact and trough times
+  raw        the estimator on your record, extrapolated to a zero trigger window (biased)
+  corrected  the raw value with the bias removed, read off records simulated at known e
+             with your record's length and sampling (the calibration)
+  95 % interval  every e at which your raw value lies within the central 95 % of the raw
+             values its simulated records give
+  coverage   how often that interval held the true e on the calibration's records
+             (near 95 % means the interval can be trusted)
+  triggers   stretches of the record averaged into the signature, in the largest
+             trigger window (more: less scatter)
+  below / above the calibrated range (< 0.400, > 0.995)  the raw value lies beyond what
+             any calibrated e (0.4 to 0.995) produces: e is outside that range, not
+             estimated; "none": beyond every calibrated mean, not estimated
+  sigma_Y    the rms angle of the record; g = nu^2 theta_cr, the block's restoring
+             acceleration (rad/s^2)"""
+
+
 def _estimate_text(res: dict) -> str:
-    """The human-readable report of ``rockdec estimate``."""
-    fmt = lambda x: "   nan" if x is None else f"{x:.4f}"  # noqa: E731
-    g_how = "given (--g)" if res["g_given"] else f"from the first zero crossing of the free response, g = 2 c1/t1^2, raw {res['g_raw']:.4g}, bias-corrected"
+    """The human-readable report of ``rockdec estimate`` (its words: :data:`GLOSSARY`)."""
+    fmt = lambda x: "nan" if x is None else f"{x:.4f}"  # noqa: E731
+    pct = lambda x: "-" if x is None else f"{x:.0%}"  # noqa: E731
     cal = res["calibration"]
+    if res["g_given"]:
+        g_how = "given (--g)"
+    else:
+        g_how = f"read off the record: raw {res['g_raw']:.4g}, corrected for the trigger window's bias"
     lines = [
-        f"records: {', '.join(res['records'])}: {res['samples']} samples at dt = {res['dt']:.6g} s, {res['nan_samples']} NaN skipped",
-        f"sigma_Y = {res['sigma_y']:.4g} rad, {res['points_per_cycle']:.1f} samples per cycle at sigma_Y (eq. 5)",
-        f"g = {res['g']:.5g} rad/s^2 ({g_how})" if res["g"] is not None else "g: not determined",
-        f"calibration: {cal['file']} ({'from the cache' if cal['cached'] else 'built in %.1f s' % cal['seconds']})",
+        f"records: {', '.join(res['records'])}",
+        f"  {res['samples']} samples at dt = {res['dt']:.6g} s ({res['nan_samples']} NaN skipped); rms angle "
+        f"sigma_Y = {res['sigma_y']:.4g} rad, {res['points_per_cycle']:.1f} samples per rocking cycle at sigma_Y",
+        f"  restoring acceleration g = {res['g']:.5g} rad/s^2 ({g_how})" if res["g"] is not None else "  restoring acceleration g: not determined",
+        f"  calibration: {cal['file']}, "
+        + ("from the cache" if cal["cached"] else f"built in {cal['seconds']:.1f} s and stored for the next record like these"),
         "",
-        f"{'estimator':<10} {'raw':>7} {'corrected':>10}   {'95 % interval':<19} {'coverage':>8} {'triggers':>8}",
+        f"{'estimator':<10} {'reads':<32} {'raw':>7} {'corrected':>10}  {'95 % interval':<18} {'coverage':>9} {'triggers':>9}",
     ]
-    pct = lambda x: "   -" if x is None else f"{x:.0%}"  # noqa: E731
     for name, est in res["estimators"].items():
-        mark = " *" if name == res["estimator"] else "  "
-        interval = f"[{fmt(est['interval'][0])}, {fmt(est['interval'][1])}]"
-        lines.append(f"{name + mark:<10} {fmt(est['raw']):>7} {fmt(est['e']):>10}   {interval:<19} {pct(est['coverage']):>8} {est['triggers']:>8}")
-        lines += [f"{'':>12}note: {note}" for note in est["notes"]]
+        mark = " *" if name == res["estimator"] else ""
+        corrected, why = _corrected(est)
+        interval = "-" if est["interval"][0] is None else f"[{fmt(est['interval'][0])}, {fmt(est['interval'][1])}]"
+        lines.append(
+            f"{name + mark:<10} {READS.get(name, ''):<32} {fmt(est['raw']):>7} {corrected:>10}  {interval:<18} "
+            f"{pct(est['coverage']):>9} {est['triggers']:>9}"
+        )
+        lines += [f"{'':>11}note: {note}" for note in ([why] if why else []) + est["notes"]]
+    corrected, why = _corrected(res["estimators"][res["estimator"]])
     lines += [
         "",
-        f"e = {fmt(res['e'])}, 95 % interval [{fmt(res['interval'][0])}, {fmt(res['interval'][1])}] ({res['estimator']}, marked *);",
-        f"coverage: the interval held the true e on {pct(res['coverage'])} of the calibration's simulated records "
-        "(in-sample; the README's coverage study checks it on independent records)",
+        (f"e = {corrected}" if res["e"] is not None else f"e: {why}")
+        + f", 95 % interval [{fmt(res['interval'][0])}, {fmt(res['interval'][1])}] (estimator {res['estimator']}, marked *);",
+        f"the interval held the true e on {pct(res['coverage'])} of the calibration's simulated records "
+        "(in-sample; the README's coverage study checks independent records)",
     ]
-    if res.get("reason"):
+    if res.get("reason") and not why:  # a value beyond the calibration is explained on the line above
         lines.append(f"no e: {res['reason']}")
     lines += [f"warning: {w}" for w in res["warnings"]]
+    lines.append("(what each word means: rockdec estimate --help)")
     return "\n".join(lines)
 
 
+def _corrected(est: dict) -> tuple[str, str]:
+    """The corrected value of one estimator as the report shows it, and why it is not an
+    estimate (``""`` when it is): beyond the calibrated range it is a bound on ``e``."""
+    beyond = est.get("beyond")
+    if beyond is None:
+        return ("nan" if est["e"] is None else f"{est['e']:.4f}"), ""
+    lo, hi = est["calibrated_range"]
+    if beyond == "below":
+        return f"< {lo:.3f}", f"below the calibrated range {lo:.3f}-{hi:.3f}: e is less than {lo:.3f}, not estimated"
+    if beyond == "above":
+        return f"> {hi:.3f}", f"above the calibrated range {lo:.3f}-{hi:.3f}: e is more than {hi:.3f}, not estimated"
+    return "none", "the raw value is beyond what any calibrated e gives on average: not estimated"
+
+
 def cmd_verify(args) -> None:
+    from rockdec import archive
+
     out = Path(args.rebuild) if args.rebuild else None
     if out is not None and out.exists():
         raise UsageError(f"--rebuild '{out}' exists already; remove it or choose another folder.")
@@ -458,10 +547,13 @@ def cmd_verify(args) -> None:
             raise SystemExit(1)
 
 
-def _progress():
-    from dask.diagnostics import ProgressBar
+def _default_config() -> str:
+    """The config ``--scene`` reads by default: ``config/config.yaml`` in this folder if there
+    is one, else the workflow's own (:func:`workflow_root`)."""
+    from rockdec.config import DEFAULT_PATH
 
-    return ProgressBar(out=sys.stderr, minimum=2.0)
+    root = workflow_root()
+    return DEFAULT_PATH if Path(DEFAULT_PATH).is_file() or root is None else str(root / DEFAULT_PATH)
 
 
 def _default_cache() -> str:
@@ -473,18 +565,88 @@ def _default_cache() -> str:
     return os.environ.get("ROCKDEC_CACHE") or str(Path(platformdirs.user_cache_dir("rockdec")) / "calibration")
 
 
+#: What the workflow needs besides the package: the extra that installs it.
+WORKFLOW_EXTRA = "rockdec[workflow]"
+
+
+def workflow_root() -> Path | None:
+    """The folder holding the workflow's Snakefile: the copy the wheel carries
+    (``rockdec/_workflow``), else the source checkout this package runs from; ``None`` if neither."""
+    package = Path(__file__).resolve().parent
+    for root in (package / "_workflow", package.parents[1]):
+        if (root / "Snakefile").is_file() and (root / "config" / "config.yaml").is_file():
+            return root
+    return None
+
+
+def cmd_workflow(args) -> None:
+    import importlib.util
+    import subprocess
+
+    root = workflow_root()
+    if root is None:
+        raise UsageError("this installation of rockdec carries no workflow (no Snakefile); reinstall it from a wheel or a checkout.")
+    if importlib.util.find_spec("snakemake") is None:
+        raise UsageError(f"the workflow needs Snakemake, which is not installed; install it with pip install '{WORKFLOW_EXTRA}'.")
+    extra = [a for a in args.snakemake_args if a != "--"]
+    command = [sys.executable, "-m", "snakemake", "--snakefile", str(root / "Snakefile")]
+    if not any(a == "--configfile" or a.startswith("--configfile=") for a in extra):
+        command += ["--configfile", str(root / "config" / "config.yaml")]
+    if args.scene:
+        command += ["--config", f"default_scene={args.scene}"]
+    command += extra
+    log.info(f"running the workflow of {root} in {Path.cwd()}: results/ goes here")
+    log.debug(" ".join(command))
+    code = subprocess.run(command).returncode
+    if code:
+        raise SystemExit(code)
+
+
+#: The first lines of ``rockdec --help``.
+DESCRIPTION = (
+    "rockdec: the coefficient of restitution e of a rocking rigid block, estimated from its random "
+    "response by the Random Decrement technique."
+)
+
+#: Examples at the end of ``rockdec --help``.
+EXAMPLES = """examples:
+  rockdec estimate my_record.csv           e of your record, with a 95 % interval
+  rockdec simulate --scene tiny --out sim.nc
+  rockdec signatures sim.nc --out sig.nc && rockdec estimates sig.nc --out est.nc
+  rockdec workflow --scene tiny            the paper's workflow (tiny scene) into ./results/
+  rockdec verify results/paper/archive
+
+'rockdec COMMAND --help' describes each command."""
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = _Parser(prog="rockdec", description=__doc__.splitlines()[0])
+    """The parser of every command. Building it imports nothing numerical (help strings
+    escape a literal percent sign as ``%%``: argparse formats them)."""
+    raw = argparse.RawDescriptionHelpFormatter
+    parser = _Parser(prog="rockdec", description=DESCRIPTION, epilog=EXAMPLES, formatter_class=raw)
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
+    loud = parser.add_mutually_exclusive_group()
+    loud.add_argument("-q", "--quiet", action="count", default=0, help="print only warnings and errors (no progress)")
+    loud.add_argument("-v", "--verbose", action="count", default=0, help="print details too")
     parser.add_argument("--debug", action="store_true", help="show the traceback of an unexpected error")
     parser.add_argument(
         "--dask-scheduler", metavar="ENGINE",
-        help=f"where Dask computes: threads (default), processes:N (N local worker processes) or tcp://host:port "
+        help="where Dask computes: threads (default), processes:N (N local worker processes) or tcp://host:port "
         f"(a running scheduler); default ${engine.VARIABLE}",
     )
-    sub = parser.add_subparsers(dest="command", required=True)
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
 
-    est1 = sub.add_parser("estimate", help="e of a measured record, bias-corrected, with a 95 % interval (calibrated by simulation)")
+    def command(name: str, summary: str, example: str, epilog: str = "", **kwargs):
+        """A subcommand: ``summary`` in the list of commands and atop its help, ``example`` below it."""
+        text = f"example:\n  {example}" + (f"\n\n{epilog}" if epilog else "")
+        return sub.add_parser(
+            name, help=summary, description=summary.replace("%%", "%"), epilog=text, formatter_class=raw, **kwargs
+        )
+
+    est1 = command(
+        "estimate", "e of a measured record, bias-corrected, with a 95 %% interval (calibrated by simulation)",
+        "rockdec estimate my_record.csv --plot e.png", GLOSSARY,
+    )
     est1.add_argument("records", nargs="+", help="record file(s) of one block, pooled: .csv (time,theta), .nc or .npy; angles in rad")
     rate = est1.add_mutually_exclusive_group()
     rate.add_argument("--dt", type=float, help="sampling step in s (for files without a time axis)")
@@ -499,10 +661,13 @@ def build_parser() -> argparse.ArgumentParser:
     est1.add_argument("--yes", action="store_true", help="go on with records that need more than 10 min")
     est1.set_defaults(func=cmd_estimate)
 
-    sim = sub.add_parser("simulate", help="simulate rocking series (exact, eqs. 21-24) to NetCDF")
+    sim = command(
+        "simulate", "simulate rocking series (exact, eqs. 21-24) to NetCDF",
+        "rockdec simulate --e 0.85 --seeds 0-9 --n-points 20000 --out sim.nc",
+    )
     sim.add_argument("--out", required=True, help="NetCDF file to write")
     sim.add_argument("--scene", help="take every setting from this scene of the config")
-    sim.add_argument("--config", default="config/config.yaml", help="config file (default: %(default)s)")
+    sim.add_argument("--config", help="config file of --scene (default: config/config.yaml here, else the workflow's own)")
     sim.add_argument("--seeds", help="seeds, e.g. 0-99 or 3,7 (default: the scene's)")
     sim.add_argument("--model", help="simplified (eq. 4), housner (eq. 2) or auto (by amplitude; default: the scene's)")
     sim.add_argument("--e", type=float, help="coefficient of restitution, 0..1")
@@ -521,7 +686,10 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--yes", action="store_true", help="go on with a run that needs more than 10 min")
     sim.set_defaults(func=cmd_simulate)
 
-    sig = sub.add_parser("signatures", help="RDD signatures D_a and D_v (eq. 19) of a record or a simulation file")
+    sig = command(
+        "signatures", "RDD signatures D_a and D_v (eq. 19) of a record or a simulation file",
+        "rockdec signatures sim.nc --out sig.nc",
+    )
     sig.add_argument("input", help="NetCDF file with theta(seed, time) or theta(time), in rad")
     sig.add_argument("--out", required=True, help="NetCDF file to write")
     sig.add_argument("--variable", default="theta", help="name of the record (default: %(default)s)")
@@ -535,20 +703,34 @@ def build_parser() -> argparse.ArgumentParser:
     sig.add_argument("--overwrite", action="store_true", help="replace --out if it exists")
     sig.set_defaults(func=cmd_signatures)
 
-    est = sub.add_parser("estimates", help="estimate e (eqs. 25-27, e_v) and extrapolate to zero window")
+    est = command(
+        "estimates", "estimate e (eqs. 25-27, e_v) and extrapolate to zero window",
+        "rockdec estimates sig.nc --out est.nc",
+    )
     est.add_argument("input", help="signature file from 'rockdec signatures'")
     est.add_argument("--out", required=True, help="NetCDF file to write")
-    est.add_argument("--fit-points", type=int, default=estimators.DEFAULT_FIT_POINTS, help="points per side of the e_v slope fits")
+    est.add_argument("--fit-points", type=int, default=fits.DEFAULT_FIT_POINTS, help="points per side of the e_v slope fits (default %(default)s)")
     est.add_argument("--weights", choices=["window", "count"], default="window", help="extrapolation weights")
     est.add_argument("--overwrite", action="store_true", help="replace --out if it exists")
     est.set_defaults(func=cmd_estimates)
 
-    ver = sub.add_parser(
-        "verify", help="re-check every file of an archive (snakemake archive) and its Workflow Run Crate against its manifest"
+    ver = command(
+        "verify", "re-check every file of an archive (snakemake archive) and its Workflow Run Crate against its manifest",
+        "rockdec verify results/paper/archive --rebuild rebuilt/",
     )
     ver.add_argument("folder", help="archive folder holding manifest.json and ro-crate-metadata.json, e.g. results/paper/archive")
     ver.add_argument("--rebuild", metavar="OUT", help="then remake the tables and figures from the archive alone into the new folder OUT")
     ver.set_defaults(func=cmd_verify)
+
+    flow = command(
+        "workflow", "run the paper's Snakemake workflow here, writing results/ in this folder",
+        "rockdec workflow --scene tiny --cores 2",
+        "Every other option goes to Snakemake (e.g. -n for a dry run, --cores N, a target file).\n"
+        f"Needs the workflow extra: pip install '{WORKFLOW_EXTRA}'.",
+        allow_abbrev=False,
+    )
+    flow.add_argument("--scene", help="scene of the config to build (default: paper; tiny takes about a minute)")
+    flow.set_defaults(func=cmd_workflow, snakemake_args=[])
     return parser
 
 
@@ -556,11 +738,17 @@ def main(argv: list[str] | None = None) -> int:
     """Run one command; returns the exit code: 0, 2 (input the user can fix), 1 (internal error)."""
     parser = build_parser()
     try:
-        args = parser.parse_args(argv)
+        args, unknown = parser.parse_known_args(argv)
+        if unknown and args.command != "workflow":  # only the workflow passes options on (to Snakemake)
+            parser.error(f"unrecognized arguments: {' '.join(unknown)}")
     except SystemExit as exc:  # --help (0) or a usage error (2), printed already
         return exc.code if isinstance(exc.code, int) else 2
+    if args.command is None:  # no command: the whole help, not a one-line pointer to it
+        parser.print_help()
+        return 2
+    args.snakemake_args = unknown
     try:
-        with engine.session(scheduler=args.dask_scheduler):
+        with console.configured(args.verbose - args.quiet), engine.session(scheduler=args.dask_scheduler):
             args.func(args)
     except checks.InputError as exc:
         if args.debug:

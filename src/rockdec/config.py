@@ -18,6 +18,7 @@ import yaml
 from rockdec import layout
 from rockdec import validate as checks
 from rockdec.fits import DEFAULT_FIT_POINTS, min_points_per_cycle
+from rockdec.record_model import Load
 
 #: The config file the workflow reads unless told otherwise.
 DEFAULT_PATH = "config/config.yaml"
@@ -202,6 +203,10 @@ def validate(config: dict, source: str | Path = DEFAULT_PATH, overrides: dict | 
                 "excitation.burn_in in a scene, --dt and --burn-in on the command line)",
                 fix(where),
             )
+        try:
+            Load.from_dict(exc["load"])
+        except checks.InputError as err:
+            raise _field_error(f"scenes.{name}.excitation.load", str(err).rstrip("."), fix(f"scenes.{name}.excitation.load")) from None
         floor = min_points_per_cycle(scene["system"]["e"], scene["signatures"]["level"])
         if exc["dt"] is None and exc["points_per_cycle"] < floor:
             where = f"scenes.{name}.excitation.points_per_cycle"

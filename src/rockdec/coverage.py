@@ -8,7 +8,7 @@ records how often each estimator's 95 % interval holds the true ``e``, the bias 
 spread of the corrected value, and the error of the corrected ``g``.
 
 Coloured load (paper §6's open question): the same, with the impulses low-pass filtered
-(:func:`rockdec.loading.draw_impulses`), corner at ``corner`` times the rocking frequency
+(:class:`rockdec.record_model.Load`), corner at ``corner`` times the rocking frequency
 ``1/T(sigma_Y)``, and the *white-noise* calibration: how far the white assumption carries.
 """
 
@@ -22,9 +22,10 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from rockdec import belt, calibration, engine, estimators, measured
-from rockdec.loading import pole_for_corner
-from rockdec.simulate import calibrate_dt, simulate_block
+from rockdec import belt, calibration, engine, measured, registry
+from rockdec.registry import DEFAULT_ESTIMATOR
+from rockdec.record_model import Load
+from rockdec.simulate import STEP_ITERATIONS, calibrate_dt, simulate_block
 
 #: Seeds of the study's records start here (apart from calibration and pilot seeds).
 STUDY_SEED_OFFSET = 2**60
@@ -51,18 +52,16 @@ def run(e_values, n_records: int, n_points: int, cache_dir, *, points_per_cycle:
     estimator). Records are analysed in Dask tasks of ``batch``; calibrations are built
     as their settings come up and stored in ``cache_dir`` for reuse.
     """
-    from rockdec.inference import DEFAULT_ESTIMATOR
-
     e_values = [float(e) for e in e_values]
-    names = list(estimators.ESTIMATORS)
+    names = list(registry.ESTIMATORS)
     shape = (len(e_values), n_records, len(names))
     raw, e_hat, low, high = (np.full(shape, np.nan) for _ in range(4))
     g_hat = np.full(shape[:2], np.nan)
-    pole = 0.0 if corner is None else pole_for_corner(corner, points_per_cycle)
+    load = Load() if corner is None else Load("lowpass", corner)
+    pole = load.pole(points_per_cycle)
     by_hash: dict = {}
     for i, e in enumerate(e_values):
-        # a coloured load needs more pilots: its exponent is measured (simulate._secant_step)
-        cal = calibrate_dt(e=e, g=1.0, sigma_p=1.0, points_per_cycle=points_per_cycle, pole=pole, iterations=3 if pole == 0.0 else 8)
+        cal = calibrate_dt(e=e, g=1.0, sigma_p=1.0, points_per_cycle=points_per_cycle, pole=pole, iterations=STEP_ITERATIONS[load.kind])
         seed0 = STUDY_SEED_OFFSET + i * 10**7
         tasks = [
             dask.delayed(_record_batch)(e, np.arange(start, min(start + batch, n_records)) + seed0, n_points, cal, pole)
@@ -101,7 +100,7 @@ def run(e_values, n_records: int, n_points: int, cache_dir, *, points_per_cycle:
             "n_points": int(n_points),
             "points_per_cycle": float(points_per_cycle),
             "corner": float("nan") if corner is None else float(corner),
-            "load": "white" if corner is None else f"low-pass, corner {corner:g} x rocking frequency",
+            "load": load.describe(),
         },
     )
 

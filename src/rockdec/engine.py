@@ -26,8 +26,6 @@ import contextlib
 import contextvars
 import os
 
-import dask
-
 from rockdec.validate import InputError
 
 #: The environment variable that names the engine.
@@ -103,6 +101,8 @@ def session(threads: int | None = None, scheduler: str | None = None):
     if _active.get():
         yield
         return
+    import dask  # here, not at the top: the command line reads VARIABLE without loading Dask
+
     kind, value = setting(scheduler)
     token = _active.set(True)
     try:
@@ -129,5 +129,7 @@ def session(threads: int | None = None, scheduler: str | None = None):
 
 def compute(*collections, threads: int | None = None, scheduler: str | None = None):
     """``dask.compute(*collections)`` on the configured engine (:func:`session`)."""
+    import dask
+
     with session(threads, scheduler):
         return dask.compute(*collections)

@@ -18,13 +18,11 @@ to zero window by weighted least squares (§5).
 
 Kernels are numba functions on NumPy arrays that never raise on bad data: a NaN comes with
 an integer reason code (:data:`_REASONS`). :func:`_estimate_rows` runs every estimator on
-a batch of signatures ``r[n, lag_pos]``, ``d[n, lag]``; :func:`estimate_cube` (labelled,
-xarray/Dask) hands it whole blocks and keeps the values, :func:`estimate_all` hands it one
-signature and turns the codes into reasons. The single-estimator functions
-(:func:`e_global`, :func:`half_cycle`, ...) call the same kernels. :func:`extrapolate` is
-batched NumPy over every row at once. :func:`reference_estimate_all` is the former
-per-signature NumPy implementation, kept only to check the kernels (tests) and to time
-them (``benchmarks/bench_estimators.py``).
+a batch of signatures ``r[n, lag_pos]``, ``d[n, lag]`` and writes each into its column of
+:mod:`rockdec.registry`; :func:`estimate_cube` (labelled, xarray/Dask) hands it whole
+blocks and keeps the values, :func:`estimate_all` hands it one signature and turns the
+codes into reasons; :func:`half_cycle` (the fits of eq. 27, which also give ``g``) calls the
+same kernels. :func:`extrapolate` is batched NumPy over every row at once.
 
 Units: ``r`` and ``d`` in rad, ``dt`` and the fitted times in s, slopes in rad/s; every
 ``e`` estimate is dimensionless.
@@ -39,14 +37,24 @@ import numpy as np
 import xarray as xr
 from numba import njit
 
-from rockdec import __version__
+from rockdec import __version__, registry
 from rockdec import validate as checks
 from rockdec.fits import DEFAULT_FIT_POINTS, MIN_FIT_POINTS
-
-ESTIMATORS = ("e_g", "e_0", "e1", "e2", "e3", "e4", "e_v")
-"""Names of the estimators, in the order of the ``estimator`` coordinate."""
+from rockdec.registry import ESTIMATORS
 
 LOCAL_ESTIMATORS = ("e1", "e2", "e3", "e4")
+"""The estimators of eq. 27, computed from one set of half-cycle fits (:func:`_local_measures`)."""
+
+_KERNEL_OUTPUTS = ("e_g", "e_0", *LOCAL_ESTIMATORS, "e_v")
+"""What :func:`_estimate_rows` computes, in its order of work; :data:`_COLUMNS` places each
+in its registry column. Every registered estimator has one, checked at import."""
+
+if sorted(_KERNEL_OUTPUTS) != sorted(ESTIMATORS):
+    raise ImportError(f"the estimator kernel computes {_KERNEL_OUTPUTS} but the registry declares {ESTIMATORS}")
+
+_COLUMNS = np.array([registry.column(name) for name in _KERNEL_OUTPUTS], dtype=np.int64)
+"""Registry column of each of :data:`_KERNEL_OUTPUTS`, passed to the kernel at run time (a
+numba cache does not see a change of another module's constants)."""
 
 
 class Estimate(NamedTuple):
@@ -84,46 +92,33 @@ class Extrapolation(NamedTuple):
 
 # --------------------------------------------------------------------------- reason codes
 
-_REASONS = (
-    "",
-    "empty signature",
-    "NaN in signature",
-    "r[0] not positive",
-    "no zero crossing",
-    "first minimum beyond the lag range",
-    f"fewer than {MIN_FIT_POINTS} points for a fit",
-    "before-crossing fit has no real root",
-    "before-crossing fit touches zero without crossing",
-    "minimum fit has no minimum",
-    "fitted c1 not positive",
-    "fitted crossing t1 not between 0 and t2",
-    "not finite: the signature values overflow the arithmetic",
-    "D_v signature length not odd: no lag 0",
-    "fewer than fit_points={fit_points} lags on a side",
-    "zero slope before the impact",
-    "no D_v signature",
-)
+_REASONS: list[str] = []
 """Why a kernel's value is NaN, indexed by its integer code (0: no NaN)."""
 
-(
-    _OK,
-    _EMPTY,
-    _NAN,
-    _R0_NOT_POSITIVE,
-    _NO_CROSSING,
-    _BEYOND_LAGS,
-    _FEW_POINTS,
-    _NO_ROOT,
-    _TOUCHES_ZERO,
-    _NO_MINIMUM,
-    _C1_NOT_POSITIVE,
-    _T1_OUTSIDE,
-    _NOT_FINITE,
-    _EVEN_LENGTH,
-    _FEW_LAGS,
-    _ZERO_SLOPE,
-    _NO_DV,
-) = range(len(_REASONS))
+
+def _reason_code(text: str) -> int:
+    """A new reason code for ``text`` (the numba kernels see the returned integer)."""
+    _REASONS.append(text)
+    return len(_REASONS) - 1
+
+
+_OK = _reason_code("")
+_EMPTY = _reason_code("empty signature")
+_NAN = _reason_code("NaN in signature")
+_R0_NOT_POSITIVE = _reason_code("r[0] not positive")
+_NO_CROSSING = _reason_code("no zero crossing")
+_BEYOND_LAGS = _reason_code("first minimum beyond the lag range")
+_FEW_POINTS = _reason_code(f"fewer than {MIN_FIT_POINTS} points for a fit")
+_NO_ROOT = _reason_code("before-crossing fit has no real root")
+_TOUCHES_ZERO = _reason_code("before-crossing fit touches zero without crossing")
+_NO_MINIMUM = _reason_code("minimum fit has no minimum")
+_C1_NOT_POSITIVE = _reason_code("fitted c1 not positive")
+_T1_OUTSIDE = _reason_code("fitted crossing t1 not between 0 and t2")
+_NOT_FINITE = _reason_code("not finite: the signature values overflow the arithmetic")
+_EVEN_LENGTH = _reason_code("D_v signature length not odd: no lag 0")
+_FEW_LAGS = _reason_code("fewer than fit_points={fit_points} lags on a side")
+_ZERO_SLOPE = _reason_code("zero slope before the impact")
+_NO_DV = _reason_code("no D_v signature")
 
 
 def _reason(code, fit_points=None) -> str:
@@ -287,7 +282,13 @@ def _lobes(r):
 
 @_jit
 def _e_global(r, code, lobes):
-    """``e_g`` (eqs. 25, 7) from the lobes of ``r``: ``(value, code)``."""
+    """``e_g`` (eqs. 25, 7) from the lobes of ``r``: ``(value, code)``.
+
+    The extremes ``r_i`` are the sampled values of largest ``|r|`` of each lobe (no
+    derivative, no threshold: robust on noisy estimates; off the true extreme by at most
+    ``g dt^2/8``). With ``2 ln|r_i| = 2 ln r_0 - i delta`` (eq. 25) the least-squares slope
+    of ``2 ln|r_i|`` on ``i`` is ``-delta``, and ``e = exp(-delta/4)`` (eq. 7).
+    """
     if code != _OK:
         return np.nan, code
     n = lobes.shape[0]
@@ -301,7 +302,7 @@ def _e_global(r, code, lobes):
 
 @_jit
 def _e_first_peak(r, code, lobes):
-    """``e_0`` (eq. 26) from the lobes of ``r``: ``(value, code)``."""
+    """``e_0 = sqrt(|r_1| / r_0)`` (eq. 26), the first two sampled extremes of ``r``: ``(value, code)``."""
     if code != _OK:
         return np.nan, code
     return _finite(np.sqrt(abs(r[lobes[1, 2]]) / r[lobes[0, 2]]))
@@ -346,23 +347,38 @@ def _half_cycle(r, dt, code, lobes):
 
 
 @_jit
-def _local_measures(h, code, values, codes):
-    """``e1..e4`` of eq. 27 from the half-cycle features ``h`` into ``values[:4]``, ``codes[:4]``."""
+def _local_measures(h, code, values, codes, columns):
+    """``e1..e4`` of eq. 27 from the half-cycle features ``h`` into ``values[columns[k]]``,
+    ``codes[columns[k]]`` (``columns``: the columns of ``e1..e4``).
+
+    ``e1 = sqrt(|c2|/c1)``, ``e2 = v2/v1``, ``e3 = (|c2|/c1) t1/(t2 - t1)``,
+    ``e4 = (t2 - t1)/t1`` (the paper prints its reciprocal, ``1/e`` on the ideal response;
+    docs/method.md §5.3, §6).
+    """
     if code != _OK:
-        values[:4] = np.nan
-        codes[:4] = code
+        for k in range(4):
+            values[columns[k]] = np.nan
+            codes[columns[k]] = code
         return
     c1, t1, v1, v2, t2, c2 = h
     ratio = abs(c2) / c1
-    values[0], codes[0] = _finite(np.sqrt(ratio))
-    values[1], codes[1] = _finite(v2 / v1)
-    values[2], codes[2] = _finite(ratio * t1 / (t2 - t1))
-    values[3], codes[3] = _finite((t2 - t1) / t1)
+    values[columns[0]], codes[columns[0]] = _finite(np.sqrt(ratio))
+    values[columns[1]], codes[columns[1]] = _finite(v2 / v1)
+    values[columns[2]], codes[columns[2]] = _finite(ratio * t1 / (t2 - t1))
+    values[columns[3]], codes[columns[3]] = _finite((t2 - t1) / t1)
 
 
 @_jit
 def _e_impact_slope(d, dt, fit_points):
-    """``e_v`` (eq. 6, see :func:`e_impact_slope`): ``(value, code)``."""
+    """``e_v`` (eq. 6): the ratio of the slopes of a ``D_v`` signature ``d`` after and before
+    lag 0, ``(value, code)``.
+
+    Lag 0 (index ``L`` of the ``2L+1`` lags) is a zero crossing where the velocity is
+    multiplied by ``e``. Each side is fitted by a parabola (the free flight of eq. 4 is one,
+    so the fit has no curvature bias) on the ``fit_points`` lags strictly on that side;
+    lag 0 belongs to neither, because the slope is discontinuous there. Both fits are
+    differentiated at ``tau = 0``: ``e_v = slope_after / slope_before``.
+    """
     if d.size % 2 == 0:
         return np.nan, _EVEN_LENGTH
     for k in range(d.size):
@@ -380,30 +396,33 @@ def _e_impact_slope(d, dt, fit_points):
 
 
 @_jit
-def _estimate_rows(r, d, dt, fit_points):
-    """Every estimator of :data:`ESTIMATORS` on every row: ``(values[n, 7], codes[n, 7])``.
+def _estimate_rows(r, d, dt, fit_points, columns):
+    """Every registered estimator on every row: ``(values[n, estimator], codes[n, estimator])``.
 
     ``e_g`` (eqs. 25, 7), ``e_0`` (eq. 26), ``e1..e4`` (eq. 27) from one lobe search and
-    one set of half-cycle fits per free response, ``e_v`` (eq. 6) from its ``D_v`` row.
+    one set of half-cycle fits per free response, ``e_v`` (eq. 6) from its ``D_v`` row;
+    each goes to its column ``columns[k]`` (:data:`_COLUMNS`, in the order of
+    :data:`_KERNEL_OUTPUTS`).
 
     ``r[n, lag_pos]`` free responses, ``d[n, lag]`` their ``D_v`` signatures or ``None``
     (``e_v`` NaN, "no D_v signature"); ``dt`` and ``fit_points`` already checked.
     The batch kernel of :func:`estimate_cube` and :func:`estimate_all`.
     """
     n = r.shape[0]
-    values = np.empty((n, 7))
-    codes = np.empty((n, 7), np.int64)
+    values = np.empty((n, columns.size))
+    codes = np.empty((n, columns.size), np.int64)
+    e_g, e_0, e_v = columns[0], columns[1], columns[6]
     for i in range(n):
         row = r[i]
         code, lobes = _lobes(row)
-        values[i, 0], codes[i, 0] = _e_global(row, code, lobes)
-        values[i, 1], codes[i, 1] = _e_first_peak(row, code, lobes)
+        values[i, e_g], codes[i, e_g] = _e_global(row, code, lobes)
+        values[i, e_0], codes[i, e_0] = _e_first_peak(row, code, lobes)
         h, h_code = _half_cycle(row, dt, code, lobes)
-        _local_measures(h, h_code, values[i, 2:6], codes[i, 2:6])
+        _local_measures(h, h_code, values[i], codes[i], columns[2:6])
         if d is None:
-            values[i, 6], codes[i, 6] = np.nan, _NO_DV
+            values[i, e_v], codes[i, e_v] = np.nan, _NO_DV
         else:
-            values[i, 6], codes[i, 6] = _e_impact_slope(d[i], dt, fit_points)
+            values[i, e_v], codes[i, e_v] = _e_impact_slope(d[i], dt, fit_points)
     return values, codes
 
 
@@ -435,39 +454,11 @@ def _lobes_of(r, lobes):
     return _lobes(r) if lobes is None else lobes
 
 
-def e_global(r, lobes=None) -> Estimate:
-    """``e_g``: logarithmic decrement from all extremes of ``r`` (eqs. 25, 7).
-
-    The extremes ``r_i`` are the sampled values of largest ``|r|`` between successive zero
-    crossings (``r_0`` the largest value before the first crossing, normally ``r[0]``; the
-    last half cycle only if its extreme lies inside the lag range). Taking sampled extrema
-    per half cycle needs no derivative and no threshold, so it stays robust on noisy
-    estimates; it misses a true extreme by at most ``g dt^2/8`` (a sample at most half a
-    step off the vertex of a parabola of curvature ``g``, when the half cycle is longer
-    than a step). With ``2 ln|r_i| = 2 ln r_0 - i delta``
-    (eq. 25), the least-squares slope of ``2 ln|r_i|`` on ``i`` is ``-delta``, and
-    ``e = exp(-delta/4)`` (eq. 7). ``lobes``: the result of :func:`_lobes` on ``r`` when
-    the caller has it already.
-    """
-    r = _as_row(r)
-    return _as_estimate(*_e_global(r, *_lobes_of(r, lobes)))
-
-
-def e_first_peak(r, lobes=None) -> Estimate:
-    """``e_0 = sqrt(|r_1| / r_0)`` (eq. 26): the first two sampled extremes of ``r``.
-
-    ``r_0`` is the maximum and ``r_1`` the first minimum, located as in :func:`e_global`;
-    for a decaying response they are the maximum and minimum of the whole estimate.
-    """
-    r = _as_row(r)
-    return _as_estimate(*_e_first_peak(r, *_lobes_of(r, lobes)))
-
-
 def half_cycle(r, dt: float, lobes=None) -> HalfCycle:
     """Fit the first half cycle of ``r`` with second-order polynomials (eq. 27).
 
     ``N_h = m + 1`` is the number of samples from ``tau = 0`` to the sampled first minimum
-    ``m`` (see :func:`e_global`). Fits, each least squares of degree 2
+    ``m`` (:func:`_lobes`). Fits, each least squares of degree 2
     (:func:`_fit2`) in ``tau = k*dt``:
 
     - start: the first ``N_h // 8`` samples; ``c1`` = the fit at ``tau = 0``;
@@ -489,51 +480,13 @@ def half_cycle(r, dt: float, lobes=None) -> HalfCycle:
     return HalfCycle(*features, reason=_reason(code))
 
 
-def local_measures(r, dt: float, lobes=None) -> dict[str, Estimate]:
-    """``e1..e4`` of eq. 27 from one set of half-cycle fits (:func:`half_cycle`).
-
-    ``e1 = sqrt(|c2|/c1)``, ``e2 = v2/v1``, ``e3 = (|c2|/c1) t1/(t2 - t1)``,
-    ``e4 = (t2 - t1)/t1``.
-
-    Derivation for the ideal response (eqs. 4, 6): ``c1 = a`` and ``r = a - g tau^2/2``
-    reaches zero at ``t1 = sqrt(2a/g)`` with velocity ``v1 = -g t1``. The impact leaves
-    ``v2 = e v1``; gravity (now of the other sign) brings that velocity to zero after a
-    time ``e t1``, so ``t2 = (1 + e) t1`` and ``c2 = -e^2 g t1^2/2 = -e^2 a``. Hence
-    ``|c2|/c1 = e^2``, ``v2/v1 = e``, ``(t2 - t1)/t1 = e`` and ``e3 = e^2 / e = e``.
-    The paper prints ``e4 = t1/(t2 - t1)``, which is ``1/e`` for this response; ``e4``
-    here is its reciprocal.
-    """
-    dt = checks.positive(dt, "dt", "give the sampling interval in s, > 0")
-    r = _as_row(r)
-    values, codes = np.empty(len(LOCAL_ESTIMATORS)), np.empty(len(LOCAL_ESTIMATORS), np.int64)
-    _local_measures(*_half_cycle(r, dt, *_lobes_of(r, lobes)), values, codes)
-    return {name: _as_estimate(v, c) for name, v, c in zip(LOCAL_ESTIMATORS, values, codes)}
-
-
-def e_impact_slope(d, dt: float, fit_points: int = DEFAULT_FIT_POINTS) -> Estimate:
-    """``e_v``: ratio of the slopes of a ``D_v`` signature after and before lag 0 (eq. 6).
-
-    Lag 0 (index ``L`` of the ``2L+1`` lags) is a zero crossing where the velocity is
-    multiplied by ``e``. Each side is fitted by a second-order polynomial (the free flight
-    of eq. 4 is a parabola, so the fit has no curvature bias) on the ``fit_points`` lags
-    strictly on that side, ``tau = -fit_points*dt .. -dt`` and ``dt .. fit_points*dt``;
-    lag 0 belongs to neither side, because the slope is discontinuous there and where the
-    sampled trigger sits relative to the true crossing is uncertain. Both fits are
-    differentiated at ``tau = 0``: ``e_v = slope_after / slope_before``.
-
-    ``fit_points`` below :data:`MIN_FIT_POINTS` is a caller error (``ValueError``).
-    """
-    dt, fit_points = _check_options(dt, fit_points, with_dv=True)
-    return _as_estimate(*_e_impact_slope(_as_row(d), dt, fit_points), fit_points)
-
-
 def estimate_all(r, d, dt: float, fit_points: int = DEFAULT_FIT_POINTS) -> dict[str, Estimate]:
-    """Every estimator of :data:`ESTIMATORS` on one free response ``r`` and one ``D_v``
+    """Every registered estimator on one free response ``r`` and one ``D_v``
     signature ``d`` (``None`` when there is none: ``e_v`` is then NaN): the batch kernel
     :func:`_estimate_rows` on a batch of one."""
     dt, points = _check_options(dt, fit_points, with_dv=d is not None)
     rows = None if d is None else _as_row(d)[None]
-    values, codes = _estimate_rows(_as_row(r)[None], rows, dt, points)
+    values, codes = _estimate_rows(_as_row(r)[None], rows, dt, points, _COLUMNS)
     return {name: _as_estimate(v, c, fit_points) for name, v, c in zip(ESTIMATORS, values[0], codes[0])}
 
 
@@ -605,7 +558,7 @@ def _estimate_block(r, d, dt, fit_points):
     def rows(a):  # a writable copy: the kernel then has the one type estimate_all gives it, compiled once
         return np.array(np.broadcast_to(a, shape + a.shape[-1:]), dtype=float, order="C").reshape(math.prod(shape), a.shape[-1])
 
-    values, _ = _estimate_rows(rows(r), None if d is None else rows(d), dt, fit_points)
+    values, _ = _estimate_rows(rows(r), None if d is None else rows(d), dt, fit_points, _COLUMNS)
     return values.reshape(shape + (len(ESTIMATORS),))
 
 
@@ -621,7 +574,7 @@ def estimate_cube(
     dimension ``lag`` (two-sided) or is ``None``; their other dimensions broadcast by
     name. Each block (all of a NumPy cube, each chunk of a Dask one, which stays lazy)
     goes to the batch kernel :func:`_estimate_rows` at once. Returns ``e_hat`` with
-    dimension ``estimator`` (:data:`ESTIMATORS`) first; NaN where an estimator failed
+    dimension ``estimator`` (:data:`rockdec.registry.ESTIMATORS`) first; NaN where an estimator failed
     (:func:`estimate_all` on that signature says why).
     """
     dt, points = _check_options(dt, fit_points, with_dv=dv_signature is not None)
@@ -696,178 +649,3 @@ def extrapolate(e_hat: xr.DataArray, weights: xr.DataArray | None = None) -> xr.
         },
         attrs={"history": f"rockdec {__version__}: extrapolate"},
     )
-
-
-# --------------------------------------------------------------------------- reference
-
-
-class _Parabola(NamedTuple):
-    """``y = c0 + c1 (t - tc) + c2 (t - tc)^2``: a least-squares parabola about ``tc``."""
-
-    tc: float
-    c0: float
-    c1: float
-    c2: float
-
-    def value(self, t):
-        u = t - self.tc
-        return self.c0 + u * (self.c1 + u * self.c2)
-
-    def slope(self, t):
-        return self.c1 + 2.0 * self.c2 * (t - self.tc)
-
-    def vertex(self):
-        return self.tc - self.c1 / (2.0 * self.c2)
-
-    def roots(self) -> np.ndarray:
-        c0, c1, c2 = self.c0, self.c1, self.c2
-        if c2 == 0.0:
-            return np.array([self.tc - c0 / c1]) if c1 != 0.0 else np.array([])
-        disc = c1 * c1 - 4.0 * c2 * c0
-        if disc < 0.0:
-            return np.array([])
-        q = -0.5 * (c1 + np.copysign(np.sqrt(disc), c1))
-        us = [q / c2] + ([c0 / q] if q != 0.0 else [])
-        return self.tc + np.array(us)
-
-
-def _reference_fit2(t: np.ndarray, y: np.ndarray) -> _Parabola:
-    tc = 0.5 * (t[0] + t[-1])
-    h = 0.5 * (t[-1] - t[0])
-    u = (t - tc) / h
-    u2 = u * u
-    s = (u.size, u.sum(), u2.sum(), (u2 * u).sum(), (u2 * u2).sum())
-    normal = np.array([[s[0], s[1], s[2]], [s[1], s[2], s[3]], [s[2], s[3], s[4]]])
-    a0, a1, a2 = np.linalg.solve(normal, np.array([y.sum(), (u * y).sum(), (u2 * y).sum()]))
-    return _Parabola(float(tc), float(a0), float(a1 / h), float(a2 / h**2))
-
-
-def _reference_lobes(r: np.ndarray) -> tuple[list[tuple[int, int, int]], str]:
-    if r.ndim != 1 or r.size == 0:
-        return [], "empty signature"
-    if not np.all(np.isfinite(r)):
-        return [], "NaN in signature"
-    if r[0] <= 0:
-        return [], "r[0] not positive"
-    nonzero = np.flatnonzero(r)
-    sign = np.sign(r[nonzero])
-    runs = np.split(nonzero, np.flatnonzero(sign[1:] != sign[:-1]) + 1)
-    if len(runs) < 2:
-        return [], "no zero crossing"
-    lobes = []
-    for run in runs:
-        start, stop = int(run[0]), int(run[-1]) + 1
-        lobes.append((start, stop, start + int(np.argmax(np.abs(r[start:stop])))))
-    if lobes[-1][2] == r.size - 1:
-        lobes.pop()
-    if len(lobes) < 2:
-        return [], "first minimum beyond the lag range"
-    return lobes, ""
-
-
-def _reference_estimate(value: float) -> Estimate:
-    if np.isfinite(value):
-        return Estimate(float(value))
-    return Estimate(np.nan, _REASONS[_NOT_FINITE])
-
-
-def _reference_half_cycle(r: np.ndarray, dt: float, lobes) -> HalfCycle:
-    def failed(code):
-        return HalfCycle(*([np.nan] * 6), reason=_REASONS[code])
-
-    lobes, reason = lobes
-    if reason:
-        return HalfCycle(*([np.nan] * 6), reason=reason)
-    (_, end0, _), (start1, end1, m) = lobes[0], lobes[1]
-    n_h = m + 1
-    n8 = max(MIN_FIT_POINTS, n_h // 8)
-    n4 = max(MIN_FIT_POINTS, n_h // 4)
-    windows = {
-        "start": (0, min(n8, end0)),
-        "before": (max(0, end0 - n8), end0),
-        "after": (start1, min(start1 + n8, end1)),
-        "minimum": (max(start1, m - (n4 - 1) // 2), min(end1, m + n4 // 2 + 1)),
-    }
-    if any(stop - start < MIN_FIT_POINTS for start, stop in windows.values()):
-        return failed(_FEW_POINTS)
-    tau = dt * np.arange(r.size)
-    fit = {name: _reference_fit2(tau[a:b], r[a:b]) for name, (a, b) in windows.items()}
-    roots = fit["before"].roots()
-    if roots.size == 0:
-        return failed(_NO_ROOT)
-    crossing = 0.5 * (tau[end0 - 1] + tau[start1])
-    t1 = roots[np.argmin(np.abs(roots - crossing))]
-    v1 = fit["before"].slope(t1)
-    if v1 == 0:
-        return failed(_TOUCHES_ZERO)
-    if not fit["minimum"].c2 > 0:
-        return failed(_NO_MINIMUM)
-    t2 = fit["minimum"].vertex()
-    c1 = fit["start"].value(0.0)
-    if not c1 > 0:
-        return failed(_C1_NOT_POSITIVE)
-    if not 0 < t1 < t2:
-        return failed(_T1_OUTSIDE)
-    return HalfCycle(
-        c1=float(c1),
-        t1=float(t1),
-        v1=float(v1),
-        v2=float(fit["after"].slope(t1)),
-        t2=float(t2),
-        c2=float(fit["minimum"].value(t2)),
-    )
-
-
-def _reference_e_impact_slope(d, dt: float, fit_points: int) -> Estimate:
-    d = np.asarray(d, dtype=float)
-    if d.ndim != 1 or d.size % 2 == 0:
-        return Estimate(np.nan, _REASONS[_EVEN_LENGTH])
-    if not np.all(np.isfinite(d)):
-        return Estimate(np.nan, _REASONS[_NAN])
-    lag0 = d.size // 2
-    if lag0 < fit_points:
-        return Estimate(np.nan, _reason(_FEW_LAGS, fit_points))
-    tau = dt * np.arange(1, fit_points + 1)
-    before = _reference_fit2(-tau[::-1], d[lag0 - fit_points : lag0]).slope(0.0)
-    after = _reference_fit2(tau, d[lag0 + 1 : lag0 + 1 + fit_points]).slope(0.0)
-    if abs(before) * tau[-1] <= FLAT_ULPS * np.finfo(float).eps * np.abs(d[lag0 - fit_points : lag0]).max():
-        return Estimate(np.nan, _REASONS[_ZERO_SLOPE])
-    with np.errstate(all="ignore"):
-        return _reference_estimate(after / before)
-
-
-def reference_estimate_all(r, d, dt: float, fit_points: int = DEFAULT_FIT_POINTS) -> dict[str, Estimate]:
-    """Reference implementation of :func:`estimate_all`: per-signature NumPy, as before the
-    numba kernels (``np.linalg.solve`` for each parabola fit, NumPy runs for the lobes).
-
-    Same conventions, reasons and input checks; slower by about two orders of magnitude.
-    Kept only to check the kernels (tests) and to time them
-    (``benchmarks/bench_estimators.py``).
-    """
-    dt, fit_points = _check_options(dt, fit_points, with_dv=d is not None)
-    r = np.asarray(r, dtype=float)
-    lobes = _reference_lobes(r)
-    (ks, reason) = lobes
-    if reason:
-        e_g = e_0 = Estimate(np.nan, reason)
-    else:
-        k = np.array([extreme for _, _, extreme in ks])
-        i = np.arange(k.size) - 0.5 * (k.size - 1)
-        slope = float(np.dot(i, 2.0 * np.log(np.abs(r[k]))) / np.dot(i, i))
-        with np.errstate(over="ignore"):
-            e_g = _reference_estimate(np.exp(slope / 4.0))
-            e_0 = _reference_estimate(np.sqrt(abs(r[k[1]]) / r[k[0]]))
-    h = _reference_half_cycle(r, dt, lobes)
-    if h.reason:
-        local = {name: Estimate(np.nan, h.reason) for name in LOCAL_ESTIMATORS}
-    else:
-        with np.errstate(all="ignore"):
-            ratio = np.float64(abs(h.c2)) / h.c1
-            local = {
-                "e1": _reference_estimate(np.sqrt(ratio)),
-                "e2": _reference_estimate(np.float64(h.v2) / h.v1),
-                "e3": _reference_estimate(ratio * h.t1 / (h.t2 - h.t1)),
-                "e4": _reference_estimate(np.float64(h.t2 - h.t1) / h.t1),
-            }
-    e_v = Estimate(np.nan, _REASONS[_NO_DV]) if d is None else _reference_e_impact_slope(d, dt, fit_points)
-    return {"e_g": e_g, "e_0": e_0, **local, "e_v": e_v}

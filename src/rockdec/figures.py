@@ -36,7 +36,7 @@ import numpy as np  # noqa: E402
 import xarray as xr  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
-from rockdec import models  # noqa: E402
+from rockdec import models, registry  # noqa: E402
 from rockdec.layout import FIGURES  # noqa: E402  (the workflow's file names, drawn here)
 from rockdec.models import period_from_g  # noqa: E402
 
@@ -57,8 +57,8 @@ SPREAD_ALPHA = 0.18
 """Shading of the spread across replicates (mean +- 1 std), told apart from the error bars
 of the mean (+- 1 standard error)."""
 
-PARETO_ESTIMATORS = ("e4", "e_v", "e_0", "e1")
-"""Estimators drawn by :func:`pareto_figure` by default."""
+PARETO_ESTIMATORS = registry.BY_RANK[:4]
+"""Estimators drawn by :func:`pareto_figure` by default: the first four of the studies' order."""
 
 KNOB_LABELS = {
     "points_per_cycle": "ppc",
@@ -309,8 +309,9 @@ def fig3(est: xr.Dataset, e_target: float | None = None) -> Figure:
     fig = _new_figure(9.0, 4.6)
     axes = fig.subplots(1, 2)
     handles = []
-    for ax, (name, title) in zip(axes, (("e_g", r"(a) global estimate $\hat e_g$ (eqs. 25, 7)"),
-                                        ("e_0", r"(b) first-peak estimate $\hat e_0$ (eq. 26)"))):
+    for ax, name, letter in zip(axes, ("e_g", "e_0"), "ab"):
+        spec = registry.spec(name)
+        title = f"({letter}) {spec.symbol}: {spec.label}, {spec.equation}"
         mean, _, sem = _replicate_stats(est["e_hat"].sel(estimator=name))
         handles.append(ax.errorbar(w, mean, yerr=sem, color="tab:blue", marker="o", ms=4, ls="none", capsize=4,
                                    elinewidth=1.2, label="mean over replicates ± 1 standard error"))
@@ -347,12 +348,6 @@ def fig4(est: xr.Dataset, e_target: float | None = None) -> Figure:
     w_line = np.linspace(0.0, w.max(), 50)
     fig = _new_figure(9.0, 7.8)
     axes = fig.subplots(2, 2)
-    formulas = {
-        "e1": r"$\hat e_1 = \sqrt{|c_2|/c_1}$",
-        "e2": r"$\hat e_2 = v_2/v_1$",
-        "e3": r"$\hat e_3 = (|c_2|/c_1)\,t_1/(t_2 - t_1)$",
-        "e4": r"$\hat e_4 = (t_2 - t_1)/t_1$ (corrected)",
-    }
     handles = []
     for ax, name in zip(axes.flat, ("e1", "e2", "e3", "e4")):
         curves = est["e_hat"].sel(estimator=name)
@@ -378,7 +373,7 @@ def fig4(est: xr.Dataset, e_target: float | None = None) -> Figure:
             note += f"\npaper {paper:.4f} ± {paper_std:.4f}"
         ax.text(0.98, 0.97, note, transform=ax.transAxes, ha="right", va="top", fontsize="x-small",
                 bbox={"facecolor": "white", "edgecolor": "none", "alpha": 0.8, "pad": 1.5})
-        ax.set_title(formulas[name], fontsize="medium")
+        ax.set_title(registry.spec(name).symbol, fontsize="medium")
         ax.set_ylabel(r"estimate of $e$")
         ax.set_xlim(-0.05 * w.max(), 1.03 * w.max())
         _zero_window_ylim(ax, [e0_mean - e0_std, e0_mean + e0_std, paper - paper_std, paper + paper_std,
@@ -397,7 +392,7 @@ def fig_ev(sig: xr.Dataset, est: xr.Dataset, e_target: float | None = None) -> F
     ``sigma_Y`` against the lag in rocking periods ``T(a)`` (eq. 5). (b) The same near lag 0
     with the free flight through an impact at ``(0, v)``: slope ``v`` before, ``e v`` after
     (eqs. 4, 6); the kink is the estimator ``e_v`` (slope ratio,
-    :func:`rockdec.estimators.e_impact_slope`). (c) ``e_v`` of every replicate against
+    docs/method.md §5.4). (c) ``e_v`` of every replicate against
     ``dv/dv_max``, the mean extrapolated line and the target.
     """
     pooled = _pooled(sig)
@@ -482,7 +477,7 @@ def fig_ev(sig: xr.Dataset, est: xr.Dataset, e_target: float | None = None) -> F
     return fig
 
 
-def fig_amplitude(ds: xr.Dataset, estimators=("e_0", "e4", "e_v")) -> Figure:
+def fig_amplitude(ds: xr.Dataset, estimators=registry.CANDIDATES) -> Figure:
     """Simplified (eq. 4) vs linearized Housner (eq. 2) estimates against ``sigma_Y/theta_cr``.
 
     ``ds`` from :func:`rockdec.amplitude.sweep` (the target ``e`` is its attribute
@@ -604,7 +599,7 @@ def fig_record(result: dict) -> Figure:
     return fig
 
 
-def fig_coverage(table, estimators_shown=("e_0", "e4", "e_v")) -> Figure:
+def fig_coverage(table, estimators_shown=registry.CANDIDATES) -> Figure:
     """Coverage of the 95 % interval and bias of the corrected estimate against the load.
 
     ``table``: :func:`rockdec.coverage.summary` of every case. x axis: the load's corner in

@@ -19,18 +19,18 @@ than the spread of a record of 20 million samples). Records longer than
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 import warnings
 
 import numpy as np
 
-from rockdec import belt, calibration, estimators, fits, measured
+from rockdec import __version__, belt, calibration, fits, measured, registry
+from rockdec.record_model import PAPER, RecordModel, SensorNoise
 from rockdec.records import Record, RecordError, distinct, same_step
 
-#: The estimator reported as ``e``: the calibration's coverage study shows it best
-#: (smallest spread and bias of the corrected value, coverage closest to 95 %).
-DEFAULT_ESTIMATOR = "e_v"
+from rockdec.registry import DEFAULT_ESTIMATOR
 
 #: Fewest triggers in the largest window before the result is called unreliable.
 FEW_TRIGGERS = 100
@@ -138,8 +138,12 @@ def _check_given_g(g: float, own: measured.Analysis | None, names: str) -> None:
         )
 
 
-def estimate(records: list[Record], *, cache_dir, g: float | None = None, settings: dict | None = None) -> dict:
+def estimate(records: list[Record], *, cache_dir, g: float | None = None, settings: dict | None = None, model: RecordModel = PAPER) -> dict:
     """Calibrated estimates of ``e`` from ``records`` of one block (pooled).
+
+    ``model``: the record model the calibration simulates (its load and sensor noise, e.g.
+    measured off the records; :mod:`rockdec.record_model`); the paper's white load and a
+    perfect sensor by default. A sensor noise in rad is expressed in the records' ``sigma_Y``.
 
     Returns a JSON-able dict: ``e``, ``interval`` (95 %), ``reason`` (why ``e`` is null,
     else ``None``), ``estimator``, ``coverage`` (the
@@ -147,7 +151,11 @@ def estimate(records: list[Record], *, cache_dir, g: float | None = None, settin
     :func:`rockdec.belt.calibration_coverage`), ``raw`` (of the default estimator), ``g`` (rad/s^2: corrected, or as given), ``g_raw``,
     ``points_per_cycle``, ``sigma_y``, ``dt``, ``samples``, ``nan_samples``,
     ``estimators`` (per estimator: ``raw``, ``e``, ``interval``, ``coverage``, ``triggers``,
-    ``notes``),
+    ``notes``, ``calibrated_range`` and ``beyond``: ``"below"``, ``"above"`` or
+    ``"unreached"`` when the raw value lies beyond what any calibrated ``e`` produces on
+    average, and ``e`` is then ``None``, :func:`beyond`),
+    ``g_interval`` (``None``: the calibration corrects ``g`` but gives it no interval;
+    ``g_interval_note`` says so), ``rockdec_version``,
     ``warnings``, ``calibration`` (file, and whether it came from the cache), and, under
     keys starting with ``_``, the analysis and belts for plots.
 
@@ -176,22 +184,27 @@ def estimate(records: list[Record], *, cache_dir, g: float | None = None, settin
     shape = measured.rocking_shape(own if own is not None else analysis)
     if shape:
         raise RecordError(f"{names} does not look like a rocking record: {shape}; rockdec estimate gives e only for rocking records.")
-    cal_settings = calibration.calibration_settings([r.theta.size for r in records], analysis.points_per_cycle, settings)
+    if model.sensor.units == "rad":
+        model = dataclasses.replace(model, sensor=SensorNoise(model.sensor.std / analysis.sigma_y, "sigma_y"))
+    cal_settings = calibration.calibration_settings([r.theta.size for r in records], analysis.points_per_cycle, settings, model)
     started = time.perf_counter()
     cal, cached = calibration.load_or_build(cal_settings, cache_dir, notes)
     built_s = time.perf_counter() - started
     per = {}
     belts = belt.belts(cal)
-    for name in estimators.ESTIMATORS:
+    for name in registry.ESTIMATORS:
         c = belt.correct(belts[name], analysis.raw[name])
-        trigger = "v" if name == "e_v" else "a"
+        trigger = registry.trigger(name)
+        side = beyond(belts[name], analysis.raw[name], c)
         per[name] = {
             "raw": _num(analysis.raw[name]),
-            "e": _num(c.value),
+            "e": None if side else _num(c.value),
+            "beyond": side,
+            "calibrated_range": [_num(belts[name].e[0]), _num(belts[name].e[-1])] if belts[name].e.size else None,
             "interval": [_num(c.low), _num(c.high)],
             "coverage": _num(belt.calibration_coverage(cal, name, belts[name])),
             "triggers": int(analysis.count[trigger][-1]),
-            "notes": list(c.notes),
+            "notes": [note for note in c.notes if not (side and "nearest point" in note)],  # no value is shown
         }
     default = per[DEFAULT_ESTIMATOR]
     e_default = math.nan if default["e"] is None else default["e"]
@@ -213,7 +226,9 @@ def estimate(records: list[Record], *, cache_dir, g: float | None = None, settin
             "(about 0.001 at e = 0.95): on 20-million-sample records it covered the true e 73-90 % of the time, not 95 %"
         )
     reason = None
-    if default["e"] is None:
+    if default["beyond"] is not None:
+        reason = f"the raw value lies beyond what any calibrated e gives ({default['beyond']})"
+    elif default["e"] is None:
         reason = "; ".join(default["notes"]) or "the estimator gave no value on these records"
     return {
         "e": default["e"],
@@ -225,6 +240,11 @@ def estimate(records: list[Record], *, cache_dir, g: float | None = None, settin
         "g": _num(g_value),
         "g_given": g is not None,
         "g_raw": _num(analysis.raw[measured.G_NAME]),
+        "g_interval": None,
+        "g_interval_note": "as given (--g)" if g is not None else (
+            "no interval: the calibration corrects g's bias at the corrected e but does not give g an interval "
+            "whose coverage has been checked"
+        ),
         "points_per_cycle": _num(analysis.points_per_cycle),
         "sigma_y": _num(analysis.sigma_y),
         "dt": dt,
@@ -233,12 +253,28 @@ def estimate(records: list[Record], *, cache_dir, g: float | None = None, settin
         "nan_samples": int(analysis.nan_samples),
         "estimators": per,
         "warnings": notes + diagnose(records, analysis, settings),
+        "rockdec_version": __version__,
         "calibration": {
             "file": f"calibration-{calibration.settings_hash(cal_settings)}.nc", "cached": cached, "seconds": round(built_s, 2),
         },
         "_analysis": analysis,
         "_belts": belts,
     }
+
+
+def beyond(b: belt.Belt, raw: float, c: belt.Corrected) -> str | None:
+    """Why the corrected value ``c`` of the raw value ``raw`` is no estimate, or ``None``.
+
+    When ``raw`` lies outside every value the belt's mean curve takes, :func:`belt.correct`
+    returns the nearest point of the curve, which estimates nothing: ``"below"`` or
+    ``"above"`` when that point is an end of the calibrated range of ``e`` (which then
+    bounds ``e``), ``"unreached"`` when it is inside the range.
+    """
+    if b.e.size == 0 or not (np.isfinite(raw) and np.isfinite(c.value)) or b.mean.min() <= raw <= b.mean.max():
+        return None
+    if c.value == b.e[0]:
+        return "below"
+    return "above" if c.value == b.e[-1] else "unreached"
 
 
 def _num(x) -> float | None:

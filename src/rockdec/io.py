@@ -2,7 +2,9 @@
 
 Every product is written through :func:`write_netcdf`: to a temporary file beside the
 target, renamed into place only when complete, so a failed run leaves no partial file,
-and an existing file is never replaced unless the caller says so. Each run's temporary
+and an existing file is never replaced unless the caller says so. The temporary file is
+made with mode 0666 less the umask, as any file the user creates, so a product is as
+readable as the user's umask says (0644 under umask 022). Each run's temporary
 file has a name of its own, so runs writing different outputs never touch each other's;
 a run claims its output with a lock file made exclusively (``O_EXCL``) beside it, so a
 second run on the same output refuses at once instead of racing the first.
@@ -15,9 +17,9 @@ import datetime as _dt
 import errno
 import json
 import os
+import secrets
 import shutil
 import subprocess
-import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -37,15 +39,47 @@ class OutputError(InputError):
     """An output path the user can fix (exists already, folder missing or not writable, disk full)."""
 
 
-def git_commit() -> str:
-    """The git commit of the source tree this package runs from, or ``"unknown"``."""
+def _git(*args: str, cwd: Path) -> str | None:
+    """The stdout of ``git args`` run in ``cwd``, stripped; ``None`` when git fails or is absent."""
     try:
-        out = subprocess.run(
-            ["git", "rev-parse", "HEAD"], cwd=Path(__file__).parent, capture_output=True, text=True, timeout=5
-        )
+        out = subprocess.run(["git", *args], cwd=cwd, capture_output=True, text=True, timeout=10)
     except (OSError, subprocess.TimeoutExpired):
-        return "unknown"
-    return out.stdout.strip() if out.returncode == 0 else "unknown"
+        return None
+    return out.stdout.strip() if out.returncode == 0 else None
+
+
+def source_repository() -> Path | None:
+    """The git work tree this package's own source belongs to, or ``None``.
+
+    Only a checkout of rockdec counts: its top level holds ``pyproject.toml`` and this very
+    package as ``src/rockdec``. An installed copy inside some other repository (a
+    virtualenv in a project's folder) is not that repository's source, so it has none.
+    """
+    package = Path(__file__).resolve().parent
+    top = _git("rev-parse", "--show-toplevel", cwd=package)
+    if top is None:
+        return None
+    top = Path(top)
+    source = top / "src" / "rockdec"
+    if not (top / "pyproject.toml").is_file() or not source.is_dir() or not source.samefile(package):
+        return None
+    return top
+
+
+def git_commit() -> str:
+    """The git commit of the rockdec checkout this package runs from
+    (:func:`source_repository`), or ``"unknown"`` (an installed package, no git)."""
+    top = source_repository()
+    commit = _git("rev-parse", "HEAD", cwd=top) if top is not None else None
+    return commit or "unknown"
+
+
+def git_dirty() -> bool | None:
+    """Whether the rockdec checkout this package runs from has uncommitted changes;
+    ``None`` outside such a checkout (:func:`source_repository`)."""
+    top = source_repository()
+    status = _git("status", "--porcelain", cwd=top) if top is not None else None
+    return None if status is None else bool(status)
 
 
 #: The ``title`` of each product, by the step that writes it (CF 1.10 section 2.6.2).
@@ -93,10 +127,11 @@ def provenance(step: str, settings: dict | None = None, inputs=()) -> dict:
     appended, never overwritten: the history lines of every input file
     (:func:`input_history`), then this step's line ``<UTC time>: rockdec <version> <step>
     <inputs>``; ``source_files``: the input files (``inputs``, paths as given), one a line,
-    when there are any.
+    when there are any. Python sources among ``inputs`` (a rule's code inputs,
+    :func:`rockdec.sources.package_sources`) are left out: the version and commit name the code.
     """
     now = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
-    inputs = [str(path) for path in inputs]
+    inputs = [str(path) for path in inputs if not str(path).endswith(".py")]
     line = " ".join([f"{now}: rockdec {__version__} {step}", *inputs])
     attrs = {
         "Conventions": "CF-1.10",
@@ -246,9 +281,7 @@ def write_claimed(path: Path, write, overwrite: bool = False, keep_suffix: bool 
     with ``keep_suffix``, for writers that pick the format by it), renamed over ``path``
     when complete. A symlink at ``path`` is replaced itself (with ``overwrite``), never
     written through."""
-    fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".partial" + (path.suffix if keep_suffix else ""), dir=path.parent)
-    os.close(fd)
-    tmp = Path(name)
+    tmp = _new_partial(path, path.suffix if keep_suffix else "")
     try:
         write(tmp)
         if (path.exists() or path.is_symlink()) and not overwrite:  # made meanwhile by a writer that takes no lock
@@ -278,6 +311,18 @@ def coordinate_encoding(ds: xr.Dataset) -> dict:
         if coord.dtype.kind in "OUST":  # object, unicode, bytes, NumPy StringDType (pandas 3 string indexes)
             encoding[name]["dtype"] = "S1"
     return encoding
+
+
+def _new_partial(path: Path, suffix: str = "") -> Path:
+    """A new empty file ``.<name>.<random>.partial<suffix>`` beside ``path``, made
+    exclusively with mode 0666 less the umask (a writer that fills it keeps that mode)."""
+    while True:
+        tmp = path.with_name(f".{path.name}.{secrets.token_hex(6)}.partial{suffix}")
+        try:
+            os.close(os.open(tmp, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o666))
+            return tmp
+        except FileExistsError:
+            continue
 
 
 def _fits_float32(data, name: str):

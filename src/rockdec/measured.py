@@ -33,7 +33,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from rockdec import estimators, fits, signatures
+from rockdec import estimators, fits, registry, signatures
 from rockdec.models import period_from_g
 
 #: Settings of the analysis and their defaults (the workflow's scene defaults, see the schema).
@@ -69,7 +69,7 @@ MAX_G_SPREAD = 0.5
 class Analysis(NamedTuple):
     """What :func:`analyse` measures on a set of records.
 
-    ``raw``: zero-window value per estimator of :data:`rockdec.estimators.ESTIMATORS`
+    ``raw``: zero-window value per estimator of :data:`rockdec.registry.ESTIMATORS`
     (dimensionless) and ``"g"`` (rad/s^2, largest window); ``per_window``: the same names, one value per
     window; ``count``: triggers per window, ``{"a": ..., "v": ...}``; ``sigma_y`` (rad),
     ``points_per_cycle`` (samples per cycle at amplitude ``sigma_y`` with the measured
@@ -229,22 +229,21 @@ def analyse(records, dt: float, settings: dict | None = None, g: float | None = 
         sig = signatures.mean_signature(np.stack([sum_a, sum_v]), np.stack([count_a, count_v]), windows=windows)
     r_all = signatures.free_response(sig[0])
 
-    names = list(estimators.ESTIMATORS) + [G_NAME]
+    names = list(registry.ESTIMATORS) + [G_NAME]
     per_window = {name: np.full(windows.size, np.nan) for name in names}
     for w in range(windows.size):
         for name, est in estimators.estimate_all(r_all[w], sig[1, w], dt, opts["fit_points"]).items():
             per_window[name][w] = est.value
         per_window[G_NAME][w] = _half_cycle_g(r_all[w], dt)
     raw = {G_NAME: per_window[G_NAME][-1]}
-    for name in estimators.ESTIMATORS:
-        weight = None
-        if opts["weights"] == "count":
-            weight = count_v if name == "e_v" else count_a
+    count = {"a": count_a, "v": count_v}
+    for name in registry.ESTIMATORS:
+        weight = count[registry.trigger(name)] if opts["weights"] == "count" else None
         raw[name] = estimators.extrapolate_to_zero(windows, per_window[name], weight).value
     return Analysis(
         raw=raw,
         per_window=per_window,
-        count={"a": count_a, "v": count_v},
+        count=count,
         sigma_y=sigma_y,
         points_per_cycle=float(period_from_g(sigma_y, lag_g) / dt),
         dt=float(dt),

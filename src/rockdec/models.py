@@ -91,6 +91,11 @@ def auto_switch_ratio() -> float:
     return amplitude_limit(MODEL_TOLERANCE) / MODEL_PEAK_SIGMAS
 
 
+SCALE_CONSTANT_GUESS = 290.0
+"""The number ``c`` of :func:`scale_constant` near ``e = 0.95`` (white load, 75 samples per
+cycle): the first guess of every step search, which then measures ``c``."""
+
+
 def scale_constant(sigma_y: float, dt: float, g: float, sigma_p: float) -> float:
     """The number ``c = sigma_Y dt^2 g^3 / sigma_p^4`` of the stationary scale law.
 

@@ -25,6 +25,7 @@ import pandas as pd
 
 from rockdec import loading, record_measure, simulate
 from rockdec.models import period_from_g
+from rockdec.record_model import Load
 from rockdec.validate import InputError
 
 #: ``name: (noise share of sigma_Y, corner in rocking frequencies or None for white,
@@ -59,7 +60,7 @@ def truth_kind(noise: float, corner) -> str:
 def records(e: float, corner, n_records: int, n_points: int, *, pilot_seeds: int = 32, seed_offset: int = STUDY_SEED_OFFSET):
     """Clean records ``theta(record, time)`` at ``e`` under a white load (``corner`` None) or a
     low-pass load of that corner, seeds from ``seed_offset``; returns ``(theta, dt, pole)``."""
-    pole = 0.0 if corner is None else loading.pole_for_corner(corner, POINTS_PER_CYCLE)
+    pole = (Load() if corner is None else Load("lowpass", corner)).pole(POINTS_PER_CYCLE)
     cal = simulate.calibrate_dt(e=e, g=1.0, sigma_p=1.0, points_per_cycle=POINTS_PER_CYCLE, pilot_seeds=pilot_seeds, iterations=8, pole=pole)
     seeds = seed_offset + np.arange(n_records)
     theta, _ = simulate.simulate_block(seeds, n_points, dt=cal["dt"], g=1.0, e=e, sigma_p=1.0, burn_in=cal["burn_in"], pole=pole)

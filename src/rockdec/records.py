@@ -16,16 +16,15 @@ from typing import NamedTuple
 
 import numpy as np
 
-from rockdec.validate import InputError, path_name, show
+from rockdec import timeaxis
+from rockdec.timeaxis import RecordError
+from rockdec.validate import path_name, show
 
 #: Largest fraction of NaN samples a record may hold.
 MAX_NAN_FRACTION = 0.1
 
 #: Fewest samples a record must have (a few rocking cycles at the sampling the fits need).
 MIN_SAMPLES = 1000
-
-#: Relative tolerance on the spacing of a time axis (printed times are rounded).
-TIME_RTOL = 1e-3
 
 #: Bytes read from the start of a CSV file to sniff its separator and its line length.
 SNIFF_BYTES = 1 << 16
@@ -43,10 +42,6 @@ TIME_UNITS = {"s": 1.0, "sec": 1.0, "second": 1.0, "seconds": 1.0,
               "us": 1e-6, "microsecond": 1e-6, "microseconds": 1e-6, "min": 60.0, "minute": 60.0, "minutes": 60.0}
 
 
-class RecordError(InputError):
-    """A record the user can fix; the message names the file, the problem and the fix."""
-
-
 class Record(NamedTuple):
     """One record: ``theta`` (rad, 1-D, float64, NaN for gaps), ``dt`` (s), ``source`` (the file)."""
 
@@ -56,30 +51,9 @@ class Record(NamedTuple):
 
 
 def sampling_step(time, source: str) -> float:
-    """The step of a time axis (s), refusing one that is not uniform and increasing."""
-    t = np.asarray(time)
-    if np.issubdtype(t.dtype, np.datetime64) or np.issubdtype(t.dtype, np.timedelta64):
-        t = (t - t[0]) / np.timedelta64(1, "s")
-    t = t.astype(np.float64)
-    if t.size < 2:
-        raise RecordError(f"{source}: the time axis has {t.size} value(s); a record needs at least {MIN_SAMPLES} samples.")
-    if not np.all(np.isfinite(t)):
-        row = int(np.flatnonzero(~np.isfinite(t))[0])
-        raise RecordError(f"{source}: time value {row} is {t[row]}; every time stamp must be a finite number of seconds.")
-    step = np.diff(t)
-    if np.any(step <= 0):
-        row = int(np.flatnonzero(step <= 0)[0]) + 1
-        what = "repeats" if step[row - 1] == 0 else "goes back"
-        raise RecordError(f"{source}: time {what} at sample {row} (t = {t[row]:g} s); sort the record and drop duplicate stamps.")
-    median = float(np.median(step))
-    bad = np.abs(step - median) > TIME_RTOL * median
-    if np.any(bad):
-        row = int(np.flatnonzero(bad)[0]) + 1
-        raise RecordError(
-            f"{source}: time is not uniformly sampled (step {step[row - 1]:g} s at sample {row}, typical {median:g} s); "
-            "resample it to a uniform step, or mark missing samples as NaN on a uniform time axis."
-        )
-    return float((t[-1] - t[0]) / (t.size - 1))
+    """The step of a record's time axis (s): :func:`rockdec.timeaxis.sampling_step` with the
+    fewest samples a record needs (:data:`MIN_SAMPLES`)."""
+    return timeaxis.sampling_step(time, source, MIN_SAMPLES)
 
 
 def _step_from_options(dt, fs, source: str) -> float | None:

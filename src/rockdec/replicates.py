@@ -28,8 +28,9 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from rockdec import engine, estimators, series, signatures, tables
+from rockdec import engine, estimators, registry, series, signatures, tables
 from rockdec.layout import READINGS, scene_seeds
+from rockdec.record_model import carried_attrs
 from rockdec.run import Run
 
 PER_SERIES_LIMIT = 100
@@ -175,6 +176,7 @@ def replicate_curves(cube: xr.Dataset, *, fit_points: int) -> xr.Dataset:
 
     ``e_hat(estimator, replicate, window)``: NaN-aware mean over the groups (or series) of
     a replicate; ``count(replicate, trigger, window)``: triggers pooled in the replicate.
+    The cube's load and sensor attributes are carried on (:func:`rockdec.record_model.carried_attrs`).
     """
     dt = float(cube.attrs["dt"])
     per_group = estimators.estimate_cube(
@@ -185,7 +187,7 @@ def replicate_curves(cube: xr.Dataset, *, fit_points: int) -> xr.Dataset:
     e_hat.attrs = per_group.attrs
     count = cube["count"].groupby(cube["replicate"]).sum(dim)
     count.attrs = {"units": "1", "long_name": "triggers pooled in the replicate"}
-    return xr.Dataset({"e_hat": e_hat, "count": count}, attrs={"fit_points": fit_points, "dt": dt})
+    return xr.Dataset({"e_hat": e_hat, "count": count}, attrs={"fit_points": fit_points, "dt": dt, **carried_attrs(cube.attrs)})
 
 
 def extrapolated(curves: xr.Dataset, weights: str = "window") -> xr.Dataset:
@@ -193,13 +195,13 @@ def extrapolated(curves: xr.Dataset, weights: str = "window") -> xr.Dataset:
 
     ``e_hat0(estimator, replicate)`` and its standard error from
     :func:`rockdec.estimators.extrapolate`, weighted by the window size (paper §5) or by
-    the replicate's trigger count (``weights="count"``; ``e_v`` rests on the ``D_v``
-    triggers, every other estimator on the ``D_a`` triggers); the curves are kept.
+    the replicate's trigger count (``weights="count"``: the counts of the trigger each
+    estimator reads, :func:`rockdec.registry.trigger`); the curves are kept.
     """
     e_hat, count = curves["e_hat"], curves["count"]
     if weights == "count":
         w = xr.concat(
-            [count.sel(trigger="v" if name == "e_v" else "a", drop=True) for name in e_hat["estimator"].values],
+            [count.sel(trigger=registry.trigger(name), drop=True) for name in e_hat["estimator"].values],
             dim=e_hat["estimator"],
         ).astype(float)
         extrap = estimators.extrapolate(e_hat, weights=w)
@@ -251,7 +253,7 @@ def readings_estimates(curves: xr.Dataset, weights: str) -> tuple[xr.Dataset, pd
     """
     e_target = float(curves.attrs["e_target"])
     combined = extrapolated(curves, weights)[["e_hat0", "e_hat0_stderr"]]
-    combined.attrs = {"e_target": e_target}
+    combined.attrs = {"e_target": e_target, **carried_attrs(curves.attrs)}
     table = pd.concat(
         [tables.summary_table(combined["e_hat0"].sel(reading=r), e_target).assign(reading=str(r)) for r in combined["reading"].values],
         ignore_index=True,

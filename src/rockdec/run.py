@@ -1,14 +1,15 @@
 """The run contract: everything that fixes a scene's simulated series, built once and passed on.
 
 A :class:`Run` holds the rocking system (``e``, ``nu``, ``theta_cr``; eqs. 2, 4, 6), the load
-(``sigma_p``, eqs. 21-24), the sampling (``dt``, ``burn_in``), the initial state, the model
-that runs and the stationary statistics measured at that step (``sigma_y``,
-``sigma_ydot``, samples per cycle at ``sigma_Y``, eq. 5). Given a seed it determines the
+(``sigma_p``, eqs. 21-24, and its spectrum, :class:`rockdec.record_model.Load`), the sensor
+noise, the sampling (``dt``, ``burn_in``), the initial state, the model that runs and the
+stationary statistics measured at that step (``sigma_y``, ``sigma_ydot``, samples per
+cycle at ``sigma_Y``, eq. 5); :attr:`Run.record_model` gives its record model. Given a seed it determines the
 series bit for bit (:meth:`Run.dataset`), and its statistics set the trigger levels of
 every signature of the scene (one level for all series, docs/method.md §4.4).
 
-Every path builds it once: the workflow's rule ``calibrate`` (:func:`calibrate`, written
-as ``run.json``), the command line, the coverage, trade-off and amplitude studies; it
+Every path builds it once, by :func:`calibrate` (step search included): the workflow's rule
+``calibrate`` (written as ``run.json``), the command line, the trade-off and amplitude studies; it
 travels as NetCDF attributes (:meth:`Run.to_attrs`, :meth:`Run.from_attrs`) in every file
 made from it. The kernels and their Dask wrapper stay in :mod:`rockdec.simulate`.
 """
@@ -26,11 +27,23 @@ import xarray as xr
 
 from rockdec import simulate
 from rockdec import validate as checks
-from rockdec.housner import choose_model, simulate_block_housner
+from rockdec.housner import choose_model
 from rockdec.models import MODEL_PEAK_SIGMAS, period_from_g, restoring_acceleration
+from rockdec.record_model import (
+    NO_NOISE,
+    WHITE,
+    Load,
+    RecordModel,
+    SensorNoise,
+    load_attrs,
+    load_from_attrs,
+    sensor_attrs,
+    sensor_from_attrs,
+)
 
-#: Series and points of the pilot that measures the statistics at a given step.
-PILOT_SERIES, PILOT_POINTS = 64, 40_000
+#: Pilot sizes of the step search (:func:`rockdec.simulate.calibrate_dt`), the defaults of
+#: :func:`calibrate`'s ``pilot``.
+PILOT = {"pilot_seeds": simulate.PILOT_SERIES, "pilot_points": simulate.PILOT_POINTS}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -44,7 +57,9 @@ class Run:
     of the burn-in); ``sigma_y`` (rad), ``sigma_ydot`` (rad/s, of the sampled slope) and
     ``points_per_cycle`` (samples per cycle at ``sigma_Y``, eq. 5) measured by a pilot at
     ``dt`` (NaN for a free response); ``points_per_cycle_target`` (what set ``dt``) and
-    ``model_reason`` (why this model) say how it was chosen.
+    ``model_reason`` (why this model) say how it was chosen; ``load``: the impulses' spectrum
+    (its corner placed at ``points_per_cycle_target``, :attr:`pole`); ``sensor``: white noise
+    added to the recorded angle (the statistics are the model's response without it).
     """
 
     model: str
@@ -61,15 +76,34 @@ class Run:
     model_reason: str = "requested"
     theta0: float = 0.0
     theta_dot0: float = 0.0
+    load: Load = WHITE
+    sensor: SensorNoise = NO_NOISE
 
     @property
     def g(self) -> float:
         """The restoring acceleration ``nu^2 theta_cr`` of eq. 4, in rad/s^2."""
         return restoring_acceleration(self.nu, self.theta_cr)
 
+    @property
+    def pole(self) -> float:
+        """The load filter's pole (:meth:`rockdec.record_model.Load.pole` at the target density; 0: white)."""
+        return self.load.pole(self.points_per_cycle_target)
+
+    @property
+    def sensor_std(self) -> float:
+        """The sensor noise's standard deviation in rad (0 without noise)."""
+        return self.sensor.std_rad(self.sigma_y) if self.sensor.std > 0.0 else 0.0
+
+    @property
+    def record_model(self) -> RecordModel:
+        """The run's record model: its rocking model (the fixed-step integrator runs eq. 4), load and sensor."""
+        return RecordModel("housner" if self.model == "housner" else "simplified", self.load, self.sensor)
+
     def to_attrs(self) -> dict:
-        """The run as NetCDF attributes (numbers and strings), ``g`` added for readers."""
-        return {**dataclasses.asdict(self), "g": self.g}
+        """The run as NetCDF attributes (numbers and strings): every field, the load and the
+        sensor noise flattened (:mod:`rockdec.record_model`), ``g`` and ``load_pole`` added for readers."""
+        fields = {f.name: getattr(self, f.name) for f in dataclasses.fields(self) if f.name not in ("load", "sensor")}
+        return {**fields, **load_attrs(self.load), **sensor_attrs(self.sensor), "g": self.g, "load_pole": self.pole}
 
     @classmethod
     def from_attrs(cls, attrs) -> "Run":
@@ -82,7 +116,8 @@ class Run:
                 "use a file written by the workflow or by 'rockdec simulate'"
             )
         cast = {"str": str, "int": int, "float": float}
-        return cls(**{name: cast[kinds[name]](attrs[name]) for name in kinds if name in attrs})
+        plain = {name: cast[kinds[name]](attrs[name]) for name in kinds if name in attrs and kinds[name] in cast}
+        return cls(**plain, load=load_from_attrs(attrs), sensor=sensor_from_attrs(attrs))
 
     def dataset(self, seeds, n_points: int, chunk_seeds: int = 100) -> xr.Dataset:
         """Lazy ``theta(seed, time)``, ``theta_dot(seed, time)`` of ``seeds`` under this run
@@ -90,7 +125,7 @@ class Run:
         ds = simulate.simulation_dataset(
             seeds, n_points, dt=self.dt, g=self.g, e=self.e, sigma_p=self.sigma_p, theta0=self.theta0,
             theta_dot0=self.theta_dot0, burn_in=self.burn_in, chunk_seeds=chunk_seeds, model=self.model,
-            theta_cr=self.theta_cr,
+            theta_cr=self.theta_cr, pole=self.pole, sensor_std=self.sensor_std,
         )
         ds.attrs = self.to_attrs()
         return ds
@@ -116,19 +151,25 @@ def _required() -> dict:
     return {f.name: f for f in dataclasses.fields(Run) if f.default is dataclasses.MISSING}
 
 
-def calibrate(scene: dict, amplitude: float = 0.0, theta0: float = 0.0, theta_dot0: float = 0.0) -> Run:
-    """The run of a scene's ``model``, ``system`` and ``excitation`` sections.
+def calibrate(scene: dict, amplitude: float = 0.0, theta0: float = 0.0, theta_dot0: float = 0.0, pilot: dict | None = None) -> Run:
+    """The run of a scene's ``model``, ``system`` and ``excitation`` sections: the one way from
+    settings (a scene, or a command line made into one) to a :class:`Run`.
 
-    ``dt`` comes from the scene or from :func:`rockdec.simulate.calibrate_dt`; the burn-in
-    from the scene or :func:`rockdec.simulate.default_burn_in`. Stationary statistics are
-    measured by a pilot at that step, with the model that runs (``auto`` chooses by the
-    amplitude, :func:`model_for`). Without noise (``sigma_p = 0``, a free response from
-    ``theta0``) there is no ``sigma_Y``: the step then gives ``points_per_cycle`` samples
-    per cycle at ``amplitude`` (eq. 5), no burn-in.
+    ``dt`` comes from the scene or from the step search :func:`rockdec.simulate.calibrate_dt`
+    under the scene's load (``pilot``: its sizes, :data:`PILOT`); the burn-in from the
+    scene or :func:`rockdec.simulate.default_burn_in`. Stationary statistics are measured
+    by a pilot at that step, with the model that runs (``auto`` chooses by the amplitude,
+    :func:`model_for`; :func:`with_model`). Without noise (``sigma_p = 0``, a free response
+    from ``theta0``) there is no ``sigma_Y``: the step then gives ``points_per_cycle``
+    samples per cycle at ``amplitude`` (eq. 5), no burn-in. ``scene["model"]`` may also be
+    ``"fixed_step"`` (the grid-impact integrator, for the speed/accuracy study).
     """
     system, exc = scene["system"], scene["excitation"]
     g = restoring_acceleration(system["nu"], system["theta_cr"])
     e, sigma_p = system["e"], exc["sigma_p"]
+    load, sensor = Load.from_dict(exc.get("load")), SensorNoise.from_dict(exc.get("sensor_noise"))
+    pilot = {**PILOT, **(pilot or {})}
+    pole = load.pole(exc["points_per_cycle"])
     if sigma_p == 0.0:
         if exc["dt"] is None and amplitude <= 0.0:
             raise checks.InputError("a free response (sigma_p = 0) needs --theta0 > 0 to set the step, or --dt")
@@ -136,36 +177,52 @@ def calibrate(scene: dict, amplitude: float = 0.0, theta0: float = 0.0, theta_do
         nan = math.nan
         cal = {"dt": dt, "burn_in": 0, "sigma_y": nan, "sigma_ydot": nan, "points_per_cycle": nan}
     elif exc["dt"] is None:
-        cal = simulate.calibrate_dt(e=e, g=g, sigma_p=sigma_p, points_per_cycle=exc["points_per_cycle"])
+        cal = simulate.calibrate_dt(
+            e=e, g=g, sigma_p=sigma_p, points_per_cycle=exc["points_per_cycle"], pole=pole,
+            iterations=simulate.STEP_ITERATIONS[load.kind], **pilot,
+        )
     else:
         burn_in = exc["burn_in"] if exc["burn_in"] is not None else simulate.default_burn_in(e, exc["points_per_cycle"])
         theta, _ = simulate.simulate_block(
-            np.arange(PILOT_SERIES) + simulate.PILOT_SEED_OFFSET, PILOT_POINTS, dt=exc["dt"], g=g, e=e, sigma_p=sigma_p,
-            burn_in=burn_in,
+            _statistics_seeds(pilot), pilot["pilot_points"], dt=exc["dt"], g=g, e=e, sigma_p=sigma_p, burn_in=burn_in, pole=pole
         )
         cal = {"dt": exc["dt"], "burn_in": burn_in, **simulate.pilot_statistics(theta, exc["dt"], g)}
     if exc["burn_in"] is not None:
         cal["burn_in"] = exc["burn_in"]
     model, reason = model_for(scene["model"], cal["sigma_y"], system["theta_cr"])
-    if model == "housner" and sigma_p > 0.0:
-        # the trigger level and sampling follow the model that runs: re-measure the pilot
-        theta, _, _ = simulate_block_housner(
-            np.arange(PILOT_SERIES) + simulate.PILOT_SEED_OFFSET, PILOT_POINTS, dt=cal["dt"], nu=system["nu"],
-            theta_cr=system["theta_cr"], e=e, sigma_p=sigma_p, burn_in=cal["burn_in"],
-        )
-        standing = np.all(np.isfinite(theta), axis=1)
-        if standing.mean() < 0.5:
-            raise checks.InputError(
-                f"the block overturns in {1 - standing.mean():.0%} of the pilot series ({MODEL_PEAK_SIGMAS:g} sigma_Y/theta_cr = "
-                f"{MODEL_PEAK_SIGMAS * cal['sigma_y'] / system['theta_cr']:.2g}): no stationary rocking exists; lower sigma_p"
-            )
-        cal.update(simulate.pilot_statistics(theta[standing], cal["dt"], g))
-    return Run(
-        model=model, e=e, nu=system["nu"], theta_cr=system["theta_cr"], sigma_p=sigma_p, dt=cal["dt"],
+    simplified = Run(
+        model="simplified", e=e, nu=system["nu"], theta_cr=system["theta_cr"], sigma_p=sigma_p, dt=cal["dt"],
         burn_in=int(cal["burn_in"]), sigma_y=cal["sigma_y"], sigma_ydot=cal["sigma_ydot"],
         points_per_cycle=cal["points_per_cycle"], points_per_cycle_target=float(exc["points_per_cycle"]),
-        model_reason=reason, theta0=float(theta0), theta_dot0=float(theta_dot0),
+        model_reason=reason, theta0=float(theta0), theta_dot0=float(theta_dot0), load=load, sensor=sensor,
     )
+    return with_model(simplified, model, pilot)
+
+
+def _statistics_seeds(pilot: dict) -> np.ndarray:
+    """Seeds of the pilot that measures the statistics at a given step (:data:`rockdec.simulate.STATISTICS_PILOT_SERIES`)."""
+    return np.arange(min(simulate.STATISTICS_PILOT_SERIES, pilot["pilot_seeds"])) + simulate.PILOT_SEED_OFFSET
+
+
+def with_model(run: Run, model: str, pilot: dict | None = None) -> Run:
+    """``run`` under ``model`` at the same step, its statistics re-measured by a pilot of that
+    model: the trigger level and the sampling follow the model that runs. A block that
+    overturns in most pilot series (Housner) has no stationary rocking: refused.
+    """
+    if model == run.model or not run.sigma_p > 0.0:
+        return dataclasses.replace(run, model=model)
+    pilot = {**PILOT, **(pilot or {})}
+    theta, _ = simulate.simulate_model(
+        model, _statistics_seeds(pilot), pilot["pilot_points"], dt=run.dt, g=run.g, e=run.e, sigma_p=run.sigma_p,
+        theta_cr=run.theta_cr, pole=run.pole, burn_in=run.burn_in,
+    )
+    standing = np.all(np.isfinite(theta), axis=1)
+    if standing.mean() < 0.5:
+        raise checks.InputError(
+            f"the block overturns in {1 - standing.mean():.0%} of the pilot series ({MODEL_PEAK_SIGMAS:g} sigma_Y/theta_cr = "
+            f"{MODEL_PEAK_SIGMAS * run.sigma_y / run.theta_cr:.2g}): no stationary rocking exists; lower sigma_p"
+        )
+    return dataclasses.replace(run, model=model, **simulate.pilot_statistics(theta[standing], run.dt, run.g))
 
 
 def model_for(requested: str, sigma_y: float, theta_cr: float) -> tuple[str, str]:

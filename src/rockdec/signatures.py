@@ -55,8 +55,7 @@ chunks. The adding of series into groups is done inside the kernels (``rows_to``
 series adds its segments into its group's row, and the cumulative sum over the windows runs
 once per group), so a grouped cube never holds per-series sums.
 
-Layers: NumPy/numba kernels (:func:`extremum_sums`, :func:`crossing_sums`), the
-:func:`reference_per_window` used by tests and the benchmark, small helpers
+Layers: NumPy/numba kernels (:func:`extremum_sums`, :func:`crossing_sums`), small helpers
 (:func:`lag_samples`, :func:`free_response`, :func:`pool`) and the xarray/Dask wrapper
 :func:`signature_cube`.
 """
@@ -73,7 +72,7 @@ from numba import njit
 from rockdec import __version__
 from rockdec import validate as checks
 from rockdec.models import period_from_g
-from rockdec.records import sampling_step
+from rockdec.timeaxis import sampling_step
 
 __all__ = [
     "DEFAULT_WINDOWS",
@@ -85,7 +84,6 @@ __all__ = [
     "lag_samples",
     "mean_signature",
     "pool",
-    "reference_per_window",
     "signature_cube",
 ]
 
@@ -324,23 +322,6 @@ def crossing_sums(y, velocity, half_widths, n_lag, dt, *, both_signs=True, owned
     return _run("v", y, velocity, half_widths, n_lag, dt, both_signs, owned, rows_to)
 
 
-def reference_per_window(y, trigger, target, half_widths, n_lag, *, dt=1.0, both_signs=True) -> SignatureSums:
-    """Reference implementation: one full rescan of the record per window.
-
-    Calls the kernel once for each half-width alone (no binning, no cumulative sum) and
-    stacks the results; same conventions as :func:`extremum_sums` (``trigger="a"``) and
-    :func:`crossing_sums` (``trigger="v"``), slower by about the number of windows. Kept
-    only to check the one-pass binning (tests) and to time it
-    (``benchmarks/bench_signatures.py``).
-    """
-    parts = [_run(trigger, y, target, [width], n_lag, dt, both_signs, None, None) for width in np.atleast_1d(half_widths)]
-    return SignatureSums(
-        np.concatenate([part.sum for part in parts], axis=-2),
-        np.concatenate([part.count for part in parts], axis=-1),
-        np.concatenate([part.skipped for part in parts], axis=-1),
-    )
-
-
 # --------------------------------------------------------------------------- helpers
 
 
@@ -547,7 +528,7 @@ def _group_sums(theta: xr.DataArray, group: xr.DataArray, kw: dict):
 
 def _sampling_interval(theta: xr.DataArray) -> float:
     """``dt`` in s from ``theta.attrs['dt']`` or a uniform, increasing ``time`` coordinate
-    (:func:`rockdec.records.sampling_step`)."""
+    (:func:`rockdec.timeaxis.sampling_step`)."""
     if "dt" in theta.attrs:
         return float(theta.attrs["dt"])
     if "time" in theta.coords:

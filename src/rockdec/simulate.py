@@ -21,7 +21,11 @@ What the paper's scheme leaves out and :func:`flight` handles:
 Sampling convention: ``theta[n]`` is the angle at ``t = n dt`` and ``theta_dot[n]`` the
 velocity just after the impulse applied at that instant (eq. 21).
 
-Kernels take and return NumPy arrays; :func:`simulate_dataset` adds labels and Dask.
+Kernels take and return NumPy arrays; :func:`simulate_model` runs the model a run names,
+:func:`simulation_dataset` adds labels and Dask. :func:`calibrate_dt` is the step search, its
+constants (:data:`PILOT_SERIES`, :data:`PILOT_POINTS`, :data:`STEP_ITERATIONS`,
+:data:`STATISTICS_PILOT_SERIES`, :data:`rockdec.models.SCALE_CONSTANT_GUESS`) have their home
+here and in :mod:`rockdec.models`.
 """
 
 from __future__ import annotations
@@ -34,9 +38,9 @@ import xarray as xr
 
 from rockdec.fixed_step import step as grid_step
 from rockdec.housner import simulate_block_housner
-from rockdec.loading import draw_impulses, series_rng
 from rockdec import validate as checks
-from rockdec.models import check_finite_series, check_run, period_from_g, scale_constant, step_for_density
+from rockdec.loading import add_sensor_noise, draw_impulses, series_rng
+from rockdec.models import SCALE_CONSTANT_GUESS, check_finite_series, check_run, period_from_g, scale_constant, step_for_density
 
 #: Largest number of correction steps when the closed-form flight count is off by rounding.
 _COUNT_FIX = 4
@@ -47,6 +51,19 @@ _MAX_PASSES = 64
 
 #: Pilot runs draw seeds from here on, apart from any scene's seeds.
 PILOT_SEED_OFFSET = 2**62
+
+#: Pilot of the step search (:func:`calibrate_dt`): series and points. The response is
+#: heavy-tailed (kurtosis near 15), so the pilot is large: 256 x 40000 points pin ``sigma_Y``
+#: to about 2 %.
+PILOT_SERIES, PILOT_POINTS = 256, 40_000
+
+#: Updates of the step in :func:`calibrate_dt`, per load kind: under white noise the scale law
+#: converges in 3; a coloured load's exponent is measured from the pilots (:func:`secant_step`).
+STEP_ITERATIONS = {"white": 3, "lowpass": 8}
+
+#: Series of the pilot that measures the statistics at a given step, or under a model other
+#: than the one the step search ran (:func:`rockdec.run.calibrate`), of :data:`PILOT_POINTS`.
+STATISTICS_PILOT_SERIES = 64
 
 #: Largest default burn-in, in steps; beyond it the caller must choose one.
 MAX_DEFAULT_BURN_IN = 10**7
@@ -227,19 +244,18 @@ def calibrate_dt(
     g: float,
     sigma_p: float,
     points_per_cycle: float = 75.0,
-    pilot_seeds: int = 256,
-    pilot_points: int = 40_000,
-    iterations: int = 3,
+    pilot_seeds: int = PILOT_SERIES,
+    pilot_points: int = PILOT_POINTS,
+    iterations: int = STEP_ITERATIONS["white"],
     pole: float = 0.0,
 ) -> dict:
     """Time step giving ``points_per_cycle`` samples per cycle at amplitude ``sigma_Y`` (eq. 5).
 
     Under the scale law ``sigma_Y = c S^2/g^3`` (:func:`rockdec.models.scale_constant`)
     the step is :func:`rockdec.models.step_for_density` of ``c``; ``c`` is measured by
-    pilot runs (seeds of their own, burn-in discarded) and the step updated
-    ``iterations`` times. The response
-    is heavy-tailed (kurtosis near 15), so the pilot is large: 256 x 40000 points pins
-    ``sigma_Y`` to about 2 %.
+    pilot runs (:data:`PILOT_SERIES` x :data:`PILOT_POINTS`, seeds of their own, burn-in
+    discarded) and the step updated ``iterations`` times, from the step of
+    :data:`rockdec.models.SCALE_CONSTANT_GUESS`.
 
     Returns a dict with ``dt``, ``burn_in``, and the last pilot's statistics at that step:
     ``sigma_y``, ``sigma_ydot`` (of the sampled slope ``diff(theta)/dt``, what a measured
@@ -263,7 +279,7 @@ def calibrate_dt(
         raise checks.InputError("time-step calibration needs noise: sigma_p must be > 0 (or give --dt)")
     burn_in = default_burn_in(e, points_per_cycle)
     seeds = np.arange(pilot_seeds) + PILOT_SEED_OFFSET
-    dt = step_for_density(290.0, sigma_p, g, points_per_cycle)  # c is near 290 at e = 0.95
+    dt = step_for_density(SCALE_CONSTANT_GUESS, sigma_p, g, points_per_cycle)
     outside = checks.InputError(
         f"the time-step calibration at g = {g}, sigma_p = {sigma_p} leaves the floating-point range; "
         "give the time step explicitly (--dt)"
@@ -280,13 +296,13 @@ def calibrate_dt(
                     c = scale_constant(stats["sigma_y"], dt, g, sigma_p)
                     dt = step_for_density(c, sigma_p, g, points_per_cycle)
                 else:
-                    dt = _secant_step(history, dt, stats["points_per_cycle"], points_per_cycle)
+                    dt = secant_step(history, dt, stats["points_per_cycle"], points_per_cycle)
             except (OverflowError, ZeroDivisionError):  # float ** raises where * gives inf
                 raise outside from None
     return {"dt": dt, "burn_in": burn_in, **stats}
 
 
-def _secant_step(history: list, dt: float, achieved: float, target: float) -> float:
+def secant_step(history: list, dt: float, achieved: float, target: float) -> float:
     """Next step of :func:`calibrate_dt` under a coloured load.
 
     The load's correlation time is a fixed number of steps, so it scales with ``dt`` and
@@ -316,6 +332,29 @@ def pilot_statistics(theta: np.ndarray, dt: float, g: float | None = None) -> di
     return out
 
 
+def simulate_model(model: str, seeds, n_points: int, *, dt, g, e, sigma_p, theta_cr=None, pole=0.0, theta0=0.0, theta_dot0=0.0,
+                   burn_in=0) -> tuple[np.ndarray, np.ndarray]:
+    """``(theta, theta_dot)`` of one series per seed under ``model``: the one dispatch on a model name.
+
+    ``"simplified"`` (eq. 4, :func:`simulate_block`), ``"housner"`` (eq. 2,
+    :func:`rockdec.housner.simulate_block_housner` with ``nu = sqrt(g/theta_cr)``; a series
+    that overturns is NaN from the fall on) or ``"fixed_step"`` (eq. 4 with the grid-impact
+    integrator of :mod:`rockdec.fixed_step`, for the speed/accuracy study). ``pole``: the
+    load's filter (:meth:`rockdec.record_model.Load.pole`, 0 for white noise).
+    """
+    common = dict(dt=dt, e=e, sigma_p=sigma_p, theta0=theta0, theta_dot0=theta_dot0, burn_in=burn_in, pole=pole)
+    if model == "simplified":
+        return simulate_block(seeds, n_points, g=g, **common)
+    if model == "fixed_step":  # not a model: the grid-impact integrator of rockdec.fixed_step
+        return simulate_block(seeds, n_points, g=g, grid_impacts=True, **common)
+    if model == "housner":
+        if theta_cr is None:
+            raise ValueError("the Housner model needs theta_cr")
+        theta, theta_dot, _ = simulate_block_housner(seeds, n_points, nu=math.sqrt(g / theta_cr), theta_cr=theta_cr, **common)
+        return theta, theta_dot
+    raise ValueError(f"unknown model '{model}'; use simplified or housner")
+
+
 def simulation_dataset(
     seeds,
     n_points: int,
@@ -330,43 +369,31 @@ def simulation_dataset(
     chunk_seeds: int = 100,
     model: str = "simplified",
     theta_cr: float | None = None,
+    pole: float = 0.0,
+    sensor_std: float = 0.0,
 ) -> xr.Dataset:
     """Lazy Dataset ``theta(seed, time)``, ``theta_dot(seed, time)`` (float64, Dask chunks over seed).
 
-    Nothing is simulated until the values are asked for; each chunk calls the model's
-    block kernel (numba, ``nogil``), so Dask's threads run chunks in parallel. A series
-    depends on its seed only, so any chunking gives the same numbers, bit for bit.
-    ``model`` is ``"simplified"`` (eq. 4, :func:`simulate_block`) or ``"housner"`` (eq. 2,
-    :func:`rockdec.housner.simulate_block_housner`, which needs ``theta_cr``; a series that
-    overturns is NaN from the fall on); ``"fixed_step"`` runs the simplified model with the
-    grid-impact integrator of :mod:`rockdec.fixed_step` (for the speed/accuracy study).
+    Nothing is simulated until the values are asked for; each chunk calls
+    :func:`simulate_model` (numba, ``nogil``), so Dask's threads run chunks in parallel. A
+    series depends on its seed only, so any chunking gives the same numbers, bit for bit.
+    ``pole``: the load's filter (0: white); ``sensor_std`` (rad): white sensor noise added to
+    the recorded angle (:func:`rockdec.loading.add_sensor_noise`; ``theta_dot`` stays the
+    model's).
     """
     import dask.array as da  # the lazy dataset only: simulate_block's callers never load dask.array
 
     seeds = np.atleast_1d(np.asarray(seeds, dtype=np.int64))
     seed_chunks = da.from_array(seeds, chunks=chunk_seeds)
-    common = dict(e=e, sigma_p=sigma_p, theta0=theta0, theta_dot0=theta_dot0, burn_in=burn_in, dt=dt)
-    if model == "simplified":
-
-        def block(chunk):
-            return np.stack(simulate_block(chunk, n_points, g=g, **common))
-
-    elif model == "housner":
-        if theta_cr is None:
-            raise ValueError("the Housner model needs theta_cr")
-        nu = math.sqrt(g / theta_cr)
-
-        def block(chunk):
-            theta, theta_dot, _ = simulate_block_housner(chunk, n_points, nu=nu, theta_cr=theta_cr, **common)
-            return np.stack((theta, theta_dot))
-
-    elif model == "fixed_step":  # not a model: the grid-impact integrator of rockdec.fixed_step
-
-        def block(chunk):
-            return np.stack(simulate_block(chunk, n_points, g=g, grid_impacts=True, **common))
-
-    else:
+    if model not in ("simplified", "housner", "fixed_step"):
         raise ValueError(f"unknown model '{model}'; use simplified or housner")
+    if model == "housner" and theta_cr is None:
+        raise ValueError("the Housner model needs theta_cr")
+    common = dict(dt=dt, g=g, e=e, sigma_p=sigma_p, theta_cr=theta_cr, pole=pole, theta0=theta0, theta_dot0=theta_dot0, burn_in=burn_in)
+
+    def block(chunk):
+        theta, theta_dot = simulate_model(model, chunk, n_points, **common)
+        return np.stack((add_sensor_noise(theta, chunk, sensor_std), theta_dot))
 
     both = da.map_blocks(
         block, seed_chunks, new_axis=[0, 2], chunks=((2,), seed_chunks.chunks[0], (n_points,)), dtype=np.float64
@@ -392,31 +419,7 @@ def simulation_dataset(
         },
     )
     ds.attrs.update(
-        {"model": model, "dt": dt, "g": g, "e": e, "sigma_p": sigma_p, "burn_in": burn_in, "theta0": theta0, "theta_dot0": theta_dot0}
+        {"model": model, "dt": dt, "g": g, "e": e, "sigma_p": sigma_p, "burn_in": burn_in, "theta0": theta0, "theta_dot0": theta_dot0,
+         "load_pole": pole, "sensor_noise_rad": sensor_std}
     )
     return ds
-
-
-def long_series(seed: int, n_points: int, chunk: int, *, dt, g, e, sigma_p, theta0=0.0, theta_dot0=0.0, burn_in=0):
-    """One long series in time chunks: yields ``(theta, theta_dot)`` blocks of ``chunk`` samples.
-
-    Memory stays ``O(chunk)`` whatever ``n_points``; the concatenated blocks equal
-    :func:`simulate_block` of the same seed bit for bit (the state and the random stream
-    carry over from block to block).
-    """
-    rng = series_rng(seed)
-    impulses = draw_impulses(rng, np.empty(burn_in), sigma_p)
-    state_theta, state_omega = np.empty(1), np.empty(1)
-    integrate(impulses, dt, g, e, theta0, theta_dot0, burn_in, state_theta, state_omega)
-    theta, omega = state_theta[0], state_omega[0]
-    done = 0
-    while done < n_points:
-        size = min(chunk, n_points - done)
-        first = done == 0  # the first block starts with the state after the burn-in
-        steps = size - 1 if first else size
-        impulses = draw_impulses(rng, np.empty(steps), sigma_p)
-        out_theta, out_omega = np.empty(steps + 1), np.empty(steps + 1)
-        integrate(impulses, dt, g, e, theta, omega, 0, out_theta, out_omega)
-        theta, omega = out_theta[-1], out_omega[-1]
-        yield (out_theta, out_omega) if first else (out_theta[1:], out_omega[1:])
-        done += size

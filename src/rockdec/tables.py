@@ -18,6 +18,7 @@ import pandas as pd
 import xarray as xr
 
 from rockdec.belt import Z95
+from rockdec.registry import BY_RANK
 
 PAPER = {
     "e_g": (0.8083, np.nan),
@@ -163,7 +164,7 @@ def with_alternative(table: pd.DataFrame, e_hat0: xr.DataArray, label: str, e_ta
 
 
 def tradeoff_markdown(table: pd.DataFrame, recommendations: dict[str, pd.DataFrame],
-                      estimators_shown=("e4", "e_v", "e_0", "e1", "e2", "e3", "e_g")) -> str:
+                      estimators_shown=BY_RANK) -> str:
     """The speed/accuracy study as Markdown: cost per configuration, accuracy per estimator,
     and the cheapest configurations.
 

@@ -54,7 +54,6 @@ share a simulation also share its series. Moving one knob at a time cannot find 
 from __future__ import annotations
 
 import copy
-import dataclasses
 import json
 import time
 import warnings
@@ -64,9 +63,8 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from rockdec import engine, fixed_step, replicates, simulate, tables
+from rockdec import engine, fixed_step, replicates, run, tables
 from rockdec.run import Run
-from rockdec.models import restoring_acceleration
 
 KNOBS = {
     "points_per_cycle": (5, 10, 20, 35, 75, 150, 300, 1000),
@@ -100,12 +98,6 @@ ACCURACY_COLUMNS = ["n", "mean", "bias", "std", "rmse", "ci95"]
 
 SETTING_COLUMNS = ["kind", "points_per_cycle", "n_points", "series_per_replicate", "n_windows", "level", "n_periods"]
 """Columns of :func:`study_table` that identify a configuration."""
-
-PILOT = {"pilot_seeds": 256, "pilot_points": 40_000}
-"""Size of the calibration pilots (as :func:`rockdec.simulate.calibrate_dt`)."""
-
-FIXED_STEP_PILOT_SEEDS = 64
-"""Series of the fixed-step pilot that measures that simulator's ``sigma_Y``, ``sigma_Ydot``."""
 
 MAX_CHUNK_POINTS = 2_000_000
 """Largest number of samples in one Dask chunk (seeds per chunk shrink for long series)."""
@@ -182,25 +174,17 @@ def variant_scene(scene: dict, settings: dict) -> dict:
 
 
 def _calibrate(scene: dict, points_per_cycle: float, simulators: set, pilot: dict) -> dict:
-    """The run at one density, per simulator (:class:`rockdec.run.Run`), and the CPU s of
-    this thread: ``{simulator: (run, cpu_s)}``."""
+    """The run at one density, per simulator (:func:`rockdec.run.calibrate` of the scene at
+    that density, then :func:`rockdec.run.with_model` for the fixed-step integrator), and the
+    CPU s of this thread: ``{simulator: (run, cpu_s)}``."""
     start = time.thread_time()
-    system, exc = scene["system"], scene["excitation"]
-    g = restoring_acceleration(system["nu"], system["theta_cr"])
-    e, sigma_p = system["e"], exc["sigma_p"]
-    cal = simulate.calibrate_dt(e=e, g=g, sigma_p=sigma_p, points_per_cycle=points_per_cycle, **pilot)
-    exact = Run(
-        model="simplified", e=e, nu=system["nu"], theta_cr=system["theta_cr"], sigma_p=sigma_p, dt=cal["dt"],
-        burn_in=cal["burn_in"], sigma_y=cal["sigma_y"], sigma_ydot=cal["sigma_ydot"],
-        points_per_cycle=cal["points_per_cycle"], points_per_cycle_target=float(points_per_cycle),
-    )
+    at_density = copy.deepcopy(scene)
+    at_density["model"] = "simplified"
+    at_density["excitation"].update(points_per_cycle=points_per_cycle, dt=None)
+    exact = run.calibrate(at_density, pilot=pilot)
     out = {"exact": exact}
     if fixed_step.KIND in simulators:
-        seeds = np.arange(min(FIXED_STEP_PILOT_SEEDS, pilot["pilot_seeds"])) + simulate.PILOT_SEED_OFFSET
-        theta, _ = simulate.simulate_block(
-            seeds, pilot["pilot_points"], dt=cal["dt"], g=g, e=e, sigma_p=sigma_p, burn_in=cal["burn_in"], grid_impacts=True
-        )
-        out[fixed_step.KIND] = dataclasses.replace(exact, model="fixed_step", **simulate.pilot_statistics(theta, cal["dt"], g))
+        out[fixed_step.KIND] = run.with_model(exact, "fixed_step", pilot)
     cpu = time.thread_time() - start
     return {kind: (entry, cpu) for kind, entry in out.items()}
 
@@ -212,7 +196,7 @@ def calibrations(scene: dict, settings: list[dict], threads: int = 1, pilot: dic
     (:class:`rockdec.run.Run`); the densities run in ``threads`` threads (the kernels
     release the GIL).
     """
-    pilot = PILOT if pilot is None else pilot
+    pilot = run.PILOT if pilot is None else pilot
     wanted: dict[float, set] = {}
     for s in settings:
         wanted.setdefault(s["points_per_cycle"], set()).add(s["simulator"])

@@ -1,11 +1,10 @@
 # Config validation and the helpers that turn a scene into file names.
-import ast
 import sys
 from importlib.util import find_spec
-from pathlib import Path
 
 from rockdec import config as rockdec_config
 from rockdec import layout
+from rockdec.sources import package_sources
 
 # Values given with --config arrive as text: read them as YAML values. An error names where
 # the bad field was set (--config, or the file the user passed with --configfile); one
@@ -104,6 +103,13 @@ def default_products():
 FIGURES_CODE = find_spec("rockdec.figures").origin
 
 
+def step_code(script):
+    """Source of every rockdec module workflow script ``script`` runs
+    (:func:`rockdec.sources.package_sources`): a compute rule's code input, so an edit to
+    any of them reruns it."""
+    return package_sources(f"{workflow.basedir}/workflow/scripts/{script}")
+
+
 def figure_outputs(name):
     """PNG and PDF of figure ``name`` for the scene, both tagged for the report."""
     return {
@@ -126,23 +132,3 @@ def part_series(name, part):
     """The per-replicate series files one signature job reads (`store_series: all`)."""
     rec, first = layout.part_records(records(name), int(part))
     return series_files(name)[first : first + rec["replicates"]]
-
-
-def package_sources(module):
-    """Source files of rockdec module ``module`` and of every rockdec module it imports,
-    directly or through others (anywhere in a module, imports inside functions included)."""
-    found, todo = {}, [module]
-    while todo:
-        name = todo.pop()
-        spec = None if name in found else find_spec(name)
-        if spec is None:  # seen already, or no module (`from rockdec import __version__`)
-            continue
-        found[name] = spec.origin
-        for node in ast.walk(ast.parse(Path(spec.origin).read_text())):
-            if isinstance(node, ast.ImportFrom) and node.level == 0 and node.module == "rockdec":
-                todo += [f"rockdec.{alias.name}" for alias in node.names]
-            elif isinstance(node, ast.ImportFrom) and node.level == 0 and (node.module or "").startswith("rockdec."):
-                todo.append(node.module)
-            elif isinstance(node, ast.Import):
-                todo += [alias.name for alias in node.names if alias.name.startswith("rockdec.")]
-    return sorted(found.values())

@@ -4,6 +4,8 @@ from rockdec.layout import COVERAGE_CASES as CASES
 
 rule coverage_case:
     """One case of the study: records of known e through `rockdec estimate`'s pipeline."""
+    input:
+        code=step_code("coverage_case.py"),
     output:
         "results/studies/coverage/{case}.nc",
     log:
@@ -27,7 +29,8 @@ rule coverage_case:
 rule coverage_table:
     """Bias, spread, interval width and coverage per case, e and estimator."""
     input:
-        expand("results/studies/coverage/{case}.nc", case=CASES),
+        cases=expand("results/studies/coverage/{case}.nc", case=CASES),
+        code=step_code("coverage_table.py"),
     output:
         csv=report("results/studies/coverage/table.csv", category="Measured records", caption="../report/coverage.rst"),
         md="results/studies/coverage/table.md",

@@ -2,6 +2,7 @@ rule estimates:
     """Estimators per replicate, zero-window extrapolation, and the table beside the paper."""
     input:
         "results/{scene}/signatures.nc",
+        code=step_code("estimates.py"),
     output:
         estimates="results/{scene}/estimates.nc",
         csv=report("results/{scene}/table.csv", category="Tables", caption="../report/table.rst"),
@@ -23,6 +24,7 @@ rule table_readings:
     """Every reading side by side: the scene's own estimates beside the other readings'."""
     input:
         "results/{scene}/readings.nc",
+        code=step_code("table_readings.py"),
     output:
         estimates="results/{scene}/estimates_readings.nc",
         csv=report("results/{scene}/table_readings.csv", category="Tables", caption="../report/table_readings.rst"),
@@ -45,6 +47,7 @@ rule choices:
     input:
         run="results/{scene}/run.json",
         series=lambda w: series_files(w.scene),
+        code=step_code("choices.py"),
     output:
         estimates="results/{scene}/estimates_choices.nc",
         csv=report("results/{scene}/table_choices.csv", category="Tables", caption="../report/table_choices.rst"),

@@ -5,6 +5,7 @@ rule stored_signature:
     """Signature cube of the stored series pooled into one group (the estimate of fig. 2c)."""
     input:
         "results/{scene}/stored_series.nc",
+        code=step_code("stored_signature.py"),
     output:
         "results/{scene}/stored_signature.nc",
     log:

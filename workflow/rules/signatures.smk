@@ -7,6 +7,7 @@ rule signatures:
         series=lambda w: [] if part_files(w.scene, "signatures") else series_files(w.scene),
         cubes=lambda w: part_files(w.scene, "signatures"),
         curves=lambda w: part_files(w.scene, "readings"),
+        code=step_code("signatures.py"),
     output:
         cube="results/{scene}/signatures.nc",
         readings="results/{scene}/readings.nc",
@@ -34,6 +35,7 @@ rule signature_part:
     input:
         run="results/{scene}/run.json",
         series=lambda w: part_series(w.scene, w.part),
+        code=step_code("signatures.py"),
     output:
         cube="results/{scene}/parts/signatures_{part}.nc",
         readings="results/{scene}/parts/readings_{part}.nc",

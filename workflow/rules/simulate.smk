@@ -1,6 +1,8 @@
 rule calibrate:
     """The run contract of the scene: model, step and burn-in from pilot simulations, and the
     stationary statistics that set every trigger level."""
+    input:
+        code=step_code("calibrate.py"),
     output:
         "results/{scene}/run.json",
     log:
@@ -20,6 +22,7 @@ rule stored_series:
     """The series the scene keeps (fig. 2), simulated under its run."""
     input:
         "results/{scene}/run.json",
+        code=step_code("stored_series.py"),
     output:
         "results/{scene}/stored_series.nc",
     log:
@@ -39,6 +42,7 @@ rule series:
     """Every series of one replicate (scenes with `store_series: all`): float32, chunked by seed."""
     input:
         "results/{scene}/run.json",
+        code=step_code("series.py"),
     output:
         "results/{scene}/series/replicate_{replicate}.nc",
     log:

@@ -1,6 +1,6 @@
 # Studies beyond the paper, under results/studies/ (apart from the per-scene results/{scene}/).
 # Each compute rule lists the source of every rockdec module its numbers come from
-# (package_sources, in common.smk), so a change to the study's code reruns it; each plot
+# (step_code, in common.smk), so a change to the study's code reruns it; each plot
 # rule lists only the drawing code (rockdec.figures) and the study's data, so a change to
 # a plot never reruns the study.
 
@@ -8,7 +8,7 @@
 rule amplitude:
     """Simplified vs Housner model over sigma_Y/theta_cr: where the simplified model's estimates drift."""
     input:
-        code=package_sources("rockdec.amplitude"),
+        code=step_code("amplitude.py"),
     output:
         estimates="results/studies/amplitude/amplitude.nc",
         csv=report("results/studies/amplitude/table.csv", category="Amplitude", caption="../report/amplitude.rst"),

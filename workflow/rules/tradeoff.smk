@@ -6,7 +6,7 @@
 rule tradeoff:
     """CPU cost and bias/std/RMSE of every estimator for each configuration of the study."""
     input:
-        code=package_sources("rockdec.tradeoff"),
+        code=step_code("tradeoff.py"),
     output:
         nc="results/studies/tradeoff/tradeoff.nc",
         csv=report(

@@ -7,7 +7,7 @@ from rockdec import coverage, job, tables
 
 
 def main(smk):
-    table = pd.concat([coverage.summary(xr.load_dataset(path)) for path in smk.input], ignore_index=True)
+    table = pd.concat([coverage.summary(xr.load_dataset(path)) for path in smk.input.cases], ignore_index=True)
     tables.write_table(table, smk.output.csv, smk.output.md)
 
 

@@ -1,0 +1,52 @@
+"""Which package sources a step runs: the code dependencies of workflow rules and caches.
+
+:func:`package_sources` walks the ``rockdec`` imports of a module or a script, through every
+module it reaches (imports inside functions included), and lists their source files. The
+workflow's compute rules declare these files as inputs, so an edit reruns what it can change;
+the calibration's cache key hashes the same list (:func:`rockdec.calibration.pipeline_fingerprint`),
+so no module the analysis runs can be left out of it. Reads source text only: nothing is
+imported but the ``rockdec`` package itself (to locate its files).
+"""
+
+from __future__ import annotations
+
+import ast
+from importlib.util import find_spec
+from pathlib import Path
+
+
+def _rockdec_imports(path: Path) -> list[str]:
+    """The ``rockdec`` modules a source file imports, anywhere in it (absolute imports)."""
+    names = []
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.ImportFrom) and node.level == 0 and node.module == "rockdec":
+            names += [f"rockdec.{alias.name}" for alias in node.names]
+        elif isinstance(node, ast.ImportFrom) and node.level == 0 and (node.module or "").startswith("rockdec."):
+            names.append(node.module)
+        elif isinstance(node, ast.Import):
+            names += [alias.name for alias in node.names if alias.name.startswith("rockdec.")]
+    return names
+
+
+def package_sources(*roots: str) -> list[str]:
+    """Sorted source files of every ``rockdec`` module that ``roots`` reach by import.
+
+    Each root is a module name (``"rockdec.calibration"``, itself included) or the path of a
+    Python file (a workflow script: only the modules it reaches are listed). A name that is
+    no module (``from rockdec import __version__``) is skipped.
+    """
+    found: dict[str, str] = {}
+    todo: list[str] = []
+    for root in roots:
+        if str(root).endswith(".py"):
+            todo += _rockdec_imports(Path(root))
+        else:
+            todo.append(str(root))
+    while todo:
+        name = todo.pop()
+        spec = None if name in found else find_spec(name)
+        if spec is None or spec.origin is None:
+            continue
+        found[name] = spec.origin
+        todo += _rockdec_imports(Path(spec.origin))
+    return sorted(found.values())

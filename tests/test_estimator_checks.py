@@ -1,0 +1,105 @@
+"""Common checks run over every registered estimator (:mod:`rockdec.registry`).
+
+Whatever an estimator computes, it must: recover ``e`` from the ideal responses of the
+simplified model (eqs. 4, 6, in closed form), be invariant to the scales of angle and time,
+answer a NaN window with NaN and a reason, and give the same value through the labelled
+cube (:func:`rockdec.estimators.estimate_cube`) as on one record
+(:func:`rockdec.estimators.estimate_all`). A new estimator passes these before anything else.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import xarray as xr
+from test_estimators import A, G, free_rocking, t1_of, through_impact
+
+from rockdec import registry
+from rockdec.estimators import DEFAULT_FIT_POINTS, estimate_all, estimate_cube
+
+NAMES = registry.ESTIMATORS
+POINTS_PER_CYCLE = 2000
+"""Fine sampling: the sampled extremes of ``e_g`` and ``e_0`` then miss the true ones by
+``g dt^2/8`` (tests/test_estimators.py), below the tolerance."""
+TOLERANCE = 1e-4
+
+
+def ideal_signatures(e: float, points_per_cycle: int = POINTS_PER_CYCLE, angle: float = 1.0, time: float = 1.0):
+    """The ideal free response from ``(a, 0)`` over 1.6 periods and the ideal ``D_v`` through
+    an impact at lag 0 (closed forms, eqs. 4, 6), with angles scaled by ``angle`` and times by
+    ``time`` (``g`` becomes ``angle g / time^2``). Returns ``(r, d, dt)``."""
+    dt = 4.0 * t1_of() / points_per_cycle
+    lag_pos = dt * np.arange(int(1.6 * points_per_cycle))
+    lag = dt * np.arange(-40, 41)
+    return angle * free_rocking(e, lag_pos, a=A, g=G), angle * through_impact(e, lag), time * dt
+
+
+def test_registry_names_are_unique_and_declare_a_known_trigger():
+    assert len(set(NAMES)) == len(NAMES)
+    assert {s.trigger for s in registry.REGISTRY} <= {"a", "v"}
+    assert registry.DEFAULT_ESTIMATOR in registry.CANDIDATES
+    assert sorted(s.rank for s in registry.REGISTRY) == list(range(1, len(NAMES) + 1))
+
+
+@pytest.mark.parametrize("name", NAMES)
+@pytest.mark.parametrize("e", (0.8, 0.95))
+def test_recovers_e_from_the_ideal_response(name, e):
+    r, d, dt = ideal_signatures(e)
+    est = estimate_all(r, d, dt)[name]
+    assert est.reason == ""
+    assert est.value == pytest.approx(e, abs=TOLERANCE)
+
+
+@pytest.mark.parametrize("name", NAMES)
+@pytest.mark.parametrize("angle, time", [(1e-3, 1.0), (1.0, 37.0), (250.0, 1e-2)])
+def test_invariant_to_angle_and_time_scales(name, angle, time):
+    r, d, dt = ideal_signatures(0.9, points_per_cycle=75)
+    reference = estimate_all(r, d, dt)[name].value
+    scaled = estimate_all(*ideal_signatures(0.9, points_per_cycle=75, angle=angle, time=time))[name].value
+    assert np.isfinite(reference)
+    assert scaled == pytest.approx(reference, rel=1e-9)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_nan_window_gives_nan_with_a_reason(name):
+    r, d, dt = ideal_signatures(0.9, points_per_cycle=75)
+    if registry.trigger(name) == "a":
+        r = r.copy()
+        r[len(r) // 3] = np.nan
+    else:
+        d = d.copy()
+        d[len(d) // 2 - 2] = np.nan
+    est = estimate_all(r, d, dt)[name]
+    assert np.isnan(est.value)
+    assert est.reason == "NaN in signature"
+
+
+@pytest.mark.parametrize("use_dask", [False, True])
+def test_cube_path_equals_single_record_path(use_dask):
+    """Every estimator, every window of a small labelled cube, against one record at a time."""
+    rng = np.random.default_rng(5)
+    rows = [ideal_signatures(e, points_per_cycle=75) for e in (0.6, 0.8, 0.9, 0.95)]
+    dt = rows[0][2]
+    free = np.stack([r + 0.01 * rng.standard_normal(r.size) for r, _, _ in rows])
+    dv = np.stack([d + 0.01 * rng.standard_normal(d.size) for _, d, _ in rows])
+    free_da = xr.DataArray(free, dims=("window", "lag_pos"))
+    dv_da = xr.DataArray(dv, dims=("window", "lag"))
+    if use_dask:
+        free_da, dv_da = free_da.chunk({"window": 3}), dv_da.chunk({"window": 2})
+    cube = estimate_cube(free_da, dv_da, dt)["e_hat"].compute()
+    assert list(cube["estimator"].values) == list(NAMES)
+    for w in range(free.shape[0]):
+        single = estimate_all(free[w], dv[w], dt, DEFAULT_FIT_POINTS)
+        for name in NAMES:
+            np.testing.assert_array_equal(cube.sel(estimator=name).values[w], single[name].value)
+
+
+def test_docs_list_every_registered_estimator():
+    """docs/method.md §5 gives each estimator a section and the recipe for a new one exists."""
+    from pathlib import Path
+
+    docs = Path(__file__).resolve().parents[1] / "docs"
+    method = (docs / "method.md").read_text()
+    for spec in registry.REGISTRY:
+        assert f"`{spec.name}`" in method, spec.name
+    assert "registry" in (docs / "adding-an-estimator.md").read_text()
