@@ -1,6 +1,11 @@
 # rockdec: the coefficient of restitution of a rocking block by the Random Decrement technique.
 # `snakemake --cores 2` rebuilds every figure and table of the default scene (config/config.yaml).
 
+from snakemake.utils import min_version
+
+min_version("9.0")
+
+
 report: "workflow/report/workflow.rst"
 
 
@@ -16,6 +21,28 @@ include: "workflow/rules/studies.smk"
 include: "workflow/rules/tradeoff.smk"
 include: "workflow/rules/coverage.smk"
 include: "workflow/rules/archive.smk"
+
+
+# Figures, tables and the archive read finished products and take seconds: on a cluster
+# they run on the submitting node instead of waiting in the queue.
+localrules:
+    all,
+    archive,
+    archive_scene,
+    estimates,
+    table_readings,
+    fig1b,
+    fig2,
+    fig3,
+    fig4,
+    fig_ev,
+    amplitude_study,
+    fig_amplitude,
+    tradeoff_study,
+    fig_tradeoff,
+    coverage,
+    coverage_table,
+    fig_coverage,
 
 
 rule all:

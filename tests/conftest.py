@@ -58,13 +58,13 @@ def copy_workflow(root: Path) -> Path:
 def tiny_workflow(tmp_path_factory) -> dict:
     """A copy of the workflow (:func:`copy_workflow`), dry-run, then built once with the
     archive of its scene (``snakemake --cores 2 all archive``): ``root`` and ``dry_run``
-    (the dry run's output, before the build). Tests that change it put it back."""
+    (the dry run's output, before the build) and ``log`` (the build's). Tests that change it put it back."""
     root = copy_workflow(tmp_path_factory.mktemp("workflow"))
     code, dry = snakemake(root, "-n")
     assert code == 0, dry
     code, log = snakemake(root, "all", "archive")
     assert code == 0, log
-    return {"root": root, "dry_run": dry}
+    return {"root": root, "dry_run": dry, "log": log}
 
 
 #: The test modules that use :func:`tiny_workflow` (one worker runs them: one build, and no

@@ -158,7 +158,7 @@ def test_paper_values_are_shown_only_for_the_papers_target(name, products):
 def test_extrapolated_lines_start_at_the_mean_zero_window_value(products):
     est = products["est"]
     fig = figures.fig3(est, E)
-    starts = {round(float(line.get_ydata()[0]), 12) for line in fig.axes[0].lines if len(line.get_xdata()) > 2}
+    starts = {round(float(line.get_ydata()[0]), 12) for ax in fig.axes for line in ax.lines if len(line.get_xdata()) > 2}
     for name in ("e_g", "e_0"):
         assert round(float(est["e_hat0"].sel(estimator=name).mean()), 12) in starts
 
@@ -168,6 +168,70 @@ def test_figures_cope_with_one_replicate_and_missing_estimates(products):
     est["e_hat"][dict(window=0)] = np.nan
     for fig in (figures.fig3(est, E), figures.fig4(est, E), figures.fig_ev(products["sig"], est, E)):
         assert_labelled(fig)
+
+
+def drawn(fig: Figure) -> Figure:
+    """``fig`` laid out and rendered (extents known)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    FigureCanvasAgg(fig).draw()
+    return fig
+
+
+@pytest.mark.parametrize("name", figures.FIGURES)
+def test_no_figure_carries_a_title_naming_the_papers_figure(name, products):
+    fig = draw(name, products)
+    titles = [ax.get_title() for ax in fig.axes] + [fig._suptitle.get_text() if fig._suptitle else ""]
+    assert not any("paper fig" in title.lower() for title in titles), titles
+
+
+@pytest.mark.parametrize("name", ["fig3", "fig4", "fig_ev"])
+def test_legends_sit_below_the_axes_off_the_data_each_entry_once(name, products):
+    fig = drawn(draw(name, products))
+    assert not any(ax.get_legend() for ax in fig.axes) and len(fig.legends) == 1
+    box = fig.legends[0].get_window_extent()
+    assert all(box.y1 <= ax.get_window_extent().y0 + 1 for ax in fig.axes)
+    texts = legend_texts(fig)
+    assert len(texts) == len(set(texts)) and sum("paper" in text for text in texts) <= 1
+    assert all(text.get_fontsize() >= 8 for text in fig.legends[0].get_texts())
+
+
+@pytest.mark.parametrize("name", ["fig3", "fig4", "fig_ev"])
+def test_the_target_line_stays_clear_of_the_frame(name, products):
+    fig = drawn(draw(name, products))
+    for ax in fig.axes:
+        for line in ax.lines:
+            if line.get_label().startswith("target"):
+                lo, hi = ax.get_ylim()
+                assert lo + 0.03 * (hi - lo) < E < hi - 0.03 * (hi - lo)
+
+
+def test_fig3_draws_our_zero_window_value_inside_the_papers_open_diamond(products):
+    fig = figures.fig3(products["est"], E)
+    for ax in fig.axes:
+        paper = next(line for line in ax.lines if line.get_label() == "paper at zero window")
+        ours = next(line for line in ax.lines if line.get_label().startswith("ours at zero window"))
+        assert paper.get_markerfacecolor() == "none" and ours.get_markersize() < paper.get_markersize()
+        assert ours.get_zorder() > paper.get_zorder()
+
+
+def test_fig3_error_bars_are_a_visible_part_of_each_panel(products):
+    fig = drawn(figures.fig3(products["est"], E))
+    for ax in fig.axes:
+        bars = [c for c in ax.collections if type(c).__name__ == "LineCollection"]
+        spans = [abs(seg[1][1] - seg[0][1]) for c in bars for seg in c.get_segments()]
+        lo, hi = ax.get_ylim()
+        assert spans and max(spans) > 0.01 * (hi - lo)
+
+
+def test_fig_ev_draws_the_spread_as_a_band_and_the_standard_errors_as_bars(products):
+    fig = figures.fig_ev(products["sig"], products["est"], E)
+    texts = legend_texts(fig)
+    from matplotlib.collections import PolyCollection
+
+    band = next(c for c in fig.axes[2].collections if c.get_label().startswith("spread across replicates"))
+    assert isinstance(band, PolyCollection) and band.get_label() in texts  # a shaded band, in the legend
+    assert any(text.startswith("mean over replicates ± 1 standard error") for text in texts)
 
 
 def test_fig2_overlays_the_free_response_from_the_trigger_level(products):

@@ -103,7 +103,7 @@ def test_paper_columns_only_for_the_paper_target():
     assert table.set_index("estimator").loc["e1", "paper_mean"] == 0.9628
     assert np.isnan(table.set_index("estimator").loc["e_v", "paper_mean"])
     assert np.isnan(tables.summary_table(e_hat0, 0.8)["paper_mean"]).all()
-    assert "| e1" in tables.to_markdown(table)
+    assert "| `e1`" in tables.to_markdown(table)
 
 
 @pytest.fixture(scope="module")

@@ -86,3 +86,63 @@ def test_write_table_writes_every_digit_and_the_markdown_given(tmp_path):
     tables.write_table(table, tmp_path / "b.csv", tmp_path / "b.md", markdown="# richer\n")
     assert (tmp_path / "b.md").read_text() == "# richer\n"
     assert (tmp_path / "b.csv").read_text() == (tmp_path / "a.csv").read_text()
+
+
+# --- the Markdown a reader reads -----------------------------------------------------
+
+REPO = __import__("pathlib").Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture
+def paper_table():
+    """The paper table of 4 replicates of every estimator the paper reports, and one it does not."""
+    rng = np.random.default_rng(1)
+    names = ["e_g", "e_0", "e1", "e2", "e3", "e4", "e_v"]
+    e_hat0 = xr.DataArray(rng.normal(0.95, 0.01, (7, 4)), dims=("estimator", "replicate"), coords={"estimator": names})
+    return tables.summary_table(e_hat0, 0.95)
+
+
+def markdown_rows(text: str) -> list[list[str]]:
+    """The cells of a Markdown table (header first, the rule line left out)."""
+    lines = [line for line in text.splitlines() if line.startswith("|") and not set(line) <= set("|-: ")]
+    return [[cell.strip() for cell in line.strip("|").split("|")] for line in lines]
+
+
+def test_markdown_shows_a_dash_where_there_is_no_value_never_nan(paper_table):
+    text = tables.to_markdown(paper_table)
+    assert "nan" not in text.lower()
+    rows = {row[0]: row for row in markdown_rows(text)[1:]}
+    header = markdown_rows(text)[0]
+    assert rows["`e_v`"][header.index("paper: mean")] == tables.MISSING  # the paper has no e_v
+    assert rows["`e_g`"][header.index("paper: std")] == tables.MISSING  # nor a spread of e_g
+
+
+def test_markdown_says_a_column_of_one_value_once_and_leaves_out_the_other_weighting(paper_table):
+    table = tables.with_alternative(paper_table, xr.DataArray(np.full((7, 4), 0.9), dims=("estimator", "replicate"),
+                                                              coords={"estimator": paper_table["estimator"]}), "count_weights", 0.95)
+    text = tables.to_markdown(table)
+    first = text.splitlines()[0]
+    assert "replicates: 4" in first and "true e: 0.95" in first
+    header = markdown_rows(text)[0]
+    assert len(header) == 9 and len(table.columns) == 13
+    assert not any("weights" in h for h in header)
+
+
+def test_markdown_prints_one_precision_per_column(paper_table):
+    rows = markdown_rows(tables.to_markdown(paper_table))
+    for k, heading in enumerate(rows[0][1:], start=1):
+        decimals = {len(row[k].split(".")[1]) if "." in row[k] and "e" not in row[k] else None
+                    for row in rows[1:] if row[k] != tables.MISSING}
+        if heading != "p of the bias":  # p: two significant digits, however small
+            assert len(decimals) == 1, (heading, decimals)
+
+
+def test_the_readme_names_every_column_of_the_tables_in_words(paper_table):
+    readme = (REPO / "README.md").read_text()
+    readings = pd.concat([paper_table.assign(reading=r) for r in ("pooled", "per_series")])
+    readings = readings[["reading"] + list(paper_table.columns)]
+    for table in (paper_table, readings):
+        for heading in markdown_rows(tables.to_markdown(table))[0]:
+            assert f"| {heading} |" in readme, heading
+    for name in paper_table["estimator"]:
+        assert f"| `{name}` |" in readme, name

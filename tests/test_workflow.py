@@ -8,9 +8,13 @@ changes; the others use dry runs only.
 from __future__ import annotations
 
 import contextlib
+import json
 import os
 import re
 import shutil
+import subprocess
+import sys
+import time
 from pathlib import Path
 
 import matplotlib.image
@@ -18,9 +22,10 @@ import pytest
 import xarray as xr
 import yaml
 
-from cf_check import cf_findings
+from cf_check import NO_FINDINGS, cf_findings
 from conftest import snakemake
-from rockdec import figures, run
+from rockdec import config, figures, job, run
+from rockdec.validate import InputError
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -108,7 +113,7 @@ def test_every_netcdf_product_is_cf_clean_and_carries_its_inputs_history(workflo
     assert len(products) == 6, products
     contract = run.Run.read(root / "results" / SCENE / "run.json")
     for path in products:
-        assert cf_findings(path, tmp_path) == {"errors": [], "warnings": []}, path.name
+        assert cf_findings(path) == NO_FINDINGS, path.name
         with xr.open_dataset(path) as ds:
             attrs = ds.attrs
         history = attrs["history"].splitlines()
@@ -122,6 +127,79 @@ def test_every_netcdf_product_is_cf_clean_and_carries_its_inputs_history(workflo
                 before = src.attrs["history"].splitlines()
             assert set(before) <= set(history[:-1]), (path.name, source)
         assert history[-1].endswith(" ".join(attrs["source_files"].splitlines()))
+
+
+def declared_localrules() -> set[str]:
+    """The rules the Snakefile's ``localrules:`` block names (Snakemake refuses unknown names)."""
+    block = (REPO / "Snakefile").read_text().split("\nlocalrules:\n", 1)[1]
+    return set(re.findall(r"^    (\w+),$", block.split("\n\n", 1)[0], re.M))
+
+
+def test_figure_table_and_archive_rules_run_on_the_submitting_node_and_compute_rules_do_not():
+    local = declared_localrules()
+    assert {"estimates", "table_readings", *figures.FIGURES, "fig_amplitude", "fig_tradeoff", "fig_coverage",
+            "coverage_table", "archive_scene", "all"} <= local
+    assert not local & {"calibrate", "stored_series", "series", "signatures", "signature_part", "stored_signature",
+                        "choices", "amplitude", "tradeoff", "coverage_case"}
+
+
+@pytest.mark.slow
+def test_no_job_prints_an_empty_shell_command(workflow):
+    assert "rule signatures:" in workflow["log"] and "Shell command" not in workflow["log"]
+
+
+@pytest.mark.slow
+def test_the_signature_log_has_labelled_lines_and_no_progress_bar_frames(workflow):
+    log = (workflow["root"] / "results" / SCENE / "logs" / "signatures.log").read_text()
+    assert "\r" not in log
+    lines = log.splitlines()
+    assert lines[0] == "signatures: 2 replicates x 10 series: started"
+    assert re.fullmatch(r"signatures: 2 replicates x 10 series: done in [\d.]+ s", lines[-1])
+
+
+@pytest.mark.slow
+def test_reordering_the_keys_of_a_scene_reruns_nothing(workflow):
+    def reorder(scene):
+        for key, value in list(scene.items()):
+            scene[key] = dict(reversed(list(value.items()))) if isinstance(value, dict) else value
+        items = list(scene.items())
+        scene.clear()
+        scene.update(reversed(items))
+
+    assert dry_run_after(workflow["root"], reorder) == {}
+
+
+@pytest.mark.slow
+def test_a_nested_config_override_is_read_as_yaml_values(workflow):
+    code, out = snakemake(workflow["root"], "-n", "--config", "scenes={tiny: {signatures: {level: 2.5}}}")
+    assert code == 0, out
+    jobs = job_stats(out)
+    assert jobs["signatures"] == 1 and "calibrate" not in jobs  # level 2.5 is a number: the pass reruns
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("scheduler", ["processes:2", "tcp"])
+def test_the_tiny_scene_on_worker_processes_gives_the_products_of_threads(workflow, tmp_path, scheduler, monkeypatch):
+    root = tmp_path / "copy"
+    shutil.copytree(workflow["root"], root, symlinks=True)  # threads' products, mtimes kept
+    products = ["series/replicate_0.nc", "series/replicate_1.nc", "stored_series.nc", "signatures.nc", "readings.nc",
+                "estimates.nc", "estimates_readings.nc"]
+    targets = [f"results/{SCENE}/{name}" for name in products]
+    with contextlib.ExitStack() as stack:
+        if scheduler == "tcp":  # a running scheduler on loopback, given by its address
+            from dask.distributed import LocalCluster
+
+            cluster = stack.enter_context(LocalCluster(n_workers=2, threads_per_worker=1, host="127.0.0.1",
+                                                       dashboard_address=None))
+            scheduler = cluster.scheduler_address
+        monkeypatch.setenv("ROCKDEC_DASK_SCHEDULER", scheduler)  # the snakemake process inherits it
+        code, out = snakemake(root, "--forcerun", "series", "stored_series", "signatures", "--", *targets)
+    assert code == 0, out
+    assert job_stats(out)["signatures"] == 1
+    for name in products:
+        with xr.open_dataset(root / "results" / SCENE / name) as got, \
+                xr.open_dataset(workflow["root"] / "results" / SCENE / name) as want:
+            assert got.equals(want), name  # every variable and coordinate, bit for bit
 
 
 @pytest.mark.slow
@@ -298,3 +376,140 @@ def test_changing_the_drawing_code_redraws_without_rerunning_the_study(studies, 
 def test_the_compute_rule_alone_is_a_target(studies):
     touch(studies / "rockdec" / "tradeoff.py")
     assert dry_run(studies, "tradeoff") == {"tradeoff": 1}
+
+
+# --- conventions: lint, versions, settings from the command line, sizes refused up front
+
+
+@pytest.fixture(scope="module")
+def bare(tmp_path_factory):
+    """A copy of the workflow and its config, nothing built."""
+    root = tmp_path_factory.mktemp("bare")
+    shutil.copy(REPO / "Snakefile", root)
+    for folder in ("workflow", "config", "profiles"):
+        shutil.copytree(REPO / folder, root / folder)
+    return root
+
+
+def test_snakemake_lint_finds_nothing(bare):
+    code, out = snakemake(bare, "--lint")
+    assert code == 0, out
+    assert "Lints for" not in out and "in a good condition" in out, out
+
+
+def test_the_snakefile_names_the_snakemake_it_needs():
+    assert re.search(r'^min_version\("9\.0"\)$', (REPO / "Snakefile").read_text(), re.M)
+
+
+def test_a_bad_value_given_with_config_names_that_option(bare):
+    code, out = snakemake(bare, "-n", "--config", "scenes={tiny: {records: {replicates: three}}}")
+    assert code == 2, out
+    line = out.strip().splitlines()[-1]
+    assert "scenes.tiny.records.replicates" in line and config.OVERRIDE_SOURCE in line, out
+    assert "config/config.yaml" not in line and "Traceback" not in out
+
+
+SIZES = {
+    "1e12 points": ({"n_points": 10**12}, "needs about 1.6e+14 samples"),
+    "2e9 points": ({"n_points": 2 * 10**9, "chunk_seeds": 10}, "GB of memory"),
+    "200,000 replicates": ({"replicates": 200_000, "series_per_replicate": 1000}, "needs about 1.2e+12 samples"),
+    "1e6 x 1e6 series": ({"replicates": 10**6, "series_per_replicate": 10**6}, "needs about 6e+15 samples"),
+}
+
+
+@pytest.mark.parametrize("records, words", SIZES.values(), ids=SIZES.keys())
+def test_a_scene_too_large_is_refused_at_validation_with_the_estimate(records, words):
+    scene = {"records": {"replicates": 4, "series_per_replicate": 40, **records}}
+    with pytest.raises(config.ConfigError, match="scenes.tiny.records") as refused:
+        config.validate_scene(scene, "tiny", sizes=True)
+    assert words in str(refused.value) and str(refused.value).count(". ") == 1  # one sentence, then the fix
+
+
+def test_a_dry_run_refuses_a_scene_too_large_in_one_sentence(bare):
+    records, words = SIZES["1e6 x 1e6 series"]  # a 7 TiB seed table if anything built it
+    code, out = snakemake(bare, "-n", "--config", "scenes={tiny: {records: {replicates: 1000000, series_per_replicate: 1000000}}}")
+    assert code == 2, out
+    line = out.strip().splitlines()[-1]
+    assert line.startswith("rockdec: error: config field 'scenes.tiny.records'") and words in line, out
+    assert "Traceback" not in out
+
+
+def test_every_scene_of_the_config_passes_the_size_checks():
+    assert {"paper", "large", "tiny"} <= set(config.load(REPO / "config" / "config.yaml")["scenes"])
+
+
+# --- around every script (rockdec.job): errors on the console, orphans of a killed Snakemake
+
+
+class FakeJob:
+    """What rockdec.job reads of Snakemake's ``snakemake`` object."""
+
+    def __init__(self, folder: Path):
+        self.rule, self.log, self.output = "signatures", [str(folder / "rule.log")], [str(folder / "out.nc")]
+
+
+def test_a_user_error_in_a_rule_shows_its_sentence_on_the_console_and_exits_2(tmp_path, capsys):
+    def main(smk):
+        raise InputError("output 'x.nc' exists already; remove it.")
+
+    with pytest.raises(SystemExit) as stop:
+        job.run(main, FakeJob(tmp_path))
+    assert stop.value.code == 2
+    assert capsys.readouterr().err.strip() == "rockdec: error in rule signatures: output 'x.nc' exists already; remove it."
+    assert (tmp_path / "rule.log").read_text().strip() == "rockdec: error: output 'x.nc' exists already; remove it."
+
+
+ORPHAN = """
+import json, pathlib, subprocess, sys, time
+from rockdec import job
+if sys.argv[1] == "parent":  # plays Snakemake: starts the job, then waits
+    subprocess.Popen([sys.executable, __file__, "job", sys.argv[2]])
+    time.sleep(120)
+else:  # the job: records itself as rockdec.job does, then works on
+    pathlib.Path(sys.argv[2]).write_text(json.dumps(job._record()))
+    time.sleep(120)
+"""
+
+
+def start_job_under_a_parent(tmp_path: Path):
+    """A parent process (standing for Snakemake) and the job it started; returns (parent, job pid)."""
+    import psutil
+
+    script = tmp_path / "orphan.py"
+    script.write_text(ORPHAN)
+    pid_file = Path(FakeJob(tmp_path).log[0] + ".pid")
+    parent = subprocess.Popen([sys.executable, str(script), "parent", str(pid_file)])
+    for _ in range(600):
+        if pid_file.exists() and pid_file.read_text():
+            break
+        time.sleep(0.05)
+    pid = json.loads(pid_file.read_text())["pid"]
+    return parent, psutil.Process(pid)
+
+
+def test_a_rerun_stops_the_orphan_of_a_killed_snakemake_and_clears_its_output(tmp_path, capsys):
+    parent, orphan = start_job_under_a_parent(tmp_path)
+    parent.kill()  # kill -9 of Snakemake alone: its job goes on
+    parent.wait()
+    assert orphan.is_running()
+    (tmp_path / "out.nc").write_text("written by the orphan")
+    ran = []
+    job.run(lambda smk: ran.append(Path(smk.output[0]).exists()), FakeJob(tmp_path))
+    assert ran == [False]  # the orphan's output was cleared before the rule ran
+    assert not orphan.is_running() or orphan.status() == "zombie"
+    assert "orphaned job of rule signatures" in capsys.readouterr().err
+    assert not Path(FakeJob(tmp_path).log[0] + ".pid").exists()
+
+
+def test_a_rerun_refuses_while_the_snakemake_of_a_running_job_still_runs(tmp_path, capsys):
+    parent, orphan = start_job_under_a_parent(tmp_path)
+    try:
+        with pytest.raises(SystemExit) as stop:
+            job.run(lambda smk: None, FakeJob(tmp_path))
+        assert stop.value.code == 2
+        assert f"running already for these outputs (process {orphan.pid}" in capsys.readouterr().err
+        assert orphan.is_running()
+    finally:
+        orphan.kill()
+        parent.kill()
+        parent.wait()

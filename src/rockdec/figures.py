@@ -49,7 +49,13 @@ __all__ = ["FIGURES", "fig1b", "fig2", "fig3", "fig4", "fig_ev", "fig_record", "
 
 WINDOW_LABEL = r"relative window size $\Delta a/\Delta a_{max}$"
 TARGET_STYLE = {"color": "k", "ls": "--", "lw": 1.0}
-PAPER_STYLE = {"color": "tab:red", "marker": "D", "ms": 6, "ls": "none", "zorder": 5}
+PAPER_STYLE = {"color": "tab:red", "marker": "D", "ms": 10, "mfc": "none", "mew": 1.5, "ls": "none", "zorder": 5}
+"""The paper's value: a large open diamond, so that our zero-window marker (:data:`OURS_STYLE`,
+smaller and drawn above it) stays visible when the two coincide."""
+OURS_STYLE = {"marker": "o", "ms": 5, "ls": "none", "zorder": 6}
+SPREAD_ALPHA = 0.18
+"""Shading of the spread across replicates (mean +- 1 std), told apart from the error bars
+of the mean (+- 1 standard error)."""
 
 PARETO_ESTIMATORS = registry.BY_RANK[:4]
 """Estimators drawn by :func:`pareto_figure` by default: the first four of the studies' order."""
@@ -187,7 +193,6 @@ def fig1b(max_ratio: float = 0.9, tolerance: float = 0.05) -> Figure:
     top.set_ylabel(r"period $\nu T$ (T in units of $1/\nu$)")
     top.set_ylim(0.0, None)
     top.legend(loc="upper left")
-    top.set_title("Free-rocking period against amplitude (paper fig. 1b)")
     bottom.plot(ratio[1:], 100.0 * rel[1:], color="tab:purple")
     bottom.axhline(100.0 * tolerance, color="0.5", lw=0.8, ls=":")
     bottom.axvline(x_tol, color="0.5", lw=0.8, ls=":")
@@ -268,40 +273,65 @@ def fig2(sim: xr.Dataset, stored_sig: xr.Dataset, *, n_samples: int = 750, windo
     return fig
 
 
+def _zero_window_ylim(ax, values) -> None:
+    """Y limits that hold ``values`` (the target among them) with a margin, so no line sits on
+    the frame."""
+    values = np.concatenate([np.ravel(np.asarray(v, dtype=float)) for v in values])
+    values = values[np.isfinite(values)]
+    lo, hi = (min(values.min(), ax.get_ylim()[0]), max(values.max(), ax.get_ylim()[1])) if values.size else ax.get_ylim()
+    pad = 0.08 * (hi - lo if hi > lo else 1e-3)
+    ax.set_ylim(lo - pad, hi + pad)
+
+
+def _legend_below(fig: Figure, handles, ncols: int = 3) -> None:
+    """One legend for the whole figure, under the axes, each entry once."""
+    seen, unique = set(), []
+    for h in handles:
+        if h.get_label() not in seen and not h.get_label().startswith("_"):
+            seen.add(h.get_label())
+            unique.append(h)
+    fig.legend(handles=unique, loc="outside lower center", ncols=ncols, fontsize="small", frameon=False)
+
+
 def fig3(est: xr.Dataset, e_target: float | None = None) -> Figure:
     """Paper fig. 3: ``e_g`` (eqs. 25, 7) and ``e_0`` (eq. 26) against the window size.
 
-    Points: the mean over replicates at each window, error bars one standard error
-    (``std/sqrt(n)``). Lines: the mean over replicates of the weighted least-squares lines
-    ``e_hat0 + slope * w`` (§5), drawn from ``w = 0``; the open marker at ``w = 0`` is
-    our mean extrapolated value, the red diamond the paper's.
+    One panel each, on its own scale. Points: the mean over replicates at each window, error
+    bars one standard error (``std/sqrt(n)``). Lines: the mean over replicates of the
+    least-squares lines ``e_hat0 + slope * w`` weighted by the window size (§5), drawn from
+    ``w = 0``; the filled circle at ``w = 0`` is our mean extrapolated value, the open
+    diamond the paper's, both written in the panel. The line follows the large windows,
+    which weigh most: where an estimator bends at small windows (``e_g``), it passes beside
+    their points.
     """
     w = est["window"].values
     w_line = np.linspace(0.0, w.max(), 50)
-    fig = _new_figure(6.5, 4.5)
-    ax = fig.subplots()
+    fig = _new_figure(9.0, 4.6)
+    axes = fig.subplots(1, 2)
     handles = []
-    for name, color in (("e_g", "tab:blue"), ("e_0", "tab:green")):
+    for ax, name, letter in zip(axes, ("e_g", "e_0"), "ab"):
         spec = registry.spec(name)
-        symbol, label = spec.symbol, f"{spec.label}, {spec.equation}"
+        title = f"({letter}) {spec.symbol}: {spec.label}, {spec.equation}"
         mean, _, sem = _replicate_stats(est["e_hat"].sel(estimator=name))
-        handles.append(ax.errorbar(w, mean, yerr=sem, color=color, marker="o", ls="none", capsize=3,
-                                   label=f"{symbol} ({label}): mean ± std. error"))
-        ax.plot(w_line, _extrapolated_line(est, name, w_line), color=color, lw=1.0)
+        handles.append(ax.errorbar(w, mean, yerr=sem, color="tab:blue", marker="o", ms=4, ls="none", capsize=4,
+                                   elinewidth=1.2, label="mean over replicates ± 1 standard error"))
+        handles += ax.plot(w_line, _extrapolated_line(est, name, w_line), color="tab:blue", lw=1.0,
+                           label="least-squares line weighted by window size (§5)")
         e0 = float(est["e_hat0"].sel(estimator=name).mean(skipna=True))
-        handles += ax.plot(0.0, e0, color=color, marker="o", mfc="white", ls="none", zorder=4,
-                           label=f"{symbol} extrapolated to zero window: {e0:.4f}")
         paper, _ = _paper_values(name, e_target)
         if np.isfinite(paper):
-            handles += ax.plot(0.0, paper, **PAPER_STYLE, label=f"{symbol} paper at zero window: {paper:.4f}")
-    if e_target is not None:
-        handles.append(ax.axhline(e_target, label=f"target e = {e_target:g}", **TARGET_STYLE))
-    n = est.sizes["replicate"]
-    ax.set_xlim(-0.03, 1.03 * w.max())
-    ax.set_xlabel(WINDOW_LABEL)
-    ax.set_ylabel(r"estimate of $e$")
-    ax.set_title(f"Global and first-peak estimates, mean of {n} replicates (paper fig. 3)", fontsize="medium")
-    ax.legend(handles=handles, fontsize="small", loc="best")
+            handles += ax.plot(0.0, paper, **PAPER_STYLE, label="paper at zero window")
+        handles += ax.plot(0.0, e0, color="tab:blue", **OURS_STYLE, label="ours at zero window (mean)")
+        note = f"zero window: ours {e0:.4f}" + (f", paper {paper:.4f}" if np.isfinite(paper) else "")
+        ax.text(0.98, 0.97, note, transform=ax.transAxes, ha="right", va="top", fontsize="small")
+        if e_target is not None:
+            handles.append(ax.axhline(e_target, label=f"target e = {e_target:g}", **TARGET_STYLE))
+        ax.set_xlim(-0.05 * w.max(), 1.03 * w.max())
+        _zero_window_ylim(ax, [mean + sem, mean - sem, e0, paper, e_target if e_target is not None else np.nan])
+        ax.set_xlabel(WINDOW_LABEL)
+        ax.set_ylabel(r"estimate of $e$")
+        ax.set_title(title, fontsize="medium")
+    _legend_below(fig, handles, ncols=3)
     return fig
 
 
@@ -310,36 +340,48 @@ def fig4(est: xr.Dataset, e_target: float | None = None) -> Figure:
 
     Each panel: every replicate's estimate against the window size (thin grey), their mean
     (thick), the mean extrapolated line, our mean and standard deviation at zero window
-    (open circle) beside the paper's (red diamond, eq. 28) and the target.
+    (filled circle with bar) beside the paper's (open diamond with bar, eq. 28) and the
+    target, kept clear of the frame. Values at zero window are written in the panel; one
+    legend for all panels, below them.
     """
     w = est["window"].values
     w_line = np.linspace(0.0, w.max(), 50)
-    fig = _new_figure(9.0, 7.0)
+    fig = _new_figure(9.0, 7.8)
     axes = fig.subplots(2, 2)
+    handles = []
     for ax, name in zip(axes.flat, ("e1", "e2", "e3", "e4")):
         curves = est["e_hat"].sel(estimator=name)
         for k, rep in enumerate(curves["replicate"].values):
-            ax.plot(w, curves.sel(replicate=rep).values, color="0.6", lw=0.6,
-                    label="replicates" if k == 0 else None)
+            handles += ax.plot(w, curves.sel(replicate=rep).values, color="0.65", lw=0.6,
+                               label="one replicate" if k == 0 else None)
         mean, _, _ = _replicate_stats(curves)
-        ax.plot(w, mean, color="tab:blue", lw=2.0, marker="o", ms=3, label="mean")
-        ax.plot(w_line, _extrapolated_line(est, name, w_line), color="tab:blue", lw=1.0, ls="-.")
-        e0 = est["e_hat0"].sel(estimator=name)
-        e0_mean, e0_std, _ = _replicate_stats(e0)
-        ax.errorbar(0.0, e0_mean, yerr=e0_std if np.isfinite(e0_std) else None, color="tab:blue", marker="o",
-                    mfc="white", capsize=3, ls="none", zorder=4,
-                    label=f"ours at zero window: {float(e0_mean):.4f} ± {float(e0_std):.4f}")
+        handles += ax.plot(w, mean, color="tab:blue", lw=2.0, marker="o", ms=3, label="mean over replicates")
+        handles += ax.plot(w_line, _extrapolated_line(est, name, w_line), color="tab:blue", lw=1.0, ls="-.",
+                           label="mean extrapolation to zero window (§5)")
+        e0_mean, e0_std, _ = _replicate_stats(est["e_hat0"].sel(estimator=name))
+        e0_mean, e0_std = float(e0_mean), float(e0_std)
         paper, paper_std = _paper_values(name, e_target)
         if np.isfinite(paper):
-            ax.errorbar(0.0, paper, yerr=paper_std, capsize=3, **PAPER_STYLE,
-                        label=f"paper (eq. 28): {paper:.4f} ± {paper_std:.4f}")
+            handles.append(ax.errorbar(0.0, paper, yerr=paper_std, capsize=4, **PAPER_STYLE,
+                                       label="paper at zero window ± 1 std (eq. 28)"))
+        handles.append(ax.errorbar(0.0, e0_mean, yerr=e0_std if np.isfinite(e0_std) else None, color="tab:blue",
+                                   capsize=3, **OURS_STYLE, label="ours at zero window ± 1 std"))
         _draw_target(ax, e_target)
+        handles += [line for line in ax.lines if line.get_label().startswith("target")]
+        note = f"zero window: ours {e0_mean:.4f} ± {e0_std:.4f}"
+        if np.isfinite(paper):
+            note += f"\npaper {paper:.4f} ± {paper_std:.4f}"
+        ax.text(0.98, 0.97, note, transform=ax.transAxes, ha="right", va="top", fontsize="x-small",
+                bbox={"facecolor": "white", "edgecolor": "none", "alpha": 0.8, "pad": 1.5})
         ax.set_title(registry.spec(name).symbol, fontsize="medium")
         ax.set_ylabel(r"estimate of $e$")
-        ax.set_xlim(-0.04, 1.03 * w.max())
+        ax.set_xlim(-0.05 * w.max(), 1.03 * w.max())
+        _zero_window_ylim(ax, [e0_mean - e0_std, e0_mean + e0_std, paper - paper_std, paper + paper_std,
+                               e_target if e_target is not None else np.nan])
+        lo, hi = ax.get_ylim()
+        ax.set_ylim(lo, hi + 0.18 * (hi - lo))  # room for the note above the curves
         ax.set_xlabel(WINDOW_LABEL)
-        ax.legend(fontsize="x-small", loc="best")
-    fig.suptitle(f"Local estimates on the first half cycle, {est.sizes['replicate']} replicates (paper fig. 4)")
+    _legend_below(fig, handles, ncols=3)
     return fig
 
 
@@ -403,26 +445,35 @@ def fig_ev(sig: xr.Dataset, est: xr.Dataset, e_target: float | None = None) -> F
     ax_zoom.set_xlabel("time lag τ (ms)")
     ax_zoom.set_ylabel(r"$D_v(\tau)/\sigma_Y$")
     ax_zoom.set_title("(b) the slope jump at the impact, lag 0", fontsize="medium")
-    fig.legend(*ax_zoom.get_legend_handles_labels(), loc="outside lower center", ncols=3, fontsize="small")
 
     curves = est["e_hat"].sel(estimator="e_v")
     w = est["window"].values
-    for k, rep in enumerate(curves["replicate"].values):
-        ax_e.plot(w, curves.sel(replicate=rep).values, color="0.6", lw=0.6, label="replicates" if k == 0 else None)
-    mean, _, sem = _replicate_stats(curves)
-    ax_e.errorbar(w, mean, yerr=sem, color="tab:blue", marker="o", ms=4, capsize=3, label="mean ± std. error")
+    mean, std, sem = _replicate_stats(curves)
+    spread = ax_e.fill_between(w, mean - std, mean + std, color="tab:blue", alpha=SPREAD_ALPHA, lw=0,
+                               label="spread across replicates (mean ± 1 std)")
+    means = ax_e.errorbar(w, mean, yerr=sem, color="tab:blue", marker="o", ms=4, capsize=4, elinewidth=1.2,
+                          label="mean over replicates ± 1 standard error")
     w_line = np.linspace(0.0, w.max(), 50)
-    ax_e.plot(w_line, _extrapolated_line(est, "e_v", w_line), color="tab:blue", lw=1.0, ls="-.")
-    e0_mean, e0_std, _ = _replicate_stats(est["e_hat0"].sel(estimator="e_v"))
-    ax_e.errorbar(0.0, e0_mean, yerr=e0_std if np.isfinite(e0_std) else None, color="tab:blue", marker="o",
-                  mfc="white", capsize=3, ls="none", zorder=4,
-                  label=f"zero window: {float(e0_mean):.4f} ± {float(e0_std):.4f}")
+    line = ax_e.plot(w_line, _extrapolated_line(est, "e_v", w_line), color="tab:blue", lw=1.0, ls="-.",
+                     label="mean extrapolation to zero window (§5)")
+    e0_mean, e0_std, e0_sem = (float(x) for x in _replicate_stats(est["e_hat0"].sel(estimator="e_v")))
+    if np.isfinite(e0_std):
+        ax_e.bar(0.0, 2 * e0_std, bottom=e0_mean - e0_std, width=0.04 * w.max(), color="tab:blue", alpha=SPREAD_ALPHA)
+    ax_e.errorbar(0.0, e0_mean, yerr=e0_sem if np.isfinite(e0_sem) else None, color="tab:blue", capsize=4,
+                  **OURS_STYLE)
+    ax_e.text(0.98, 0.97, f"zero window: {e0_mean:.4f}, std {e0_std:.4f}", transform=ax_e.transAxes,
+              ha="right", va="top", fontsize="small")
     _draw_target(ax_e, e_target)
-    ax_e.set_xlim(-0.04, 1.03 * w.max())
+    ax_e.set_xlim(-0.05 * w.max(), 1.03 * w.max())
+    _zero_window_ylim(ax_e, [mean - std, mean + std, e0_mean - e0_std, e0_mean + e0_std,
+                             e_target if e_target is not None else np.nan])
+    lo, hi = ax_e.get_ylim()
+    ax_e.set_ylim(lo, hi + 0.12 * (hi - lo))
     ax_e.set_xlabel(r"relative window size $\Delta v/\Delta v_{max}$")
     ax_e.set_ylabel(r"$\hat e_v$ (slope ratio at lag 0)")
-    ax_e.set_title(r"(c) $\hat e_v$ per replicate", fontsize="medium")
-    ax_e.legend(fontsize="x-small", loc="best")
+    ax_e.set_title(r"(c) $\hat e_v$ over the replicates", fontsize="medium")
+    targets = [ln for ln in ax_e.lines if ln.get_label().startswith("target")]
+    _legend_below(fig, [*ax_zoom.get_legend_handles_labels()[0], spread, means, *line, *targets], ncols=3)
     return fig
 
 

@@ -241,8 +241,7 @@ def write_netcdf(
         if chunks and var.ndim >= 1:
             enc["chunksizes"] = tuple(max(1, min(chunks.get(dim, size), size)) for dim, size in var.sizes.items())
         encoding[name] = enc
-    for name in ds.coords:
-        encoding[name] = {"_FillValue": None}  # CF 2.5.1: no missing values in coordinates
+    encoding.update(coordinate_encoding(ds))
     with _claim(path):
         return write_claimed(path, lambda tmp: ds.to_netcdf(tmp, encoding=encoding, engine="netcdf4"), overwrite)
 
@@ -293,6 +292,25 @@ def write_claimed(path: Path, write, overwrite: bool = False, keep_suffix: bool 
     finally:
         tmp.unlink(missing_ok=True)
     return path
+
+
+def coordinate_encoding(ds: xr.Dataset) -> dict:
+    """How each coordinate of ``ds`` is stored: without a fill value (CF 2.5.1: no missing
+    values in coordinates); labels (``estimator``, ``trigger``, ``reading``, ...) as
+    character arrays (CF 2.2), ``trigger(trigger, string1)``.
+
+    A label coordinate stored as a variable-length string would be a one-dimensional
+    coordinate variable of strings, which CF requires to be numeric and monotonic (the CF
+    checker's monotonicity check raises on it). Stored as characters it is a label
+    variable, and xarray reads it back as the same string index, so ``.sel(trigger="a")``
+    works on the file as written.
+    """
+    encoding = {}
+    for name, coord in ds.coords.items():
+        encoding[name] = {"_FillValue": None}
+        if coord.dtype.kind in "OUST":  # object, unicode, bytes, NumPy StringDType (pandas 3 string indexes)
+            encoding[name]["dtype"] = "S1"
+    return encoding
 
 
 def _new_partial(path: Path, suffix: str = "") -> Path:

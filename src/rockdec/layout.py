@@ -47,7 +47,8 @@ def simulation_seeds(records: dict) -> np.ndarray:
     """Seeds whose series ``stored_series.nc`` holds: the first ``store_series`` of the scene
     (the first :data:`FIGURE_SERIES` with ``store_series: all``)."""
     count = FIGURE_SERIES if stores_all(records) else records["store_series"]
-    return scene_seeds(records).ravel()[:count]
+    n = records["replicates"] * records["series_per_replicate"]  # the first seeds of scene_seeds, not all of them
+    return records["first_seed"] + np.arange(min(count, n), dtype=np.int64)
 
 
 def replicate_files(folder: str | Path, records: dict) -> list[Path]:

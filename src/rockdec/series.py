@@ -33,10 +33,14 @@ def replicate_dataset(run: Run, records: dict, replicate: int) -> xr.Dataset:
     """Lazy ``theta(seed, time)`` of every series of one replicate, as the scene simulates them.
 
     The file's attributes hold the run (:meth:`rockdec.run.Run.to_attrs`, so one file says
-    how to regenerate its series) and the replicate number.
+    how to regenerate its series) and the replicate number; the coordinate ``replicate(seed)``
+    holds it for each series too, so the files opened together (``xarray.open_mfdataset``,
+    concatenated along ``seed``) still say which replicate each series belongs to.
     """
     seeds = scene_seeds(records)[replicate]
     ds = run.dataset(seeds, records["n_points"], chunk_seeds=records["chunk_seeds"])[["theta"]]
+    ds = ds.assign_coords(replicate=("seed", np.full(seeds.size, replicate, dtype=np.int64),
+                                     {"long_name": "replicate of the series", "units": "1"}))
     ds.attrs = {**run.to_attrs(), **io.provenance("series", records), "replicate": int(replicate)}
     return ds
 

@@ -70,10 +70,11 @@ MAX_DEFAULT_BURN_IN = 10**7
 
 #: The ``time`` coordinate of a simulation: seconds from the end of the burn-in. CF 1.10
 #: (section 4.4) asks a time coordinate for a reference date; the epoch stands for that
-#: instant, so xarray reads ``time`` as dates from 1970-01-01 (``time - time[0]`` in s).
+#: instant, so xarray reads ``time`` as dates from 1970-01-01 (``time - time[0]`` in s). The
+#: proleptic Gregorian calendar: the ``standard`` one draws a CF note, its 1582 switch unused.
 TIME_ATTRS = {
     "units": "seconds since 1970-01-01 00:00:00",
-    "calendar": "standard",
+    "calendar": "proleptic_gregorian",
     "standard_name": "time",
     "long_name": "time since the end of the burn-in",
 }

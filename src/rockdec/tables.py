@@ -88,15 +88,69 @@ def summary_table(e_hat0: xr.DataArray, e_target: float) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
+COLUMN_WORDS = {
+    "reading": "reading of the sizes",
+    "estimator": "estimator",
+    "n": "replicates",
+    "mean": "mean over replicates",
+    "std": "std over replicates",
+    "bias": "bias (mean − true e)",
+    "t": "t of the bias",
+    "p_value": "p of the bias",
+    "e_target": "true e",
+    "paper_mean": "paper: mean",
+    "paper_std": "paper: std",
+    "mean_minus_paper": "ours − paper (mean)",
+    "rmse": "RMSE",
+    "ci95": "|bias| + 1.96 std",
+}
+"""The heading of each column in a table's Markdown (the CSV keeps the short names); each
+is explained in the README ("The tables, column by column")."""
+
+MARKDOWN_ONLY_IN_CSV = ("mean_count_weights", "std_count_weights", "mean_window_weights", "std_window_weights")
+"""Columns the Markdown leaves out: the other extrapolation weighting (:func:`with_alternative`),
+in the CSV for a reader who compares them."""
+
+MISSING = "—"
+"""What a table's Markdown shows where there is no value (the paper gives none, or too few replicates)."""
+
+
+def _cell(column: str, value) -> str:
+    """One value of ``column`` in the Markdown: one precision per column, :data:`MISSING` for NaN."""
+    if isinstance(value, str):
+        return f"`{value}`" if column == "estimator" else value
+    if value is None or (isinstance(value, float) and not np.isfinite(value)):
+        return MISSING
+    if isinstance(value, (int, np.integer)) or (column == "n" and float(value).is_integer()):
+        return str(int(value))
+    if column == "p_value":
+        return f"{value:.2g}"
+    if column == "e_target":
+        return f"{value:g}"
+    if column == "t":
+        return f"{value:.1f}"
+    if column in ("bias", "mean_minus_paper"):
+        return f"{value:+.4f}"
+    return f"{value:.4f}"
+
+
 def to_markdown(table: pd.DataFrame) -> str:
-    """The table as Markdown with 4 decimals (p-values in scientific notation)."""
-    formatted = table.copy()
-    for col in formatted.columns:
-        if col == "p_value":
-            formatted[col] = formatted[col].map(lambda v: f"{v:.2e}")
-        elif formatted[col].dtype.kind == "f":
-            formatted[col] = formatted[col].map(lambda v: f"{v:.4f}")
-    return formatted.to_markdown(index=False) + "\n"
+    """The table as Markdown a reader can read: columns headed in words (:data:`COLUMN_WORDS`),
+    one precision per column (4 decimals for values of ``e``, ``t`` to 0.1, ``p`` to two
+    significant digits), :data:`MISSING` where there is no value; a column with no value in
+    any row is left out, and one that holds the same value in every row is said once above
+    the table instead of in every row."""
+    table = table.drop(columns=[c for c in MARKDOWN_ONLY_IN_CSV if c in table.columns])
+    table = table.drop(columns=[c for c in table.columns if table[c].isna().all()])
+    constant = [c for c in table.columns[1:] if len(table) > 1 and table[c].nunique(dropna=False) == 1]
+    lines = []
+    if constant:
+        lines.append("; ".join(f"{COLUMN_WORDS.get(c, c)}: {_cell(c, table[c].iloc[0])}" for c in constant) + ".\n")
+    shown = table.drop(columns=constant)
+    body = pd.DataFrame({COLUMN_WORDS.get(c, c): [_cell(c, v) for v in shown[c]] for c in shown.columns})
+    align = ["left" if shown[c].dtype.kind == "O" else "right" for c in shown.columns]
+    lines.append(body.to_markdown(index=False, disable_numparse=True, colalign=align))
+    return "\n".join(lines) + "\n"
 
 
 def with_alternative(table: pd.DataFrame, e_hat0: xr.DataArray, label: str, e_target: float) -> pd.DataFrame:

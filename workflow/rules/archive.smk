@@ -25,6 +25,8 @@ rule archive_scene:
     params:
         scene=lambda w: scene(w.scene),
         producers=lambda w: archive_files(w.scene),
-        root=workflow.basedir,
+        root=lambda w: workflow.basedir,  # the Snakefile's folder; a local rule, so it runs where that folder is
+    conda:
+        "../envs/rockdec.yaml"
     script:
         "../scripts/archive.py"

@@ -6,9 +6,16 @@ from rockdec import config as rockdec_config
 from rockdec import layout
 from rockdec.sources import package_sources
 
-# Name the file the user passed (--configfile), not always the default one; one sentence, exit code 2.
+# Values given with --config arrive as text: read them as YAML values. An error names where
+# the bad field was set (--config, or the file the user passed with --configfile); one
+# sentence, exit code 2, before any job (so `snakemake -n` refuses too).
 try:
-    rockdec_config.validate(config, source=", ".join(map(str, workflow.overwrite_configfiles)) or rockdec_config.DEFAULT_PATH)
+    overrides = dict(workflow.config_settings.config)  # --config KEY=VALUE alone (overwrite_config adds --configfile)
+    rockdec_config.validate(
+        rockdec_config.apply_overrides(config, overrides),
+        source=", ".join(map(str, workflow.overwrite_configfiles)) or rockdec_config.DEFAULT_PATH,
+        overrides=overrides,
+    )
 except rockdec_config.ConfigError as exc:
     print(f"rockdec: error: {exc}", file=sys.stderr)
     sys.exit(2)
@@ -22,14 +29,15 @@ wildcard_constraints:
 
 
 def scene(name):
-    """The completed settings of scene ``name``."""
-    return config["scenes"][name]
+    """The completed settings of scene ``name``, keys sorted: a rule's params compare by their
+    text, so reordering the keys of a scene reruns nothing."""
+    return rockdec_config.canonical(config["scenes"][name])
 
 
-# What each rule reads of a scene: a rule receives only its own settings as params, so
+# The part of a scene each of the rules reads. A job receives only its own settings as params, so
 # editing another setting (or a description) reruns nothing of it.
 def physics(name):
-    """What rule `calibrate` reads: the model, the system and the excitation."""
+    """The settings `calibrate` reads -- the model, the system and the excitation."""
     return {key: scene(name)[key] for key in ("model", "system", "excitation")}
 
 
@@ -46,26 +54,13 @@ def signature_settings(name):
 
 
 def estimate_options(name):
-    """What rule `estimates` reads: the fits and the extrapolation weights."""
+    """The settings `estimates` reads -- the fits and the extrapolation weights."""
     return {key: scene(name)["estimates"][key] for key in ("fit_points", "weights")}
 
 
 def signature_memory_mb(name, part=None):
-    """Memory a signature job asks of a cluster (resources: mem_mb), from the scene's sizes.
-
-    Sums, signatures and free responses of every unit of the pass (about 3 x 8 bytes x
-    2 triggers x windows x lags each; the lag range is about n_periods sqrt(level) samples
-    per cycle at sigma_Y a side, eq. 5), the series of the chunks in flight (about 6 float64
-    copies of chunk_seeds x n_points per thread), and 1 GB for the interpreter and libraries.
-    """
-    rec = records(name) if part is None else layout.part_records(records(name), part)[0]
-    sig, est, exc = scene(name)["signatures"], scene(name)["estimates"], scene(name)["excitation"]
-    spr = rec["series_per_replicate"]
-    units = rec["replicates"] * (min(spr, 100 + spr // 10) if est["compare_readings"] else spr)
-    lags = 2 * sig["n_periods"] * sig["level"] ** 0.5 * exc["points_per_cycle"] + 1
-    sums = 3 * 8 * 2 * len(sig["windows"]) * lags * units
-    series = 2 * 6 * 8 * rec["chunk_seeds"] * rec["n_points"]
-    return int((sums + series) / 1e6) + 1000
+    """Memory a signature job asks of a cluster (resources: mem_mb), from the scene's sizes."""
+    return int(rockdec_config.signature_memory_bytes(scene(name), part) / 1e6)
 
 
 def figure_names(name):
@@ -126,3 +121,14 @@ def figure_outputs(name):
         )
         for fmt in ("png", "pdf")
     }
+
+
+def part_files(name, kind):
+    """The signature jobs' files of scene ``name`` (none when its pass runs as one job)."""
+    return [f"results/{name}/parts/{kind}_{part}.nc" for part in layout.signature_parts(records(name))]
+
+
+def part_series(name, part):
+    """The per-replicate series files one signature job reads (`store_series: all`)."""
+    rec, first = layout.part_records(records(name), int(part))
+    return series_files(name)[first : first + rec["replicates"]]

@@ -20,6 +20,8 @@ rule coverage_case:
         runtime=60,
     params:
         cache="results/studies/coverage/calibration",
+    conda:
+        "../envs/rockdec.yaml"
     script:
         "../scripts/coverage_case.py"
 
@@ -37,6 +39,8 @@ rule coverage_table:
     benchmark:
         "results/studies/coverage/benchmarks/table.tsv"
     threads: 1
+    conda:
+        "../envs/rockdec.yaml"
     script:
         "../scripts/coverage_table.py"
 
@@ -53,6 +57,8 @@ rule fig_coverage:
     benchmark:
         "results/studies/coverage/benchmarks/fig_coverage.tsv"
     threads: 1
+    conda:
+        "../envs/rockdec.yaml"
     script:
         "../scripts/fig_coverage.py"
 

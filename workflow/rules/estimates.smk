@@ -14,6 +14,8 @@ rule estimates:
     threads: 1
     params:
         options=lambda w: estimate_options(w.scene),
+    conda:
+        "../envs/rockdec.yaml"
     script:
         "../scripts/estimates.py"
 
@@ -34,6 +36,8 @@ rule table_readings:
     threads: 1
     params:
         weights=lambda w: scene(w.scene)["estimates"]["weights"],
+    conda:
+        "../envs/rockdec.yaml"
     script:
         "../scripts/table_readings.py"
 
@@ -60,5 +64,7 @@ rule choices:
         records=lambda w: records(w.scene),
         signatures=lambda w: scene(w.scene)["signatures"],
         estimates=lambda w: scene(w.scene)["estimates"],
+    conda:
+        "../envs/rockdec.yaml"
     script:
         "../scripts/choices.py"

@@ -15,6 +15,8 @@ rule stored_signature:
     threads: 1
     params:
         signatures=lambda w: scene(w.scene)["signatures"],
+    conda:
+        "../envs/rockdec.yaml"
     script:
         "../scripts/stored_signature.py"
 
@@ -30,6 +32,8 @@ rule fig1b:
     benchmark:
         "results/{scene}/benchmarks/fig1b.tsv"
     threads: 1
+    conda:
+        "../envs/rockdec.yaml"
     script:
         "../scripts/fig_1b.py"
 
@@ -47,6 +51,8 @@ rule fig2:
     benchmark:
         "results/{scene}/benchmarks/fig2.tsv"
     threads: 1
+    conda:
+        "../envs/rockdec.yaml"
     script:
         "../scripts/fig_2.py"
 
@@ -63,6 +69,8 @@ rule fig3:
     benchmark:
         "results/{scene}/benchmarks/fig3.tsv"
     threads: 1
+    conda:
+        "../envs/rockdec.yaml"
     script:
         "../scripts/fig_3.py"
 
@@ -79,6 +87,8 @@ rule fig4:
     benchmark:
         "results/{scene}/benchmarks/fig4.tsv"
     threads: 1
+    conda:
+        "../envs/rockdec.yaml"
     script:
         "../scripts/fig_4.py"
 
@@ -96,5 +106,7 @@ rule fig_ev:
     benchmark:
         "results/{scene}/benchmarks/fig_ev.tsv"
     threads: 1
+    conda:
+        "../envs/rockdec.yaml"
     script:
         "../scripts/fig_ev.py"

@@ -1,14 +1,3 @@
-def part_files(name, kind):
-    """The signature jobs' files of scene ``name`` (none when its pass runs as one job)."""
-    return [f"results/{name}/parts/{kind}_{part}.nc" for part in layout.signature_parts(records(name))]
-
-
-def part_series(name, part):
-    """The per-replicate series files one signature job reads (`store_series: all`)."""
-    rec, first = layout.part_records(records(name), int(part))
-    return series_files(name)[first : first + rec["replicates"]]
-
-
 rule signatures:
     """One pass over every series: the signature cube of the scene's reading, and the window
     curves of every reading it compares (signature sums pool exactly by adding). A scene
@@ -35,6 +24,8 @@ rule signatures:
         records=lambda w: records(w.scene),
         settings=lambda w: signature_settings(w.scene),
         first_replicate=0,
+    conda:
+        "../envs/rockdec.yaml"
     script:
         "../scripts/signatures.py"
 
@@ -62,5 +53,7 @@ rule signature_part:
         records=lambda w: layout.part_records(records(w.scene), int(w.part))[0],
         settings=lambda w: signature_settings(w.scene),
         first_replicate=lambda w: layout.part_records(records(w.scene), int(w.part))[1],
+    conda:
+        "../envs/rockdec.yaml"
     script:
         "../scripts/signatures.py"

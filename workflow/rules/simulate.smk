@@ -12,6 +12,8 @@ rule calibrate:
     threads: 1
     params:
         physics=lambda w: physics(w.scene),
+    conda:
+        "../envs/rockdec.yaml"
     script:
         "../scripts/calibrate.py"
 
@@ -30,6 +32,8 @@ rule stored_series:
     threads: 1
     params:
         records=lambda w: records(w.scene),
+    conda:
+        "../envs/rockdec.yaml"
     script:
         "../scripts/stored_series.py"
 
@@ -48,5 +52,7 @@ rule series:
     threads: 1
     params:
         records=lambda w: records(w.scene),
+    conda:
+        "../envs/rockdec.yaml"
     script:
         "../scripts/series.py"

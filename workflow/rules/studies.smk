@@ -1,7 +1,8 @@
 # Studies beyond the paper, under results/studies/ (apart from the per-scene results/{scene}/).
-# Each compute rule lists the source of every rockdec module its numbers come from, so a
-# change to the study's code reruns it; each plot rule lists only the drawing code
-# (rockdec.figures) and the study's data, so a change to a plot never reruns the study.
+# Each compute rule lists the source of every rockdec module its numbers come from
+# (step_code, in common.smk), so a change to the study's code reruns it; each plot
+# rule lists only the drawing code (rockdec.figures) and the study's data, so a change to
+# a plot never reruns the study.
 
 
 rule amplitude:
@@ -22,6 +23,8 @@ rule amplitude:
         runtime=60,
     params:
         scene=scene("amplitude"),
+    conda:
+        "../envs/rockdec.yaml"
     script:
         "../scripts/amplitude.py"
 
@@ -39,6 +42,8 @@ rule fig_amplitude:
     benchmark:
         "results/studies/amplitude/benchmarks/fig_amplitude.tsv"
     threads: 1
+    conda:
+        "../envs/rockdec.yaml"
     script:
         "../scripts/fig_amplitude.py"
 

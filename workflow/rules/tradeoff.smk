@@ -1,6 +1,6 @@
 # Speed against accuracy (scene `tradeoff`): every knob of rockdec.tradeoff.KNOBS moved one at a
 # time from the scene; one compute rule writes the study, one plot rule only reads it
-# (package_sources: workflow/rules/studies.smk, included before this file).
+# (package_sources: workflow/rules/common.smk).
 
 
 rule tradeoff:
@@ -25,6 +25,8 @@ rule tradeoff:
         runtime=120,
     params:
         scene=lambda w: scene("tradeoff"),
+    conda:
+        "../envs/rockdec.yaml"
     script:
         "../scripts/tradeoff.py"
 
@@ -49,6 +51,8 @@ rule fig_tradeoff:
     benchmark:
         "results/studies/tradeoff/benchmarks/fig_tradeoff.tsv"
     threads: 1
+    conda:
+        "../envs/rockdec.yaml"
     script:
         "../scripts/fig_tradeoff.py"
 

@@ -2,9 +2,14 @@
 
 import sys
 
-from rockdec import run
+from rockdec import job, run
 
-sys.stderr = open(snakemake.log[0], "w")
-contract = run.calibrate(snakemake.params.physics)
-print(f"run: {contract}", file=sys.stderr)
-contract.write(snakemake.output[0])
+
+def main(smk):
+    contract = run.calibrate(smk.params.physics)
+    print(f"run: {contract}", file=sys.stderr)
+    contract.write(smk.output[0])
+
+
+if __name__ == "__main__":
+    job.run(main, snakemake)

@@ -1,12 +1,15 @@
 """Rule `coverage_case`: one case of the coverage study."""
 
-import sys
+from rockdec import coverage, engine, io, job, layout
 
-from rockdec import coverage, engine, io, layout
 
-sys.stderr = open(snakemake.log[0], "w")
-n_points, corner = layout.COVERAGE_CASES[snakemake.wildcards.case]
-with engine.session(snakemake.threads):
-    ds = coverage.run(coverage.E_VALUES, coverage.RECORDS_PER_E, n_points, snakemake.params.cache, corner=corner)
-ds.attrs.update(io.provenance("coverage", {"case": snakemake.wildcards.case}))
-io.write_netcdf(ds, snakemake.output[0])
+def main(smk):
+    n_points, corner = layout.COVERAGE_CASES[smk.wildcards.case]
+    with engine.session(smk.threads):
+        ds = coverage.run(coverage.E_VALUES, coverage.RECORDS_PER_E, n_points, smk.params.cache, corner=corner)
+    ds.attrs.update(io.provenance("coverage", {"case": smk.wildcards.case}))
+    io.write_netcdf(ds, smk.output[0])
+
+
+if __name__ == "__main__":
+    job.run(main, snakemake)

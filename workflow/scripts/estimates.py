@@ -1,9 +1,12 @@
 """Rule `estimates`: estimators per replicate, extrapolation, table beside the paper."""
 
-import sys
+from rockdec import job, steps
 
-from rockdec import steps
 
-sys.stderr = open(snakemake.log[0], "w")
-out = snakemake.output
-steps.estimates(snakemake.input[0], out.estimates, out.csv, out.md, snakemake.params.options)
+def main(smk):
+    out = smk.output
+    steps.estimates(smk.input[0], out.estimates, out.csv, out.md, smk.params.options)
+
+
+if __name__ == "__main__":
+    job.run(main, snakemake)

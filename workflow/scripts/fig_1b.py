@@ -1,8 +1,11 @@
 """Rule `fig1b`: paper fig. 1b, the free-rocking periods of eqs. 3 and 5 (no input data)."""
 
-import sys
+from rockdec import job, steps
 
-from rockdec import steps
 
-sys.stderr = open(snakemake.log[0], "w")
-steps.fig1b([snakemake.output.png, snakemake.output.pdf])
+def main(smk):
+    steps.fig1b([smk.output.png, smk.output.pdf])
+
+
+if __name__ == "__main__":
+    job.run(main, snakemake)

@@ -1,8 +1,11 @@
 """Rule `fig2`: paper fig. 2, two stored series and their pooled free-response estimate."""
 
-import sys
+from rockdec import job, steps
 
-from rockdec import steps
 
-sys.stderr = open(snakemake.log[0], "w")
-steps.fig2(snakemake.input.sim, snakemake.input.sig, [snakemake.output.png, snakemake.output.pdf])
+def main(smk):
+    steps.fig2(smk.input.sim, smk.input.sig, [smk.output.png, smk.output.pdf])
+
+
+if __name__ == "__main__":
+    job.run(main, snakemake)

@@ -1,8 +1,11 @@
 """Rule `fig3`: paper fig. 3, e_g and e_0 against the window size."""
 
-import sys
+from rockdec import job, steps
 
-from rockdec import steps
 
-sys.stderr = open(snakemake.log[0], "w")
-steps.fig3(snakemake.input.est, [snakemake.output.png, snakemake.output.pdf])
+def main(smk):
+    steps.fig3(smk.input.est, [smk.output.png, smk.output.pdf])
+
+
+if __name__ == "__main__":
+    job.run(main, snakemake)

@@ -1,8 +1,11 @@
 """Rule `fig4`: paper fig. 4, e1..e4 of every replicate against the window size."""
 
-import sys
+from rockdec import job, steps
 
-from rockdec import steps
 
-sys.stderr = open(snakemake.log[0], "w")
-steps.fig4(snakemake.input.est, [snakemake.output.png, snakemake.output.pdf])
+def main(smk):
+    steps.fig4(smk.input.est, [smk.output.png, smk.output.pdf])
+
+
+if __name__ == "__main__":
+    job.run(main, snakemake)

@@ -1,10 +1,13 @@
 """Rule `fig_coverage`: coverage and bias against the load's corner frequency."""
 
-import sys
-
 import pandas as pd
 
-from rockdec import figures
+from rockdec import figures, job
 
-sys.stderr = open(snakemake.log[0], "w")
-figures.save(figures.fig_coverage(pd.read_csv(snakemake.input[0])), [snakemake.output.png, snakemake.output.pdf])
+
+def main(smk):
+    figures.save(figures.fig_coverage(pd.read_csv(smk.input[0])), [smk.output.png, smk.output.pdf])
+
+
+if __name__ == "__main__":
+    job.run(main, snakemake)

@@ -1,8 +1,11 @@
 """Rule `fig_ev`: the D_v signature and the estimator e_v (the paper's section 6 proposal)."""
 
-import sys
+from rockdec import job, steps
 
-from rockdec import steps
 
-sys.stderr = open(snakemake.log[0], "w")
-steps.fig_ev(snakemake.input.sig, snakemake.input.est, [snakemake.output.png, snakemake.output.pdf])
+def main(smk):
+    steps.fig_ev(smk.input.sig, smk.input.est, [smk.output.png, smk.output.pdf])
+
+
+if __name__ == "__main__":
+    job.run(main, snakemake)

@@ -1,10 +1,13 @@
 """Rule `fig_tradeoff`: the Pareto plot of the speed/accuracy study (reads the study only)."""
 
-import sys
+from rockdec import figures, io, job, tradeoff
 
-from rockdec import figures, io, tradeoff
 
-sys.stderr = open(snakemake.log[0], "w")
-with io.open_dataset(snakemake.input.nc) as ds:
-    table = tradeoff.study_table(ds.load())
-figures.save(figures.pareto_figure(table), [snakemake.output.png, snakemake.output.pdf])
+def main(smk):
+    with io.open_dataset(smk.input.nc) as ds:
+        table = tradeoff.study_table(ds.load())
+    figures.save(figures.pareto_figure(table), [smk.output.png, smk.output.pdf])
+
+
+if __name__ == "__main__":
+    job.run(main, snakemake)

@@ -2,11 +2,16 @@
 
 import sys
 
-from rockdec import engine, series
+from rockdec import engine, job, series
 from rockdec.run import Run
 
-sys.stderr = open(snakemake.log[0], "w")
-replicate = int(snakemake.wildcards.replicate)
-print(f"replicate {replicate} -> {snakemake.output[0]}", file=sys.stderr)
-with engine.session(snakemake.threads):
-    series.write_replicate(Run.read(snakemake.input[0]), snakemake.params.records, replicate, snakemake.output[0])
+
+def main(smk):
+    replicate = int(smk.wildcards.replicate)
+    print(f"replicate {replicate} -> {smk.output[0]}", file=sys.stderr)
+    with engine.session(smk.threads):
+        series.write_replicate(Run.read(smk.input[0]), smk.params.records, replicate, smk.output[0])
+
+
+if __name__ == "__main__":
+    job.run(main, snakemake)

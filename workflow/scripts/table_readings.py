@@ -1,9 +1,12 @@
 """Rule `table_readings`: every reading of the paper's sizes in one dataset and one table."""
 
-import sys
+from rockdec import job, steps
 
-from rockdec import steps
 
-sys.stderr = open(snakemake.log[0], "w")
-out = snakemake.output
-steps.table_readings(snakemake.input[0], out.estimates, out.csv, out.md, snakemake.params.weights)
+def main(smk):
+    out = smk.output
+    steps.table_readings(smk.input[0], out.estimates, out.csv, out.md, smk.params.weights)
+
+
+if __name__ == "__main__":
+    job.run(main, snakemake)

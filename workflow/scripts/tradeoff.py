@@ -2,13 +2,18 @@
 
 import sys
 
-from rockdec import io, tables, tradeoff
+from rockdec import io, job, tables, tradeoff
 
-sys.stderr = open(snakemake.log[0], "w")
-scene = snakemake.params.scene
-ds = tradeoff.run_study(scene, threads=snakemake.threads, progress=lambda text: print(text, file=sys.stderr, flush=True))
-ds.attrs.update(io.provenance("tradeoff", scene))
-io.write_netcdf(ds, snakemake.output.nc)
-table = tradeoff.study_table(ds)
-recommendations = {criterion: tradeoff.recommend(table, criterion=criterion) for criterion in tradeoff.CRITERIA}
-tables.write_table(table, snakemake.output.csv, snakemake.output.md, markdown=tables.tradeoff_markdown(table, recommendations))
+
+def main(smk):
+    scene = smk.params.scene
+    ds = tradeoff.run_study(scene, threads=smk.threads, progress=lambda text: print(text, file=sys.stderr, flush=True))
+    ds.attrs.update(io.provenance("tradeoff", scene))
+    io.write_netcdf(ds, smk.output.nc)
+    table = tradeoff.study_table(ds)
+    recommendations = {criterion: tradeoff.recommend(table, criterion=criterion) for criterion in tradeoff.CRITERIA}
+    tables.write_table(table, smk.output.csv, smk.output.md, markdown=tables.tradeoff_markdown(table, recommendations))
+
+
+if __name__ == "__main__":
+    job.run(main, snakemake)
