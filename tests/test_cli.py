@@ -244,6 +244,22 @@ def test_progress_bar_is_labelled_on_a_terminal_and_absent_in_a_log(terminal, mo
         assert text == ""  # a log file gets no carriage-return frames
 
 
+@pytest.mark.parametrize("terminal", [True, False])
+def test_a_workflow_job_logs_start_and_end_and_draws_the_same_bar_only_on_a_terminal(terminal, monkeypatch):
+    import dask
+
+    from rockdec import console, job
+
+    log, screen = io_module.StringIO(), _Terminal() if terminal else io_module.StringIO()
+    monkeypatch.setattr(sys, "stderr", log)
+    monkeypatch.setattr(console, "BAR_AFTER_S", 0.0)
+    with job.progress("signatures", terminal=screen):
+        dask.delayed(time.sleep)(0.3).compute(scheduler="threads")
+    lines = log.getvalue().splitlines()
+    assert lines[0] == "signatures: started" and lines[-1].startswith("signatures: done in") and "\r" not in log.getvalue()
+    assert ("\rsignatures [" in screen.getvalue()) == terminal
+
+
 def test_workflow_without_snakemake_says_which_extra_to_install(monkeypatch, capsys):
     import importlib.util
 

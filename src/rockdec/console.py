@@ -68,14 +68,19 @@ class _Labelled:
         self.stream.flush()
 
 
-def progress(label: str):
+def progress(label: str, stream=None):
     """A context in which Dask computations longer than :data:`BAR_AFTER_S` draw a progress
-    bar on stderr, each frame starting with ``label``.
+    bar, each frame starting with ``label``, on ``stream``: by default stderr, and only while
+    the package's messages are shown (not under ``-q``).
 
-    No bar when stderr is not a terminal or the package's messages are hidden (``-q``).
+    No bar when the stream is not a terminal (a log file never gets the bar's frames).
     """
-    if not (logging.getLogger(LOGGER).isEnabledFor(logging.INFO) and sys.stderr.isatty()):
+    if stream is None:
+        if not logging.getLogger(LOGGER).isEnabledFor(logging.INFO):
+            return contextlib.nullcontext()
+        stream = sys.stderr
+    if stream is None or not stream.isatty():
         return contextlib.nullcontext()
     from dask.diagnostics import ProgressBar
 
-    return ProgressBar(out=_Labelled(sys.stderr, label), minimum=BAR_AFTER_S)
+    return ProgressBar(out=_Labelled(stream, label), minimum=BAR_AFTER_S)

@@ -67,23 +67,18 @@ def run(main, smk) -> None:
 
 
 @contextlib.contextmanager
-def progress(label: str, console=None):
+def progress(label: str, terminal=None):
     """Label the Dask computations of the block: a line in the log at its start and end.
 
-    A Dask progress bar is drawn only on a terminal (``console``, default the process's own
-    standard error, when it is a TTY): a log file gets the two labelled lines, never the
-    bar's carriage-return frames. Bars are drawn for Dask's local schedulers only.
+    The progress bar (:func:`rockdec.console.progress`) is drawn only on a terminal
+    (``terminal``, default the process's own standard error when it is a TTY): a log file
+    gets the two labelled lines, never the bar's carriage-return frames.
     """
-    console = console if console is not None else sys.__stderr__
+    from rockdec import console
+
     start = time.perf_counter()
     print(f"{label}: started", file=sys.stderr, flush=True)
-    bar = contextlib.nullcontext()
-    if console is not None and console.isatty():
-        from dask.diagnostics import ProgressBar
-
-        print(f"{label}:", file=console, flush=True)
-        bar = ProgressBar(out=console, minimum=2.0, dt=0.5)
-    with bar:
+    with console.progress(label, stream=terminal if terminal is not None else sys.__stderr__):
         yield
     print(f"{label}: done in {time.perf_counter() - start:.1f} s", file=sys.stderr, flush=True)
 
