@@ -229,20 +229,19 @@ def write_netcdf(
     variable along those dimensions (whole length along the others). Dask-backed
     variables are computed chunk by chunk while writing.
     """
-    path = check_output(path, overwrite)
-    encoding = {}
-    for name, var in ds.data_vars.items():
-        enc = {"zlib": True, "complevel": 4}
-        if name in float32:
-            enc["dtype"] = "float32"
-            ds = ds.assign({name: var.copy(data=_fits_float32(var.data, name))})
-        if var.ndim >= 1 and var.dtype.kind == "f":
-            enc["_FillValue"] = float("nan")
-        if chunks and var.ndim >= 1:
-            enc["chunksizes"] = tuple(max(1, min(chunks.get(dim, size), size)) for dim, size in var.sizes.items())
-        encoding[name] = enc
-    encoding.update(coordinate_encoding(ds))
-    with _claim(path):
+    with claimed(path, overwrite) as path:
+        encoding = {}
+        for name, var in ds.data_vars.items():
+            enc = {"zlib": True, "complevel": 4}
+            if name in float32:
+                enc["dtype"] = "float32"
+                ds = ds.assign({name: var.copy(data=_fits_float32(var.data, name))})
+            if var.ndim >= 1 and var.dtype.kind == "f":
+                enc["_FillValue"] = float("nan")
+            if chunks and var.ndim >= 1:
+                enc["chunksizes"] = tuple(max(1, min(chunks.get(dim, size), size)) for dim, size in var.sizes.items())
+            encoding[name] = enc
+        encoding.update(coordinate_encoding(ds))
         return write_claimed(path, lambda tmp: ds.to_netcdf(tmp, encoding=encoding, engine="netcdf4"), overwrite)
 
 
