@@ -422,17 +422,6 @@ def cmd_estimate(args) -> None:
         print(_estimate_text(public))
 
 
-#: What each estimator of ``rockdec estimate`` reads, in a few words (the glossary says more).
-READS = {
-    "e_g": "decay of every peak of D_a",
-    "e_0": "first peak and trough of D_a",
-    "e1": "start and first trough of D_a",
-    "e2": "slopes of D_a at the impact",
-    "e3": "trough and impact time of D_a",
-    "e4": "impact and trough times of D_a",
-    "e_v": "slope jump of D_v at the impact",
-}
-
 #: The words of ``rockdec estimate``'s report, for its ``--help`` (the README holds the same list).
 GLOSSARY = """glossary:
   e          coefficient of restitution: the share of its angular velocity the block keeps
@@ -464,6 +453,13 @@ GLOSSARY = """glossary:
              acceleration (rad/s^2)"""
 
 
+def _reads(name: str) -> str:
+    """What estimator ``name`` reads, in words (the registry's ``reads``; blank for a name it lacks)."""
+    from rockdec import registry
+
+    return registry.spec(name).reads if name in registry.ESTIMATORS else ""
+
+
 def _estimate_text(res: dict) -> str:
     """The human-readable report of ``rockdec estimate`` (its words: :data:`GLOSSARY`)."""
     fmt = lambda x: "nan" if x is None else f"{x:.4f}"  # noqa: E731
@@ -488,7 +484,7 @@ def _estimate_text(res: dict) -> str:
         corrected, why = _corrected(est)
         interval = "-" if est["interval"][0] is None else f"[{fmt(est['interval'][0])}, {fmt(est['interval'][1])}]"
         lines.append(
-            f"{name + mark:<10} {READS.get(name, ''):<32} {fmt(est['raw']):>7} {corrected:>10}  {interval:<18} "
+            f"{name + mark:<10} {_reads(name):<32} {fmt(est['raw']):>7} {corrected:>10}  {interval:<18} "
             f"{pct(est['coverage']):>9} {est['triggers']:>9}"
         )
         lines += [f"{'':>11}note: {note}" for note in ([why] if why else []) + est["notes"]]

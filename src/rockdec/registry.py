@@ -25,7 +25,8 @@ class EstimatorSpec:
     paper's equation numbers; ``label``: a few plain words for legends; ``symbol``: its
     formula in matplotlib's TeX; ``candidate``: it may be reported as ``e`` (the figures of
     the amplitude and coverage studies show the candidates); ``rank``: its place in the
-    studies' tables (1 first: the most accurate at the paper's sizes).
+    studies' tables (1 first: the most accurate at the paper's sizes); ``reads``: what of
+    the signature it reads, in words (``rockdec estimate``'s report).
     """
 
     name: str
@@ -35,16 +36,24 @@ class EstimatorSpec:
     symbol: str
     candidate: bool
     rank: int
+    reads: str
 
 
 REGISTRY = (
-    EstimatorSpec("e_g", "a", "eqs. 25, 7", "global", r"$\hat e_g$", False, 7),
-    EstimatorSpec("e_0", "a", "eq. 26", "first peak", r"$\hat e_0$", True, 3),
-    EstimatorSpec("e1", "a", "eq. 27", "local, peak ratio", r"$\hat e_1 = \sqrt{|c_2|/c_1}$", False, 4),
-    EstimatorSpec("e2", "a", "eq. 27", "local, slope ratio", r"$\hat e_2 = v_2/v_1$", False, 5),
-    EstimatorSpec("e3", "a", "eq. 27", "local, mixed", r"$\hat e_3 = (|c_2|/c_1)\,t_1/(t_2 - t_1)$", False, 6),
-    EstimatorSpec("e4", "a", "eq. 27, corrected", "local, time ratio", r"$\hat e_4 = (t_2 - t_1)/t_1$ (corrected)", True, 1),
-    EstimatorSpec("e_v", "v", "eq. 6", "D_v slope jump", r"$\hat e_v$", True, 2),
+    EstimatorSpec("e_g", "a", "eqs. 25, 7", "global", r"$\hat e_g$", False, 7,
+        "decay of every peak of D_a"),
+    EstimatorSpec("e_0", "a", "eq. 26", "first peak", r"$\hat e_0$", True, 3,
+        "first peak and trough of D_a"),
+    EstimatorSpec("e1", "a", "eq. 27", "local, peak ratio", r"$\hat e_1 = \sqrt{|c_2|/c_1}$", False, 4,
+        "start and first trough of D_a"),
+    EstimatorSpec("e2", "a", "eq. 27", "local, slope ratio", r"$\hat e_2 = v_2/v_1$", False, 5,
+        "slopes of D_a at the impact"),
+    EstimatorSpec("e3", "a", "eq. 27", "local, mixed", r"$\hat e_3 = (|c_2|/c_1)\,t_1/(t_2 - t_1)$", False, 6,
+        "trough and impact time of D_a"),
+    EstimatorSpec("e4", "a", "eq. 27, corrected", "local, time ratio", r"$\hat e_4 = (t_2 - t_1)/t_1$ (corrected)", True, 1,
+        "impact and trough times of D_a"),
+    EstimatorSpec("e_v", "v", "eq. 6", "D_v slope jump", r"$\hat e_v$", True, 2,
+        "slope jump of D_v at the impact"),
 )
 """Every estimator, in the order of the ``estimator`` coordinate and of the kernel's columns."""
 
