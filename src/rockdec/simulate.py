@@ -3,7 +3,9 @@
 Model: ``theta'' = -g sign(theta) + F(t)`` with ``g = nu^2 theta_cr`` (eq. 4); at every zero
 crossing the angular velocity is multiplied by ``e`` (eq. 6). The load is discrete white
 noise applied as velocity impulses ``p_n ~ N(0, sigma_p^2)`` at the end of every step, so
-between impulses the motion is a parabola and is integrated exactly (eqs. 21-24).
+between impulses the motion is a parabola and is integrated exactly (eqs. 21-24). The
+impulses may be coloured (``pole``: low-pass filtered; ``spectrum``: of a tabulated spectrum;
+:func:`rockdec.loading.draw_impulses`), the same for every simulator here.
 
 What the paper's scheme leaves out and :func:`flight` handles:
 
@@ -59,7 +61,7 @@ PILOT_SERIES, PILOT_POINTS = 256, 40_000
 
 #: Updates of the step in :func:`calibrate_dt`, per load kind: under white noise the scale law
 #: converges in 3; a coloured load's exponent is measured from the pilots (:func:`secant_step`).
-STEP_ITERATIONS = {"white": 3, "lowpass": 8}
+STEP_ITERATIONS = {"white": 3, "lowpass": 8, "spectrum": 8}
 
 #: Series of the pilot that measures the statistics at a given step, or under a model other
 #: than the one the step search ran (:func:`rockdec.run.calibrate`), of :data:`PILOT_POINTS`.
@@ -192,14 +194,17 @@ def integrate(impulses, dt, g, e, theta0, omega0, burn_in, theta_out, omega_out,
         omega_out[j] = omega
 
 
-def simulate_block(seeds, n_points, *, dt, g, e, sigma_p, theta0=0.0, theta_dot0=0.0, burn_in=0, grid_impacts=False, pole=0.0):
+def simulate_block(seeds, n_points, *, dt, g, e, sigma_p, theta0=0.0, theta_dot0=0.0, burn_in=0, grid_impacts=False, pole=0.0,
+                   spectrum=None):
     """Simulate one series per seed; returns ``(theta, theta_dot)``, each ``(len(seeds), n_points)``.
 
     Kernel entry point (NumPy in, NumPy out). ``sigma_p`` is the standard deviation of the
     velocity impulses in rad/s; ``sigma_p = 0`` gives the free response from
     ``(theta0, theta_dot0)``. ``grid_impacts=True``: the fixed-step integrator instead of the
     exact one (same load, same seed). ``pole``: low-pass filtered load
-    (:func:`rockdec.loading.draw_impulses`), 0 for white noise. Inputs outside the model
+    (:func:`rockdec.loading.draw_impulses`), 0 for white noise; ``spectrum``: a load of that
+    spectrum instead (:class:`rockdec.loading.ImpulseSpectrum`, cycles per step;
+    :meth:`rockdec.record_model.Load.draw_options` gives either). Inputs outside the model
     (NaN, infinities, ``e`` outside ``[0, 1]``, ...) and series that overflow raise
     :class:`rockdec.validate.InputError`.
     """
@@ -211,7 +216,7 @@ def simulate_block(seeds, n_points, *, dt, g, e, sigma_p, theta0=0.0, theta_dot0
     theta_dot = np.empty((seeds.size, n_points))
     impulses = np.empty(n_steps)
     for row, seed in enumerate(seeds):
-        draw_impulses(series_rng(seed), impulses, sigma_p, pole)
+        draw_impulses(series_rng(seed), impulses, sigma_p, pole, spectrum)
         integrate(impulses, dt, g, e, theta0, theta_dot0, burn_in, theta[row], theta_dot[row], grid_impacts)
     check_finite_series(np.stack([theta[:, -1], theta_dot[:, -1]]), f"the simulation at dt = {dt}, g = {g}, sigma_p = {sigma_p}")
     return theta, theta_dot
@@ -248,6 +253,7 @@ def calibrate_dt(
     pilot_points: int = PILOT_POINTS,
     iterations: int = STEP_ITERATIONS["white"],
     pole: float = 0.0,
+    spectrum=None,
 ) -> dict:
     """Time step giving ``points_per_cycle`` samples per cycle at amplitude ``sigma_Y`` (eq. 5).
 
@@ -260,7 +266,8 @@ def calibrate_dt(
     Returns a dict with ``dt``, ``burn_in``, and the last pilot's statistics at that step:
     ``sigma_y``, ``sigma_ydot`` (of the sampled slope ``diff(theta)/dt``, what a measured
     record gives) and the achieved ``points_per_cycle``. Refuses ``e >= 1``. ``pole``:
-    a low-pass filtered load (:func:`rockdec.loading.draw_impulses`).
+    a low-pass filtered load, ``spectrum``: a load of that spectrum
+    (:func:`rockdec.loading.draw_impulses`); under either the step follows :func:`secant_step`.
     """
     checks.in_range(e, "e", 0.0, 1.0, "give the coefficient of restitution in [0, 1]")
     checks.positive(g, "g", "give the restoring acceleration nu^2 theta_cr in rad/s^2, > 0")
@@ -288,11 +295,12 @@ def calibrate_dt(
     for i in range(iterations):
         if not (0.0 < dt < math.inf and 0.0 < g * dt * dt < math.inf):
             raise outside
-        theta, _ = simulate_block(seeds, pilot_points, dt=dt, g=g, e=e, sigma_p=sigma_p, burn_in=burn_in, pole=pole)
+        theta, _ = simulate_block(seeds, pilot_points, dt=dt, g=g, e=e, sigma_p=sigma_p, burn_in=burn_in, pole=pole,
+                                  spectrum=spectrum)
         stats = pilot_statistics(theta, dt, g)
         if i < iterations - 1:
             try:
-                if pole == 0.0:
+                if pole == 0.0 and spectrum is None:
                     c = scale_constant(stats["sigma_y"], dt, g, sigma_p)
                     dt = step_for_density(c, sigma_p, g, points_per_cycle)
                 else:
@@ -303,9 +311,10 @@ def calibrate_dt(
 
 
 def secant_step(history: list, dt: float, achieved: float, target: float) -> float:
-    """Next step of :func:`calibrate_dt` under a coloured load.
+    """Next step of :func:`calibrate_dt` under a coloured load (low-pass or of a spectrum).
 
-    The load's correlation time is a fixed number of steps, so it scales with ``dt`` and
+    The load's correlation time is a fixed number of steps (its spectrum is placed in cycles
+    per step), so it scales with ``dt`` and
     the white law ``points_per_cycle ~ dt^-2`` no longer holds (near a corner at the
     rocking frequency the exponent is nearer 5, and the white update oscillates). The
     exponent ``k`` is measured from the last two pilots (``history`` of ``(ln dt, ln N)``,
@@ -333,16 +342,16 @@ def pilot_statistics(theta: np.ndarray, dt: float, g: float | None = None) -> di
 
 
 def simulate_model(model: str, seeds, n_points: int, *, dt, g, e, sigma_p, theta_cr=None, pole=0.0, theta0=0.0, theta_dot0=0.0,
-                   burn_in=0) -> tuple[np.ndarray, np.ndarray]:
+                   burn_in=0, spectrum=None) -> tuple[np.ndarray, np.ndarray]:
     """``(theta, theta_dot)`` of one series per seed under ``model``: the one dispatch on a model name.
 
     ``"simplified"`` (eq. 4, :func:`simulate_block`), ``"housner"`` (eq. 2,
     :func:`rockdec.housner.simulate_block_housner` with ``nu = sqrt(g/theta_cr)``; a series
     that overturns is NaN from the fall on) or ``"fixed_step"`` (eq. 4 with the grid-impact
-    integrator of :mod:`rockdec.fixed_step`, for the speed/accuracy study). ``pole``: the
-    load's filter (:meth:`rockdec.record_model.Load.pole`, 0 for white noise).
+    integrator of :mod:`rockdec.fixed_step`, for the speed/accuracy study). ``pole``,
+    ``spectrum``: the load (:meth:`rockdec.record_model.Load.draw_options`; 0, None: white).
     """
-    common = dict(dt=dt, e=e, sigma_p=sigma_p, theta0=theta0, theta_dot0=theta_dot0, burn_in=burn_in, pole=pole)
+    common = dict(dt=dt, e=e, sigma_p=sigma_p, theta0=theta0, theta_dot0=theta_dot0, burn_in=burn_in, pole=pole, spectrum=spectrum)
     if model == "simplified":
         return simulate_block(seeds, n_points, g=g, **common)
     if model == "fixed_step":  # not a model: the grid-impact integrator of rockdec.fixed_step
@@ -370,6 +379,7 @@ def simulation_dataset(
     model: str = "simplified",
     theta_cr: float | None = None,
     pole: float = 0.0,
+    spectrum=None,
     sensor_std: float = 0.0,
 ) -> xr.Dataset:
     """Lazy Dataset ``theta(seed, time)``, ``theta_dot(seed, time)`` (float64, Dask chunks over seed).
@@ -377,7 +387,8 @@ def simulation_dataset(
     Nothing is simulated until the values are asked for; each chunk calls
     :func:`simulate_model` (numba, ``nogil``), so Dask's threads run chunks in parallel. A
     series depends on its seed only, so any chunking gives the same numbers, bit for bit.
-    ``pole``: the load's filter (0: white); ``sensor_std`` (rad): white sensor noise added to
+    ``pole``, ``spectrum``: the load (0, None: white; the attribute ``load_pole`` is NaN
+    for a spectrum, whose table :meth:`rockdec.run.Run.dataset` names); ``sensor_std`` (rad): white sensor noise added to
     the recorded angle (:func:`rockdec.loading.add_sensor_noise`; ``theta_dot`` stays the
     model's).
     """
@@ -389,7 +400,8 @@ def simulation_dataset(
         raise ValueError(f"unknown model '{model}'; use simplified or housner")
     if model == "housner" and theta_cr is None:
         raise ValueError("the Housner model needs theta_cr")
-    common = dict(dt=dt, g=g, e=e, sigma_p=sigma_p, theta_cr=theta_cr, pole=pole, theta0=theta0, theta_dot0=theta_dot0, burn_in=burn_in)
+    common = dict(dt=dt, g=g, e=e, sigma_p=sigma_p, theta_cr=theta_cr, pole=pole, theta0=theta0, theta_dot0=theta_dot0, burn_in=burn_in,
+                  spectrum=spectrum)
 
     def block(chunk):
         theta, theta_dot = simulate_model(model, chunk, n_points, **common)
@@ -420,6 +432,6 @@ def simulation_dataset(
     )
     ds.attrs.update(
         {"model": model, "dt": dt, "g": g, "e": e, "sigma_p": sigma_p, "burn_in": burn_in, "theta0": theta0, "theta_dot0": theta_dot0,
-         "load_pole": pole, "sensor_noise_rad": sensor_std}
+         "load_pole": math.nan if spectrum is not None else pole, "sensor_noise_rad": sensor_std}
     )
     return ds
