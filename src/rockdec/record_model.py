@@ -321,10 +321,11 @@ def read_base_record(path, rocking_frequency: float | None = None) -> Load:
     bad = next((i for i, a in enumerate(accel) if not math.isfinite(a)), None)
     if bad is not None:
         raise checks.InputError(f"{path}: sample {bad} of the acceleration is {accel[bad]}; give a record without gaps (cut it at the gap)")
+    import numpy as np
     from scipy.signal import welch
 
     segment = min(WELCH_MAX_SEGMENT, 2 ** int(math.log2(len(accel) / WELCH_SEGMENTS)))
-    frequency, psd = welch(accel, fs=1.0 / dt, nperseg=segment, detrend="constant")
+    frequency, psd = welch(np.asarray(accel), fs=1.0 / dt, nperseg=segment, detrend="constant")
     source = _source(path, "base record") + f", Welch estimate, segments of {segment} samples at {dt:g} s"
     return Load("spectrum", frequency=tuple(frequency[1:] / f_rock), psd=tuple(float(p) for p in psd[1:]), source=source)
 
