@@ -244,3 +244,15 @@ def test_scene_spectrum_load_validates_and_bad_ones_are_refused(tmp_path):
         with pytest.raises(config.ConfigError, match=match) as err:
             config.validate_scene({"excitation": {"load": load}})
         assert "\n" not in str(err.value)
+
+
+def test_spectrum_series_are_seed_stable_whatever_the_chunks_and_a_nan_pole_is_refused():
+    spectrum = lowpass_table(0.9, rows=100).draw_options(N_CYCLE)["spectrum"]
+    kw = dict(dt=0.36, g=1.0, e=0.9, sigma_p=1.0, burn_in=300, spectrum=spectrum)
+    alone = simulate.simulation_dataset([3, 7], 1500, chunk_seeds=1, **kw).theta.values
+    many = simulate.simulation_dataset(np.arange(10), 1500, chunk_seeds=3, **kw)
+    np.testing.assert_array_equal(many.theta.sel(seed=[3, 7]).values, alone)
+    assert math.isnan(many.attrs["load_pole"])
+    assert math.isnan(Load("spectrum", frequency=(0.0, 1.0), psd=(1.0, 1.0)).pole(N_CYCLE))
+    with pytest.raises(InputError, match="pole nan"):
+        simulate.simulate_block([0], 10, dt=0.36, g=1.0, e=0.9, sigma_p=1.0, pole=math.nan)

@@ -99,7 +99,9 @@ def spectral_gain(spectrum: ImpulseSpectrum, size: int) -> np.ndarray:
             f"the load spectrum (rows from {f[0]:.3g} to {f[-1]:.3g} cycles per step) holds no power between 0 and the "
             "Nyquist frequency of 0.5 cycles per step of this simulation; give a table that covers the rocking band"
         )
-    return np.sqrt(power / mean)
+    gain = np.sqrt(power / mean)
+    gain.flags.writeable = False  # shared by every caller of the cache
+    return gain
 
 
 def _draw_spectrum(rng: np.random.Generator, out: np.ndarray, spectrum: ImpulseSpectrum) -> None:

@@ -112,11 +112,12 @@ class Load:
     def pole(self, points_per_cycle: float) -> float:
         """Pole ``c`` of the load filter (:func:`rockdec.loading.draw_impulses`) at
         ``points_per_cycle`` samples per rocking cycle: ``exp(-2 pi corner / points_per_cycle)``,
-        0 for white noise; a spectrum load has none (refused: :meth:`draw_options` draws it)."""
+        0 for white noise, NaN for a spectrum load, which has none (the simulators refuse a NaN
+        pole; :meth:`draw_options` draws any load)."""
         if self.kind == "white":
             return 0.0
         if self.kind == "spectrum":
-            raise checks.InputError("a spectrum load has no filter pole; draw it with the simulators' spectrum= (Load.draw_options)")
+            return math.nan
         checks.positive(points_per_cycle, "points_per_cycle", "a low-pass load needs the samples per cycle that place its corner")
         return float(math.exp(-2.0 * math.pi * self.corner / points_per_cycle))
 

@@ -88,7 +88,7 @@ class Run:
     def pole(self) -> float:
         """The load filter's pole (:meth:`rockdec.record_model.Load.pole` at the target density; 0: white;
         NaN: a spectrum load, which has none)."""
-        return math.nan if self.load.kind == "spectrum" else self.load.pole(self.points_per_cycle_target)
+        return self.load.pole(self.points_per_cycle_target)
 
     @property
     def load_options(self) -> dict:
