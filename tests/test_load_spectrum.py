@@ -12,6 +12,8 @@ import math
 import numpy as np
 import pytest
 import xarray as xr
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from rockdec import config, run, simulate
 from rockdec.loading import ImpulseSpectrum, draw_impulses, low_pass, series_rng, spectral_gain
@@ -256,3 +258,21 @@ def test_spectrum_series_are_seed_stable_whatever_the_chunks_and_a_nan_pole_is_r
     assert math.isnan(Load("spectrum", frequency=(0.0, 1.0), psd=(1.0, 1.0)).pole(N_CYCLE))
     with pytest.raises(InputError, match="pole nan"):
         simulate.simulate_block([0], 10, dt=0.36, g=1.0, e=0.9, sigma_p=1.0, pole=math.nan)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    frequency=st.lists(st.floats(allow_nan=True, allow_infinity=True), min_size=0, max_size=5),
+    psd=st.lists(st.floats(allow_nan=True, allow_infinity=True), min_size=0, max_size=5),
+    points_per_cycle=st.floats(1e-300, 1e300),
+)
+def test_any_table_is_refused_in_one_sentence_or_draws_finite_impulses_of_unit_shape(frequency, psd, points_per_cycle):
+    try:
+        load = Load("spectrum", frequency=tuple(frequency), psd=tuple(psd))
+        p = draw_impulses(series_rng(1), np.empty(2000), 1.5, **load.draw_options(points_per_cycle))
+    except InputError as exc:
+        assert "\n" not in str(exc)
+        return
+    assert np.all(np.isfinite(p))
+    gain = spectral_gain(load.draw_options(points_per_cycle)["spectrum"], 4000)  # the variance over the circle: exactly 1
+    assert np.concatenate([gain, gain[-2:0:-1]]) ** 2 @ np.ones(4000) / 4000 == pytest.approx(1.0, rel=1e-9)

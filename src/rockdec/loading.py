@@ -81,6 +81,13 @@ def spectral_gain(spectrum: ImpulseSpectrum, size: int) -> np.ndarray:
     """Gains ``sqrt(S(k/size))`` of the ``size // 2 + 1`` bins of a real transform of ``size``
     points (module docstring), scaled so that ``S`` averages 1 over the ``size`` bins of the circle."""
     f, s = np.asarray(spectrum.frequency, dtype=np.float64), np.asarray(spectrum.psd, dtype=np.float64)
+    if not (f.size >= 2 and f.size == s.size and np.all(np.diff(f) > 0) and f[0] >= 0 and np.all(np.isfinite(s)) and s.min() >= 0
+            and s.max() > 0):
+        raise InputError(
+            f"the load spectrum ({f.size} rows from {f[0]:.3g} to {f[-1]:.3g} cycles per step) is not a table of ascending "
+            "frequencies >= 0 and PSD values >= 0, not all 0; give such a table (rockdec.record_model.Load checks one)"
+        )
+    s = s / s.max()  # only the shape counts; no overflow in the mean below
     bins = np.arange(size // 2 + 1) / size
     power = np.zeros(bins.size)
     pos = f > 0.0
