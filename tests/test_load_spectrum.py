@@ -6,6 +6,7 @@ and every product state them; the ``pole`` path keeps its series bit for bit."""
 
 from __future__ import annotations
 
+import functools
 import json
 import math
 
@@ -89,8 +90,8 @@ def test_pole_path_keeps_its_series_bit_for_bit():
         theta, omega = np.empty(n), np.empty(n)
         simulate.integrate(impulses, 0.36, 1.0, 0.9, 0.0, 0.0, burn, theta, omega, grid)
         np.testing.assert_array_equal(simulate.simulate_block([seed], n, grid_impacts=grid, pole=c, **kw)[0][0], theta)
-    contract = run.calibrate(config.validate_scene({"model": "simplified", "excitation": {"load": {"kind": "lowpass", "corner": 2.0}}}),
-                             pilot=SMALL_PILOT)
+    scene = {"model": "simplified", "excitation": {"dt": 0.01, "burn_in": 500, "load": {"kind": "lowpass", "corner": 2.0}}}
+    contract = run.calibrate(config.validate_scene(scene), pilot=SMALL_PILOT)
     ref = simulate.simulate_block([seed], n, dt=contract.dt, g=contract.g, e=contract.e, sigma_p=contract.sigma_p,
                                   burn_in=contract.burn_in, pole=contract.pole)[0][0]
     np.testing.assert_array_equal(contract.dataset([seed], n)["theta"].values[0], ref)
@@ -124,6 +125,7 @@ def test_secant_step_exponent_is_a_fit_over_recent_pilots():
     assert 300.0 * dt**-4 == pytest.approx(75.0, rel=1e-9)
 
 
+@functools.cache
 def housner_spectrum_run():
     table = lowpass_table(Load("lowpass", 1.0).pole(N_CYCLE), rows=200).to_dict()
     scene = config.validate_scene({"model": "housner", "excitation": {"load": table}})
