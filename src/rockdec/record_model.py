@@ -262,10 +262,10 @@ def read_spectrum_table(path, rocking_frequency: float | None = None) -> Load:
     header, columns = _read_csv_columns(path, "load spectrum")
     if len(header) != 2 or header[0] not in SPECTRUM_COLUMNS or header[1] != "psd":
         raise checks.InputError(
-            f"{path}: the header is {','.join(header)!r}; a load spectrum is two columns headed frequency_rocking,psd "
-            "(rocking frequencies) or frequency_hz,psd (Hz)"
+            f"{path}: the header is {','.join(header)!r}; a load spectrum is two columns headed "
+            + " or ".join(f"{name},psd ({units})" for name, units in SPECTRUM_COLUMNS.items())
         )
-    frequency, psd = columns
+    frequency, psd = _checked_table(*columns, str(path))  # refusals name the file's path
     if header[0] == "frequency_hz":
         f_rock = _rocking_frequency(rocking_frequency, f"{path}: a table in Hz")
         frequency = [f / f_rock for f in frequency]

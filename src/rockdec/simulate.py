@@ -26,7 +26,8 @@ velocity just after the impulse applied at that instant (eq. 21).
 Kernels take and return NumPy arrays; :func:`simulate_model` runs the model a run names,
 :func:`simulation_dataset` adds labels and Dask. :func:`calibrate_dt` is the step search, its
 constants (:data:`PILOT_SERIES`, :data:`PILOT_POINTS`, :data:`STEP_ITERATIONS`,
-:data:`STATISTICS_PILOT_SERIES`, :data:`rockdec.models.SCALE_CONSTANT_GUESS`) have their home
+:data:`STATISTICS_PILOT_SERIES`, :data:`SECANT_POINTS`, :data:`SECANT_EXPONENTS`,
+:data:`rockdec.models.SCALE_CONSTANT_GUESS`) have their home
 here and in :mod:`rockdec.models`.
 """
 
@@ -269,7 +270,7 @@ def calibrate_dt(
     discarded) and the step updated ``iterations`` times, from the step of
     :data:`rockdec.models.SCALE_CONSTANT_GUESS`.
 
-    Returns a dict with ``dt``, ``burn_in``, and the last pilot's statistics at that step:
+    Returns a dict with ``dt``, ``burn_in``, and the statistics of the pilot at that step:
     ``sigma_y``, ``sigma_ydot`` (of the sampled slope ``diff(theta)/dt``, what a measured
     record gives) and the achieved ``points_per_cycle``. Refuses ``e >= 1``. ``pole``:
     a low-pass filtered load, ``spectrum``: a load of that spectrum
