@@ -16,7 +16,7 @@ import xarray as xr
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from rockdec import config, run, simulate
+from rockdec import config, replicates, run, simulate
 from rockdec.loading import ImpulseSpectrum, draw_impulses, low_pass, series_rng, spectral_gain
 from rockdec.record_model import Load, RecordModel, carried_attrs, load_attrs, load_from_attrs, parse_load, read_base_record
 from rockdec.validate import InputError
@@ -149,6 +149,7 @@ def test_housner_honours_a_spectrum_load():
         assert np.corrcoef(p[m:], p[:-m])[0, 1] == pytest.approx(c**m, abs=0.03)
 
 
+@pytest.mark.filterwarnings("ignore::rockdec.signatures.NoTriggerWarning")
 def test_run_json_and_files_name_a_spectrum_load(tmp_path):
     contract = housner_spectrum_run()
     stored = json.loads(contract.write(tmp_path / "run.json").read_text())
@@ -161,6 +162,14 @@ def test_run_json_and_files_name_a_spectrum_load(tmp_path):
         assert run.Run.from_attrs(back.attrs) == contract
         assert load_from_attrs(carried_attrs(back.attrs)) == contract.load
     assert contract.record_model == RecordModel("housner", contract.load)
+    scene = config.validate_scene(
+        {"records": {"replicates": 2, "series_per_replicate": 2, "n_points": 4000, "chunk_seeds": 2}, "estimates": {"compare_readings": False}}
+    )
+    reading = scene["estimates"]["reading"]
+    cube = replicates.scene_cubes(contract, scene["records"], scene["signatures"], [reading])[reading]
+    est, _ = replicates.scene_estimates(cube, scene["estimates"])
+    for name, product in {"signatures": cube, "estimates": est}.items():
+        assert load_from_attrs(product.attrs) == contract.load, name
 
 
 def write(path, text):
