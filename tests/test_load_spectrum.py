@@ -17,7 +17,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from rockdec import config, replicates, run, simulate
-from rockdec.loading import ImpulseSpectrum, draw_impulses, low_pass, series_rng, spectral_gain
+from rockdec.loading import WRAP_TOLERANCE, ImpulseSpectrum, draw_impulses, embedding_size, low_pass, series_rng, spectral_gain
 from rockdec.record_model import Load, RecordModel, carried_attrs, load_attrs, load_from_attrs, parse_load, read_base_record
 from rockdec.validate import InputError
 
@@ -51,6 +51,9 @@ def test_lowpass_spectrum_table_gives_the_closed_form_autocorrelation(c):
     assert power.mean() == pytest.approx(1.0, rel=1e-12)
     for m in (1, 2, 5, 20):
         assert acf[m] == pytest.approx(c**m, abs=2e-3)
+    # the embedding wraps no more than WRAP_TOLERANCE of correlation (c^L < 1e-4) and costs little more than n
+    n = 48_086
+    assert n + math.log(WRAP_TOLERANCE) / math.log(c) <= embedding_size(spectrum, n) <= 1.1 * n
     p = draw_impulses(series_rng(4), np.empty(400_000), 2.0, spectrum=spectrum)
     assert p.std() == pytest.approx(2.0, rel=0.03 if c < 0.99 else 0.08)
     for m in (1, 2, 5):

@@ -9,13 +9,16 @@ gives ``c`` for a corner set in rocking frequencies.
 
 Load of a given spectrum (:class:`ImpulseSpectrum`, a table of the one-sided power spectral
 density in cycles per step; only its shape matters): circulant embedding. The series of
-``n`` impulses is the first ``n`` samples of a periodic one of ``M >= 2n`` samples
-(``scipy.fft.next_fast_len``): ``M`` standard normal numbers of the series' stream,
-transformed, multiplied by the gain ``sqrt(S(k/M))`` of each frequency bin, transformed
-back. The gains are scaled so that the mean of ``S`` over the ``M`` bins is 1, so the
-impulses have the standard deviation ``sigma_p`` and, at lag ``m < n``, the autocorrelation
-``sum_k S(k/M) cos(2 pi k m/M) / M``, the inverse transform of the spectrum (exact up to
-the wrap-around ``r(M - m)``, negligible when the correlation dies out within ``n`` steps).
+``n`` impulses is the first ``n`` samples of a periodic one of ``M`` samples: ``M``
+standard normal numbers of the series' stream, transformed, multiplied by the gain
+``sqrt(S(k/M))`` of each frequency bin, transformed back. The gains are scaled so that the
+mean of ``S`` over the ``M`` bins is 1, so the impulses have the standard deviation
+``sigma_p`` and, at lag ``m < n``, the autocorrelation ``sum_k S(k/M) cos(2 pi k m/M) / M``,
+the inverse transform of the spectrum, up to the wrap-around ``r(M - m)``.
+:func:`embedding_size` makes that term smaller than :data:`WRAP_TOLERANCE`: ``M`` is the next
+fast length (``scipy.fft.next_fast_len``) of ``n + L``, ``L`` the lag (at most ``n``) beyond
+which the autocorrelation stays below it, so a short correlation costs little more than
+``n`` numbers and a long one at most ``2n``.
 ``S`` between the table's rows is interpolated linearly in ``log f``; a row at ``f = 0`` sets
 the constant bin and is joined to the first positive row linearly in ``f``; outside the table
 ``S = 0`` (the table states where the power is), and rows above the Nyquist frequency
@@ -76,6 +79,23 @@ class ImpulseSpectrum(NamedTuple):
     psd: tuple
 
 
+WRAP_TOLERANCE = 1e-4
+"""Largest autocorrelation the circulant embedding may wrap around (:func:`embedding_size`)."""
+
+
+@functools.lru_cache(maxsize=16)
+def embedding_size(spectrum: ImpulseSpectrum, n: int) -> int:
+    """Length ``M`` of the periodic series whose first ``n`` samples are ``n`` impulses of
+    ``spectrum``: the next fast length of ``n + L``, ``L`` the last lag up to ``n`` at which the
+    autocorrelation (at ``M = 2n``) exceeds :data:`WRAP_TOLERANCE`, plus one."""
+    from scipy import fft
+
+    trial = fft.next_fast_len(2 * n, real=True)
+    acf = np.abs(fft.irfft(spectral_gain(spectrum, trial) ** 2, n=trial)[: n + 1])
+    lag = int(np.flatnonzero(acf > WRAP_TOLERANCE)[-1]) + 1  # acf[0] = 1
+    return fft.next_fast_len(n + lag, real=True)
+
+
 @functools.lru_cache(maxsize=16)
 def spectral_gain(spectrum: ImpulseSpectrum, size: int) -> np.ndarray:
     """Gains ``sqrt(S(k/size))`` of the ``size // 2 + 1`` bins of a real transform of ``size``
@@ -115,7 +135,7 @@ def _draw_spectrum(rng: np.random.Generator, out: np.ndarray, spectrum: ImpulseS
     """Unit-variance impulses of ``spectrum`` into ``out`` by circulant embedding (module docstring)."""
     from scipy import fft
 
-    size = fft.next_fast_len(2 * out.size, real=True)
+    size = embedding_size(spectrum, out.size)
     white = rng.standard_normal(size)
     out[:] = fft.irfft(fft.rfft(white) * spectral_gain(spectrum, size), n=size)[: out.size]
 
