@@ -19,10 +19,18 @@ to zero window by weighted least squares (§5).
 Kernels are numba functions on NumPy arrays that never raise on bad data: a NaN comes with
 an integer reason code (:data:`_REASONS`). :func:`_estimate_rows` runs every estimator on
 a batch of signatures ``r[n, lag_pos]``, ``d[n, lag]`` and writes each into its column of
-:mod:`rockdec.registry`; :func:`estimate_cube` (labelled, xarray/Dask) hands it whole
-blocks and keeps the values, :func:`estimate_all` hands it one signature and turns the
-codes into reasons; :func:`half_cycle` (the fits of eq. 27, which also give ``g``) calls the
-same kernels. :func:`extrapolate` is batched NumPy over every row at once.
+:mod:`rockdec.registry`, then ``g = 2 c1/t1^2`` (eq. 4) from the fits of eq. 27
+(:data:`COLUMNS`); :func:`estimate_cube` (labelled, xarray/Dask) hands it whole blocks of
+signatures and keeps the values, :func:`estimate_all` hands it one signature and turns the
+codes into reasons; :func:`half_cycle` (the fits of eq. 27) calls the same kernels.
+:func:`extrapolate` is batched NumPy over every row at once.
+
+The analysis core, which every analysis of records runs (the workflow, ``rockdec
+estimates``, :func:`rockdec.measured.analyse` and so ``rockdec estimate`` and the
+calibration): :func:`window_estimates` takes pooled signature sums and counts of both
+triggers to every column at every window, :func:`zero_window` extrapolates every estimator
+with the weights of :func:`extrapolation_weights`; :func:`window_cube` and
+:func:`extrapolate` are their labelled wrappers (``xr.apply_ufunc``, Dask-parallel).
 
 Units: ``r`` and ``d`` in rad, ``dt`` and the fitted times in s, slopes in rad/s; every
 ``e`` estimate is dimensionless.
@@ -55,8 +63,9 @@ COLUMNS = (*ESTIMATORS, G_NAME)
 """The batch kernel's output columns: every registered estimator (registry order), then ``g``."""
 
 _KERNEL_OUTPUTS = ("e_g", "e_0", *LOCAL_ESTIMATORS, "e_v", G_NAME)
-"""What :func:`_estimate_rows` computes, in its order of work; :data:`_COLUMNS` places each
-in its column of :data:`COLUMNS`. Every registered estimator has one, checked at import."""
+"""What :func:`_estimate_rows` computes, in its order of work (the kernel reads the first
+eight positions; a new estimator goes at the end); :data:`_COLUMNS` places each in its
+column of :data:`COLUMNS`. Every registered estimator has one, checked at import."""
 
 if sorted(_KERNEL_OUTPUTS) != sorted(COLUMNS):
     raise ImportError(f"the estimator kernel computes {_KERNEL_OUTPUTS} but the registry declares {ESTIMATORS}")
