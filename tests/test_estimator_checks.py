@@ -181,3 +181,13 @@ def test_cube_path_equals_the_analysis_of_a_measured_record(one_record, use_dask
         np.testing.assert_allclose(est["e_hat"].sel(estimator=name, replicate=0).values, analysis.per_window[name], rtol=1e-12)
         np.testing.assert_allclose(est["e_hat0"].sel(estimator=name, replicate=0).values, analysis.raw[name], rtol=1e-12)
     np.testing.assert_array_equal(est["count"].sel(replicate=0).values, np.stack([analysis.count["a"], analysis.count["v"]]))
+
+
+def test_window_cube_refuses_a_bad_step_or_fit_before_computing(one_record):
+    theta, dt = one_record
+    series = xr.DataArray(theta[None, :6000], dims=("seed", "time"), attrs={"dt": dt}).chunk({"seed": 1})
+    cube = signatures.signature_cube(series, sigma_y=float(theta.std()), sigma_ydot=1.0, n_lag=40)
+    with pytest.raises(ValueError, match="dt"):
+        estimators.window_cube(cube.assign_attrs(dt=-1.0))
+    with pytest.raises(ValueError, match="fit_points=2"):
+        estimators.window_cube(cube, 2)

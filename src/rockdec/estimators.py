@@ -653,13 +653,14 @@ def window_cube(cube: xr.Dataset, fit_points: int = DEFAULT_FIT_POINTS) -> xr.Da
     (dimension ``estimator`` first, :data:`rockdec.registry.ESTIMATORS`, then the cube's
     leading dimensions and ``window``) and ``g_hat`` (rad/s^2, eq. 4).
     """
+    dt, points = _check_options(cube.attrs["dt"], fit_points, with_dv=True)  # now, not when a lazy cube computes
     values = xr.apply_ufunc(
         window_estimates,
         cube["signature_sum"],
         cube["count"],
         input_core_dims=[["trigger", "window", "lag"], ["trigger", "window"]],
         output_core_dims=[["column", "window"]],
-        kwargs={"dt": float(cube.attrs["dt"]), "fit_points": fit_points},
+        kwargs={"dt": dt, "fit_points": points},
         dask="parallelized",
         output_dtypes=[float],
         dask_gufunc_kwargs={"output_sizes": {"column": len(COLUMNS)}},
