@@ -19,7 +19,7 @@ Checks (exit status 1 when one fails):
    ``results/paper/signatures.nc``) equal ``cube_estimates_two_paths`` to 1e-12, both
    weightings.
 
-Times (best of ``--repeat``, both paths in this one run, so the ratio is the result):
+Times (best of ``--repeat``, both paths taking turns in this one run, so the ratio is the result):
 ``measured.analyse`` on one 200,000-sample record (the calibration's analysis) and the
 estimates of the cube (``rockdec.replicates.scene_estimates``'s two extrapolations).
 
@@ -176,13 +176,16 @@ def check_cube(cube, fit_points) -> bool:
     return worst <= TOLERANCE
 
 
-def best_of(repeat, func):
-    times = []
+def best_of(repeat, *funcs):
+    """Best time of each of ``funcs`` over ``repeat`` rounds, the funcs taking turns within a
+    round (so a change of the machine's load falls on both)."""
+    times = [[] for _ in funcs]
     for _ in range(repeat):
-        start = time.perf_counter()
-        func()
-        times.append(time.perf_counter() - start)
-    return min(times)
+        for func, spent in zip(funcs, times):
+            start = time.perf_counter()
+            func()
+            spent.append(time.perf_counter() - start)
+    return [min(spent) for spent in times]
 
 
 def main(argv=None) -> int:
@@ -213,8 +216,7 @@ def main(argv=None) -> int:
     print(f"3. times, best of {args.repeat}")
     theta, dt = record(0.95, args.points, 9)
     measured.analyse([theta], dt), analyse_two_paths([theta], dt)  # compile (or load the cache) outside the timings
-    t_old = best_of(args.repeat, lambda: analyse_two_paths([theta], dt))
-    t_new = best_of(args.repeat, lambda: measured.analyse([theta], dt))
+    t_old, t_new = best_of(args.repeat, lambda: analyse_two_paths([theta], dt), lambda: measured.analyse([theta], dt))
     print(f"  measured.analyse, {args.points} samples: two paths {t_old * 1e3:.1f} ms, core {t_new * 1e3:.1f} ms, "
           f"ratio core/two paths {t_new / t_old:.2f}")
     if cube is not None:
@@ -228,7 +230,7 @@ def main(argv=None) -> int:
                 replicates.extrapolated(curves, weights)
 
         old(), new()
-        t_old, t_new = best_of(args.repeat, old), best_of(args.repeat, new)
+        t_old, t_new = best_of(args.repeat, old, new)
         print(f"  cube estimates ({cube.sizes[replicates.series_dim(cube)]} signatures): two paths {t_old * 1e3:.1f} ms, "
               f"core {t_new * 1e3:.1f} ms, ratio core/two paths {t_new / t_old:.2f}")
     print("all answers equal to 1e-12" if ok else "ANSWERS DIFFER")
