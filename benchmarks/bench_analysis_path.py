@@ -14,7 +14,8 @@ Checks (exit status 1 when one fails):
 
 1. ``measured.analyse`` gives the same ``raw`` values (every estimator and ``g``), window
    curves and counts as ``analyse_two_paths`` to 1e-12 on simulated records of several
-   lengths, ``e`` and seeds, with ``g`` read off the record and given, both weightings;
+   lengths (a short one with empty windows), ``e`` and seeds, with ``g`` read off the record
+   and given, both weightings, two records pooled and a record with a gap of NaN;
 2. the workflow's estimates of a signature cube (``--cube``, default the paper scene's
    ``results/paper/signatures.nc``) equal ``cube_estimates_two_paths`` to 1e-12, both
    weightings.
@@ -146,21 +147,32 @@ def differs(a, b) -> float:
     return float(np.max(np.abs(a[ok] - b[ok]) / np.maximum(1.0, np.abs(b[ok])), initial=0.0))
 
 
+def records_of(e, n, seed, kind):
+    """One record (``kind`` "one"), its halves pooled ("halves") or it with a gap of NaN ("gap")."""
+    theta, dt = record(e, n, seed)
+    if kind == "halves":
+        return [theta[: n // 2], theta[n // 2 :]], dt
+    if kind == "gap":
+        theta[n // 3 : n // 3 + 500] = np.nan
+    return [theta], dt
+
+
 def check_records(cases) -> bool:
     worst = 0.0
-    for e, n, seed, given_g, weights in cases:
-        theta, dt = record(e, n, seed)
+    for e, n, seed, given_g, weights, kind in cases:
+        records, dt = records_of(e, n, seed, kind)
         settings = {"weights": weights}
-        got = measured.analyse([theta], dt, settings, g=given_g)
-        raw, per_window, count = analyse_two_paths([theta], dt, settings, g=given_g)
+        got = measured.analyse(records, dt, settings, g=given_g)
+        raw, per_window, count = analyse_two_paths(records, dt, settings, g=given_g)
         d = max(
             differs([got.raw[k] for k in raw], list(raw.values())),
             max(differs(got.per_window[k], per_window[k]) for k in per_window),
             max(differs(got.count[k], count[k]) for k in count),
         )
         worst = max(worst, d)
-        print(f"  e={e:<5} n={n:<7} seed={seed:<3} g={'given' if given_g else 'read':<5} weights={weights:<6} "
-              f"largest difference {d:.1e}  (e_v raw {got.raw['e_v']:.6f})")
+        empty = int((got.count["a"] == 0).sum() + (got.count["v"] == 0).sum())
+        print(f"  e={e:<5} n={n:<7} seed={seed:<3} {kind:<6} g={'given' if given_g else 'read':<5} weights={weights:<6} "
+              f"largest difference {d:.1e}  (e_v raw {got.raw['e_v']:.6f}, {empty} empty windows)")
     print(f"records: largest difference {worst:.1e} (tolerance {TOLERANCE:g})")
     return worst <= TOLERANCE
 
@@ -198,9 +210,12 @@ def main(argv=None) -> int:
 
     print("1. measured.analyse against the two paths")
     cases = [
-        (0.95, 20_000, 1, None, "window"), (0.95, 200_000, 2, None, "window"), (0.9, 60_000, 3, None, "count"),
-        (0.8, 40_000, 4, G, "window"), (0.7, 100_000, 5, None, "window"), (0.6, 30_000, 6, G, "count"),
-        (0.85, 150_000, 7, None, "count"), (0.5, 50_000, 8, None, "window"),
+        (0.95, 20_000, 1, None, "window", "one"), (0.95, 200_000, 2, None, "window", "one"),
+        (0.9, 60_000, 3, None, "count", "one"), (0.8, 40_000, 4, G, "window", "one"),
+        (0.7, 100_000, 5, None, "window", "one"), (0.6, 30_000, 6, G, "count", "one"),
+        (0.85, 150_000, 7, None, "count", "one"), (0.5, 50_000, 8, None, "window", "one"),
+        (0.95, 3_000, 10, None, "count", "one"), (0.9, 80_000, 11, None, "window", "halves"),
+        (0.9, 60_000, 12, None, "count", "gap"),
     ]
     ok = check_records(cases)
 
