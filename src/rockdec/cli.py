@@ -331,10 +331,10 @@ def cmd_estimates(args) -> None:
     out = io.check_output(args.out, args.overwrite)
     checks.integer(args.fit_points, "--fit-points", 3, "give at least 3 points per side (a parabola needs 3)")
     with io.open_dataset(args.input) as src:
-        if "free_response" not in src or not {"group", "seed"} & set(src.dims) or "count" not in src or "dt" not in src.attrs:
+        if "signature_sum" not in src or not {"group", "seed"} & set(src.dims) or "count" not in src or "dt" not in src.attrs:
             raise UsageError(f"{args.input} is not a signature file; make one with 'rockdec signatures'.")
         cube = src.load()
-    lags = (cube.sizes[cube["free_response"].dims[-1]] - 1)
+    lags = cube.sizes["lag"] // 2
     if args.fit_points > lags:
         raise UsageError(f"--fit-points {args.fit_points}: more than the {lags} lags of the signatures in {args.input}; give at most {lags}.")
     if "replicate" not in cube.coords:
