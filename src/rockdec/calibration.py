@@ -62,8 +62,10 @@ E_GRID = (0.4, 0.5, 0.6, 0.7, 0.75, 0.8, 0.85, 0.88, 0.91, 0.93, 0.95, 0.965, 0.
 #: Simulated record sets per grid point.
 SETS_PER_E = 40
 
-#: Pilot sets of each iteration of the step search.
-PILOT_SETS = 8
+#: Pilot sets of each iteration of the step search, and the most samples of a pilot record
+#: (:func:`step_for`); under a coloured load a pilot record is as long as the record, up to
+#: ``PILOT_SAMPLES_COLOURED``.
+PILOT_SETS, PILOT_SAMPLES, PILOT_SAMPLES_COLOURED = 8, 50_000, 200_000
 
 #: Calibrations are shared by records whose samples per cycle agree within this relative step.
 PPC_BIN = 0.1
@@ -143,9 +145,13 @@ def step_for(e: float, points_per_cycle: float, lengths, settings: dict, seed0: 
     ``points_per_cycle`` off simulated records at ``e``, and the burn-in.
 
     Fixed point on the scale law: ``points_per_cycle`` goes as ``1/dt^2`` (``sigma_Y`` as
-    ``S^2/g^3`` with ``S = sigma_p^2/dt``, and eq. 5), so ``dt <- dt sqrt(N_read / N)``;
-    under a coloured load the exponent is measured (:func:`rockdec.simulate.secant_step`).
-    :data:`PILOT_SETS` sets of at most 50,000 samples a record per iteration,
+    ``S^2/g^3`` with ``S = sigma_p^2/dt``, and eq. 5), so ``dt <- dt sqrt(N_read / N)``, on
+    :data:`PILOT_SETS` sets of at most :data:`PILOT_SAMPLES` samples a record. Under a
+    coloured load the samples per cycle read off a record grow with its length (rare large
+    excursions) and fall steeply with ``dt``, so the pilot records are as long as the
+    records (up to :data:`PILOT_SAMPLES_COLOURED`, as many sets as make
+    :data:`PILOT_SETS` x :data:`PILOT_SAMPLES` samples, at least half :data:`PILOT_SETS`) and the step is
+    bracketed (:func:`rockdec.simulate.secant_step`).
     :data:`rockdec.simulate.STEP_ITERATIONS` iterations.
     """
     from rockdec.simulate import STEP_ITERATIONS, default_burn_in, secant_step
@@ -153,11 +159,13 @@ def step_for(e: float, points_per_cycle: float, lengths, settings: dict, seed0: 
     burn_in = default_burn_in(e, points_per_cycle)
     dt = step_for_density(SCALE_CONSTANT_GUESS, 1.0, 1.0, points_per_cycle)
     pole = model.load.pole(points_per_cycle)
-    pilot = [min(int(n), 50_000) for n in lengths]
+    white = model.load.kind == "white"
+    pilot = [min(int(n), PILOT_SAMPLES if white else PILOT_SAMPLES_COLOURED) for n in lengths]
+    sets = PILOT_SETS if white else max(PILOT_SETS // 2, PILOT_SETS * PILOT_SAMPLES // sum(pilot))
     history: list = []
     for i in range(STEP_ITERATIONS[model.load.kind]):
         read = []
-        for k in range(PILOT_SETS):
+        for k in range(sets):
             try:
                 records = _simulate_set(seed0 + k * len(pilot), pilot, dt, e, burn_in, model, pole)
                 read.append(measured.analyse(records, dt, settings).points_per_cycle)
@@ -165,7 +173,7 @@ def step_for(e: float, points_per_cycle: float, lengths, settings: dict, seed0: 
                 continue
         if not read:
             raise ValueError(f"no pilot record at e = {e} could be analysed; the records are too short for this sampling")
-        if model.load.kind == "white":
+        if white:
             dt *= math.sqrt(float(np.median(read)) / points_per_cycle)
         else:
             dt = secant_step(history, dt, float(np.median(read)), points_per_cycle)
