@@ -16,6 +16,12 @@ load, noise-free sensor). Per condition and model: records with a value, coverag
 95 % interval (a record without a value counts as not covered), bias and spread of the
 reported ``e``, the median width, which estimator was reported, and the calibrations built.
 
+Bin error (``--bins K``): for the first ``K`` records of the noisy and coloured conditions,
+the record is estimated again with its sensor noise, then its load's pole per sample,
+declared one bin below and one above the bin its measurement falls in
+(:func:`rockdec.calibration.binned_model`); half the change of ``e`` over one bin bounds
+what a value anywhere inside a bin moves it, printed as a share of the interval's width.
+
 Timing (``--time``): one clean record, in this process: the analysis alone
 (:func:`rockdec.measured.analyse`), then ``estimate`` with an empty cache (the
 calibration built) and again (from the cache), each as a ratio to the analysis.
@@ -78,6 +84,29 @@ def one(theta: np.ndarray, dt: float, cache: str, model) -> dict:
     }
 
 
+def bin_error(theta: np.ndarray, dt: float, cache: str) -> dict:
+    """Corrected ``e`` (default estimator's pick) at the record's measured bins and at the
+    adjacent bins of its noise and of its load's pole (module docstring)."""
+    import math
+
+    base = inference.estimate([Record(theta, dt, "r")], cache_dir=cache)
+    sim, ppc = base["record_model"]["simulated"], base["points_per_cycle"]
+    name = base["estimator"]
+    out = {"e": base["e"], "width": None if base["e"] is None else base["interval"][1] - base["interval"][0], "estimator": name}
+    if sim["sensor_noise"]["std"] > 0:
+        for step in (-1, 1):
+            sensor = SensorNoise(sim["sensor_noise"]["std"] * math.exp(step * calibration.NOISE_BIN))
+            res = inference.estimate([Record(theta, dt, "r")], cache_dir=cache, sensor=sensor)
+            out[f"noise {step:+d}"] = res["estimators"][name]["e"] if name else None
+    if sim["load"]["kind"] == "lowpass":
+        rate = -math.log(sim["load_pole_per_sample"])
+        for step in (-1, 1):
+            load = Load("lowpass", rate * math.exp(step * calibration.POLE_BIN) * ppc / (2 * math.pi))
+            res = inference.estimate([Record(theta, dt, "r")], cache_dir=cache, load=load)
+            out[f"pole {step:+d}"] = res["estimators"][name]["e"] if name else None
+    return out
+
+
 def summary(rows: list[dict], e: float) -> str:
     valued = [r for r in rows if r.get("e") is not None]
     covered = sum(r["interval"][0] <= e <= r["interval"][1] for r in valued)
@@ -119,6 +148,7 @@ def main() -> None:
     parser.add_argument("--cache", default=None, help="calibration folder (default: a temporary one)")
     parser.add_argument("--out", default=None, help="write one JSON line per record here")
     parser.add_argument("--time", action="store_true", help="also time one record cold and warm")
+    parser.add_argument("--bins", type=int, default=0, help="records per noisy or coloured condition to measure the bin error on")
     args = parser.parse_args()
     if args.time:
         timing(args.e, args.n_points)
@@ -126,6 +156,18 @@ def main() -> None:
     out = open(args.out, "a") if args.out else None
     for condition in args.conditions:
         index = list(CONDITIONS).index(condition)
+        if args.bins and condition != "clean":
+            records, dt = records_of(condition, args.e, args.n_points, args.bins, index)
+            for k, theta in enumerate(records):
+                row = bin_error(theta, dt, cache)
+                shifts = {key: value for key, value in row.items() if key.startswith(("noise", "pole"))}
+                moves = {
+                    kind: abs(shifts[f"{kind} +1"] - shifts[f"{kind} -1"]) / 4 / row["width"]
+                    for kind in ("noise", "pole")
+                    if row["width"] and shifts.get(f"{kind} +1") is not None and shifts.get(f"{kind} -1") is not None
+                }
+                print(f"{condition:>22} | bins, record {k}: {row}; half a bin moves e by {moves} of the interval's width", flush=True)
+            continue
         records, dt = records_of(condition, args.e, args.n_points, args.records, index)
         rows = {"measured": [], "paper": []}
         for k, theta in enumerate(records):

@@ -547,10 +547,10 @@ def _estimate_text(res: dict) -> str:
         lines.append(f"e: not estimated: {res['reason']}")
     else:
         corrected, _ = _corrected(res["estimators"][res["estimator"]])
-        trusted = [row["estimator"] for row in res["selection"] if row["holds"]]
+        trusted = ", ".join(row["estimator"] for row in res["selection"] if row["holds"])
         lines += [
             f"e = {corrected}, 95 % interval [{fmt(res['interval'][0])}, {fmt(res['interval'][1])}] (estimator {res['estimator']}, "
-            f"marked *: the narrowest interval of {', '.join(trusted)}, the candidates whose calibrated coverage holds);",
+            f"marked *: the narrowest interval of the candidates whose calibrated coverage holds, {trusted});",
             f"the interval held the true e on {pct(res['coverage'])} of the calibration's simulated records "
             "(in-sample; the README's coverage study checks independent records)",
         ]
@@ -560,9 +560,12 @@ def _estimate_text(res: dict) -> str:
     return "\n".join(lines)
 
 
-def _model_lines(report: dict) -> list[str]:
+def _model_lines(report: dict | None) -> list[str]:
     """The record model of ``rockdec estimate``'s report: what was measured (each quantity
-    with its standard error), detected or declared, and what the calibration simulated."""
+    with its standard error), detected or declared, and what the calibration simulated
+    (none: no lines)."""
+    if report is None:
+        return []
     src = report["sources"]
     lines = [f"  calibration simulates: {report['simulated']['described']} (load {src['load']}, sensor noise {src['sensor_noise']}, "
              f"rocking model {src['rocking']})"]
