@@ -483,8 +483,8 @@ GLOSSARY = """glossary:
              a = 2 sigma_Y: the average free decay from rest (paper eq. 8)
   D_v        signature triggered where the angle crosses zero at the speed sigma_Ydot: the
              average motion through an impact (paper eq. 19)
-  e_v        slope of D_v just after the impact over the slope just before (eq. 6): the
-             reported e (marked *), least biased and least scattered
+  e_v        slope of D_v just after the impact over the slope just before (eq. 6);
+             on clean records the least biased and least scattered
   e_g        from how fast all the peaks of D_a decay (eqs. 25, 7); the most biased
   e_0        from the first peak and first trough of D_a (eq. 26)
   e1 .. e4   from fits to D_a's first half cycle (eq. 27): e1 start and trough values,
@@ -497,6 +497,16 @@ GLOSSARY = """glossary:
              values its simulated records give
   coverage   how often that interval held the true e on the calibration's records
              (near 95 % means the interval can be trusted)
+  *          the reported e: of e_0, e4 and e_v, those with a value whose coverage holds
+             (at least 95 % less the binomial error of the calibration's sets, 93.3 %
+             for 600), the one with the narrowest interval; none: e is not estimated
+             and the report says why
+  record model  what besides e makes the record, and what the calibration simulates:
+             the load (white, or low-pass with its pole per sample and its corner in
+             rocking frequencies), the sensor noise (in % of sigma_Y) and the rocking
+             model; each measured off the record (with its standard error; used when
+             detected) or declared (--load, --sensor-noise, --model); drift and the
+             two sides' g are measured and reported, drift is warned about
   triggers   stretches of the record averaged into the signature, in the largest
              trigger window (more: less scatter)
   below / above the calibrated range (< 0.400, > 0.995)  the raw value lies beyond what
