@@ -2,10 +2,13 @@
 
 :func:`estimate` analyses the records (:func:`rockdec.measured.analyse`), checks that they
 look like rocking (:func:`rockdec.measured.rocking_shape`) and that a given ``g`` agrees
-with the records' own, fetches or builds the calibration for their lengths and sampling
-(:mod:`rockdec.calibration`), corrects every estimator and gives its 95 % interval,
-corrects ``g`` the same way, and lists what looks wrong with the records
-(:func:`diagnose`). When no ``e`` can be given, ``reason`` says why.
+with the records' own, measures the records' own model (sensor noise, load colour,
+drift: :func:`rockdec.record_measure.measure`) unless it is declared, fetches or builds
+the calibration for their lengths, sampling and model (:func:`record_model`,
+:mod:`rockdec.calibration`), corrects every estimator and gives its 95 % interval,
+reports the narrowest trusted candidate (:func:`select`), corrects ``g`` the same way,
+and lists what looks wrong with the records (:func:`diagnose`). When no ``e`` can be
+given, ``reason`` says why.
 
 The calibration simulates records as long as the measured ones, so its cost grows with
 their length (:func:`cost`); the command line refuses, before reading the records, a run
@@ -161,8 +164,9 @@ def record_model(
     and where each part came from.
 
     ``model`` declares every part; else ``load``, ``sensor`` and ``rocking`` declare theirs
-    (the rocking model is the simplified one, eq. 4, unless declared) and the rest is measured (``measurement``, a :class:`rockdec.record_measure.MeasuredModel` or
-    ``None`` when the records could not be measured; then the part is the paper's). A
+    (the rocking model is the simplified one, eq. 4, unless declared) and the rest is
+    measured (``measurement``, a :class:`rockdec.record_measure.MeasuredModel`, or ``None``
+    when the records could not be measured; then the part is the paper's). A
     measured low-pass load (colour detected, :attr:`~rockdec.record_measure.MeasuredModel.coloured`)
     is stated by its pole per sample ``alpha``, as a corner ``-ln(alpha) N / (2 pi)`` in
     rocking frequencies at the ``N`` samples per cycle the analysis reads
