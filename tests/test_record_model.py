@@ -47,6 +47,8 @@ def test_unknown_load_kind_is_refused():
     with pytest.raises(config.ConfigError, match="white, lowpass"):
         config.validate_scene({"excitation": {"load": {"kind": "measured"}}})
     with pytest.raises(InputError, match="not a load model"):
+        Load("measured")
+    with pytest.raises(InputError, match="at least 2 rows"):
         Load("spectrum")
 
 

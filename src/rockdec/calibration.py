@@ -119,7 +119,8 @@ def binned_model(model: RecordModel, points_per_cycle: float) -> RecordModel:
     reads directly): ``-ln alpha`` is binned and the corner stated at the binned samples
     per cycle (:func:`ppc_key`), at which the calibration simulates, so that the
     calibration's records carry the binned pole per sample and are read at the binned
-    samples per cycle.
+    samples per cycle. A spectrum load is simulated as stated (its table in rocking
+    frequencies, placed at the binned samples per cycle).
     """
     if model.sensor.units != "sigma_y":
         raise ValueError("a calibration takes its sensor noise in units of sigma_Y")
@@ -179,17 +180,23 @@ def settings_hash(cal_settings: dict) -> str:
     return hashlib.sha256(json.dumps(cal_settings, sort_keys=True).encode()).hexdigest()[:16]
 
 
-def _simulate_set(seed0: int, lengths, dt: float, e: float, burn_in: int, model: RecordModel, pole: float, theta_cr: float | None = None) -> list[np.ndarray]:
+def _simulate_set(
+    seed0: int, lengths, dt: float, e: float, burn_in: int, model: RecordModel, pole: float = 0.0, theta_cr: float | None = None,
+    spectrum=None,
+) -> list[np.ndarray]:
     """One set of records (one per length), seeds ``seed0, seed0 + 1, ...``; ``g = sigma_p = 1``,
     the rocking model of ``model`` (``theta_cr`` for Housner's, eq. 2, with ``nu^2 = 1/theta_cr``;
-    :func:`rockdec.simulate.simulate_model`), the load's filter ``pole``, and the sensor
-    noise of ``model`` relative to each record's rms."""
+    :func:`rockdec.simulate.simulate_model`), the load's filter ``pole`` or its ``spectrum``
+    (:meth:`rockdec.record_model.Load.draw_options`), and the sensor noise of ``model``
+    relative to each record's rms."""
     from rockdec.loading import add_sensor_noise  # the simulators load only when a calibration is built
     from rockdec.simulate import simulate_model
 
     out = []
     for k, n in enumerate(lengths):
-        theta = simulate_model(model.rocking, [seed0 + k], n, dt=dt, g=1.0, e=e, sigma_p=1.0, theta_cr=theta_cr, burn_in=burn_in, pole=pole)[0]
+        theta = simulate_model(
+            model.rocking, [seed0 + k], n, dt=dt, g=1.0, e=e, sigma_p=1.0, theta_cr=theta_cr, burn_in=burn_in, pole=pole, spectrum=spectrum,
+        )[0]
         if model.sensor.std > 0.0:
             add_sensor_noise(theta, [seed0 + k], model.sensor.std_rad(float(np.sqrt(np.nanmean(theta**2)))))
         out.append(theta[0])
@@ -210,7 +217,8 @@ def step_for(
     excursions) and fall steeply with ``dt``, so the pilot records are as long as the
     records (up to :data:`PILOT_SAMPLES_COLOURED`, as many sets as make
     :data:`PILOT_SETS` x :data:`PILOT_SAMPLES` samples, at least half :data:`PILOT_SETS`)
-    and the step is bracketed (:func:`rockdec.simulate.secant_step`).
+    and the step is bracketed (:func:`rockdec.simulate.secant_step`); the step returned is
+    then the pilot's whose samples per cycle came nearest the target.
     :data:`rockdec.simulate.STEP_ITERATIONS` iterations. Under Housner's model each pilot
     also sets the next ``theta_cr = sigma_Y / theta_cr_ratio`` from its median ``sigma_Y``
     (the first from eq. 5 at the target: ``sigma_Y = (N dt / 4)^2 / 2``), and the search
@@ -220,7 +228,7 @@ def step_for(
 
     burn_in = default_burn_in(e, points_per_cycle)
     dt = step_for_density(SCALE_CONSTANT_GUESS, 1.0, 1.0, points_per_cycle)
-    pole = model.load.pole(points_per_cycle)
+    draw = model.load.draw_options(points_per_cycle)
     white = model.load.kind == "white"
     housner = model.rocking == "housner"
     theta_cr = (points_per_cycle * dt / 4.0) ** 2 / 2.0 / theta_cr_ratio if housner else None
@@ -228,24 +236,28 @@ def step_for(
     sets = PILOT_SETS if white else max(PILOT_SETS // 2, PILOT_SETS * PILOT_SAMPLES // sum(pilot))
     iterations = max(STEP_ITERATIONS[model.load.kind], HOUSNER_ITERATIONS if housner else 0)
     history: list = []
+    closest = (math.inf, dt, theta_cr)
     for i in range(iterations):
         read, rms = [], []
         for k in range(sets):
             try:
-                records = _simulate_set(seed0 + k * len(pilot), pilot, dt, e, burn_in, model, pole, theta_cr)
+                records = _simulate_set(seed0 + k * len(pilot), pilot, dt, e, burn_in, model, theta_cr=theta_cr, **draw)
                 read.append(measured.analyse(records, dt, settings).points_per_cycle)
                 rms.append(float(np.sqrt(np.nanmean(np.concatenate(records) ** 2))))
             except ValueError:
                 continue
         if not read:
             raise ValueError(f"no pilot record at e = {e} could be analysed; the records are too short for this sampling")
+        miss = abs(math.log(float(np.median(read)) / points_per_cycle))
+        if miss < closest[0]:
+            closest = (miss, dt, theta_cr)
         if housner:
             theta_cr = float(np.median(rms)) / theta_cr_ratio
         if white:
             dt *= math.sqrt(float(np.median(read)) / points_per_cycle)
         else:
             dt = secant_step(history, dt, float(np.median(read)), points_per_cycle)
-    return dt, burn_in, theta_cr
+    return (dt, burn_in, theta_cr) if white else (closest[1], burn_in, closest[2])
 
 
 def _grid_point(j: int, e: float, cal_settings: dict, seed_base: int) -> np.ndarray:
@@ -262,7 +274,7 @@ def _grid_point(j: int, e: float, cal_settings: dict, seed_base: int) -> np.ndar
         return out
     for k in range(cal_settings["sets_per_e"]):
         try:
-            records = _simulate_set(seed0 + k * len(lengths), lengths, dt, e, burn_in, model, model.load.pole(ppc), theta_cr)
+            records = _simulate_set(seed0 + k * len(lengths), lengths, dt, e, burn_in, model, theta_cr=theta_cr, **model.load.draw_options(ppc))
             raw = measured.analyse(records, dt, settings).raw
         except ValueError:
             continue

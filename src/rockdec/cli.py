@@ -409,15 +409,18 @@ def parse_sensor_noise(text: str):
 
 def parse_load_option(text: str):
     """The load of ``--load``: ``None`` for ``auto`` (measured off the record), else
-    :func:`rockdec.record_model.parse_load` (its refusals name ``--load``)."""
+    :func:`rockdec.record_model.parse_load`'s load; a file (``spectrum:FILE``, ``base:FILE``)
+    is read and checked here, and its text returned, for :func:`rockdec.inference.estimate`
+    to place it against the record's rocking frequency (a table in Hz, a base record)."""
     from rockdec.record_model import parse_load
 
     if str(text).strip().lower() == "auto":
         return None
     try:
-        return parse_load(text)
+        load = parse_load(text, dt=1.0, points_per_cycle=1.0)  # a file is checked at a stand-in rocking frequency
     except checks.InputError as exc:
-        raise UsageError(f"{str(exc).rstrip('.')}, or auto (measured off the record).") from None
+        raise UsageError(f"{str(exc).rstrip('.')}; or give --load auto (measured off the record).") from None
+    return text if load.kind == "spectrum" else load
 
 
 def _estimate_model_options(args) -> dict:
@@ -748,7 +751,9 @@ def build_parser() -> argparse.ArgumentParser:
     est1.add_argument(
         "--load", default="auto", metavar="LOAD",
         help="the load the calibration simulates: auto (measured off the record: white, or a low-pass load when its colour "
-        "is detected), white, or lowpass:CORNER (corner in rocking frequencies 1/T(sigma_Y), eq. 5) (default: %(default)s)",
+        "is detected), white, lowpass:CORNER (corner in rocking frequencies 1/T(sigma_Y), eq. 5), spectrum:FILE (CSV "
+        "frequency_rocking,psd or frequency_hz,psd) or base:FILE (a base-acceleration record, CSV time,acceleration or "
+        "NetCDF; its spectrum) (default: %(default)s)",
     )
     est1.add_argument(
         "--sensor-noise", default="auto", metavar="NOISE",

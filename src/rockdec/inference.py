@@ -30,7 +30,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from rockdec import __version__, belt, calibration, fits, measured, registry
-from rockdec.record_model import NO_NOISE, WHITE, Load, RecordModel, SensorNoise
+from rockdec.record_model import NO_NOISE, WHITE, Load, RecordModel, SensorNoise, parse_load
 from rockdec.records import Record, RecordError, distinct, same_step
 from rockdec.validate import InputError
 
@@ -157,7 +157,7 @@ def measure_model(records: list[Record], dt: float) -> tuple[record_measure.Meas
 
 
 def record_model(
-    measurement, analysis: measured.Analysis, *, model: RecordModel | None = None, load: Load | None = None,
+    measurement, analysis: measured.Analysis, *, model: RecordModel | None = None, load: Load | str | None = None,
     sensor: SensorNoise | None = None, rocking: str | None = None,
 ) -> tuple[RecordModel, dict]:
     """The record model the calibration simulates (before :func:`rockdec.calibration.binned_model`)
@@ -173,10 +173,15 @@ def record_model(
     (``analysis.points_per_cycle``), so that the calibration, which simulates at that
     ``N``, simulates that pole; measured sensor noise (detected,
     :attr:`~rockdec.record_measure.MeasuredModel.noisy`) in units of ``sigma_Y``. A
-    declared noise in rad is expressed in the records' ``sigma_Y``. Returns
+    declared noise in rad is expressed in the records' ``sigma_Y``; a declared load given as
+    text (``--load``, :func:`rockdec.record_model.parse_load`) is read with the records'
+    ``dt`` and samples per cycle, which place a spectrum table in Hz and a base record
+    against their rocking frequency ``1/(dt N)``. Returns
     ``(model, sources)``, ``sources`` naming ``load``, ``sensor_noise`` and ``rocking`` as
     ``"declared"``, ``"measured"`` or ``"paper (not measured)"``.
     """
+    if isinstance(load, str):
+        load = parse_load(load, dt=analysis.dt, points_per_cycle=analysis.points_per_cycle)
     if model is not None:
         load, sensor, rocking, how = model.load, model.sensor, model.rocking, "declared"
         sources = {"load": how, "sensor_noise": how, "rocking": how}
@@ -214,6 +219,9 @@ def model_report(measurement, why_not: str | None, analysis: measured.Analysis, 
         "sources": sources,
         "simulated": {
             **simulated.key(),
+            "load": simulated.load.to_dict() if simulated.load.kind != "spectrum" else {
+                "kind": "spectrum", "rows": len(simulated.load.frequency), "source": simulated.load.source,
+            },
             "load_pole_per_sample": _num(simulated.load.pole(cal_ppc)),
             "points_per_cycle": _num(cal_ppc),
             "sigma_y_over_theta_cr": ratio,
@@ -287,7 +295,7 @@ def select(per: dict, n_sets: int) -> tuple[str | None, list[dict], str | None]:
 
 def estimate(
     records: list[Record], *, cache_dir, g: float | None = None, settings: dict | None = None, model: RecordModel | None = None,
-    load: Load | None = None, sensor: SensorNoise | None = None, rocking: str | None = None, theta_cr: float | None = None,
+    load: Load | str | None = None, sensor: SensorNoise | None = None, rocking: str | None = None, theta_cr: float | None = None,
 ) -> dict:
     """Calibrated estimates of ``e`` from ``records`` of one block (pooled).
 
@@ -295,8 +303,9 @@ def estimate(
     (:mod:`rockdec.record_model`; :data:`rockdec.record_model.PAPER` is the paper's white
     load and perfect sensor); ``None`` measures it off the records
     (:func:`rockdec.record_measure.measure`, :func:`record_model`), except the parts
-    ``load``, ``sensor`` and ``rocking`` declare. A sensor noise in rad is expressed in the
-    records' ``sigma_Y``. Housner's model (eq. 2) needs the block's ``theta_cr`` (rad): its
+    ``load`` (a :class:`~rockdec.record_model.Load`, or the text of ``--load``:
+    :func:`record_model`), ``sensor`` and ``rocking`` declare. A sensor noise in rad is
+    expressed in the records' ``sigma_Y``. Housner's model (eq. 2) needs the block's ``theta_cr`` (rad): its
     calibration simulates the records' ``sigma_Y / theta_cr``. The calibration simulates
     that model binned (:func:`rockdec.calibration.binned_model`).
 
