@@ -70,6 +70,22 @@ def test_measured_noise_and_colour_reach_the_calibration_key():
     assert inference.record_model(m, analysis, model=PAPER)[0] == PAPER
 
 
+def test_a_declared_spectrum_file_is_placed_at_the_records_rocking_frequency(tmp_path):
+    """--load spectrum:FILE with a table in Hz: read with the record's dt and samples per
+    cycle, so its frequencies in rocking frequencies are Hz times dt N; the calibration's
+    key carries the table."""
+    y = _record(24)
+    analysis = measured.analyse([y], DT_WHITE)
+    table = tmp_path / "psd.csv"
+    table.write_text("frequency_hz,psd\n0.0,1.0\n0.01,1.0\n0.02,0.1\n")
+    model, sources = inference.record_model(None, analysis, load=f"spectrum:{table}", sensor=SensorNoise())
+    assert model.load.kind == "spectrum" and sources["load"] == "declared"
+    f_rock = 1.0 / (DT_WHITE * analysis.points_per_cycle)
+    np.testing.assert_allclose(model.load.frequency, np.array([0.0, 0.01, 0.02]) / f_rock)
+    key = calibration.calibration_settings([y.size], analysis.points_per_cycle, model=model)["record_model"]
+    assert key["load"]["kind"] == "spectrum" and key["load"]["psd"] == [1.0, 1.0, 0.1]
+
+
 def test_noisy_record_json_names_the_noise_and_its_calibration_simulates_it(tmp_path, capsys, small_calibration):
     y = _record(23, noise=0.03)
     path = tmp_path / "r.npy"
