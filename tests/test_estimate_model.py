@@ -195,3 +195,34 @@ def test_calibration_step_under_a_low_pass_load_reads_the_target(small_calibrati
         for k in range(6)
     ]
     assert float(np.median(read)) == pytest.approx(75.0, rel=0.25)
+
+
+def _identity_grid_point(j, e, cal_settings, seed_base):
+    """A calibration grid point without simulation: every estimator reads the true e with a
+    spread of 0.01, g its true value; the settings it was asked for are kept."""
+    _identity_grid_point.settings = cal_settings
+    rng = np.random.default_rng(j)
+    out = e + 0.01 * rng.standard_normal((cal_settings["sets_per_e"], len(calibration.NAMES)))
+    out[:, calibration.NAMES.index("g")] = 1.0 + 0.01 * rng.standard_normal(cal_settings["sets_per_e"])
+    return out
+
+
+def test_housner_model_puts_sigma_y_over_theta_cr_in_the_calibration_key(tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(calibration, "_grid_point", _identity_grid_point)
+    path = tmp_path / "r.npy"
+    y = _record(25)
+    np.save(path, 0.02 * y / y.std())  # sigma_Y = 0.02 rad
+    args = ["estimate", str(path), "--dt", str(DT_WHITE), "--cache", str(tmp_path / "cache"), "--json", "--load", "white",
+            "--sensor-noise", "0"]
+    assert main([*args, "--model", "housner", "--theta-cr", "0.4"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    ratio = res["sigma_y"] / 0.4
+    simulated = res["record_model"]["simulated"]
+    assert simulated["rocking"] == "housner" and res["record_model"]["sources"]["rocking"] == "declared"
+    assert abs(math.log(simulated["sigma_y_over_theta_cr"] / ratio)) <= calibration.RATIO_BIN / 2 + 1e-3
+    assert _identity_grid_point.settings["sigma_y_over_theta_cr"] == simulated["sigma_y_over_theta_cr"]
+    sources = res["record_model"]["sources"]
+    assert sources["load"] == sources["sensor_noise"] == "declared"  # measured and reported, not used
+    assert simulated["load"] == {"kind": "white"} and simulated["sensor_noise"]["std"] == 0.0
+    assert main([*args, "--model", "housner", "--theta-cr", "0.8"]) == 0  # another ratio, another calibration
+    assert json.loads(capsys.readouterr().out)["calibration"]["file"] != res["calibration"]["file"]
