@@ -162,7 +162,7 @@ def main() -> None:
     parser.add_argument("--records", type=int, default=20)
     parser.add_argument("--e", type=float, default=0.9)
     parser.add_argument("--n-points", type=int, default=200_000)
-    parser.add_argument("--conditions", nargs="+", default=list(CONDITIONS))
+    parser.add_argument("--conditions", nargs="*", default=list(CONDITIONS), help="(none: only --time)")
     parser.add_argument("--cache", default=None, help="calibration folder (default: a temporary one)")
     parser.add_argument("--out", default=None, help="write one JSON line per record here")
     parser.add_argument("--time", action="store_true", help="also time one record cold and warm")
