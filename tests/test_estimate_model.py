@@ -144,7 +144,7 @@ def test_bad_model_options_end_in_one_sentence_before_any_calibration(tmp_path, 
 
 
 def _entry(e, low, high, coverage, beyond=None, notes=()):
-    return {"e": e, "interval": [low, high], "coverage": coverage, "beyond": beyond, "notes": list(notes)}
+    return {"e": e, "interval": [low, high], "coverage": coverage, "beyond": beyond, "notes": list(notes), "calibrated_range": [0.4, 0.995]}
 
 
 def test_the_narrowest_trusted_candidate_is_reported():
@@ -162,6 +162,8 @@ def test_no_trusted_candidate_gives_null_with_a_one_sentence_reason():
 
     per = {"e_0": _entry(None, None, None, 0.95, beyond="above"), "e4": _entry(0.9, 0.8, 0.99, 0.5),
            "e_v": _entry(None, None, None, None, notes=["no raw estimate"])}
+    whole = inference.select({**per, "e_v": _entry(0.41, 0.4, 0.995, 0.95)}, 600)
+    assert whole[0] is None and "spans the whole calibrated range" in whole[2]  # an interval that says nothing
     name, rows, reason = inference.select(per, 600)
     assert name is None and not any(row["holds"] for row in rows)
     assert reason.startswith("no estimator can be trusted") and all(n in reason for n in per) and "\n" not in reason

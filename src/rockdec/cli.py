@@ -500,10 +500,10 @@ GLOSSARY = """glossary:
              values its simulated records give
   coverage   how often that interval held the true e on the calibration's records
              (near 95 % means the interval can be trusted)
-  *          the reported e: of e_0, e4 and e_v, those with a value whose coverage holds
-             (at least 95 % less the binomial error of the calibration's sets, 93.3 %
-             for 600), the one with the narrowest interval; none: e is not estimated
-             and the report says why
+  *          the reported e: of e_0, e4 and e_v, those with a value, an interval narrower
+             than the calibrated range, and a coverage that holds (at least 95 % less
+             the binomial error of the calibration's sets, 93.3 % for 600), the one with
+             the narrowest interval; none: e is not estimated and the report says why
   record model  what besides e makes the record, and what the calibration simulates:
              the load (white, or low-pass with its pole per sample and its corner in
              rocking frequencies), the sensor noise (in % of sigma_Y) and the rocking

@@ -266,8 +266,8 @@ def coverage_floor(n_sets: int) -> float:
 
 def select(per: dict, n_sets: int) -> tuple[str | None, list[dict], str | None]:
     """The reported estimator among :data:`rockdec.registry.CANDIDATES`: of those with a
-    value whose calibrated coverage holds (:func:`coverage_floor`), the one with the
-    narrowest 95 % interval. Returns ``(name or None, selection, reason)``: ``selection``
+    value, an interval narrower than the calibrated range, and a calibrated coverage that
+    holds (:func:`coverage_floor`), the one with the narrowest 95 % interval. Returns ``(name or None, selection, reason)``: ``selection``
     lists each candidate's width, coverage, whether it holds and why not; ``reason`` is
     one sentence when none can be trusted."""
     floor = coverage_floor(n_sets)
@@ -281,6 +281,8 @@ def select(per: dict, n_sets: int) -> tuple[str | None, list[dict], str | None]:
             why = f"its raw value lies beyond what any calibrated e gives ({est['beyond']})"
         elif width is None:
             why = "; ".join(est["notes"]) or "it gave no value on these records"
+        elif est["calibrated_range"] and low <= est["calibrated_range"][0] and high >= est["calibrated_range"][1]:
+            why = "its 95 % interval spans the whole calibrated range: the record does not tell e"
         elif cov is None or cov < floor:
             why = f"its calibrated coverage {'-' if cov is None else f'{cov:.1%}'} is below {floor:.1%}"
         else:
