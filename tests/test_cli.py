@@ -329,7 +329,7 @@ def test_a_corrected_value_at_the_end_of_the_calibrated_range_is_shown_as_a_boun
     res = {"records": ["r.csv"], "samples": 1000, "dt": 0.01, "nan_samples": 0, "sigma_y": 0.01, "points_per_cycle": 75.0,
            "g": 1.0, "g_given": True, "g_raw": 1.0, "calibration": {"file": "c.nc", "cached": True, "seconds": 0.0},
            "estimators": {"e_v": est}, "estimator": "e_v", "e": est["e"], "interval": est["interval"], "coverage": 0.95,
-           "warnings": []}
+           "warnings": [], "record_model": None, "selection": [{"estimator": "e_v", "holds": True}]}
     row = next(line for line in _estimate_text(res).splitlines() if line.startswith("e_v *"))
     assert shown in row
     if side:
