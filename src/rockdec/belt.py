@@ -43,12 +43,78 @@ class Corrected(NamedTuple):
 
 class Belt(NamedTuple):
     """Smooth mean and spread of one estimator against the true ``e`` (module docstring);
-    ``failed``: the fraction of calibration sets on which the estimator gave NaN."""
+    ``failed``: the fraction of calibration sets on which the estimator gave NaN; the 95 %
+    band at each ``e`` is ``[mean + q_low spread, mean + q_high spread]`` (``q_low``,
+    ``q_high``: the 2.5 % and 97.5 % quantiles of the standardised raw value; a normal
+    estimator has ``-Z95`` and ``Z95``)."""
 
     e: np.ndarray
     mean: np.ndarray
     spread: np.ndarray
     failed: float
+    q_low: np.ndarray | float = -Z95
+    q_high: np.ndarray | float = Z95
+
+
+#: Bandwidth (in ``log(1 - e)``) of the Gaussian kernel that pools the standardised raw
+#: values of neighbouring grid points into the quantiles of the band.
+QUANTILE_BANDWIDTH = 0.4
+
+#: Penalty on the degrees of freedom in the generalised cross-validation of the smoothing
+#: splines (1 is plain GCV; above 1 guards against its undersmoothing on few points).
+GCV_GAMMA = 1.4
+
+#: Smoothing parameters tried by the cross-validation, relative to the weights' scale.
+_LAMBDAS = np.logspace(-6, 8, 57)
+
+
+def _penalty(x: np.ndarray) -> np.ndarray:
+    """Roughness matrix ``K`` of the natural cubic spline through values at the knots ``x``
+    (increasing): ``f @ K @ f`` is the integral of its squared second derivative (Reinsch)."""
+    h = np.diff(x)
+    n = x.size
+    q = np.zeros((n, n - 2))
+    r = np.zeros((n - 2, n - 2))
+    for j in range(1, n - 1):
+        q[j - 1, j - 1], q[j, j - 1], q[j + 1, j - 1] = 1.0 / h[j - 1], -1.0 / h[j - 1] - 1.0 / h[j], 1.0 / h[j]
+        r[j - 1, j - 1] = (h[j - 1] + h[j]) / 3.0
+        if j < n - 2:
+            r[j - 1, j] = r[j, j - 1] = h[j] / 6.0
+    return q @ np.linalg.solve(r, q.T)
+
+
+def _smooth(x: np.ndarray, y: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+    """Weighted cubic smoothing spline through ``(x, y)`` (``x`` increasing, weights ``w``:
+    inverse variances), its smoothing chosen by generalised cross-validation
+    (:data:`GCV_GAMMA`); from a straight line (infinite smoothing) to interpolation.
+
+    Returns the fitted values at ``x``, the hat matrix ``H`` (fitted = ``H @ y``) and the
+    residual variance in units of ``1/w`` (1 when the weights are right, more when the
+    points scatter about any smooth curve by more than their weights say).
+    """
+    n = x.size
+    k = _penalty(x)
+    wm = np.diag(w)
+    best = None
+    for lam in _LAMBDAS * w.sum() / np.trace(k):
+        hat = np.linalg.solve(wm + lam * k, wm)
+        fit = hat @ y
+        df = float(np.trace(hat))
+        if n - GCV_GAMMA * df <= 0.0:
+            continue
+        rss = float(np.sum(w * (y - fit) ** 2))
+        score = n * rss / (n - GCV_GAMMA * df) ** 2
+        if best is None or score < best[0]:
+            best = (score, fit, hat, rss / (n - df))
+    return best[1], best[2], best[3]
+
+
+def _weighted_quantiles(z: np.ndarray, w: np.ndarray, p) -> np.ndarray:
+    """Quantiles ``p`` of the values ``z`` with weights ``w`` (midpoint rule)."""
+    order = np.argsort(z)
+    z, w = z[order], w[order]
+    cum = (np.cumsum(w) - 0.5 * w) / w.sum()
+    return np.interp(p, cum, z)
 
 
 def belt(cal: xr.Dataset, name: str, points: int = 4001) -> Belt:
@@ -57,6 +123,8 @@ def belt(cal: xr.Dataset, name: str, points: int = 4001) -> Belt:
     ``failed``: the fraction of calibration sets on which the estimator gave NaN. Fewer
     than 5 usable grid points give an empty belt, which :func:`correct` refuses to invert.
     """
+    from scipy.interpolate import CubicSpline
+
     raw = cal["raw"].sel(name=name).values
     e_grid = cal["e_true"].values
     ok = np.isfinite(raw)
@@ -65,21 +133,32 @@ def belt(cal: xr.Dataset, name: str, points: int = 4001) -> Belt:
     means = np.array([raw[j, ok[j]].mean() if use[j] else np.nan for j in range(e_grid.size)])
     sds = np.array([raw[j, ok[j]].std(ddof=1) if use[j] else np.nan for j in range(e_grid.size)])
     use &= sds > 0
+    failed = float(1.0 - ok.sum() / ok.size)
     if use.sum() < 5:  # an empty belt: correct() says why
-        return Belt(np.empty(0), np.empty(0), np.empty(0), float(1.0 - ok.sum() / ok.size))
-    x = e_grid[use]
-    log_s = np.polyfit(np.log1p(-x), np.log(sds[use]), 2)
-    s_fit = np.exp(np.polyval(log_s, np.log1p(-x)))
-    design = np.vander(x, 4)
-    w = n[use] / s_fit**2
-    cov = np.linalg.inv(design.T @ (design * w[:, None]))
-    coef = cov @ (design.T @ (w * means[use]))
-    dense = np.linspace(x[0], x[-1], points)
-    dense_design = np.vander(dense, 4)
-    mean = dense_design @ coef
-    var_mean = np.einsum("ij,jk,ik->i", dense_design, cov, dense_design)
-    spread = np.sqrt(np.exp(np.polyval(log_s, np.log1p(-dense))) ** 2 + var_mean)
-    return Belt(dense, mean, spread, float(1.0 - ok.sum() / ok.size))
+        return Belt(np.empty(0), np.empty(0), np.empty(0), failed)
+    order = np.argsort(np.log1p(-e_grid[use]))  # increasing u = log(1 - e): decreasing e
+    x = e_grid[use][order]
+    u = np.log1p(-x)
+    counts = n[use][order]
+    log_s, _, _ = _smooth(u, np.log(sds[use][order]), 2.0 * (counts - 1.0))
+    s_fit = np.exp(log_s)
+    w = counts / s_fit**2
+    bias, hat, scatter = _smooth(u, means[use][order] - x, w)
+    cov = (hat / w) @ hat.T * max(scatter, 1.0)
+    sets = raw[use][order]
+    z = (sets - (x + bias)[:, None]) / s_fit[:, None]
+    zok = np.isfinite(z)
+    q = np.array([
+        _weighted_quantiles(z[zok], (np.exp(-0.5 * ((u[:, None] - uj) / QUANTILE_BANDWIDTH) ** 2) / counts[:, None] * np.ones(z.shape))[zok], [0.025, 0.975])
+        for uj in u
+    ])
+    dense = np.linspace(x.min(), x.max(), points)
+    ud = np.log1p(-dense)
+    basis = CubicSpline(u, np.eye(u.size), bc_type="natural")(ud)  # (dense, grid): the natural spline through the fitted values
+    mean = dense + basis @ bias
+    var_mean = np.einsum("ij,jk,ik->i", basis, cov, basis)
+    spread = np.sqrt(np.exp(CubicSpline(u, log_s, bc_type="natural")(ud)) ** 2 + var_mean)
+    return Belt(dense, mean, spread, failed, np.interp(ud, u, q[:, 0]), np.interp(ud, u, q[:, 1]))
 
 
 def belts(cal: xr.Dataset) -> dict[str, Belt]:
@@ -89,7 +168,8 @@ def belts(cal: xr.Dataset) -> dict[str, Belt]:
 
 def _inside(b: Belt, observed: np.ndarray) -> np.ndarray:
     """``(observation, dense e)``: where the 95 % band of the belt holds each observation."""
-    return np.abs(observed[:, None] - b.mean[None, :]) <= Z95 * b.spread[None, :]
+    offset = observed[:, None] - b.mean[None, :]
+    return (offset >= b.q_low * b.spread[None, :]) & (offset <= b.q_high * b.spread[None, :])
 
 
 def _ends(b: Belt, inside: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -104,6 +184,25 @@ def correct_g(g_belt: Belt, g_raw: float, e: float) -> float:
     if g_belt.e.size == 0 or not np.isfinite(e):
         return float("nan")
     return float(g_raw / np.interp(e, g_belt.e, g_belt.mean))
+
+
+def g_interval(g_belt: Belt, g_raw: float, e_low: float, e_high: float) -> tuple[float, float]:
+    """95 % interval of ``g`` read off a record as ``g_raw``, given the 95 % interval
+    ``[e_low, e_high]`` of ``e``: ``g_raw`` over the 95 % band of the calibrated ratio
+    (measured ``g`` / true ``g``) at every ``e`` of that interval (the union of the
+    intervals of ``g`` at each ``e`` it holds). NaN ends when ``e`` has no interval, the
+    ``g`` belt is empty or the band's lower ratio is not positive."""
+    if g_belt.e.size == 0 or not (np.isfinite(g_raw) and np.isfinite(e_low) and np.isfinite(e_high)):
+        return float("nan"), float("nan")
+    at = (g_belt.e >= e_low) & (g_belt.e <= e_high)
+    if not at.any():
+        at = np.abs(g_belt.e - 0.5 * (e_low + e_high)) == np.min(np.abs(g_belt.e - 0.5 * (e_low + e_high)))
+    q_low, q_high = np.broadcast_to(g_belt.q_low, g_belt.e.shape)[at], np.broadcast_to(g_belt.q_high, g_belt.e.shape)[at]
+    lowest = float(np.min(g_belt.mean[at] + q_low * g_belt.spread[at]))
+    highest = float(np.max(g_belt.mean[at] + q_high * g_belt.spread[at]))
+    if not lowest > 0.0:
+        return float("nan"), float("nan")
+    return float(g_raw / highest), float(g_raw / lowest)
 
 
 def correct(b: Belt, observed: float) -> Corrected:
