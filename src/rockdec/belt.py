@@ -118,15 +118,24 @@ def _weighted_quantiles(z: np.ndarray, w: np.ndarray, p) -> np.ndarray:
 
 
 def belt(cal: xr.Dataset, name: str, points: int = 4001) -> Belt:
-    """The belt of estimator ``name`` on a dense grid of ``points`` values of ``e``.
+    """The belt of estimator ``name`` (or of ``g``'s ratio to the true ``g``) on a dense
+    grid of ``points`` values of ``e`` (:func:`fit`)."""
+    from rockdec.measured import G_NAME
 
-    ``failed``: the fraction of calibration sets on which the estimator gave NaN. Fewer
-    than 5 usable grid points give an empty belt, which :func:`correct` refuses to invert.
+    return fit(cal["e_true"].values, cal["raw"].sel(name=name).values, name == G_NAME, points)
+
+
+def fit(e_grid: np.ndarray, raw: np.ndarray, ratio: bool = False, points: int = 4001) -> Belt:
+    """The belt of raw values ``raw(e, set)`` simulated at the true ``e_grid``, on a dense grid
+    of ``points`` values of ``e`` (module docstring): the mean is smoothed as its offset from
+    ``e`` (from 1 for a ``ratio``), in ``u = log(1 - e)``.
+
+    ``failed``: the fraction of sets that gave NaN. Fewer than 5 usable grid points (3 sets
+    at least) give an empty belt, which :func:`correct` refuses to invert.
     """
     from scipy.interpolate import CubicSpline
 
-    raw = cal["raw"].sel(name=name).values
-    e_grid = cal["e_true"].values
+    e_grid = np.asarray(e_grid, dtype=float)
     ok = np.isfinite(raw)
     n = ok.sum(axis=1)
     use = n >= 3
@@ -143,10 +152,13 @@ def belt(cal: xr.Dataset, name: str, points: int = 4001) -> Belt:
     log_s, _, _ = _smooth(u, np.log(sds[use][order]), 2.0 * (counts - 1.0))
     s_fit = np.exp(log_s)
     w = counts / s_fit**2
-    bias, hat, scatter = _smooth(u, means[use][order] - x, w)
+    centre = np.ones_like(x) if ratio else x
+    bias, hat, scatter = _smooth(-x, means[use][order] - centre, w)  # in e (increasing -e, the order of u)
     cov = (hat / w) @ hat.T * max(scatter, 1.0)
     sets = raw[use][order]
-    z = (sets - (x + bias)[:, None]) / s_fit[:, None]
+    # scatter about each point's own mean (the mean curve's error is var_mean's), in units of the
+    # fitted spread, so that the quantiles also take up what the spread curve misses locally
+    z = (sets - means[use][order][:, None]) / s_fit[:, None] * np.sqrt(counts / (counts - 1.0))[:, None]
     zok = np.isfinite(z)
     q = np.array([
         _weighted_quantiles(z[zok], (np.exp(-0.5 * ((u[:, None] - uj) / QUANTILE_BANDWIDTH) ** 2) / counts[:, None] * np.ones(z.shape))[zok], [0.025, 0.975])
@@ -154,8 +166,8 @@ def belt(cal: xr.Dataset, name: str, points: int = 4001) -> Belt:
     ])
     dense = np.linspace(x.min(), x.max(), points)
     ud = np.log1p(-dense)
-    basis = CubicSpline(u, np.eye(u.size), bc_type="natural")(ud)  # (dense, grid): the natural spline through the fitted values
-    mean = dense + basis @ bias
+    basis = CubicSpline(-x, np.eye(u.size), bc_type="natural")(-dense)  # (dense, grid): the natural spline through the fitted values
+    mean = (1.0 if ratio else dense) + basis @ bias
     var_mean = np.einsum("ij,jk,ik->i", basis, cov, basis)
     spread = np.sqrt(np.exp(CubicSpline(u, log_s, bc_type="natural")(ud)) ** 2 + var_mean)
     return Belt(dense, mean, spread, failed, np.interp(ud, u, q[:, 0]), np.interp(ud, u, q[:, 1]))
@@ -186,23 +198,72 @@ def correct_g(g_belt: Belt, g_raw: float, e: float) -> float:
     return float(g_raw / np.interp(e, g_belt.e, g_belt.mean))
 
 
-def g_interval(g_belt: Belt, g_raw: float, e_low: float, e_high: float) -> tuple[float, float]:
-    """95 % interval of ``g`` read off a record as ``g_raw``, given the 95 % interval
-    ``[e_low, e_high]`` of ``e``: ``g_raw`` over the 95 % band of the calibrated ratio
-    (measured ``g`` / true ``g``) at every ``e`` of that interval (the union of the
-    intervals of ``g`` at each ``e`` it holds). NaN ends when ``e`` has no interval, the
-    ``g`` belt is empty or the band's lower ratio is not positive."""
-    if g_belt.e.size == 0 or not (np.isfinite(g_raw) and np.isfinite(e_low) and np.isfinite(e_high)):
+def g_band(cal: xr.Dataset, name: str, e_belt: Belt, g_belt: Belt) -> Belt:
+    """The belt of the ratio corrected ``g`` / true ``g`` over the calibration's own sets,
+    ``e`` read by estimator ``name`` (its belt ``e_belt``; ``g_belt`` the belt of ``g``).
+
+    Each set's ``g`` is corrected as a record's is (:func:`correct_g` at the set's corrected
+    ``e``; a set whose raw value lies beyond the mean curve gives no ``e``,
+    :func:`rockdec.inference.beyond`), so the ratio holds both the scatter of ``g`` at a
+    given ``e`` and the error of the corrected ``e`` it is divided by, and their
+    correlation; its belt (:func:`fit`) gives :func:`g_interval`.
+    """
+    from rockdec.measured import G_NAME
+
+    raw_e = cal["raw"].sel(name=name).values
+    raw_g = cal["raw"].sel(name=G_NAME).values
+    ratio = np.full(raw_e.shape, np.nan)
+    for j, k in zip(*np.nonzero(np.isfinite(raw_e) & np.isfinite(raw_g))):
+        ratio[j, k] = correct_g(g_belt, raw_g[j, k], corrected_e(e_belt, raw_e[j, k]))
+    return fit(cal["e_true"].values, ratio, ratio=True)
+
+
+def corrected_e(b: Belt, raw: float) -> float:
+    """The corrected ``e`` of ``raw`` (:func:`correct`), NaN when ``raw`` lies beyond every
+    value of the mean curve (the corrected value is then its nearest point, no estimate:
+    :func:`rockdec.inference.beyond`)."""
+    if b.e.size == 0 or not (np.isfinite(raw) and b.mean.min() <= raw <= b.mean.max()):
+        return float("nan")
+    return correct(b, raw).value
+
+
+def g_interval(band: Belt, g_value: float, e: float) -> tuple[float, float]:
+    """95 % interval of the true ``g`` for ``g`` corrected to ``g_value`` (:func:`correct_g`)
+    at the corrected ``e``: ``g_value`` over the ends of the 95 % band of :func:`g_band` at
+    ``e``; NaN ends when ``g_value`` or ``e`` is NaN, the band is empty or its lower end
+    not positive."""
+    if band.e.size == 0 or not (np.isfinite(g_value) and np.isfinite(e)):
         return float("nan"), float("nan")
-    at = (g_belt.e >= e_low) & (g_belt.e <= e_high)
-    if not at.any():
-        at = np.abs(g_belt.e - 0.5 * (e_low + e_high)) == np.min(np.abs(g_belt.e - 0.5 * (e_low + e_high)))
-    q_low, q_high = np.broadcast_to(g_belt.q_low, g_belt.e.shape)[at], np.broadcast_to(g_belt.q_high, g_belt.e.shape)[at]
-    lowest = float(np.min(g_belt.mean[at] + q_low * g_belt.spread[at]))
-    highest = float(np.max(g_belt.mean[at] + q_high * g_belt.spread[at]))
-    if not lowest > 0.0:
+    mean, spread = np.interp(e, band.e, band.mean), np.interp(e, band.e, band.spread)
+    low = mean + np.interp(e, band.e, np.broadcast_to(band.q_low, band.e.shape)) * spread
+    high = mean + np.interp(e, band.e, np.broadcast_to(band.q_high, band.e.shape)) * spread
+    if not low > 0.0:
         return float("nan"), float("nan")
-    return float(g_raw / highest), float(g_raw / lowest)
+    return float(g_value / high), float(g_value / low)
+
+
+def g_intervals(e_belt: Belt, g_belt: Belt, band: Belt, raw_e: np.ndarray, raw_g: np.ndarray) -> np.ndarray:
+    """``(set, 2)``: the 95 % interval of ``g`` (:func:`g_interval`) for each pair of raw
+    values ``raw_e`` (of the estimator of ``e_belt``) and ``raw_g``, as a record's is made:
+    ``e`` corrected (none when the raw value lies beyond the mean curve), ``g`` corrected at it."""
+    out = []
+    for x, g in zip(np.ravel(raw_e), np.ravel(raw_g)):
+        e = corrected_e(e_belt, x)
+        out.append(g_interval(band, correct_g(g_belt, g, e), e))
+    return np.array(out).reshape(-1, 2)
+
+
+def g_calibration_coverage(cal: xr.Dataset, name: str, e_belt: Belt, g_belt: Belt, band: Belt) -> float:
+    """Share of the calibration's own record sets whose 95 % interval of ``g``
+    (:func:`g_intervals`, ``e`` read by estimator ``name``) holds their true ``g`` (in-sample,
+    like :func:`calibration_coverage`; sets with no interval count as not covered); NaN
+    for an empty band."""
+    if band.e.size == 0:
+        return float("nan")
+    from rockdec.measured import G_NAME
+
+    ends = g_intervals(e_belt, g_belt, band, cal["raw"].sel(name=name).values, cal["raw"].sel(name=G_NAME).values)
+    return float(np.mean((ends[:, 0] <= 1.0) & (1.0 <= ends[:, 1])))
 
 
 def correct(b: Belt, observed: float) -> Corrected:

@@ -15,7 +15,7 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from rockdec import belt, calibration, engine, registry
+from rockdec import belt, calibration, engine, measured, registry
 
 #: Seed bases of the test bed: the calibration's, moved by multiples of this (far apart
 #: from the calibration's own seeds, the study's and the scenes').
@@ -74,4 +74,26 @@ def coverage(cal: xr.Dataset, test: xr.Dataset, names=registry.CANDIDATES) -> pd
                     "no_interval": float(np.mean(~np.isfinite(low))),
                 }
             )
+    return pd.DataFrame(rows)
+
+
+def g_coverage(cal: xr.Dataset, test: xr.Dataset, name: str = registry.DEFAULT_ESTIMATOR) -> pd.DataFrame:
+    """Per true ``e`` of ``test``: coverage of the 95 % interval of ``g``
+    (:func:`rockdec.belt.g_interval`, ``e`` corrected with estimator ``name``) over the
+    test sets (their ``g`` row is in units of the true ``g``, so the interval must hold 1),
+    its median relative width, and the share with no interval (counted as not covered)."""
+    b, g_belt = belt.belt(cal, name), belt.belt(cal, measured.G_NAME)
+    band = belt.g_band(cal, name, b, g_belt)
+    rows = []
+    for e in test["e_true"].values:
+        ends = belt.g_intervals(b, g_belt, band, test["raw"].sel(name=name, e_true=e).values, test["raw"].sel(name=measured.G_NAME, e_true=e).values)
+        rows.append(
+            {
+                "e_true": float(e),
+                "records": int(ends.shape[0]),
+                "coverage": float(np.mean((ends[:, 0] <= 1.0) & (1.0 <= ends[:, 1]))),
+                "median_width": float(np.nanmedian(ends[:, 1] - ends[:, 0])) if np.isfinite(ends).any() else float("nan"),
+                "no_interval": float(np.mean(~np.isfinite(ends[:, 0]))),
+            }
+        )
     return pd.DataFrame(rows)

@@ -154,8 +154,10 @@ def estimate(records: list[Record], *, cache_dir, g: float | None = None, settin
     ``notes``, ``calibrated_range`` and ``beyond``: ``"below"``, ``"above"`` or
     ``"unreached"`` when the raw value lies beyond what any calibrated ``e`` produces on
     average, and ``e`` is then ``None``, :func:`beyond`),
-    ``g_interval`` (``None``: the calibration corrects ``g`` but gives it no interval;
-    ``g_interval_note`` says so), ``rockdec_version``,
+    ``g_interval`` (95 %, rad/s^2, :func:`rockdec.belt.g_interval`; ``None`` when ``g`` is
+    given or there is no corrected ``e``; ``g_interval_note`` says which), ``g_coverage`` (the
+    share of the calibration's simulated record sets whose ``g`` interval held their true
+    ``g``, :func:`rockdec.belt.g_calibration_coverage`), ``rockdec_version``,
     ``warnings``, ``calibration`` (file, and whether it came from the cache), and, under
     keys starting with ``_``, the analysis and belts for plots.
 
@@ -209,12 +211,12 @@ def estimate(records: list[Record], *, cache_dir, g: float | None = None, settin
     default = per[DEFAULT_ESTIMATOR]
     e_default = math.nan if default["e"] is None else default["e"]
     g_belt = belts[measured.G_NAME]
+    g_band = belt.g_band(cal, DEFAULT_ESTIMATOR, belts[DEFAULT_ESTIMATOR], g_belt)
     g_value = g if g is not None else belt.correct_g(g_belt, analysis.raw[measured.G_NAME], e_default)
-    if g is not None and own is not None and g_belt.e.size and np.isfinite(e_default):
-        own_raw = own.raw[measured.G_NAME]
-        mean, spread = np.interp(e_default, g_belt.e, g_belt.mean), np.interp(e_default, g_belt.e, g_belt.spread)
-        low, high = own_raw / (mean + belt.Z95 * spread), own_raw / max(mean - belt.Z95 * spread, 1e-12)
-        if not low <= g <= high:
+    g_low, g_high = (math.nan, math.nan) if g is not None else belt.g_interval(g_band, g_value, e_default)
+    if g is not None and own is not None:
+        low, high = belt.g_interval(g_band, belt.correct_g(g_belt, own.raw[measured.G_NAME], e_default), e_default)
+        if np.isfinite(low) and not low <= g <= high:
             notes.append(
                 f"--g {g:g} lies outside the records' own g, {low:.4g}-{high:.4g} rad/s^2 (calibrated 95 % interval): "
                 "the estimate rests on the given g"
@@ -240,10 +242,12 @@ def estimate(records: list[Record], *, cache_dir, g: float | None = None, settin
         "g": _num(g_value),
         "g_given": g is not None,
         "g_raw": _num(analysis.raw[measured.G_NAME]),
-        "g_interval": None,
+        "g_interval": None if g is not None or not np.isfinite(g_low) else [_num(g_low), _num(g_high)],
+        "g_coverage": None if g is not None else _num(belt.g_calibration_coverage(cal, DEFAULT_ESTIMATOR, belts[DEFAULT_ESTIMATOR], g_belt, g_band)),
         "g_interval_note": "as given (--g)" if g is not None else (
-            "no interval: the calibration corrects g's bias at the corrected e but does not give g an interval "
-            "whose coverage has been checked"
+            "95 % interval: the corrected g over the scatter of the corrected g about the true g on the calibration's "
+            "simulated records (the error of the corrected e included)" if np.isfinite(g_low) else
+            "no interval: g is corrected at the corrected e, and there is none"
         ),
         "points_per_cycle": _num(analysis.points_per_cycle),
         "sigma_y": _num(analysis.sigma_y),
