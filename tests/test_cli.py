@@ -310,7 +310,8 @@ def test_calibrating_is_announced_only_when_a_calibration_is_built(tmp_path, cap
     assert "calibrating" not in again.err
     res = json.loads(again.out)
     assert res["calibration"]["cached"] is True and res["rockdec_version"] == __version__
-    assert res["g_interval"] is None and "no interval" in res["g_interval_note"]
+    low, high = res["g_interval"]
+    assert low < res["g"] < high and "95 % interval" in res["g_interval_note"] and 0.9 <= res["g_coverage"] <= 1.0
 
 
 @pytest.mark.parametrize("raw, side, shown", [(0.39, "below", "< 0.400"), (1.0, "above", "> 0.995"), (0.7, None, "0.7000")])
