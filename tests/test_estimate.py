@@ -185,6 +185,17 @@ def test_belt_says_when_the_interval_reaches_the_calibrated_range():
     assert math.isnan(outside.value) and "not produced" in outside.notes[0]
 
 
+def test_the_belts_spline_is_scipys_natural_cubic_spline():
+    """The belt's own natural cubic spline basis (no scipy import on the estimate path)
+    against scipy's, through values at uneven knots."""
+    from scipy.interpolate import CubicSpline
+
+    knots = np.sort(np.random.default_rng(1).uniform(-5.0, 0.0, 10))
+    values = np.sin(knots)
+    at = np.linspace(knots[0], knots[-1], 777)
+    assert belt._spline_basis(knots, at) @ values == pytest.approx(CubicSpline(knots, values, bc_type="natural")(at), abs=1e-12)
+
+
 def curved_calibration(skew: bool, sets: int = 40, seed: int = 0, grid=calibration.E_GRID) -> xr.Dataset:
     """A calibration drawn from a known mean ``m(e)`` and spread ``s(e)`` (:func:`known_curves`),
     the raw value normal, or skewed (a centred gamma of shape 4: skewness 1, as ``e_v``
@@ -249,19 +260,25 @@ def test_the_belts_interval_covers_95_percent_at_every_e(skew):
 
 
 def test_g_interval_covers_the_true_g():
-    """On a synthetic calibration with a known ratio measured g / true g, the 95 % interval of
-    g (its scatter and the error of the corrected e it is divided by) holds the true g on
-    95 % of fresh draws, and in-sample on the calibration's own sets."""
-    cal = curved_calibration(False, sets=calibration.SETS_PER_E)
-    b, g_belt = belt.belt(cal, "e_v"), belt.belt(cal, measured.G_NAME)
-    band = belt.g_band(cal, "e_v", b, g_belt)
-    assert belt.g_calibration_coverage(cal, "e_v", b, g_belt, band) == pytest.approx(0.95, abs=0.02)
+    """On synthetic calibrations of the calibration's size with a known ratio measured g /
+    true g, the 95 % interval of g (its scatter and the error of the corrected e it is
+    divided by) holds the true g on 93-97 % of fresh draws, on average over 6 calibrations,
+    and on about 95 % of the calibrations' own sets."""
     rng = np.random.default_rng(3)
-    for e in (0.65, 0.85, 0.95):
-        m, s = known_curves(np.array([e]), "e_v")
-        r, sr = known_curves(np.array([e]), measured.G_NAME)
-        ends = belt.g_intervals(b, g_belt, band, m + s * rng.standard_normal(400), r + sr * rng.standard_normal(400))
-        assert 0.92 <= np.mean((ends[:, 0] <= 1.0) & (1.0 <= ends[:, 1])) <= 0.98, e
+    e_true = (0.65, 0.85, 0.95)
+    covered, in_sample = np.zeros(len(e_true)), 0.0
+    for seed in range(6):
+        cal = curved_calibration(False, sets=calibration.SETS_PER_E, seed=seed)
+        b, g_belt = belt.belt(cal, "e_v"), belt.belt(cal, measured.G_NAME)
+        band = belt.g_band(cal, "e_v", b, g_belt)
+        in_sample += belt.g_calibration_coverage(cal, "e_v", b, g_belt, band) / 6
+        for i, e in enumerate(e_true):
+            m, s = known_curves(np.array([e]), "e_v")
+            r, sr = known_curves(np.array([e]), measured.G_NAME)
+            ends = belt.g_intervals(b, g_belt, band, m + s * rng.standard_normal(300), r + sr * rng.standard_normal(300))
+            covered[i] += np.mean((ends[:, 0] <= 1.0) & (1.0 <= ends[:, 1])) / 6
+    assert np.all((covered >= 0.93) & (covered <= 0.97)), covered
+    assert in_sample == pytest.approx(0.95, abs=0.02)
     assert math.isnan(belt.g_interval(band, 1.0, math.nan)[0])
 
 

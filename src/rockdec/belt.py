@@ -89,9 +89,11 @@ GCV_GAMMA = 1.4
 _LAMBDAS = np.logspace(-6, 8, 57)
 
 
-def _penalty(x: np.ndarray) -> np.ndarray:
-    """Roughness matrix ``K`` of the natural cubic spline through values at the knots ``x``
-    (increasing): ``f @ K @ f`` is the integral of its squared second derivative (Reinsch)."""
+def _reinsch(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The matrices ``Q`` ``(n, n-2)`` and ``R`` ``(n-2, n-2)`` of the natural cubic spline
+    through values ``f`` at the knots ``x`` (increasing): its second derivatives at the
+    inner knots are ``R^-1 Q^T f`` (zero at the ends), and the integral of its squared
+    second derivative is ``f @ Q R^-1 Q^T @ f`` (Green and Silverman, 1994, section 2.1)."""
     h = np.diff(x)
     n = x.size
     q = np.zeros((n, n - 2))
@@ -101,7 +103,32 @@ def _penalty(x: np.ndarray) -> np.ndarray:
         r[j - 1, j - 1] = (h[j - 1] + h[j]) / 3.0
         if j < n - 2:
             r[j - 1, j] = r[j, j - 1] = h[j] / 6.0
+    return q, r
+
+
+def _penalty(x: np.ndarray) -> np.ndarray:
+    """Roughness matrix ``K`` of the natural cubic spline through values at the knots ``x``:
+    ``f @ K @ f`` is the integral of its squared second derivative (:func:`_reinsch`)."""
+    q, r = _reinsch(x)
     return q @ np.linalg.solve(r, q.T)
+
+
+def _spline_basis(x: np.ndarray, at: np.ndarray) -> np.ndarray:
+    """``(at, knots)``: the natural cubic spline through values ``f`` at the knots ``x``
+    (increasing) takes the values ``basis @ f`` at the points ``at`` (within the knots)."""
+    q, r = _reinsch(x)
+    second = np.zeros((x.size, x.size))
+    second[1:-1] = np.linalg.solve(r, q.T)  # second derivatives at the knots per unit value
+    i = np.clip(np.searchsorted(x, at, side="right") - 1, 0, x.size - 2)
+    h = x[i + 1] - x[i]
+    b = (at - x[i]) / h
+    a = 1.0 - b
+    basis = np.zeros((at.size, x.size))
+    rows = np.arange(at.size)
+    basis[rows, i] += a
+    basis[rows, i + 1] += b
+    basis += ((a**3 - a) * h**2 / 6.0)[:, None] * second[i] + ((b**3 - b) * h**2 / 6.0)[:, None] * second[i + 1]
+    return basis
 
 
 def _smooth(x: np.ndarray, y: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
@@ -154,8 +181,6 @@ def fit(e_grid: np.ndarray, raw: np.ndarray, ratio: bool = False, points: int = 
     ``failed``: the fraction of sets that gave NaN. Fewer than 5 usable grid points (3 sets
     at least) give an empty belt, which :func:`correct` refuses to invert.
     """
-    from scipy.interpolate import CubicSpline
-
     e_grid = np.asarray(e_grid, dtype=float)
     ok = np.isfinite(raw)
     n = ok.sum(axis=1)
@@ -174,7 +199,8 @@ def fit(e_grid: np.ndarray, raw: np.ndarray, ratio: bool = False, points: int = 
     s_fit = np.exp(log_s)
     w = counts / s_fit**2
     centre = np.ones_like(x) if ratio else x
-    bias, hat, scatter = _smooth(-x, means[use][order] - centre, w)  # in e (increasing -e, the order of u)
+    along = u if ratio else -x  # a ratio tends to 1 like a power of 1 - e; a bias is smoothest in e (-e: the order of u)
+    bias, hat, scatter = _smooth(along, means[use][order] - centre, w)
     cov = (hat / w) @ hat.T * max(scatter, 1.0)
     sets = raw[use][order]
     # scatter about each point's own mean (the mean curve's error is var_mean's), in units of the
@@ -187,11 +213,11 @@ def fit(e_grid: np.ndarray, raw: np.ndarray, ratio: bool = False, points: int = 
     ])
     dense = np.linspace(x.min(), x.max(), points)
     ud = np.log1p(-dense)
-    basis = CubicSpline(-x, np.eye(u.size), bc_type="natural")(-dense)  # (dense, grid): the natural spline through the fitted values
+    basis = _spline_basis(along, ud if ratio else -dense)  # (dense, grid): the natural spline through the fitted values
     mean = (1.0 if ratio else dense) + basis @ bias
     var_mean = np.einsum("ij,jk,ik->i", basis, cov, basis)
-    spread = np.sqrt(np.exp(CubicSpline(u, log_s, bc_type="natural")(ud)) ** 2 + var_mean)
-    basis_s = CubicSpline(u, np.eye(u.size), bc_type="natural")(ud)
+    basis_s = _spline_basis(u, ud)
+    spread = np.sqrt(np.exp(basis_s @ log_s) ** 2 + var_mean)
     var_log_s = np.einsum("ij,jk,ik->i", basis_s, (hat_s / (2.0 * (counts - 1.0))) @ hat_s.T * max(scatter_s, 1.0), basis_s)
     widen = _t_quantile(1.0 / (2.0 * var_log_s)) / Z95  # a spread estimated from few sets: Student's t
     return Belt(dense, mean, spread, failed, widen * np.interp(ud, u, q[:, 0]), widen * np.interp(ud, u, q[:, 1]))
