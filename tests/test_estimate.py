@@ -279,7 +279,7 @@ def test_g_interval_covers_the_true_g():
             covered[i] += np.mean((ends[:, 0] <= 1.0) & (1.0 <= ends[:, 1])) / 6
     assert np.all((covered >= 0.93) & (covered <= 0.97)), covered
     assert in_sample == pytest.approx(0.95, abs=0.02)
-    assert math.isnan(belt.g_interval(band, 1.0, math.nan)[0])
+    assert math.isnan(belt.g_interval(band, b, g_belt, math.nan, 1.0)[0])
 
 
 def test_calibration_name_changes_with_every_setting():

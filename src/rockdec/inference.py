@@ -155,7 +155,8 @@ def estimate(records: list[Record], *, cache_dir, g: float | None = None, settin
     ``"unreached"`` when the raw value lies beyond what any calibrated ``e`` produces on
     average, and ``e`` is then ``None``, :func:`beyond`),
     ``g_interval`` (95 %, rad/s^2, :func:`rockdec.belt.g_interval`; ``None`` when ``g`` is
-    given or there is no corrected ``e``; ``g_interval_note`` says which), ``g_coverage`` (the
+    given, or when there is no corrected ``e`` or its interval reaches an end of the
+    calibrated range; ``g_interval_note`` says which), ``g_coverage`` (the
     share of the calibration's simulated record sets whose ``g`` interval held their true
     ``g``, :func:`rockdec.belt.g_calibration_coverage`), ``rockdec_version``,
     ``warnings``, ``calibration`` (file, and whether it came from the cache), and, under
@@ -213,9 +214,10 @@ def estimate(records: list[Record], *, cache_dir, g: float | None = None, settin
     g_belt = belts[measured.G_NAME]
     g_band = belt.g_band(cal, DEFAULT_ESTIMATOR, belts[DEFAULT_ESTIMATOR], g_belt)
     g_value = g if g is not None else belt.correct_g(g_belt, analysis.raw[measured.G_NAME], e_default)
-    g_low, g_high = (math.nan, math.nan) if g is not None else belt.g_interval(g_band, g_value, e_default)
+    e_belt = belts[DEFAULT_ESTIMATOR]
+    g_low, g_high = (math.nan, math.nan) if g is not None else belt.g_interval(g_band, e_belt, g_belt, analysis.raw[DEFAULT_ESTIMATOR], analysis.raw[measured.G_NAME])
     if g is not None and own is not None:
-        low, high = belt.g_interval(g_band, belt.correct_g(g_belt, own.raw[measured.G_NAME], e_default), e_default)
+        low, high = belt.g_interval(g_band, e_belt, g_belt, own.raw[DEFAULT_ESTIMATOR], own.raw[measured.G_NAME])
         if np.isfinite(low) and not low <= g <= high:
             notes.append(
                 f"--g {g:g} lies outside the records' own g, {low:.4g}-{high:.4g} rad/s^2 (calibrated 95 % interval): "
@@ -243,11 +245,11 @@ def estimate(records: list[Record], *, cache_dir, g: float | None = None, settin
         "g_given": g is not None,
         "g_raw": _num(analysis.raw[measured.G_NAME]),
         "g_interval": None if g is not None or not np.isfinite(g_low) else [_num(g_low), _num(g_high)],
-        "g_coverage": None if g is not None else _num(belt.g_calibration_coverage(cal, DEFAULT_ESTIMATOR, belts[DEFAULT_ESTIMATOR], g_belt, g_band)),
+        "g_coverage": None if g is not None else _num(belt.g_calibration_coverage(cal, DEFAULT_ESTIMATOR, e_belt, g_belt, g_band)),
         "g_interval_note": "as given (--g)" if g is not None else (
             "95 % interval: the corrected g over the scatter of the corrected g about the true g on the calibration's "
             "simulated records (the error of the corrected e included)" if np.isfinite(g_low) else
-            "no interval: g is corrected at the corrected e, and there is none"
+            "no interval: g's interval needs a corrected e whose interval lies inside the calibrated range"
         ),
         "points_per_cycle": _num(analysis.points_per_cycle),
         "sigma_y": _num(analysis.sigma_y),
