@@ -282,6 +282,18 @@ def test_g_interval_covers_the_true_g():
     assert math.isnan(belt.g_interval(band, b, g_belt, math.nan, 1.0)[0])
 
 
+def test_the_test_bed_measures_95_percent_on_pools_of_known_curves():
+    """rockdec.belt_study.study on synthetic pools (the test bed's grid of e, two seeds):
+    belts of the calibration's grid and size from one pool, tested on the other, cover
+    about 95 % of e_v's and g's test sets over 0.6-0.98."""
+    pools = [curved_calibration(False, sets=2 * calibration.SETS_PER_E, seed=seed, grid=belt_study.TEST_E) for seed in (11, 12)]
+    table = belt_study.study(pools, names=("e_v",), blocks=2)
+    for name in ("e_v", measured.G_NAME):
+        rows = table[table["estimator"] == name]
+        assert rows["coverage"].mean() == pytest.approx(0.95, abs=0.015), name
+        assert (rows["belts"] == 4).all() and (rows["test_sets"] == 2 * calibration.SETS_PER_E).all()
+
+
 def test_calibration_name_changes_with_every_setting():
     base = calibration.calibration_settings([200_000], 75.0)
     h = calibration.settings_hash(base)

@@ -6,7 +6,10 @@ settings but different seed bases are independent samples of the same distributi
 serves as the belt, the sets of the others as test records, at the calibration's grid and
 at any other ``e`` (:func:`pool` draws sets on any grid of ``e``). The coverage of the 95 %
 interval per ``e`` then comes from hundreds of sets without any analysis code of its own
-(:func:`coverage`).
+(:func:`coverage`, and :func:`g_coverage` for ``g``'s interval; :func:`study` over several
+belts). Run it as ``python -m rockdec.belt_study --samples 200000 --pool-sets 120 200 200 200
+--replicas 1 3 5 6 --out DIR`` (the table of docs/method.md §10; about 15 minutes of
+simulation on 2 idle cores at 200,000 samples, the pools are stored in ``DIR``).
 """
 
 from __future__ import annotations
@@ -98,3 +101,55 @@ def g_coverage(cal: xr.Dataset, test: xr.Dataset, name: str = registry.DEFAULT_E
             }
         )
     return pd.DataFrame(rows)
+
+
+def study(pools: list[xr.Dataset], grid=calibration.E_GRID, sets: int = calibration.SETS_PER_E, names=registry.CANDIDATES,
+          blocks: int = 4, e_range=(0.6, 0.98)) -> pd.DataFrame:
+    """Coverage per true ``e`` and estimator (and ``g``, as ``name = "g"``) of belts built from
+    blocks of ``sets`` sets at the ``grid`` of one pool (up to ``blocks`` per pool), each
+    tested on the sets of every other pool at the ``e`` of ``e_range``; mean over the
+    belts, and the 10 % and 90 % points of a single belt's coverage."""
+    frames = []
+    for i, own in enumerate(pools):
+        others = xr.concat([p for j, p in enumerate(pools) if j != i], "set")
+        test = others.sel(e_true=[e for e in others["e_true"].values if e_range[0] - 1e-9 <= e <= e_range[1] + 1e-9])
+        for k in range(min(blocks, own.sizes["set"] // sets)):
+            cal = own.sel(e_true=list(grid)).isel(set=slice(k * sets, (k + 1) * sets))
+            frames += [coverage(cal, test, names), g_coverage(cal, test).assign(estimator=measured.G_NAME)]
+    rows = pd.concat(frames).groupby(["estimator", "e_true"])
+    return pd.DataFrame({
+        "coverage": rows["coverage"].mean(), "p10": rows["coverage"].quantile(0.1), "p90": rows["coverage"].quantile(0.9),
+        "median_width": rows["median_width"].mean(), "no_interval": rows["no_interval"].mean(), "belts": rows.size(),
+        "test_sets": rows["records"].first(),
+    }).reset_index()
+
+
+def main(argv=None) -> int:
+    """``python -m rockdec.belt_study --samples 200000 --pool-sets 120 200 200 200 --out DIR``:
+    draws the pools (stored in ``DIR``, reused when present) and prints :func:`study`."""
+    import argparse
+    from pathlib import Path
+
+    parser = argparse.ArgumentParser(prog="python -m rockdec.belt_study", description=main.__doc__)
+    parser.add_argument("--samples", type=int, default=200_000)
+    parser.add_argument("--pool-sets", type=int, nargs="+", default=[120, 200, 200, 200], help="sets per e of each pool")
+    parser.add_argument("--replicas", type=int, nargs="+", help="seed base of each pool (default 1, 2, ...)")
+    parser.add_argument("--blocks", type=int, default=4)
+    parser.add_argument("--out", type=Path, required=True)
+    args = parser.parse_args(argv)
+    args.out.mkdir(parents=True, exist_ok=True)
+    pools = []
+    for replica, sets in zip(args.replicas or range(1, len(args.pool_sets) + 1), args.pool_sets):
+        path = args.out / f"pool-{args.samples}-{replica}-{sets}.nc"
+        if not path.is_file():
+            pool(TEST_E, sets, args.samples, replica=replica).to_netcdf(path)
+        pools.append(xr.load_dataset(path))
+    table = study(pools, blocks=args.blocks)
+    with pd.option_context("display.width", 200, "display.max_rows", 500):
+        print(table.pivot(index="e_true", columns="estimator", values="coverage").round(3))
+        print(table.round(4).to_string(index=False))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -12,7 +12,7 @@ their length (:func:`cost`); the command line refuses, before reading the record
 the machine cannot finish soon. Two shortcuts for long records were measured and do not
 cover (README): calibrating on shorter records with the spread scaled by the square
 root of the length ratio (the bias itself moves with the length), and fewer simulated
-sets per ``e`` (the belt's cubic mean then misses the true mean by about 0.001, more
+sets per ``e`` (a cubic mean curve then misses the true mean by about 0.001, more
 than the spread of a record of 20 million samples). Records longer than
 :data:`LONG_SAMPLES` are answered with a warning that says so.
 """
