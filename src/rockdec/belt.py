@@ -261,10 +261,9 @@ def g_band(cal: xr.Dataset, name: str, e_belt: Belt, g_belt: Belt) -> Belt:
     ``e`` read by estimator ``name`` (its belt ``e_belt``; ``g_belt`` the belt of ``g``).
 
     Each set's ``g`` is corrected as a record's is (:func:`correct_g` at the set's corrected
-    ``e``; a set whose raw value lies beyond the mean curve gives no ``e``,
-    :func:`rockdec.inference.beyond`), so the ratio holds both the scatter of ``g`` at a
-    given ``e`` and the error of the corrected ``e`` it is divided by, and their
-    correlation; its belt (:func:`fit`) gives :func:`g_interval`.
+    ``e``, when its interval lies inside the calibrated range: :func:`held_e`), so the ratio
+    holds both the scatter of ``g`` at a given ``e`` and the error of the corrected ``e`` it
+    is divided by, and their correlation; its belt (:func:`fit`) gives :func:`g_interval`.
     """
     from rockdec.measured import G_NAME
 
@@ -272,7 +271,7 @@ def g_band(cal: xr.Dataset, name: str, e_belt: Belt, g_belt: Belt) -> Belt:
     raw_g = cal["raw"].sel(name=G_NAME).values
     ratio = np.full(raw_e.shape, np.nan)
     for j, k in zip(*np.nonzero(np.isfinite(raw_e) & np.isfinite(raw_g))):
-        ratio[j, k] = correct_g(g_belt, raw_g[j, k], corrected_e(e_belt, raw_e[j, k]))
+        ratio[j, k] = correct_g(g_belt, raw_g[j, k], held_e(e_belt, raw_e[j, k]))
     return fit(cal["e_true"].values, ratio, ratio=True)
 
 
@@ -285,21 +284,29 @@ def corrected_e(b: Belt, raw: float) -> float:
     return correct(b, raw).value
 
 
+def held_e(b: Belt, raw: float) -> float:
+    """The corrected ``e`` of ``raw`` when its 95 % interval lies inside the calibrated range,
+    else NaN: the ``e`` at which ``g``'s band applies (:func:`g_band`, :func:`g_interval`).
+    An interval that reaches an end of the range holds ``e`` too loosely (on records of
+    20,000 samples nearly every interval reaches ``e = 0.4``), and dividing ``g`` by the
+    ratio at such an ``e`` covered 78-91 % below ``e = 0.8``."""
+    e = corrected_e(b, raw)
+    if not np.isfinite(e):
+        return e
+    c = correct(b, raw)
+    return e if b.e[0] < c.low and c.high < b.e[-1] else float("nan")
+
+
 def g_interval(band: Belt, e_belt: Belt, g_belt: Belt, raw_e: float, raw_g: float) -> tuple[float, float]:
     """95 % interval of the true ``g`` of a record whose raw values are ``raw_e`` (of the
     estimator of ``e_belt``) and ``raw_g``: ``g`` corrected at the corrected ``e``
     (:func:`correct_g`) over the ends of the 95 % band of :func:`g_band` at that ``e``.
 
-    NaN ends when ``e`` has no estimate (:func:`corrected_e`), when its interval reaches an
-    end of the calibrated range (``e`` is then too loosely held for the band at the
-    corrected ``e`` to apply: on records of 20,000 samples below ``e = 0.8`` it covered
-    78-91 %), or when the band is empty or its lower end not positive.
+    NaN ends when ``e`` is not held inside the calibrated range (:func:`held_e`), or when
+    the band is empty or its lower end not positive.
     """
-    e = corrected_e(e_belt, raw_e)
+    e = held_e(e_belt, raw_e)
     if band.e.size == 0 or not np.isfinite(e):
-        return float("nan"), float("nan")
-    c = correct(e_belt, raw_e)
-    if not (e_belt.e[0] < c.low and c.high < e_belt.e[-1]):
         return float("nan"), float("nan")
     g_value = correct_g(g_belt, raw_g, e)
     mean, spread = np.interp(e, band.e, band.mean), np.interp(e, band.e, band.spread)
