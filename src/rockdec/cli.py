@@ -470,7 +470,8 @@ def _estimate_text(res: dict) -> str:
     else:
         g_how = f"read off the record: raw {res['g_raw']:.4g}, corrected for the trigger window's bias"
         if res.get("g_interval"):
-            g_how += f"; 95 % interval [{res['g_interval'][0]:.5g}, {res['g_interval'][1]:.5g}], held on {res['g_coverage']:.0%} of the calibration's records"
+            held = "" if res.get("g_coverage") is None else f", held the true g on {res['g_coverage']:.0%} of the calibration's records"
+            g_how += f"; 95 % interval [{res['g_interval'][0]:.5g}, {res['g_interval'][1]:.5g}]{held}"
     lines = [
         f"records: {', '.join(res['records'])}",
         f"  {res['samples']} samples at dt = {res['dt']:.6g} s ({res['nan_samples']} NaN skipped); rms angle "
