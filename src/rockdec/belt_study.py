@@ -84,8 +84,9 @@ def g_coverage(cal: xr.Dataset, test: xr.Dataset, name: str = registry.DEFAULT_E
     """Per true ``e`` of ``test``: coverage of the 95 % interval of ``g``
     (:func:`rockdec.belt.g_interval`, ``e`` corrected with estimator ``name``) over the
     test sets that get one (their ``g`` row is in units of the true ``g``, so the interval
-    must hold 1), its median relative width, and the share of sets with no interval (no
-    corrected ``e``: the raw value lies beyond the mean curve)."""
+    must hold 1), its median relative width, and the share of sets with no interval (``e``
+    not held inside the calibrated range, :func:`rockdec.belt.held_e`); NaN coverage when
+    none has one."""
     b, g_belt = belt.belt(cal, name), belt.belt(cal, measured.G_NAME)
     band = belt.g_band(cal, name, b, g_belt)
     rows = []
@@ -95,7 +96,7 @@ def g_coverage(cal: xr.Dataset, test: xr.Dataset, name: str = registry.DEFAULT_E
             {
                 "e_true": float(e),
                 "records": int(ends.shape[0]),
-                "coverage": float(np.sum((ends[:, 0] <= 1.0) & (1.0 <= ends[:, 1])) / max(np.isfinite(ends[:, 0]).sum(), 1)),
+                "coverage": float(np.sum((ends[:, 0] <= 1.0) & (1.0 <= ends[:, 1])) / np.isfinite(ends[:, 0]).sum()) if np.isfinite(ends[:, 0]).any() else float("nan"),
                 "median_width": float(np.nanmedian(ends[:, 1] - ends[:, 0])) if np.isfinite(ends).any() else float("nan"),
                 "no_interval": float(np.mean(~np.isfinite(ends[:, 0]))),
             }
