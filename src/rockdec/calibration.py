@@ -59,11 +59,13 @@ from rockdec.validate import InputError
 
 log = logging.getLogger(__name__)
 
-#: True ``e`` of the calibration grid: denser where the estimators bend (near 1).
-E_GRID = (0.4, 0.5, 0.6, 0.7, 0.75, 0.8, 0.85, 0.88, 0.91, 0.93, 0.95, 0.965, 0.98, 0.99, 0.995)
+#: True ``e`` of the calibration grid: about evenly spaced in ``log(1 - e)``, in which the
+#: spread of the estimators is smooth (:mod:`rockdec.belt`); with :data:`SETS_PER_E`, half
+#: the simulated samples of 15 points of 40 sets at the same coverage (docs/method.md §10).
+E_GRID = (0.4, 0.55, 0.7, 0.8, 0.865, 0.92, 0.95, 0.972, 0.985, 0.995)
 
 #: Simulated record sets per grid point.
-SETS_PER_E = 40
+SETS_PER_E = 30
 
 #: Pilot sets of each iteration of the step search, and the most samples of a pilot record
 #: (:func:`step_for`); under a coloured load a pilot record is as long as the record, up to

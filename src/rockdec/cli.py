@@ -502,7 +502,7 @@ GLOSSARY = """glossary:
              (near 95 % means the interval can be trusted)
   *          the reported e: of e_0, e4 and e_v, those with a value, an interval narrower
              than the calibrated range, and a coverage that holds (at least 95 % less
-             the binomial error of the calibration's sets, 93.3 % for 600), the one with
+             the binomial error of the calibration's sets, 92.5 % for 300), the one with
              the narrowest interval; none: e is not estimated and the report says why
   record model  what besides e makes the record, and what the calibration simulates:
              the load (white, or low-pass with its pole per sample and its corner in
@@ -535,6 +535,9 @@ def _estimate_text(res: dict) -> str:
         g_how = "given (--g)"
     else:
         g_how = f"read off the record: raw {res['g_raw']:.4g}, corrected for the trigger window's bias"
+        if res.get("g_interval"):
+            held = "" if res.get("g_coverage") is None else f", held the true g on {res['g_coverage']:.0%} of the calibration's records"
+            g_how += f"; 95 % interval [{res['g_interval'][0]:.5g}, {res['g_interval'][1]:.5g}]{held}"
     lines = [
         f"records: {', '.join(res['records'])}",
         f"  {res['samples']} samples at dt = {res['dt']:.6g} s ({res['nan_samples']} NaN skipped); rms angle "

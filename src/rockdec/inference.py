@@ -15,7 +15,7 @@ their length (:func:`cost`); the command line refuses, before reading the record
 the machine cannot finish soon. Two shortcuts for long records were measured and do not
 cover (README): calibrating on shorter records with the spread scaled by the square
 root of the length ratio (the bias itself moves with the length), and fewer simulated
-sets per ``e`` (the belt's cubic mean then misses the true mean by about 0.001, more
+sets per ``e`` (a cubic mean curve then misses the true mean by about 0.001, more
 than the spread of a record of 20 million samples). Records longer than
 :data:`LONG_SAMPLES` are answered with a warning that says so.
 """
@@ -323,8 +323,11 @@ def estimate(
     ``notes``, ``calibrated_range`` and ``beyond``: ``"below"``, ``"above"`` or
     ``"unreached"`` when the raw value lies beyond what any calibrated ``e`` produces on
     average, and ``e`` is then ``None``, :func:`beyond`),
-    ``g_interval`` (``None``: the calibration corrects ``g`` but gives it no interval;
-    ``g_interval_note`` says so), ``rockdec_version``,
+    ``g_interval`` (95 %, rad/s^2, :func:`rockdec.belt.g_interval`; ``None`` when ``g`` is
+    given, or when there is no corrected ``e`` or its interval reaches an end of the
+    calibrated range; ``g_interval_note`` says which), ``g_coverage`` (the
+    share of the calibration's simulated record sets whose ``g`` interval held their true
+    ``g``, :func:`rockdec.belt.g_calibration_coverage`), ``rockdec_version``,
     ``warnings``, ``calibration`` (file, and whether it came from the cache), and, under
     keys starting with ``_``, the analysis and belts for plots.
 
@@ -391,12 +394,15 @@ def estimate(
     shown = per[chosen] if chosen else {"e": None, "interval": [None, None], "coverage": None, "raw": None}
     e_chosen = math.nan if shown["e"] is None else shown["e"]
     g_belt = belts[measured.G_NAME]
+    e_name = chosen or DEFAULT_ESTIMATOR  # the estimator whose corrected e corrects g
+    e_belt = belts[e_name]
+    g_band = belt.g_band(cal, e_name, e_belt, g_belt)
     g_value = g if g is not None else belt.correct_g(g_belt, analysis.raw[measured.G_NAME], e_chosen)
-    if g is not None and own is not None and g_belt.e.size and np.isfinite(e_chosen):
-        own_raw = own.raw[measured.G_NAME]
-        mean, spread = np.interp(e_chosen, g_belt.e, g_belt.mean), np.interp(e_chosen, g_belt.e, g_belt.spread)
-        low, high = own_raw / (mean + belt.Z95 * spread), own_raw / max(mean - belt.Z95 * spread, 1e-12)
-        if not low <= g <= high:
+    no_interval = g is not None or chosen is None
+    g_low, g_high = (math.nan, math.nan) if no_interval else belt.g_interval(g_band, e_belt, g_belt, analysis.raw[e_name], analysis.raw[measured.G_NAME])
+    if g is not None and own is not None:
+        low, high = belt.g_interval(g_band, e_belt, g_belt, own.raw[e_name], own.raw[measured.G_NAME])
+        if np.isfinite(low) and not low <= g <= high:
             notes.append(
                 f"--g {g:g} lies outside the records' own g, {low:.4g}-{high:.4g} rad/s^2 (calibrated 95 % interval): "
                 "the estimate rests on the given g"
@@ -419,10 +425,13 @@ def estimate(
         "g": _num(g_value),
         "g_given": g is not None,
         "g_raw": _num(analysis.raw[measured.G_NAME]),
-        "g_interval": None,
+        "g_interval": None if g is not None or not np.isfinite(g_low) else [_num(g_low), _num(g_high)],
+        "g_coverage": None if no_interval else _num(belt.g_calibration_coverage(cal, e_name, e_belt, g_belt, g_band)),
         "g_interval_note": "as given (--g)" if g is not None else (
-            "no interval: the calibration corrects g's bias at the corrected e but does not give g an interval "
-            "whose coverage has been checked"
+            "95 % interval: the corrected g over the scatter of the corrected g about the true g on the calibration's "
+            "simulated records (the error of the corrected e included)" if np.isfinite(g_low) else
+            "no interval: no e was estimated, and g is corrected at the corrected e" if chosen is None else
+            "no interval: g's interval needs a corrected e whose interval lies inside the calibrated range"
         ),
         "points_per_cycle": _num(analysis.points_per_cycle),
         "sigma_y": _num(analysis.sigma_y),
