@@ -1,4 +1,5 @@
-"""What every workflow script does around its rule's work: the log, user errors, progress.
+"""What every workflow script does around its rule's work: the log, user errors, progress;
+and :func:`step`, the same for a rule that runs inside the Snakemake process.
 
 A workflow script (``workflow/scripts/*.py``) is a thin adapter: its work sits in a
 function of the ``snakemake`` object, called as ``job.run(main, snakemake)`` under an
@@ -64,6 +65,34 @@ def run(main, smk) -> None:
             raise SystemExit(1) from None
         finally:
             sys.stderr = console
+
+
+def step(rule: str, log: str, *args) -> None:
+    """Run the rule ``rule`` of the :mod:`rockdec.steps` function of that name, ``*args``,
+    inside the Snakemake process (a ``run:`` rule; the workflow's default profile runs those
+    in threads, ``force-use-threads``): the tables and figures read finished products and
+    take a fraction of a second once the libraries are loaded, so they load them once for
+    the whole run instead of starting Python for each.
+
+    The log (``log``) gets a line at the start and at the end; an error the user can fix
+    (:class:`rockdec.validate.InputError`) is written there as its one sentence and raised
+    again for Snakemake to report; any other exception leaves its traceback there too.
+    Standard error is left alone: the Snakemake process and its other threads share it.
+    """
+    from rockdec import steps
+
+    start = time.perf_counter()
+    with open(log, "w") as out:
+        print(f"{rule}: started", file=out, flush=True)
+        try:
+            getattr(steps, rule)(*args)
+        except InputError as exc:
+            print(f"rockdec: error: {exc}", file=out, flush=True)
+            raise
+        except Exception:
+            traceback.print_exc(file=out)
+            raise
+        print(f"{rule}: done in {time.perf_counter() - start:.1f} s", file=out, flush=True)
 
 
 @contextlib.contextmanager

@@ -32,10 +32,8 @@ rule fig1b:
     benchmark:
         "results/{scene}/benchmarks/fig1b.tsv"
     threads: 1
-    conda:
-        "../envs/rockdec.yaml"
-    script:
-        "../scripts/fig_1b.py"
+    run:
+        job.step(rule, log[0], [output.png, output.pdf])
 
 
 rule fig2:
@@ -51,10 +49,8 @@ rule fig2:
     benchmark:
         "results/{scene}/benchmarks/fig2.tsv"
     threads: 1
-    conda:
-        "../envs/rockdec.yaml"
-    script:
-        "../scripts/fig_2.py"
+    run:
+        job.step(rule, log[0], input.sim, input.sig, [output.png, output.pdf])
 
 
 rule fig3:
@@ -69,10 +65,8 @@ rule fig3:
     benchmark:
         "results/{scene}/benchmarks/fig3.tsv"
     threads: 1
-    conda:
-        "../envs/rockdec.yaml"
-    script:
-        "../scripts/fig_3.py"
+    run:
+        job.step(rule, log[0], input.est, [output.png, output.pdf])
 
 
 rule fig4:
@@ -87,10 +81,8 @@ rule fig4:
     benchmark:
         "results/{scene}/benchmarks/fig4.tsv"
     threads: 1
-    conda:
-        "../envs/rockdec.yaml"
-    script:
-        "../scripts/fig_4.py"
+    run:
+        job.step(rule, log[0], input.est, [output.png, output.pdf])
 
 
 rule fig_ev:
@@ -106,7 +98,5 @@ rule fig_ev:
     benchmark:
         "results/{scene}/benchmarks/fig_ev.tsv"
     threads: 1
-    conda:
-        "../envs/rockdec.yaml"
-    script:
-        "../scripts/fig_ev.py"
+    run:
+        job.step(rule, log[0], input.sig, input.est, [output.png, output.pdf])
