@@ -21,10 +21,14 @@ calibrations stale (their name hashes the source of the modules that build them)
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
-import xarray as xr
+
+if TYPE_CHECKING:  # annotations only: xarray loads where a function needs it
+    import xarray as xr
+
+    from rockdec import ncread
 
 #: Two-sided normal quantile of the 95 % interval.
 Z95 = 1.959963984540054
@@ -51,7 +55,7 @@ class Belt(NamedTuple):
     failed: float
 
 
-def belt(cal: xr.Dataset, name: str, points: int = 4001) -> Belt:
+def belt(cal: ncread.Stored | xr.Dataset, name: str, points: int = 4001) -> Belt:
     """The belt of estimator ``name`` on a dense grid of ``points`` values of ``e``.
 
     ``failed``: the fraction of calibration sets on which the estimator gave NaN. Fewer
@@ -82,7 +86,7 @@ def belt(cal: xr.Dataset, name: str, points: int = 4001) -> Belt:
     return Belt(dense, mean, spread, float(1.0 - ok.sum() / ok.size))
 
 
-def belts(cal: xr.Dataset) -> dict[str, Belt]:
+def belts(cal: ncread.Stored | xr.Dataset) -> dict[str, Belt]:
     """The belt of every name the calibration holds (each estimator of ``e``, and ``g``)."""
     return {str(name): belt(cal, str(name)) for name in cal["name"].values}
 
@@ -134,7 +138,7 @@ def correct(b: Belt, observed: float) -> Corrected:
     return Corrected(value, float(low), float(high), tuple(notes))
 
 
-def calibration_coverage(cal: xr.Dataset, name: str, b: Belt) -> float:
+def calibration_coverage(cal: ncread.Stored | xr.Dataset, name: str, b: Belt) -> float:
     """Share of the calibration's own record sets whose 95 % interval (:func:`correct`)
     holds their true ``e``: the coverage of the interval at the record's own settings.
 

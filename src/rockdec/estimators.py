@@ -31,16 +31,18 @@ Units: ``r`` and ``d`` in rad, ``dt`` and the fitted times in s, slopes in rad/s
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
-import xarray as xr
 from numba import njit
 
 from rockdec import __version__, registry
 from rockdec import validate as checks
 from rockdec.fits import DEFAULT_FIT_POINTS, MIN_FIT_POINTS
 from rockdec.registry import ESTIMATORS
+
+if TYPE_CHECKING:  # annotations only: xarray loads where a function needs it
+    import xarray as xr
 
 LOCAL_ESTIMATORS = ("e1", "e2", "e3", "e4")
 """The estimators of eq. 27, computed from one set of half-cycle fits (:func:`_local_measures`)."""
@@ -577,6 +579,8 @@ def estimate_cube(
     dimension ``estimator`` (:data:`rockdec.registry.ESTIMATORS`) first; NaN where an estimator failed
     (:func:`estimate_all` on that signature says why).
     """
+    import xarray as xr
+
     dt, points = _check_options(dt, fit_points, with_dv=dv_signature is not None)
     common = dict(
         dask="parallelized",
@@ -621,6 +625,8 @@ def extrapolate(e_hat: xr.DataArray, weights: xr.DataArray | None = None) -> xr.
     fitted at once (:func:`_extrapolate_rows`). Returns ``e_hat0`` (value at zero window),
     ``e_hat0_stderr`` and ``slope``; reasons are dropped (NaN stays NaN).
     """
+    import xarray as xr
+
     window = e_hat["window"]
     w = window if weights is None else weights
     value, stderr, slope = xr.apply_ufunc(
