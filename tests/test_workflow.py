@@ -204,7 +204,7 @@ def test_editing_a_figures_rule_code_reruns_only_that_figure(workflow):
     assert code == 0 and job_stats(out) == {}, out
     rules = root / "workflow" / "rules" / "figures.smk"
     before = rules.read_text()
-    call = "job.step(rule, log[0], input.est, [output.png, output.pdf])"
+    call = "in_snakemake.step(rule, log[0], input.est, [output.png, output.pdf])"
     at = before.index(call, before.index("rule fig3:"))
     rules.write_text(before[:at] + call.replace("png, output.pdf", "pdf, output.png") + before[at + len(call):])
     try:

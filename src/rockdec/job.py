@@ -1,5 +1,4 @@
-"""What every workflow script does around its rule's work: the log, user errors, progress;
-and :func:`step`, the same for a rule that runs inside the Snakemake process.
+"""What every workflow script does around its rule's work: the log, user errors, progress.
 
 A workflow script (``workflow/scripts/*.py``) is a thin adapter: its work sits in a
 function of the ``snakemake`` object, called as ``job.run(main, snakemake)`` under an
@@ -31,7 +30,6 @@ import json
 import os
 import socket
 import sys
-import threading
 import time
 import traceback
 from pathlib import Path
@@ -40,11 +38,6 @@ from rockdec.validate import InputError
 
 #: Seconds an orphaned job is given to stop after SIGTERM before it is killed.
 STOP_WAIT_S = 10.0
-
-#: One :func:`step` at a time in a process: matplotlib (its fonts) and the HDF5 library
-#: under netCDF4 are not safe to use from two threads at once.
-_STEP_LOCK = threading.Lock()
-
 
 def run(main, smk) -> None:
     """Call ``main(smk)`` with standard error sent to the rule's log (``smk.log[0]``)."""
@@ -70,35 +63,6 @@ def run(main, smk) -> None:
             raise SystemExit(1) from None
         finally:
             sys.stderr = console
-
-
-def step(rule: str, log: str, *args) -> None:
-    """Run the rule ``rule`` of the :mod:`rockdec.steps` function of that name, ``*args``,
-    inside the Snakemake process (a ``run:`` rule; the workflow's default profile runs those
-    in threads, ``force-use-threads``): the tables and figures read finished products and
-    take a fraction of a second once the libraries are loaded, so they load them once for
-    the whole run instead of starting Python for each. Steps run one at a time
-    (:data:`_STEP_LOCK`); the compute rules' scripts run beside them.
-
-    The log (``log``) gets a line at the start and at the end; an error the user can fix
-    (:class:`rockdec.validate.InputError`) is written there as its one sentence and raised
-    again for Snakemake to report; any other exception leaves its traceback there too.
-    Standard error is left alone: the Snakemake process and its other threads share it.
-    """
-    with _STEP_LOCK, open(log, "w") as out:
-        start = time.perf_counter()
-        print(f"{rule}: started", file=out, flush=True)
-        try:
-            from rockdec import steps
-
-            getattr(steps, rule)(*args)
-        except InputError as exc:
-            print(f"rockdec: error: {exc}", file=out, flush=True)
-            raise
-        except Exception:
-            traceback.print_exc(file=out)
-            raise
-        print(f"{rule}: done in {time.perf_counter() - start:.1f} s", file=out, flush=True)
 
 
 @contextlib.contextmanager

@@ -11,6 +11,7 @@ the signatures skip every segment that holds one, and the count is reported.
 from __future__ import annotations
 
 import hashlib
+import warnings
 from pathlib import Path
 from typing import NamedTuple
 
@@ -97,7 +98,9 @@ def _plain_columns(path: Path, sep: str, column: str) -> dict[str, np.ndarray] |
             names = [n.strip() for n in (header.split() if sep == r"\s+" else header.split(sep))]
             if column not in names or "" in names or len(set(names)) < len(names):
                 return None
-            values = np.loadtxt(f, delimiter=None if sep == r"\s+" else sep, comments="#", ndmin=2, dtype=np.float64)
+            with warnings.catch_warnings():  # a file of a header alone: pandas names it
+                warnings.simplefilter("ignore", UserWarning)
+                values = np.loadtxt(f, delimiter=None if sep == r"\s+" else sep, comments="#", ndmin=2, dtype=np.float64)
     except (ValueError, UnicodeDecodeError):
         return None
     if values.shape[1] != len(names) or not values.size or not np.isfinite(values).all():

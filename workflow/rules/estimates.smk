@@ -15,7 +15,7 @@ rule estimates:
     params:
         options=lambda w: estimate_options(w.scene),
     run:
-        job.step(rule, log[0], input[0], output.estimates, output.csv, output.md, params.options)
+        in_snakemake.step(rule, log[0], input[0], output.estimates, output.csv, output.md, params.options)
 
 
 rule table_readings:
@@ -35,7 +35,7 @@ rule table_readings:
     params:
         weights=lambda w: scene(w.scene)["estimates"]["weights"],
     run:
-        job.step(rule, log[0], input[0], output.estimates, output.csv, output.md, params.weights)
+        in_snakemake.step(rule, log[0], input[0], output.estimates, output.csv, output.md, params.weights)
 
 
 rule choices:

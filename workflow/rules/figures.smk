@@ -1,7 +1,7 @@
 # Figures: one compute rule (the signature of the stored series, paper fig. 2c) and one plot
 # rule per figure. Plot rules only read NetCDF products, so changing a plot never reruns a
 # simulation; each also lists the plotting module, so editing it redraws every figure. They
-# run inside the Snakemake process (run: with rockdec.job.step, common.smk): matplotlib and
+# run inside the Snakemake process (run: with rockdec.in_snakemake.step, common.smk): matplotlib and
 # xarray load once for all of them.
 rule stored_signature:
     """Signature cube of the stored series pooled into one group (the estimate of fig. 2c)."""
@@ -35,7 +35,7 @@ rule fig1b:
         "results/{scene}/benchmarks/fig1b.tsv"
     threads: 1
     run:
-        job.step(rule, log[0], [output.png, output.pdf])
+        in_snakemake.step(rule, log[0], [output.png, output.pdf])
 
 
 rule fig2:
@@ -52,7 +52,7 @@ rule fig2:
         "results/{scene}/benchmarks/fig2.tsv"
     threads: 1
     run:
-        job.step(rule, log[0], input.sim, input.sig, [output.png, output.pdf])
+        in_snakemake.step(rule, log[0], input.sim, input.sig, [output.png, output.pdf])
 
 
 rule fig3:
@@ -68,7 +68,7 @@ rule fig3:
         "results/{scene}/benchmarks/fig3.tsv"
     threads: 1
     run:
-        job.step(rule, log[0], input.est, [output.png, output.pdf])
+        in_snakemake.step(rule, log[0], input.est, [output.png, output.pdf])
 
 
 rule fig4:
@@ -84,7 +84,7 @@ rule fig4:
         "results/{scene}/benchmarks/fig4.tsv"
     threads: 1
     run:
-        job.step(rule, log[0], input.est, [output.png, output.pdf])
+        in_snakemake.step(rule, log[0], input.est, [output.png, output.pdf])
 
 
 rule fig_ev:
@@ -101,4 +101,4 @@ rule fig_ev:
         "results/{scene}/benchmarks/fig_ev.tsv"
     threads: 1
     run:
-        job.step(rule, log[0], input.sig, input.est, [output.png, output.pdf])
+        in_snakemake.step(rule, log[0], input.sig, input.est, [output.png, output.pdf])
