@@ -310,7 +310,8 @@ def test_calibrating_is_announced_only_when_a_calibration_is_built(tmp_path, cap
     assert "calibrating" not in again.err
     res = json.loads(again.out)
     assert res["calibration"]["cached"] is True and res["rockdec_version"] == __version__
-    assert res["g_interval"] is None and "no interval" in res["g_interval_note"]
+    low, high = res["g_interval"]
+    assert low < res["g"] < high and "95 % interval" in res["g_interval_note"] and 0.9 <= res["g_coverage"] <= 1.0
 
 
 @pytest.mark.parametrize("raw, side, shown", [(0.39, "below", "< 0.400"), (1.0, "above", "> 0.995"), (0.7, None, "0.7000")])
@@ -329,12 +330,28 @@ def test_a_corrected_value_at_the_end_of_the_calibrated_range_is_shown_as_a_boun
     res = {"records": ["r.csv"], "samples": 1000, "dt": 0.01, "nan_samples": 0, "sigma_y": 0.01, "points_per_cycle": 75.0,
            "g": 1.0, "g_given": True, "g_raw": 1.0, "calibration": {"file": "c.nc", "cached": True, "seconds": 0.0},
            "estimators": {"e_v": est}, "estimator": "e_v", "e": est["e"], "interval": est["interval"], "coverage": 0.95,
-           "warnings": []}
+           "warnings": [], "record_model": None, "selection": [{"estimator": "e_v", "holds": True}]}
     row = next(line for line in _estimate_text(res).splitlines() if line.startswith("e_v *"))
     assert shown in row
     if side:
         assert "0.4000 " not in row.split("[")[0] and "0.9950 " not in row.split("[")[0]  # the end is not printed as a value
         assert f"{side} the calibrated range" in _estimate_text(res)
+
+
+def test_the_g_line_of_the_report_gives_g_s_interval_and_keeps_a_given_g_as_given():
+    from rockdec.cli import _estimate_text
+
+    est = {"raw": 0.9, "e": 0.9, "beyond": None, "calibrated_range": [0.4, 0.995], "interval": [0.88, 0.92],
+           "coverage": 0.95, "triggers": 100, "notes": []}
+    res = {"records": ["r.csv"], "samples": 1000, "dt": 0.01, "nan_samples": 0, "sigma_y": 0.01, "points_per_cycle": 75.0,
+           "g": 1.02, "g_given": False, "g_raw": 0.99, "g_interval": [0.97, 1.08], "g_coverage": 0.94,
+           "calibration": {"file": "c.nc", "cached": True, "seconds": 0.0}, "estimators": {"e_v": est}, "estimator": "e_v",
+           "e": 0.9, "interval": [0.88, 0.92], "coverage": 0.95, "warnings": []}
+    line = next(line for line in _estimate_text(res).splitlines() if "restoring acceleration" in line)
+    assert "g = 1.02 rad/s^2" in line and "95 % interval [0.97, 1.08]" in line and "on 94% of the calibration's records" in line
+    given = {**res, "g": 1.0, "g_given": True, "g_interval": None, "g_coverage": None}
+    line = next(line for line in _estimate_text(given).splitlines() if "restoring acceleration" in line)
+    assert "g = 1 rad/s^2 (given (--g))" in line and "interval" not in line
 
 
 def test_readme_explains_every_estimator_and_word_of_the_estimate_report():

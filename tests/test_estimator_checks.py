@@ -4,7 +4,10 @@ Whatever an estimator computes, it must: recover ``e`` from the ideal responses 
 simplified model (eqs. 4, 6, in closed form), be invariant to the scales of angle and time,
 answer a NaN window with NaN and a reason, and give the same value through the labelled
 cube (:func:`rockdec.estimators.estimate_cube`) as on one record
-(:func:`rockdec.estimators.estimate_all`). A new estimator passes these before anything else.
+(:func:`rockdec.estimators.estimate_all`), and through the workflow's cube path as through
+the analysis of a measured record (:func:`rockdec.measured.analyse`): one analysis core
+(:func:`rockdec.estimators.window_estimates`, :func:`rockdec.estimators.zero_window`). A
+new estimator passes these before anything else.
 """
 
 from __future__ import annotations
@@ -14,7 +17,7 @@ import pytest
 import xarray as xr
 from test_estimators import A, G, free_rocking, t1_of, through_impact
 
-from rockdec import registry
+from rockdec import estimators, measured, registry, replicates, signatures, simulate
 from rockdec.estimators import DEFAULT_FIT_POINTS, estimate_all, estimate_cube
 
 NAMES = registry.ESTIMATORS
@@ -103,3 +106,88 @@ def test_docs_list_every_registered_estimator():
     for spec in registry.REGISTRY:
         assert f"`{spec.name}`" in method, spec.name
     assert "registry" in (docs / "adding-an-estimator.md").read_text()
+
+
+def sums_of(r, d, count=1.0):
+    """Signature sums and counts ``(trigger, window, lag)`` whose signatures are the two-sided
+    ``D_a`` with even part ``r`` (``r`` mirrored) and ``D_v`` ``d``, each from ``count``
+    triggers (``r`` and ``d`` one row per window, ``d`` of ``2 len(r) - 1`` lags)."""
+    two_sided = np.concatenate([r[..., :0:-1], r], axis=-1)
+    sums = count * np.stack([two_sided, d])
+    return sums, np.full(sums.shape[:-1], count)
+
+
+@pytest.mark.parametrize("e", (0.8, 0.95))
+def test_core_recovers_e_and_g_from_ideal_sums_at_any_count(e):
+    """The analysis core on sums of ideal signatures (eqs. 4, 6): every estimator within
+    :data:`TOLERANCE` of ``e``, ``g`` = ``G`` (``2 c1/t1^2`` of the free flight), and the
+    same values whatever the number of triggers pooled (only ``sum/count`` matters)."""
+    r, _, dt = ideal_signatures(e)
+    n_lag = r.size - 1
+    d = through_impact(e, dt * np.arange(-n_lag, n_lag + 1))
+    rows = np.stack([r, r]), np.stack([d, d])  # two windows
+    values = estimators.window_estimates(*sums_of(*rows), dt)
+    assert values.shape == (len(estimators.COLUMNS), 2)
+    np.testing.assert_allclose(values[: len(NAMES)], e, atol=TOLERANCE)
+    np.testing.assert_allclose(values[estimators.COLUMNS.index(estimators.G_NAME)], G, rtol=1e-9)
+    np.testing.assert_allclose(estimators.window_estimates(*sums_of(*rows, count=37.0), dt), values, rtol=1e-12)
+
+
+def test_count_weights_are_the_counts_of_each_estimators_trigger():
+    """``weights="count"`` weights each estimator by its own trigger's counts
+    (:func:`rockdec.registry.trigger`); ``"window"`` by the window sizes (paper §5)."""
+    rng = np.random.default_rng(3)
+    windows = np.arange(1, 7) / 6
+    values = 0.9 + 0.01 * rng.standard_normal((len(estimators.COLUMNS), windows.size))
+    counts = np.stack([np.arange(10, 70, 10), np.array([90, 5, 40, 2, 60, 30])])
+    for weights in ("window", "count"):
+        value, stderr, slope = estimators.zero_window(windows, values, counts, weights)
+        for k, name in enumerate(NAMES):
+            w = windows if weights == "window" else counts[signatures.TRIGGERS.index(registry.trigger(name))]
+            expected = estimators.extrapolate_to_zero(windows, values[k], w)
+            np.testing.assert_array_equal([value[k], stderr[k], slope[k]], expected[:3])
+    with pytest.raises(ValueError, match="unknown extrapolation weights"):
+        estimators.zero_window(windows, values, counts, "triggers")
+
+
+@pytest.fixture(scope="module")
+def one_record():
+    cal = simulate.calibrate_dt(e=0.9, g=G, sigma_p=0.003, points_per_cycle=75)
+    theta, _ = simulate.simulate_block([3], 30_000, dt=cal["dt"], g=G, e=0.9, sigma_p=0.003, burn_in=cal["burn_in"])
+    return theta[0], cal["dt"]
+
+
+@pytest.mark.parametrize("use_dask", [False, True])
+@pytest.mark.parametrize("weights", ["window", "count"])
+def test_cube_path_equals_the_analysis_of_a_measured_record(one_record, use_dask, weights):
+    """The workflow's path (a signature cube, :func:`rockdec.replicates.replicate_curves`,
+    :func:`rockdec.replicates.extrapolated`) on a record, at the trigger levels and lag range
+    :func:`rockdec.measured.analyse` chose for it, gives its window curves, ``g`` and
+    zero-window values to 1e-12."""
+    theta, dt = one_record
+    analysis = measured.analyse([theta], dt, {"weights": weights})
+    y = theta - theta.mean()
+    sigma_ydot = float(np.sqrt(np.mean((np.diff(y) / dt) ** 2)))
+    series = xr.DataArray(y[None], dims=("seed", "time"), attrs={"dt": dt})
+    cube = signatures.signature_cube(series, sigma_y=analysis.sigma_y, sigma_ydot=sigma_ydot, n_lag=analysis.n_lag)
+    if use_dask:
+        cube = cube.chunk({"seed": 1})
+    cube = cube.assign_coords(replicate=("seed", [0]))
+    window = estimators.window_cube(cube, DEFAULT_FIT_POINTS)
+    assert (window["e_hat"].chunks is not None) == use_dask  # lazy stays lazy
+    np.testing.assert_allclose(window["g_hat"].isel(seed=0).values, analysis.per_window["g"], rtol=1e-12)
+    est = replicates.extrapolated(replicates.replicate_curves(cube, fit_points=DEFAULT_FIT_POINTS), weights).compute()
+    for name in NAMES:
+        np.testing.assert_allclose(est["e_hat"].sel(estimator=name, replicate=0).values, analysis.per_window[name], rtol=1e-12)
+        np.testing.assert_allclose(est["e_hat0"].sel(estimator=name, replicate=0).values, analysis.raw[name], rtol=1e-12)
+    np.testing.assert_array_equal(est["count"].sel(replicate=0).values, np.stack([analysis.count["a"], analysis.count["v"]]))
+
+
+def test_window_cube_refuses_a_bad_step_or_fit_before_computing(one_record):
+    theta, dt = one_record
+    series = xr.DataArray(theta[None, :6000], dims=("seed", "time"), attrs={"dt": dt}).chunk({"seed": 1})
+    cube = signatures.signature_cube(series, sigma_y=float(theta.std()), sigma_ydot=1.0, n_lag=40)
+    with pytest.raises(ValueError, match="dt"):
+        estimators.window_cube(cube.assign_attrs(dt=-1.0))
+    with pytest.raises(ValueError, match="fit_points=2"):
+        estimators.window_cube(cube, 2)

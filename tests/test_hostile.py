@@ -854,16 +854,16 @@ def test_a_long_record_is_warned_that_its_interval_may_cover_less(rocking, tiny_
     assert any("narrower than the accuracy" in w for w in res["warnings"])
 
 
-def test_a_20_million_sample_record_is_refused_with_its_time_unless_yes(tmp_path, capsys, monkeypatch):
+def test_a_40_million_sample_record_is_refused_with_its_time_unless_yes(tmp_path, capsys, monkeypatch):
     monkeypatch.setattr(calibration, "E_GRID", FULL_CALIBRATION[0])
     monkeypatch.setattr(calibration, "SETS_PER_E", FULL_CALIBRATION[1])
     path = tmp_path / "long.npy"
-    with open(path, "wb") as handle:  # a header for 20 million float64 samples, then a hole
-        np.lib.format.write_array_header_1_0(handle, {"descr": "<f8", "fortran_order": False, "shape": (20_000_000,)})
-        handle.truncate(handle.tell() + 8 * 20_000_000)
-    seconds, _ = inference.cost(20_000_000, False, False)
+    with open(path, "wb") as handle:  # a header for 40 million float64 samples, then a hole
+        np.lib.format.write_array_header_1_0(handle, {"descr": "<f8", "fortran_order": False, "shape": (40_000_000,)})
+        handle.truncate(handle.tell() + 8 * 40_000_000)
+    seconds, _ = inference.cost(40_000_000, False, False)
     assert seconds > 600
-    refused(["estimate", str(path), "--dt", "0.01", "--cache", str(tmp_path / "c")], tmp_path, capsys, ["2e+07 samples", "min", "--yes"])
+    refused(["estimate", str(path), "--dt", "0.01", "--cache", str(tmp_path / "c")], tmp_path, capsys, ["4e+07 samples", "min", "--yes"])
 
 
 ESTIMATE_PROCESS = """

@@ -204,7 +204,9 @@ def validate(config: dict, source: str | Path = DEFAULT_PATH, overrides: dict | 
                 fix(where),
             )
         try:
-            Load.from_dict(exc["load"])
+            load = Load.from_dict(exc["load"])
+            if exc["load"].get("file") is not None:  # the table read, so the scene (and its rules' params) carry it
+                exc["load"] = load.to_dict()
         except checks.InputError as err:
             raise _field_error(f"scenes.{name}.excitation.load", str(err).rstrip("."), fix(f"scenes.{name}.excitation.load")) from None
         floor = min_points_per_cycle(scene["system"]["e"], scene["signatures"]["level"])

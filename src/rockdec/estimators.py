@@ -19,10 +19,18 @@ to zero window by weighted least squares (§5).
 Kernels are numba functions on NumPy arrays that never raise on bad data: a NaN comes with
 an integer reason code (:data:`_REASONS`). :func:`_estimate_rows` runs every estimator on
 a batch of signatures ``r[n, lag_pos]``, ``d[n, lag]`` and writes each into its column of
-:mod:`rockdec.registry`; :func:`estimate_cube` (labelled, xarray/Dask) hands it whole
-blocks and keeps the values, :func:`estimate_all` hands it one signature and turns the
-codes into reasons; :func:`half_cycle` (the fits of eq. 27, which also give ``g``) calls the
-same kernels. :func:`extrapolate` is batched NumPy over every row at once.
+:mod:`rockdec.registry`, then ``g = 2 c1/t1^2`` (eq. 4) from the fits of eq. 27
+(:data:`COLUMNS`); :func:`estimate_cube` (labelled, xarray/Dask) hands it whole blocks of
+signatures and keeps the values, :func:`estimate_all` hands it one signature and turns the
+codes into reasons; :func:`half_cycle` (the fits of eq. 27) calls the same kernels.
+:func:`extrapolate` is batched NumPy over every row at once.
+
+The analysis core, which every analysis of records runs (the workflow, ``rockdec
+estimates``, :func:`rockdec.measured.analyse` and so ``rockdec estimate`` and the
+calibration): :func:`window_estimates` takes pooled signature sums and counts of both
+triggers to every column at every window, :func:`zero_window` extrapolates every estimator
+with the weights of :func:`extrapolation_weights`; :func:`window_cube` and
+:func:`extrapolate` are their labelled wrappers (``xr.apply_ufunc``, Dask-parallel).
 
 Units: ``r`` and ``d`` in rad, ``dt`` and the fitted times in s, slopes in rad/s; every
 ``e`` estimate is dimensionless.
@@ -31,6 +39,7 @@ Units: ``r`` and ``d`` in rad, ``dt`` and the fitted times in s, slopes in rad/s
 from __future__ import annotations
 
 import math
+import warnings
 from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
@@ -40,6 +49,7 @@ from rockdec import __version__, registry
 from rockdec import validate as checks
 from rockdec.fits import DEFAULT_FIT_POINTS, MIN_FIT_POINTS
 from rockdec.registry import ESTIMATORS
+from rockdec.signatures import TRIGGERS, NoTriggerWarning, free_response, mean_signature
 
 if TYPE_CHECKING:  # annotations only: xarray loads where a function needs it
     import xarray as xr
@@ -47,16 +57,28 @@ if TYPE_CHECKING:  # annotations only: xarray loads where a function needs it
 LOCAL_ESTIMATORS = ("e1", "e2", "e3", "e4")
 """The estimators of eq. 27, computed from one set of half-cycle fits (:func:`_local_measures`)."""
 
-_KERNEL_OUTPUTS = ("e_g", "e_0", *LOCAL_ESTIMATORS, "e_v")
-"""What :func:`_estimate_rows` computes, in its order of work; :data:`_COLUMNS` places each
-in its registry column. Every registered estimator has one, checked at import."""
+G_NAME = "g"
+"""Name of the restoring acceleration ``g = 2 c1 / t1^2`` (rad/s^2, eq. 4) read off the
+half-cycle fits of eq. 27, the column after the estimators of ``e``."""
 
-if sorted(_KERNEL_OUTPUTS) != sorted(ESTIMATORS):
+COLUMNS = (*ESTIMATORS, G_NAME)
+"""The batch kernel's output columns: every registered estimator (registry order), then ``g``."""
+
+_KERNEL_OUTPUTS = ("e_g", "e_0", *LOCAL_ESTIMATORS, "e_v", G_NAME)
+"""What :func:`_estimate_rows` computes, in its order of work (the kernel reads the first
+eight positions; a new estimator goes at the end); :data:`_COLUMNS` places each in its
+column of :data:`COLUMNS`. Every registered estimator has one, checked at import."""
+
+if sorted(_KERNEL_OUTPUTS) != sorted(COLUMNS):
     raise ImportError(f"the estimator kernel computes {_KERNEL_OUTPUTS} but the registry declares {ESTIMATORS}")
 
-_COLUMNS = np.array([registry.column(name) for name in _KERNEL_OUTPUTS], dtype=np.int64)
-"""Registry column of each of :data:`_KERNEL_OUTPUTS`, passed to the kernel at run time (a
-numba cache does not see a change of another module's constants)."""
+_COLUMNS = np.array([COLUMNS.index(name) for name in _KERNEL_OUTPUTS], dtype=np.int64)
+"""Column of each of :data:`_KERNEL_OUTPUTS` (the registry's for the estimators), passed to
+the kernel at run time (a numba cache does not see a change of another module's constants)."""
+
+_TRIGGER_ROWS = np.array([TRIGGERS.index(registry.trigger(name)) for name in ESTIMATORS], dtype=np.int64)
+"""Index along ``trigger`` (:data:`rockdec.signatures.TRIGGERS`) of the signature each
+estimator reads (:func:`rockdec.registry.trigger`): the counts that weight its extrapolation."""
 
 
 class Estimate(NamedTuple):
@@ -399,10 +421,11 @@ def _e_impact_slope(d, dt, fit_points):
 
 @_jit
 def _estimate_rows(r, d, dt, fit_points, columns):
-    """Every registered estimator on every row: ``(values[n, estimator], codes[n, estimator])``.
+    """Every column of :data:`COLUMNS` on every row: ``(values[n, column], codes[n, column])``.
 
-    ``e_g`` (eqs. 25, 7), ``e_0`` (eq. 26), ``e1..e4`` (eq. 27) from one lobe search and
-    one set of half-cycle fits per free response, ``e_v`` (eq. 6) from its ``D_v`` row;
+    ``e_g`` (eqs. 25, 7), ``e_0`` (eq. 26), ``e1..e4`` (eq. 27) and ``g = 2 c1 / t1^2``
+    (eq. 4: the free flight ``c1 - g tau^2/2`` crosses zero at ``t1``) from one lobe search
+    and one set of half-cycle fits per free response, ``e_v`` (eq. 6) from its ``D_v`` row;
     each goes to its column ``columns[k]`` (:data:`_COLUMNS`, in the order of
     :data:`_KERNEL_OUTPUTS`).
 
@@ -413,7 +436,7 @@ def _estimate_rows(r, d, dt, fit_points, columns):
     n = r.shape[0]
     values = np.empty((n, columns.size))
     codes = np.empty((n, columns.size), np.int64)
-    e_g, e_0, e_v = columns[0], columns[1], columns[6]
+    e_g, e_0, e_v, g = columns[0], columns[1], columns[6], columns[7]
     for i in range(n):
         row = r[i]
         code, lobes = _lobes(row)
@@ -421,6 +444,10 @@ def _estimate_rows(r, d, dt, fit_points, columns):
         values[i, e_0], codes[i, e_0] = _e_first_peak(row, code, lobes)
         h, h_code = _half_cycle(row, dt, code, lobes)
         _local_measures(h, h_code, values[i], codes[i], columns[2:6])
+        if h_code == _OK:
+            values[i, g], codes[i, g] = _finite(2.0 * h[0] / (h[1] * h[1]))
+        else:
+            values[i, g], codes[i, g] = np.nan, h_code
         if d is None:
             values[i, e_v], codes[i, e_v] = np.nan, _NO_DV
         else:
@@ -549,19 +576,106 @@ def extrapolate_to_zero(x, y, weights=None) -> Extrapolation:
     return Extrapolation(float(value), float(stderr), float(slope), _EXTRAPOLATION_REASONS[int(code)])
 
 
-# --------------------------------------------------------------------------- labelled
+# --------------------------------------------------------------------------- the analysis core
 
 
 def _estimate_block(r, d, dt, fit_points):
     """:func:`_estimate_rows` on a block ``r[..., lag_pos]``, ``d[..., lag]`` (leading axes
-    broadcast) -> ``values[..., estimator]``."""
+    broadcast) -> ``values[..., column]`` (:data:`COLUMNS`)."""
     shape = r.shape[:-1] if d is None else np.broadcast_shapes(r.shape[:-1], d.shape[:-1])
 
     def rows(a):  # a writable copy: the kernel then has the one type estimate_all gives it, compiled once
         return np.array(np.broadcast_to(a, shape + a.shape[-1:]), dtype=float, order="C").reshape(math.prod(shape), a.shape[-1])
 
     values, _ = _estimate_rows(rows(r), None if d is None else rows(d), dt, fit_points, _COLUMNS)
-    return values.reshape(shape + (len(ESTIMATORS),))
+    return values.reshape(shape + (len(COLUMNS),))
+
+
+def window_estimates(sums, counts, dt: float, fit_points: int = DEFAULT_FIT_POINTS) -> np.ndarray:
+    """Every column of :data:`COLUMNS` at every window, from pooled signature sums and counts.
+
+    ``sums[..., trigger, window, lag]`` and ``counts[..., trigger, window]`` (triggers in the
+    order of :data:`rockdec.signatures.TRIGGERS`, two-sided lags, pooled over whatever
+    series the caller pools) give the signatures ``sum / count`` (eq. 8; NaN in a window
+    without a trigger, which ``counts`` reports), the free response of ``D_a`` (its even
+    part, eq. 20) and ``D_v`` (eq. 19). The batch kernel :func:`_estimate_rows` takes every
+    window of every leading index at once. Returns ``values[..., column, window]``: the
+    estimators of ``e`` (eqs. 25-27, 6; dimensionless) and ``g`` (rad/s^2, eq. 4).
+    """
+    dt, points = _check_options(dt, fit_points, with_dv=True)
+    with warnings.catch_warnings():  # empty windows are reported through ``counts``
+        warnings.simplefilter("ignore", NoTriggerWarning)
+        signature = mean_signature(sums, counts)
+    values = _estimate_block(free_response(signature[..., 0, :, :]), signature[..., 1, :, :], dt, points)
+    return np.swapaxes(values, -1, -2)
+
+
+def extrapolation_weights(windows, counts, weights: str = "window") -> np.ndarray:
+    """The weights of every estimator's zero-window extrapolation (paper §5), ``[..., estimator, window]``.
+
+    ``"window"``: the window sizes ``windows`` (the paper's choice: the trigger count, and
+    so the reciprocal variance, grows about as the window); ``"count"``: the trigger counts
+    ``counts[..., trigger, window]`` of the signature each estimator reads
+    (:func:`rockdec.registry.trigger`).
+    """
+    counts = np.asarray(counts)
+    if weights == "count":
+        return np.take(counts, _TRIGGER_ROWS, axis=-2).astype(float)
+    if weights == "window":
+        windows = np.asarray(windows, dtype=float)
+        return np.broadcast_to(windows, counts.shape[:-2] + (len(ESTIMATORS), windows.size))
+    raise ValueError(f"unknown extrapolation weights '{weights}'; use window or count")
+
+
+def zero_window(windows, values, counts, weights: str = "window"):
+    """Every estimator of ``values[..., column, window]`` (:func:`window_estimates`)
+    extrapolated to zero window: ``(value, stderr, slope)``, each ``[..., estimator]``.
+
+    The weighted least-squares line in the window size of :func:`extrapolate_to_zero`
+    (paper §5), every row at once (:func:`_extrapolate_rows`), with the weights of
+    :func:`extrapolation_weights`. The ``g`` column is not extrapolated: ``g`` is read at
+    the largest window, where most triggers make it least noisy.
+    """
+    estimates = np.asarray(values)[..., : len(ESTIMATORS), :]
+    return _extrapolate_rows(windows, estimates, extrapolation_weights(windows, counts, weights))[:3]
+
+
+# --------------------------------------------------------------------------- labelled
+
+
+def _e_hat_attrs(fit_points) -> dict:
+    return {"units": "1", "long_name": "estimated coefficient of restitution", "fit_points": fit_points}
+
+
+def window_cube(cube: xr.Dataset, fit_points: int = DEFAULT_FIT_POINTS) -> xr.Dataset:
+    """:func:`window_estimates` on every signature of a cube (:func:`rockdec.signatures.signature_cube`).
+
+    Reads ``signature_sum(..., trigger, window, lag)``, ``count(..., trigger, window)`` and
+    ``dt``; NumPy or Dask (chunks of the leading dimensions stay lazy). Returns ``e_hat``
+    (dimension ``estimator`` first, :data:`rockdec.registry.ESTIMATORS`, then the cube's
+    leading dimensions and ``window``) and ``g_hat`` (rad/s^2, eq. 4).
+    """
+    import xarray as xr
+
+    dt, points = _check_options(cube.attrs["dt"], fit_points, with_dv=True)  # now, not when a lazy cube computes
+    values = xr.apply_ufunc(
+        window_estimates,
+        cube["signature_sum"],
+        cube["count"],
+        input_core_dims=[["trigger", "window", "lag"], ["trigger", "window"]],
+        output_core_dims=[["column", "window"]],
+        kwargs={"dt": dt, "fit_points": points},
+        dask="parallelized",
+        output_dtypes=[float],
+        dask_gufunc_kwargs={"output_sizes": {"column": len(COLUMNS)}},
+    )
+    e_hat = values.isel(column=slice(0, len(ESTIMATORS))).rename(column="estimator")
+    e_hat = e_hat.transpose("estimator", ...).assign_coords(estimator=list(ESTIMATORS))
+    e_hat.attrs = _e_hat_attrs(fit_points)
+    e_hat["estimator"].attrs["long_name"] = "estimator of e (paper eqs. 25-27, e_v from D_v)"
+    g_hat = values.isel(column=len(ESTIMATORS), drop=True)
+    g_hat.attrs = {"units": "rad s-2", "long_name": "restoring acceleration g = 2 c1/t1^2 (eqs. 4, 27)"}
+    return xr.Dataset({"e_hat": e_hat, "g_hat": g_hat}, attrs={"history": f"rockdec {__version__}: window_cube"})
 
 
 def estimate_cube(
@@ -590,25 +704,21 @@ def estimate_cube(
     )
     if dv_signature is None:
         e_hat = xr.apply_ufunc(
-            lambda r: _estimate_block(r, None, dt, points),
+            lambda r: _estimate_block(r, None, dt, points)[..., : len(ESTIMATORS)],
             free_response,
             input_core_dims=[["lag_pos"]],
             **common,
         )
     else:
         e_hat = xr.apply_ufunc(
-            lambda r, d: _estimate_block(r, d, dt, points),
+            lambda r, d: _estimate_block(r, d, dt, points)[..., : len(ESTIMATORS)],
             free_response,
             dv_signature,
             input_core_dims=[["lag_pos"], ["lag"]],
             **common,
         )
     e_hat = e_hat.transpose("estimator", ...).assign_coords(estimator=list(ESTIMATORS))
-    e_hat.attrs = {
-        "units": "1",
-        "long_name": "estimated coefficient of restitution",
-        "fit_points": fit_points,
-    }
+    e_hat.attrs = _e_hat_attrs(fit_points)
     e_hat["estimator"].attrs["long_name"] = "estimator of e (paper eqs. 25-27, e_v from D_v)"
     return xr.Dataset({"e_hat": e_hat}, attrs={"history": f"rockdec {__version__}: estimate_cube"})
 
@@ -617,17 +727,32 @@ def _extrapolation_block(x, y, w):
     return _extrapolate_rows(x, y, w)[:3]
 
 
-def extrapolate(e_hat: xr.DataArray, weights: xr.DataArray | None = None) -> xr.Dataset:
+def extrapolate(e_hat: xr.DataArray, weights: xr.DataArray | str | None = None, count: xr.DataArray | None = None) -> xr.Dataset:
     """:func:`extrapolate_to_zero` along ``window`` for every other index of ``e_hat``.
 
-    ``x`` is the ``window`` coordinate; ``weights`` default to it (paper §5), or pass the
-    trigger counts (dimension ``window``, broadcast by name). All rows of a block are
-    fitted at once (:func:`_extrapolate_rows`). Returns ``e_hat0`` (value at zero window),
+    ``x`` is the ``window`` coordinate; ``weights`` default to it (paper §5). Pass weights
+    (dimension ``window``, broadcast by name), or a name of :func:`extrapolation_weights`
+    with the trigger counts ``count(..., trigger, window)``: ``"window"`` or ``"count"``
+    (each estimator weighted by the counts of its trigger; ``e_hat`` then has the
+    ``estimator`` dimension). All rows of a block are fitted at once
+    (:func:`_extrapolate_rows`). Returns ``e_hat0`` (value at zero window),
     ``e_hat0_stderr`` and ``slope``; reasons are dropped (NaN stays NaN).
     """
     import xarray as xr
 
     window = e_hat["window"]
+    if isinstance(weights, str):
+        weights = xr.apply_ufunc(
+            extrapolation_weights,
+            window,
+            count,
+            kwargs={"weights": weights},
+            input_core_dims=[["window"], ["trigger", "window"]],
+            output_core_dims=[["estimator", "window"]],
+            dask="parallelized",
+            output_dtypes=[float],
+            dask_gufunc_kwargs={"output_sizes": {"estimator": len(ESTIMATORS)}},
+        ).assign_coords(estimator=list(ESTIMATORS))
     w = window if weights is None else weights
     value, stderr, slope = xr.apply_ufunc(
         _extrapolation_block,

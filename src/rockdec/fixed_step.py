@@ -3,7 +3,7 @@
 This is the scheme of most public rocking codes, kept here as the cheap, biased
 alternative to the exact event-driven simulator of :mod:`rockdec.simulate`. Same model
 (eq. 4, ``theta'' = -g sign(theta) + F(t)``, impact rule eq. 6), same load (a velocity
-impulse ``p_n ~ N(0, sigma_p^2)`` at the end of every step), same random stream and the
+impulse ``p_n ~ N(0, sigma_p^2)`` at the end of every step, white, low-pass or of a spectrum), same random stream and the
 same sampling convention, so the two simulators differ only in how a step is taken.
 
 One step of length ``dt`` (:func:`step`):

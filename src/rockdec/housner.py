@@ -14,8 +14,8 @@ the simplified one (eq. 4, :mod:`rockdec.simulate`) with ``g = nu^2 theta_cr``.
 Units: angles in rad, ``nu`` in rad/s, times in s, angular velocities in rad/s.
 
 Loading: exactly as :func:`rockdec.simulate.simulate_block` (eqs. 21-24 with the parabola
-replaced by the ``cosh``/``sinh`` arcs): velocity impulses ``p_n ~ N(0, sigma_p^2)``, white or
-low-pass filtered (:func:`rockdec.loading.draw_impulses`), are added at the end of every
+replaced by the ``cosh``/``sinh`` arcs): velocity impulses ``p_n ~ N(0, sigma_p^2)``, white,
+low-pass filtered or of a given spectrum (:func:`rockdec.loading.draw_impulses`), are added at the end of every
 step, so both models fed the same seed see the same load.
 
 How :func:`housner_flight` advances a state exactly (writing ``h = |theta|`` the height above
@@ -318,13 +318,15 @@ def integrate_housner(impulses, dt, nu, theta_cr, e, theta0, omega0, burn_in, th
     return -1
 
 
-def simulate_block_housner(seeds, n_points, *, dt, nu, theta_cr, e, sigma_p, theta0=0.0, theta_dot0=0.0, burn_in=0, pole=0.0):
+def simulate_block_housner(seeds, n_points, *, dt, nu, theta_cr, e, sigma_p, theta0=0.0, theta_dot0=0.0, burn_in=0, pole=0.0,
+                           spectrum=None):
     """Simulate one linearized-Housner series per seed (eqs. 2, 6; load as eqs. 21-24).
 
     Mirrors :func:`rockdec.simulate.simulate_block` and draws the same impulses from the
     same seed. ``nu`` in rad/s, ``theta_cr`` in rad, ``sigma_p`` the impulse standard
     deviation in rad/s (``0``: free response from ``(theta0, theta_dot0)``), ``dt`` in s;
-    ``pole``: the low-pass filtered load of :func:`rockdec.loading.draw_impulses` (0: white).
+    ``pole``: the low-pass filtered load of :func:`rockdec.loading.draw_impulses` (0: white);
+    ``spectrum``: a load of that spectrum (:class:`rockdec.loading.ImpulseSpectrum`) instead.
 
     Returns ``(theta, theta_dot, overturned_at)``: two ``(len(seeds), n_points)`` arrays,
     NaN from the sample at which a series' block lies overturned, and an int64 array with
@@ -340,7 +342,7 @@ def simulate_block_housner(seeds, n_points, *, dt, nu, theta_cr, e, sigma_p, the
     overturned_at = np.full(seeds.size, -1, dtype=np.int64)
     impulses = np.empty(n_steps)
     for row, seed in enumerate(seeds):
-        draw_impulses(series_rng(seed), impulses, sigma_p, pole)
+        draw_impulses(series_rng(seed), impulses, sigma_p, pole, spectrum)
         overturned_at[row] = integrate_housner(
             impulses, dt, nu, theta_cr, e, theta0, theta_dot0, burn_in, theta[row], theta_dot[row]
         )

@@ -23,7 +23,10 @@ Steps
        like the bias of the estimators of ``e``.
 
 The triggers of all records pool into one signature per window (sums and counts add), at
-one trigger level from the pooled ``sigma_Y``.
+one trigger level from the pooled ``sigma_Y`` (:func:`rockdec.signatures.trigger_levels`).
+From the pooled sums and counts on, the analysis is the workflow's: the one core of
+:func:`rockdec.estimators.window_estimates` (every estimator and ``g`` at every window) and
+:func:`rockdec.estimators.zero_window` (the extrapolation and its weights).
 """
 
 from __future__ import annotations
@@ -34,6 +37,7 @@ from typing import NamedTuple
 import numpy as np
 
 from rockdec import estimators, fits, registry, signatures
+from rockdec.estimators import G_NAME
 from rockdec.models import period_from_g
 
 #: Settings of the analysis and their defaults (the workflow's scene defaults, see the schema).
@@ -48,9 +52,6 @@ DEFAULT_SETTINGS = {
     "fit_points": fits.DEFAULT_FIT_POINTS,
     "weights": "window",
 }
-
-#: Name of the ``g`` row beside the estimators of ``e``.
-G_NAME = "g"
 
 #: Fewest samples from lag 0 to the first zero crossing of a rocking free response (white
 #: noise crosses after 1 sample; simulated rocking at 20-90 samples per cycle after 5-30).
@@ -88,24 +89,22 @@ class Analysis(NamedTuple):
     nan_samples: int
 
 
-def _pooled_sums(records, trigger, target, widths, n_lag, dt, both_signs):
-    """Signature sums of one trigger over every record, pooled (they add, eq. 8)."""
-    total, count = None, None
+def _pooled(records, sums):
+    """``sums(y)`` (a tuple of arrays) of every record, added: signatures pool by adding
+    their sums and counts (eq. 8)."""
+    total = None
     for y in records:
-        if trigger == "a":
-            s = signatures.extremum_sums(y, target, widths, n_lag, both_signs=both_signs)
-        else:
-            s = signatures.crossing_sums(y, target, widths, n_lag, dt, both_signs=both_signs)
-        total = s.sum if total is None else total + s.sum
-        count = s.count if count is None else count + s.count
-    return total, count
+        part = sums(y)
+        total = part if total is None else tuple(t + p for t, p in zip(total, part))
+    return total
 
 
-def _half_cycle_g(r: np.ndarray, dt: float) -> float:
-    """``g = 2 c1 / t1^2`` from the fitted start value and first zero crossing of ``r``
-    (eq. 4; the fits of eq. 27, :func:`rockdec.estimators.half_cycle`); NaN when they fail."""
-    h = estimators.half_cycle(r, dt)
-    return 2.0 * h.c1 / h.t1**2 if not h.reason else np.nan
+def _largest_window_response(sums: np.ndarray, counts: np.ndarray) -> np.ndarray:
+    """The free-response estimate (eq. 20) of the ``D_a`` sums ``sums[window, lag]`` at the
+    largest window; NaN when it holds no trigger (the counts say so)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", signatures.NoTriggerWarning)
+        return signatures.free_response(signatures.mean_signature(sums[None, -1:], counts[None, -1:], triggers=("a",))[0, 0])
 
 
 def _sampled_crossing_g(r: np.ndarray, dt: float) -> float:
@@ -181,8 +180,10 @@ def analyse(records, dt: float, settings: dict | None = None, g: float | None = 
     sigma_y = float(np.sqrt(np.nanmean(np.concatenate([y**2 for y in records]))))
     sigma_ydot = float(np.sqrt(np.nanmean(np.concatenate([(np.diff(y) / dt) ** 2 for y in records]))))
     windows = np.asarray(opts["windows"], dtype=np.float64)
-    a = opts["level"] * sigma_y
-    a_widths = windows * opts["window_max"] * a
+    levels = signatures.trigger_levels(
+        sigma_y, sigma_ydot, **{key: opts[key] for key in ("level", "windows", "window_max", "v_level", "dv_max")}
+    )
+    a = levels["a"]
     shortest = min(y.size for y in records)
 
     g_first = np.nan
@@ -190,11 +191,10 @@ def analyse(records, dt: float, settings: dict | None = None, g: float | None = 
         cap = (shortest - 1) // 2
         n_lag = min(int(np.ceil(4 * _crossing_interval(records))), cap)
         while True:
-            total, count = _pooled_sums(records, "a", a, a_widths[-1:], n_lag, dt, opts["both_signs"])
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", signatures.NoTriggerWarning)
-                r = signatures.free_response(signatures.mean_signature(total[None], count[None], triggers=("a",))[0, -1])
-            g_first = _sampled_crossing_g(r, dt)
+            total, count = _pooled(
+                records, lambda y: signatures.extremum_sums(y, a, levels["a_widths"][-1:], n_lag, both_signs=opts["both_signs"])[:2]
+            )
+            g_first = _sampled_crossing_g(_largest_window_response(total, count), dt)
             if np.isfinite(g_first) or n_lag >= cap or not count.any():
                 break
             n_lag = min(2 * n_lag, cap)
@@ -221,33 +221,20 @@ def analyse(records, dt: float, settings: dict | None = None, g: float | None = 
         f"a lag range of {opts['n_periods']} rocking periods at the trigger level (g = {lag_g:.3g} rad/s^2)",
         "use longer records, a smaller n_periods, or the right g",
     )
-    v = opts["v_level"] * sigma_ydot
-    sum_a, count_a = _pooled_sums(records, "a", a, a_widths, n_lag, dt, opts["both_signs"])
-    sum_v, count_v = _pooled_sums(records, "v", v, windows * opts["dv_max"] * v, n_lag, dt, opts["both_signs"])
-    with warnings.catch_warnings():  # empty windows are reported through ``count``
-        warnings.simplefilter("ignore", signatures.NoTriggerWarning)
-        sig = signatures.mean_signature(np.stack([sum_a, sum_v]), np.stack([count_a, count_v]), windows=windows)
-    r_all = signatures.free_response(sig[0])
-
-    names = list(registry.ESTIMATORS) + [G_NAME]
-    per_window = {name: np.full(windows.size, np.nan) for name in names}
-    for w in range(windows.size):
-        for name, est in estimators.estimate_all(r_all[w], sig[1, w], dt, opts["fit_points"]).items():
-            per_window[name][w] = est.value
-        per_window[G_NAME][w] = _half_cycle_g(r_all[w], dt)
-    raw = {G_NAME: per_window[G_NAME][-1]}
-    count = {"a": count_a, "v": count_v}
-    for name in registry.ESTIMATORS:
-        weight = count[registry.trigger(name)] if opts["weights"] == "count" else None
-        raw[name] = estimators.extrapolate_to_zero(windows, per_window[name], weight).value
+    sums, counts = _pooled(
+        records, lambda y: signatures.trigger_sums(y, **levels, n_lag=n_lag, dt=dt, both_signs=opts["both_signs"])[:2]
+    )
+    values = estimators.window_estimates(sums, counts, dt, opts["fit_points"])
+    value, _, _ = estimators.zero_window(windows, values, counts, opts["weights"])
+    per_window = dict(zip(estimators.COLUMNS, values))
     return Analysis(
-        raw=raw,
+        raw={G_NAME: per_window[G_NAME][-1], **{name: float(v) for name, v in zip(registry.ESTIMATORS, value)}},
         per_window=per_window,
-        count=count,
+        count=dict(zip(signatures.TRIGGERS, counts)),
         sigma_y=sigma_y,
         points_per_cycle=float(period_from_g(sigma_y, lag_g) / dt),
         dt=float(dt),
         n_lag=int(n_lag),
-        free_response=r_all[-1],
+        free_response=_largest_window_response(sums[0], counts[0]),
         nan_samples=nan_samples,
     )

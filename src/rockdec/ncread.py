@@ -4,7 +4,7 @@
 (:func:`rockdec.calibration.load_or_build`); xarray and the libraries it loads (pandas,
 Dask) would take longer to import than the rest of the command takes to run. :func:`read`
 gives the subset of :class:`xarray.Dataset` the calibration's readers use: ``ds[name]``
-with ``.values``, ``.dims``, ``.attrs`` and ``.sel(dim=label)`` (one label of a dimension
+with ``.values``, ``.dims``, ``.sizes``, ``.attrs`` and ``.sel(dim=label)`` (one label of a dimension
 that has a coordinate), ``ds.sizes`` and ``ds.attrs``; values decoded as xarray decodes them
 (``_FillValue`` to NaN in float variables, character arrays with ``_Encoding`` to strings).
 """
@@ -24,6 +24,11 @@ class Variable(NamedTuple):
     values: np.ndarray
     attrs: dict
     dataset: Stored
+
+    @property
+    def sizes(self) -> dict[str, int]:
+        """The length of each of the variable's dimensions."""
+        return dict(zip(self.dims, self.values.shape))
 
     def sel(self, **labels) -> Variable:
         """The variable at one label of each dimension named, found in its coordinate."""

@@ -28,7 +28,7 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from rockdec import engine, estimators, registry, series, signatures, tables
+from rockdec import engine, estimators, series, signatures, tables
 from rockdec.layout import READINGS, scene_seeds
 from rockdec.record_model import carried_attrs
 from rockdec.run import Run
@@ -174,14 +174,14 @@ def gathered(cubes: list[xr.Dataset], curves: list[xr.Dataset]) -> tuple[xr.Data
 def replicate_curves(cube: xr.Dataset, *, fit_points: int) -> xr.Dataset:
     """Every estimator on every signature of ``cube``, averaged per replicate: the window curves.
 
+    The analysis core (:func:`rockdec.estimators.window_estimates`, through
+    :func:`rockdec.estimators.window_cube`) on each group's (or series') sums and counts;
     ``e_hat(estimator, replicate, window)``: NaN-aware mean over the groups (or series) of
     a replicate; ``count(replicate, trigger, window)``: triggers pooled in the replicate.
     The cube's load and sensor attributes are carried on (:func:`rockdec.record_model.carried_attrs`).
     """
     dt = float(cube.attrs["dt"])
-    per_group = estimators.estimate_cube(
-        cube["free_response"], cube["signature"].sel(trigger="v", drop=True), dt, fit_points=fit_points
-    )["e_hat"]
+    per_group = estimators.window_cube(cube, fit_points)["e_hat"]
     dim = series_dim(cube)
     e_hat = per_group.groupby(cube["replicate"]).mean(dim, skipna=True)
     e_hat.attrs = per_group.attrs
@@ -195,19 +195,11 @@ def extrapolated(curves: xr.Dataset, weights: str = "window") -> xr.Dataset:
 
     ``e_hat0(estimator, replicate)`` and its standard error from
     :func:`rockdec.estimators.extrapolate`, weighted by the window size (paper §5) or by
-    the replicate's trigger count (``weights="count"``: the counts of the trigger each
-    estimator reads, :func:`rockdec.registry.trigger`); the curves are kept.
+    the replicate's trigger count (``weights="count"``), as
+    :func:`rockdec.estimators.extrapolation_weights` decides; the curves are kept.
     """
     e_hat, count = curves["e_hat"], curves["count"]
-    if weights == "count":
-        w = xr.concat(
-            [count.sel(trigger=registry.trigger(name), drop=True) for name in e_hat["estimator"].values],
-            dim=e_hat["estimator"],
-        ).astype(float)
-        extrap = estimators.extrapolate(e_hat, weights=w)
-    else:
-        extrap = estimators.extrapolate(e_hat)
-    out = extrap.assign(e_hat=e_hat, count=count)
+    out = estimators.extrapolate(e_hat, weights, count).assign(e_hat=e_hat, count=count)
     out.attrs.update({**curves.attrs, "weights": weights})
     return out
 

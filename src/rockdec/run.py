@@ -58,7 +58,7 @@ class Run:
     ``points_per_cycle`` (samples per cycle at ``sigma_Y``, eq. 5) measured by a pilot at
     ``dt`` (NaN for a free response); ``points_per_cycle_target`` (what set ``dt``) and
     ``model_reason`` (why this model) say how it was chosen; ``load``: the impulses' spectrum
-    (its corner placed at ``points_per_cycle_target``, :attr:`pole`); ``sensor``: white noise
+    (its corner or its table placed at ``points_per_cycle_target``, :attr:`load_options`); ``sensor``: white noise
     added to the recorded angle (the statistics are the model's response without it).
     """
 
@@ -86,8 +86,15 @@ class Run:
 
     @property
     def pole(self) -> float:
-        """The load filter's pole (:meth:`rockdec.record_model.Load.pole` at the target density; 0: white)."""
+        """The load filter's pole (:meth:`rockdec.record_model.Load.pole` at the target density; 0: white;
+        NaN: a spectrum load, which has none)."""
         return self.load.pole(self.points_per_cycle_target)
+
+    @property
+    def load_options(self) -> dict:
+        """The load as the simulators' keywords (``pole`` or ``spectrum``) at the target density
+        (:meth:`rockdec.record_model.Load.draw_options`)."""
+        return self.load.draw_options(self.points_per_cycle_target)
 
     @property
     def sensor_std(self) -> float:
@@ -125,7 +132,7 @@ class Run:
         ds = simulate.simulation_dataset(
             seeds, n_points, dt=self.dt, g=self.g, e=self.e, sigma_p=self.sigma_p, theta0=self.theta0,
             theta_dot0=self.theta_dot0, burn_in=self.burn_in, chunk_seeds=chunk_seeds, model=self.model,
-            theta_cr=self.theta_cr, pole=self.pole, sensor_std=self.sensor_std,
+            theta_cr=self.theta_cr, sensor_std=self.sensor_std, **self.load_options,
         )
         ds.attrs = self.to_attrs()
         return ds
@@ -169,7 +176,7 @@ def calibrate(scene: dict, amplitude: float = 0.0, theta0: float = 0.0, theta_do
     e, sigma_p = system["e"], exc["sigma_p"]
     load, sensor = Load.from_dict(exc.get("load")), SensorNoise.from_dict(exc.get("sensor_noise"))
     pilot = {**PILOT, **(pilot or {})}
-    pole = load.pole(exc["points_per_cycle"])
+    draw = load.draw_options(exc["points_per_cycle"])
     if sigma_p == 0.0:
         if exc["dt"] is None and amplitude <= 0.0:
             raise checks.InputError("a free response (sigma_p = 0) needs --theta0 > 0 to set the step, or --dt")
@@ -178,13 +185,13 @@ def calibrate(scene: dict, amplitude: float = 0.0, theta0: float = 0.0, theta_do
         cal = {"dt": dt, "burn_in": 0, "sigma_y": nan, "sigma_ydot": nan, "points_per_cycle": nan}
     elif exc["dt"] is None:
         cal = simulate.calibrate_dt(
-            e=e, g=g, sigma_p=sigma_p, points_per_cycle=exc["points_per_cycle"], pole=pole,
+            e=e, g=g, sigma_p=sigma_p, points_per_cycle=exc["points_per_cycle"], **draw,
             iterations=simulate.STEP_ITERATIONS[load.kind], **pilot,
         )
     else:
         burn_in = exc["burn_in"] if exc["burn_in"] is not None else simulate.default_burn_in(e, exc["points_per_cycle"])
         theta, _ = simulate.simulate_block(
-            _statistics_seeds(pilot), pilot["pilot_points"], dt=exc["dt"], g=g, e=e, sigma_p=sigma_p, burn_in=burn_in, pole=pole
+            _statistics_seeds(pilot), pilot["pilot_points"], dt=exc["dt"], g=g, e=e, sigma_p=sigma_p, burn_in=burn_in, **draw
         )
         cal = {"dt": exc["dt"], "burn_in": burn_in, **simulate.pilot_statistics(theta, exc["dt"], g)}
     if exc["burn_in"] is not None:
@@ -214,7 +221,7 @@ def with_model(run: Run, model: str, pilot: dict | None = None) -> Run:
     pilot = {**PILOT, **(pilot or {})}
     theta, _ = simulate.simulate_model(
         model, _statistics_seeds(pilot), pilot["pilot_points"], dt=run.dt, g=run.g, e=run.e, sigma_p=run.sigma_p,
-        theta_cr=run.theta_cr, pole=run.pole, burn_in=run.burn_in,
+        theta_cr=run.theta_cr, burn_in=run.burn_in, **run.load_options,
     )
     standing = np.all(np.isfinite(theta), axis=1)
     if standing.mean() < 0.5:

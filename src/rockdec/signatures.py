@@ -55,9 +55,10 @@ chunks. The adding of series into groups is done inside the kernels (``rows_to``
 series adds its segments into its group's row, and the cumulative sum over the windows runs
 once per group), so a grouped cube never holds per-series sums.
 
-Layers: NumPy/numba kernels (:func:`extremum_sums`, :func:`crossing_sums`), small helpers
-(:func:`lag_samples`, :func:`free_response`, :func:`pool`) and the xarray/Dask wrapper
-:func:`signature_cube`.
+Layers: NumPy/numba kernels (:func:`extremum_sums`, :func:`crossing_sums`, both at once:
+:func:`trigger_sums`), small helpers (:func:`trigger_levels`, :func:`lag_samples`,
+:func:`free_response`, :func:`pool`) and the xarray/Dask wrapper :func:`signature_cube`. The
+estimators read the sums and counts (:func:`rockdec.estimators.window_estimates`).
 """
 
 from __future__ import annotations
@@ -87,6 +88,8 @@ __all__ = [
     "mean_signature",
     "pool",
     "signature_cube",
+    "trigger_levels",
+    "trigger_sums",
 ]
 
 DEFAULT_WINDOWS = (0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0)
@@ -407,11 +410,25 @@ def mean_signature(sums, counts, *, triggers=TRIGGERS, windows=None):
     return out
 
 
-# --------------------------------------------------------------------------- xarray / Dask
+def trigger_levels(sigma_y: float, sigma_ydot: float, *, level: float, windows, window_max: float, v_level: float, dv_max: float) -> dict:
+    """The triggers of eq. 19 from the response's scales: ``a``, ``a_widths``, ``v``, ``v_widths``.
+
+    ``a = level * sigma_y`` (rad; the paper's ``a = 2 sigma_Y``) with half-widths
+    ``da = windows * window_max * a``; ``v = v_level * sigma_ydot`` (rad/s) with
+    ``dv = windows * dv_max * v``. ``windows`` relative, ascending in ``(0, 1]``.
+    """
+    windows = np.asarray(windows, dtype=np.float64)
+    a = level * sigma_y
+    v = v_level * sigma_ydot
+    return {"a": a, "a_widths": windows * window_max * a, "v": v, "v_widths": windows * dv_max * v}
 
 
-def _cube_block(y, *, a, a_widths, v, v_widths, n_lag, dt, both_signs, owned=None, groups=None):
-    """Both triggers on one block: sums ``(..., 2, W, 2L+1)``, count and skipped ``(..., 2, W)``.
+def trigger_sums(y, *, a, a_widths, v, v_widths, n_lag, dt, both_signs, owned=None, groups=None):
+    """Both triggers (eq. 19) on records ``y[..., time]``: sums ``(..., 2, W, 2L+1)``, count
+    and skipped ``(..., 2, W)``, triggers in the order of :data:`TRIGGERS`.
+
+    ``a``, ``a_widths``, ``v``, ``v_widths`` as :func:`trigger_levels` gives them; the rest
+    as in :func:`extremum_sums` and :func:`crossing_sums`.
 
     ``groups = (inverse, n_groups)`` sums the series along the first axis within groups
     inside the kernels (series ``j`` into group ``inverse[j]``, ``0 <= inverse < n_groups``):
@@ -433,13 +450,16 @@ def _cube_block(y, *, a, a_widths, v, v_widths, n_lag, dt, both_signs, owned=Non
     )
 
 
+# --------------------------------------------------------------------------- xarray / Dask
+
+
 def _cube_packed(x, groups=None, **kw):
-    """:func:`_cube_block` on a Dask array, possibly chunked along time (the last axis), packed.
+    """:func:`trigger_sums` on a Dask array, possibly chunked along time (the last axis), packed.
 
     Each time chunk is extended by ``depth`` samples from its neighbours (none past the
     record's ends), counts only the triggers at its own samples, and the per-chunk sums
     are added. ``depth`` covers the segment and the incoming-velocity stencil.
-    ``groups`` holds one ``(inverse, n_groups)`` of :func:`_cube_block` per chunk of the
+    ``groups`` holds one ``(inverse, n_groups)`` of :func:`trigger_sums` per chunk of the
     first axis: each block then sums its series into its own groups. Returns one float64
     array ``(..., 2, W, 2L+3)``: the sums, then count and skipped (exact below 2**53;
     :func:`_unpack` splits it).
@@ -462,7 +482,7 @@ def _cube_packed(x, groups=None, **kw):
         loc = where[axis]
         lo = 0 if loc == 0 else depth
         hi = b.shape[-1] - (0 if loc == n_chunks - 1 else depth)
-        s, c, k = _cube_block(b, owned=(lo, hi), groups=None if groups is None else groups[where[0]], **kw)
+        s, c, k = trigger_sums(b, owned=(lo, hi), groups=None if groups is None else groups[where[0]], **kw)
         packed = np.concatenate([s, c[..., None].astype(np.float64), k[..., None].astype(np.float64)], axis=-1)
         return packed[..., None, :, :, :]
 
@@ -485,7 +505,7 @@ def _unpack(packed):
 
 
 def _cube_time_chunked(x, **kw):
-    """:func:`_cube_block` on a Dask array chunked along time: :func:`_cube_packed`, unpacked."""
+    """:func:`trigger_sums` on a Dask array chunked along time: :func:`_cube_packed`, unpacked."""
     return _unpack(_cube_packed(x, **kw))
 
 
@@ -515,7 +535,7 @@ def _group_sums(theta: xr.DataArray, group: xr.DataArray, kw: dict):
     groups = [(inverse, unique.size) for unique, inverse in parts]
     dims = ("group", *x.dims[1:-1])
     if x.chunks is None:  # one block: its groups are all the groups, sorted
-        out = _cube_block(x.values, groups=groups[0], **kw)
+        out = trigger_sums(x.values, groups=groups[0], **kw)
     else:
         part_labels = np.concatenate([unique for unique, _ in parts])
         packed = xr.DataArray(
@@ -678,8 +698,8 @@ def signature_cube(
         raise ValueError(f"theta must have a 'time' dimension; it has {theta.dims}")
     dt = _sampling_interval(theta)
     windows = np.asarray(windows, dtype=np.float64)
-    a = level * sigma_y
-    v = v_level * sigma_ydot
+    levels = trigger_levels(sigma_y, sigma_ydot, level=level, windows=windows, window_max=window_max, v_level=v_level, dv_max=dv_max)
+    a, v = levels["a"], levels["v"]
     lag_settings = {}
     if n_lag is None:
         if g is None:
@@ -695,10 +715,7 @@ def signature_cube(
         "raise g or lower n_periods (or n_lag), or use smaller chunks of series",
     )
     kw = {
-        "a": a,
-        "a_widths": windows * window_max * a,
-        "v": v,
-        "v_widths": windows * dv_max * v,
+        **levels,
         "n_lag": int(n_lag),
         "dt": dt,
         "both_signs": both_signs,
@@ -719,7 +736,7 @@ def signature_cube(
                 "dask_gufunc_kwargs": {"output_sizes": {"trigger": 2, "window": windows.size, "lag": width}},
                 "output_dtypes": dtypes,
             }
-            func = _cube_block
+            func = trigger_sums
         s, c, k = xr.apply_ufunc(
             func, theta, input_core_dims=[["time"]], output_core_dims=core_out, kwargs=kw, keep_attrs=False, **ufunc_kw
         )

@@ -3,7 +3,9 @@
 Model: ``theta'' = -g sign(theta) + F(t)`` with ``g = nu^2 theta_cr`` (eq. 4); at every zero
 crossing the angular velocity is multiplied by ``e`` (eq. 6). The load is discrete white
 noise applied as velocity impulses ``p_n ~ N(0, sigma_p^2)`` at the end of every step, so
-between impulses the motion is a parabola and is integrated exactly (eqs. 21-24).
+between impulses the motion is a parabola and is integrated exactly (eqs. 21-24). The
+impulses may be coloured (``pole``: low-pass filtered; ``spectrum``: of a tabulated spectrum;
+:func:`rockdec.loading.draw_impulses`), the same for every simulator here.
 
 What the paper's scheme leaves out and :func:`flight` handles:
 
@@ -24,7 +26,8 @@ velocity just after the impulse applied at that instant (eq. 21).
 Kernels take and return NumPy arrays; :func:`simulate_model` runs the model a run names,
 :func:`simulation_dataset` adds labels and Dask. :func:`calibrate_dt` is the step search, its
 constants (:data:`PILOT_SERIES`, :data:`PILOT_POINTS`, :data:`STEP_ITERATIONS`,
-:data:`STATISTICS_PILOT_SERIES`, :data:`rockdec.models.SCALE_CONSTANT_GUESS`) have their home
+:data:`STATISTICS_PILOT_SERIES`, :data:`SECANT_POINTS`, :data:`SECANT_EXPONENTS`,
+:data:`rockdec.models.SCALE_CONSTANT_GUESS`) have their home
 here and in :mod:`rockdec.models`.
 """
 
@@ -59,7 +62,13 @@ PILOT_SERIES, PILOT_POINTS = 256, 40_000
 
 #: Updates of the step in :func:`calibrate_dt`, per load kind: under white noise the scale law
 #: converges in 3; a coloured load's exponent is measured from the pilots (:func:`secant_step`).
-STEP_ITERATIONS = {"white": 3, "lowpass": 8}
+STEP_ITERATIONS = {"white": 3, "lowpass": 12, "spectrum": 12}
+
+#: Pilots whose least-squares slope gives the exponent of :func:`secant_step`, and the range
+#: the exponent is held to: with the corner at the rocking frequency the pilot's samples per
+#: cycle scatter by 20 % and more at one step, and the slope of the last two pilots alone can
+#: send the step far off (measured: 0.4 samples per cycle after 8 updates at e = 0.95).
+SECANT_POINTS, SECANT_EXPONENTS = 3, (1.0, 10.0)
 
 #: Series of the pilot that measures the statistics at a given step, or under a model other
 #: than the one the step search ran (:func:`rockdec.run.calibrate`), of :data:`PILOT_POINTS`.
@@ -192,14 +201,17 @@ def integrate(impulses, dt, g, e, theta0, omega0, burn_in, theta_out, omega_out,
         omega_out[j] = omega
 
 
-def simulate_block(seeds, n_points, *, dt, g, e, sigma_p, theta0=0.0, theta_dot0=0.0, burn_in=0, grid_impacts=False, pole=0.0):
+def simulate_block(seeds, n_points, *, dt, g, e, sigma_p, theta0=0.0, theta_dot0=0.0, burn_in=0, grid_impacts=False, pole=0.0,
+                   spectrum=None):
     """Simulate one series per seed; returns ``(theta, theta_dot)``, each ``(len(seeds), n_points)``.
 
     Kernel entry point (NumPy in, NumPy out). ``sigma_p`` is the standard deviation of the
     velocity impulses in rad/s; ``sigma_p = 0`` gives the free response from
     ``(theta0, theta_dot0)``. ``grid_impacts=True``: the fixed-step integrator instead of the
     exact one (same load, same seed). ``pole``: low-pass filtered load
-    (:func:`rockdec.loading.draw_impulses`), 0 for white noise. Inputs outside the model
+    (:func:`rockdec.loading.draw_impulses`), 0 for white noise; ``spectrum``: a load of that
+    spectrum instead (:class:`rockdec.loading.ImpulseSpectrum`, cycles per step;
+    :meth:`rockdec.record_model.Load.draw_options` gives either). Inputs outside the model
     (NaN, infinities, ``e`` outside ``[0, 1]``, ...) and series that overflow raise
     :class:`rockdec.validate.InputError`.
     """
@@ -211,7 +223,7 @@ def simulate_block(seeds, n_points, *, dt, g, e, sigma_p, theta0=0.0, theta_dot0
     theta_dot = np.empty((seeds.size, n_points))
     impulses = np.empty(n_steps)
     for row, seed in enumerate(seeds):
-        draw_impulses(series_rng(seed), impulses, sigma_p, pole)
+        draw_impulses(series_rng(seed), impulses, sigma_p, pole, spectrum)
         integrate(impulses, dt, g, e, theta0, theta_dot0, burn_in, theta[row], theta_dot[row], grid_impacts)
     check_finite_series(np.stack([theta[:, -1], theta_dot[:, -1]]), f"the simulation at dt = {dt}, g = {g}, sigma_p = {sigma_p}")
     return theta, theta_dot
@@ -248,6 +260,7 @@ def calibrate_dt(
     pilot_points: int = PILOT_POINTS,
     iterations: int = STEP_ITERATIONS["white"],
     pole: float = 0.0,
+    spectrum=None,
 ) -> dict:
     """Time step giving ``points_per_cycle`` samples per cycle at amplitude ``sigma_Y`` (eq. 5).
 
@@ -257,10 +270,12 @@ def calibrate_dt(
     discarded) and the step updated ``iterations`` times, from the step of
     :data:`rockdec.models.SCALE_CONSTANT_GUESS`.
 
-    Returns a dict with ``dt``, ``burn_in``, and the last pilot's statistics at that step:
+    Returns a dict with ``dt``, ``burn_in``, and the statistics of the pilot at that step:
     ``sigma_y``, ``sigma_ydot`` (of the sampled slope ``diff(theta)/dt``, what a measured
     record gives) and the achieved ``points_per_cycle``. Refuses ``e >= 1``. ``pole``:
-    a low-pass filtered load (:func:`rockdec.loading.draw_impulses`).
+    a low-pass filtered load, ``spectrum``: a load of that spectrum
+    (:func:`rockdec.loading.draw_impulses`); under either the step follows :func:`secant_step`
+    and the pilot that came closest to ``points_per_cycle`` (in ``log``) is returned.
     """
     checks.in_range(e, "e", 0.0, 1.0, "give the coefficient of restitution in [0, 1]")
     checks.positive(g, "g", "give the restoring acceleration nu^2 theta_cr in rad/s^2, > 0")
@@ -285,38 +300,65 @@ def calibrate_dt(
         "give the time step explicitly (--dt)"
     )
     history: list[tuple[float, float]] = []
+    coloured = not (pole == 0.0 and spectrum is None)
+    closest = None
     for i in range(iterations):
         if not (0.0 < dt < math.inf and 0.0 < g * dt * dt < math.inf):
             raise outside
-        theta, _ = simulate_block(seeds, pilot_points, dt=dt, g=g, e=e, sigma_p=sigma_p, burn_in=burn_in, pole=pole)
+        theta, _ = simulate_block(seeds, pilot_points, dt=dt, g=g, e=e, sigma_p=sigma_p, burn_in=burn_in, pole=pole,
+                                  spectrum=spectrum)
         stats = pilot_statistics(theta, dt, g)
+        miss = abs(math.log(stats["points_per_cycle"] / points_per_cycle)) if stats["points_per_cycle"] > 0 else math.inf
+        if coloured and (closest is None or miss < closest[0]):
+            closest = (miss, {"dt": dt, "burn_in": burn_in, **stats})
         if i < iterations - 1:
             try:
-                if pole == 0.0:
+                if not coloured:
                     c = scale_constant(stats["sigma_y"], dt, g, sigma_p)
                     dt = step_for_density(c, sigma_p, g, points_per_cycle)
                 else:
                     dt = secant_step(history, dt, stats["points_per_cycle"], points_per_cycle)
             except (OverflowError, ZeroDivisionError):  # float ** raises where * gives inf
                 raise outside from None
-    return {"dt": dt, "burn_in": burn_in, **stats}
+    return closest[1] if coloured and math.isfinite(closest[0]) else {"dt": dt, "burn_in": burn_in, **stats}
 
 
 def secant_step(history: list, dt: float, achieved: float, target: float) -> float:
-    """Next step of :func:`calibrate_dt` under a coloured load.
+    """Next step of a step search under a coloured load, low-pass or of a spectrum
+    (:func:`calibrate_dt`, :func:`rockdec.calibration.step_for`).
 
-    The load's correlation time is a fixed number of steps, so it scales with ``dt`` and
-    the white law ``points_per_cycle ~ dt^-2`` no longer holds (near a corner at the
-    rocking frequency the exponent is nearer 5, and the white update oscillates). The
-    exponent ``k`` is measured from the last two pilots (``history`` of ``(ln dt, ln N)``,
-    appended to here; 2 at first) and ``dt <- dt (N_achieved / N_target)^(1/k)``.
+    The load's correlation time is a fixed number of steps (its spectrum is placed in cycles
+    per step), so it scales with ``dt`` and the white law ``points_per_cycle ~ dt^-2`` no
+    longer holds: near a corner at the rocking frequency the load acts like a force that
+    must exceed ``g`` to lift the block, and the samples per cycle fall by two decades over
+    a factor 1.3 in ``dt`` (measured at ``e = 0.98``), so an extrapolated exponent
+    overshoots and the search oscillates. ``history`` holds every pilot ``(ln dt, ln N)``
+    (appended to here). Once pilots lie on both sides of the target, the next step
+    interpolates (in logs) between the nearest step below and the nearest above, kept
+    inside the middle 80 % of that bracket, which shrinks it at every pilot like a
+    bisection. Before that, the exponent ``k`` is the least-squares slope of ``ln N`` on
+    ``ln dt`` over the last :data:`SECANT_POINTS` pilots (2 at first), held to
+    :data:`SECANT_EXPONENTS`, and ``dt <- dt (N_achieved / N_target)^(1/k)``. Points per
+    cycle fall as ``dt`` grows, so a pilot above the target is a step too short.
     """
     history.append((math.log(dt), math.log(achieved)))
+    y_t = math.log(target)
+    short = [x for x, y in history if y > y_t]  # steps too short: more samples per cycle than wanted
+    long = [x for x, y in history if y < y_t]
+    if short and long and max(short) < min(long):
+        lo, hi = max(short), min(long)
+        y_lo, y_hi = (next(y for x, y in reversed(history) if x == b) for b in (lo, hi))
+        x = lo + (y_t - y_lo) * (hi - lo) / (y_hi - y_lo) if y_hi != y_lo else 0.5 * (lo + hi)
+        return math.exp(min(max(x, lo + 0.1 * (hi - lo)), hi - 0.1 * (hi - lo)))
     k = 2.0
-    if len(history) >= 2:
-        (x0, y0), (x1, y1) = history[-2:]
-        if x1 != x0:
-            k = min(max(-(y1 - y0) / (x1 - x0), 0.5), 10.0)
+    points = history[-SECANT_POINTS:]
+    if len(points) >= 2:
+        mx = sum(x for x, _ in points) / len(points)
+        my = sum(y for _, y in points) / len(points)
+        sxx = sum((x - mx) ** 2 for x, _ in points)
+        if sxx > 0.0:
+            slope = sum((x - mx) * (y - my) for x, y in points) / sxx
+            k = min(max(-slope, SECANT_EXPONENTS[0]), SECANT_EXPONENTS[1])
     return dt * (achieved / target) ** (1.0 / k)
 
 
@@ -333,16 +375,16 @@ def pilot_statistics(theta: np.ndarray, dt: float, g: float | None = None) -> di
 
 
 def simulate_model(model: str, seeds, n_points: int, *, dt, g, e, sigma_p, theta_cr=None, pole=0.0, theta0=0.0, theta_dot0=0.0,
-                   burn_in=0) -> tuple[np.ndarray, np.ndarray]:
+                   burn_in=0, spectrum=None) -> tuple[np.ndarray, np.ndarray]:
     """``(theta, theta_dot)`` of one series per seed under ``model``: the one dispatch on a model name.
 
     ``"simplified"`` (eq. 4, :func:`simulate_block`), ``"housner"`` (eq. 2,
     :func:`rockdec.housner.simulate_block_housner` with ``nu = sqrt(g/theta_cr)``; a series
     that overturns is NaN from the fall on) or ``"fixed_step"`` (eq. 4 with the grid-impact
-    integrator of :mod:`rockdec.fixed_step`, for the speed/accuracy study). ``pole``: the
-    load's filter (:meth:`rockdec.record_model.Load.pole`, 0 for white noise).
+    integrator of :mod:`rockdec.fixed_step`, for the speed/accuracy study). ``pole``,
+    ``spectrum``: the load (:meth:`rockdec.record_model.Load.draw_options`; 0, None: white).
     """
-    common = dict(dt=dt, e=e, sigma_p=sigma_p, theta0=theta0, theta_dot0=theta_dot0, burn_in=burn_in, pole=pole)
+    common = dict(dt=dt, e=e, sigma_p=sigma_p, theta0=theta0, theta_dot0=theta_dot0, burn_in=burn_in, pole=pole, spectrum=spectrum)
     if model == "simplified":
         return simulate_block(seeds, n_points, g=g, **common)
     if model == "fixed_step":  # not a model: the grid-impact integrator of rockdec.fixed_step
@@ -370,6 +412,7 @@ def simulation_dataset(
     model: str = "simplified",
     theta_cr: float | None = None,
     pole: float = 0.0,
+    spectrum=None,
     sensor_std: float = 0.0,
 ) -> xr.Dataset:
     """Lazy Dataset ``theta(seed, time)``, ``theta_dot(seed, time)`` (float64, Dask chunks over seed).
@@ -377,7 +420,8 @@ def simulation_dataset(
     Nothing is simulated until the values are asked for; each chunk calls
     :func:`simulate_model` (numba, ``nogil``), so Dask's threads run chunks in parallel. A
     series depends on its seed only, so any chunking gives the same numbers, bit for bit.
-    ``pole``: the load's filter (0: white); ``sensor_std`` (rad): white sensor noise added to
+    ``pole``, ``spectrum``: the load (0, None: white; the attribute ``load_pole`` is NaN
+    for a spectrum, whose table :meth:`rockdec.run.Run.dataset` names); ``sensor_std`` (rad): white sensor noise added to
     the recorded angle (:func:`rockdec.loading.add_sensor_noise`; ``theta_dot`` stays the
     model's).
     """
@@ -389,7 +433,8 @@ def simulation_dataset(
         raise ValueError(f"unknown model '{model}'; use simplified or housner")
     if model == "housner" and theta_cr is None:
         raise ValueError("the Housner model needs theta_cr")
-    common = dict(dt=dt, g=g, e=e, sigma_p=sigma_p, theta_cr=theta_cr, pole=pole, theta0=theta0, theta_dot0=theta_dot0, burn_in=burn_in)
+    common = dict(dt=dt, g=g, e=e, sigma_p=sigma_p, theta_cr=theta_cr, pole=pole, theta0=theta0, theta_dot0=theta_dot0, burn_in=burn_in,
+                  spectrum=spectrum)
 
     def block(chunk):
         theta, theta_dot = simulate_model(model, chunk, n_points, **common)
@@ -420,6 +465,6 @@ def simulation_dataset(
     )
     ds.attrs.update(
         {"model": model, "dt": dt, "g": g, "e": e, "sigma_p": sigma_p, "burn_in": burn_in, "theta0": theta0, "theta_dot0": theta_dot0,
-         "load_pole": pole, "sensor_noise_rad": sensor_std}
+         "load_pole": math.nan if spectrum is not None else pole, "sensor_noise_rad": sensor_std}
     )
     return ds

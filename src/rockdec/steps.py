@@ -20,8 +20,9 @@ Paths = Sequence[str | Path]
 
 def estimates(signatures: str | Path, nc: str | Path, csv: str | Path, md: str | Path, options: dict) -> None:
     """Rule ``estimates``: the estimators of eqs. 25-27 and e_v per replicate, their
-    zero-window extrapolation (:func:`rockdec.replicates.scene_estimates`) and the table
-    beside the paper's, from the signature file ``signatures``."""
+    zero-window extrapolation (:func:`rockdec.replicates.scene_estimates`, the analysis core
+    of :mod:`rockdec.estimators` over the replicates) and the table beside the paper's,
+    from the signature file ``signatures``."""
     from rockdec import replicates, tables  # the estimators' kernels: not loaded by the figure steps
 
     with io.open_dataset(signatures) as cube:
