@@ -39,6 +39,7 @@ from rockdec.validate import InputError
 #: Seconds an orphaned job is given to stop after SIGTERM before it is killed.
 STOP_WAIT_S = 10.0
 
+
 def run(main, smk) -> None:
     """Call ``main(smk)`` with standard error sent to the rule's log (``smk.log[0]``)."""
     console = sys.stderr
