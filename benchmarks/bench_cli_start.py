@@ -8,8 +8,9 @@ Each case runs in a fresh interpreter (``python -m rockdec ...``), ``--repeat`` 
 turn with the others; the median and the fastest wall time are printed with their ratio to
 ``python -c pass`` (the floor every command pays) and the extra milliseconds over it. For
 scale, the last case imports the numerical modules a command loads once it runs
-(``rockdec.inference``: numpy, xarray, scipy, numba kernels, Dask), which ``--version``,
-``--help`` and a refused option no longer wait for.
+(``rockdec.inference``: numpy, scipy, numba; no xarray, pandas or Dask, which load only
+where a function needs them), which ``--version``, ``--help`` and a refused option do not
+wait for. ``bench_estimate.py`` times a whole warm ``rockdec estimate``.
 """
 
 from __future__ import annotations

@@ -337,7 +337,7 @@ def rebuild(folder: str | Path, out: str | Path) -> dict[str, bool]:
     """Remake the tables and figures of an archive in the new folder ``out``.
 
     The steps after the simulation run again on the archived files through the functions
-    the workflow's scripts call (:mod:`rockdec.steps`): rule ``estimates`` on
+    the workflow's rules call (:mod:`rockdec.steps`): rule ``estimates`` on
     ``signatures.nc``, rule ``table_readings`` on ``readings.nc`` when the archive holds its
     table, and every figure rule the archive holds the inputs of. The work goes to a hidden
     folder beside ``out``, renamed to ``out`` only when complete and removed on failure.

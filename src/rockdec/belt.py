@@ -42,10 +42,14 @@ calibrations stale (their name hashes the source of the modules that build them)
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
-import xarray as xr
+
+if TYPE_CHECKING:  # annotations only: xarray loads where a function needs it
+    import xarray as xr
+
+    from rockdec import ncread
 
 #: Two-sided normal quantile of the 95 % interval.
 Z95 = 1.959963984540054
@@ -167,7 +171,7 @@ def _weighted_quantiles(z: np.ndarray, w: np.ndarray, p) -> np.ndarray:
     return np.interp(p, cum, z)
 
 
-def belt(cal: xr.Dataset, name: str, points: int = 4001) -> Belt:
+def belt(cal: ncread.Stored | xr.Dataset, name: str, points: int = 4001) -> Belt:
     """The belt of estimator ``name`` (or of ``g``'s ratio to the true ``g``) on a dense
     grid of ``points`` values of ``e`` (:func:`fit`)."""
     from rockdec.measured import G_NAME
@@ -233,7 +237,7 @@ def _t_quantile(dof: np.ndarray) -> np.ndarray:
     return z + (z**3 + z) / (4.0 * dof) + (5.0 * z**5 + 16.0 * z**3 + 3.0 * z) / (96.0 * dof**2)
 
 
-def belts(cal: xr.Dataset) -> dict[str, Belt]:
+def belts(cal: ncread.Stored | xr.Dataset) -> dict[str, Belt]:
     """The belt of every name the calibration holds (each estimator of ``e``, and ``g``)."""
     return {str(name): belt(cal, str(name)) for name in cal["name"].values}
 
@@ -258,7 +262,7 @@ def correct_g(g_belt: Belt, g_raw: float, e: float) -> float:
     return float(g_raw / np.interp(e, g_belt.e, g_belt.mean))
 
 
-def g_band(cal: xr.Dataset, name: str, e_belt: Belt, g_belt: Belt) -> Belt:
+def g_band(cal: ncread.Stored | xr.Dataset, name: str, e_belt: Belt, g_belt: Belt) -> Belt:
     """The belt of the ratio corrected ``g`` / true ``g`` over the calibration's own sets,
     ``e`` read by estimator ``name`` (its belt ``e_belt``; ``g_belt`` the belt of ``g``).
 
@@ -324,7 +328,7 @@ def g_intervals(e_belt: Belt, g_belt: Belt, band: Belt, raw_e: np.ndarray, raw_g
     return np.array([g_interval(band, e_belt, g_belt, x, g) for x, g in zip(np.ravel(raw_e), np.ravel(raw_g))]).reshape(-1, 2)
 
 
-def g_calibration_coverage(cal: xr.Dataset, name: str, e_belt: Belt, g_belt: Belt, band: Belt) -> float:
+def g_calibration_coverage(cal: ncread.Stored | xr.Dataset, name: str, e_belt: Belt, g_belt: Belt, band: Belt) -> float:
     """Share of the calibration's own record sets with an interval of ``g`` (:func:`g_interval`,
     ``e`` read by estimator ``name``) whose interval holds their true ``g``: in-sample, like
     :func:`calibration_coverage`; NaN when no set has one."""
@@ -365,7 +369,7 @@ def correct(b: Belt, observed: float) -> Corrected:
     return Corrected(value, float(low), float(high), tuple(notes))
 
 
-def calibration_coverage(cal: xr.Dataset, name: str, b: Belt) -> float:
+def calibration_coverage(cal: ncread.Stored | xr.Dataset, name: str, b: Belt) -> float:
     """Share of the calibration's own record sets whose 95 % interval (:func:`correct`)
     holds their true ``e``: the coverage of the interval at the record's own settings.
 

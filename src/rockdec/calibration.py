@@ -47,15 +47,18 @@ import sys
 import threading
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-import xarray as xr
 
-from rockdec import __version__, engine, io, measured, registry
+from rockdec import __version__, engine, io, measured, ncread, registry
 from rockdec.models import SCALE_CONSTANT_GUESS, step_for_density
 from rockdec.record_model import PAPER, Load, RecordModel, SensorNoise
 from rockdec.sources import package_sources
 from rockdec.validate import InputError
+
+if TYPE_CHECKING:  # annotations only: xarray loads where a function needs it
+    import xarray as xr
 
 log = logging.getLogger(__name__)
 
@@ -291,6 +294,7 @@ def build(cal_settings: dict) -> xr.Dataset:
     default); the simulation and signature kernels release the GIL.
     """
     import dask
+    import xarray as xr
 
     log.info(
         f"calibrating: simulating {cal_settings['sets_per_e']} record sets at each of {len(cal_settings['e_grid'])} values of e "
@@ -317,11 +321,11 @@ def content_checksum(ds: xr.Dataset) -> str:
     return digest.hexdigest()
 
 
-def _read_checked(path: Path, expected_hash: str) -> tuple[xr.Dataset | None, str | None]:
-    """The calibration stored at ``path`` and ``None``, or ``None`` and why it cannot be trusted."""
+def _read_checked(path: Path, expected_hash: str) -> tuple[ncread.Stored | None, str | None]:
+    """The calibration stored at ``path`` and ``None``, or ``None`` and why it cannot be trusted
+    (read by :func:`rockdec.ncread.read`: no xarray to import for a cached calibration)."""
     try:
-        with xr.open_dataset(path, engine="netcdf4") as ds:
-            ds = ds.load()
+        ds = ncread.read(path)
     except (OSError, ValueError, RuntimeError) as exc:
         return None, f"it is not readable ({type(exc).__name__})"
     try:
@@ -378,12 +382,13 @@ def _take_lock(lock: Path, notes: list) -> bool:
     return True
 
 
-def load_or_build(cal_settings: dict, cache_dir: str | Path, notes: list | None = None) -> tuple[xr.Dataset, bool]:
+def load_or_build(cal_settings: dict, cache_dir: str | Path, notes: list | None = None) -> tuple[ncread.Stored, bool]:
     """The calibration for ``cal_settings`` from ``cache_dir``, built and stored when absent
     or damaged (module docstring; ``notes`` receives a sentence on each rebuild, wait or
     takeover).
 
-    Returns ``(dataset, from_cache)``.
+    Returns ``(calibration, from_cache)``, the calibration as read back from its file
+    (:func:`rockdec.ncread.read`) whether it was stored or built.
     """
     notes = [] if notes is None else notes
     folder = Path(cache_dir)
@@ -416,4 +421,4 @@ def load_or_build(cal_settings: dict, cache_dir: str | Path, notes: list | None 
             io.write_netcdf(ds, path, overwrite=True)
     finally:
         lock.unlink(missing_ok=True)
-    return ds, False
+    return ncread.read(path), False

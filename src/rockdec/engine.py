@@ -25,6 +25,7 @@ from __future__ import annotations
 import contextlib
 import contextvars
 import os
+import sys
 
 from rockdec.validate import InputError
 
@@ -101,16 +102,15 @@ def session(threads: int | None = None, scheduler: str | None = None):
     if _active.get():
         yield
         return
-    import dask  # here, not at the top: the command line reads VARIABLE without loading Dask
-
     kind, value = setting(scheduler)
     token = _active.set(True)
     try:
         if kind == "threads":
             options = {"scheduler": "threads"} if threads is None else {"scheduler": "threads", "num_workers": max(1, int(threads))}
-            with dask.config.set(options):
+            with _dask_config(options):
                 yield
         elif kind == "processes":
+            import dask
             from dask.distributed import Client, LocalCluster
 
             with LocalCluster(n_workers=value, threads_per_worker=1, processes=True, host="127.0.0.1",
@@ -118,6 +118,7 @@ def session(threads: int | None = None, scheduler: str | None = None):
                 with dask.config.set(scheduler=client):
                     yield
         else:
+            import dask
             from dask.distributed import Client
 
             _probe(value)
@@ -125,6 +126,32 @@ def session(threads: int | None = None, scheduler: str | None = None):
                 yield
     finally:
         _active.reset(token)
+
+
+@contextlib.contextmanager
+def _dask_config(options: dict):
+    """Dask's configuration ``options`` inside the block. While Dask is not loaded, they go
+    to the environment variables Dask reads when it loads (``DASK_SCHEDULER``,
+    ``DASK_NUM_WORKERS``), so a command that computes nothing with Dask (``rockdec
+    estimate`` with its calibration cached) never loads it; the variables are restored after
+    the block and Dask, if it was loaded meanwhile, reads its configuration again."""
+    if "dask" in sys.modules:
+        with sys.modules["dask"].config.set(options):
+            yield
+        return
+    names = {f"DASK_{key.upper()}": str(value) for key, value in options.items()}
+    before = {name: os.environ.get(name) for name in names}
+    os.environ.update(names)
+    try:
+        yield
+    finally:
+        for name, text in before.items():
+            if text is None:
+                os.environ.pop(name, None)
+            else:
+                os.environ[name] = text
+        if "dask" in sys.modules:
+            sys.modules["dask"].config.refresh()
 
 
 def compute(*collections, threads: int | None = None, scheduler: str | None = None):

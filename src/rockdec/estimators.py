@@ -40,10 +40,9 @@ from __future__ import annotations
 
 import math
 import warnings
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
-import xarray as xr
 from numba import njit
 
 from rockdec import __version__, registry
@@ -51,6 +50,9 @@ from rockdec import validate as checks
 from rockdec.fits import DEFAULT_FIT_POINTS, MIN_FIT_POINTS
 from rockdec.registry import ESTIMATORS
 from rockdec.signatures import TRIGGERS, NoTriggerWarning, free_response, mean_signature
+
+if TYPE_CHECKING:  # annotations only: xarray loads where a function needs it
+    import xarray as xr
 
 LOCAL_ESTIMATORS = ("e1", "e2", "e3", "e4")
 """The estimators of eq. 27, computed from one set of half-cycle fits (:func:`_local_measures`)."""
@@ -653,6 +655,8 @@ def window_cube(cube: xr.Dataset, fit_points: int = DEFAULT_FIT_POINTS) -> xr.Da
     (dimension ``estimator`` first, :data:`rockdec.registry.ESTIMATORS`, then the cube's
     leading dimensions and ``window``) and ``g_hat`` (rad/s^2, eq. 4).
     """
+    import xarray as xr
+
     dt, points = _check_options(cube.attrs["dt"], fit_points, with_dv=True)  # now, not when a lazy cube computes
     values = xr.apply_ufunc(
         window_estimates,
@@ -689,6 +693,8 @@ def estimate_cube(
     dimension ``estimator`` (:data:`rockdec.registry.ESTIMATORS`) first; NaN where an estimator failed
     (:func:`estimate_all` on that signature says why).
     """
+    import xarray as xr
+
     dt, points = _check_options(dt, fit_points, with_dv=dv_signature is not None)
     common = dict(
         dask="parallelized",
@@ -732,6 +738,8 @@ def extrapolate(e_hat: xr.DataArray, weights: xr.DataArray | str | None = None, 
     (:func:`_extrapolate_rows`). Returns ``e_hat0`` (value at zero window),
     ``e_hat0_stderr`` and ``slope``; reasons are dropped (NaN stays NaN).
     """
+    import xarray as xr
+
     window = e_hat["window"]
     if isinstance(weights, str):
         weights = xr.apply_ufunc(

@@ -41,9 +41,9 @@ from rockdec.layout import FIGURES  # noqa: E402  (the workflow's file names, dr
 from rockdec.models import period_from_g  # noqa: E402
 
 # rockdec.signatures (numba, dask), rockdec.tables (scipy.stats), rockdec.tradeoff (numba,
-# dask) and scipy.optimize are imported where they are used: each plot rule is a fresh
-# process, and these imports would double its start-up time for the figures that do not
-# need them.
+# dask) and scipy.optimize are imported where they are used: a study's plot rule and
+# `rockdec estimate --plot` are fresh processes, and these imports would double their
+# start-up time for the figures that do not need them.
 
 __all__ = ["FIGURES", "fig1b", "fig2", "fig3", "fig4", "fig_ev", "fig_record", "free_rocking", "save"]
 

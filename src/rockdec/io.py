@@ -21,12 +21,15 @@ import secrets
 import shutil
 import subprocess
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-import xarray as xr
 
 from rockdec import __version__
 from rockdec.validate import InputError, path_name
+
+if TYPE_CHECKING:  # annotations only: xarray loads where a function needs it
+    import xarray as xr
 
 #: Largest magnitude a float32 variable can store without becoming inf.
 FLOAT32_MAX = float(np.finfo(np.float32).max)
@@ -343,6 +346,8 @@ def _fits_float32(data, name: str):
 
 def open_dataset(path: str | Path, **kwargs) -> xr.Dataset:
     """Open a rockdec NetCDF file with a clear error when it is missing or not NetCDF."""
+    import xarray as xr
+
     path = Path(path)
     if not path.is_file():
         raise OutputError(f"input '{path}' does not exist; run the step that makes it first.")

@@ -11,6 +11,7 @@ the signatures skip every segment that holds one, and the count is reported.
 from __future__ import annotations
 
 import hashlib
+import warnings
 from pathlib import Path
 from typing import NamedTuple
 
@@ -86,10 +87,45 @@ def _sniff_csv(path: Path) -> tuple[str, float]:
     return (r"\s+" if len(header.split()) > 1 else ","), len(head) / lines
 
 
+def _plain_columns(path: Path, sep: str, column: str) -> dict[str, np.ndarray] | None:
+    """The columns of a plain CSV file by name, read by NumPy (pandas is slow to import):
+    a first line (after comments) of distinct names, ``column`` among them, and on every
+    other line a finite number under each. ``None`` for any other file, which pandas reads
+    (:func:`_read_csv`, with its messages for what is wrong)."""
+    try:
+        with open(path, encoding="utf-8") as f:
+            header = next((line for line in f if line.strip() and not line.lstrip().startswith("#")), "")
+            names = [n.strip() for n in (header.split() if sep == r"\s+" else header.split(sep))]
+            if column not in names or "" in names or len(set(names)) < len(names):
+                return None
+            with warnings.catch_warnings():  # a file of a header alone: pandas names it
+                warnings.simplefilter("ignore", UserWarning)
+                values = np.loadtxt(f, delimiter=None if sep == r"\s+" else sep, comments="#", ndmin=2, dtype=np.float64)
+    except (ValueError, UnicodeDecodeError):
+        return None
+    if values.shape[1] != len(names) or not values.size or not np.isfinite(values).all():
+        return None
+    return dict(zip(names, values.T))
+
+
 def _read_csv(path: Path, column: str, step: float | None) -> tuple[np.ndarray, float]:
+    sep, _ = _sniff_csv(path)
+    plain = _plain_columns(path, sep, column)
+    values, time = (plain[column], plain.get("time")) if plain is not None else _pandas_columns(path, sep, column)
+    if time is not None:
+        if step is not None:
+            raise RecordError(f"{path}: the file has a time column, so --dt/--fs would contradict it; drop the option.")
+        step = sampling_step(time if isinstance(time, np.ndarray) else _numeric(time, path, "time"), str(path))
+    elif step is None:
+        raise RecordError(f"{path}: no 'time' column; give the sampling step with --dt SECONDS or --fs HZ.")
+    return values, step
+
+
+def _pandas_columns(path: Path, sep: str, column: str):
+    """Column ``column`` of any CSV file pandas reads, as numbers, and its ``time`` column as
+    read (``None`` when it has none); one sentence for what makes it unreadable."""
     import pandas as pd
 
-    sep, _ = _sniff_csv(path)
     options = {"comment": "#", "sep": sep, "skipinitialspace": sep != r"\s+"}
     try:
         table = pd.read_csv(path, **options)
@@ -103,14 +139,7 @@ def _read_csv(path: Path, column: str, step: float | None) -> tuple[np.ndarray, 
     table.columns = [str(c).strip() for c in table.columns]
     if column not in table.columns:
         raise RecordError(f"{path}: no column '{column}' (columns: {', '.join(table.columns)}); name it with --column.")
-    values = _numeric(table[column], path, column)
-    if "time" in table.columns:
-        if step is not None:
-            raise RecordError(f"{path}: the file has a time column, so --dt/--fs would contradict it; drop the option.")
-        step = sampling_step(_numeric(table["time"], path, "time"), str(path))
-    elif step is None:
-        raise RecordError(f"{path}: no 'time' column; give the sampling step with --dt SECONDS or --fs HZ.")
-    return values, step
+    return _numeric(table[column], path, column), table["time"] if "time" in table.columns else None
 
 
 def _numeric(series, path: Path, column: str) -> np.ndarray:

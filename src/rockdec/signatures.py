@@ -64,16 +64,18 @@ estimators read the sums and counts (:func:`rockdec.estimators.window_estimates`
 from __future__ import annotations
 
 import warnings
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
-import xarray as xr
 from numba import njit
 
 from rockdec import __version__
 from rockdec import validate as checks
 from rockdec.models import period_from_g
 from rockdec.timeaxis import sampling_step
+
+if TYPE_CHECKING:  # annotations only: xarray loads where a function needs it
+    import xarray as xr
 
 __all__ = [
     "DEFAULT_WINDOWS",
@@ -519,6 +521,8 @@ def _group_sums(theta: xr.DataArray, group: xr.DataArray, kw: dict):
     sums and counts. Returns the three DataArrays, ``group`` first as with xarray's
     groupby, and the sorted labels along ``group``.
     """
+    import xarray as xr
+
     dim = group.dims[0] if group.ndim == 1 else None
     if dim is None or dim == "time" or dim not in theta.dims:
         raise ValueError(f"group must be one-dimensional along a dimension of theta other than time; it has {group.dims}")
@@ -558,6 +562,8 @@ def _sampling_interval(theta: xr.DataArray) -> float:
 
 def _finish(sums: xr.Dataset) -> xr.Dataset:
     """Add ``signature`` and ``free_response`` to a Dataset of sums and counts."""
+    import xarray as xr
+
     units = sums["signature_sum"].attrs.get("units", "rad")
     signature = xr.apply_ufunc(
         mean_signature,
@@ -594,6 +600,8 @@ def pool(ds: xr.Dataset, dim, by=None) -> xr.Dataset:
     instead: the result has a ``group`` dimension, one per label >= 0 in ascending order;
     entries labelled -1 are left out.
     """
+    import xarray as xr
+
     sums = ds[list(SUM_VARS)]
     if by is None:
         return _finish(sums.sum(dim, keep_attrs=True))
@@ -684,6 +692,8 @@ def signature_cube(
     computed. A window empty in some series only is normal (see ``count``) and not warned
     about; :func:`pool` warns for windows still empty after pooling.
     """
+    import xarray as xr
+
     if "time" not in theta.dims:
         raise ValueError(f"theta must have a 'time' dimension; it has {theta.dims}")
     dt = _sampling_interval(theta)

@@ -11,21 +11,33 @@ imported but the ``rockdec`` package itself (to locate its files).
 from __future__ import annotations
 
 import ast
+import functools
 from importlib.util import find_spec
 from pathlib import Path
 
 
-def _rockdec_imports(path: Path) -> list[str]:
-    """The ``rockdec`` modules a source file imports, anywhere in it (absolute imports)."""
+def _rockdec_imports(path: Path) -> tuple[str, ...]:
+    """The ``rockdec`` modules a source file imports, anywhere in it (absolute imports).
+
+    Each file is parsed once while it is unchanged (:func:`_parsed_imports`): the workflow
+    asks for the sources of a dozen steps that share most of their modules.
+    """
+    stat = path.stat()
+    return _parsed_imports(str(path), stat.st_mtime_ns, stat.st_size)
+
+
+@functools.lru_cache(maxsize=1024)
+def _parsed_imports(path: str, mtime_ns: int, size: int) -> tuple[str, ...]:
+    """:func:`_rockdec_imports` of the file ``path`` as it is at ``mtime_ns`` and ``size``."""
     names = []
-    for node in ast.walk(ast.parse(path.read_text())):
+    for node in ast.walk(ast.parse(Path(path).read_text())):
         if isinstance(node, ast.ImportFrom) and node.level == 0 and node.module == "rockdec":
             names += [f"rockdec.{alias.name}" for alias in node.names]
         elif isinstance(node, ast.ImportFrom) and node.level == 0 and (node.module or "").startswith("rockdec."):
             names.append(node.module)
         elif isinstance(node, ast.Import):
             names += [alias.name for alias in node.names if alias.name.startswith("rockdec.")]
-    return names
+    return tuple(names)
 
 
 def package_sources(*roots: str) -> list[str]:

@@ -1,7 +1,8 @@
 """The workflow's steps after the signatures, one function each: files in, files out.
 
-The rules' scripts (``workflow/scripts/estimates.py``, ``table_readings.py``, ``fig_1b.py``,
-``fig_2.py``, ``fig_3.py``, ``fig_4.py``, ``fig_ev.py``) and ``rockdec verify --rebuild``
+The workflow's rules of the same names (``estimates``, ``table_readings``, ``fig1b``,
+``fig2``, ``fig3``, ``fig4``, ``fig_ev``: ``run:`` through :func:`rockdec.in_snakemake.step`,
+inside the Snakemake process) and ``rockdec verify --rebuild``
 (:func:`rockdec.archive.rebuild`) call these functions, so a product rebuilt from an
 archive is made by the code that made it in the workflow. Figures import matplotlib, and
 the estimates the estimators' kernels, only when they run.

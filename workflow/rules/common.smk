@@ -3,7 +3,7 @@ import sys
 from importlib.util import find_spec
 
 from rockdec import config as rockdec_config
-from rockdec import layout
+from rockdec import in_snakemake, layout
 from rockdec.sources import package_sources
 
 # Values given with --config arrive as text: read them as YAML values. An error names where
@@ -101,6 +101,11 @@ def default_products():
 
 
 FIGURES_CODE = find_spec("rockdec.figures").origin
+
+# The tables and figures run inside the Snakemake process (`run:` with rockdec.in_snakemake.step,
+# in threads: profiles/default), so their libraries load once a run; their code input is what
+# that module reaches (rockdec.steps and the modules it runs).
+STEPS_CODE = package_sources("rockdec.in_snakemake")
 
 
 def step_code(script):

@@ -2,7 +2,7 @@ rule estimates:
     """Estimators per replicate, zero-window extrapolation, and the table beside the paper."""
     input:
         "results/{scene}/signatures.nc",
-        code=step_code("estimates.py"),
+        code=STEPS_CODE,
     output:
         estimates="results/{scene}/estimates.nc",
         csv=report("results/{scene}/table.csv", category="Tables", caption="../report/table.rst"),
@@ -14,17 +14,15 @@ rule estimates:
     threads: 1
     params:
         options=lambda w: estimate_options(w.scene),
-    conda:
-        "../envs/rockdec.yaml"
-    script:
-        "../scripts/estimates.py"
+    run:
+        in_snakemake.step(rule, log[0], input[0], output.estimates, output.csv, output.md, params.options)
 
 
 rule table_readings:
     """Every reading side by side: the scene's own estimates beside the other readings'."""
     input:
         "results/{scene}/readings.nc",
-        code=step_code("table_readings.py"),
+        code=STEPS_CODE,
     output:
         estimates="results/{scene}/estimates_readings.nc",
         csv=report("results/{scene}/table_readings.csv", category="Tables", caption="../report/table_readings.rst"),
@@ -36,10 +34,8 @@ rule table_readings:
     threads: 1
     params:
         weights=lambda w: scene(w.scene)["estimates"]["weights"],
-    conda:
-        "../envs/rockdec.yaml"
-    script:
-        "../scripts/table_readings.py"
+    run:
+        in_snakemake.step(rule, log[0], input[0], output.estimates, output.csv, output.md, params.weights)
 
 
 rule choices:

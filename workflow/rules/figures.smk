@@ -1,6 +1,8 @@
 # Figures: one compute rule (the signature of the stored series, paper fig. 2c) and one plot
 # rule per figure. Plot rules only read NetCDF products, so changing a plot never reruns a
-# simulation; each also lists the plotting module, so editing it redraws every figure.
+# simulation; each also lists the plotting module, so editing it redraws every figure. They
+# run inside the Snakemake process (run: with rockdec.in_snakemake.step, common.smk): matplotlib and
+# xarray load once for all of them.
 rule stored_signature:
     """Signature cube of the stored series pooled into one group (the estimate of fig. 2c)."""
     input:
@@ -32,10 +34,8 @@ rule fig1b:
     benchmark:
         "results/{scene}/benchmarks/fig1b.tsv"
     threads: 1
-    conda:
-        "../envs/rockdec.yaml"
-    script:
-        "../scripts/fig_1b.py"
+    run:
+        in_snakemake.step(rule, log[0], [output.png, output.pdf])
 
 
 rule fig2:
@@ -51,10 +51,8 @@ rule fig2:
     benchmark:
         "results/{scene}/benchmarks/fig2.tsv"
     threads: 1
-    conda:
-        "../envs/rockdec.yaml"
-    script:
-        "../scripts/fig_2.py"
+    run:
+        in_snakemake.step(rule, log[0], input.sim, input.sig, [output.png, output.pdf])
 
 
 rule fig3:
@@ -69,10 +67,8 @@ rule fig3:
     benchmark:
         "results/{scene}/benchmarks/fig3.tsv"
     threads: 1
-    conda:
-        "../envs/rockdec.yaml"
-    script:
-        "../scripts/fig_3.py"
+    run:
+        in_snakemake.step(rule, log[0], input.est, [output.png, output.pdf])
 
 
 rule fig4:
@@ -87,10 +83,8 @@ rule fig4:
     benchmark:
         "results/{scene}/benchmarks/fig4.tsv"
     threads: 1
-    conda:
-        "../envs/rockdec.yaml"
-    script:
-        "../scripts/fig_4.py"
+    run:
+        in_snakemake.step(rule, log[0], input.est, [output.png, output.pdf])
 
 
 rule fig_ev:
@@ -106,7 +100,5 @@ rule fig_ev:
     benchmark:
         "results/{scene}/benchmarks/fig_ev.tsv"
     threads: 1
-    conda:
-        "../envs/rockdec.yaml"
-    script:
-        "../scripts/fig_ev.py"
+    run:
+        in_snakemake.step(rule, log[0], input.sig, input.est, [output.png, output.pdf])
