@@ -78,15 +78,6 @@ class ArchiveError(InputError):
     """An archive folder that cannot be verified or rebuilt as it is; the message says why."""
 
 
-def sha256(path: str | Path) -> str:
-    """Hex SHA-256 of a regular file, read in 1 MiB blocks (a symbolic link is refused, not followed)."""
-    digest = hashlib.sha256()
-    with os.fdopen(os.open(path, os.O_RDONLY | os.O_NOFOLLOW), "rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
-
-
 def package_versions() -> dict[str, str]:
     """Installed version of each of :data:`PACKAGES` (``"not installed"`` if absent)."""
     out = {}
@@ -107,7 +98,7 @@ def _copy(source: Path, folder: Path, name: str) -> dict:
     target = folder / name
     target.parent.mkdir(parents=True, exist_ok=True)
     shutil.copyfile(source, target)
-    return {"name": name, "size": target.stat().st_size, "sha256": sha256(target)}
+    return {"name": name, "size": target.stat().st_size, "sha256": io.sha256(target)}
 
 
 def _write_json(path: Path, data) -> None:
@@ -142,7 +133,7 @@ def write_archive(
     path = folder / MANIFEST
     check_manifest(manifest, path)
     _write_json(path, manifest)
-    entry = {"name": MANIFEST, "size": path.stat().st_size, "sha256": sha256(path)}
+    entry = {"name": MANIFEST, "size": path.stat().st_size, "sha256": io.sha256(path)}
     _write_json(folder / CRATE, crates.crate_from_manifest(manifest, entry))
     return path
 
@@ -258,7 +249,7 @@ def _file_problem(folder: Path, entry: dict) -> str | None:
     if not stat.S_ISREG(mode):
         return f"not a plain file: {name} (a folder or a device; an archive holds regular files)"
     try:
-        if os.lstat(path).st_size != entry["size"] or sha256(path) != entry["sha256"]:
+        if os.lstat(path).st_size != entry["size"] or io.sha256(path) != entry["sha256"]:
             return f"changed: {name} (SHA-256 differs from the manifest)"
     except OSError as exc:
         return f"unreadable: {name} ({exc.strerror})"
@@ -295,7 +286,7 @@ def _crate_problems(folder: Path, manifest: dict) -> list[str]:
         return [f"not a plain file: {CRATE} (a link or a folder; an archive holds regular files)"]
     except (json.JSONDecodeError, UnicodeDecodeError, RecursionError):
         return [f"changed: {CRATE} (not valid JSON)"]
-    entry = {"name": MANIFEST, "size": os.lstat(folder / MANIFEST).st_size, "sha256": sha256(folder / MANIFEST)}
+    entry = {"name": MANIFEST, "size": os.lstat(folder / MANIFEST).st_size, "sha256": io.sha256(folder / MANIFEST)}
     problems = []
     for line in crates.differences(stored, crates.crate_from_manifest(manifest, entry)):
         if line.startswith(f"'{MANIFEST}' differs"):

@@ -15,6 +15,7 @@ from __future__ import annotations
 import contextlib
 import datetime as _dt
 import errno
+import hashlib
 import json
 import os
 import secrets
@@ -40,6 +41,15 @@ DISK_FULL_BYTES = 2**20
 
 class OutputError(InputError):
     """An output path the user can fix (exists already, folder missing or not writable, disk full)."""
+
+
+def sha256(path: str | Path) -> str:
+    """Hex SHA-256 of a regular file, read in 1 MiB blocks (a symbolic link is refused, not followed)."""
+    digest = hashlib.sha256()
+    with os.fdopen(os.open(path, os.O_RDONLY | os.O_NOFOLLOW), "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
 
 
 def _git(*args: str, cwd: Path) -> str | None:

@@ -221,7 +221,7 @@ def _file(path, what: str) -> Path:
 
 def _source(path: Path, what: str) -> str:
     """``what`` and ``path``'s name and SHA-256 (its first 16 hex digits), as the load's ``source``."""
-    from rockdec.archive import sha256
+    from rockdec.io import sha256
 
     return f"{what} {path.name} (sha256 {sha256(path)[:16]})"
 
