@@ -346,7 +346,8 @@ def test_the_g_line_of_the_report_gives_g_s_interval_and_keeps_a_given_g_as_give
     res = {"records": ["r.csv"], "samples": 1000, "dt": 0.01, "nan_samples": 0, "sigma_y": 0.01, "points_per_cycle": 75.0,
            "g": 1.02, "g_given": False, "g_raw": 0.99, "g_interval": [0.97, 1.08], "g_coverage": 0.94,
            "calibration": {"file": "c.nc", "cached": True, "seconds": 0.0}, "estimators": {"e_v": est}, "estimator": "e_v",
-           "e": 0.9, "interval": [0.88, 0.92], "coverage": 0.95, "warnings": []}
+           "e": 0.9, "interval": [0.88, 0.92], "coverage": 0.95, "warnings": [], "record_model": None,
+           "selection": [{"estimator": "e_v", "holds": True}]}
     line = next(line for line in _estimate_text(res).splitlines() if "restoring acceleration" in line)
     assert "g = 1.02 rad/s^2" in line and "95 % interval [0.97, 1.08]" in line and "on 94% of the calibration's records" in line
     given = {**res, "g": 1.0, "g_given": True, "g_interval": None, "g_coverage": None}
