@@ -207,13 +207,19 @@ class Outcome:
     message: str
 
 
-def evaluate(records, analysis, cal, e: float | None, interval, level: float) -> dict:
-    """Every check on ``records`` against the calibration ``cal`` (:func:`thresholds`):
-    ``{name: Outcome}`` in registry order. A NaN statistic or threshold never fires."""
-    limits = thresholds(cal, e, interval, level)
+def judge(values, limits: dict) -> dict:
+    """``{name: Outcome}`` (registry order) of the statistics ``values``
+    (:func:`statistics`) against the thresholds ``limits`` (:func:`thresholds`). A NaN
+    statistic or threshold never fires."""
     out = {}
-    for check, value in zip(REGISTRY, statistics(records, analysis)):
+    for check, value in zip(REGISTRY, values):
         limit = limits[check.name]
         fired = bool(value > limit if check.side == "high" else value < limit)  # NaN compares False
         out[check.name] = Outcome(float(value), float(limit), fired, check.message.format(value=value, threshold=limit) if fired else "")
     return out
+
+
+def evaluate(records, analysis, cal, e: float | None, interval, level: float) -> dict:
+    """Every check on ``records`` against the calibration ``cal``: :func:`judge` of
+    :func:`statistics` and :func:`thresholds`."""
+    return judge(statistics(records, analysis), thresholds(cal, e, interval, level))
