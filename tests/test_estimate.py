@@ -313,28 +313,6 @@ def test_an_estimator_that_fails_in_the_calibration_gets_no_interval():
     assert math.isnan(c.value) and math.isnan(c.low) and "too many for a belt" in c.notes[0]
 
 
-def test_warnings_name_what_looks_wrong(short_record):
-    """Drift, a spike and a lean each raise their warning; the clean record raises none of them."""
-    from rockdec.inference import diagnose
-    from rockdec.records import Record
-
-    theta, dt = short_record
-    analysis = measured.analyse([theta], dt)
-
-    def notes(y):
-        return " ".join(diagnose([Record(y, dt, "r")], analysis, {}))
-
-    clean = notes(theta)
-    assert "stationary" not in clean and "spike" not in clean and "asymmetric" not in clean
-    drifting = theta.copy()
-    drifting[-theta.size // 4 :] *= 3.0
-    assert "not stationary" in notes(drifting)
-    spiky = theta.copy()
-    spiky[500] = 40 * analysis.sigma_y
-    assert "spike" in notes(spiky)
-    assert "asymmetric" in notes(theta + 0.8 * np.abs(theta))
-
-
 def test_calibration_coverage_is_95_percent_when_the_belt_is_right_and_less_when_too_narrow():
     cal = synthetic_calibration(bias=0.02, spread=0.01, sets=400)
     b = belt.belt(cal, "e_v")
