@@ -32,77 +32,151 @@ calibration, are measured by :mod:`rockdec.diagnostics_study` (docs/method.md §
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable
+from typing import Callable, NamedTuple
 
 import numpy as np
+from numba import njit
 
-from rockdec import fits, record_measure
+from rockdec import fits
 
 #: Share of the calibration's own records (near the record's ``e``) below a ``"high"``
 #: threshold; a check fires on ``1 - QUANTILE`` of them in expectation.
 QUANTILE = 0.975
 
-#: Consecutive blocks per record of the non-stationarity statistic.
-STATIONARITY_BLOCKS = 8
+#: Consecutive blocks per record of the block statistics (drift and non-stationarity), each
+#: of at least ``BLOCK_MIN`` samples (fewer blocks for short records; none below 4).
+BLOCKS, BLOCK_MIN = 20, 1000
 
 #: ``e`` at which the structural floor of ``coarse_sampling`` is taken when the record gives
 #: no corrected ``e`` (the floor is highest for small ``e``; 0.95 is the paper's middle).
 FLOOR_E = 0.95
 
 
-def _finite(records) -> np.ndarray:
-    """The records' finite samples, each record less its own mean, end to end."""
-    return np.concatenate([(y - np.nanmean(y))[np.isfinite(y)] for y in records])
+@njit(nogil=True, cache=True)
+def _record_sums(y, n_blocks):
+    """One record's sums in one pass over its samples: per block of ``n_blocks`` consecutive
+    equal blocks (by sample index), the count of finite samples and the sums of ``d``,
+    ``d^2`` and ``d^3`` with ``d = y - c``, ``c`` the first finite sample (a shift that keeps
+    the central moments accurate, :func:`sums`); and the largest
+    ``|y[k] - (y[k-1] + y[k+1]) / 2|`` over finite triples. Returns ``(c, counts, sums)``
+    with ``sums`` of shape ``(3, n_blocks)``, and that largest distance."""
+    n = y.size
+    c = 0.0
+    for k in range(n):
+        if np.isfinite(y[k]):
+            c = y[k]
+            break
+    counts, out = np.zeros(n_blocks), np.zeros((3, n_blocks))
+    for j in range(n_blocks):
+        m, t1, t2, t3 = 0, 0.0, 0.0, 0.0
+        for k in range(j * n // n_blocks, (j + 1) * n // n_blocks):
+            d = y[k] - c
+            if np.isfinite(d):
+                m += 1
+                t1 += d
+                d2 = d * d
+                t2 += d2
+                t3 += d2 * d
+        counts[j], out[0, j], out[1, j], out[2, j] = m, t1, t2, t3
+    worst = 0.0
+    for k in range(1, n - 1):
+        off = abs(y[k] - 0.5 * (y[k - 1] + y[k + 1]))
+        if off > worst:  # NaN compares False
+            worst = off
+    return c, counts, out, worst
 
 
-def nonstationarity(records, analysis) -> float:
-    """Standard deviation of ``ln`` of the rms of :data:`STATIONARITY_BLOCKS` consecutive
-    blocks of each record (each block about its own mean, so an offset does not count),
-    pooled over records: 0 for a stationary record of infinite length."""
-    logs = []
-    for y in records:
-        for block in np.array_split(np.asarray(y, dtype=float), STATIONARITY_BLOCKS):
-            block = block[np.isfinite(block)]
-            if block.size > 1:
-                logs.append(np.log(np.std(block)))
-    return float(np.std(logs)) if len(logs) > 1 else np.nan
+class Sums(NamedTuple):
+    """What the checks read of the records (:func:`sums`), pooled over records: ``count``
+    finite samples; ``m2``, ``m3`` the second and third moments about each record's mean;
+    ``block_mean``, ``block_var`` per block of each record (:data:`BLOCKS`, each of at least
+    :data:`BLOCK_MIN` samples, fewer for short records, none below 4), with ``block_record``
+    the record of each; ``off``: the largest distance of a sample from the line through its
+    neighbours (rad)."""
+
+    count: int
+    m2: float
+    m3: float
+    block_mean: np.ndarray
+    block_var: np.ndarray
+    block_record: np.ndarray
+    off: float
 
 
-def drift(records, analysis) -> float:
-    """``drift_z`` of :mod:`rockdec.record_measure`: von Neumann's ratio of 20 block means per
-    record as a z score (about N(0, 1) for independent block means; large for a slow
-    offset)."""
-    return float(record_measure._drift([np.asarray(y, dtype=float) - np.nanmean(y) for y in records], analysis.sigma_y)[1])
+def sums(records) -> Sums:
+    """:class:`Sums` of ``records`` (1-D arrays, NaN allowed): one compiled pass per record
+    (:func:`_record_sums`); the moments about the mean follow from the shifted sums
+    (``m2 = S2/n - dbar^2``, ``m3 = S3/n - 3 dbar S2/n + 2 dbar^3``)."""
+    count, s2, s3, off = 0, 0.0, 0.0, 0.0
+    means, variances, owners = [], [], []
+    for i, y in enumerate(records):
+        y = np.ascontiguousarray(y, dtype=np.float64)
+        b = min(BLOCKS, y.size // BLOCK_MIN)
+        _, bn, (b1, b2, b3), worst = _record_sums(y, max(b, 1))
+        n = bn.sum()
+        off = max(off, worst)
+        if not n:
+            continue
+        dbar = b1.sum() / n
+        count += int(n)
+        s2 += b2.sum() - n * dbar**2
+        s3 += b3.sum() - 3.0 * dbar * b2.sum() + 2.0 * n * dbar**3
+        if b >= 4 and (bn > 1).all():
+            means.append(b1 / bn)
+            variances.append(b2 / bn - (b1 / bn) ** 2)
+            owners.append(np.full(b, i))
+    stack = (lambda parts: np.concatenate(parts) if parts else np.empty(0))
+    m2, m3 = (s2 / count, s3 / count) if count else (np.nan, np.nan)
+    return Sums(count, m2, m3, stack(means), stack(variances), stack(owners), off)
 
 
-def spikes(records, analysis) -> float:
+def nonstationarity(s: Sums, analysis) -> float:
+    """Standard deviation of ``ln`` of the blocks' rms (each block about its own mean, so an
+    offset does not count), pooled over records: 0 for a stationary record of infinite
+    length, large when the load's strength changes along the record."""
+    return float(np.std(0.5 * np.log(s.block_var))) if s.block_var.size > 1 else np.nan
+
+
+def drift(s: Sums, analysis) -> float:
+    """Von Neumann's ratio ``eta`` of the block means (mean square successive difference
+    over variance, pooled over records) as the z score ``(2 - eta) / sd0``,
+    ``sd0^2 = 4 (B - 2)/(B^2 - 1)`` for ``B`` blocks: about N(0, 1) for independent block
+    means, large for a slow offset (the ``drift_z`` of :mod:`rockdec.record_measure`, on
+    equal blocks)."""
+    num = den = 0.0
+    for i in np.unique(s.block_record):
+        means = s.block_mean[s.block_record == i]
+        means = means - means.mean()
+        num += float(np.sum(np.diff(means) ** 2))
+        den += float(np.sum(means**2))
+    count = s.block_mean.size
+    if count < 4 or den == 0.0:
+        return np.nan
+    return (2.0 - num / den) / np.sqrt(4.0 * (count - 2) / (count**2 - 1))
+
+
+def spikes(s: Sums, analysis) -> float:
     """Largest ``|y[k] - (y[k-1] + y[k+1]) / 2|`` over ``sigma_Y``: how far one sample stands
     off the line through its neighbours. Between impacts the block moves on parabolas, so
-    a clean record gives a few tenths at most (velocity jumps at impacts); an isolated
-    spike of ``k sigma_Y`` gives ``k``."""
-    worst = 0.0
-    for y in records:
-        y = np.asarray(y, dtype=float)
-        off = np.abs(y[1:-1] - 0.5 * (y[:-2] + y[2:]))
-        if np.isfinite(off).any():
-            worst = max(worst, float(np.nanmax(off)))
-    return worst / analysis.sigma_y
+    a clean record gives a few hundredths of ``sigma_Y`` at the paper's sampling (velocity
+    jumps at impacts); an isolated spike of ``k sigma_Y`` gives ``k``. Triples touching a
+    NaN are left out."""
+    return s.off / analysis.sigma_y
 
 
-def asymmetry(records, analysis) -> float:
-    """``|skewness|`` of the pooled records (each less its mean): a block leaning on one
+def asymmetry(s: Sums, analysis) -> float:
+    """``|skewness|`` of the records (each about its mean, pooled): a block leaning on one
     side (``g`` differing between its sides, or a load with a non-zero mean) goes further
     on its weak side."""
-    y = _finite(records)
-    return float(abs(np.mean(y**3) / np.mean(y**2) ** 1.5))
+    return abs(s.m3) / s.m2**1.5
 
 
-def triggers(records, analysis) -> float:
+def triggers(s: Sums, analysis) -> float:
     """Triggers of both signatures (``D_a`` and ``D_v``) in the largest window."""
     return float(analysis.count["a"][-1] + analysis.count["v"][-1])
 
 
-def sampling(records, analysis) -> float:
+def sampling(s: Sums, analysis) -> float:
     """Samples per cycle at amplitude ``sigma_Y`` (eq. 5)."""
     return float(analysis.points_per_cycle)
 
@@ -113,7 +187,8 @@ class Check:
 
     ``name``: the ``check`` coordinate of the calibration's ``diagnostic`` variable and the
     key of ``rockdec estimate``'s JSON ``diagnostics``; ``defect``: what it finds, in a few
-    words; ``statistic``: ``f(records, analysis) -> float`` (dimensionless); ``side``:
+    words; ``statistic``: ``f(sums, analysis) -> float`` (dimensionless; :func:`sums` of the
+    records, their :class:`rockdec.measured.Analysis`); ``side``:
     ``"high"`` fires above the threshold, ``"low"`` below; ``threshold``: ``"calibrated"``
     (:func:`thresholds`) or ``"structural"`` (``coarse_sampling``, module docstring);
     ``message``: the warning, formatted with ``value`` and ``threshold``.
@@ -156,9 +231,10 @@ CHECKS = tuple(check.name for check in REGISTRY)
 
 
 def statistics(records, analysis) -> np.ndarray:
-    """Every check's statistic on ``records`` (zero-mean-able 1-D arrays, NaN allowed) and
-    their :class:`rockdec.measured.Analysis`, in registry order."""
-    return np.array([check.statistic(records, analysis) for check in REGISTRY], dtype=float)
+    """Every check's statistic on ``records`` (1-D arrays, NaN allowed) and their
+    :class:`rockdec.measured.Analysis`, in registry order."""
+    s = sums(records)
+    return np.array([check.statistic(s, analysis) for check in REGISTRY], dtype=float)
 
 
 def _near(e_grid: np.ndarray, e: float | None, interval) -> np.ndarray:
