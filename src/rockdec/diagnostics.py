@@ -130,29 +130,35 @@ def sums(records) -> Sums:
     return Sums(count, m2, m3, stack(means), stack(variances), stack(owners), off)
 
 
+def _von_neumann_z(values: np.ndarray, owners: np.ndarray) -> float:
+    """Von Neumann's ratio ``eta`` of consecutive ``values`` (mean square successive
+    difference over variance, each record's ``values``, marked by ``owners``, about their
+    own mean, pooled) as the z score ``(2 - eta) / sd0``, ``sd0^2 = 4 (B - 2)/(B^2 - 1)`` for
+    ``B`` values: about N(0, 1) for independent values, large when they follow a slow
+    trend. NaN for fewer than 4 values."""
+    num = den = 0.0
+    for i in np.unique(owners):
+        v = values[owners == i]
+        v = v - v.mean()
+        num += float(np.sum(np.diff(v) ** 2))
+        den += float(np.sum(v**2))
+    count = values.size
+    if count < 4 or not den > 0.0:
+        return np.nan
+    return (2.0 - num / den) / np.sqrt(4.0 * (count - 2) / (count**2 - 1))
+
+
 def nonstationarity(s: Sums, analysis) -> float:
-    """Standard deviation of ``ln`` of the blocks' rms (each block about its own mean, so an
-    offset does not count), pooled over records: 0 for a stationary record of infinite
-    length, large when the load's strength changes along the record."""
-    return float(np.std(0.5 * np.log(s.block_var))) if s.block_var.size > 1 else np.nan
+    """:func:`_von_neumann_z` of ``ln`` of the blocks' variances (each block about its own
+    mean, so an offset does not count): large when the load's strength changes slowly or
+    steps along the record; scale-free."""
+    return _von_neumann_z(np.log(s.block_var), s.block_record)
 
 
 def drift(s: Sums, analysis) -> float:
-    """Von Neumann's ratio ``eta`` of the block means (mean square successive difference
-    over variance, pooled over records) as the z score ``(2 - eta) / sd0``,
-    ``sd0^2 = 4 (B - 2)/(B^2 - 1)`` for ``B`` blocks: about N(0, 1) for independent block
-    means, large for a slow offset (the ``drift_z`` of :mod:`rockdec.record_measure`, on
-    equal blocks)."""
-    num = den = 0.0
-    for i in np.unique(s.block_record):
-        means = s.block_mean[s.block_record == i]
-        means = means - means.mean()
-        num += float(np.sum(np.diff(means) ** 2))
-        den += float(np.sum(means**2))
-    count = s.block_mean.size
-    if count < 4 or den == 0.0:
-        return np.nan
-    return (2.0 - num / den) / np.sqrt(4.0 * (count - 2) / (count**2 - 1))
+    """:func:`_von_neumann_z` of the block means: large for a slow offset (the ``drift_z``
+    of :mod:`rockdec.record_measure`, on equal blocks)."""
+    return _von_neumann_z(s.block_mean, s.block_record)
 
 
 def spikes(s: Sums, analysis) -> float:
@@ -204,9 +210,9 @@ class Check:
 
 REGISTRY = (
     Check("nonstationary", "the load's strength changes along the record", nonstationarity, "high", "calibrated",
-          "the response is not stationary: the rms of its blocks varies more than in stationary records like it (spread "
-          "of log rms {value:.2f}, calibrated limit {threshold:.2f}); the load changes along the record, so estimate "
-          "stretches of steady load apart"),
+          "the response is not stationary: the rms of its blocks follows a trend more than in stationary records like it "
+          "(z {value:.1f}, calibrated limit {threshold:.1f}); the load changes along the record, so estimate stretches "
+          "of steady load apart"),
     Check("drift", "a slow offset of the zero", drift, "high", "calibrated",
           "the record's block means wander more than rocking makes them (drift z {value:.1f}, calibrated limit "
           "{threshold:.1f}): the sensor's zero drifts; remove the trend (high-pass well below the rocking frequency)"),

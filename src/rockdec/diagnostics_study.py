@@ -64,7 +64,7 @@ SPIKE_EVERY, GAP = 1000, 2000
 DEFECTS = {
     "nonstationary": (0.05, 0.15, 0.4),
     "drift": (0.3, 1.0, 3.0),
-    "spikes": (1.0, 3.0, 10.0),
+    "spikes": (1.0, 5.0, 20.0),
     "asymmetry": (0.03, 0.1, 0.3),
     "few_triggers": (0.05, 0.1, 0.3),
     "coarse_sampling": (30.0, 15.0),
