@@ -75,6 +75,20 @@ def test_second_run_reuses_the_calibration_and_agrees(record_085, cache, capsys)
     assert again["e"] == first["e"] and again["interval"] == first["interval"]
 
 
+def test_the_report_gives_every_check_its_statistic_threshold_and_warning(record_085, cache, capsys):
+    """The JSON's diagnostics hold every check of rockdec.diagnostics; a check fires exactly
+    when its statistic passes its threshold, and each that fires has its warning."""
+    from rockdec import diagnostics
+
+    res = run_json([record_085, "--cache", cache], capsys)
+    assert list(res["diagnostics"]) == list(diagnostics.CHECKS)
+    for check in diagnostics.REGISTRY:
+        c = res["diagnostics"][check.name]
+        passed = c["statistic"] > c["threshold"] if check.side == "high" else c["statistic"] < c["threshold"]
+        assert c["fired"] == passed
+    assert len(res["warnings"]) >= sum(c["fired"] for c in res["diagnostics"].values())
+
+
 def test_g_is_recovered_within_2_percent(cache, tmp_path, capsys):
     theta, dt = simulated_record(0.95, 200_000, seed=3)
     res = run_json([write_csv(tmp_path / "r.csv", theta, dt), "--cache", cache], capsys)

@@ -183,26 +183,31 @@ def run(e_values=E_VALUES, defects=DEFECTS, n_records: int = RECORDS, n_points: 
 
 
 def summary(table: pd.DataFrame) -> pd.DataFrame:
-    """Per check, ``e`` and size: records analysed, the median shift of the corrected ``e``
-    from the same seeds' clean records (``coarse_sampling``: from their mean), half the
-    median 95 % interval of the clean records, whether the defect matters (shift beyond
-    half the interval), and the share of records on which the check fires (on the clean
-    records: the false-alarm rate, size 0)."""
+    """Per check, ``e`` and size: records analysed; the median shift of the corrected ``e``
+    from the same seeds' clean records (``coarse_sampling``: from their mean) over the
+    records that keep an ``e``; the share of records that lose the ``e`` their clean record
+    had (``lost_pct``); half the median 95 % interval of the clean records; whether the
+    defect matters (the shift beyond half the interval, or half the records losing their
+    ``e``); and the share of records on which the check fires (on the clean records, size
+    0: the false-alarm rate)."""
     rows = []
     for e, at_e in table.groupby("e_true"):
         clean = at_e[at_e["defect"] == "clean"].set_index("seed")
         half = 0.5 * float(np.nanmedian(clean["high"] - clean["low"]))
         for check in diagnostics.CHECKS:
             fired = clean[f"{check}_fired"].dropna().astype(bool)
-            rows.append({"check": check, "e_true": e, "size": 0.0, "records": int(fired.size), "e_shift": 0.0,
+            rows.append({"check": check, "e_true": e, "size": 0.0, "records": int(fired.size), "e_shift": 0.0, "lost_pct": 0.0,
                          "half_interval": half, "matters": False, "fired_pct": 100.0 * float(fired.mean())})
             for size, cell in at_e[at_e["defect"] == check].groupby("size"):
                 cell = cell.set_index("seed")
+                base = clean["e_hat"].reindex(cell.index)
                 if check == "coarse_sampling":
                     shift = float(np.nanmedian(cell["e_hat"]) - np.nanmean(clean["e_hat"]))
                 else:
-                    shift = float(np.nanmedian(cell["e_hat"] - clean["e_hat"].reindex(cell.index)))
+                    shift = float(np.nanmedian(cell["e_hat"] - base)) if (cell["e_hat"] - base).notna().any() else np.nan
+                lost = float(np.mean(cell["e_hat"].isna() & base.notna()))
                 fired = cell[f"{check}_fired"].dropna().astype(bool)
                 rows.append({"check": check, "e_true": e, "size": size, "records": int(fired.size), "e_shift": shift,
-                             "half_interval": half, "matters": bool(abs(shift) > half), "fired_pct": 100.0 * float(fired.mean()) if fired.size else np.nan})
+                             "lost_pct": 100.0 * lost, "half_interval": half, "matters": bool(abs(shift) > half or lost >= 0.5),
+                             "fired_pct": 100.0 * float(fired.mean()) if fired.size else np.nan})
     return pd.DataFrame(rows)
