@@ -71,11 +71,21 @@ def test_a_doctored_calibration_moves_the_thresholds_and_the_structural_one_stay
             assert doubled[check.name] == pytest.approx(3.0 * base[check.name], rel=1e-12)
 
 
-def test_without_an_e_every_grid_point_is_pooled_and_with_one_its_neighbours():
+def test_with_an_e_its_neighbours_are_pooled_and_without_one_the_strictest_grid_point_rules():
     grid = np.asarray(calibration.E_GRID)
-    assert diagnostics._near(grid, None, None).all()
     assert list(grid[diagnostics._near(grid, 0.86, (0.79, 0.9))]) == [0.8, 0.85, 0.88]
     assert list(grid[diagnostics._near(grid, 0.995, (None, None))]) == [0.995]
+    rng = np.random.default_rng(3)
+    spread = np.linspace(2.0, 1.0, grid.size)[:, None, None]  # the null narrows as e grows
+    values = spread * rng.lognormal(size=(grid.size, 200, len(diagnostics.CHECKS)))
+    cal = _calibration(values, calibration.E_GRID)
+    unplaced = diagnostics.thresholds(cal, None, None, LEVEL)
+    for j, check in enumerate(diagnostics.REGISTRY):
+        if check.threshold == "calibrated" and check.side == "high":
+            per_point = [diagnostics.thresholds(cal, float(e), None, LEVEL)[check.name] for e in grid]
+            assert unplaced[check.name] == pytest.approx(min(per_point))  # no looser than any e's
+            pooled = np.quantile(values[..., j], diagnostics.QUANTILE)
+            assert unplaced[check.name] < pooled  # pooling every e would let the widest null rule
 
 
 def test_every_statistic_is_scale_free(clean):

@@ -13,12 +13,15 @@ its simulated record sets, which have the measured records' lengths and sampling
 clean (the record model the calibration simulates, nothing else), and stores them as
 ``diagnostic(e_true, set, check)``. :func:`thresholds` pools the sets of the grid points
 inside the record's 95 % interval of ``e`` and the nearest grid point on each side of its
-corrected ``e`` (every grid point when there is no ``e``), and takes the
+corrected ``e``, and takes the
 :data:`QUANTILE` quantile of a ``"high"`` check (``1 - QUANTILE`` of a ``"low"`` one): on
 the calibration's own records near the record's ``e`` a check fires on at most
 ``1 - QUANTILE`` of them, with room for the sampling error of a quantile of some hundred
 sets below the 5 % the checks promise. Pooling over the interval takes the widest null of
-the ``e`` the record allows. The statistics are scale-free (the calibration has ``g =
+the ``e`` the record allows. A record the calibration cannot place (no corrected ``e``)
+gets the strictest threshold of any grid point: pooling every ``e`` would give it the
+widest null (that of ``e = 0.4``) and let the records a defect has damaged most pass. The
+statistics are scale-free (the calibration has ``g =
 sigma_p = 1``): each is a ratio, a z score or a count. One compiled pass over each
 record (:func:`sums`) gives what they read, at about 2 % of the cost of simulating and
 analysing a calibration set.
@@ -254,11 +257,9 @@ def statistics(records, analysis) -> np.ndarray:
     return np.array([check.statistic(s, analysis) for check in REGISTRY], dtype=float)
 
 
-def _near(e_grid: np.ndarray, e: float | None, interval) -> np.ndarray:
+def _near(e_grid: np.ndarray, e: float, interval) -> np.ndarray:
     """Grid points pooled for a record of corrected ``e`` and 95 % ``interval``: those inside
-    the interval and the nearest on each side of ``e``; all when ``e`` is not finite."""
-    if e is None or not np.isfinite(e):
-        return np.ones(e_grid.size, dtype=bool)
+    the interval and the nearest on each side of ``e``."""
     keep = np.zeros(e_grid.size, dtype=bool)
     low, high = (np.nan, np.nan) if interval is None else (np.nan if v is None else v for v in interval)
     if np.isfinite(low) and np.isfinite(high):
@@ -270,22 +271,30 @@ def _near(e_grid: np.ndarray, e: float | None, interval) -> np.ndarray:
 
 
 def thresholds(cal, e: float | None, interval, level: float) -> dict:
-    """Each check's threshold for a record of corrected ``e`` (``None`` when not estimated)
-    and 95 % ``interval``, from the calibration ``cal``'s ``diagnostic(e_true, set, check)``
-    (module docstring); ``level``: the trigger level in ``sigma_Y`` (for the structural
-    floor). NaN for a check the calibration's records never gave a value."""
+    """Each check's threshold for a record of corrected ``e`` and 95 % ``interval``, from the
+    calibration ``cal``'s ``diagnostic(e_true, set, check)`` (module docstring): the
+    :data:`QUANTILE` quantile of the sets pooled about ``e`` (``1 - QUANTILE`` for a
+    ``"low"`` check). A record without an ``e`` (``None`` or NaN: the calibration cannot
+    place it) gets the strictest grid point's threshold, each grid point's sets apart.
+    ``level``: the trigger level in ``sigma_Y`` (for the structural floor). NaN for a check
+    the calibration's records never gave a value."""
     grid = np.asarray(cal["e_true"].values, dtype=float)
-    keep = _near(grid, e, interval)
-    values = cal["diagnostic"].values[keep]  # (e_true, set, check)
+    placed = e is not None and np.isfinite(e)
+    groups = [_near(grid, e, interval)] if placed else [grid == g for g in grid]
+    values = cal["diagnostic"].values  # (e_true, set, check)
     out = {}
     for j, check in enumerate(REGISTRY):
         if check.threshold == "structural":
-            out[check.name] = fits.min_points_per_cycle(e if e is not None and np.isfinite(e) else FLOOR_E, level)
+            out[check.name] = fits.min_points_per_cycle(e if placed else FLOOR_E, level)
             continue
-        column = values[..., j].ravel()
-        column = column[np.isfinite(column)]
         q = QUANTILE if check.side == "high" else 1.0 - QUANTILE
-        out[check.name] = float(np.quantile(column, q)) if column.size else np.nan
+        limits = []
+        for group in groups:
+            column = values[group, :, j].ravel()
+            column = column[np.isfinite(column)]
+            if column.size:
+                limits.append(float(np.quantile(column, q)))
+        out[check.name] = (min(limits) if check.side == "high" else max(limits)) if limits else np.nan
     return out
 
 

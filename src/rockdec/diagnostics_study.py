@@ -6,7 +6,8 @@ from :data:`STUDY_SEED_OFFSET`), with or without one defect of a given size
 (:data:`DEFECTS`), and each goes through what ``rockdec estimate`` does with a record: the
 analysis (:func:`rockdec.measured.analyse`), the calibration for its own length and
 sampling (:mod:`rockdec.calibration`, shared by records in one samples-per-cycle bin), the
-corrected ``e`` and interval of the default estimator, and every check of
+corrected ``e`` and interval of the default estimator (no ``e`` when the raw value lies
+beyond the calibration, :func:`rockdec.inference.beyond`), and every check of
 :mod:`rockdec.diagnostics` against the calibration's thresholds.
 
 The defects, each on the same seeds as the clean records (so the shift of ``e`` is read
@@ -39,7 +40,7 @@ import dask
 import numpy as np
 import pandas as pd
 
-from rockdec import belt, calibration, diagnostics, engine, measured
+from rockdec import belt, calibration, diagnostics, engine, inference, measured
 from rockdec.loading import draw_impulses, series_rng
 from rockdec.registry import DEFAULT_ESTIMATOR
 from rockdec.simulate import calibrate_dt, integrate
@@ -174,8 +175,9 @@ def run(e_values=E_VALUES, defects=DEFECTS, n_records: int = RECORDS, n_points: 
                 by_hash[h] = (cal, belt.belts(cal))
             cal, belts = by_hash[h]
             c = belt.correct(belts[DEFAULT_ESTIMATOR], analysis.raw[DEFAULT_ESTIMATOR])
-            row.update(e_hat=c.value, low=c.low, high=c.high)
-            for name, o in diagnostics.judge(values, diagnostics.thresholds(cal, c.value, (c.low, c.high), level)).items():
+            placed = None if inference.beyond(belts[DEFAULT_ESTIMATOR], analysis.raw[DEFAULT_ESTIMATOR], c) else c.value
+            row.update(e_hat=placed, low=c.low, high=c.high)
+            for name, o in diagnostics.judge(values, diagnostics.thresholds(cal, placed, (c.low, c.high), level)).items():
                 row[f"{name}_statistic"], row[f"{name}_threshold"], row[f"{name}_fired"] = o.statistic, o.threshold, o.fired
     table = pd.DataFrame(rows)
     table.attrs.update(simulate_analyse_s=float(cost[0]), statistics_s=float(cost[1]), calibrations=len(by_hash))
