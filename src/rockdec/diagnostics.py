@@ -238,8 +238,8 @@ REGISTRY = (
           "model assumes a symmetric block"),
     Check("few_triggers", "gaps or quiet stretches", triggers, "low", "calibrated",
           "{value:.0f} triggers in the largest windows, fewer than records of this length and sampling give "
-          "({threshold:.0f}): gaps or quiet stretches leave fewer segments than the calibration assumed, so the interval "
-          "is too narrow; cut the record into pieces without them"),
+          "({threshold:.0f}): gaps (NaN) or quiet stretches leave fewer segments than the calibration's records had, so "
+          "the interval may be too narrow; cut the record into pieces without them"),
     Check("coarse_sampling", "too few samples per cycle for e1..e4", sampling, "low", "structural",
           "{value:.1f} samples per cycle at sigma_Y is below {threshold:.1f}, too coarse for the local fits of e1..e4 "
           "(eq. 27); sample faster"),
