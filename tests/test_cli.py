@@ -285,13 +285,13 @@ def test_workflow_passes_its_scene_and_every_other_option_to_snakemake(tmp_path,
 
 def _fake_grid_point(j, e, cal_settings, seed_base):
     """A calibration grid point without simulation: every estimator reads the true e, g its
-    true value (ratio 1), with a spread of 0.01."""
-    from rockdec import calibration
+    true value (ratio 1), with a spread of 0.01; no check's statistic (NaN: no warning)."""
+    from rockdec import calibration, diagnostics
 
     rng = np.random.default_rng(j)
     out = e + 0.01 * rng.standard_normal((cal_settings["sets_per_e"], len(calibration.NAMES)))
     out[:, calibration.NAMES.index("g")] = 1.0 + 0.01 * rng.standard_normal(cal_settings["sets_per_e"])
-    return out
+    return out, np.full((cal_settings["sets_per_e"], len(diagnostics.CHECKS)), np.nan)
 
 
 def test_calibrating_is_announced_only_when_a_calibration_is_built(tmp_path, capsys, monkeypatch):

@@ -15,7 +15,8 @@ only on ``e`` and one dimensionless step (equivalently the samples per cycle at 
 ``g = 1`` and ``sigma_p = 1`` (scale-free), at the step for which the analysis
 (:func:`rockdec.measured.analyse`) reads the same samples per cycle off the simulated
 records as it reads off the measured ones; then it runs the identical analysis on each
-set and stores every estimator's zero-window value, and ``g``'s, per set.
+set and stores every estimator's zero-window value, and ``g``'s, per set, with every
+check's statistic (:mod:`rockdec.diagnostics`), from which the warnings take their thresholds.
 
 The belt built on these values, and its inversion, are in :mod:`rockdec.belt`.
 
@@ -51,7 +52,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from rockdec import __version__, engine, io, measured, ncread, registry
+from rockdec import __version__, diagnostics, engine, io, measured, ncread, registry
 from rockdec.models import SCALE_CONSTANT_GUESS, step_for_density
 from rockdec.record_model import PAPER, Load, RecordModel, SensorNoise
 from rockdec.sources import package_sources
@@ -265,30 +266,34 @@ def step_for(
     return (dt, burn_in, theta_cr) if white else (closest[1], burn_in, closest[2])
 
 
-def _grid_point(j: int, e: float, cal_settings: dict, seed_base: int) -> np.ndarray:
-    """Raw zero-window values ``(set, name)`` of one grid point; NaN for sets (or the whole
+def _grid_point(j: int, e: float, cal_settings: dict, seed_base: int) -> tuple[np.ndarray, np.ndarray]:
+    """Raw zero-window values ``(set, name)`` of one grid point and the checks' statistics
+    ``(set, check)`` (:func:`rockdec.diagnostics.statistics`); NaN for sets (or the whole
     point) that cannot be analysed, e.g. records too short for the lag range at this ``e``."""
     lengths, ppc, settings = cal_settings["lengths"], cal_settings["points_per_cycle"], cal_settings["analysis"]
     model = RecordModel.from_key(cal_settings["record_model"])
     ratio = cal_settings.get("sigma_y_over_theta_cr")
     seed0 = seed_base + j * 10**7
     out = np.full((cal_settings["sets_per_e"], len(NAMES)), np.nan)
+    diag = np.full((cal_settings["sets_per_e"], len(diagnostics.CHECKS)), np.nan)
     try:
         dt, burn_in, theta_cr = step_for(e, ppc, lengths, settings, seed0 + 9 * 10**6, model, ratio)
     except ValueError:  # no record at this e can be analysed: the belt leaves this e out
-        return out
+        return out, diag
     for k in range(cal_settings["sets_per_e"]):
         try:
             records = _simulate_set(seed0 + k * len(lengths), lengths, dt, e, burn_in, model, theta_cr=theta_cr, **model.load.draw_options(ppc))
-            raw = measured.analyse(records, dt, settings).raw
+            analysis = measured.analyse(records, dt, settings)
         except ValueError:
             continue
-        out[k] = [raw[name] for name in NAMES]
-    return out
+        out[k] = [analysis.raw[name] for name in NAMES]
+        diag[k] = diagnostics.statistics(records, analysis)
+    return out, diag
 
 
 def build(cal_settings: dict) -> xr.Dataset:
-    """Simulate and analyse the calibration records; ``raw(e_true, set, name)``.
+    """Simulate and analyse the calibration records; ``raw(e_true, set, name)`` and
+    ``diagnostic(e_true, set, check)``.
 
     Grid points run as Dask tasks on the engine of :mod:`rockdec.engine` (threads by
     default); the simulation and signature kernels release the GIL.
@@ -301,13 +306,18 @@ def build(cal_settings: dict) -> xr.Dataset:
         "like the measured records (once; stored for every record with the same settings)"
     )
     tasks = [dask.delayed(_grid_point)(j, e, cal_settings, CALIBRATION_SEED_OFFSET) for j, e in enumerate(cal_settings["e_grid"])]
-    values = np.stack(engine.compute(*tasks))
+    points = engine.compute(*tasks)
+    values = np.stack([raw for raw, _ in points])
     ds = xr.Dataset(
-        {"raw": (("e_true", "set", "name"), values, {"units": "1", "long_name": "zero-window estimate on a simulated record set (g in units of the true g)"})},
+        {
+            "raw": (("e_true", "set", "name"), values, {"units": "1", "long_name": "zero-window estimate on a simulated record set (g in units of the true g)"}),
+            "diagnostic": (("e_true", "set", "check"), np.stack([diag for _, diag in points]), {"units": "1", "long_name": "statistic of a check of rockdec.diagnostics on a simulated record set"}),
+        },
         coords={
             "e_true": ("e_true", np.asarray(cal_settings["e_grid"]), {"units": "1", "long_name": "true coefficient of restitution"}),
             "set": ("set", np.arange(values.shape[1]), {"long_name": "simulated record set"}),
             "name": ("name", list(NAMES), {"long_name": "estimator of e, or g"}),
+            "check": ("check", list(diagnostics.CHECKS), {"long_name": "check of the records (rockdec.diagnostics)"}),
         },
     )
     ds.attrs.update(io.provenance("calibration", cal_settings))
@@ -315,8 +325,12 @@ def build(cal_settings: dict) -> xr.Dataset:
 
 
 def content_checksum(ds: xr.Dataset) -> str:
-    """SHA-256 of the calibration's values and true ``e`` grid (stored as an attribute)."""
-    digest = hashlib.sha256(np.ascontiguousarray(ds["raw"].values, dtype=np.float64).tobytes())
+    """SHA-256 of the calibration's values, the checks' statistics and the true ``e`` grid
+    (stored as an attribute)."""
+    digest = hashlib.sha256()
+    for name in ("raw", "diagnostic"):
+        if name in ds:
+            digest.update(np.ascontiguousarray(ds[name].values, dtype=np.float64).tobytes())
     digest.update(np.ascontiguousarray(ds["e_true"].values, dtype=np.float64).tobytes())
     return digest.hexdigest()
 

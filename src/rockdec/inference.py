@@ -7,8 +7,9 @@ drift: :func:`rockdec.record_measure.measure`) unless it is declared, fetches or
 the calibration for their lengths, sampling and model (:func:`record_model`,
 :mod:`rockdec.calibration`), corrects every estimator and gives its 95 % interval,
 reports the narrowest trusted candidate (:func:`select`), corrects ``g`` the same way,
-and lists what looks wrong with the records (:func:`diagnose`). When no ``e`` can be
-given, ``reason`` says why.
+and lists what looks wrong with the records (:func:`diagnose`: the checks of
+:mod:`rockdec.diagnostics`, their thresholds from the calibration's own simulated
+records). When no ``e`` can be given, ``reason`` says why.
 
 The calibration simulates records as long as the measured ones, so its cost grows with
 their length (:func:`cost`); the command line refuses, before reading the records, a run
@@ -29,7 +30,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from rockdec import __version__, belt, calibration, fits, measured, registry
+from rockdec import __version__, belt, calibration, diagnostics, measured, registry
 from rockdec.record_model import NO_NOISE, WHITE, Load, RecordModel, SensorNoise, parse_load
 from rockdec.records import Record, RecordError, distinct, same_step
 from rockdec.validate import InputError
@@ -39,9 +40,6 @@ from rockdec.registry import DEFAULT_ESTIMATOR
 if TYPE_CHECKING:
     from rockdec import record_measure
 
-#: Fewest triggers in the largest window before the result is called unreliable.
-FEW_TRIGGERS = 100
-
 #: Records (in all) longer than this are warned about: their spread falls below the
 #: accuracy of the belt's fitted mean (about 0.001 at e = 0.95, measured on 20-million-sample records).
 LONG_SAMPLES = 2_000_000
@@ -50,7 +48,8 @@ LONG_SAMPLES = 2_000_000
 #: calibration (the calibrated 95 % spread of ``g`` is a few per cent).
 G_FACTOR = 2.0
 
-#: Peaks beyond this many ``sigma_Y`` are called spikes (or overturning).
+#: Peaks beyond this many ``sigma_Y`` are named as the cause when the analysis refuses the
+#: records (a spike that inflates ``sigma_Y`` leaves too few triggers).
 SPIKE_SIGMAS = 15.0
 
 #: Cost model of :func:`cost`, measured on an idle 2-core machine: seconds per sample to
@@ -67,33 +66,14 @@ def cost(samples: int, csv: bool, g_given: bool, cores: int = 2) -> tuple[float,
     return seconds, samples * BYTES_PER_SAMPLE
 
 
-def diagnose(records: list[Record], analysis: measured.Analysis, settings: dict) -> list[str]:
-    """Warnings about the records: few triggers, coarse sampling, asymmetry, drift, spikes."""
-    notes = []
-    for trigger, name in (("a", "D_a (extremum)"), ("v", "D_v (zero crossing)")):
-        n = int(analysis.count[trigger][-1])
-        if n < FEW_TRIGGERS:
-            notes.append(f"only {n} {name} triggers in the largest window: the estimates rest on few segments; pool longer records")
+def diagnose(records: list[Record], analysis: measured.Analysis, settings: dict, cal, e: float | None, interval) -> tuple[list[str], dict]:
+    """The checks of :mod:`rockdec.diagnostics` on the records, against thresholds from the
+    calibration ``cal`` near the corrected ``e`` and its 95 % ``interval``: the warnings of
+    the checks that fired, and per check ``{"statistic", "threshold", "fired"}`` (JSON-able)."""
     level = settings.get("level", measured.DEFAULT_SETTINGS["level"])
-    floor = fits.min_points_per_cycle(analysis.raw[DEFAULT_ESTIMATOR] if np.isfinite(analysis.raw[DEFAULT_ESTIMATOR]) else 0.95, level)
-    if analysis.points_per_cycle < floor:
-        notes.append(
-            f"{analysis.points_per_cycle:.1f} samples per cycle at sigma_Y is below {floor:.1f}, too coarse for the local fits "
-            "of e1..e4 (eq. 27); sample faster"
-        )
-    y = np.concatenate([r.theta - np.nanmean(r.theta) for r in records])
-    y = y[np.isfinite(y)]
-    skew = float(np.mean(y**3) / np.mean(y**2) ** 1.5)
-    if abs(skew) > 0.5:
-        notes.append(f"the response is asymmetric (skewness {skew:+.2f}): the block may lean on one side; the model assumes a symmetric block")
-    if float(np.max(np.abs(y))) > SPIKE_SIGMAS * analysis.sigma_y:
-        notes.append(f"a peak of {np.max(np.abs(y)) / analysis.sigma_y:.0f} sigma_Y: the record holds a spike or the block overturns")
-    for r in records:
-        quarters = np.array_split(r.theta - np.nanmean(r.theta), 4)
-        spread = np.array([np.sqrt(np.nanmean(q**2)) for q in quarters])
-        if spread.max() > 2.0 * spread.min():
-            notes.append(f"{r.source}: the rms of its quarters ranges {spread.min():.3g}-{spread.max():.3g} rad: the response is not stationary")
-    return notes
+    outcomes = diagnostics.evaluate([r.theta for r in records], analysis, cal, e, interval, level)
+    notes = [o.message for o in outcomes.values() if o.fired]
+    return notes, {name: {"statistic": _num(o.statistic), "threshold": _num(o.threshold), "fired": o.fired} for name, o in outcomes.items()}
 
 
 def _spike(records: list[Record]) -> str | None:
@@ -328,14 +308,15 @@ def estimate(
     calibrated range; ``g_interval_note`` says which), ``g_coverage`` (the
     share of the calibration's simulated record sets whose ``g`` interval held their true
     ``g``, :func:`rockdec.belt.g_calibration_coverage`), ``rockdec_version``,
-    ``warnings``, ``calibration`` (file, and whether it came from the cache), and, under
+    ``warnings``, ``diagnostics`` (per check of :mod:`rockdec.diagnostics`: ``statistic``,
+    ``threshold``, ``fired``), ``calibration`` (file, and whether it came from the cache), and, under
     keys starting with ``_``, the analysis and belts for plots.
 
     Refuses (:class:`RecordError`) records given twice, records that do not look like
     rocking (:func:`rockdec.measured.rocking_shape`), and a ``g`` off the records' own by
     more than :data:`G_FACTOR`; a ``g`` outside the calibrated 95 % interval of the
-    records' own is warned about. Detected drift is warned about: the calibration
-    simulates a stationary record.
+    records' own is warned about. Drift is one of the checks of :func:`diagnose` (the
+    calibration simulates a stationary record).
     """
     settings = {**measured.DEFAULT_SETTINGS, **(settings or {})}
     records = distinct(records)
@@ -361,11 +342,6 @@ def estimate(
     measurement, why_not = measure_model(records, dt) if model is None else (None, "declared")
     if measuring and measurement is None:
         notes.append(f"the record model could not be measured ({why_not}): the calibration simulates the paper's white load and noise-free sensor")
-    if measurement is not None and measurement.drifting:
-        notes.append(
-            f"the record drifts (its block means wander by {measurement.drift_rms:.2g} sigma_Y, drift z = {measurement.drift_z:.1f}): "
-            "the calibration simulates a stationary record; remove the drift (high-pass the record) if it is the sensor's"
-        )
     model, sources = record_model(measurement, analysis, model=model, load=load, sensor=sensor, rocking=rocking)
     if (model.rocking == "housner") != (theta_cr is not None):
         raise InputError("Housner's model (eq. 2) needs the block's critical angle theta_cr, and only it; give both or neither.")
@@ -414,6 +390,7 @@ def estimate(
             "(about 0.001 at e = 0.95): on 20-million-sample records it covered the true e 73-90 % of the time, not 95 %"
         )
     simulated = RecordModel.from_key(cal_settings["record_model"])
+    warned, checks = diagnose(records, analysis, settings, cal, shown["e"], shown["interval"])
     return {
         "e": shown["e"],
         "interval": shown["interval"],
@@ -441,7 +418,8 @@ def estimate(
         "nan_samples": int(analysis.nan_samples),
         "record_model": model_report(measurement, why_not if measuring else None, analysis, sources, simulated, cal_settings),
         "estimators": per,
-        "warnings": notes + diagnose(records, analysis, settings),
+        "warnings": notes + warned,
+        "diagnostics": checks,
         "rockdec_version": __version__,
         "calibration": {
             "file": f"calibration-{calibration.settings_hash(cal_settings)}.nc", "cached": cached, "seconds": round(built_s, 2),

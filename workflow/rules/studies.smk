@@ -53,3 +53,50 @@ rule amplitude_study:
     input:
         rules.amplitude.output,
         rules.fig_amplitude.output,
+
+
+rule diagnostics_records:
+    """Records of known e, clean and with each defect at growing sizes, through `rockdec estimate`'s checks."""
+    input:
+        code=step_code("diagnostics_records.py"),
+    output:
+        "results/studies/diagnostics/records.csv",
+    log:
+        "results/studies/diagnostics/logs/records.log",
+    benchmark:
+        "results/studies/diagnostics/benchmarks/records.tsv"
+    threads: 2
+    resources:
+        mem_mb=4000,
+        runtime=60,
+    params:
+        cache="results/studies/diagnostics/calibration",
+    conda:
+        "../envs/rockdec.yaml"
+    script:
+        "../scripts/diagnostics_records.py"
+
+
+rule diagnostics_table:
+    """Per check, e and defect size: the shift of e, false alarms and detections."""
+    input:
+        records="results/studies/diagnostics/records.csv",
+        code=step_code("diagnostics_table.py"),
+    output:
+        csv=report("results/studies/diagnostics/table.csv", category="Measured records", caption="../report/diagnostics.rst"),
+        md="results/studies/diagnostics/table.md",
+    log:
+        "results/studies/diagnostics/logs/table.log",
+    benchmark:
+        "results/studies/diagnostics/benchmarks/table.tsv"
+    threads: 1
+    conda:
+        "../envs/rockdec.yaml"
+    script:
+        "../scripts/diagnostics_table.py"
+
+
+rule diagnostics:
+    """The warnings' false-alarm and detection study (`snakemake --cores 2 diagnostics`)."""
+    input:
+        rules.diagnostics_table.output,

@@ -1,0 +1,21 @@
+"""Rule `diagnostics_records`: every record of the warnings' study, with its checks."""
+
+import sys
+
+from rockdec import diagnostics_study, engine, job
+
+
+def main(smk):
+    with engine.session(smk.threads):
+        table = diagnostics_study.run(cache_dir=smk.params.cache)
+    cost = table.attrs
+    print(
+        f"checks' statistics {cost['statistics_s']:.1f} s, simulating and analysing {cost['simulate_analyse_s']:.1f} s "
+        f"(ratio {cost['statistics_s'] / cost['simulate_analyse_s']:.4f}); {cost['calibrations']} calibrations",
+        file=sys.stderr,
+    )
+    table.to_csv(smk.output[0], index=False)
+
+
+if __name__ == "__main__":
+    job.run(main, snakemake)

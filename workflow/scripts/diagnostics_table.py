@@ -1,0 +1,13 @@
+"""Rule `diagnostics_table`: false alarms and detections per check, e and defect size."""
+
+import pandas as pd
+
+from rockdec import diagnostics_study, job, tables
+
+
+def main(smk):
+    tables.write_table(diagnostics_study.summary(pd.read_csv(smk.input.records)), smk.output.csv, smk.output.md)
+
+
+if __name__ == "__main__":
+    job.run(main, snakemake)
