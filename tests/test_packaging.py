@@ -105,6 +105,21 @@ def test_every_declared_dependency_is_pinned_in_the_constraints():
     assert declared - {"rockdec"} <= pinned
 
 
+def test_the_rules_conda_environment_pins_every_runtime_dependency_as_tested_and_not_rockdec():
+    """`--sdm conda`: the environment holds rockdec's dependencies at the tested versions; the
+    scripts import the rockdec that runs Snakemake (Snakemake appends its own search path to
+    theirs), so no rockdec is pinned there (it is not on a package index)."""
+    import yaml
+
+    env = yaml.safe_load((REPO / "workflow" / "envs" / "rockdec.yaml").read_text())
+    pip = next(d["pip"] for d in env["dependencies"] if isinstance(d, dict))
+    in_env = {line.split("==")[0].lower(): line.split("==")[1] for line in pip}
+    tested = {line.split("==")[0].lower(): line.split("==")[1] for line in (REPO / "constraints.txt").read_text().split() if "==" in line}
+    runtime = _requirement_names(tomllib.loads((REPO / "pyproject.toml").read_text())["project"]["dependencies"])
+    assert "rockdec" not in in_env
+    assert {name: in_env.get(name) for name in runtime} == {name: tested[name] for name in runtime}
+
+
 def test_metadata_has_classifiers_and_no_invented_url():
     project = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]
     assert "Topic :: Scientific/Engineering" in project["classifiers"]
