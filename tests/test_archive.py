@@ -32,6 +32,7 @@ from rocrate.rocrate import ROCrate
 
 from rockdec import archive, simulate, steps
 from rockdec import crate as crates
+from rockdec import io as rockdec_io
 from rockdec.cli import main
 
 REPO = Path(__file__).resolve().parents[1]
@@ -324,7 +325,7 @@ def rewrite(folder: Path, manifest) -> None:
     except archive.ArchiveError:
         return  # no crate derives from it
     else:
-        entry = {"name": "manifest.json", "size": path.stat().st_size, "sha256": archive.sha256(path)}
+        entry = {"name": "manifest.json", "size": path.stat().st_size, "sha256": rockdec_io.sha256(path)}
         crate = crates.crate_from_manifest(manifest, entry)
         (folder / "ro-crate-metadata.json").write_text(json.dumps(crate, indent=2) + "\n")
 
@@ -364,9 +365,9 @@ def outside_file(tmp_path: Path) -> Path:
 
 
 def watch_reads(monkeypatch) -> list[str]:
-    """Every path opened (by open, os.open or archive.sha256) from now on."""
+    """Every path opened (by open, os.open or io.sha256, the archive's file hash) from now on."""
     seen: list[str] = []
-    real_open, real_os_open, real_sha = open, os.open, archive.sha256
+    real_open, real_os_open, real_sha = open, os.open, rockdec_io.sha256
 
     def spy_open(file, *args, **kwargs):
         if isinstance(file, (str, os.PathLike)):
@@ -383,7 +384,7 @@ def watch_reads(monkeypatch) -> list[str]:
 
     monkeypatch.setattr("builtins.open", spy_open)
     monkeypatch.setattr(os, "open", spy_os_open)
-    monkeypatch.setattr(archive, "sha256", spy_sha)
+    monkeypatch.setattr(rockdec_io, "sha256", spy_sha)
     return seen
 
 
