@@ -102,6 +102,11 @@ HEARTBEAT_S, STALE_S = 10.0, 120.0
 #: Seconds between looks at a lock held by another run.
 POLL_S = 1.0
 
+_FILE_ACCESS = threading.Lock()
+"""Serialises this process's reads and writes of calibration files: the HDF5 library under
+netCDF4 is not safe from two threads at once (a study estimates records in Dask threads,
+one thread storing a calibration while another reads one)."""
+
 
 def log_bin(x: float, width: float) -> float:
     """``x > 0`` rounded to the nearest of the bins ``exp(width k)`` (``k`` integer), to 4
@@ -339,8 +344,9 @@ def _read_checked(path: Path, expected_hash: str) -> tuple[ncread.Stored | None,
     """The calibration stored at ``path`` and ``None``, or ``None`` and why it cannot be trusted
     (read by :func:`rockdec.ncread.read`: no xarray to import for a cached calibration)."""
     try:
-        ds = ncread.read(path)
-    except (OSError, ValueError, RuntimeError) as exc:
+        with _FILE_ACCESS:
+            ds = ncread.read(path)
+    except (OSError, ValueError, RuntimeError, AttributeError) as exc:  # netCDF4 raises AttributeError on a bad attribute
         return None, f"it is not readable ({type(exc).__name__})"
     try:
         stored_hash = settings_hash(json.loads(ds.attrs["settings"]))
@@ -432,7 +438,9 @@ def load_or_build(cal_settings: dict, cache_dir: str | Path, notes: list | None 
                 return _read_checked(path, expected)[0], True
             ds = build(cal_settings)
             ds.attrs["content_sha256"] = content_checksum(ds)
-            io.write_netcdf(ds, path, overwrite=True)
+            with _FILE_ACCESS:
+                io.write_netcdf(ds, path, overwrite=True)
     finally:
         lock.unlink(missing_ok=True)
-    return ncread.read(path), False
+    with _FILE_ACCESS:
+        return ncread.read(path), False
