@@ -5,7 +5,7 @@ NumPy, one time step for all records at once, the impacts inside a step handled 
 exactly as :func:`rocking_reference.flight_reference` handles them one at a time (no
 closed-form count of bounces: each impact is stepped, and the chatter stops when the
 remaining bounces' geometric series, eq. 6, fits in the time left). Its random numbers come
-from its own generator (Philox, keyed by the seeds), so it shares no draw with the kernel's
+from its own generators (Philox, keyed by each record's seed), so it shares no draw with the kernel's
 streams (:mod:`rockdec.loading`), and it low-pass filters the impulses and adds the sensor
 noise with its own code.
 
@@ -43,7 +43,9 @@ def flight(theta, omega, duration, g, e):
         hit = idx[lands]
         left = rem[lands] - t_cross[lands]
         rebound = e * (g * t_cross[lands] - u[lands])
-        rest = (rebound == 0.0) | ((e < 1.0) & (2.0 * rebound / g / (1.0 - e) <= left))
+        rest = rebound == 0.0
+        if e < 1.0:
+            rest |= 2.0 * rebound / g / (1.0 - e) <= left
         theta[hit] = 0.0
         omega[hit] = np.where(rest, 0.0, -side[lands] * rebound)
         remaining[hit] = left
@@ -51,9 +53,10 @@ def flight(theta, omega, duration, g, e):
     return theta, omega
 
 
-def generator(seeds) -> np.random.Generator:
-    """The random numbers of the records ``seeds`` together: Philox keyed by them."""
-    return np.random.Generator(np.random.Philox(np.random.SeedSequence([int(s) for s in np.atleast_1d(seeds)] + [17])))
+def generators(seeds) -> list[np.random.Generator]:
+    """One random generator per record: Philox keyed by its seed (and a tag of its own), so
+    a record depends on its seed only, whatever records run beside it."""
+    return [np.random.Generator(np.random.Philox(np.random.SeedSequence([int(s), 17]))) for s in np.atleast_1d(seeds)]
 
 
 def simulate_records(seeds, n_points, *, dt, g, e, sigma_p, burn_in, pole=0.0, noise=0.0):
@@ -67,7 +70,7 @@ def simulate_records(seeds, n_points, *, dt, g, e, sigma_p, burn_in, pole=0.0, n
     record, its standard deviation that fraction of the record's rms.
     """
     seeds = np.atleast_1d(np.asarray(seeds, dtype=np.int64))
-    rng = generator(seeds)
+    rngs = generators(seeds)
     n_rec = seeds.size
     theta = np.zeros(n_rec)
     omega = np.zeros(n_rec)
@@ -84,11 +87,12 @@ def simulate_records(seeds, n_points, *, dt, g, e, sigma_p, burn_in, pole=0.0, n
         theta, omega = flight(theta, omega, dt, g, e)
         k = (step + burn_in) % DRAW_STEPS
         if k == 0:
-            block = rng.standard_normal((min(DRAW_STEPS, total - (step + burn_in)), n_rec))
+            count = min(DRAW_STEPS, total - (step + burn_in))
+            block = np.stack([rng.standard_normal(count) for rng in rngs], axis=1)
         w = block[k]
         previous = w if previous is None or pole == 0.0 else pole * previous + gain * w
         omega = omega + sigma_p * previous
     if noise > 0.0:
         rms = np.sqrt(np.mean(out**2, axis=1, keepdims=True))
-        out += noise * rms * rng.standard_normal(out.shape)
+        out += noise * rms * np.stack([rng.standard_normal(n_points) for rng in rngs])
     return out

@@ -124,6 +124,17 @@ def _num(x) -> float:
     return math.nan if x is None else float(x)
 
 
+def _model_read(report: dict | None) -> dict:
+    """What the tool measured of the record's model (``record_model`` of
+    :func:`rockdec.inference.estimate`): the sensor noise in ``sigma_Y`` and the load's
+    corner in rocking frequencies (NaN when not measured), and the model it simulated."""
+    measured = (report or {}).get("measured") or {}
+    noise = (measured.get("sensor_noise_sigma_y") or {}).get("value")
+    corner = (measured.get("load_corner_rocking") or {}).get("value")
+    simulated = ((report or {}).get("simulated") or {}).get("described", "")
+    return {"noise_read": _num(noise), "corner_read": _num(corner), "model": simulated}
+
+
 def estimate_record(theta: np.ndarray, dt: float, source: str, cache_dir, model) -> dict:
     """:func:`rockdec.inference.estimate` of one record, flattened; a refusal
     (:class:`rockdec.records.RecordError`) is a null ``e`` with the refusal as its reason."""
@@ -131,7 +142,7 @@ def estimate_record(theta: np.ndarray, dt: float, source: str, cache_dir, model)
         out = inference.estimate([Record(theta, dt, source)], cache_dir=cache_dir, model=model)
     except RecordError as exc:
         return {"e": math.nan, "low": math.nan, "high": math.nan, "reason": f"refused: {exc}", "estimator": "", "warnings": [],
-                "points_per_cycle": math.nan, "calibration": "", "per": {}, "model": ""}
+                "points_per_cycle": math.nan, "calibration": "", "per": {}, **_model_read(None)}
     interval = out["interval"] or [None, None]
     return {
         "e": _num(out["e"]),
@@ -142,8 +153,9 @@ def estimate_record(theta: np.ndarray, dt: float, source: str, cache_dir, model)
         "warnings": list(out["warnings"]),
         "points_per_cycle": _num(out["points_per_cycle"]),
         "calibration": out["calibration"]["file"],
-        "per": {name: (_num(v["e"]), *(_num(x) for x in v["interval"])) for name, v in out["estimators"].items()},
-        "model": str(out.get("record_model", out.get("model", ""))),
+        "per": {name: (_num(v["e"]), *((_num(x) for x in v["interval"]) if v["e"] is not None else (math.nan, math.nan)))
+                for name, v in out["estimators"].items()},
+        **_model_read(out.get("record_model")),
     }
 
 
@@ -205,7 +217,9 @@ def run_cell(cell: str, n_records: int, n_points: int, cache_dir, *, simulate=ke
             "reason": (rec, strings([g["reason"] for g in got]), {"long_name": "why e is null (empty when it is not)"}),
             "reported_by": (rec, strings([g["estimator"] for g in got]), {"long_name": "estimator the tool reported"}),
             "warnings": (rec, strings([" | ".join(g["warnings"]) for g in got]), {"long_name": "warnings of the tool, joined by ' | '"}),
-            "record_model": (rec, strings([g["model"] for g in got]), {"long_name": "record model the tool measured"}),
+            "record_model": (rec, strings([g["model"] for g in got]), {"long_name": "record model the tool's calibration simulated"}),
+            "noise_read": (rec, [g["noise_read"] for g in got], {"units": "1", "long_name": "sensor noise the tool measured, in sigma_Y"}),
+            "corner_read": (rec, [g["corner_read"] for g in got], {"units": "1", "long_name": "load corner the tool measured, in rocking frequencies"}),
             "calibration": (rec, strings([g["calibration"] for g in got]), {"long_name": "calibration file the tool used"}),
             "ppc_read": (rec, [g["points_per_cycle"] for g in got], {"units": "1", "long_name": "samples per cycle the tool read"}),
             "ppc_true": (rec, ppc, {"units": "1", "long_name": "samples per cycle at the record's sigma_Y with the true g (eq. 5)"}),
@@ -255,6 +269,12 @@ def _coverage(e: float, low, high) -> float:
     return float(np.mean((low <= e) & (e <= high)))
 
 
+def _median(values) -> float:
+    """Median of the finite ``values``; NaN when there is none."""
+    values = np.asarray(values, dtype=float)
+    return float(np.median(values[np.isfinite(values)])) if np.isfinite(values).any() else math.nan
+
+
 def summary(ds: xr.Dataset) -> dict:
     """One row of the study's table for the cell ``ds`` (:func:`run_cell`)."""
     e = ds.attrs["e_true"]
@@ -277,7 +297,7 @@ def summary(ds: xr.Dataset) -> dict:
         "bias": bias,
         "sd": sd,
         "bias_over_sd": bias / sd if sd > 0 else math.nan,
-        "median_width": float(np.nanmedian(ds["high"].values - ds["low"].values)) if ok.any() else math.nan,
+        "median_width": _median(ds["high"].values - ds["low"].values),
         "nulls": int((~ok).sum()),
         "null_reasons": _counts(ds["reason"].values[~ok], n),
         "estimators": "; ".join(f"{k} {v}" for k, v in Counter(s for s in ds["reported_by"].values if s).most_common()),
@@ -286,11 +306,13 @@ def summary(ds: xr.Dataset) -> dict:
            for name in ds["estimator"].values},
         "paper_coverage": _coverage(e, ds["paper_low"].values, ds["paper_high"].values),
         "paper_bias": float(np.mean(ds["paper_e"].values[paper_ok]) - e) if paper_ok.any() else math.nan,
-        "paper_median_width": float(np.nanmedian(ds["paper_high"].values - ds["paper_low"].values)) if paper_ok.any() else math.nan,
+        "paper_median_width": _median(ds["paper_high"].values - ds["paper_low"].values),
         "paper_nulls": int((~paper_ok).sum()),
         "ppc_true": float(np.median(ds["ppc_true"].values)),
         "corner_true": float(np.median(ds["corner_true"].values)),
-        "ppc_read": float(np.nanmedian(ds["ppc_read"].values)) if np.isfinite(ds["ppc_read"].values).any() else math.nan,
+        "ppc_read": _median(ds["ppc_read"].values),
+        "noise_read": _median(ds["noise_read"].values),
+        "corner_read": _median(ds["corner_read"].values),
         "calibrations": len({c for c in ds["calibration"].values if c}),
     }
     row["in_band"] = bool(COVERAGE_BAND[0] <= cov <= COVERAGE_BAND[1])
@@ -309,22 +331,28 @@ def table(datasets) -> pd.DataFrame:
 
 
 def markdown(tab: pd.DataFrame) -> str:
-    """The table as Markdown: the reported interval's coverage (its binomial standard error),
-    corrected bias and sd, median width, nulls, the paper model's width and coverage, and
-    the achieved samples per cycle and corner; warnings and null reasons listed below."""
+    """The table as Markdown: the reported interval's coverage (its binomial standard error;
+    bold outside :data:`COVERAGE_BAND`), corrected bias and sd, median width, nulls, the
+    paper model's width and coverage, and the records' samples per cycle, corner and noise
+    (true, and as the tool read them); the warnings and null reasons of each cell below."""
     lines = [
         "| simulator | condition | e | n | coverage | bias | sd | bias/sd | width | nulls | paper-model width | paper-model coverage | "
-        "samples/cycle (true, read) | corner (true) | estimator |",
-        "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
+        "samples/cycle (true, read) | corner (true, read) | noise read | reported by |",
+        "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
     ]
+
+    def num(x, fmt):
+        return "-" if not np.isfinite(x) else format(x, fmt)
+
     for r in tab.itertuples():
         flag = "" if r.in_band else "**"
-        corner = "" if not np.isfinite(r.corner_true) else f"{r.corner_true:.2f}"
         lines.append(
             f"| {r.simulator} | {r.condition} | {r.e_true:g} | {r.records} | {flag}{100 * r.coverage:.0f} %{flag} "
-            f"(±{100 * r.coverage_se:.0f}) | {r.bias:+.4f} | {r.sd:.4f} | {r.bias_over_sd:+.2f} | {r.median_width:.4f} | {r.nulls} | "
-            f"{r.paper_median_width:.4f} | {100 * r.paper_coverage:.0f} % | {r.ppc_true:.0f}, {r.ppc_read:.0f} | {corner} | {r.estimators} |"
+            f"(±{100 * r.coverage_se:.0f}) | {num(r.bias, '+.4f')} | {num(r.sd, '.4f')} | {num(r.bias_over_sd, '+.2f')} | "
+            f"{num(r.median_width, '.4f')} | {r.nulls} | {num(r.paper_median_width, '.4f')} | {100 * r.paper_coverage:.0f} % | "
+            f"{num(r.ppc_true, '.0f')}, {num(r.ppc_read, '.0f')} | {num(r.corner_true, '.2f')}, {num(r.corner_read, '.2f')} | "
+            f"{num(r.noise_read, '.3f')} | {r.estimators or '-'} |"
         )
-    notes = [f"- {r.simulator} {r.condition} e = {r.e_true:g}: warnings {r.warnings or 'none'}"
+    notes = [f"- {r.simulator} {r.condition} e = {r.e_true:g}: warnings: {r.warnings or 'none'}"
              + (f"; nulls: {r.null_reasons}" if r.nulls else "") for r in tab.itertuples() if r.warnings or r.nulls]
     return "\n".join(lines) + "\n\n" + "\n".join(notes) + "\n"
