@@ -149,3 +149,13 @@ def test_calibration_records_follow_the_record_model():
     assert not np.array_equal(calibration._simulate_set(*args, coloured, coloured.load.pole(75.0))[0], white)
     noisy = calibration._simulate_set(*args, RecordModel(sensor=SensorNoise(0.1)), 0.0)[0]
     assert (noisy - white).std() == pytest.approx(0.1 * np.sqrt(np.mean(white**2)), rel=0.03)
+
+
+def test_parse_load_reads_the_command_line_forms_and_refuses_others():
+    from rockdec.record_model import parse_load
+
+    assert parse_load("white") == Load()
+    assert parse_load("lowpass:2.5") == Load("lowpass", 2.5)
+    for text in ("pink", "white:3", "lowpass:", "lowpass:x", "lowpass:-1", ""):
+        with pytest.raises(InputError):
+            parse_load(text)

@@ -8,7 +8,9 @@ the measured one.
 
 What fixes the statistics. In eq. 4 with white impulses the stationary response depends
 only on ``e`` and one dimensionless step (equivalently the samples per cycle at amplitude
-``sigma_Y``, eq. 5). So the calibration simulates, for each ``e`` of a grid
+``sigma_Y``, eq. 5); a low-pass load adds its pole per sample, sensor noise its level in
+``sigma_Y``, Housner's model (eq. 2) the ratio ``sigma_Y / theta_cr`` (the record model,
+:func:`binned_model`). So the calibration simulates, for each ``e`` of a grid
 (:data:`E_GRID`), :data:`SETS_PER_E` sets of records with the measured records' lengths,
 ``g = 1`` and ``sigma_p = 1`` (scale-free), at the step for which the analysis
 (:func:`rockdec.measured.analyse`) reads the same samples per cycle off the simulated
@@ -34,6 +36,7 @@ table) and is taken over.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import hashlib
 import json
 import logging
@@ -50,7 +53,7 @@ import xarray as xr
 
 from rockdec import __version__, engine, io, measured, registry
 from rockdec.models import SCALE_CONSTANT_GUESS, step_for_density
-from rockdec.record_model import PAPER, RecordModel
+from rockdec.record_model import PAPER, Load, RecordModel, SensorNoise
 from rockdec.sources import package_sources
 from rockdec.validate import InputError
 
@@ -62,11 +65,24 @@ E_GRID = (0.4, 0.5, 0.6, 0.7, 0.75, 0.8, 0.85, 0.88, 0.91, 0.93, 0.95, 0.965, 0.
 #: Simulated record sets per grid point.
 SETS_PER_E = 40
 
-#: Pilot sets of each iteration of the step search.
-PILOT_SETS = 8
+#: Pilot sets of each iteration of the step search, and the most samples of a pilot record
+#: (:func:`step_for`); under a coloured load a pilot record is as long as the record, up to
+#: ``PILOT_SAMPLES_COLOURED``.
+PILOT_SETS, PILOT_SAMPLES, PILOT_SAMPLES_COLOURED = 8, 50_000, 200_000
 
 #: Calibrations are shared by records whose samples per cycle agree within this relative step.
 PPC_BIN = 0.1
+
+#: Calibrations are shared by records whose sensor noise (in ``sigma_Y``) and load pole
+#: (``-ln`` of the pole per sample) agree within these relative steps (:func:`binned_model`).
+NOISE_BIN, POLE_BIN = 0.1, 0.1
+
+#: Housner's model (eq. 2) is not scale-free in ``sigma_Y / theta_cr``: calibrations are
+#: shared by records whose ratio agrees within this relative step.
+RATIO_BIN = 0.1
+
+#: Fewest iterations of the step search under Housner's model, which also sets ``theta_cr``.
+HOUSNER_ITERATIONS = 5
 
 #: Names calibrated: every estimator of e, and g.
 NAMES = (*registry.ESTIMATORS, measured.G_NAME)
@@ -81,30 +97,70 @@ HEARTBEAT_S, STALE_S = 10.0, 120.0
 POLL_S = 1.0
 
 
+def log_bin(x: float, width: float) -> float:
+    """``x > 0`` rounded to the nearest of the bins ``exp(width k)`` (``k`` integer), to 4
+    significant digits: values within a relative step ``width`` share a bin."""
+    return float(f"{math.exp(width * round(math.log(x) / width)):.4g}")
+
+
 def ppc_key(points_per_cycle: float) -> float:
     """Samples per cycle rounded to the calibration's bins (:data:`PPC_BIN`, relative)."""
-    return float(round(math.exp(PPC_BIN * round(math.log(points_per_cycle) / PPC_BIN)), 3))
+    return log_bin(points_per_cycle, PPC_BIN)
 
 
-def calibration_settings(lengths, points_per_cycle: float, settings: dict | None = None, model: RecordModel = PAPER) -> dict:
+def binned_model(model: RecordModel, points_per_cycle: float) -> RecordModel:
+    """The record model a calibration simulates for records of ``model`` read at
+    ``points_per_cycle`` samples per cycle: the sensor noise (in ``sigma_Y``) on the bins
+    of :data:`NOISE_BIN`, and a low-pass load's pole per sample on the bins of
+    :data:`POLE_BIN`, so that records of nearly the same model share a calibration.
+
+    The load is matched by its pole per sample, ``alpha = exp(-2 pi corner / N)`` at the
+    records' own ``N = points_per_cycle`` (what :func:`rockdec.record_measure.measure`
+    reads directly): ``-ln alpha`` is binned and the corner stated at the binned samples
+    per cycle (:func:`ppc_key`), at which the calibration simulates, so that the
+    calibration's records carry the binned pole per sample and are read at the binned
+    samples per cycle.
+    """
+    if model.sensor.units != "sigma_y":
+        raise ValueError("a calibration takes its sensor noise in units of sigma_Y")
+    sensor = model.sensor
+    if sensor.std > 0.0:
+        sensor = SensorNoise(log_bin(sensor.std, NOISE_BIN), "sigma_y")
+    load = model.load
+    if load.kind == "lowpass":
+        rate = log_bin(-math.log(load.pole(points_per_cycle)), POLE_BIN)
+        load = Load("lowpass", float(f"{rate * ppc_key(points_per_cycle) / (2.0 * math.pi):.6g}"))
+    return dataclasses.replace(model, load=load, sensor=sensor)
+
+
+def calibration_settings(lengths, points_per_cycle: float, settings: dict | None = None, model: RecordModel = PAPER, theta_cr_ratio: float | None = None) -> dict:
     """Everything a calibration depends on, as a JSON-able dict (hashed for the cache name).
 
-    ``model``: the record model the calibration simulates (:mod:`rockdec.record_model`): its
-    load and sensor noise (in units of ``sigma_Y``: the calibration is scale-free); the
-    rocking model is the simplified one (eq. 4).
+    ``model``: the record model of the records (:mod:`rockdec.record_model`): its load (a
+    corner in rocking frequencies at ``points_per_cycle``) and sensor noise (in units of
+    ``sigma_Y``: the calibration is scale-free); the calibration simulates it binned
+    (:func:`binned_model`). Under the simplified model (eq. 4) nothing else sets the
+    statistics; Housner's (eq. 2) adds ``nu^2 theta = g theta / theta_cr``, so the records'
+    ``theta_cr_ratio = sigma_Y / theta_cr`` (binned by :data:`RATIO_BIN`) enters the key.
     """
-    if model.rocking != "simplified" or model.sensor.units != "sigma_y":
-        raise ValueError("a calibration simulates the simplified model (eq. 4), with any sensor noise in units of sigma_Y")
-    return {
+    if model.sensor.units != "sigma_y":
+        raise ValueError("a calibration takes its sensor noise in units of sigma_Y")
+    housner = model.rocking == "housner"
+    if housner != (theta_cr_ratio is not None):
+        raise ValueError("a calibration of Housner's model (eq. 2) needs sigma_Y / theta_cr, which the simplified model (eq. 4) does not take")
+    out = {
         "lengths": [int(n) for n in lengths],
         "points_per_cycle": ppc_key(points_per_cycle),
-        "record_model": model.key(),
+        "record_model": binned_model(model, points_per_cycle).key(),
         "analysis": {k: (list(v) if isinstance(v, tuple) else v) for k, v in {**measured.DEFAULT_SETTINGS, **(settings or {})}.items()},
         "e_grid": list(E_GRID),
         "sets_per_e": SETS_PER_E,
         "rockdec_version": __version__,
         "pipeline": pipeline_fingerprint(),
     }
+    if housner:
+        out["sigma_y_over_theta_cr"] = log_bin(theta_cr_ratio, RATIO_BIN)
+    return out
 
 
 def pipeline_fingerprint() -> str:
@@ -123,53 +179,73 @@ def settings_hash(cal_settings: dict) -> str:
     return hashlib.sha256(json.dumps(cal_settings, sort_keys=True).encode()).hexdigest()[:16]
 
 
-def _simulate_set(seed0: int, lengths, dt: float, e: float, burn_in: int, model: RecordModel, pole: float) -> list[np.ndarray]:
+def _simulate_set(seed0: int, lengths, dt: float, e: float, burn_in: int, model: RecordModel, pole: float, theta_cr: float | None = None) -> list[np.ndarray]:
     """One set of records (one per length), seeds ``seed0, seed0 + 1, ...``; ``g = sigma_p = 1``,
-    the load's filter ``pole``, and the sensor noise of ``model`` relative to each record's rms."""
+    the rocking model of ``model`` (``theta_cr`` for Housner's, eq. 2, with ``nu^2 = 1/theta_cr``;
+    :func:`rockdec.simulate.simulate_model`), the load's filter ``pole``, and the sensor
+    noise of ``model`` relative to each record's rms."""
     from rockdec.loading import add_sensor_noise  # the simulators load only when a calibration is built
-    from rockdec.simulate import simulate_block
+    from rockdec.simulate import simulate_model
 
     out = []
     for k, n in enumerate(lengths):
-        theta = simulate_block([seed0 + k], n, dt=dt, g=1.0, e=e, sigma_p=1.0, burn_in=burn_in, pole=pole)[0]
+        theta = simulate_model(model.rocking, [seed0 + k], n, dt=dt, g=1.0, e=e, sigma_p=1.0, theta_cr=theta_cr, burn_in=burn_in, pole=pole)[0]
         if model.sensor.std > 0.0:
-            add_sensor_noise(theta, [seed0 + k], model.sensor.std_rad(float(np.sqrt(np.mean(theta**2)))))
+            add_sensor_noise(theta, [seed0 + k], model.sensor.std_rad(float(np.sqrt(np.nanmean(theta**2)))))
         out.append(theta[0])
     return out
 
 
-def step_for(e: float, points_per_cycle: float, lengths, settings: dict, seed0: int, model: RecordModel = PAPER) -> tuple[float, int]:
+def step_for(
+    e: float, points_per_cycle: float, lengths, settings: dict, seed0: int, model: RecordModel = PAPER, theta_cr_ratio: float | None = None,
+) -> tuple[float, int, float | None]:
     """Step ``dt`` (for ``g = sigma_p = 1``) at which :func:`rockdec.measured.analyse` reads
-    ``points_per_cycle`` off simulated records at ``e``, and the burn-in.
+    ``points_per_cycle`` off simulated records at ``e``, the burn-in, and (Housner's model,
+    eq. 2) the critical angle at which the records' ``sigma_Y / theta_cr`` is ``theta_cr_ratio``.
 
     Fixed point on the scale law: ``points_per_cycle`` goes as ``1/dt^2`` (``sigma_Y`` as
-    ``S^2/g^3`` with ``S = sigma_p^2/dt``, and eq. 5), so ``dt <- dt sqrt(N_read / N)``;
-    under a coloured load the exponent is measured (:func:`rockdec.simulate.secant_step`).
-    :data:`PILOT_SETS` sets of at most 50,000 samples a record per iteration,
-    :data:`rockdec.simulate.STEP_ITERATIONS` iterations.
+    ``S^2/g^3`` with ``S = sigma_p^2/dt``, and eq. 5), so ``dt <- dt sqrt(N_read / N)``, on
+    :data:`PILOT_SETS` sets of at most :data:`PILOT_SAMPLES` samples a record. Under a
+    coloured load the samples per cycle read off a record grow with its length (rare large
+    excursions) and fall steeply with ``dt``, so the pilot records are as long as the
+    records (up to :data:`PILOT_SAMPLES_COLOURED`, as many sets as make
+    :data:`PILOT_SETS` x :data:`PILOT_SAMPLES` samples, at least half :data:`PILOT_SETS`)
+    and the step is bracketed (:func:`rockdec.simulate.secant_step`).
+    :data:`rockdec.simulate.STEP_ITERATIONS` iterations. Under Housner's model each pilot
+    also sets the next ``theta_cr = sigma_Y / theta_cr_ratio`` from its median ``sigma_Y``
+    (the first from eq. 5 at the target: ``sigma_Y = (N dt / 4)^2 / 2``), and the search
+    runs at least :data:`HOUSNER_ITERATIONS` iterations.
     """
     from rockdec.simulate import STEP_ITERATIONS, default_burn_in, secant_step
 
     burn_in = default_burn_in(e, points_per_cycle)
     dt = step_for_density(SCALE_CONSTANT_GUESS, 1.0, 1.0, points_per_cycle)
     pole = model.load.pole(points_per_cycle)
-    pilot = [min(int(n), 50_000) for n in lengths]
+    white = model.load.kind == "white"
+    housner = model.rocking == "housner"
+    theta_cr = (points_per_cycle * dt / 4.0) ** 2 / 2.0 / theta_cr_ratio if housner else None
+    pilot = [min(int(n), PILOT_SAMPLES if white else PILOT_SAMPLES_COLOURED) for n in lengths]
+    sets = PILOT_SETS if white else max(PILOT_SETS // 2, PILOT_SETS * PILOT_SAMPLES // sum(pilot))
+    iterations = max(STEP_ITERATIONS[model.load.kind], HOUSNER_ITERATIONS if housner else 0)
     history: list = []
-    for i in range(STEP_ITERATIONS[model.load.kind]):
-        read = []
-        for k in range(PILOT_SETS):
+    for i in range(iterations):
+        read, rms = [], []
+        for k in range(sets):
             try:
-                records = _simulate_set(seed0 + k * len(pilot), pilot, dt, e, burn_in, model, pole)
+                records = _simulate_set(seed0 + k * len(pilot), pilot, dt, e, burn_in, model, pole, theta_cr)
                 read.append(measured.analyse(records, dt, settings).points_per_cycle)
+                rms.append(float(np.sqrt(np.nanmean(np.concatenate(records) ** 2))))
             except ValueError:
                 continue
         if not read:
             raise ValueError(f"no pilot record at e = {e} could be analysed; the records are too short for this sampling")
-        if model.load.kind == "white":
+        if housner:
+            theta_cr = float(np.median(rms)) / theta_cr_ratio
+        if white:
             dt *= math.sqrt(float(np.median(read)) / points_per_cycle)
         else:
             dt = secant_step(history, dt, float(np.median(read)), points_per_cycle)
-    return dt, burn_in
+    return dt, burn_in, theta_cr
 
 
 def _grid_point(j: int, e: float, cal_settings: dict, seed_base: int) -> np.ndarray:
@@ -177,15 +253,16 @@ def _grid_point(j: int, e: float, cal_settings: dict, seed_base: int) -> np.ndar
     point) that cannot be analysed, e.g. records too short for the lag range at this ``e``."""
     lengths, ppc, settings = cal_settings["lengths"], cal_settings["points_per_cycle"], cal_settings["analysis"]
     model = RecordModel.from_key(cal_settings["record_model"])
+    ratio = cal_settings.get("sigma_y_over_theta_cr")
     seed0 = seed_base + j * 10**7
     out = np.full((cal_settings["sets_per_e"], len(NAMES)), np.nan)
     try:
-        dt, burn_in = step_for(e, ppc, lengths, settings, seed0 + 9 * 10**6, model)
+        dt, burn_in, theta_cr = step_for(e, ppc, lengths, settings, seed0 + 9 * 10**6, model, ratio)
     except ValueError:  # no record at this e can be analysed: the belt leaves this e out
         return out
     for k in range(cal_settings["sets_per_e"]):
         try:
-            records = _simulate_set(seed0 + k * len(lengths), lengths, dt, e, burn_in, model, model.load.pole(ppc))
+            records = _simulate_set(seed0 + k * len(lengths), lengths, dt, e, burn_in, model, model.load.pole(ppc), theta_cr)
             raw = measured.analyse(records, dt, settings).raw
         except ValueError:
             continue

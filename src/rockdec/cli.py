@@ -385,6 +385,58 @@ def _check_estimate_size(args) -> float:
     return seconds
 
 
+def parse_sensor_noise(text: str):
+    """The sensor noise of ``--sensor-noise``: ``None`` for ``auto`` (measured off the
+    record), else a :class:`rockdec.record_model.SensorNoise`: ``0`` (none), ``VALUE`` (its
+    standard deviation in rad) or ``N%`` (in per cent of ``sigma_Y``)."""
+    from rockdec.record_model import SensorNoise
+
+    word = str(text).strip().lower()
+    if word == "auto":
+        return None
+    percent = word.endswith("%")
+    try:
+        value = float(word[:-1] if percent else word)
+    except ValueError:
+        value = float("nan")
+    if not (value >= 0.0 and value < float("inf")):
+        raise UsageError(
+            f"--sensor-noise '{text}' is not a noise level; give auto (measured), 0, a standard deviation in rad "
+            "(0.0002) or a share of sigma_Y (2%), >= 0."
+        )
+    return SensorNoise(value / 100.0, "sigma_y") if percent else SensorNoise(value, "rad")
+
+
+def parse_load_option(text: str):
+    """The load of ``--load``: ``None`` for ``auto`` (measured off the record), else
+    :func:`rockdec.record_model.parse_load` (its refusals name ``--load``)."""
+    from rockdec.record_model import parse_load
+
+    if str(text).strip().lower() == "auto":
+        return None
+    try:
+        return parse_load(text)
+    except checks.InputError as exc:
+        raise UsageError(f"{str(exc).rstrip('.')}, or auto (measured off the record).") from None
+
+
+def _estimate_model_options(args) -> dict:
+    """The record-model keywords of :func:`rockdec.inference.estimate` from ``--load``,
+    ``--sensor-noise``, ``--model`` and ``--theta-cr``, each checked (one sentence, exit 2)."""
+    import math
+
+    out = {"load": parse_load_option(args.load), "sensor": parse_sensor_noise(args.sensor_noise), "rocking": args.model}
+    if args.model == "housner":
+        if args.theta_cr is None:
+            raise UsageError("--model housner needs the block's critical angle: give --theta-cr RAD (atan(width/height)).")
+        if not 0.0 < args.theta_cr < math.pi / 2:
+            raise UsageError(f"--theta-cr {checks.show(args.theta_cr)} is not a critical angle; give it in rad, between 0 and pi/2.")
+        out["theta_cr"] = args.theta_cr
+    elif args.theta_cr is not None:
+        raise UsageError("--theta-cr is the Housner model's critical angle; give --model housner with it, or leave it out.")
+    return out
+
+
 def cmd_estimate(args) -> None:
     import contextlib
 
@@ -394,6 +446,7 @@ def cmd_estimate(args) -> None:
         checks.path_name(path, "record")
     if args.g is not None:
         checks.positive(args.g, "--g", "give the restoring acceleration nu^2 theta_cr in rad/s^2, or leave --g out")
+    model_options = _estimate_model_options(args)
     if Path(args.cache).exists() and not Path(args.cache).is_dir():
         raise UsageError(f"--cache '{args.cache}' is a file, not a folder; give a folder for the stored calibrations.")
     with contextlib.ExitStack() as stack:
@@ -409,7 +462,7 @@ def cmd_estimate(args) -> None:
             f"(up to about {_duration(seconds)} when their calibration must be built)"
         )
         with console.progress("calibrating"):  # a bar only while a calibration missing from the cache is built
-            result = inference.estimate(recs, cache_dir=args.cache, g=args.g)
+            result = inference.estimate(recs, cache_dir=args.cache, g=args.g, **model_options)
         if plot is not None:
             from rockdec import figures
 
@@ -476,6 +529,7 @@ def _estimate_text(res: dict) -> str:
         f"  restoring acceleration g = {res['g']:.5g} rad/s^2 ({g_how})" if res["g"] is not None else "  restoring acceleration g: not determined",
         f"  calibration: {cal['file']}, "
         + ("from the cache" if cal["cached"] else f"built in {cal['seconds']:.1f} s and stored for the next record like these"),
+        *_model_lines(res["record_model"]),
         "",
         f"{'estimator':<10} {'reads':<32} {'raw':>7} {'corrected':>10}  {'95 % interval':<18} {'coverage':>9} {'triggers':>9}",
     ]
@@ -488,19 +542,47 @@ def _estimate_text(res: dict) -> str:
             f"{pct(est['coverage']):>9} {est['triggers']:>9}"
         )
         lines += [f"{'':>11}note: {note}" for note in ([why] if why else []) + est["notes"]]
-    corrected, why = _corrected(res["estimators"][res["estimator"]])
-    lines += [
-        "",
-        (f"e = {corrected}" if res["e"] is not None else f"e: {why}")
-        + f", 95 % interval [{fmt(res['interval'][0])}, {fmt(res['interval'][1])}] (estimator {res['estimator']}, marked *);",
-        f"the interval held the true e on {pct(res['coverage'])} of the calibration's simulated records "
-        "(in-sample; the README's coverage study checks independent records)",
-    ]
-    if res.get("reason") and not why:  # a value beyond the calibration is explained on the line above
-        lines.append(f"no e: {res['reason']}")
+    lines.append("")
+    if res["estimator"] is None:
+        lines.append(f"e: not estimated: {res['reason']}")
+    else:
+        corrected, _ = _corrected(res["estimators"][res["estimator"]])
+        trusted = [row["estimator"] for row in res["selection"] if row["holds"]]
+        lines += [
+            f"e = {corrected}, 95 % interval [{fmt(res['interval'][0])}, {fmt(res['interval'][1])}] (estimator {res['estimator']}, "
+            f"marked *: the narrowest interval of {', '.join(trusted)}, the candidates whose calibrated coverage holds);",
+            f"the interval held the true e on {pct(res['coverage'])} of the calibration's simulated records "
+            "(in-sample; the README's coverage study checks independent records)",
+        ]
+        lines += [f"not chosen: {row['estimator']}: {row['why_not']}" for row in res["selection"] if not row["holds"]]
     lines += [f"warning: {w}" for w in res["warnings"]]
     lines.append("(what each word means: rockdec estimate --help)")
     return "\n".join(lines)
+
+
+def _model_lines(report: dict) -> list[str]:
+    """The record model of ``rockdec estimate``'s report: what was measured (each quantity
+    with its standard error), detected or declared, and what the calibration simulated."""
+    src = report["sources"]
+    lines = [f"  calibration simulates: {report['simulated']['described']} (load {src['load']}, sensor noise {src['sensor_noise']}, "
+             f"rocking model {src['rocking']})"]
+    m = report["measured"]
+    if m is None:
+        if report["not_measured"]:
+            lines.append(f"  record model not measured: {report['not_measured']}")
+        return lines
+    pm = lambda q, f="{:.3g}": "-" if q["value"] is None else f.format(q["value"]) + (f" +- {q['se']:.2g}" if q["se"] is not None else "")  # noqa: E731
+    yes = lambda flag: "detected" if flag else "not detected"  # noqa: E731
+    det = m["detected"]
+    noise = m["sensor_noise_sigma_y"]
+    lines += [
+        f"  measured off the record: sensor noise {pm({k: None if v is None else 100 * v for k, v in noise.items()})} % of sigma_Y "
+        f"({yes(det['sensor_noise'])}); load pole per sample {pm(m['load_pole_per_sample'])}, corner "
+        f"{pm(m['load_corner_rocking'])} rocking frequencies (colour {yes(det['colour'])})",
+        f"    drift: block means {m['drift_rms_sigma_y']:.2g} sigma_Y, z = {m['drift_z']:.1f} ({yes(det['drift'])}); "
+        f"g from the second differences {pm(m['g'], '{:.4g}')} rad/s^2, asymmetry {pm(m['g_asymmetry'], '{:+.3f}')}",
+    ]
+    return lines
 
 
 def _corrected(est: dict) -> tuple[str, str]:
@@ -650,6 +732,21 @@ def build_parser() -> argparse.ArgumentParser:
     est1.add_argument("--column", default="theta", help="CSV column of the angle (default: %(default)s)")
     est1.add_argument("--variable", default="theta", help="NetCDF variable of the angle (default: %(default)s)")
     est1.add_argument("--g", type=float, help="restoring acceleration nu^2 theta_cr in rad/s^2, if known (default: read off the record)")
+    est1.add_argument(
+        "--load", default="auto", metavar="LOAD",
+        help="the load the calibration simulates: auto (measured off the record: white, or a low-pass load when its colour "
+        "is detected), white, or lowpass:CORNER (corner in rocking frequencies 1/T(sigma_Y), eq. 5) (default: %(default)s)",
+    )
+    est1.add_argument(
+        "--sensor-noise", default="auto", metavar="NOISE",
+        help="the sensor noise the calibration adds: auto (measured off the record, when detected), 0, a standard deviation "
+        "in rad, or N%% of sigma_Y (default: %(default)s)",
+    )
+    est1.add_argument(
+        "--model", default="simplified", choices=("simplified", "housner"),
+        help="rocking model of the calibration: simplified (eq. 4) or housner (eq. 2, needs --theta-cr) (default: %(default)s)",
+    )
+    est1.add_argument("--theta-cr", type=float, help="critical angle in rad, for --model housner (nu^2 = g/theta_cr)")
     est1.add_argument("--json", action="store_true", help="print one JSON object instead of the table")
     est1.add_argument("--plot", help="draw the signature and the calibration curve to this PNG or PDF")
     est1.add_argument("--cache", default=_default_cache(), help="folder of stored calibrations (default: %(default)s)")

@@ -570,7 +570,8 @@ def fig_record(result: dict) -> Figure:
     corrected ``e`` and interval read off it. ``result`` is
     :func:`rockdec.inference.estimate`'s output.
     """
-    analysis, belt = result["_analysis"], result["_belts"][result["estimator"]]
+    name = result["estimator"] or registry.DEFAULT_ESTIMATOR  # none trusted: the default's belt, without a value
+    analysis, belt = result["_analysis"], result["_belts"][name]
     fig = _new_figure(10.0, 4.0)
     left, right = fig.subplots(1, 2)
     r = analysis.free_response
@@ -589,12 +590,12 @@ def fig_record(result: dict) -> Figure:
     right.plot(belt.e, belt.e, **TARGET_STYLE, label="no bias")
     raw = result["raw"]
     if raw is not None:
-        right.axhline(raw, color="tab:red", lw=1.0, label=f"observed {result['estimator']} = {raw:.4f}")
+        right.axhline(raw, color="tab:red", lw=1.0, label=f"observed {name} = {raw:.4f}")
     if result["e"] is not None:
         low, high = result["interval"]
         right.axvspan(low, high, color="tab:red", alpha=0.15, label=f"e = {result['e']:.4f}, 95 %: [{low:.4f}, {high:.4f}]")
         right.axvline(result["e"], color="tab:red", lw=1.0)
-    right.set(xlabel="true e", ylabel=f"raw {result['estimator']} at zero window", title="calibration (simulated records)")
+    right.set(xlabel="true e", ylabel=f"raw {name} at zero window", title="calibration (simulated records)")
     right.legend(fontsize=8, loc="upper left")
     return fig
 

@@ -89,6 +89,29 @@ WHITE = Load()
 """The paper's load."""
 
 
+LOAD_FORMS = "white, lowpass:CORNER, spectrum:FILE or base:FILE"
+"""The forms of a load on the command line (:func:`parse_load`)."""
+
+
+def parse_load(text: str) -> Load:
+    """The load of a command-line string: ``white``, ``lowpass:CORNER`` (corner in rocking
+    frequencies ``1/T(sigma_Y)``, eq. 5), ``spectrum:FILE`` (a tabulated load spectrum) or
+    ``base:FILE`` (a measured base-excitation record); anything else is refused in one sentence."""
+    kind, sep, arg = str(text).strip().partition(":")
+    kind = kind.strip().lower()
+    if kind == "white" and not sep:
+        return WHITE
+    if kind == "lowpass" and arg.strip():
+        try:
+            corner = float(arg)
+        except ValueError:
+            raise checks.InputError(f"--load {text!r}: the corner '{arg}' is not a number; give lowpass:CORNER with CORNER in rocking frequencies, > 0") from None
+        return Load("lowpass", corner)
+    if kind in ("spectrum", "base") and arg.strip():
+        raise checks.InputError(f"--load {text!r}: a {kind} load is not supported yet; use white or lowpass:CORNER")
+    raise checks.InputError(f"--load {text!r} is not a load; give one of {LOAD_FORMS}")
+
+
 @dataclasses.dataclass(frozen=True)
 class SensorNoise:
     """White noise of the angle sensor: ``std`` (``>= 0``) in ``units`` (:data:`NOISE_UNITS`)."""
