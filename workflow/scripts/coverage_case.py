@@ -18,8 +18,10 @@ def simulator(smk):
 
 
 def main(smk):
-    with engine.session(smk.threads):
-        ds = coverage.run_cell(smk.wildcards.case, smk.params.records, smk.params.n_points, smk.params.cache, simulate=simulator(smk))
+    reference = layout.COVERAGE_CASES[smk.wildcards.case][0] == "reference"
+    with engine.session(smk.threads):  # the reference steps all records of a batch at once: larger batches
+        ds = coverage.run_cell(smk.wildcards.case, smk.params.records, smk.params.n_points, smk.params.cache,
+                               simulate=simulator(smk), batch=50 if reference else 10)
     ds.attrs.update(io.provenance("coverage", {"case": smk.wildcards.case, "records": smk.params.records}))
     io.write_netcdf(ds, smk.output[0])
 
