@@ -129,10 +129,12 @@ def _model_read(report: dict | None) -> dict:
     :func:`rockdec.inference.estimate`): the sensor noise in ``sigma_Y`` and the load's
     corner in rocking frequencies (NaN when not measured), and the model it simulated."""
     measured = (report or {}).get("measured") or {}
+    detected = measured.get("detected") or {}
     noise = (measured.get("sensor_noise_sigma_y") or {}).get("value")
-    corner = (measured.get("load_corner_rocking") or {}).get("value")
+    corner = (measured.get("load_corner_rocking") or {}).get("value") if detected.get("colour") else None
     simulated = ((report or {}).get("simulated") or {}).get("described", "")
-    return {"noise_read": _num(noise), "corner_read": _num(corner), "model": simulated}
+    return {"noise_read": _num(noise), "corner_read": _num(corner), "model": simulated,
+            "noisy": bool(detected.get("sensor_noise")), "coloured": bool(detected.get("colour"))}
 
 
 def estimate_record(theta: np.ndarray, dt: float, source: str, cache_dir, model) -> dict:
@@ -219,7 +221,9 @@ def run_cell(cell: str, n_records: int, n_points: int, cache_dir, *, simulate=ke
             "warnings": (rec, strings([" | ".join(g["warnings"]) for g in got]), {"long_name": "warnings of the tool, joined by ' | '"}),
             "record_model": (rec, strings([g["model"] for g in got]), {"long_name": "record model the tool's calibration simulated"}),
             "noise_read": (rec, [g["noise_read"] for g in got], {"units": "1", "long_name": "sensor noise the tool measured, in sigma_Y"}),
-            "corner_read": (rec, [g["corner_read"] for g in got], {"units": "1", "long_name": "load corner the tool measured, in rocking frequencies"}),
+            "corner_read": (rec, [g["corner_read"] for g in got], {"units": "1", "long_name": "load corner the tool measured, in rocking frequencies (NaN: no colour detected)"}),
+            "noisy": (rec, [g["noisy"] for g in got], {"long_name": "whether the tool detected sensor noise"}),
+            "coloured": (rec, [g["coloured"] for g in got], {"long_name": "whether the tool detected a coloured load"}),
             "calibration": (rec, strings([g["calibration"] for g in got]), {"long_name": "calibration file the tool used"}),
             "ppc_read": (rec, [g["points_per_cycle"] for g in got], {"units": "1", "long_name": "samples per cycle the tool read"}),
             "ppc_true": (rec, ppc, {"units": "1", "long_name": "samples per cycle at the record's sigma_Y with the true g (eq. 5)"}),
@@ -313,6 +317,8 @@ def summary(ds: xr.Dataset) -> dict:
         "ppc_read": _median(ds["ppc_read"].values),
         "noise_read": _median(ds["noise_read"].values),
         "corner_read": _median(ds["corner_read"].values),
+        "noisy": float(np.mean(ds["noisy"].values)),
+        "coloured": float(np.mean(ds["coloured"].values)),
         "calibrations": len({c for c in ds["calibration"].values if c}),
     }
     row["in_band"] = bool(COVERAGE_BAND[0] <= cov <= COVERAGE_BAND[1])
@@ -337,8 +343,8 @@ def markdown(tab: pd.DataFrame) -> str:
     (true, and as the tool read them); the warnings and null reasons of each cell below."""
     lines = [
         "| simulator | condition | e | n | coverage | bias | sd | bias/sd | width | nulls | paper-model width | paper-model coverage | "
-        "samples/cycle (true, read) | corner (true, read) | noise read | reported by |",
-        "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
+        "samples/cycle (true, read) | corner (true, read) | noise read | noisy, coloured | reported by |",
+        "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
     ]
 
     def num(x, fmt):
@@ -351,7 +357,7 @@ def markdown(tab: pd.DataFrame) -> str:
             f"(±{100 * r.coverage_se:.0f}) | {num(r.bias, '+.4f')} | {num(r.sd, '.4f')} | {num(r.bias_over_sd, '+.2f')} | "
             f"{num(r.median_width, '.4f')} | {r.nulls} | {num(r.paper_median_width, '.4f')} | {100 * r.paper_coverage:.0f} % | "
             f"{num(r.ppc_true, '.0f')}, {num(r.ppc_read, '.0f')} | {num(r.corner_true, '.2f')}, {num(r.corner_read, '.2f')} | "
-            f"{num(r.noise_read, '.3f')} | {r.estimators or '-'} |"
+            f"{num(r.noise_read, '.3f')} | {100 * r.noisy:.0f} %, {100 * r.coloured:.0f} % | {r.estimators or '-'} |"
         )
     notes = [f"- {r.simulator} {r.condition} e = {r.e_true:g}: warnings: {r.warnings or 'none'}"
              + (f"; nulls: {r.null_reasons}" if r.nulls else "") for r in tab.itertuples() if r.warnings or r.nulls]
