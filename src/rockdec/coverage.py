@@ -35,7 +35,7 @@ import pandas as pd
 import xarray as xr
 
 from rockdec import engine, inference, registry
-from rockdec.layout import COVERAGE_CONDITIONS, COVERAGE_SIMULATORS
+from rockdec.layout import COVERAGE_CASES, COVERAGE_CONDITIONS, COVERAGE_SIMULATORS
 from rockdec.models import SCALE_CONSTANT_GUESS, period_from_g, step_for_density
 from rockdec.record_model import PAPER, Load, RecordModel
 from rockdec.records import Record, RecordError
@@ -190,8 +190,6 @@ def run_cell(cell: str, n_records: int, n_points: int, cache_dir, *, simulate=ke
     true samples per cycle and corner.
     """
     import dask
-
-    from rockdec.layout import COVERAGE_CASES
 
     simulator, condition, e = COVERAGE_CASES[cell]
     noise, corner = COVERAGE_CONDITIONS[condition]
