@@ -255,16 +255,17 @@ def run_cell(cell: str, n_records: int, n_points: int, cache_dir, *, simulate=ke
 _NUMBER = re.compile(r"[-+]?\d[\d.,]*(?:e[-+]?\d+)?")
 
 
-def _kind(sentence: str) -> str:
-    """A warning or reason without its numbers (``#``), cut at its first colon or 60
-    characters: what the counts of :func:`summary` group by."""
+def _kind(sentence: str, clause: bool) -> str:
+    """A warning or reason without its numbers (``#``) and record names: what the counts of
+    :func:`summary` group by; cut at 80 characters, or at its first colon (``clause``: a
+    reason's details differ from record to record)."""
     text = _NUMBER.sub("#", sentence).replace("record #: ", "")
-    return text.split(":")[0][:60].strip() if ":" in text[:60] else text[:60].strip()
+    return (text.split(":")[0] if clause else text)[:80].strip()
 
 
-def _counts(sentences, n: int) -> str:
-    """``"12 % <kind>; 3 % <kind>"``: how often each kind occurs among ``n`` records."""
-    counter = Counter(_kind(s) for s in sentences if s)
+def _counts(sentences, n: int, clause: bool = False) -> str:
+    """``"12 % <kind>; 3 % <kind>"``: how often each kind (:func:`_kind`) occurs among ``n`` records."""
+    counter = Counter(_kind(s, clause) for s in sentences if s)
     return "; ".join(f"{100 * c / n:.0f} % {k}" for k, c in counter.most_common())
 
 
@@ -304,7 +305,7 @@ def summary(ds: xr.Dataset) -> dict:
         "bias_over_sd": bias / sd if sd > 0 else math.nan,
         "median_width": _median(ds["high"].values - ds["low"].values),
         "nulls": int((~ok).sum()),
-        "null_reasons": _counts(ds["reason"].values[~ok], n),
+        "null_reasons": _counts(ds["reason"].values[~ok], n, clause=True),
         "estimators": "; ".join(f"{k} {v}" for k, v in Counter(s for s in ds["reported_by"].values if s).most_common()),
         "warnings": _counts([w for ws in ds["warnings"].values for w in set(str(ws).split(" | "))], n),
         **{f"coverage_{name}": _coverage(e, ds["est_low"].sel(estimator=name).values, ds["est_high"].sel(estimator=name).values)
