@@ -600,30 +600,47 @@ def fig_record(result: dict) -> Figure:
     return fig
 
 
-def fig_coverage(table, estimators_shown=registry.CANDIDATES) -> Figure:
-    """Coverage of the 95 % interval and bias of the corrected estimate against the load.
+def fig_coverage(table) -> Figure:
+    """Coverage of the reported 95 % interval and corrected bias, per condition and true ``e``.
 
-    ``table``: :func:`rockdec.coverage.summary` of every case. x axis: the load's corner in
-    rocking frequencies (white noise drawn at the right, as an infinite corner); one line
-    per true ``e``; 200,000-sample records. Left: coverage (the 95 % claim dashed); right:
-    bias of the corrected estimate (with the white-noise calibration).
+    ``table``: :func:`rockdec.coverage.table` (one row per cell). x axis: the conditions,
+    the true ``e`` side by side within each; filled circles the kernel's records, crosses
+    the reference simulator's. Left: coverage (the band :data:`rockdec.coverage.COVERAGE_BAND`
+    shaded, 95 % dashed) with its binomial standard error, and open circles for the paper
+    model's interval on the same records. Right: corrected bias over its sd (the band
+    ``+-`` :data:`rockdec.coverage.BIAS_RATIO` shaded).
     """
-    long = table[table["n_points"] == table["n_points"].max()].copy()
-    white_x = 30.0
-    long["x"] = [white_x if load == "white" else float(load.split("corner ")[1].split(" ")[0]) for load in long["load"]]
-    fig = _new_figure(11.0, 3.2 * len(estimators_shown))
-    axes = fig.subplots(len(estimators_shown), 2, squeeze=False)
-    for row, name in enumerate(estimators_shown):
-        sub = long[long["estimator"] == name]
-        for e, part in sub.groupby("e_true"):
-            part = part.sort_values("x")
-            axes[row, 0].plot(part["x"], part["coverage"], marker="o", label=f"e = {e:g}")
-            axes[row, 1].plot(part["x"], part["bias"], marker="o", label=f"e = {e:g}")
-        axes[row, 0].axhline(0.95, **TARGET_STYLE)
-        axes[row, 1].axhline(0.0, **TARGET_STYLE)
-        for ax, what in zip(axes[row], ("coverage of the 95 % interval", "bias of the corrected e")):
-            ax.set_xscale("log")
-            ax.set_xticks([1, 3, 10, white_x], ["1", "3", "10", "white"])
-            ax.set(xlabel="load corner / rocking frequency", ylabel=what, title=name)
-        axes[row, 0].legend(fontsize=7)
+    from rockdec.coverage import BIAS_RATIO, COVERAGE_BAND
+    from rockdec.layout import COVERAGE_CONDITIONS, COVERAGE_E
+
+    conditions = [c for c in COVERAGE_CONDITIONS if c in set(table["condition"])]
+    es = sorted(set(COVERAGE_E) | set(table["e_true"]))
+    colours = matplotlib.colormaps["viridis"](np.linspace(0.0, 0.9, len(es)))
+    fig = _new_figure(13.0, 4.5)
+    cov_ax, bias_ax = fig.subplots(1, 2)
+    width = 0.8 / len(es)
+    for row in table.itertuples():
+        x = conditions.index(row.condition) + (es.index(row.e_true) - (len(es) - 1) / 2) * width
+        colour = colours[es.index(row.e_true)]
+        kernel = row.simulator == "kernel"
+        x += 0.0 if kernel else width / 3
+        marker = "o" if kernel else "x"
+        cov_ax.errorbar(x, row.coverage, yerr=row.coverage_se, color=colour, marker=marker, ms=5, lw=0.8, ls="none")
+        if kernel:
+            cov_ax.plot(x, row.paper_coverage, marker="o", mfc="none", color=colour, ms=5, ls="none")
+        bias_ax.plot(x, row.bias_over_sd, color=colour, marker=marker, ms=5, ls="none")
+    cov_ax.axhspan(*COVERAGE_BAND, color="tab:green", alpha=0.15, label=f"{COVERAGE_BAND[0]:.0%}-{COVERAGE_BAND[1]:.0%}")
+    cov_ax.axhline(0.95, **TARGET_STYLE)
+    bias_ax.axhspan(-BIAS_RATIO, BIAS_RATIO, color="tab:green", alpha=0.15, label=f"|bias| <= {BIAS_RATIO:g} sd")
+    bias_ax.axhline(0.0, **TARGET_STYLE)
+    for e, colour in zip(es, colours):
+        cov_ax.plot([], [], marker="o", color=colour, ls="none", label=f"e = {e:g}")
+    cov_ax.plot([], [], marker="o", mfc="none", color="0.4", ls="none", label="paper model's interval")
+    cov_ax.plot([], [], marker="x", color="0.4", ls="none", label="reference simulator")
+    for ax, what in ((cov_ax, "coverage of the reported 95 % interval"), (bias_ax, "corrected bias / sd")):
+        ax.set_xticks(range(len(conditions)), [c.replace("_", "\n") for c in conditions], fontsize=8)
+        ax.set(xlabel="condition", ylabel=what)
+    cov_ax.set_ylim(min(0.5, float(np.nanmin(table["coverage"])) - 0.05) if len(table) else 0.5, 1.02)
+    cov_ax.legend(fontsize=7, loc="lower left")
+    bias_ax.legend(fontsize=7)
     return fig

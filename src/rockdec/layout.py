@@ -17,15 +17,35 @@ FIGURES = ("fig1b", "fig2", "fig3", "fig4", "fig_ev")
 READINGS = ("pooled", "per_series", "groups_of_10")
 """The readings of the paper's sizes (docs/method.md §8), in the order tables list them."""
 
-COVERAGE_CASES = {
-    "white_200000": (200_000, None),
-    "white_20000": (20_000, None),
-    "corner1": (200_000, 1.0),
-    "corner3": (200_000, 3.0),
-    "corner10": (200_000, 10.0),
+COVERAGE_E = (0.6, 0.8, 0.9, 0.95, 0.98)
+"""True ``e`` of the coverage study's cells."""
+
+COVERAGE_CONDITIONS = {
+    "clean": (0.0, None),
+    "noise1": (0.01, None),
+    "noise3": (0.03, None),
+    "noise5": (0.05, None),
+    "corner0.5": (0.0, 0.5),
+    "corner1": (0.0, 1.0),
+    "corner3": (0.0, 3.0),
+    "corner1_noise2": (0.02, 1.0),
 }
-"""The coverage study's cases (``results/studies/coverage/{case}.nc``): name -> (record
-length, load corner in rocking frequencies or ``None`` for white noise)."""
+"""The coverage study's conditions: name -> (sensor noise in units of ``sigma_Y``, load
+corner in rocking frequencies ``1/T(sigma_Y)`` or ``None`` for white impulses)."""
+
+COVERAGE_SIMULATORS = ("kernel", "reference")
+"""Who makes a cell's records: the compiled kernel the calibration runs, or the NumPy
+reference written apart (``tests/rocking_vectorised.py``)."""
+
+COVERAGE_REFERENCE = (("clean", "noise3", "corner1"), (0.6, 0.9, 0.98))
+"""Conditions and ``e`` also run on the reference simulator's records."""
+
+COVERAGE_CASES = {
+    **{f"kernel_{c}_e{e:g}": ("kernel", c, e) for c in COVERAGE_CONDITIONS for e in COVERAGE_E},
+    **{f"reference_{c}_e{e:g}": ("reference", c, e) for c in COVERAGE_REFERENCE[0] for e in COVERAGE_REFERENCE[1]},
+}
+"""The coverage study's cells (``results/studies/coverage/cells/{case}.nc``): name ->
+(simulator, condition, true ``e``)."""
 
 FIGURE_SERIES = 10
 """Series ``stored_series.nc`` keeps when every series is stored apart: the pooling of fig. 2c."""

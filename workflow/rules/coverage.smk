@@ -1,25 +1,45 @@
-# Coverage of `rockdec estimate`'s interval on simulated records of known e (white and coloured load).
+# Coverage of `rockdec estimate`'s interval on simulated records of known e, over conditions
+# (sensor noise, load colour, both) and two simulators: one job per cell.
+import re
+
 from rockdec.layout import COVERAGE_CASES as CASES
 
 
+def coverage_records(case):
+    """Records of a cell: `coverage.records` for the kernel's cells, `coverage.reference_records`
+    for the reference simulator's."""
+    simulator = CASES[case][0]
+    return config["coverage"]["records" if simulator == "kernel" else "reference_records"]
+
+
+def coverage_inputs(wildcards):
+    """A cell's code: the modules its script runs, and the reference simulator for its cells."""
+    code = {"code": step_code("coverage_case.py")}
+    if CASES[wildcards.case][0] == "reference":
+        code["reference"] = "tests/rocking_vectorised.py"
+    return code
+
+
 rule coverage_case:
-    """One case of the study: records of known e through `rockdec estimate`'s pipeline."""
+    """One cell of the study: records of known e through `rockdec estimate`'s path."""
     input:
-        code=step_code("coverage_case.py"),
+        unpack(coverage_inputs),
     output:
-        "results/studies/coverage/{case}.nc",
+        "results/studies/coverage/cells/{case}.nc",
     log:
         "results/studies/coverage/logs/{case}.log",
     benchmark:
         "results/studies/coverage/benchmarks/{case}.tsv"
     wildcard_constraints:
-        case="|".join(CASES),
+        case="|".join(re.escape(c) for c in CASES),
     threads: 2
     resources:
         mem_mb=4000,
-        runtime=60,
+        runtime=120,
     params:
         cache="results/studies/coverage/calibration",
+        records=lambda wildcards: coverage_records(wildcards.case),
+        n_points=config["coverage"]["n_points"],
     conda:
         "../envs/rockdec.yaml"
     script:
@@ -27,9 +47,9 @@ rule coverage_case:
 
 
 rule coverage_table:
-    """Bias, spread, interval width and coverage per case, e and estimator."""
+    """Coverage, corrected bias, spread, interval width, nulls and warnings per cell."""
     input:
-        cases=expand("results/studies/coverage/{case}.nc", case=CASES),
+        cases=expand("results/studies/coverage/cells/{case}.nc", case=CASES),
         code=step_code("coverage_table.py"),
     output:
         csv=report("results/studies/coverage/table.csv", category="Measured records", caption="../report/coverage.rst"),
@@ -46,7 +66,7 @@ rule coverage_table:
 
 
 rule fig_coverage:
-    """Coverage and bias of each estimator against the load's corner frequency."""
+    """Coverage and corrected bias per condition and e, the 92-98 % band shown."""
     input:
         "results/studies/coverage/table.csv",
     output:

@@ -1,14 +1,13 @@
-"""Rule `coverage_table`: the study's summary table."""
+"""Rule `coverage_table`: the study's table, one row per cell."""
 
-import pandas as pd
 import xarray as xr
 
 from rockdec import coverage, job, tables
 
 
 def main(smk):
-    table = pd.concat([coverage.summary(xr.load_dataset(path)) for path in smk.input.cases], ignore_index=True)
-    tables.write_table(table, smk.output.csv, smk.output.md)
+    table = coverage.table([xr.load_dataset(path) for path in smk.input.cases])
+    tables.write_table(table, smk.output.csv, smk.output.md, coverage.markdown(table))
 
 
 if __name__ == "__main__":

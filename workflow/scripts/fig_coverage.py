@@ -1,4 +1,4 @@
-"""Rule `fig_coverage`: coverage and bias against the load's corner frequency."""
+"""Rule `fig_coverage`: coverage and corrected bias per condition and e."""
 
 import pandas as pd
 
