@@ -72,9 +72,10 @@ def test_a_doctored_calibration_moves_the_thresholds_and_the_structural_one_stay
 
 
 def test_with_an_e_its_neighbours_are_pooled_and_without_one_the_strictest_grid_point_rules():
+    dense = np.array([0.4, 0.5, 0.6, 0.7, 0.75, 0.8, 0.85, 0.88, 0.91, 0.93, 0.95, 0.98, 0.995])
+    assert list(dense[diagnostics._near(dense, 0.86, (0.79, 0.9))]) == [0.8, 0.85, 0.88]  # inside, and a neighbour each side
+    assert list(dense[diagnostics._near(dense, 0.995, (None, None))]) == [0.995]
     grid = np.asarray(calibration.E_GRID)
-    assert list(grid[diagnostics._near(grid, 0.86, (0.79, 0.9))]) == [0.8, 0.85, 0.88]
-    assert list(grid[diagnostics._near(grid, 0.995, (None, None))]) == [0.995]
     rng = np.random.default_rng(3)
     spread = np.linspace(2.0, 1.0, grid.size)[:, None, None]  # the null narrows as e grows
     values = spread * rng.lognormal(size=(grid.size, 200, len(diagnostics.CHECKS)))

@@ -201,12 +201,15 @@ def test_calibration_step_under_a_low_pass_load_reads_the_target(small_calibrati
 
 def _identity_grid_point(j, e, cal_settings, seed_base):
     """A calibration grid point without simulation: every estimator reads the true e with a
-    spread of 0.01, g its true value; the settings it was asked for are kept."""
+    spread of 0.01, g its true value, no check's statistic (NaN: no warning); the settings it
+    was asked for are kept."""
+    from rockdec import diagnostics
+
     _identity_grid_point.settings = cal_settings
     rng = np.random.default_rng(j)
     out = e + 0.01 * rng.standard_normal((cal_settings["sets_per_e"], len(calibration.NAMES)))
     out[:, calibration.NAMES.index("g")] = 1.0 + 0.01 * rng.standard_normal(cal_settings["sets_per_e"])
-    return out
+    return out, np.full((cal_settings["sets_per_e"], len(diagnostics.CHECKS)), np.nan)
 
 
 def test_housner_model_puts_sigma_y_over_theta_cr_in_the_calibration_key(tmp_path, capsys, monkeypatch):

@@ -289,7 +289,7 @@ def _read_base(path: Path) -> tuple[list[float], float]:
     if path.suffix.lower() in (".nc", ".nc4", ".netcdf"):
         import xarray as xr
 
-        from rockdec.records import time_factor
+        from rockdec.timeaxis import time_factor
 
         try:
             ds = xr.open_dataset(path, decode_times=False, decode_timedelta=False)

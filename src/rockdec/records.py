@@ -18,7 +18,7 @@ from typing import NamedTuple
 import numpy as np
 
 from rockdec import timeaxis
-from rockdec.timeaxis import RecordError
+from rockdec.timeaxis import RecordError, angle_factor, time_factor
 from rockdec.validate import path_name, show
 
 #: Largest fraction of NaN samples a record may hold.
@@ -32,16 +32,6 @@ SNIFF_BYTES = 1 << 16
 
 #: CSV separators recognised in the header line, by preference.
 SEPARATORS = (",", ";", "\t")
-
-#: ``units`` of an angle variable and their factor to rad (CF/UDUNITS spellings).
-ANGLE_UNITS = {"rad": 1.0, "radian": 1.0, "radians": 1.0, "1": 1.0,
-               "degree": np.pi / 180, "degrees": np.pi / 180, "deg": np.pi / 180}
-
-#: ``units`` of a time coordinate (without a reference date) and their factor to s.
-TIME_UNITS = {"s": 1.0, "sec": 1.0, "second": 1.0, "seconds": 1.0,
-              "ms": 1e-3, "millisecond": 1e-3, "milliseconds": 1e-3,
-              "us": 1e-6, "microsecond": 1e-6, "microseconds": 1e-6, "min": 60.0, "minute": 60.0, "minutes": 60.0}
-
 
 class Record(NamedTuple):
     """One record: ``theta`` (rad, 1-D, float64, NaN for gaps), ``dt`` (s), ``source`` (the file)."""
@@ -153,27 +143,6 @@ def _numeric(series, path: Path, column: str) -> np.ndarray:
         row = int(bad[0])
         raise RecordError(f"{path}: column '{column}' row {row + 1} holds '{series.iloc[row]}', not a number; fix or blank that cell.")
     return values
-
-
-def _factor(units, table: dict, source: str, what: str, fix: str) -> float:
-    """The factor that converts ``what`` in ``units`` (``None``: not stated) to SI by ``table``."""
-    if units is None:
-        return 1.0
-    unit = str(units).split(" since ")[0].strip()
-    if unit.lower() not in table:
-        known = ", ".join(sorted({k for k in table if len(k) > 1}))
-        raise RecordError(f"{source}: {what} has units '{units}', which rockdec does not convert; {fix} (known: {known}).")
-    return table[unit.lower()]
-
-
-def angle_factor(units, source: str, variable: str) -> float:
-    """The factor from an angle in ``units`` (a NetCDF ``units`` attribute, ``None``: rad) to rad."""
-    return _factor(units, ANGLE_UNITS, source, f"'{variable}'", "store the angle in rad or degrees")
-
-
-def time_factor(units, source: str, name: str) -> float:
-    """The factor from a time coordinate in ``units`` (``None``: s) to s."""
-    return _factor(units, TIME_UNITS, source, f"the time coordinate '{name}'", "store it in s or ms")
 
 
 def _read_netcdf(path: Path, variable: str, step: float | None) -> tuple[np.ndarray, float]:

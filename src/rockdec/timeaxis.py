@@ -1,4 +1,5 @@
-"""The time axis of a record or a simulated series: uniform and increasing, or refused.
+"""The time axis of a record or a simulated series: uniform and increasing, or refused; and
+the ``units`` of stored angles and times, converted to rad and s or refused.
 
 Shared by the reader of measured records (:mod:`rockdec.records`) and the signature wrapper
 (:mod:`rockdec.signatures`), so the kernels' side never imports a file reader.
@@ -45,3 +46,34 @@ def sampling_step(time, source: str, min_samples: int = 2) -> float:
             "resample it to a uniform step, or mark missing samples as NaN on a uniform time axis."
         )
     return float((t[-1] - t[0]) / (t.size - 1))
+
+
+#: ``units`` of an angle variable and their factor to rad (CF/UDUNITS spellings).
+ANGLE_UNITS = {"rad": 1.0, "radian": 1.0, "radians": 1.0, "1": 1.0,
+               "degree": np.pi / 180, "degrees": np.pi / 180, "deg": np.pi / 180}
+
+#: ``units`` of a time coordinate (without a reference date) and their factor to s.
+TIME_UNITS = {"s": 1.0, "sec": 1.0, "second": 1.0, "seconds": 1.0,
+              "ms": 1e-3, "millisecond": 1e-3, "milliseconds": 1e-3,
+              "us": 1e-6, "microsecond": 1e-6, "microseconds": 1e-6, "min": 60.0, "minute": 60.0, "minutes": 60.0}
+
+
+def _factor(units, table: dict, source: str, what: str, fix: str) -> float:
+    """The factor that converts ``what`` in ``units`` (``None``: not stated) to SI by ``table``."""
+    if units is None:
+        return 1.0
+    unit = str(units).split(" since ")[0].strip()
+    if unit.lower() not in table:
+        known = ", ".join(sorted({k for k in table if len(k) > 1}))
+        raise RecordError(f"{source}: {what} has units '{units}', which rockdec does not convert; {fix} (known: {known}).")
+    return table[unit.lower()]
+
+
+def angle_factor(units, source: str, variable: str) -> float:
+    """The factor from an angle in ``units`` (a NetCDF ``units`` attribute, ``None``: rad) to rad."""
+    return _factor(units, ANGLE_UNITS, source, f"'{variable}'", "store the angle in rad or degrees")
+
+
+def time_factor(units, source: str, name: str) -> float:
+    """The factor from a time coordinate in ``units`` (``None``: s) to s."""
+    return _factor(units, TIME_UNITS, source, f"the time coordinate '{name}'", "store it in s or ms")

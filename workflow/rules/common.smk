@@ -137,3 +137,18 @@ def part_series(name, part):
     """The per-replicate series files one signature job reads (`store_series: all`)."""
     rec, first = layout.part_records(records(name), int(part))
     return series_files(name)[first : first + rec["replicates"]]
+
+
+def coverage_records(case):
+    """Records of a cell: `coverage.records` for the kernel's cells, `coverage.reference_records`
+    for the reference simulator's."""
+    simulator = layout.COVERAGE_CASES[case][0]
+    return config["coverage"]["records" if simulator == "kernel" else "reference_records"]
+
+
+def coverage_inputs(wildcards):
+    """A cell's code: the modules its script runs, and the reference simulator for its cells."""
+    code = {"code": step_code("coverage_case.py")}
+    if layout.COVERAGE_CASES[wildcards.case][0] == "reference":
+        code["reference"] = "tests/rocking_vectorised.py"
+    return code

@@ -5,21 +5,6 @@ import re
 from rockdec.layout import COVERAGE_CASES as CASES
 
 
-def coverage_records(case):
-    """Records of a cell: `coverage.records` for the kernel's cells, `coverage.reference_records`
-    for the reference simulator's."""
-    simulator = CASES[case][0]
-    return config["coverage"]["records" if simulator == "kernel" else "reference_records"]
-
-
-def coverage_inputs(wildcards):
-    """A cell's code: the modules its script runs, and the reference simulator for its cells."""
-    code = {"code": step_code("coverage_case.py")}
-    if CASES[wildcards.case][0] == "reference":
-        code["reference"] = "tests/rocking_vectorised.py"
-    return code
-
-
 rule coverage_case:
     """One cell of the study: records of known e through `rockdec estimate`'s path."""
     input:
