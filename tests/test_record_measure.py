@@ -195,3 +195,14 @@ def test_bad_input_is_refused_in_one_sentence():
         rm.measure(np.full(10_000, np.nan), 1.0)
     with pytest.raises(InputError, match="longer record"):
         rm.measure(np.arange(100.0), 1.0)
+
+
+def test_a_structure_function_without_spread_is_refused_in_one_sentence_not_an_internal_error():
+    """All-zero second differences (a block at rest) leave every residual of the fit NaN: the
+    fit says so (InputError, which rockdec estimate turns into 'model not measured')."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        with pytest.raises(InputError, match="no usable spread"):
+            rm.fit_structure(np.zeros(rm.MAX_LAG + 1))

@@ -296,6 +296,11 @@ def fit_structure(gamma: np.ndarray) -> tuple[float, float, float]:
 
     grid = np.concatenate([np.linspace(-0.9, 0.9, 91), 1.0 - np.geomspace(0.1, 1.0 - MAX_POLE, 60)])
     rss = profile(grid)[1]
+    if not np.isfinite(rss).any():  # a structure function with no spread: nothing to fit a model to
+        raise checks.InputError(
+            "the second differences of the records have no usable spread (a record at rest, or one that chatters at zero "
+            "almost all the time), so their model cannot be measured; declare it (--load, --sensor-noise)"
+        )
     best = int(np.nanargmin(rss))
     lo, hi = grid[max(best - 1, 0)], grid[min(best + 1, grid.size - 1)]
     res = minimize_scalar(lambda a: profile(np.array([a]))[1][0], bounds=(lo, hi), method="bounded", options={"xatol": 1e-7})
