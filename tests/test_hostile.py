@@ -228,8 +228,11 @@ def test_concurrent_runs_on_one_output_refuse_and_on_two_do_not_interfere(tmp_pa
         with pytest.raises(io.OutputError, match="being written by another run"):
             io.check_output(out)  # refused before any work too
         io.write_netcdf(ds, other)  # another output, meanwhile: no interference
+        end = time.time() + 60  # the writer claims its output, then opens its temporary file
+        while not list(tmp_path.glob(".a.nc.*.partial")) and time.time() < end:
+            time.sleep(0.01)
         partials = list(tmp_path.glob(".a.nc.*.partial"))
-        assert len(partials) == 1  # the first run's own temporary file survived
+        assert len(partials) == 1  # the first run's own temporary file survived the refused writes
     finally:
         go.touch()
         assert proc.wait(timeout=120) == 0, proc.stderr.read()
