@@ -13,6 +13,8 @@ import xarray as xr
 
 from rockdec.cli import main
 
+import fake_calibration
+
 
 def run(args, capsys):
     code = main(args)
@@ -283,21 +285,10 @@ def test_workflow_passes_its_scene_and_every_other_option_to_snakemake(tmp_path,
     assert not (tmp_path / "results").exists()  # a dry run writes nothing
 
 
-def _fake_grid_point(j, e, cal_settings, seed_base):
-    """A calibration grid point without simulation: every estimator reads the true e, g its
-    true value (ratio 1), with a spread of 0.01; no check's statistic (NaN: no warning)."""
-    from rockdec import calibration, diagnostics
-
-    rng = np.random.default_rng(j)
-    out = e + 0.01 * rng.standard_normal((cal_settings["sets_per_e"], len(calibration.NAMES)))
-    out[:, calibration.NAMES.index("g")] = 1.0 + 0.01 * rng.standard_normal(cal_settings["sets_per_e"])
-    return out, np.full((cal_settings["sets_per_e"], len(diagnostics.CHECKS)), np.nan)
-
-
 def test_calibrating_is_announced_only_when_a_calibration_is_built(tmp_path, capsys, monkeypatch):
     from rockdec import __version__, calibration
 
-    monkeypatch.setattr(calibration, "_grid_point", _fake_grid_point)
+    monkeypatch.setattr(calibration, "_grid_point", fake_calibration.grid_point)
     record = tmp_path / "r.nc"
     assert main(["simulate", "--e", "0.85", "--seeds", "1", "--n-points", "20000", "--out", str(record)]) == 0
     capsys.readouterr()

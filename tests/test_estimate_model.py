@@ -16,6 +16,8 @@ from rockdec.loading import series_rng
 from rockdec.record_model import PAPER, Load, RecordModel, SensorNoise
 from rockdec.simulate import secant_step, simulate_block
 
+import fake_calibration
+
 # Steps giving about 75 samples per cycle at sigma_Y (g = sigma_p = 1, e = 0.9), as in
 # tests/test_record_measure.py: white load, and a low-pass load with its corner at the
 # rocking frequency (Load("lowpass", 1).pole(75)).
@@ -199,21 +201,8 @@ def test_calibration_step_under_a_low_pass_load_reads_the_target(small_calibrati
     assert float(np.median(read)) == pytest.approx(75.0, rel=0.25)
 
 
-def _identity_grid_point(j, e, cal_settings, seed_base):
-    """A calibration grid point without simulation: every estimator reads the true e with a
-    spread of 0.01, g its true value, no check's statistic (NaN: no warning); the settings it
-    was asked for are kept."""
-    from rockdec import diagnostics
-
-    _identity_grid_point.settings = cal_settings
-    rng = np.random.default_rng(j)
-    out = e + 0.01 * rng.standard_normal((cal_settings["sets_per_e"], len(calibration.NAMES)))
-    out[:, calibration.NAMES.index("g")] = 1.0 + 0.01 * rng.standard_normal(cal_settings["sets_per_e"])
-    return out, np.full((cal_settings["sets_per_e"], len(diagnostics.CHECKS)), np.nan)
-
-
 def test_housner_model_puts_sigma_y_over_theta_cr_in_the_calibration_key(tmp_path, capsys, monkeypatch):
-    monkeypatch.setattr(calibration, "_grid_point", _identity_grid_point)
+    monkeypatch.setattr(calibration, "_grid_point", fake_calibration.grid_point)
     path = tmp_path / "r.npy"
     y = _record(25)
     np.save(path, 0.02 * y / y.std())  # sigma_Y = 0.02 rad
@@ -225,7 +214,7 @@ def test_housner_model_puts_sigma_y_over_theta_cr_in_the_calibration_key(tmp_pat
     simulated = res["record_model"]["simulated"]
     assert simulated["rocking"] == "housner" and res["record_model"]["sources"]["rocking"] == "declared"
     assert abs(math.log(simulated["sigma_y_over_theta_cr"] / ratio)) <= calibration.RATIO_BIN / 2 + 1e-3
-    assert _identity_grid_point.settings["sigma_y_over_theta_cr"] == simulated["sigma_y_over_theta_cr"]
+    assert fake_calibration.grid_point.settings["sigma_y_over_theta_cr"] == simulated["sigma_y_over_theta_cr"]
     sources = res["record_model"]["sources"]
     assert sources["load"] == sources["sensor_noise"] == "declared"  # measured and reported, not used
     assert simulated["load"] == {"kind": "white"} and simulated["sensor_noise"]["std"] == 0.0
