@@ -3,7 +3,7 @@
 The two paths as they stood before the core (commit 5bc118d) live here, and only here, for
 this comparison:
 
-- ``analyse_two_paths``: ``rockdec.measured.analyse`` with its own per-record sums, its own
+- ``analyse_two_paths``: ``rockdec.rdd.measured.analyse`` with its own per-record sums, its own
   loop over the windows (one ``estimate_all`` and one ``half_cycle`` a window) and its own
   extrapolation loop;
 - ``cube_estimates_two_paths``: the workflow's estimates (``estimate_cube`` on the cube's
@@ -22,7 +22,7 @@ Checks (exit status 1 when one fails):
 
 Times (best of ``--repeat``, both paths taking turns in this one run, so the ratio is the result):
 ``measured.analyse`` on one 200,000-sample record (the calibration's analysis) and the
-estimates of the cube (``rockdec.replicates.scene_estimates``'s two extrapolations).
+estimates of the cube (``rockdec.pipeline.replicates.scene_estimates``'s two extrapolations).
 
 Run: ``PYTHONPATH=src python benchmarks/bench_analysis_path.py [--cube results/paper/signatures.nc]``.
 """
@@ -38,9 +38,11 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from rockdec import estimators, io, measured, registry, replicates, signatures
-from rockdec.models import period_from_g
-from rockdec.simulate import calibrate_dt, simulate_block
+from rockdec.rdd import estimators, measured, registry, signatures
+from rockdec import io
+from rockdec.pipeline import replicates
+from rockdec.physics.models import period_from_g
+from rockdec.physics.simulate import calibrate_dt, simulate_block
 
 G, SIGMA_P = 1.0, 0.003
 TOLERANCE = 1e-12

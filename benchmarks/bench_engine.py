@@ -6,7 +6,7 @@ A plain script (not a test): prints timings and ratios, never asserts them.
 
 One job of the `large` scene (config/config.yaml: `replicates_per_job` replicates of
 `series_per_replicate` series, simulated from their seeds and reduced to signature sums,
-:func:`rockdec.replicates.scene_cubes`) runs on the ``threads`` engine with 1 and 2
+:func:`rockdec.pipeline.replicates.scene_cubes`) runs on the ``threads`` engine with 1 and 2
 workers and on a local ``dask.distributed`` cluster (``processes:N``) with 1 and 2 worker
 processes (cluster start-up included). Every engine gives the same sums bit for bit (checked
 here too). The projection: the scene's jobs, each on a 2-core cluster node, at the measured
@@ -20,7 +20,8 @@ import time
 
 import numpy as np
 
-from rockdec import config, engine, layout, replicates, run
+from rockdec.pipeline import config, engine, layout, replicates
+from rockdec.physics import run
 
 
 def main() -> None:

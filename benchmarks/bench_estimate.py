@@ -4,15 +4,15 @@ A plain script (not a test): prints timings and ratios, never asserts them.
 
     PYTHONPATH=src python benchmarks/bench_estimate.py [--samples 200000] [--repeat 5]
 
-1. A simulated record of ``--samples`` samples at e = 0.85 (as ``tests/test_estimate.py``
+1. A simulated record of ``--samples`` samples at e = 0.85 (as ``tests/calibrate/test_estimate.py``
    makes them) is written as a CSV file, and its calibration built once into a temporary
    cache (``rockdec estimate``: the cold run, timed for scale).
 2. **The command**: ``python -m rockdec estimate record.csv --cache DIR`` in a fresh
    interpreter, ``--repeat`` times: wall and CPU seconds (the child's ``user + sys``), and
    which of the heavy libraries it loaded (xarray, pandas, Dask, matplotlib).
 3. **The analysis alone**, in this process with everything imported and numba's kernels
-   loaded: reading the record and :func:`rockdec.measured.analyse` on it; and the whole
-   estimate in process (:func:`rockdec.inference.estimate`: analysis, cached calibration,
+   loaded: reading the record and :func:`rockdec.rdd.measured.analyse` on it; and the whole
+   estimate in process (:func:`rockdec.calibrate.inference.estimate`: analysis, cached calibration,
    belts), ``--repeat`` times each.
 
 The ratio command / analysis is what starting Python, importing and loading the kernels
@@ -44,7 +44,7 @@ def record(path: Path, n: int) -> Path:
     """A simulated record at e = 0.85 of ``n`` samples, written as ``time,theta``."""
     import numpy as np
 
-    from rockdec.simulate import calibrate_dt, simulate_block
+    from rockdec.physics.simulate import calibrate_dt, simulate_block
 
     g, sigma_p, e = 1.0, 0.003, 0.85
     cal = calibrate_dt(e=e, g=g, sigma_p=sigma_p, points_per_cycle=75)
@@ -85,9 +85,11 @@ def main() -> None:
         command = ["-m", "rockdec", "estimate", str(csv), "--cache", str(cache), "--yes"]
         cold = child(command)
         runs = [child(["-c", PROBE.format(heavy=HEAVY), *command[2:]]) for _ in range(args.repeat)]
-        imports = [child(["-c", "import rockdec.cli, rockdec.inference"]) for _ in range(args.repeat)]
+        imports = [child(["-c", "import rockdec.cli, rockdec.calibrate.inference"]) for _ in range(args.repeat)]
 
-        from rockdec import inference, measured, records
+        from rockdec.calibrate import inference
+        from rockdec.rdd import measured
+        from rockdec.record import records
 
         def read():
             return records.read_records(csv)
@@ -109,9 +111,9 @@ def main() -> None:
     print(f"| case | wall s | CPU s |\n|---|---:|---:|")
     print(f"| cold `rockdec estimate` (builds the calibration) | {cold[0]:.2f} | {cold[1]:.2f} |")
     print(f"| warm `rockdec estimate` (calibration cached), fresh interpreter | {command_s[0]:.2f} | {command_s[1]:.2f} |")
-    print(f"| import of rockdec.cli and rockdec.inference, fresh interpreter | {import_s[0]:.2f} | {import_s[1]:.2f} |")
-    print(f"| in process: read + rockdec.inference.estimate (cached) | {whole_s[0]:.3f} | {whole_s[1]:.3f} |")
-    print(f"| in process: read + rockdec.measured.analyse (the analysis alone) | {analysis_s[0]:.3f} | {analysis_s[1]:.3f} |")
+    print(f"| import of rockdec.cli and rockdec.calibrate.inference, fresh interpreter | {import_s[0]:.2f} | {import_s[1]:.2f} |")
+    print(f"| in process: read + rockdec.calibrate.inference.estimate (cached) | {whole_s[0]:.3f} | {whole_s[1]:.3f} |")
+    print(f"| in process: read + rockdec.rdd.measured.analyse (the analysis alone) | {analysis_s[0]:.3f} | {analysis_s[1]:.3f} |")
     print(f"\nwarm command / analysis alone: {command_s[0] / analysis_s[0]:.2f} (wall), {command_s[1] / analysis_s[1]:.2f} (CPU)")
     print(f"warm command / estimate in process: {command_s[0] / whole_s[0]:.2f} (wall), {command_s[1] / whole_s[1]:.2f} (CPU)")
     print(f"heavy libraries the warm command loaded: {loaded or 'none'} (of {', '.join(HEAVY)})")

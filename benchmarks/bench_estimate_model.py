@@ -7,10 +7,10 @@ A plain script (not a test): prints coverage, bias and timings, never asserts th
 Records of a known ``e`` (default 0.9, 200,000 samples, ``g = sigma_p = 1``) are simulated
 under four conditions (clean; sensor noise of 3 % of ``sigma_Y``; a low-pass load with its
 corner at the rocking frequency; that load with 2 % noise) by
-:func:`rockdec.simulate.simulate_block` and :func:`rockdec.loading.add_sensor_noise`, at the
+:func:`rockdec.physics.simulate.simulate_block` and :func:`rockdec.physics.loading.add_sensor_noise`, at the
 step for which the analysis reads about 75 samples per cycle off them
-(:func:`rockdec.calibration.step_for`, on pilot seeds of their own), with seeds apart from
-every calibration's. Each record is estimated twice by :func:`rockdec.inference.estimate`:
+(:func:`rockdec.calibrate.calibration.step_for`, on pilot seeds of their own), with seeds apart from
+every calibration's. Each record is estimated twice by :func:`rockdec.calibrate.inference.estimate`:
 with ``model=None`` (the record's model measured off it) and with ``model=PAPER`` (white
 load, noise-free sensor). Per condition and model: records with a value, coverage of the
 95 % interval (a record without a value counts as not covered), bias and spread of the
@@ -19,11 +19,11 @@ reported ``e``, the median width, which estimator was reported, and the calibrat
 Bin error (``--bins K``): for the first ``K`` records of the noisy and coloured conditions,
 the record is estimated again with its sensor noise, then its load's pole per sample,
 declared one bin below and one above the bin its measurement falls in
-(:func:`rockdec.calibration.binned_model`); half the change of ``e`` over one bin bounds
+(:func:`rockdec.calibrate.calibration.binned_model`); half the change of ``e`` over one bin bounds
 what a value anywhere inside a bin moves it, printed as a share of the interval's width.
 
 Timing (``--time``): one clean record, in this process: the analysis alone
-(:func:`rockdec.measured.analyse`), then ``estimate`` with an empty cache (the
+(:func:`rockdec.rdd.measured.analyse`), then ``estimate`` with an empty cache (the
 calibration built) and again (from the cache), each as a ratio to the analysis; then the
 command ``rockdec estimate`` on the record as a CSV with the calibration cached (imports
 and reading included).
@@ -42,11 +42,12 @@ from pathlib import Path
 
 import numpy as np
 
-from rockdec import calibration, inference, measured
-from rockdec.loading import add_sensor_noise
-from rockdec.record_model import PAPER, Load, RecordModel, SensorNoise
-from rockdec.records import Record
-from rockdec.simulate import simulate_block
+from rockdec.calibrate import calibration, inference
+from rockdec.rdd import measured
+from rockdec.physics.loading import add_sensor_noise
+from rockdec.physics.record_model import PAPER, Load, RecordModel, SensorNoise
+from rockdec.record.records import Record
+from rockdec.physics.simulate import simulate_block
 
 #: Seeds of the records (apart from the calibration's, 2**61 on, and the pilots', 2**62 on).
 SEED_OFFSET = 3 * 2**59

@@ -5,7 +5,7 @@ A plain script (not a test): prints timings, never asserts them.
     python benchmarks/bench_estimators.py [--series 2000] [--points 6000] [--windows 10]
 
 The signatures are like the paper's: ``--series`` stationary series of ``--points`` samples
-at about 75 samples per rocking cycle at amplitude ``sigma_Y`` (``rockdec.simulate``,
+at about 75 samples per rocking cycle at amplitude ``sigma_Y`` (``rockdec.physics.simulate``,
 e = 0.95, the step from the scale law as in ``bench_signatures.py``), one ``D_a`` and one
 ``D_v`` signature per series and window (package defaults: level ``2 sigma_Y``, lags 2.5
 periods at amplitude ``a``, so ``lag_pos`` about 266 and ``lag`` about 531). Every free
@@ -13,8 +13,8 @@ response and ``D_v`` signature goes through
 
 - the reference, :func:`reference_estimators.reference_estimate_all` (``tests/``), one Python call per
   signature;
-- the batch kernel :func:`rockdec.estimators._estimate_rows`, all signatures in one call;
-- :func:`rockdec.estimators.estimate_cube` on the labelled cube, NumPy and Dask (chunks of
+- the batch kernel :func:`rockdec.rdd.estimators._estimate_rows`, all signatures in one call;
+- :func:`rockdec.rdd.estimators.estimate_cube` on the labelled cube, NumPy and Dask (chunks of
   ``--chunk`` series over the cores);
 
 and the largest difference between the reference and the kernel is printed with the count
@@ -35,8 +35,9 @@ import tests_path  # noqa: F401  (tests/ on sys.path for the reference)
 from bench_signatures import best_of, rocking_record  # benchmarks/ is on sys.path
 from reference_estimators import reference_estimate_all
 
-from rockdec import estimators, registry, signatures, simulate
-from rockdec.fits import DEFAULT_FIT_POINTS
+from rockdec.rdd import estimators, registry, signatures
+from rockdec.physics import simulate
+from rockdec.rdd.fits import DEFAULT_FIT_POINTS
 
 
 

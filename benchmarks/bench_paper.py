@@ -61,8 +61,8 @@ def floor(root: Path, scene_name: str, threads: int) -> dict:
     """The floor of the module docstring, timed in this process; its eq. 28 table."""
     import yaml
 
-    from rockdec import config, replicates
-    from rockdec.run import Run
+    from rockdec.pipeline import config, replicates
+    from rockdec.physics.run import Run
 
     cfg = config.validate(yaml.safe_load((root / "config" / "config.yaml").read_text()))
     scene = cfg["scenes"][scene_name]

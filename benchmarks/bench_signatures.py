@@ -7,7 +7,7 @@ A plain script (not a test): prints timings, never asserts them.
 
 The record is like the paper's: ``--series`` stationary series of ``--points`` samples at
 about 75 samples per rocking cycle at amplitude ``sigma_Y``, simulated by
-``rockdec.simulate.simulate_block`` (exact event-driven rocking, e = 0.95) or, with
+``rockdec.physics.simulate.simulate_block`` (exact event-driven rocking, e = 0.95) or, with
 ``--source ar2`` or when that simulator is missing, by a linear oscillator under white
 noise (AR(2), 75 samples per period). Trigger settings are the package defaults: level
 ``2 sigma_Y``, ``da_max = 0.28 a``, windows ``da_max * (1..W)/W``, lags 2.5 periods at
@@ -38,7 +38,7 @@ import tests_path  # noqa: F401  (tests/ on sys.path for the reference)
 from reference_signatures import reference_per_window
 from scipy.signal import lfilter
 
-from rockdec.signatures import (
+from rockdec.rdd.signatures import (
     NoTriggerWarning,
     _finish,
     crossing_sums,
@@ -51,20 +51,20 @@ POINTS_PER_CYCLE = 75.0
 
 
 def rocking_record(n_series, n_points, e=0.95, g=1.0, sigma_p=1.0):
-    """Stationary rocking series from ``rockdec.simulate`` and their ``(dt, sigma_y, sigma_ydot, L)``.
+    """Stationary rocking series from ``rockdec.physics.simulate`` and their ``(dt, sigma_y, sigma_ydot, L)``.
 
     The step comes from the scale law ``sigma_Y = c S^2 / g^3`` with ``c = 290`` (near its
     value at e = 0.95) instead of a pilot calibration; the achieved samples per cycle are
     printed.
     """
-    from rockdec import simulate
+    from rockdec.physics import simulate
 
     dt = sigma_p / g * math.sqrt(4.0 * math.sqrt(2.0 * 290.0) / POINTS_PER_CYCLE)
     burn_in = simulate.default_burn_in(e, POINTS_PER_CYCLE)
     theta, _ = simulate.simulate_block(np.arange(n_series), n_points, dt=dt, g=g, e=e, sigma_p=sigma_p, burn_in=burn_in)
     stats = simulate.pilot_statistics(theta, dt, g)
     n_lag = lag_samples(2.5, 2.0 * stats["sigma_y"], g, dt)
-    source = f"rockdec.simulate (e = {e}, {stats['points_per_cycle']:.1f} samples per cycle at sigma_Y)"
+    source = f"rockdec.physics.simulate (e = {e}, {stats['points_per_cycle']:.1f} samples per cycle at sigma_Y)"
     return theta, dt, stats["sigma_y"], stats["sigma_ydot"], n_lag, g, source
 
 
@@ -183,7 +183,7 @@ def main(argv=None):
     use_sim = args.source == "simulate"
     if args.source == "auto":
         try:
-            from rockdec import simulate
+            from rockdec.physics import simulate
 
             use_sim = hasattr(simulate, "simulate_block")
         except ImportError:

@@ -16,7 +16,7 @@ import numpy as np
 import tests_path  # noqa: F401  (tests/ on sys.path for the reference)
 from rocking_reference import flight_reference
 
-from rockdec import loading, simulate
+from rockdec.physics import loading, simulate
 
 
 def best_of(repeats, func):

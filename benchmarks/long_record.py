@@ -3,7 +3,7 @@
 Step 1 (``write``) simulates one long series block by block (``tests/long_series.py``)
 into a NetCDF file, never holding more than one block. Step 2 (``analyse``, a fresh process so
 its peak RSS is its own) opens the file with Dask chunks in time and computes the signature cube
-with the overlap handled by :func:`rockdec.signatures.signature_cube`; it also computes the same
+with the overlap handled by :func:`rockdec.rdd.signatures.signature_cube`; it also computes the same
 cube on the first ``--check`` points in memory, chunked and whole, and prints their difference.
 
 Run: ``python benchmarks/long_record.py --points 100000000``. Prints numbers; asserts nothing.
@@ -26,7 +26,8 @@ import xarray as xr
 import tests_path  # noqa: F401  (tests/ on sys.path for long_series)
 from long_series import long_series
 
-from rockdec import replicates, simulate
+from rockdec.pipeline import replicates
+from rockdec.physics import simulate
 
 DT, G, E, SIGMA_P = 0.003432651166459561, 1.0, 0.95, 0.003
 STATS = {"sigma_y": 0.001992454115749987, "sigma_ydot": 0.03410016419092972, "g": G}

@@ -69,7 +69,7 @@ def tiny_workflow(tmp_path_factory) -> dict:
 
 #: The test modules that use :func:`tiny_workflow` (one worker runs them: one build, and no
 #: two tests change it at once).
-WORKFLOW_MODULES = ("tests/test_workflow.py", "tests/test_archive.py")
+WORKFLOW_MODULES = ("tests/pipeline/test_workflow.py", "tests/pipeline/test_archive.py")
 
 
 @pytest.hookimpl(optionalhook=True)

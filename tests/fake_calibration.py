@@ -2,14 +2,15 @@
 
 Every estimator reads the true ``e`` with a spread of 0.01, ``g`` its true value (ratio 1)
 with the same spread, and no check has a statistic (NaN: no warning). The settings of the
-last call are kept as ``grid_point.settings``. Stands in for ``rockdec.calibration._grid_point``.
+last call are kept as ``grid_point.settings``. Stands in for ``rockdec.calibrate.calibration._grid_point``.
 """
 
 import numpy as np
 
 
 def grid_point(j, e, cal_settings, seed_base):
-    from rockdec import calibration, diagnostics
+    from rockdec.calibrate import calibration
+    from rockdec.record import diagnostics
 
     grid_point.settings = cal_settings
     rng = np.random.default_rng(j)

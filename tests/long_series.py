@@ -7,15 +7,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from rockdec.loading import draw_impulses, series_rng
-from rockdec.simulate import integrate
+from rockdec.physics.loading import draw_impulses, series_rng
+from rockdec.physics.simulate import integrate
 
 
 def long_series(seed: int, n_points: int, chunk: int, *, dt, g, e, sigma_p, theta0=0.0, theta_dot0=0.0, burn_in=0):
     """One long series in time chunks: yields ``(theta, theta_dot)`` blocks of ``chunk`` samples.
 
     Memory stays ``O(chunk)`` whatever ``n_points``; the concatenated blocks equal
-    :func:`rockdec.simulate.simulate_block` of the same seed bit for bit (the state and the random stream
+    :func:`rockdec.physics.simulate.simulate_block` of the same seed bit for bit (the state and the random stream
     carry over from block to block).
     """
     rng = series_rng(seed)

@@ -1,9 +1,9 @@
-"""The per-signature NumPy implementation of :func:`rockdec.estimators.estimate_all`, and
+"""The per-signature NumPy implementation of :func:`rockdec.rdd.estimators.estimate_all`, and
 single-estimator entry points of its numba kernels.
 
 Same conventions, reasons and input checks as the numba kernels, written with
 ``np.linalg.solve`` for each parabola fit and NumPy runs for the lobes; slower by about two
-orders of magnitude. It checks the kernels (``tests/test_estimators.py``) and times them
+orders of magnitude. It checks the kernels (``tests/rdd/test_estimators.py``) and times them
 (``benchmarks/bench_estimators.py``).
 """
 
@@ -14,7 +14,7 @@ from typing import NamedTuple
 import numpy as np
 
 from rockdec import validate as checks
-from rockdec.estimators import (
+from rockdec.rdd.estimators import (
     _C1_NOT_POSITIVE,
     _EVEN_LENGTH,
     _FEW_LAGS,
@@ -44,7 +44,7 @@ from rockdec.estimators import (
     _local_measures,
     _reason,
 )
-from rockdec.registry import ESTIMATORS
+from rockdec.rdd.registry import ESTIMATORS
 
 
 # --------------------------------------------------------------------------- single estimators
@@ -61,7 +61,7 @@ def e_global(r, lobes=None) -> Estimate:
     step off the vertex of a parabola of curvature ``g``, when the half cycle is longer
     than a step). With ``2 ln|r_i| = 2 ln r_0 - i delta``
     (eq. 25), the least-squares slope of ``2 ln|r_i|`` on ``i`` is ``-delta``, and
-    ``e = exp(-delta/4)`` (eq. 7). ``lobes``: the result of :func:`rockdec.estimators._lobes` on ``r`` when
+    ``e = exp(-delta/4)`` (eq. 7). ``lobes``: the result of :func:`rockdec.rdd.estimators._lobes` on ``r`` when
     the caller has it already.
     """
     r = _as_row(r)
@@ -71,7 +71,7 @@ def e_global(r, lobes=None) -> Estimate:
 def e_first_peak(r, lobes=None) -> Estimate:
     """``e_0 = sqrt(|r_1| / r_0)`` (eq. 26): the first two sampled extremes of ``r``.
 
-    ``r_0`` is the maximum and ``r_1`` the first minimum, located as in :func:`rockdec.estimators._e_global`;
+    ``r_0`` is the maximum and ``r_1`` the first minimum, located as in :func:`rockdec.rdd.estimators._e_global`;
     for a decaying response they are the maximum and minimum of the whole estimate.
     """
     r = _as_row(r)
@@ -79,7 +79,7 @@ def e_first_peak(r, lobes=None) -> Estimate:
 
 
 def local_measures(r, dt: float, lobes=None) -> dict[str, Estimate]:
-    """``e1..e4`` of eq. 27 from one set of half-cycle fits (:func:`rockdec.estimators.half_cycle`).
+    """``e1..e4`` of eq. 27 from one set of half-cycle fits (:func:`rockdec.rdd.estimators.half_cycle`).
 
     ``e1 = sqrt(|c2|/c1)``, ``e2 = v2/v1``, ``e3 = (|c2|/c1) t1/(t2 - t1)``,
     ``e4 = (t2 - t1)/t1``.
@@ -255,7 +255,7 @@ def _reference_e_impact_slope(d, dt: float, fit_points: int) -> Estimate:
 
 
 def reference_estimate_all(r, d, dt: float, fit_points: int = DEFAULT_FIT_POINTS) -> dict[str, Estimate]:
-    """:func:`rockdec.estimators.estimate_all`, one signature at a time in NumPy (module docstring)."""
+    """:func:`rockdec.rdd.estimators.estimate_all`, one signature at a time in NumPy (module docstring)."""
     dt, fit_points = _check_options(dt, fit_points, with_dv=d is not None)
     r = np.asarray(r, dtype=float)
     lobes = reference_lobes(r)

@@ -1,16 +1,16 @@
 """A second simulator of the randomly loaded simplified model (eqs. 4, 6, 21-24), written apart.
 
-Independent of :mod:`rockdec.simulate` (the compiled kernel that the calibration runs): plain
+Independent of :mod:`rockdec.physics.simulate` (the compiled kernel that the calibration runs): plain
 NumPy, one time step for all records at once, the impacts inside a step handled by masks
 exactly as :func:`rocking_reference.flight_reference` handles them one at a time (no
 closed-form count of bounces: each impact is stepped, and the chatter stops when the
 remaining bounces' geometric series, eq. 6, fits in the time left). Its random numbers come
 from its own generators (Philox, keyed by each record's seed), so it shares no draw with the kernel's
-streams (:mod:`rockdec.loading`), and it low-pass filters the impulses and adds the sensor
+streams (:mod:`rockdec.physics.loading`), and it low-pass filters the impulses and adds the sensor
 noise with its own code.
 
 The coverage study (``workflow/rules/coverage.smk``) imports it from the checkout to check
-its cells on records the calibration's simulator did not make; ``tests/test_coverage.py``
+its cells on records the calibration's simulator did not make; ``tests/studies/test_coverage.py``
 checks it against :func:`rocking_reference.flight_reference` flight by flight.
 """
 

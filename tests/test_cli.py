@@ -175,7 +175,7 @@ def test_no_arguments_print_the_whole_help_and_exit_2(capsys):
 
 
 def test_estimate_help_explains_every_word_of_its_report(capsys):
-    from rockdec import estimators
+    from rockdec.rdd import estimators
 
     main(["estimate", "--help"])
     out = " ".join(capsys.readouterr().out.split())
@@ -185,7 +185,7 @@ def test_estimate_help_explains_every_word_of_its_report(capsys):
 
 
 def test_fit_points_default_shown_in_help_is_the_estimators_default(capsys):
-    from rockdec import estimators
+    from rockdec.rdd import estimators
 
     main(["estimates", "--help"])
     assert f"(default {estimators.DEFAULT_FIT_POINTS})" in " ".join(capsys.readouterr().out.split())
@@ -250,7 +250,8 @@ def test_progress_bar_is_labelled_on_a_terminal_and_absent_in_a_log(terminal, mo
 def test_a_workflow_job_logs_start_and_end_and_draws_the_same_bar_only_on_a_terminal(terminal, monkeypatch):
     import dask
 
-    from rockdec import console, job
+    from rockdec import console
+    from rockdec.pipeline import job
 
     log, screen = io_module.StringIO(), _Terminal() if terminal else io_module.StringIO()
     monkeypatch.setattr(sys, "stderr", log)
@@ -286,7 +287,8 @@ def test_workflow_passes_its_scene_and_every_other_option_to_snakemake(tmp_path,
 
 
 def test_calibrating_is_announced_only_when_a_calibration_is_built(tmp_path, capsys, monkeypatch):
-    from rockdec import __version__, calibration
+    from rockdec import __version__
+    from rockdec.calibrate import calibration
 
     monkeypatch.setattr(calibration, "_grid_point", fake_calibration.grid_point)
     record = tmp_path / "r.nc"
@@ -309,7 +311,7 @@ def test_calibrating_is_announced_only_when_a_calibration_is_built(tmp_path, cap
 def test_a_corrected_value_at_the_end_of_the_calibrated_range_is_shown_as_a_bound(raw, side, shown):
     """Identity belt (mean e, spread 0.01) on [0.4, 0.995]: a raw value beyond the mean curve
     is corrected to the range's end, which bounds e rather than estimating it."""
-    from rockdec import belt, inference
+    from rockdec.calibrate import belt, inference
     from rockdec.cli import _estimate_text
 
     e = np.linspace(0.4, 0.995, 1191)
@@ -349,7 +351,7 @@ def test_the_g_line_of_the_report_gives_g_s_interval_and_keeps_a_given_g_as_give
 def test_readme_explains_every_estimator_and_word_of_the_estimate_report():
     from pathlib import Path
 
-    from rockdec import estimators, registry
+    from rockdec.rdd import estimators, registry
 
     readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
     glossary = readme[readme.index("**The words of its report**"):]

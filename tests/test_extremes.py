@@ -9,7 +9,9 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from rockdec import config, estimators, fits, replicates, simulate
+from rockdec.pipeline import config, replicates
+from rockdec.rdd import estimators, fits
+from rockdec.physics import simulate
 from reference_estimators import local_measures
 
 DT, G, SIGMA_P = 0.003432651166459561, 1.0, 0.003

@@ -21,7 +21,9 @@ import xarray as xr
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from rockdec import estimators, fixed_step, housner, io, run, signatures, simulate
+from rockdec.rdd import estimators, signatures
+from rockdec.physics import fixed_step, housner, run, simulate
+from rockdec import io
 from rockdec import validate as checks
 from rockdec.cli import main
 
@@ -436,7 +438,7 @@ def test_cli_simulate_options_give_a_finite_file_or_one_sentence(tmp_path_factor
 # Records of 20,000 samples and a calibration of 6 e x 5 sets keep each answered case near 1 s;
 # refusals come before any calibration.
 
-from rockdec import calibration, inference  # noqa: E402
+from rockdec.calibrate import calibration, inference  # noqa: E402
 
 #: The calibration's own grid and sets, before any test shrinks them.
 FULL_CALIBRATION = (calibration.E_GRID, calibration.SETS_PER_E)
@@ -871,7 +873,7 @@ def test_a_40_million_sample_record_is_refused_with_its_time_unless_yes(tmp_path
 
 ESTIMATE_PROCESS = """
 import json, sys
-from rockdec import calibration
+from rockdec.calibrate import calibration
 calibration.E_GRID = (0.5, 0.65, 0.75, 0.85, 0.92, 0.97)
 calibration.SETS_PER_E = 5
 from rockdec.cli import main

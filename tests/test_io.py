@@ -7,7 +7,9 @@ import pandas as pd
 import pytest
 import xarray as xr
 
-from rockdec import config, io, layout, run, series
+from rockdec.pipeline import config, layout, series
+from rockdec import io
+from rockdec.physics import run
 from rockdec.cli import main
 
 from cf_check import NO_FINDINGS, CheckerRaised, cf_findings

@@ -21,7 +21,9 @@ import traceback
 import warnings
 from pathlib import Path
 
-from rockdec import __version__, console, engine, fits
+from rockdec import __version__, console
+from rockdec.pipeline import engine
+from rockdec.rdd import fits
 from rockdec import validate as checks
 
 log = logging.getLogger(__name__)
@@ -108,8 +110,8 @@ def parse_seeds(text: str) -> np.ndarray:
 
 def _simulate_scene(args) -> dict:
     """The scene a ``simulate`` call describes: ``--scene`` (or the defaults), then options."""
-    from rockdec import config as config_mod
-    from rockdec.models import restoring_acceleration
+    from rockdec.pipeline import config as config_mod
+    from rockdec.physics.models import restoring_acceleration
 
     if args.scene:
         scene = json.loads(json.dumps(config_mod.scene(config_mod.load(args.config or _default_config()), args.scene)))
@@ -137,7 +139,7 @@ def _with_options(scene: dict, args, options: dict) -> dict:
 
 def _validated(scene: dict, options: dict) -> dict:
     """``config.validate_scene``, with an error in a field set by an option named by that option."""
-    from rockdec import config as config_mod
+    from rockdec.pipeline import config as config_mod
 
     try:
         return config_mod.validate_scene(scene)
@@ -212,7 +214,9 @@ def cmd_simulate(args) -> None:
 
     import numpy as np
 
-    from rockdec import io, layout, run
+    from rockdec import io
+    from rockdec.pipeline import layout
+    from rockdec.physics import run
 
     out = io.check_output(args.out, args.overwrite)
     n_seeds = sum(stop - start for start, stop in seed_ranges(args.seeds)) if args.seeds is not None else None
@@ -244,7 +248,11 @@ def cmd_simulate(args) -> None:
 def cmd_signatures(args) -> None:
     import numpy as np
 
-    from rockdec import io, records, replicates, signatures, simulate
+    from rockdec import io
+    from rockdec.record import records
+    from rockdec.pipeline import replicates
+    from rockdec.rdd import signatures
+    from rockdec.physics import simulate
 
     out = io.check_output(args.out, args.overwrite)
     with io.open_dataset(args.input) as src:
@@ -326,7 +334,8 @@ def cmd_signatures(args) -> None:
 def cmd_estimates(args) -> None:
     import numpy as np
 
-    from rockdec import io, replicates
+    from rockdec import io
+    from rockdec.pipeline import replicates
 
     out = io.check_output(args.out, args.overwrite)
     checks.integer(args.fit_points, "--fit-points", 3, "give at least 3 points per side (a parabola needs 3)")
@@ -367,9 +376,10 @@ def _plot_path(args) -> str:
 
 def _check_estimate_size(args) -> float:
     """Refuse, before reading the records, a run beyond the memory, or longer than
-    :data:`MAX_SECONDS` without ``--yes`` (:func:`rockdec.inference.cost`, from the files'
+    :data:`MAX_SECONDS` without ``--yes`` (:func:`rockdec.calibrate.inference.cost`, from the files'
     headers or sizes); returns the estimated seconds."""
-    from rockdec import inference, records
+    from rockdec.calibrate import inference
+    from rockdec.record import records
 
     samples = sum(records.record_size(path, args.variable) for path in args.records)
     csv = any(Path(path).suffix.lower() in (".csv", ".txt") for path in args.records)
@@ -387,9 +397,9 @@ def _check_estimate_size(args) -> float:
 
 def parse_sensor_noise(text: str):
     """The sensor noise of ``--sensor-noise``: ``None`` for ``auto`` (measured off the
-    record), else a :class:`rockdec.record_model.SensorNoise`: ``0`` (none), ``VALUE`` (its
+    record), else a :class:`rockdec.physics.record_model.SensorNoise`: ``0`` (none), ``VALUE`` (its
     standard deviation in rad) or ``N%`` (in per cent of ``sigma_Y``)."""
-    from rockdec.record_model import SensorNoise
+    from rockdec.physics.record_model import SensorNoise
 
     word = str(text).strip().lower()
     if word == "auto":
@@ -409,10 +419,10 @@ def parse_sensor_noise(text: str):
 
 def parse_load_option(text: str):
     """The load of ``--load``: ``None`` for ``auto`` (measured off the record), else
-    :func:`rockdec.record_model.parse_load`'s load; a file (``spectrum:FILE``, ``base:FILE``)
-    is read and checked here, and its text returned, for :func:`rockdec.inference.estimate`
+    :func:`rockdec.physics.record_model.parse_load`'s load; a file (``spectrum:FILE``, ``base:FILE``)
+    is read and checked here, and its text returned, for :func:`rockdec.calibrate.inference.estimate`
     to place it against the record's rocking frequency (a table in Hz, a base record)."""
-    from rockdec.record_model import parse_load
+    from rockdec.physics.record_model import parse_load
 
     if str(text).strip().lower() == "auto":
         return None
@@ -424,7 +434,7 @@ def parse_load_option(text: str):
 
 
 def _estimate_model_options(args) -> dict:
-    """The record-model keywords of :func:`rockdec.inference.estimate` from ``--load``,
+    """The record-model keywords of :func:`rockdec.calibrate.inference.estimate` from ``--load``,
     ``--sensor-noise``, ``--model`` and ``--theta-cr``, each checked (one sentence, exit 2)."""
     import math
 
@@ -443,7 +453,9 @@ def _estimate_model_options(args) -> dict:
 def cmd_estimate(args) -> None:
     import contextlib
 
-    from rockdec import inference, io, records
+    from rockdec.calibrate import inference
+    from rockdec import io
+    from rockdec.record import records
 
     for path in args.records:
         checks.path_name(path, "record")
@@ -467,7 +479,7 @@ def cmd_estimate(args) -> None:
         with console.progress("calibrating"):  # a bar only while a calibration missing from the cache is built
             result = inference.estimate(recs, cache_dir=args.cache, g=args.g, **model_options)
         if plot is not None:
-            from rockdec import figures
+            from rockdec.report import figures
 
             fig = figures.fig_record(result)
             io.write_claimed(plot, lambda tmp: figures.save(fig, tmp), args.overwrite, keep_suffix=True)
@@ -521,7 +533,7 @@ GLOSSARY = """glossary:
 
 def _reads(name: str) -> str:
     """What estimator ``name`` reads, in words (the registry's ``reads``; blank for a name it lacks)."""
-    from rockdec import registry
+    from rockdec.rdd import registry
 
     return registry.spec(name).reads if name in registry.ESTIMATORS else ""
 
@@ -619,7 +631,7 @@ def _corrected(est: dict) -> tuple[str, str]:
 
 
 def cmd_verify(args) -> None:
-    from rockdec import archive
+    from rockdec.pipeline import archive
 
     out = Path(args.rebuild) if args.rebuild else None
     if out is not None and out.exists():
@@ -647,7 +659,7 @@ def cmd_verify(args) -> None:
 def _default_config() -> str:
     """The config ``--scene`` reads by default: ``config/config.yaml`` in this folder if there
     is one, else the workflow's own (:func:`workflow_root`)."""
-    from rockdec.config import DEFAULT_PATH
+    from rockdec.pipeline.config import DEFAULT_PATH
 
     root = workflow_root()
     return DEFAULT_PATH if Path(DEFAULT_PATH).is_file() or root is None else str(root / DEFAULT_PATH)

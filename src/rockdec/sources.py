@@ -3,7 +3,7 @@
 :func:`package_sources` walks the ``rockdec`` imports of a module or a script, through every
 module it reaches (imports inside functions included), and lists their source files. The
 workflow's compute rules declare these files as inputs, so an edit reruns what it can change;
-the calibration's cache key hashes the same list (:func:`rockdec.calibration.pipeline_fingerprint`),
+the calibration's cache key hashes the same list (:func:`rockdec.calibrate.calibration.pipeline_fingerprint`),
 so no module the analysis runs can be left out of it. Reads source text only: nothing is
 imported but the ``rockdec`` package itself (to locate its files).
 """
@@ -31,19 +31,26 @@ def _parsed_imports(path: str, mtime_ns: int, size: int) -> tuple[str, ...]:
     """:func:`_rockdec_imports` of the file ``path`` as it is at ``mtime_ns`` and ``size``."""
     names = []
     for node in ast.walk(ast.parse(Path(path).read_text())):
-        if isinstance(node, ast.ImportFrom) and node.level == 0 and node.module == "rockdec":
-            names += [f"rockdec.{alias.name}" for alias in node.names]
-        elif isinstance(node, ast.ImportFrom) and node.level == 0 and (node.module or "").startswith("rockdec."):
-            names.append(node.module)
+        if isinstance(node, ast.ImportFrom) and node.level == 0 and (node.module or "").split(".")[0] == "rockdec":
+            # ``from rockdec.physics import simulate`` imports a module by its package's name
+            names += [node.module] + [f"{node.module}.{alias.name}" for alias in node.names]
         elif isinstance(node, ast.Import):
             names += [alias.name for alias in node.names if alias.name.startswith("rockdec.")]
     return tuple(names)
 
 
+@functools.lru_cache(maxsize=256)
+def _is_package(name: str) -> bool:
+    """Whether the module ``name`` is a package, so that ``name.x`` may be a module (finding
+    the spec of a name under a plain module would import that module)."""
+    spec = find_spec(name)
+    return spec is not None and spec.submodule_search_locations is not None
+
+
 def package_sources(*roots: str) -> list[str]:
     """Sorted source files of every ``rockdec`` module that ``roots`` reach by import.
 
-    Each root is a module name (``"rockdec.calibration"``, itself included) or the path of a
+    Each root is a module name (``"rockdec.calibrate.calibration"``, itself included) or the path of a
     Python file (a workflow script: only the modules it reaches are listed). A name that is
     no module (``from rockdec import __version__``) is skipped.
     """
@@ -56,7 +63,8 @@ def package_sources(*roots: str) -> list[str]:
             todo.append(str(root))
     while todo:
         name = todo.pop()
-        spec = None if name in found else find_spec(name)
+        parent = name.rpartition(".")[0]
+        spec = None if name in found or (parent and not _is_package(parent)) else find_spec(name)
         if spec is None or spec.origin is None:
             continue
         found[name] = spec.origin

@@ -1,8 +1,8 @@
 """The time axis of a record or a simulated series: uniform and increasing, or refused; and
 the ``units`` of stored angles and times, converted to rad and s or refused.
 
-Shared by the reader of measured records (:mod:`rockdec.records`) and the signature wrapper
-(:mod:`rockdec.signatures`), so the kernels' side never imports a file reader.
+Shared by the reader of measured records (:mod:`rockdec.record.records`) and the signature wrapper
+(:mod:`rockdec.rdd.signatures`), so the kernels' side never imports a file reader.
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 # workflow's own files, a manifest (size, SHA-256, producing rule, settings, versions,
 # commit, times) that `rockdec verify` re-checks, and the Workflow Run Crate derived from it.
 
-from rockdec.layout import workflow_sources
+from rockdec.pipeline.layout import workflow_sources
 
 
 rule archive:

@@ -2,8 +2,8 @@
 import sys
 from importlib.util import find_spec
 
-from rockdec import config as rockdec_config
-from rockdec import in_snakemake, layout
+from rockdec.pipeline import config as rockdec_config
+from rockdec.pipeline import in_snakemake, layout
 from rockdec.sources import package_sources
 
 # Values given with --config arrive as text: read them as YAML values. An error names where
@@ -100,12 +100,12 @@ def default_products():
     return [f"results/{name}/{product}" for product in tables + figures]
 
 
-FIGURES_CODE = find_spec("rockdec.figures").origin
+FIGURES_CODE = find_spec("rockdec.report.figures").origin
 
-# The tables and figures run inside the Snakemake process (`run:` with rockdec.in_snakemake.step,
+# The tables and figures run inside the Snakemake process (`run:` with rockdec.pipeline.in_snakemake.step,
 # in threads: profiles/default), so their libraries load once a run; their code input is what
-# that module reaches (rockdec.steps and the modules it runs).
-STEPS_CODE = package_sources("rockdec.in_snakemake")
+# that module reaches (rockdec.pipeline.steps and the modules it runs).
+STEPS_CODE = package_sources("rockdec.pipeline.in_snakemake")
 
 
 def step_code(script):

@@ -2,7 +2,7 @@
 # (sensor noise, load colour, both) and two simulators: one job per cell.
 import re
 
-from rockdec.layout import COVERAGE_CASES as CASES
+from rockdec.pipeline.layout import COVERAGE_CASES as CASES
 
 
 rule coverage_case:

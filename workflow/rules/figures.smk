@@ -1,7 +1,7 @@
 # Figures: one compute rule (the signature of the stored series, paper fig. 2c) and one plot
 # rule per figure. Plot rules only read NetCDF products, so changing a plot never reruns a
 # simulation; each also lists the plotting module, so editing it redraws every figure. They
-# run inside the Snakemake process (run: with rockdec.in_snakemake.step, common.smk): matplotlib and
+# run inside the Snakemake process (run: with rockdec.pipeline.in_snakemake.step, common.smk): matplotlib and
 # xarray load once for all of them.
 rule stored_signature:
     """Signature cube of the stored series pooled into one group (the estimate of fig. 2c)."""

@@ -1,7 +1,7 @@
 # Studies beyond the paper, under results/studies/ (apart from the per-scene results/{scene}/).
 # Each compute rule lists the source of every rockdec module its numbers come from
 # (step_code, in common.smk), so a change to the study's code reruns it; each plot
-# rule lists only the drawing code (rockdec.figures) and the study's data, so a change to
+# rule lists only the drawing code (rockdec.report.figures) and the study's data, so a change to
 # a plot never reruns the study.
 
 

@@ -1,4 +1,4 @@
-# Speed against accuracy (scene `tradeoff`): every knob of rockdec.tradeoff.KNOBS moved one at a
+# Speed against accuracy (scene `tradeoff`): every knob of rockdec.studies.tradeoff.KNOBS moved one at a
 # time from the scene; one compute rule writes the study, one plot rule only reads it
 # (package_sources: workflow/rules/common.smk).
 

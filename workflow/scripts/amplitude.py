@@ -1,6 +1,9 @@
 """Rule `amplitude`: the simplified and Housner models over sigma_Y/theta_cr."""
 
-from rockdec import amplitude, io, job, tables
+from rockdec.studies import amplitude
+from rockdec import io
+from rockdec.pipeline import job
+from rockdec.report import tables
 
 
 def main(smk):

@@ -4,7 +4,7 @@ and the Workflow Run Crate derived from it (ro-crate-metadata.json)."""
 import sys
 from pathlib import Path
 
-from rockdec import archive
+from rockdec.pipeline import archive
 
 sys.stderr = open(snakemake.log[0], "w")
 folder = Path(snakemake.output[0])

@@ -2,7 +2,8 @@
 
 import sys
 
-from rockdec import job, run
+from rockdec.pipeline import job
+from rockdec.physics import run
 
 
 def main(smk):

@@ -1,7 +1,10 @@
 """Rule `choices`: the scene's estimates under one changed analysis choice at a time."""
 
-from rockdec import io, job, sensitivity, tables
-from rockdec.run import Run
+from rockdec import io
+from rockdec.pipeline import job
+from rockdec.studies import sensitivity
+from rockdec.report import tables
+from rockdec.physics.run import Run
 
 
 def main(smk):

@@ -4,7 +4,9 @@ import functools
 import sys
 from pathlib import Path
 
-from rockdec import coverage, engine, io, job, layout
+from rockdec.studies import coverage
+from rockdec.pipeline import engine, job, layout
+from rockdec import io
 
 
 def simulator(smk):

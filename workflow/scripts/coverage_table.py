@@ -2,7 +2,9 @@
 
 import xarray as xr
 
-from rockdec import coverage, job, tables
+from rockdec.studies import coverage
+from rockdec.pipeline import job
+from rockdec.report import tables
 
 
 def main(smk):

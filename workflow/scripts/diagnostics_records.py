@@ -2,7 +2,8 @@
 
 import sys
 
-from rockdec import diagnostics_study, engine, job
+from rockdec.studies import diagnostics_study
+from rockdec.pipeline import engine, job
 
 
 def main(smk):

@@ -2,7 +2,9 @@
 
 import pandas as pd
 
-from rockdec import diagnostics_study, job, tables
+from rockdec.studies import diagnostics_study
+from rockdec.pipeline import job
+from rockdec.report import tables
 
 
 def main(smk):

@@ -1,6 +1,8 @@
 """Rule `fig_amplitude`: estimates of both models against sigma_Y/theta_cr (target e from the data)."""
 
-from rockdec import figures, io, job
+from rockdec.report import figures
+from rockdec import io
+from rockdec.pipeline import job
 
 
 def main(smk):

@@ -2,7 +2,8 @@
 
 import pandas as pd
 
-from rockdec import figures, job
+from rockdec.report import figures
+from rockdec.pipeline import job
 
 
 def main(smk):

@@ -1,6 +1,9 @@
 """Rule `fig_tradeoff`: the Pareto plot of the speed/accuracy study (reads the study only)."""
 
-from rockdec import figures, io, job, tradeoff
+from rockdec.report import figures
+from rockdec import io
+from rockdec.pipeline import job
+from rockdec.studies import tradeoff
 
 
 def main(smk):

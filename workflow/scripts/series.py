@@ -2,8 +2,8 @@
 
 import sys
 
-from rockdec import engine, job, series
-from rockdec.run import Run
+from rockdec.pipeline import engine, job, series
+from rockdec.physics.run import Run
 
 
 def main(smk):

@@ -3,8 +3,9 @@ one); the scene's cube and every reading's window curves."""
 
 import sys
 
-from rockdec import io, job, replicates
-from rockdec.run import Run
+from rockdec import io
+from rockdec.pipeline import job, replicates
+from rockdec.physics.run import Run
 
 
 def main(smk):

@@ -1,7 +1,8 @@
 """Rule `stored_series`: the series the scene keeps (fig. 2), simulated under its run."""
 
-from rockdec import engine, io, job, layout
-from rockdec.run import Run
+from rockdec.pipeline import engine, job, layout
+from rockdec import io
+from rockdec.physics.run import Run
 
 
 def main(smk):

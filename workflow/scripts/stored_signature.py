@@ -4,8 +4,9 @@ import sys
 
 import numpy as np
 
-from rockdec import io, job, replicates
-from rockdec.run import Run
+from rockdec import io
+from rockdec.pipeline import job, replicates
+from rockdec.physics.run import Run
 
 
 def main(smk):

@@ -2,7 +2,10 @@
 
 import sys
 
-from rockdec import io, job, tables, tradeoff
+from rockdec import io
+from rockdec.pipeline import job
+from rockdec.report import tables
+from rockdec.studies import tradeoff
 
 
 def main(smk):

@@ -1,0 +1,2 @@
+"""From an analysed record to a calibrated ``e``: the calibration by simulation, its
+confidence belt and the estimate ``rockdec estimate`` reports."""

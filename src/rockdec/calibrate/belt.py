@@ -1,0 +1,388 @@
+"""The confidence belt: a calibration (:mod:`rockdec.calibrate.calibration`) turned into a
+bias-corrected ``e`` and its 95 % interval, and ``g``'s.
+
+Neyman construction. At each true ``e`` the raw estimate scatters about a mean ``m(e)``
+with a spread ``s(e)`` and a shape of its own; all three come from the calibration's grid
+of ``e`` (:func:`fit`):
+
+- ``m``: the means of the grid points, smoothed as the bias ``m(e) - e`` by a weighted
+  cubic smoothing spline in ``e`` (weights: sets over spread squared), its smoothing
+  chosen by generalised cross-validation (:func:`_smooth`): from a straight line to a
+  curve through every point, as the points say. A fixed cubic misses the simulated mean
+  by about 0.001 near ``e = 0.95``, more than the spread of a long record.
+- ``log s``: the same smoother through the spreads of the grid points, in
+  ``u = log(1 - e)`` (the spread shrinks like a power of ``1 - e`` as ``e -> 1``, with
+  bends between 0.7 and 0.98 that a quadratic in ``u`` misses by 10-20 %).
+- the band's ends: the 2.5 % and 97.5 % quantiles ``q_low``, ``q_high`` of the sets'
+  scatter about their own point's mean in units of the fitted spread, pooled over
+  neighbouring grid points (Gaussian kernel of :data:`QUANTILE_BANDWIDTH` in ``u``). A
+  skewed estimator (``e_v`` at 20,000 samples and low ``e``: skewness +1) gets a skewed
+  band; the pooled quantiles also take up what the spread curve misses locally.
+
+The 95 % band at ``e`` is ``m(e) + [q_low, q_high] sqrt(s(e)^2 + var m(e))`` (``var m``
+the variance of the fitted mean, from the smoother's hat matrix and the points' scatter
+about it, so a small calibration widens the interval rather than shifting it unseen).
+The corrected estimate solves ``m(e) = x`` for the observed ``x``; the 95 % interval is
+every ``e`` whose band holds ``x``. A belt is inverted at the observed value, so it covers
+the truth as often as the simulated scatter says, whatever the bias; a parametric
+bootstrap would need fresh simulations around each record, where the belt's grid is
+cached and serves every record with the same settings. Whether it holds is measured, not
+assumed: :mod:`rockdec.studies.belt_study` on calibration record sets of other seeds, and
+:mod:`rockdec.studies.coverage` on records of its own route.
+
+``g``: the calibration stores ``g`` over the true ``g`` per set. A record's ``g`` is
+corrected by the mean ratio at its corrected ``e`` (:func:`correct_g`); its 95 % interval
+comes from the belt of the calibration's own sets' corrected ``g`` over their true ``g``
+(:func:`g_band`), which holds the scatter of ``g`` at a given ``e`` and the error of the
+corrected ``e`` it was divided by (:func:`g_interval`).
+
+Kept apart from :mod:`rockdec.calibrate.calibration` so that a change here never makes the stored
+calibrations stale (their name hashes the source of the modules that build them).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, NamedTuple
+
+import numpy as np
+
+if TYPE_CHECKING:  # annotations only: xarray loads where a function needs it
+    import xarray as xr
+
+    from rockdec.calibrate import ncread
+
+#: Two-sided normal quantile of the 95 % interval.
+Z95 = 1.959963984540054
+
+
+class Corrected(NamedTuple):
+    """A bias-corrected estimate: ``value`` and the 95 % interval ``[low, high]``; ``notes``
+    say when the interval reaches the end of the calibrated range or the raw value lies
+    outside what any calibrated ``e`` produces."""
+
+    value: float
+    low: float
+    high: float
+    notes: tuple[str, ...]
+
+
+class Belt(NamedTuple):
+    """Smooth mean and spread of one estimator against the true ``e`` (module docstring);
+    ``failed``: the fraction of calibration sets on which the estimator gave NaN; the 95 %
+    band at each ``e`` is ``[mean + q_low spread, mean + q_high spread]`` (``q_low``,
+    ``q_high``: the 2.5 % and 97.5 % quantiles of the standardised raw value, widened by
+    Student's t for a spread estimated from few sets; a normal estimator known exactly has
+    ``-Z95`` and ``Z95``)."""
+
+    e: np.ndarray
+    mean: np.ndarray
+    spread: np.ndarray
+    failed: float
+    q_low: np.ndarray | float = -Z95
+    q_high: np.ndarray | float = Z95
+
+
+#: Bandwidth (in ``log(1 - e)``) of the Gaussian kernel that pools the standardised raw
+#: values of neighbouring grid points into the quantiles of the band.
+QUANTILE_BANDWIDTH = 0.8
+
+#: Penalty on the degrees of freedom in the generalised cross-validation of the smoothing
+#: splines (1 is plain GCV; above 1 guards against its undersmoothing on few points).
+GCV_GAMMA = 1.4
+
+#: Smoothing parameters tried by the cross-validation, relative to the weights' scale.
+_LAMBDAS = np.logspace(-6, 8, 57)
+
+
+def _reinsch(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The matrices ``Q`` ``(n, n-2)`` and ``R`` ``(n-2, n-2)`` of the natural cubic spline
+    through values ``f`` at the knots ``x`` (increasing): its second derivatives at the
+    inner knots are ``R^-1 Q^T f`` (zero at the ends), and the integral of its squared
+    second derivative is ``f @ Q R^-1 Q^T @ f`` (Green and Silverman, 1994, section 2.1)."""
+    h = np.diff(x)
+    n = x.size
+    q = np.zeros((n, n - 2))
+    r = np.zeros((n - 2, n - 2))
+    for j in range(1, n - 1):
+        q[j - 1, j - 1], q[j, j - 1], q[j + 1, j - 1] = 1.0 / h[j - 1], -1.0 / h[j - 1] - 1.0 / h[j], 1.0 / h[j]
+        r[j - 1, j - 1] = (h[j - 1] + h[j]) / 3.0
+        if j < n - 2:
+            r[j - 1, j] = r[j, j - 1] = h[j] / 6.0
+    return q, r
+
+
+def _penalty(x: np.ndarray) -> np.ndarray:
+    """Roughness matrix ``K`` of the natural cubic spline through values at the knots ``x``:
+    ``f @ K @ f`` is the integral of its squared second derivative (:func:`_reinsch`)."""
+    q, r = _reinsch(x)
+    return q @ np.linalg.solve(r, q.T)
+
+
+def _spline_basis(x: np.ndarray, at: np.ndarray) -> np.ndarray:
+    """``(at, knots)``: the natural cubic spline through values ``f`` at the knots ``x``
+    (increasing) takes the values ``basis @ f`` at the points ``at`` (within the knots)."""
+    q, r = _reinsch(x)
+    second = np.zeros((x.size, x.size))
+    second[1:-1] = np.linalg.solve(r, q.T)  # second derivatives at the knots per unit value
+    i = np.clip(np.searchsorted(x, at, side="right") - 1, 0, x.size - 2)
+    h = x[i + 1] - x[i]
+    b = (at - x[i]) / h
+    a = 1.0 - b
+    basis = np.zeros((at.size, x.size))
+    rows = np.arange(at.size)
+    basis[rows, i] += a
+    basis[rows, i + 1] += b
+    basis += ((a**3 - a) * h**2 / 6.0)[:, None] * second[i] + ((b**3 - b) * h**2 / 6.0)[:, None] * second[i + 1]
+    return basis
+
+
+def _smooth(x: np.ndarray, y: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, float]:
+    """Weighted cubic smoothing spline through ``(x, y)`` (``x`` increasing, weights ``w``:
+    inverse variances), its smoothing chosen by generalised cross-validation
+    (:data:`GCV_GAMMA`); from a straight line (infinite smoothing) to interpolation.
+
+    Returns the fitted values at ``x``, the hat matrix ``H`` (fitted = ``H @ y``), the
+    residual variance in units of ``1/w`` (1 when the weights are right, more when the
+    points scatter about any smooth curve by more than their weights say) and the
+    cross-validation score.
+    """
+    n = x.size
+    k = _penalty(x)
+    wm = np.diag(w)
+    best = None
+    for lam in _LAMBDAS * w.sum() / np.trace(k):
+        hat = np.linalg.solve(wm + lam * k, wm)
+        fit = hat @ y
+        df = float(np.trace(hat))
+        if n - GCV_GAMMA * df <= 0.0:
+            continue
+        rss = float(np.sum(w * (y - fit) ** 2))
+        score = n * rss / (n - GCV_GAMMA * df) ** 2
+        if best is None or score < best[0]:
+            best = (score, fit, hat, rss / (n - df))
+    return best[1], best[2], best[3], best[0]
+
+
+def _weighted_quantiles(z: np.ndarray, w: np.ndarray, p) -> np.ndarray:
+    """Quantiles ``p`` of the values ``z`` with weights ``w`` (midpoint rule)."""
+    order = np.argsort(z)
+    z, w = z[order], w[order]
+    cum = (np.cumsum(w) - 0.5 * w) / w.sum()
+    return np.interp(p, cum, z)
+
+
+def belt(cal: ncread.Stored | xr.Dataset, name: str, points: int = 4001) -> Belt:
+    """The belt of estimator ``name`` (or of ``g``'s ratio to the true ``g``) on a dense
+    grid of ``points`` values of ``e`` (:func:`fit`)."""
+    from rockdec.rdd.measured import G_NAME
+
+    return fit(cal["e_true"].values, cal["raw"].sel(name=name).values, name == G_NAME, points)
+
+
+def fit(e_grid: np.ndarray, raw: np.ndarray, ratio: bool = False, points: int = 4001) -> Belt:
+    """The belt of raw values ``raw(e, set)`` simulated at the true ``e_grid``, on a dense grid
+    of ``points`` values of ``e`` (module docstring): the mean is smoothed as its offset from
+    ``e`` (from 1 for a ``ratio``) along ``e`` or ``u = log(1 - e)``, whichever
+    cross-validates better; the spread along ``u``.
+
+    ``failed``: the fraction of sets that gave NaN. Fewer than 5 usable grid points (3 sets
+    at least) give an empty belt, which :func:`correct` refuses to invert.
+    """
+    e_grid = np.asarray(e_grid, dtype=float)
+    ok = np.isfinite(raw)
+    n = ok.sum(axis=1)
+    use = n >= 3
+    means = np.array([raw[j, ok[j]].mean() if use[j] else np.nan for j in range(e_grid.size)])
+    sds = np.array([raw[j, ok[j]].std(ddof=1) if use[j] else np.nan for j in range(e_grid.size)])
+    use &= sds > 0
+    failed = float(1.0 - ok.sum() / ok.size)
+    if use.sum() < 5:  # an empty belt: correct() says why
+        return Belt(np.empty(0), np.empty(0), np.empty(0), failed)
+    order = np.argsort(np.log1p(-e_grid[use]))  # increasing u = log(1 - e): decreasing e
+    x = e_grid[use][order]
+    u = np.log1p(-x)
+    counts = n[use][order]
+    log_s, hat_s, scatter_s, _ = _smooth(u, np.log(sds[use][order]), 2.0 * (counts - 1.0))
+    s_fit = np.exp(log_s)
+    w = counts / s_fit**2
+    centre = np.ones_like(x) if ratio else x
+    # the mean along e (as -e: the order of u) or along u, whichever cross-validates better
+    along, (bias, hat, scatter, _) = min(((c, _smooth(c, means[use][order] - centre, w)) for c in (-x, u)), key=lambda t: t[1][3])
+    cov = (hat / w) @ hat.T * max(scatter, 1.0)
+    sets = raw[use][order]
+    # scatter about each point's own mean (the mean curve's error is var_mean's), in units of the
+    # fitted spread, so that the quantiles also take up what the spread curve misses locally
+    z = (sets - means[use][order][:, None]) / s_fit[:, None] * np.sqrt(counts / (counts - 1.0))[:, None]
+    zok = np.isfinite(z)
+    q = np.array([
+        _weighted_quantiles(z[zok], (np.exp(-0.5 * ((u[:, None] - uj) / QUANTILE_BANDWIDTH) ** 2) / counts[:, None] * np.ones(z.shape))[zok], [0.025, 0.975])
+        for uj in u
+    ])
+    dense = np.linspace(x.min(), x.max(), points)
+    ud = np.log1p(-dense)
+    basis = _spline_basis(along, -dense if along is not u else ud)  # (dense, grid): the natural spline through the fitted values
+    mean = (1.0 if ratio else dense) + basis @ bias
+    var_mean = np.einsum("ij,jk,ik->i", basis, cov, basis)
+    basis_s = _spline_basis(u, ud)
+    spread = np.sqrt(np.exp(basis_s @ log_s) ** 2 + var_mean)
+    var_log_s = np.einsum("ij,jk,ik->i", basis_s, (hat_s / (2.0 * (counts - 1.0))) @ hat_s.T * max(scatter_s, 1.0), basis_s)
+    widen = _t_quantile(1.0 / (2.0 * var_log_s)) / Z95  # a spread estimated from few sets: Student's t
+    return Belt(dense, mean, spread, failed, widen * np.interp(ud, u, q[:, 0]), widen * np.interp(ud, u, q[:, 1]))
+
+
+def _t_quantile(dof: np.ndarray) -> np.ndarray:
+    """The 97.5 % quantile of Student's t with ``dof`` degrees of freedom (Cornish-Fisher
+    expansion about the normal's: within 1 % for ``dof >= 5``, 0.1 % for ``dof >= 10``)."""
+    z = Z95
+    return z + (z**3 + z) / (4.0 * dof) + (5.0 * z**5 + 16.0 * z**3 + 3.0 * z) / (96.0 * dof**2)
+
+
+def belts(cal: ncread.Stored | xr.Dataset) -> dict[str, Belt]:
+    """The belt of every name the calibration holds (each estimator of ``e``, and ``g``)."""
+    return {str(name): belt(cal, str(name)) for name in cal["name"].values}
+
+
+def _inside(b: Belt, observed: np.ndarray) -> np.ndarray:
+    """``(observation, dense e)``: where the 95 % band of the belt holds each observation."""
+    offset = observed[:, None] - b.mean[None, :]
+    return (offset >= b.q_low * b.spread[None, :]) & (offset <= b.q_high * b.spread[None, :])
+
+
+def _ends(b: Belt, inside: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The 95 % interval of each row of :func:`_inside`: its first and last ``e``."""
+    return b.e[np.argmax(inside, axis=1)], b.e[b.e.size - 1 - np.argmax(inside[:, ::-1], axis=1)]
+
+
+def correct_g(g_belt: Belt, g_raw: float, e: float) -> float:
+    """``g`` read off a record, corrected for its window bias: ``g_raw`` over the mean
+    ratio (measured ``g`` / true ``g``) of the calibration at the corrected ``e``; NaN when
+    ``e`` is NaN or the ``g`` belt is empty."""
+    if g_belt.e.size == 0 or not np.isfinite(e):
+        return float("nan")
+    return float(g_raw / np.interp(e, g_belt.e, g_belt.mean))
+
+
+def g_band(cal: ncread.Stored | xr.Dataset, name: str, e_belt: Belt, g_belt: Belt) -> Belt:
+    """The belt of the ratio corrected ``g`` / true ``g`` over the calibration's own sets,
+    ``e`` read by estimator ``name`` (its belt ``e_belt``; ``g_belt`` the belt of ``g``).
+
+    Each set's ``g`` is corrected as a record's is (:func:`correct_g` at the set's corrected
+    ``e``, when its interval lies inside the calibrated range: :func:`held_e`), so the ratio
+    holds both the scatter of ``g`` at a given ``e`` and the error of the corrected ``e`` it
+    is divided by, and their correlation; its belt (:func:`fit`) gives :func:`g_interval`.
+    """
+    from rockdec.rdd.measured import G_NAME
+
+    raw_e = cal["raw"].sel(name=name).values
+    raw_g = cal["raw"].sel(name=G_NAME).values
+    ratio = np.full(raw_e.shape, np.nan)
+    for j, k in zip(*np.nonzero(np.isfinite(raw_e) & np.isfinite(raw_g))):
+        ratio[j, k] = correct_g(g_belt, raw_g[j, k], held_e(e_belt, raw_e[j, k]))
+    return fit(cal["e_true"].values, ratio, ratio=True)
+
+
+def corrected_e(b: Belt, raw: float) -> float:
+    """The corrected ``e`` of ``raw`` (:func:`correct`), NaN when ``raw`` lies beyond every
+    value of the mean curve (the corrected value is then its nearest point, no estimate:
+    :func:`rockdec.calibrate.inference.beyond`)."""
+    if b.e.size == 0 or not (np.isfinite(raw) and b.mean.min() <= raw <= b.mean.max()):
+        return float("nan")
+    return correct(b, raw).value
+
+
+def held_e(b: Belt, raw: float) -> float:
+    """The corrected ``e`` of ``raw`` when its 95 % interval lies inside the calibrated range,
+    else NaN: the ``e`` at which ``g``'s band applies (:func:`g_band`, :func:`g_interval`).
+    An interval that reaches an end of the range holds ``e`` too loosely (on records of
+    20,000 samples nearly every interval reaches ``e = 0.4``), and dividing ``g`` by the
+    ratio at such an ``e`` covered 78-91 % below ``e = 0.8``."""
+    e = corrected_e(b, raw)
+    if not np.isfinite(e):
+        return e
+    c = correct(b, raw)
+    return e if b.e[0] < c.low and c.high < b.e[-1] else float("nan")
+
+
+def g_interval(band: Belt, e_belt: Belt, g_belt: Belt, raw_e: float, raw_g: float) -> tuple[float, float]:
+    """95 % interval of the true ``g`` of a record whose raw values are ``raw_e`` (of the
+    estimator of ``e_belt``) and ``raw_g``: ``g`` corrected at the corrected ``e``
+    (:func:`correct_g`) over the ends of the 95 % band of :func:`g_band` at that ``e``.
+
+    NaN ends when ``e`` is not held inside the calibrated range (:func:`held_e`), or when
+    the band is empty or its lower end not positive.
+    """
+    e = held_e(e_belt, raw_e)
+    if band.e.size == 0 or not np.isfinite(e):
+        return float("nan"), float("nan")
+    g_value = correct_g(g_belt, raw_g, e)
+    mean, spread = np.interp(e, band.e, band.mean), np.interp(e, band.e, band.spread)
+    low = mean + np.interp(e, band.e, np.broadcast_to(band.q_low, band.e.shape)) * spread
+    high = mean + np.interp(e, band.e, np.broadcast_to(band.q_high, band.e.shape)) * spread
+    if not (low > 0.0 and np.isfinite(g_value)):
+        return float("nan"), float("nan")
+    return float(g_value / high), float(g_value / low)
+
+
+def g_intervals(e_belt: Belt, g_belt: Belt, band: Belt, raw_e: np.ndarray, raw_g: np.ndarray) -> np.ndarray:
+    """``(set, 2)``: :func:`g_interval` for each pair of raw values ``raw_e``, ``raw_g``."""
+    return np.array([g_interval(band, e_belt, g_belt, x, g) for x, g in zip(np.ravel(raw_e), np.ravel(raw_g))]).reshape(-1, 2)
+
+
+def g_calibration_coverage(cal: ncread.Stored | xr.Dataset, name: str, e_belt: Belt, g_belt: Belt, band: Belt) -> float:
+    """Share of the calibration's own record sets with an interval of ``g`` (:func:`g_interval`,
+    ``e`` read by estimator ``name``) whose interval holds their true ``g``: in-sample, like
+    :func:`calibration_coverage`; NaN when no set has one."""
+    from rockdec.rdd.measured import G_NAME
+
+    ends = g_intervals(e_belt, g_belt, band, cal["raw"].sel(name=name).values, cal["raw"].sel(name=G_NAME).values)
+    given = np.isfinite(ends[:, 0])
+    if band.e.size == 0 or not given.any():
+        return float("nan")
+    return float(np.mean((ends[given, 0] <= 1.0) & (1.0 <= ends[given, 1])))
+
+
+def correct(b: Belt, observed: float) -> Corrected:
+    """Invert the belt at ``observed``: the corrected ``e`` and its 95 % interval."""
+    if not np.isfinite(observed):
+        return Corrected(np.nan, np.nan, np.nan, ("no raw estimate",))
+    if b.e.size == 0:
+        return Corrected(np.nan, np.nan, np.nan, (f"the estimator failed on {b.failed:.0%} of the calibration records, too many for a belt",))
+    notes = []
+    inside = _inside(b, np.array([observed]))[0]
+    if not inside.any():
+        nearest = int(np.argmin(np.abs(observed - b.mean) / b.spread))
+        return Corrected(np.nan, np.nan, np.nan, (f"the raw value {observed:.4f} is not produced by any calibrated e (nearest e = {b.e[nearest]:.3f})",))
+    idx = np.flatnonzero(inside)
+    low, high = _ends(b, inside[None])
+    low, high = low[0], high[0]
+    if idx[0] == 0 or idx[-1] == b.e.size - 1:
+        notes.append(f"the interval reaches the end of the calibrated range [{b.e[0]:.3f}, {b.e[-1]:.3f}]")
+    # corrected value: where the mean curve meets the observation, inside the interval
+    gap = b.mean[idx] - observed
+    crossing = np.flatnonzero(np.diff(np.sign(gap)) != 0)
+    if crossing.size:
+        i = idx[crossing[0]]
+        value = float(np.interp(observed, sorted([b.mean[i], b.mean[i + 1]]), [b.e[i], b.e[i + 1]][:: 1 if b.mean[i] <= b.mean[i + 1] else -1]))
+    else:
+        value = float(b.e[idx[np.argmin(np.abs(gap))]])
+        notes.append("the raw value lies beyond the calibrated mean curve; the corrected value is its nearest point")
+    return Corrected(value, float(low), float(high), tuple(notes))
+
+
+def calibration_coverage(cal: ncread.Stored | xr.Dataset, name: str, b: Belt) -> float:
+    """Share of the calibration's own record sets whose 95 % interval (:func:`correct`)
+    holds their true ``e``: the coverage of the interval at the record's own settings.
+
+    In-sample (the belt was fitted to these sets), so it can only flatter the interval a
+    little; the out-of-sample check is :mod:`rockdec.studies.coverage`. Sets at a true ``e``
+    outside the belt's range, and failed sets, count as not covered. NaN for an empty belt.
+    """
+    if b.e.size == 0:
+        return float("nan")
+    raw = cal["raw"].sel(name=name).values  # (e_true, set)
+    truth = np.broadcast_to(cal["e_true"].values[:, None], raw.shape).ravel()
+    x = raw.ravel()
+    inside = _inside(b, x)
+    any_inside = inside.any(axis=1) & np.isfinite(x)
+    low, high = _ends(b, inside)
+    return float(np.mean(any_inside & (low <= truth) & (truth <= high)))

@@ -1,0 +1,450 @@
+"""Calibration by simulation: how each estimator of ``e`` scatters about the truth, for a measured record.
+
+Why. Every estimator of eqs. 25-27 is biased by an amount that depends on ``e`` and on
+how the record was sampled, and the standard error of the zero-window line understates
+the real spread 3.5-5 times (the nested windows share their triggers and neighbouring
+lags are correlated). Both are measured here instead, on records simulated exactly like
+the measured one.
+
+What fixes the statistics. In eq. 4 with white impulses the stationary response depends
+only on ``e`` and one dimensionless step (equivalently the samples per cycle at amplitude
+``sigma_Y``, eq. 5); a low-pass load adds its pole per sample, sensor noise its level in
+``sigma_Y``, Housner's model (eq. 2) the ratio ``sigma_Y / theta_cr`` (the record model,
+:func:`binned_model`). So the calibration simulates, for each ``e`` of a grid
+(:data:`E_GRID`), :data:`SETS_PER_E` sets of records with the measured records' lengths,
+``g = 1`` and ``sigma_p = 1`` (scale-free), at the step for which the analysis
+(:func:`rockdec.rdd.measured.analyse`) reads the same samples per cycle off the simulated
+records as it reads off the measured ones; then it runs the identical analysis on each
+set and stores every estimator's zero-window value, and ``g``'s, per set, with every
+check's statistic (:mod:`rockdec.record.diagnostics`), from which the warnings take their thresholds.
+
+The belt built on these values, and its inversion, are in :mod:`rockdec.calibrate.belt`.
+
+The calibration is stored as NetCDF under a name hashed from everything it depends on, and
+reused; the name also hashes the source of the pipeline (:func:`pipeline_fingerprint`).
+A stored file is trusted only when its settings hash to its name and the SHA-256 of its
+values matches the one it carries (:func:`_read_checked`); a damaged, truncated or
+edited file is rebuilt with a note, never fatal.
+
+One build at a time: the builder holds ``calibration-<hash>.building`` (created
+exclusively, holding host name, process id and start time) and touches it every
+:data:`HEARTBEAT_S` seconds; another run on the same settings waits for the file instead
+of building it too. A lock not touched for :data:`STALE_S` seconds belongs to a run that
+died (on any node of a shared disk: the rule reads the file's mtime, not the process
+table) and is taken over.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import hashlib
+import json
+import logging
+import math
+import os
+import socket
+import sys
+import threading
+import time
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from rockdec import __version__, io
+from rockdec.record import diagnostics
+from rockdec.pipeline import engine
+from rockdec.rdd import measured, registry
+from rockdec.calibrate import ncread
+from rockdec.physics.models import SCALE_CONSTANT_GUESS, step_for_density
+from rockdec.physics.record_model import PAPER, Load, RecordModel, SensorNoise
+from rockdec.sources import package_sources
+from rockdec.validate import InputError
+
+if TYPE_CHECKING:  # annotations only: xarray loads where a function needs it
+    import xarray as xr
+
+log = logging.getLogger(__name__)
+
+#: True ``e`` of the calibration grid: about evenly spaced in ``log(1 - e)``, in which the
+#: spread of the estimators is smooth (:mod:`rockdec.calibrate.belt`); with :data:`SETS_PER_E`, half
+#: the simulated samples of 15 points of 40 sets at the same coverage (docs/method.md §10).
+E_GRID = (0.4, 0.55, 0.7, 0.8, 0.865, 0.92, 0.95, 0.972, 0.985, 0.995)
+
+#: Simulated record sets per grid point.
+SETS_PER_E = 30
+
+#: Pilot sets of each iteration of the step search, and the most samples of a pilot record
+#: (:func:`step_for`); under a coloured load a pilot record is as long as the record, up to
+#: ``PILOT_SAMPLES_COLOURED``.
+PILOT_SETS, PILOT_SAMPLES, PILOT_SAMPLES_COLOURED = 8, 50_000, 200_000
+
+#: Calibrations are shared by records whose samples per cycle agree within this relative step.
+PPC_BIN = 0.1
+
+#: Calibrations are shared by records whose sensor noise (in ``sigma_Y``) and load pole
+#: (``-ln`` of the pole per sample) agree within these relative steps (:func:`binned_model`).
+NOISE_BIN, POLE_BIN = 0.1, 0.1
+
+#: Housner's model (eq. 2) is not scale-free in ``sigma_Y / theta_cr``: calibrations are
+#: shared by records whose ratio agrees within this relative step.
+RATIO_BIN = 0.1
+
+#: Fewest iterations of the step search under Housner's model, which also sets ``theta_cr``.
+HOUSNER_ITERATIONS = 5
+
+#: Names calibrated: every estimator of e, and g.
+NAMES = (*registry.ESTIMATORS, measured.G_NAME)
+
+#: Seeds of calibration records start here (apart from scene seeds and pilot seeds).
+CALIBRATION_SEED_OFFSET = 2**61
+
+#: Seconds between touches of a build lock, and age of its mtime after which it is stale.
+HEARTBEAT_S, STALE_S = 10.0, 120.0
+
+#: Seconds between looks at a lock held by another run.
+POLL_S = 1.0
+
+_FILE_ACCESS = threading.Lock()
+"""Serialises this process's reads and writes of calibration files: the HDF5 library under
+netCDF4 is not safe from two threads at once (a study estimates records in Dask threads,
+one thread storing a calibration while another reads one)."""
+
+
+def log_bin(x: float, width: float) -> float:
+    """``x > 0`` rounded to the nearest of the bins ``exp(width k)`` (``k`` integer), to 4
+    significant digits: values within a relative step ``width`` share a bin."""
+    return float(f"{math.exp(width * round(math.log(x) / width)):.4g}")
+
+
+def ppc_key(points_per_cycle: float) -> float:
+    """Samples per cycle rounded to the calibration's bins (:data:`PPC_BIN`, relative)."""
+    return log_bin(points_per_cycle, PPC_BIN)
+
+
+def binned_model(model: RecordModel, points_per_cycle: float) -> RecordModel:
+    """The record model a calibration simulates for records of ``model`` read at
+    ``points_per_cycle`` samples per cycle: the sensor noise (in ``sigma_Y``) on the bins
+    of :data:`NOISE_BIN`, and a low-pass load's pole per sample on the bins of
+    :data:`POLE_BIN`, so that records of nearly the same model share a calibration.
+
+    The load is matched by its pole per sample, ``alpha = exp(-2 pi corner / N)`` at the
+    records' own ``N = points_per_cycle`` (what :func:`rockdec.record.record_measure.measure`
+    reads directly): ``-ln alpha`` is binned and the corner stated at the binned samples
+    per cycle (:func:`ppc_key`), at which the calibration simulates, so that the
+    calibration's records carry the binned pole per sample and are read at the binned
+    samples per cycle. A spectrum load is simulated as stated (its table in rocking
+    frequencies, placed at the binned samples per cycle).
+    """
+    if model.sensor.units != "sigma_y":
+        raise ValueError("a calibration takes its sensor noise in units of sigma_Y")
+    sensor = model.sensor
+    if sensor.std > 0.0:
+        sensor = SensorNoise(log_bin(sensor.std, NOISE_BIN), "sigma_y")
+    load = model.load
+    if load.kind == "lowpass":
+        rate = log_bin(-math.log(load.pole(points_per_cycle)), POLE_BIN)
+        load = Load("lowpass", float(f"{rate * ppc_key(points_per_cycle) / (2.0 * math.pi):.6g}"))
+    return dataclasses.replace(model, load=load, sensor=sensor)
+
+
+def calibration_settings(lengths, points_per_cycle: float, settings: dict | None = None, model: RecordModel = PAPER, theta_cr_ratio: float | None = None) -> dict:
+    """Everything a calibration depends on, as a JSON-able dict (hashed for the cache name).
+
+    ``model``: the record model of the records (:mod:`rockdec.physics.record_model`): its load (a
+    corner in rocking frequencies at ``points_per_cycle``) and sensor noise (in units of
+    ``sigma_Y``: the calibration is scale-free); the calibration simulates it binned
+    (:func:`binned_model`). Under the simplified model (eq. 4) nothing else sets the
+    statistics; Housner's (eq. 2) adds ``nu^2 theta = g theta / theta_cr``, so the records'
+    ``theta_cr_ratio = sigma_Y / theta_cr`` (binned by :data:`RATIO_BIN`) enters the key.
+    """
+    if model.sensor.units != "sigma_y":
+        raise ValueError("a calibration takes its sensor noise in units of sigma_Y")
+    housner = model.rocking == "housner"
+    if housner != (theta_cr_ratio is not None):
+        raise ValueError("a calibration of Housner's model (eq. 2) needs sigma_Y / theta_cr, which the simplified model (eq. 4) does not take")
+    out = {
+        "lengths": [int(n) for n in lengths],
+        "points_per_cycle": ppc_key(points_per_cycle),
+        "record_model": binned_model(model, points_per_cycle).key(),
+        "analysis": {k: (list(v) if isinstance(v, tuple) else v) for k, v in {**measured.DEFAULT_SETTINGS, **(settings or {})}.items()},
+        "e_grid": list(E_GRID),
+        "sets_per_e": SETS_PER_E,
+        "rockdec_version": __version__,
+        "pipeline": pipeline_fingerprint(),
+    }
+    if housner:
+        out["sigma_y_over_theta_cr"] = log_bin(theta_cr_ratio, RATIO_BIN)
+    return out
+
+
+def pipeline_fingerprint() -> str:
+    """SHA-256 (16 hex digits) of the source of every module this one reaches by import
+    (:func:`rockdec.sources.package_sources`, the list the workflow's rules declare too): a
+    change to the simulator, the models, the signatures, the estimators, the analysis or this
+    module makes every stored calibration stale, whatever the version number says."""
+    digest = hashlib.sha256()
+    for path in package_sources(__name__):
+        digest.update(Path(path).read_bytes())
+    return digest.hexdigest()[:16]
+
+
+def settings_hash(cal_settings: dict) -> str:
+    """SHA-256 (first 16 hex digits) of the canonical JSON of the settings."""
+    return hashlib.sha256(json.dumps(cal_settings, sort_keys=True).encode()).hexdigest()[:16]
+
+
+def _simulate_set(
+    seed0: int, lengths, dt: float, e: float, burn_in: int, model: RecordModel, pole: float = 0.0, theta_cr: float | None = None,
+    spectrum=None,
+) -> list[np.ndarray]:
+    """One set of records (one per length), seeds ``seed0, seed0 + 1, ...``; ``g = sigma_p = 1``,
+    the rocking model of ``model`` (``theta_cr`` for Housner's, eq. 2, with ``nu^2 = 1/theta_cr``;
+    :func:`rockdec.physics.simulate.simulate_model`), the load's filter ``pole`` or its ``spectrum``
+    (:meth:`rockdec.physics.record_model.Load.draw_options`), and the sensor noise of ``model``
+    relative to each record's rms."""
+    from rockdec.physics.loading import add_sensor_noise  # the simulators load only when a calibration is built
+    from rockdec.physics.simulate import simulate_model
+
+    out = []
+    for k, n in enumerate(lengths):
+        theta = simulate_model(
+            model.rocking, [seed0 + k], n, dt=dt, g=1.0, e=e, sigma_p=1.0, theta_cr=theta_cr, burn_in=burn_in, pole=pole, spectrum=spectrum,
+        )[0]
+        if model.sensor.std > 0.0:
+            add_sensor_noise(theta, [seed0 + k], model.sensor.std_rad(float(np.sqrt(np.nanmean(theta**2)))))
+        out.append(theta[0])
+    return out
+
+
+def step_for(
+    e: float, points_per_cycle: float, lengths, settings: dict, seed0: int, model: RecordModel = PAPER, theta_cr_ratio: float | None = None,
+) -> tuple[float, int, float | None]:
+    """Step ``dt`` (for ``g = sigma_p = 1``) at which :func:`rockdec.rdd.measured.analyse` reads
+    ``points_per_cycle`` off simulated records at ``e``, the burn-in, and (Housner's model,
+    eq. 2) the critical angle at which the records' ``sigma_Y / theta_cr`` is ``theta_cr_ratio``.
+
+    Fixed point on the scale law: ``points_per_cycle`` goes as ``1/dt^2`` (``sigma_Y`` as
+    ``S^2/g^3`` with ``S = sigma_p^2/dt``, and eq. 5), so ``dt <- dt sqrt(N_read / N)``, on
+    :data:`PILOT_SETS` sets of at most :data:`PILOT_SAMPLES` samples a record. Under a
+    coloured load the samples per cycle read off a record grow with its length (rare large
+    excursions) and fall steeply with ``dt``, so the pilot records are as long as the
+    records (up to :data:`PILOT_SAMPLES_COLOURED`, as many sets as make
+    :data:`PILOT_SETS` x :data:`PILOT_SAMPLES` samples, at least half :data:`PILOT_SETS`)
+    and the step is bracketed (:func:`rockdec.physics.simulate.secant_step`); the step returned is
+    then the pilot's whose samples per cycle came nearest the target.
+    :data:`rockdec.physics.simulate.STEP_ITERATIONS` iterations. Under Housner's model each pilot
+    also sets the next ``theta_cr = sigma_Y / theta_cr_ratio`` from its median ``sigma_Y``
+    (the first from eq. 5 at the target: ``sigma_Y = (N dt / 4)^2 / 2``), and the search
+    runs at least :data:`HOUSNER_ITERATIONS` iterations.
+    """
+    from rockdec.physics.simulate import STEP_ITERATIONS, default_burn_in, secant_step
+
+    burn_in = default_burn_in(e, points_per_cycle)
+    dt = step_for_density(SCALE_CONSTANT_GUESS, 1.0, 1.0, points_per_cycle)
+    draw = model.load.draw_options(points_per_cycle)
+    white = model.load.kind == "white"
+    housner = model.rocking == "housner"
+    theta_cr = (points_per_cycle * dt / 4.0) ** 2 / 2.0 / theta_cr_ratio if housner else None
+    pilot = [min(int(n), PILOT_SAMPLES if white else PILOT_SAMPLES_COLOURED) for n in lengths]
+    sets = PILOT_SETS if white else max(PILOT_SETS // 2, PILOT_SETS * PILOT_SAMPLES // sum(pilot))
+    iterations = max(STEP_ITERATIONS[model.load.kind], HOUSNER_ITERATIONS if housner else 0)
+    history: list = []
+    closest = (math.inf, dt, theta_cr)
+    for i in range(iterations):
+        read, rms = [], []
+        for k in range(sets):
+            try:
+                records = _simulate_set(seed0 + k * len(pilot), pilot, dt, e, burn_in, model, theta_cr=theta_cr, **draw)
+                read.append(measured.analyse(records, dt, settings).points_per_cycle)
+                rms.append(float(np.sqrt(np.nanmean(np.concatenate(records) ** 2))))
+            except ValueError:
+                continue
+        if not read:
+            raise ValueError(f"no pilot record at e = {e} could be analysed; the records are too short for this sampling")
+        miss = abs(math.log(float(np.median(read)) / points_per_cycle))
+        if miss < closest[0]:
+            closest = (miss, dt, theta_cr)
+        if housner:
+            theta_cr = float(np.median(rms)) / theta_cr_ratio
+        if white:
+            dt *= math.sqrt(float(np.median(read)) / points_per_cycle)
+        else:
+            dt = secant_step(history, dt, float(np.median(read)), points_per_cycle)
+    return (dt, burn_in, theta_cr) if white else (closest[1], burn_in, closest[2])
+
+
+def _grid_point(j: int, e: float, cal_settings: dict, seed_base: int) -> tuple[np.ndarray, np.ndarray]:
+    """Raw zero-window values ``(set, name)`` of one grid point and the checks' statistics
+    ``(set, check)`` (:func:`rockdec.record.diagnostics.statistics`); NaN for sets (or the whole
+    point) that cannot be analysed, e.g. records too short for the lag range at this ``e``."""
+    lengths, ppc, settings = cal_settings["lengths"], cal_settings["points_per_cycle"], cal_settings["analysis"]
+    model = RecordModel.from_key(cal_settings["record_model"])
+    ratio = cal_settings.get("sigma_y_over_theta_cr")
+    seed0 = seed_base + j * 10**7
+    out = np.full((cal_settings["sets_per_e"], len(NAMES)), np.nan)
+    diag = np.full((cal_settings["sets_per_e"], len(diagnostics.CHECKS)), np.nan)
+    try:
+        dt, burn_in, theta_cr = step_for(e, ppc, lengths, settings, seed0 + 9 * 10**6, model, ratio)
+    except ValueError:  # no record at this e can be analysed: the belt leaves this e out
+        return out, diag
+    for k in range(cal_settings["sets_per_e"]):
+        try:
+            records = _simulate_set(seed0 + k * len(lengths), lengths, dt, e, burn_in, model, theta_cr=theta_cr, **model.load.draw_options(ppc))
+            analysis = measured.analyse(records, dt, settings)
+        except ValueError:
+            continue
+        out[k] = [analysis.raw[name] for name in NAMES]
+        diag[k] = diagnostics.statistics(records, analysis)
+    return out, diag
+
+
+def build(cal_settings: dict) -> xr.Dataset:
+    """Simulate and analyse the calibration records; ``raw(e_true, set, name)`` and
+    ``diagnostic(e_true, set, check)``.
+
+    Grid points run as Dask tasks on the engine of :mod:`rockdec.pipeline.engine` (threads by
+    default); the simulation and signature kernels release the GIL.
+    """
+    import dask
+    import xarray as xr
+
+    log.info(
+        f"calibrating: simulating {cal_settings['sets_per_e']} record sets at each of {len(cal_settings['e_grid'])} values of e "
+        "like the measured records (once; stored for every record with the same settings)"
+    )
+    tasks = [dask.delayed(_grid_point)(j, e, cal_settings, CALIBRATION_SEED_OFFSET) for j, e in enumerate(cal_settings["e_grid"])]
+    points = engine.compute(*tasks)
+    values = np.stack([raw for raw, _ in points])
+    ds = xr.Dataset(
+        {
+            "raw": (("e_true", "set", "name"), values, {"units": "1", "long_name": "zero-window estimate on a simulated record set (g in units of the true g)"}),
+            "diagnostic": (("e_true", "set", "check"), np.stack([diag for _, diag in points]), {"units": "1", "long_name": "statistic of a check of rockdec.record.diagnostics on a simulated record set"}),
+        },
+        coords={
+            "e_true": ("e_true", np.asarray(cal_settings["e_grid"]), {"units": "1", "long_name": "true coefficient of restitution"}),
+            "set": ("set", np.arange(values.shape[1]), {"long_name": "simulated record set"}),
+            "name": ("name", list(NAMES), {"long_name": "estimator of e, or g"}),
+            "check": ("check", list(diagnostics.CHECKS), {"long_name": "check of the records (rockdec.record.diagnostics)"}),
+        },
+    )
+    ds.attrs.update(io.provenance("calibration", cal_settings))
+    return ds
+
+
+def content_checksum(ds: xr.Dataset) -> str:
+    """SHA-256 of the calibration's values, the checks' statistics and the true ``e`` grid
+    (stored as an attribute)."""
+    digest = hashlib.sha256()
+    for name in ("raw", "diagnostic"):
+        if name in ds:
+            digest.update(np.ascontiguousarray(ds[name].values, dtype=np.float64).tobytes())
+    digest.update(np.ascontiguousarray(ds["e_true"].values, dtype=np.float64).tobytes())
+    return digest.hexdigest()
+
+
+def _read_checked(path: Path, expected_hash: str) -> tuple[ncread.Stored | None, str | None]:
+    """The calibration stored at ``path`` and ``None``, or ``None`` and why it cannot be trusted
+    (read by :func:`rockdec.calibrate.ncread.read`: no xarray to import for a cached calibration)."""
+    try:
+        with _FILE_ACCESS:
+            ds = ncread.read(path)
+    except (OSError, ValueError, RuntimeError, AttributeError) as exc:  # netCDF4 raises AttributeError on a bad attribute
+        return None, f"it is not readable ({type(exc).__name__})"
+    try:
+        stored_hash = settings_hash(json.loads(ds.attrs["settings"]))
+        checksum = content_checksum(ds)
+    except (KeyError, TypeError, ValueError):
+        return None, "it lacks its settings or values"
+    if stored_hash != expected_hash:
+        return None, "its settings do not hash to its name"
+    if ds.attrs.get("content_sha256") != checksum:
+        return None, "its values do not match their checksum"
+    return ds, None
+
+
+@contextlib.contextmanager
+def _heartbeat(lock: Path):
+    """Touch ``lock`` every :data:`HEARTBEAT_S` seconds while the block runs."""
+    stop = threading.Event()
+
+    def beat():
+        while not stop.wait(HEARTBEAT_S):
+            with contextlib.suppress(OSError):
+                os.utime(lock)
+
+    thread = threading.Thread(target=beat, daemon=True)
+    thread.start()
+    try:
+        yield
+    finally:
+        stop.set()
+        thread.join()
+
+
+def _take_lock(lock: Path, notes: list) -> bool:
+    """Create ``lock`` exclusively; ``False`` while a live run (fresh mtime) holds it.
+
+    A lock older than :data:`STALE_S` seconds is removed (with a note) and taken.
+    """
+    try:
+        fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+    except FileExistsError:
+        try:
+            age = time.time() - lock.stat().st_mtime
+        except FileNotFoundError:  # released meanwhile
+            return False
+        if age < STALE_S:
+            return False
+        holder = lock.read_text(errors="replace").strip() if lock.exists() else ""
+        notes.append(f"took over the calibration lock {lock.name} of a run that stopped {age:.0f} s ago ({holder})")
+        lock.unlink(missing_ok=True)
+        return False
+    with os.fdopen(fd, "w") as f:
+        f.write(f"host {socket.gethostname()} pid {os.getpid()} started {time.strftime('%Y-%m-%dT%H:%M:%SZ', time.gmtime())}\n")
+    return True
+
+
+def load_or_build(cal_settings: dict, cache_dir: str | Path, notes: list | None = None) -> tuple[ncread.Stored, bool]:
+    """The calibration for ``cal_settings`` from ``cache_dir``, built and stored when absent
+    or damaged (module docstring; ``notes`` receives a sentence on each rebuild, wait or
+    takeover).
+
+    Returns ``(calibration, from_cache)``, the calibration as read back from its file
+    (:func:`rockdec.calibrate.ncread.read`) whether it was stored or built.
+    """
+    notes = [] if notes is None else notes
+    folder = Path(cache_dir)
+    if folder.exists() and not folder.is_dir():
+        raise InputError(f"--cache '{folder}' is a file, not a folder; give a folder for the stored calibrations.")
+    expected = settings_hash(cal_settings)
+    path = folder / f"calibration-{expected}.nc"
+    lock = path.with_suffix(".building")
+    folder.mkdir(parents=True, exist_ok=True)
+    waited = False
+    while True:
+        if path.is_file():
+            ds, problem = _read_checked(path, expected)
+            if ds is not None:
+                return ds, True
+            if not waited:
+                notes.append(f"the stored calibration {path.name} was rebuilt: {problem}")
+        if _take_lock(lock, notes):
+            break
+        if not waited:
+            print(f"waiting for another run that builds {path.name} (lock {lock})", file=sys.stderr)
+            waited = True
+        time.sleep(POLL_S)
+    try:
+        with _heartbeat(lock):
+            if path.is_file() and _read_checked(path, expected)[0] is not None:  # stored while we took the lock
+                return _read_checked(path, expected)[0], True
+            ds = build(cal_settings)
+            ds.attrs["content_sha256"] = content_checksum(ds)
+            with _FILE_ACCESS:
+                io.write_netcdf(ds, path, overwrite=True)
+    finally:
+        lock.unlink(missing_ok=True)
+    with _FILE_ACCESS:
+        return ncread.read(path), False

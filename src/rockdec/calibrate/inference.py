@@ -1,0 +1,453 @@
+"""From measured records to a calibrated ``e``: what ``rockdec estimate`` computes.
+
+:func:`estimate` analyses the records (:func:`rockdec.rdd.measured.analyse`), checks that they
+look like rocking (:func:`rockdec.rdd.measured.rocking_shape`) and that a given ``g`` agrees
+with the records' own, measures the records' own model (sensor noise, load colour,
+drift: :func:`rockdec.record.record_measure.measure`) unless it is declared, fetches or builds
+the calibration for their lengths, sampling and model (:func:`record_model`,
+:mod:`rockdec.calibrate.calibration`), corrects every estimator and gives its 95 % interval,
+reports the narrowest trusted candidate (:func:`select`), corrects ``g`` the same way,
+and lists what looks wrong with the records (:func:`diagnose`: the checks of
+:mod:`rockdec.record.diagnostics`, their thresholds from the calibration's own simulated
+records). When no ``e`` can be given, ``reason`` says why.
+
+The calibration simulates records as long as the measured ones, so its cost grows with
+their length (:func:`cost`); the command line refuses, before reading the records, a run
+the machine cannot finish soon. Two shortcuts for long records were measured and do not
+cover (README): calibrating on shorter records with the spread scaled by the square
+root of the length ratio (the bias itself moves with the length), and fewer simulated
+sets per ``e`` (a cubic mean curve then misses the true mean by about 0.001, more
+than the spread of a record of 20 million samples). Records longer than
+:data:`LONG_SAMPLES` are answered with a warning that says so.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+import warnings
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from rockdec import __version__
+from rockdec.calibrate import belt, calibration
+from rockdec.record import diagnostics
+from rockdec.rdd import measured, registry
+from rockdec.physics.record_model import NO_NOISE, WHITE, Load, RecordModel, SensorNoise, parse_load
+from rockdec.record.records import Record, RecordError, distinct, same_step
+from rockdec.validate import InputError
+
+from rockdec.rdd.registry import DEFAULT_ESTIMATOR
+
+if TYPE_CHECKING:
+    from rockdec.record import record_measure
+
+#: Records (in all) longer than this are warned about: their spread falls below the
+#: accuracy of the belt's fitted mean (about 0.001 at e = 0.95, measured on 20-million-sample records).
+LONG_SAMPLES = 2_000_000
+
+#: A given ``g`` off the records' own by more than this factor is refused before any
+#: calibration (the calibrated 95 % spread of ``g`` is a few per cent).
+G_FACTOR = 2.0
+
+#: Peaks beyond this many ``sigma_Y`` are named as the cause when the analysis refuses the
+#: records (a spike that inflates ``sigma_Y`` leaves too few triggers).
+SPIKE_SIGMAS = 15.0
+
+#: Cost model of :func:`cost`, measured on an idle 2-core machine: seconds per sample to
+#: read a CSV (pandas) and to analyse a record; seconds per simulated and analysed
+#: calibration sample on one core; bytes held per sample while reading and analysing.
+CSV_SECONDS, ANALYSIS_SECONDS, CALIBRATION_SECONDS, BYTES_PER_SAMPLE = 5e-7, 1.2e-7, 1.3e-7, 96.0
+
+
+def cost(samples: int, csv: bool, g_given: bool, cores: int = 2) -> tuple[float, float]:
+    """``(seconds, bytes)`` that :func:`estimate` needs for records of ``samples`` in all,
+    calibration included (:data:`CSV_SECONDS` and the other constants of the model)."""
+    calibrated = samples * len(calibration.E_GRID) * calibration.SETS_PER_E
+    seconds = samples * (CSV_SECONDS * csv + ANALYSIS_SECONDS * (1 + g_given)) + calibrated * CALIBRATION_SECONDS / cores
+    return seconds, samples * BYTES_PER_SAMPLE
+
+
+def diagnose(records: list[Record], analysis: measured.Analysis, settings: dict, cal, e: float | None, interval) -> tuple[list[str], dict]:
+    """The checks of :mod:`rockdec.record.diagnostics` on the records, against thresholds from the
+    calibration ``cal`` near the corrected ``e`` and its 95 % ``interval``: the warnings of
+    the checks that fired, and per check ``{"statistic", "threshold", "fired"}`` (JSON-able)."""
+    level = settings.get("level", measured.DEFAULT_SETTINGS["level"])
+    outcomes = diagnostics.evaluate([r.theta for r in records], analysis, cal, e, interval, level)
+    notes = [o.message for o in outcomes.values() if o.fired]
+    return notes, {name: {"statistic": _num(o.statistic), "threshold": _num(o.threshold), "fired": o.fired} for name, o in outcomes.items()}
+
+
+def _spike(records: list[Record]) -> str | None:
+    """A sentence on the largest spike of the records (beyond :data:`SPIKE_SIGMAS` times their
+    rms), or ``None``."""
+    y = np.concatenate([r.theta - np.nanmean(r.theta) for r in records])
+    rms = float(np.sqrt(np.nanmean(y**2)))
+    where = int(np.nanargmax(np.abs(y)))
+    peak = float(np.abs(y[where])) / rms
+    if not peak > SPIKE_SIGMAS:
+        return None
+    return (
+        f"a spike of {peak:.0f} times the rms (sample {where}) inflates sigma_Y and with it the trigger levels; "
+        "remove the spikes or mark them as gaps (NaN)"
+    )
+
+
+def _analyse(records: list[Record], dt: float, settings: dict, g: float | None) -> measured.Analysis:
+    """:func:`rockdec.rdd.measured.analyse`, its refusals as :class:`RecordError` naming the
+    records (a spike, when there is one, is named as the cause)."""
+    names = ", ".join(r.source for r in records)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # empty windows are reported through the trigger counts
+        try:
+            analysis = measured.analyse([r.theta for r in records], dt, settings, g=g)
+        except ValueError as exc:
+            raise RecordError(f"{names}: {_spike(records) or exc}.") from None
+    n_a, n_v = int(analysis.count["a"][-1]), int(analysis.count["v"][-1])
+    if n_v < 3 or n_a < 3:
+        spike = _spike(records)
+        if spike:
+            raise RecordError(f"{names}: only {n_a} extremum and {n_v} zero-crossing triggers: {spike}.")
+        raise RecordError(
+            f"{names}: only {n_a} extremum and {n_v} zero-crossing triggers, too few for the fits; give a longer record."
+        )
+    return analysis
+
+
+def _check_given_g(g: float, own: measured.Analysis | None, names: str) -> None:
+    """Refuse a given ``g`` off the records' own (read off their free response) by more
+    than :data:`G_FACTOR`."""
+    if own is None or not np.isfinite(own.raw[measured.G_NAME]):
+        return
+    ratio = g / own.raw[measured.G_NAME]
+    if not 1.0 / G_FACTOR <= ratio <= G_FACTOR:
+        raise RecordError(
+            f"--g {g:g} is {ratio:.3g} times the g the records show ({own.raw[measured.G_NAME]:.3g} rad/s^2, read off the "
+            f"free response of {names}); give g = nu^2 theta_cr in rad/s^2 (theta_cr in rad, not degrees), or leave --g out."
+        )
+
+
+def measure_model(records: list[Record], dt: float) -> tuple[record_measure.MeasuredModel | None, str | None]:
+    """:func:`rockdec.record.record_measure.measure` of the records, or ``None`` and why it could not
+    be measured (too few triples on one side of zero, say)."""
+    from rockdec.record import record_measure
+
+    try:
+        return record_measure.measure([r.theta for r in records], dt), None
+    except InputError as exc:
+        return None, str(exc).rstrip(".")
+
+
+def record_model(
+    measurement, analysis: measured.Analysis, *, model: RecordModel | None = None, load: Load | str | None = None,
+    sensor: SensorNoise | None = None, rocking: str | None = None,
+) -> tuple[RecordModel, dict]:
+    """The record model the calibration simulates (before :func:`rockdec.calibrate.calibration.binned_model`)
+    and where each part came from.
+
+    ``model`` declares every part; else ``load``, ``sensor`` and ``rocking`` declare theirs
+    (the rocking model is the simplified one, eq. 4, unless declared) and the rest is
+    measured (``measurement``, a :class:`rockdec.record.record_measure.MeasuredModel`, or ``None``
+    when the records could not be measured; then the part is the paper's). A
+    measured low-pass load (colour detected, :attr:`~rockdec.record.record_measure.MeasuredModel.coloured`)
+    is stated by its pole per sample ``alpha``, as a corner ``-ln(alpha) N / (2 pi)`` in
+    rocking frequencies at the ``N`` samples per cycle the analysis reads
+    (``analysis.points_per_cycle``), so that the calibration, which simulates at that
+    ``N``, simulates that pole; measured sensor noise (detected,
+    :attr:`~rockdec.record.record_measure.MeasuredModel.noisy`) in units of ``sigma_Y``. A
+    declared noise in rad is expressed in the records' ``sigma_Y``; a declared load given as
+    text (``--load``, :func:`rockdec.physics.record_model.parse_load`) is read with the records'
+    ``dt`` and samples per cycle, which place a spectrum table in Hz and a base record
+    against their rocking frequency ``1/(dt N)``. Returns
+    ``(model, sources)``, ``sources`` naming ``load``, ``sensor_noise`` and ``rocking`` as
+    ``"declared"``, ``"measured"`` or ``"paper (not measured)"``.
+    """
+    if isinstance(load, str):
+        load = parse_load(load, dt=analysis.dt, points_per_cycle=analysis.points_per_cycle)
+    if model is not None:
+        load, sensor, rocking, how = model.load, model.sensor, model.rocking, "declared"
+        sources = {"load": how, "sensor_noise": how, "rocking": how}
+    else:
+        sources = {"rocking": "paper (the simplified model, eq. 4)" if rocking is None else "declared"}
+        rocking = rocking or "simplified"
+        missing = "paper (not measured)" if measurement is None else "measured"
+        sources["load"] = "declared" if load is not None else missing
+        sources["sensor_noise"] = "declared" if sensor is not None else missing
+        if load is None:
+            load = WHITE
+            if measurement is not None and measurement.coloured:
+                load = Load("lowpass", -math.log(measurement.pole.value) * analysis.points_per_cycle / (2.0 * math.pi))
+        if sensor is None:
+            sensor = NO_NOISE
+            if measurement is not None and measurement.noisy:
+                sensor = SensorNoise(measurement.noise_ratio.value, "sigma_y")
+    if sensor.units == "rad":
+        sensor = SensorNoise(sensor.std / analysis.sigma_y, "sigma_y")
+    return RecordModel(rocking, load, sensor), sources
+
+
+def _quantity(q, scale: float = 1.0) -> dict:
+    """A measured quantity and its standard error for JSON (``scale`` multiplies both)."""
+    return {"value": _num(q.value * scale), "se": _num(q.se * scale)}
+
+
+def model_report(measurement, why_not: str | None, analysis: measured.Analysis, sources: dict, simulated: RecordModel, cal_settings: dict) -> dict:
+    """The ``record_model`` of :func:`estimate`'s JSON: what was measured (each quantity
+    with its standard error), what was detected, what the calibration simulated (the
+    binned model, :func:`rockdec.calibrate.calibration.binned_model`) and where each part came from."""
+    cal_ppc = cal_settings["points_per_cycle"]
+    ratio = cal_settings.get("sigma_y_over_theta_cr")
+    out = {
+        "sources": sources,
+        "simulated": {
+            **simulated.key(),
+            "load": simulated.load.to_dict() if simulated.load.kind != "spectrum" else {
+                "kind": "spectrum", "rows": len(simulated.load.frequency), "source": simulated.load.source,
+            },
+            "load_pole_per_sample": _num(simulated.load.pole(cal_ppc)),
+            "points_per_cycle": _num(cal_ppc),
+            "sigma_y_over_theta_cr": ratio,
+            "described": f"{simulated.rocking} rocking" + (f" (sigma_Y/theta_cr {ratio:.3g})" if ratio else "") + f", {simulated.load.describe()} load, "
+            + (f"sensor noise {simulated.sensor.std:.3g} sigma_Y" if simulated.sensor.std > 0 else "no sensor noise"),
+        },
+        "measured": None,
+        "not_measured": why_not,
+    }
+    if measurement is not None:
+        m = measurement
+        rate = analysis.points_per_cycle / (2.0 * math.pi)  # corner in rocking frequencies per unit of -ln(pole)
+        corner = (
+            {"value": _num(-math.log(m.pole.value) * rate), "se": _num(m.pole.se / m.pole.value * rate)}
+            if 0.0 < m.pole.value < 1.0 else {"value": None, "se": None}
+        )
+        out["measured"] = {
+            "kind": m.kind,
+            "detected": {"sensor_noise": m.noisy, "colour": m.coloured, "drift": m.drifting},
+            "sensor_noise_sigma_y": _quantity(m.noise_ratio),
+            "sensor_noise_z": _num(m.noise_var.z),
+            "load_pole_per_sample": _quantity(m.pole),
+            "load_pole_z": _num(m.pole.z),
+            "load_corner_rocking": corner,
+            "load_corner_hz": _quantity(m.corner_hz),
+            "drift_rms_sigma_y": _num(m.drift_rms),
+            "drift_z": _num(m.drift_z),
+            "g": _quantity(m.g),
+            "g_asymmetry": _quantity(m.asymmetry),
+            "triples": m.triples,
+        }
+    return out
+
+
+def coverage_floor(n_sets: int) -> float:
+    """Lowest calibrated coverage (:func:`rockdec.calibrate.belt.calibration_coverage`) at which an
+    interval is taken to hold 95 %: the lower end of the binomial band
+    ``0.95 - 1.96 sqrt(0.95 x 0.05 / n)`` of ``n`` calibration sets (what a belt that covers
+    exactly 95 % shows on its own sets 97.5 % of the time)."""
+    return 0.95 - belt.Z95 * math.sqrt(0.95 * 0.05 / max(n_sets, 1))
+
+
+def select(per: dict, n_sets: int) -> tuple[str | None, list[dict], str | None]:
+    """The reported estimator among :data:`rockdec.rdd.registry.CANDIDATES`: of those with a
+    value, an interval narrower than the calibrated range, and a calibrated coverage that
+    holds (:func:`coverage_floor`), the one with the narrowest 95 % interval. Returns ``(name or None, selection, reason)``: ``selection``
+    lists each candidate's width, coverage, whether it holds and why not; ``reason`` is
+    one sentence when none can be trusted."""
+    floor = coverage_floor(n_sets)
+    rows = []
+    for name in registry.CANDIDATES:
+        est = per[name]
+        low, high = est["interval"]
+        width = None if est["e"] is None or low is None else high - low
+        cov = est["coverage"]
+        if est["beyond"] is not None:
+            why = f"its raw value lies beyond what any calibrated e gives ({est['beyond']})"
+        elif width is None:
+            why = "; ".join(est["notes"]) or "it gave no value on these records"
+        elif est["calibrated_range"] and low <= est["calibrated_range"][0] and high >= est["calibrated_range"][1]:
+            why = "its 95 % interval spans the whole calibrated range: the record does not tell e"
+        elif cov is None or cov < floor:
+            why = f"its calibrated coverage {'-' if cov is None else f'{cov:.1%}'} is below {floor:.1%}"
+        else:
+            why = None
+        rows.append({"estimator": name, "width": _num(width) if width is not None else None, "coverage": cov, "holds": why is None, "why_not": why})
+    trusted = [row for row in rows if row["holds"]]
+    if trusted:
+        return min(trusted, key=lambda row: row["width"])["estimator"], rows, None
+    reason = "no estimator can be trusted on these records: " + "; ".join(f"{row['estimator']}: {row['why_not']}" for row in rows)
+    return None, rows, reason
+
+
+def estimate(
+    records: list[Record], *, cache_dir, g: float | None = None, settings: dict | None = None, model: RecordModel | None = None,
+    load: Load | str | None = None, sensor: SensorNoise | None = None, rocking: str | None = None, theta_cr: float | None = None,
+) -> dict:
+    """Calibrated estimates of ``e`` from ``records`` of one block (pooled).
+
+    ``model``: the record model the calibration simulates, declared whole
+    (:mod:`rockdec.physics.record_model`; :data:`rockdec.physics.record_model.PAPER` is the paper's white
+    load and perfect sensor); ``None`` measures it off the records
+    (:func:`rockdec.record.record_measure.measure`, :func:`record_model`), except the parts
+    ``load`` (a :class:`~rockdec.physics.record_model.Load`, or the text of ``--load``:
+    :func:`record_model`), ``sensor`` and ``rocking`` declare. A sensor noise in rad is
+    expressed in the records' ``sigma_Y``. Housner's model (eq. 2) needs the block's ``theta_cr`` (rad): its
+    calibration simulates the records' ``sigma_Y / theta_cr``. The calibration simulates
+    that model binned (:func:`rockdec.calibrate.calibration.binned_model`).
+
+    Returns a JSON-able dict: ``e``, ``interval`` (95 %), ``reason`` (why ``e`` is null,
+    else ``None``), ``estimator`` (the candidate reported, :func:`select`; ``None`` when
+    none can be trusted), ``selection`` (the candidates' widths and coverages),
+    ``coverage`` (the share of the calibration's simulated record sets whose interval held
+    their true ``e``, :func:`rockdec.calibrate.belt.calibration_coverage`), ``raw`` (of the reported
+    estimator), ``g`` (rad/s^2: corrected, or as given), ``g_raw``,
+    ``points_per_cycle``, ``sigma_y``, ``dt``, ``samples``, ``nan_samples``,
+    ``record_model`` (:func:`model_report`),
+    ``estimators`` (per estimator: ``raw``, ``e``, ``interval``, ``coverage``, ``triggers``,
+    ``notes``, ``calibrated_range`` and ``beyond``: ``"below"``, ``"above"`` or
+    ``"unreached"`` when the raw value lies beyond what any calibrated ``e`` produces on
+    average, and ``e`` is then ``None``, :func:`beyond`),
+    ``g_interval`` (95 %, rad/s^2, :func:`rockdec.calibrate.belt.g_interval`; ``None`` when ``g`` is
+    given, or when there is no corrected ``e`` or its interval reaches an end of the
+    calibrated range; ``g_interval_note`` says which), ``g_coverage`` (the
+    share of the calibration's simulated record sets whose ``g`` interval held their true
+    ``g``, :func:`rockdec.calibrate.belt.g_calibration_coverage`), ``rockdec_version``,
+    ``warnings``, ``diagnostics`` (per check of :mod:`rockdec.record.diagnostics`: ``statistic``,
+    ``threshold``, ``fired``), ``calibration`` (file, and whether it came from the cache), and, under
+    keys starting with ``_``, the analysis and belts for plots.
+
+    Refuses (:class:`RecordError`) records given twice, records that do not look like
+    rocking (:func:`rockdec.rdd.measured.rocking_shape`), and a ``g`` off the records' own by
+    more than :data:`G_FACTOR`; a ``g`` outside the calibrated 95 % interval of the
+    records' own is warned about. Drift is one of the checks of :func:`diagnose` (the
+    calibration simulates a stationary record).
+    """
+    settings = {**measured.DEFAULT_SETTINGS, **(settings or {})}
+    records = distinct(records)
+    dt = same_step(records)
+    names = ", ".join(r.source for r in records)
+    notes = []
+    try:
+        own = _analyse(records, dt, settings, None)
+    except RecordError:
+        if g is None:
+            raise
+        own = None
+        notes.append("g cannot be read off the records, so --g could not be checked against them")
+    if g is not None:
+        _check_given_g(g, own, names)
+        analysis = _analyse(records, dt, settings, g)
+    else:
+        analysis = own
+    shape = measured.rocking_shape(own if own is not None else analysis)
+    if shape:
+        raise RecordError(f"{names} does not look like a rocking record: {shape}; rockdec estimate gives e only for rocking records.")
+    measuring = model is None and (load is None or sensor is None)  # a part is to be measured
+    measurement, why_not = measure_model(records, dt) if model is None else (None, "declared")
+    if measuring and measurement is None:
+        notes.append(f"the record model could not be measured ({why_not}): the calibration simulates the paper's white load and noise-free sensor")
+    model, sources = record_model(measurement, analysis, model=model, load=load, sensor=sensor, rocking=rocking)
+    if (model.rocking == "housner") != (theta_cr is not None):
+        raise InputError("Housner's model (eq. 2) needs the block's critical angle theta_cr, and only it; give both or neither.")
+    ratio = analysis.sigma_y / theta_cr if theta_cr is not None else None
+    cal_settings = calibration.calibration_settings([r.theta.size for r in records], analysis.points_per_cycle, settings, model, ratio)
+    started = time.perf_counter()
+    cal, cached = calibration.load_or_build(cal_settings, cache_dir, notes)
+    built_s = time.perf_counter() - started
+    per = {}
+    belts = belt.belts(cal)
+    for name in registry.ESTIMATORS:
+        c = belt.correct(belts[name], analysis.raw[name])
+        trigger = registry.trigger(name)
+        side = beyond(belts[name], analysis.raw[name], c)
+        per[name] = {
+            "raw": _num(analysis.raw[name]),
+            "e": None if side else _num(c.value),
+            "beyond": side,
+            "calibrated_range": [_num(belts[name].e[0]), _num(belts[name].e[-1])] if belts[name].e.size else None,
+            "interval": [_num(c.low), _num(c.high)],
+            "coverage": _num(belt.calibration_coverage(cal, name, belts[name])),
+            "triggers": int(analysis.count[trigger][-1]),
+            "notes": [note for note in c.notes if not (side and "nearest point" in note)],  # no value is shown
+        }
+    chosen, selection, reason = select(per, int(cal["raw"].sizes["e_true"] * cal["raw"].sizes["set"]))
+    shown = per[chosen] if chosen else {"e": None, "interval": [None, None], "coverage": None, "raw": None}
+    e_chosen = math.nan if shown["e"] is None else shown["e"]
+    g_belt = belts[measured.G_NAME]
+    e_name = chosen or DEFAULT_ESTIMATOR  # the estimator whose corrected e corrects g
+    e_belt = belts[e_name]
+    g_band = belt.g_band(cal, e_name, e_belt, g_belt)
+    g_value = g if g is not None else belt.correct_g(g_belt, analysis.raw[measured.G_NAME], e_chosen)
+    no_interval = g is not None or chosen is None
+    g_low, g_high = (math.nan, math.nan) if no_interval else belt.g_interval(g_band, e_belt, g_belt, analysis.raw[e_name], analysis.raw[measured.G_NAME])
+    if g is not None and own is not None:
+        low, high = belt.g_interval(g_band, e_belt, g_belt, own.raw[e_name], own.raw[measured.G_NAME])
+        if np.isfinite(low) and not low <= g <= high:
+            notes.append(
+                f"--g {g:g} lies outside the records' own g, {low:.4g}-{high:.4g} rad/s^2 (calibrated 95 % interval): "
+                "the estimate rests on the given g"
+            )
+    samples = int(sum(r.theta.size for r in records))
+    if samples > LONG_SAMPLES:
+        notes.append(
+            f"{samples} samples make the interval narrower than the accuracy of the calibration's fitted mean curve "
+            "(about 0.001 at e = 0.95): on 20-million-sample records it covered the true e 73-90 % of the time, not 95 %"
+        )
+    simulated = RecordModel.from_key(cal_settings["record_model"])
+    warned, checks = diagnose(records, analysis, settings, cal, shown["e"], shown["interval"])
+    return {
+        "e": shown["e"],
+        "interval": shown["interval"],
+        "reason": reason,
+        "estimator": chosen,
+        "selection": selection,
+        "coverage": shown["coverage"],
+        "raw": shown["raw"],
+        "g": _num(g_value),
+        "g_given": g is not None,
+        "g_raw": _num(analysis.raw[measured.G_NAME]),
+        "g_interval": None if g is not None or not np.isfinite(g_low) else [_num(g_low), _num(g_high)],
+        "g_coverage": None if no_interval else _num(belt.g_calibration_coverage(cal, e_name, e_belt, g_belt, g_band)),
+        "g_interval_note": "as given (--g)" if g is not None else (
+            "95 % interval: the corrected g over the scatter of the corrected g about the true g on the calibration's "
+            "simulated records (the error of the corrected e included)" if np.isfinite(g_low) else
+            "no interval: no e was estimated, and g is corrected at the corrected e" if chosen is None else
+            "no interval: g's interval needs a corrected e whose interval lies inside the calibrated range"
+        ),
+        "points_per_cycle": _num(analysis.points_per_cycle),
+        "sigma_y": _num(analysis.sigma_y),
+        "dt": dt,
+        "records": [r.source for r in records],
+        "samples": samples,
+        "nan_samples": int(analysis.nan_samples),
+        "record_model": model_report(measurement, why_not if measuring else None, analysis, sources, simulated, cal_settings),
+        "estimators": per,
+        "warnings": notes + warned,
+        "diagnostics": checks,
+        "rockdec_version": __version__,
+        "calibration": {
+            "file": f"calibration-{calibration.settings_hash(cal_settings)}.nc", "cached": cached, "seconds": round(built_s, 2),
+        },
+        "_analysis": analysis,
+        "_belts": belts,
+    }
+
+
+def beyond(b: belt.Belt, raw: float, c: belt.Corrected) -> str | None:
+    """Why the corrected value ``c`` of the raw value ``raw`` is no estimate, or ``None``.
+
+    When ``raw`` lies outside every value the belt's mean curve takes, :func:`belt.correct`
+    returns the nearest point of the curve, which estimates nothing: ``"below"`` or
+    ``"above"`` when that point is an end of the calibrated range of ``e`` (which then
+    bounds ``e``), ``"unreached"`` when it is inside the range.
+    """
+    if b.e.size == 0 or not (np.isfinite(raw) and np.isfinite(c.value)) or b.mean.min() <= raw <= b.mean.max():
+        return None
+    if c.value == b.e[0]:
+        return "below"
+    return "above" if c.value == b.e[-1] else "unreached"
+
+
+def _num(x) -> float | None:
+    """A float for JSON, ``None`` for NaN."""
+    x = float(x)
+    return x if math.isfinite(x) else None

@@ -1,0 +1,251 @@
+"""The run contract: everything that fixes a scene's simulated series, built once and passed on.
+
+A :class:`Run` holds the rocking system (``e``, ``nu``, ``theta_cr``; eqs. 2, 4, 6), the load
+(``sigma_p``, eqs. 21-24, and its spectrum, :class:`rockdec.physics.record_model.Load`), the sensor
+noise, the sampling (``dt``, ``burn_in``), the initial state, the model that runs and the
+stationary statistics measured at that step (``sigma_y``, ``sigma_ydot``, samples per
+cycle at ``sigma_Y``, eq. 5); :attr:`Run.record_model` gives its record model. Given a seed it determines the
+series bit for bit (:meth:`Run.dataset`), and its statistics set the trigger levels of
+every signature of the scene (one level for all series, docs/method.md §4.4).
+
+Every path builds it once, by :func:`calibrate` (step search included): the workflow's rule
+``calibrate`` (written as ``run.json``), the command line, the trade-off and amplitude studies; it
+travels as NetCDF attributes (:meth:`Run.to_attrs`, :meth:`Run.from_attrs`) in every file
+made from it. The kernels and their Dask wrapper stay in :mod:`rockdec.physics.simulate`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import warnings
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from rockdec.physics import simulate
+from rockdec import validate as checks
+from rockdec.physics.housner import choose_model
+from rockdec.physics.models import MODEL_PEAK_SIGMAS, period_from_g, restoring_acceleration
+from rockdec.physics.record_model import (
+    NO_NOISE,
+    WHITE,
+    Load,
+    RecordModel,
+    SensorNoise,
+    load_attrs,
+    load_from_attrs,
+    sensor_attrs,
+    sensor_from_attrs,
+)
+
+#: Pilot sizes of the step search (:func:`rockdec.physics.simulate.calibrate_dt`), the defaults of
+#: :func:`calibrate`'s ``pilot``.
+PILOT = {"pilot_seeds": simulate.PILOT_SERIES, "pilot_points": simulate.PILOT_POINTS}
+
+
+@dataclasses.dataclass(frozen=True)
+class Run:
+    """One simulated run: what a seed needs to become a series, and the scene's statistics.
+
+    ``model``: ``"simplified"`` (eq. 4), ``"housner"`` (eq. 2) or ``"fixed_step"`` (eq. 4
+    with the grid-impact integrator of :mod:`rockdec.physics.fixed_step`); ``e`` (eq. 6), ``nu``
+    (rad/s), ``theta_cr`` (rad), ``sigma_p`` (rad/s, std of the velocity impulses),
+    ``dt`` (s), ``burn_in`` (steps discarded), ``theta0``/``theta_dot0`` (state at the start
+    of the burn-in); ``sigma_y`` (rad), ``sigma_ydot`` (rad/s, of the sampled slope) and
+    ``points_per_cycle`` (samples per cycle at ``sigma_Y``, eq. 5) measured by a pilot at
+    ``dt`` (NaN for a free response); ``points_per_cycle_target`` (what set ``dt``) and
+    ``model_reason`` (why this model) say how it was chosen; ``load``: the impulses' spectrum
+    (its corner or its table placed at ``points_per_cycle_target``, :attr:`load_options`); ``sensor``: white noise
+    added to the recorded angle (the statistics are the model's response without it).
+    """
+
+    model: str
+    e: float
+    nu: float
+    theta_cr: float
+    sigma_p: float
+    dt: float
+    burn_in: int
+    sigma_y: float
+    sigma_ydot: float
+    points_per_cycle: float
+    points_per_cycle_target: float = math.nan
+    model_reason: str = "requested"
+    theta0: float = 0.0
+    theta_dot0: float = 0.0
+    load: Load = WHITE
+    sensor: SensorNoise = NO_NOISE
+
+    @property
+    def g(self) -> float:
+        """The restoring acceleration ``nu^2 theta_cr`` of eq. 4, in rad/s^2."""
+        return restoring_acceleration(self.nu, self.theta_cr)
+
+    @property
+    def pole(self) -> float:
+        """The load filter's pole (:meth:`rockdec.physics.record_model.Load.pole` at the target density; 0: white;
+        NaN: a spectrum load, which has none)."""
+        return self.load.pole(self.points_per_cycle_target)
+
+    @property
+    def load_options(self) -> dict:
+        """The load as the simulators' keywords (``pole`` or ``spectrum``) at the target density
+        (:meth:`rockdec.physics.record_model.Load.draw_options`)."""
+        return self.load.draw_options(self.points_per_cycle_target)
+
+    @property
+    def sensor_std(self) -> float:
+        """The sensor noise's standard deviation in rad (0 without noise)."""
+        return self.sensor.std_rad(self.sigma_y) if self.sensor.std > 0.0 else 0.0
+
+    @property
+    def record_model(self) -> RecordModel:
+        """The run's record model: its rocking model (the fixed-step integrator runs eq. 4), load and sensor."""
+        return RecordModel("housner" if self.model == "housner" else "simplified", self.load, self.sensor)
+
+    def to_attrs(self) -> dict:
+        """The run as NetCDF attributes (numbers and strings): every field, the load and the
+        sensor noise flattened (:mod:`rockdec.physics.record_model`), ``g`` and ``load_pole`` added for readers."""
+        fields = {f.name: getattr(self, f.name) for f in dataclasses.fields(self) if f.name not in ("load", "sensor")}
+        return {**fields, **load_attrs(self.load), **sensor_attrs(self.sensor), "g": self.g, "load_pole": self.pole}
+
+    @classmethod
+    def from_attrs(cls, attrs) -> "Run":
+        """The run described by ``attrs`` (as :meth:`to_attrs` wrote them; others ignored)."""
+        kinds = {f.name: f.type for f in dataclasses.fields(cls)}
+        missing = [name for name, f in _required().items() if name not in attrs]
+        if missing:
+            raise checks.InputError(
+                f"the attributes do not describe a rockdec run: {', '.join(missing)} missing; "
+                "use a file written by the workflow or by 'rockdec simulate'"
+            )
+        cast = {"str": str, "int": int, "float": float}
+        plain = {name: cast[kinds[name]](attrs[name]) for name in kinds if name in attrs and kinds[name] in cast}
+        return cls(**plain, load=load_from_attrs(attrs), sensor=sensor_from_attrs(attrs))
+
+    def dataset(self, seeds, n_points: int, chunk_seeds: int = 100) -> xr.Dataset:
+        """Lazy ``theta(seed, time)``, ``theta_dot(seed, time)`` of ``seeds`` under this run
+        (:func:`rockdec.physics.simulate.simulation_dataset`), its attributes :meth:`to_attrs`."""
+        ds = simulate.simulation_dataset(
+            seeds, n_points, dt=self.dt, g=self.g, e=self.e, sigma_p=self.sigma_p, theta0=self.theta0,
+            theta_dot0=self.theta_dot0, burn_in=self.burn_in, chunk_seeds=chunk_seeds, model=self.model,
+            theta_cr=self.theta_cr, sensor_std=self.sensor_std, **self.load_options,
+        )
+        ds.attrs = self.to_attrs()
+        return ds
+
+    def write(self, path) -> Path:
+        """Write the run as JSON (the product of rule ``calibrate``)."""
+        path = Path(path)
+        path.write_text(json.dumps(self.to_attrs(), indent=2, sort_keys=True) + "\n")
+        return path
+
+    @classmethod
+    def read(cls, path) -> "Run":
+        """The run of a ``run.json`` written by :meth:`write`."""
+        path = Path(path)
+        try:
+            attrs = json.loads(path.read_text())
+        except (OSError, ValueError) as exc:
+            raise checks.InputError(f"'{path}' is not a readable run file ({exc}); rerun rule calibrate") from None
+        return cls.from_attrs(attrs)
+
+
+def _required() -> dict:
+    return {f.name: f for f in dataclasses.fields(Run) if f.default is dataclasses.MISSING}
+
+
+def calibrate(scene: dict, amplitude: float = 0.0, theta0: float = 0.0, theta_dot0: float = 0.0, pilot: dict | None = None) -> Run:
+    """The run of a scene's ``model``, ``system`` and ``excitation`` sections: the one way from
+    settings (a scene, or a command line made into one) to a :class:`Run`.
+
+    ``dt`` comes from the scene or from the step search :func:`rockdec.physics.simulate.calibrate_dt`
+    under the scene's load (``pilot``: its sizes, :data:`PILOT`); the burn-in from the
+    scene or :func:`rockdec.physics.simulate.default_burn_in`. Stationary statistics are measured
+    by a pilot at that step, with the model that runs (``auto`` chooses by the amplitude,
+    :func:`model_for`; :func:`with_model`). Without noise (``sigma_p = 0``, a free response
+    from ``theta0``) there is no ``sigma_Y``: the step then gives ``points_per_cycle``
+    samples per cycle at ``amplitude`` (eq. 5), no burn-in. ``scene["model"]`` may also be
+    ``"fixed_step"`` (the grid-impact integrator, for the speed/accuracy study).
+    """
+    system, exc = scene["system"], scene["excitation"]
+    g = restoring_acceleration(system["nu"], system["theta_cr"])
+    e, sigma_p = system["e"], exc["sigma_p"]
+    load, sensor = Load.from_dict(exc.get("load")), SensorNoise.from_dict(exc.get("sensor_noise"))
+    pilot = {**PILOT, **(pilot or {})}
+    draw = load.draw_options(exc["points_per_cycle"])
+    if sigma_p == 0.0:
+        if exc["dt"] is None and amplitude <= 0.0:
+            raise checks.InputError("a free response (sigma_p = 0) needs --theta0 > 0 to set the step, or --dt")
+        dt = exc["dt"] if exc["dt"] is not None else float(period_from_g(abs(amplitude), g)) / exc["points_per_cycle"]
+        nan = math.nan
+        cal = {"dt": dt, "burn_in": 0, "sigma_y": nan, "sigma_ydot": nan, "points_per_cycle": nan}
+    elif exc["dt"] is None:
+        cal = simulate.calibrate_dt(
+            e=e, g=g, sigma_p=sigma_p, points_per_cycle=exc["points_per_cycle"], **draw,
+            iterations=simulate.STEP_ITERATIONS[load.kind], **pilot,
+        )
+    else:
+        burn_in = exc["burn_in"] if exc["burn_in"] is not None else simulate.default_burn_in(e, exc["points_per_cycle"])
+        theta, _ = simulate.simulate_block(
+            _statistics_seeds(pilot), pilot["pilot_points"], dt=exc["dt"], g=g, e=e, sigma_p=sigma_p, burn_in=burn_in, **draw
+        )
+        cal = {"dt": exc["dt"], "burn_in": burn_in, **simulate.pilot_statistics(theta, exc["dt"], g)}
+    if exc["burn_in"] is not None:
+        cal["burn_in"] = exc["burn_in"]
+    model, reason = model_for(scene["model"], cal["sigma_y"], system["theta_cr"])
+    simplified = Run(
+        model="simplified", e=e, nu=system["nu"], theta_cr=system["theta_cr"], sigma_p=sigma_p, dt=cal["dt"],
+        burn_in=int(cal["burn_in"]), sigma_y=cal["sigma_y"], sigma_ydot=cal["sigma_ydot"],
+        points_per_cycle=cal["points_per_cycle"], points_per_cycle_target=float(exc["points_per_cycle"]),
+        model_reason=reason, theta0=float(theta0), theta_dot0=float(theta_dot0), load=load, sensor=sensor,
+    )
+    return with_model(simplified, model, pilot)
+
+
+def _statistics_seeds(pilot: dict) -> np.ndarray:
+    """Seeds of the pilot that measures the statistics at a given step (:data:`rockdec.physics.simulate.STATISTICS_PILOT_SERIES`)."""
+    return np.arange(min(simulate.STATISTICS_PILOT_SERIES, pilot["pilot_seeds"])) + simulate.PILOT_SEED_OFFSET
+
+
+def with_model(run: Run, model: str, pilot: dict | None = None) -> Run:
+    """``run`` under ``model`` at the same step, its statistics re-measured by a pilot of that
+    model: the trigger level and the sampling follow the model that runs. A block that
+    overturns in most pilot series (Housner) has no stationary rocking: refused.
+    """
+    if model == run.model or not run.sigma_p > 0.0:
+        return dataclasses.replace(run, model=model)
+    pilot = {**PILOT, **(pilot or {})}
+    theta, _ = simulate.simulate_model(
+        model, _statistics_seeds(pilot), pilot["pilot_points"], dt=run.dt, g=run.g, e=run.e, sigma_p=run.sigma_p,
+        theta_cr=run.theta_cr, burn_in=run.burn_in, **run.load_options,
+    )
+    standing = np.all(np.isfinite(theta), axis=1)
+    if standing.mean() < 0.5:
+        raise checks.InputError(
+            f"the block overturns in {1 - standing.mean():.0%} of the pilot series ({MODEL_PEAK_SIGMAS:g} sigma_Y/theta_cr = "
+            f"{MODEL_PEAK_SIGMAS * run.sigma_y / run.theta_cr:.2g}): no stationary rocking exists; lower sigma_p"
+        )
+    return dataclasses.replace(run, model=model, **simulate.pilot_statistics(theta[standing], run.dt, run.g))
+
+
+def model_for(requested: str, sigma_y: float, theta_cr: float) -> tuple[str, str]:
+    """The model a scene runs, and why: as requested, or for ``auto`` by the amplitude.
+
+    ``auto`` judges the amplitude by ``3 sigma_Y / theta_cr`` (:data:`rockdec.physics.models.
+    MODEL_PEAK_SIGMAS`) with :func:`rockdec.physics.housner.choose_model`: the simplified model
+    while the periods of eqs. 3 and 5 agree within 2 % (:data:`rockdec.physics.models.
+    MODEL_TOLERANCE`), Housner beyond. A requested model is kept, with a warning in the
+    reason when it leaves its validity.
+    """
+    ratio = MODEL_PEAK_SIGMAS * sigma_y / theta_cr if np.isfinite(sigma_y) else 0.0
+    chosen, why = choose_model(ratio)
+    if requested == "auto":
+        return chosen, f"auto: {why}"
+    if requested == "simplified" and chosen == "housner":
+        warnings.warn(f"the simplified model is outside its validity region: {why}", RuntimeWarning, stacklevel=3)
+        return requested, f"requested; outside its validity: {why}"
+    return requested, "requested"

@@ -1,0 +1,470 @@
+"""Exact event-driven simulation of the simplified rocking model (paper eqs. 4, 6, 21-24).
+
+Model: ``theta'' = -g sign(theta) + F(t)`` with ``g = nu^2 theta_cr`` (eq. 4); at every zero
+crossing the angular velocity is multiplied by ``e`` (eq. 6). The load is discrete white
+noise applied as velocity impulses ``p_n ~ N(0, sigma_p^2)`` at the end of every step, so
+between impulses the motion is a parabola and is integrated exactly (eqs. 21-24). The
+impulses may be coloured (``pole``: low-pass filtered; ``spectrum``: of a tabulated spectrum;
+:func:`rockdec.physics.loading.draw_impulses`), the same for every simulator here.
+
+What the paper's scheme leaves out and :func:`flight` handles:
+
+* several zero crossings inside one step: after an impact the body flies back towards
+  zero with speed ``e V`` and may land again before the step ends;
+* the chattering (Zeno) limit: successive flight times ``2 e^k V / g`` form a geometric
+  series; when its sum ``2 e V / (g (1 - e))`` ends inside the step the body comes to rest
+  at ``theta = 0, theta' = 0``. The number of whole flights that fit in the remaining time
+  is found in closed form, so no loop runs over impacts and nothing divides by zero;
+* the time to the next crossing is the root of ``h + u t - g t^2/2 = 0`` (``h = |theta|``,
+  ``u`` the velocity away from zero), taken as ``(u + sqrt(D))/g`` when ``u >= 0`` and
+  ``2h / (sqrt(D) - u)`` when ``u < 0``, which never subtracts nearly equal numbers;
+* ``e = 1`` (no loss, flights never shrink) and ``e = 0`` (plastic impact: rest at once).
+
+Sampling convention: ``theta[n]`` is the angle at ``t = n dt`` and ``theta_dot[n]`` the
+velocity just after the impulse applied at that instant (eq. 21).
+
+Kernels take and return NumPy arrays; :func:`simulate_model` runs the model a run names,
+:func:`simulation_dataset` adds labels and Dask. :func:`calibrate_dt` is the step search, its
+constants (:data:`PILOT_SERIES`, :data:`PILOT_POINTS`, :data:`STEP_ITERATIONS`,
+:data:`STATISTICS_PILOT_SERIES`, :data:`SECANT_POINTS`, :data:`SECANT_EXPONENTS`,
+:data:`rockdec.physics.models.SCALE_CONSTANT_GUESS`) have their home
+here and in :mod:`rockdec.physics.models`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+import xarray as xr
+
+from rockdec.physics.fixed_step import step as grid_step
+from rockdec.physics.housner import simulate_block_housner
+from rockdec import validate as checks
+from rockdec.physics.loading import add_sensor_noise, draw_impulses, series_rng
+from rockdec.physics.models import SCALE_CONSTANT_GUESS, check_finite_series, check_run, period_from_g, scale_constant, step_for_density
+
+#: Largest number of correction steps when the closed-form flight count is off by rounding.
+_COUNT_FIX = 4
+
+#: Passes of the flight loop before giving up with NaN. A valid state needs at most three
+#: (crossing, closed-form bounces, last arc); only NaN or overflow could loop for ever.
+_MAX_PASSES = 64
+
+#: Pilot runs draw seeds from here on, apart from any scene's seeds.
+PILOT_SEED_OFFSET = 2**62
+
+#: Pilot of the step search (:func:`calibrate_dt`): series and points. The response is
+#: heavy-tailed (kurtosis near 15), so the pilot is large: 256 x 40000 points pin ``sigma_Y``
+#: to about 2 %.
+PILOT_SERIES, PILOT_POINTS = 256, 40_000
+
+#: Updates of the step in :func:`calibrate_dt`, per load kind: under white noise the scale law
+#: converges in 3; a coloured load's exponent is measured from the pilots (:func:`secant_step`).
+STEP_ITERATIONS = {"white": 3, "lowpass": 12, "spectrum": 12}
+
+#: Pilots whose least-squares slope gives the exponent of :func:`secant_step`, and the range
+#: the exponent is held to: with the corner at the rocking frequency the pilot's samples per
+#: cycle scatter by 20 % and more at one step, and the slope of the last two pilots alone can
+#: send the step far off (measured: 0.4 samples per cycle after 8 updates at e = 0.95).
+SECANT_POINTS, SECANT_EXPONENTS = 3, (1.0, 10.0)
+
+#: Series of the pilot that measures the statistics at a given step, or under a model other
+#: than the one the step search ran (:func:`rockdec.physics.run.calibrate`), of :data:`PILOT_POINTS`.
+STATISTICS_PILOT_SERIES = 64
+
+#: Largest default burn-in, in steps; beyond it the caller must choose one.
+MAX_DEFAULT_BURN_IN = 10**7
+
+#: The ``time`` coordinate of a simulation: seconds from the end of the burn-in. CF 1.10
+#: (section 4.4) asks a time coordinate for a reference date; the epoch stands for that
+#: instant, so xarray reads ``time`` as dates from 1970-01-01 (``time - time[0]`` in s). The
+#: proleptic Gregorian calendar: the ``standard`` one draws a CF note, its 1582 switch unused.
+TIME_ATTRS = {
+    "units": "seconds since 1970-01-01 00:00:00",
+    "calendar": "proleptic_gregorian",
+    "standard_name": "time",
+    "long_name": "time since the end of the burn-in",
+}
+
+#: Longest record, in s, whose times still decode as dates (NumPy ``datetime64[ns]`` ends
+#: in 2262): a longer one would make the file unreadable to a plain ``xarray.open_dataset``.
+MAX_RECORD_SECONDS = 9.2e9
+
+
+@numba.njit(nogil=True, cache=True, inline="always")
+def flight(theta, omega, duration, g, e):
+    """Advance ``(theta, omega)`` by ``duration`` seconds of free rocking (no load).
+
+    Exact for the simplified model (eqs. 4, 6, 22-24), any number of impacts, the rest
+    state included. Returns the new ``(theta, omega)``; ``(nan, nan)`` for a state or
+    step that is NaN (the loop is bounded by :data:`_MAX_PASSES`).
+    """
+    remaining = duration
+    if remaining != remaining:  # a NaN step: NaN, whatever the state (even at rest)
+        return math.nan, math.nan
+    for _ in range(_MAX_PASSES):
+        if theta == 0.0 and omega == 0.0:
+            return 0.0, 0.0
+        if theta > 0.0 or (theta == 0.0 and omega > 0.0):
+            side = 1.0
+        else:
+            side = -1.0
+        h = side * theta  # height above zero, >= 0
+        u = side * omega  # speed away from zero
+        h_end = h + remaining * (u - 0.5 * g * remaining)
+        if h_end > 0.0 or remaining <= 0.0:
+            return side * h_end, side * (u - g * remaining)
+        # A crossing inside the interval (the concave parabola stays below zero after it).
+        sq = math.sqrt(u * u + 2.0 * g * h)  # impact speed
+        if u >= 0.0:
+            t_cross = (u + sq) / g
+        else:
+            t_cross = 2.0 * h / (sq - u)
+        if t_cross > remaining:  # rounding: h_end <= 0 says the crossing is inside
+            t_cross = remaining
+        remaining -= t_cross
+        w = e * sq  # speed after the impact, now on the other side
+        side = -side
+        if w == 0.0:
+            return 0.0, 0.0
+        f1 = 2.0 * w / g  # duration of the first bounce
+        if f1 > remaining:
+            theta = 0.0
+            omega = side * w
+            continue
+        # Whole bounces that fit: k with S_k = f1 (1 - e^k)/(1 - e) <= remaining.
+        if e < 1.0:
+            if f1 <= remaining * (1.0 - e):  # the whole geometric series fits: rest
+                return 0.0, 0.0
+            k = math.floor(math.log1p(-remaining * (1.0 - e) / f1) / math.log(e))
+        else:
+            k = math.floor(remaining / f1)
+        k = max(k, 1.0)
+        for _ in range(_COUNT_FIX):
+            if _bounce_time(f1, e, k) > remaining and k > 1.0:
+                k -= 1.0
+            elif _bounce_time(f1, e, k + 1.0) <= remaining:
+                k += 1.0
+            else:
+                break
+        remaining = max(remaining - _bounce_time(f1, e, k), 0.0)
+        w = w * e**k
+        if k % 2.0 == 1.0:
+            side = -side
+        if w == 0.0:
+            return 0.0, 0.0
+        theta = 0.0
+        omega = side * w
+    return math.nan, math.nan
+
+
+@numba.njit(nogil=True, cache=True)
+def _bounce_time(f1, e, k):
+    """Total duration of ``k`` successive bounces, the first lasting ``f1``."""
+    if e < 1.0:
+        return f1 * -math.expm1(k * math.log(e)) / (1.0 - e) if e > 0.0 else f1
+    return f1 * k
+
+
+@numba.njit(nogil=True, cache=True, inline="always")
+def _advance(theta, omega, dt, g, e, grid_impacts):
+    """One unloaded step: the exact :func:`flight`, or the grid-impact step of
+    :mod:`rockdec.physics.fixed_step` (what most public rocking codes do)."""
+    if grid_impacts:
+        return grid_step(theta, omega, dt, g, e)
+    return flight(theta, omega, dt, g, e)
+
+
+@numba.njit(nogil=True, cache=True)
+def integrate(impulses, dt, g, e, theta0, omega0, burn_in, theta_out, omega_out, grid_impacts=False):
+    """Integrate one series (eqs. 21-24) and write the recorded part.
+
+    ``impulses`` holds ``burn_in + n - 1`` velocity impulses (rad/s); the first ``burn_in``
+    steps are discarded, then ``n = len(theta_out)`` samples are written, the first one
+    being the state after the burn-in. ``grid_impacts`` swaps the exact flight for the
+    fixed-step integrator (:func:`rockdec.physics.fixed_step.step`).
+    """
+    theta = theta0
+    omega = omega0
+    n = theta_out.shape[0]
+    for i in range(burn_in):
+        theta, omega = _advance(theta, omega, dt, g, e, grid_impacts)
+        omega += impulses[i]
+    theta_out[0] = theta
+    omega_out[0] = omega
+    for j in range(1, n):
+        theta, omega = _advance(theta, omega, dt, g, e, grid_impacts)
+        omega += impulses[burn_in + j - 1]
+        theta_out[j] = theta
+        omega_out[j] = omega
+
+
+def simulate_block(seeds, n_points, *, dt, g, e, sigma_p, theta0=0.0, theta_dot0=0.0, burn_in=0, grid_impacts=False, pole=0.0,
+                   spectrum=None):
+    """Simulate one series per seed; returns ``(theta, theta_dot)``, each ``(len(seeds), n_points)``.
+
+    Kernel entry point (NumPy in, NumPy out). ``sigma_p`` is the standard deviation of the
+    velocity impulses in rad/s; ``sigma_p = 0`` gives the free response from
+    ``(theta0, theta_dot0)``. ``grid_impacts=True``: the fixed-step integrator instead of the
+    exact one (same load, same seed). ``pole``: low-pass filtered load
+    (:func:`rockdec.physics.loading.draw_impulses`), 0 for white noise; ``spectrum``: a load of that
+    spectrum instead (:class:`rockdec.physics.loading.ImpulseSpectrum`, cycles per step;
+    :meth:`rockdec.physics.record_model.Load.draw_options` gives either). Inputs outside the model
+    (NaN, infinities, ``e`` outside ``[0, 1]``, ...) and series that overflow raise
+    :class:`rockdec.validate.InputError`.
+    """
+    check_run(dt=dt, e=e, sigma_p=sigma_p, theta0=theta0, theta_dot0=theta_dot0, burn_in=burn_in, n_points=n_points)
+    checks.positive(g, "g", "give the restoring acceleration nu^2 theta_cr in rad/s^2, > 0")
+    seeds = np.atleast_1d(np.asarray(seeds, dtype=np.int64))
+    n_steps = burn_in + n_points - 1
+    theta = np.empty((seeds.size, n_points))
+    theta_dot = np.empty((seeds.size, n_points))
+    impulses = np.empty(n_steps)
+    for row, seed in enumerate(seeds):
+        draw_impulses(series_rng(seed), impulses, sigma_p, pole, spectrum)
+        integrate(impulses, dt, g, e, theta0, theta_dot0, burn_in, theta[row], theta_dot[row], grid_impacts)
+    check_finite_series(np.stack([theta[:, -1], theta_dot[:, -1]]), f"the simulation at dt = {dt}, g = {g}, sigma_p = {sigma_p}")
+    return theta, theta_dot
+
+
+def default_burn_in(e: float, points_per_cycle: float, relaxations: float = 20.0) -> int:
+    """Steps to discard so that a series started at rest is stationary.
+
+    The energy lost per cycle is the fraction ``1 - e^4`` (eq. 7), so the energy relaxes
+    over about ``1/(1 - e^4)`` cycles; ``relaxations`` of those cycles, at
+    ``points_per_cycle`` steps each, are discarded. Refuses ``e = 1`` (nothing relaxes).
+    """
+    checks.in_range(e, "e", 0.0, 1.0, "give the coefficient of restitution in [0, 1]")
+    checks.positive(points_per_cycle, "points_per_cycle")
+    loss = 1.0 - e**4
+    if loss <= 0.0:
+        raise checks.InputError("e = 1 dissipates no energy, so no stationary state exists: give --burn-in explicitly")
+    steps = relaxations * points_per_cycle / loss
+    if steps > MAX_DEFAULT_BURN_IN:
+        raise checks.InputError(
+            f"e = {e} loses only {loss:.2g} of the energy per cycle, so reaching the stationary state "
+            f"takes about {steps:.3g} steps; give --burn-in (and --dt) explicitly"
+        )
+    return int(math.ceil(steps))
+
+
+def calibrate_dt(
+    *,
+    e: float,
+    g: float,
+    sigma_p: float,
+    points_per_cycle: float = 75.0,
+    pilot_seeds: int = PILOT_SERIES,
+    pilot_points: int = PILOT_POINTS,
+    iterations: int = STEP_ITERATIONS["white"],
+    pole: float = 0.0,
+    spectrum=None,
+) -> dict:
+    """Time step giving ``points_per_cycle`` samples per cycle at amplitude ``sigma_Y`` (eq. 5).
+
+    Under the scale law ``sigma_Y = c S^2/g^3`` (:func:`rockdec.physics.models.scale_constant`)
+    the step is :func:`rockdec.physics.models.step_for_density` of ``c``; ``c`` is measured by
+    pilot runs (:data:`PILOT_SERIES` x :data:`PILOT_POINTS`, seeds of their own, burn-in
+    discarded) and the step updated ``iterations`` times, from the step of
+    :data:`rockdec.physics.models.SCALE_CONSTANT_GUESS`.
+
+    Returns a dict with ``dt``, ``burn_in``, and the statistics of the pilot at that step:
+    ``sigma_y``, ``sigma_ydot`` (of the sampled slope ``diff(theta)/dt``, what a measured
+    record gives) and the achieved ``points_per_cycle``. Refuses ``e >= 1``. ``pole``:
+    a low-pass filtered load, ``spectrum``: a load of that spectrum
+    (:func:`rockdec.physics.loading.draw_impulses`); under either the step follows :func:`secant_step`
+    and the pilot that came closest to ``points_per_cycle`` (in ``log``) is returned.
+    """
+    checks.in_range(e, "e", 0.0, 1.0, "give the coefficient of restitution in [0, 1]")
+    checks.positive(g, "g", "give the restoring acceleration nu^2 theta_cr in rad/s^2, > 0")
+    checks.positive(sigma_p, "sigma_p", "give the impulse standard deviation in rad/s, > 0", allow_zero=True)
+    checks.in_range(points_per_cycle, "points_per_cycle", 2.0, lo_open=True, fix="give more than 2 samples per cycle")
+    checks.integer(pilot_seeds, "pilot_seeds", 1)
+    checks.integer(pilot_points, "pilot_points", 2)
+    checks.integer(iterations, "iterations", 1)
+    if e >= 1.0:
+        raise checks.InputError(
+            "e = 1 dissipates no energy, so the response never becomes stationary and "
+            "sigma_Y does not exist: give the time step explicitly (--dt) instead of "
+            "--points-per-cycle"
+        )
+    if sigma_p <= 0.0:
+        raise checks.InputError("time-step calibration needs noise: sigma_p must be > 0 (or give --dt)")
+    burn_in = default_burn_in(e, points_per_cycle)
+    seeds = np.arange(pilot_seeds) + PILOT_SEED_OFFSET
+    dt = step_for_density(SCALE_CONSTANT_GUESS, sigma_p, g, points_per_cycle)
+    outside = checks.InputError(
+        f"the time-step calibration at g = {g}, sigma_p = {sigma_p} leaves the floating-point range; "
+        "give the time step explicitly (--dt)"
+    )
+    history: list[tuple[float, float]] = []
+    coloured = not (pole == 0.0 and spectrum is None)
+    closest = None
+    for i in range(iterations):
+        if not (0.0 < dt < math.inf and 0.0 < g * dt * dt < math.inf):
+            raise outside
+        theta, _ = simulate_block(seeds, pilot_points, dt=dt, g=g, e=e, sigma_p=sigma_p, burn_in=burn_in, pole=pole,
+                                  spectrum=spectrum)
+        stats = pilot_statistics(theta, dt, g)
+        miss = abs(math.log(stats["points_per_cycle"] / points_per_cycle)) if stats["points_per_cycle"] > 0 else math.inf
+        if coloured and (closest is None or miss < closest[0]):
+            closest = (miss, {"dt": dt, "burn_in": burn_in, **stats})
+        if i < iterations - 1:
+            try:
+                if not coloured:
+                    c = scale_constant(stats["sigma_y"], dt, g, sigma_p)
+                    dt = step_for_density(c, sigma_p, g, points_per_cycle)
+                else:
+                    dt = secant_step(history, dt, stats["points_per_cycle"], points_per_cycle)
+            except (OverflowError, ZeroDivisionError):  # float ** raises where * gives inf
+                raise outside from None
+    return closest[1] if coloured and math.isfinite(closest[0]) else {"dt": dt, "burn_in": burn_in, **stats}
+
+
+def secant_step(history: list, dt: float, achieved: float, target: float) -> float:
+    """Next step of a step search under a coloured load, low-pass or of a spectrum
+    (:func:`calibrate_dt`, :func:`rockdec.calibrate.calibration.step_for`).
+
+    The load's correlation time is a fixed number of steps (its spectrum is placed in cycles
+    per step), so it scales with ``dt`` and the white law ``points_per_cycle ~ dt^-2`` no
+    longer holds: near a corner at the rocking frequency the load acts like a force that
+    must exceed ``g`` to lift the block, and the samples per cycle fall by two decades over
+    a factor 1.3 in ``dt`` (measured at ``e = 0.98``), so an extrapolated exponent
+    overshoots and the search oscillates. ``history`` holds every pilot ``(ln dt, ln N)``
+    (appended to here). Once pilots lie on both sides of the target, the next step
+    interpolates (in logs) between the nearest step below and the nearest above, kept
+    inside the middle 80 % of that bracket, which shrinks it at every pilot like a
+    bisection. Before that, the exponent ``k`` is the least-squares slope of ``ln N`` on
+    ``ln dt`` over the last :data:`SECANT_POINTS` pilots (2 at first), held to
+    :data:`SECANT_EXPONENTS`, and ``dt <- dt (N_achieved / N_target)^(1/k)``. Points per
+    cycle fall as ``dt`` grows, so a pilot above the target is a step too short.
+    """
+    history.append((math.log(dt), math.log(achieved)))
+    y_t = math.log(target)
+    short = [x for x, y in history if y > y_t]  # steps too short: more samples per cycle than wanted
+    long = [x for x, y in history if y < y_t]
+    if short and long and max(short) < min(long):
+        lo, hi = max(short), min(long)
+        y_lo, y_hi = (next(y for x, y in reversed(history) if x == b) for b in (lo, hi))
+        x = lo + (y_t - y_lo) * (hi - lo) / (y_hi - y_lo) if y_hi != y_lo else 0.5 * (lo + hi)
+        return math.exp(min(max(x, lo + 0.1 * (hi - lo)), hi - 0.1 * (hi - lo)))
+    k = 2.0
+    points = history[-SECANT_POINTS:]
+    if len(points) >= 2:
+        mx = sum(x for x, _ in points) / len(points)
+        my = sum(y for _, y in points) / len(points)
+        sxx = sum((x - mx) ** 2 for x, _ in points)
+        if sxx > 0.0:
+            slope = sum((x - mx) * (y - my) for x, y in points) / sxx
+            k = min(max(-slope, SECANT_EXPONENTS[0]), SECANT_EXPONENTS[1])
+    return dt * (achieved / target) ** (1.0 / k)
+
+
+def pilot_statistics(theta: np.ndarray, dt: float, g: float | None = None) -> dict:
+    """Stationary statistics of series ``theta(seed, time)``: ``sigma_y``, ``sigma_ydot`` (of
+    ``diff(theta)/dt``) and, given ``g``, samples per cycle at ``sigma_y`` (eq. 5); NaN
+    samples left out."""
+    sigma_y = float(np.sqrt(np.nanmean(theta**2)))
+    sigma_ydot = float(np.sqrt(np.nanmean((np.diff(theta, axis=-1) / dt) ** 2)))
+    out = {"sigma_y": sigma_y, "sigma_ydot": sigma_ydot}
+    if g is not None:
+        out["points_per_cycle"] = float(period_from_g(sigma_y, g) / dt)
+    return out
+
+
+def simulate_model(model: str, seeds, n_points: int, *, dt, g, e, sigma_p, theta_cr=None, pole=0.0, theta0=0.0, theta_dot0=0.0,
+                   burn_in=0, spectrum=None) -> tuple[np.ndarray, np.ndarray]:
+    """``(theta, theta_dot)`` of one series per seed under ``model``: the one dispatch on a model name.
+
+    ``"simplified"`` (eq. 4, :func:`simulate_block`), ``"housner"`` (eq. 2,
+    :func:`rockdec.physics.housner.simulate_block_housner` with ``nu = sqrt(g/theta_cr)``; a series
+    that overturns is NaN from the fall on) or ``"fixed_step"`` (eq. 4 with the grid-impact
+    integrator of :mod:`rockdec.physics.fixed_step`, for the speed/accuracy study). ``pole``,
+    ``spectrum``: the load (:meth:`rockdec.physics.record_model.Load.draw_options`; 0, None: white).
+    """
+    common = dict(dt=dt, e=e, sigma_p=sigma_p, theta0=theta0, theta_dot0=theta_dot0, burn_in=burn_in, pole=pole, spectrum=spectrum)
+    if model == "simplified":
+        return simulate_block(seeds, n_points, g=g, **common)
+    if model == "fixed_step":  # not a model: the grid-impact integrator of rockdec.physics.fixed_step
+        return simulate_block(seeds, n_points, g=g, grid_impacts=True, **common)
+    if model == "housner":
+        if theta_cr is None:
+            raise ValueError("the Housner model needs theta_cr")
+        theta, theta_dot, _ = simulate_block_housner(seeds, n_points, nu=math.sqrt(g / theta_cr), theta_cr=theta_cr, **common)
+        return theta, theta_dot
+    raise ValueError(f"unknown model '{model}'; use simplified or housner")
+
+
+def simulation_dataset(
+    seeds,
+    n_points: int,
+    *,
+    dt: float,
+    g: float,
+    e: float,
+    sigma_p: float,
+    theta0: float = 0.0,
+    theta_dot0: float = 0.0,
+    burn_in: int = 0,
+    chunk_seeds: int = 100,
+    model: str = "simplified",
+    theta_cr: float | None = None,
+    pole: float = 0.0,
+    spectrum=None,
+    sensor_std: float = 0.0,
+) -> xr.Dataset:
+    """Lazy Dataset ``theta(seed, time)``, ``theta_dot(seed, time)`` (float64, Dask chunks over seed).
+
+    Nothing is simulated until the values are asked for; each chunk calls
+    :func:`simulate_model` (numba, ``nogil``), so Dask's threads run chunks in parallel. A
+    series depends on its seed only, so any chunking gives the same numbers, bit for bit.
+    ``pole``, ``spectrum``: the load (0, None: white; the attribute ``load_pole`` is NaN
+    for a spectrum, whose table :meth:`rockdec.physics.run.Run.dataset` names); ``sensor_std`` (rad): white sensor noise added to
+    the recorded angle (:func:`rockdec.physics.loading.add_sensor_noise`; ``theta_dot`` stays the
+    model's).
+    """
+    import dask.array as da  # the lazy dataset only: simulate_block's callers never load dask.array
+
+    seeds = np.atleast_1d(np.asarray(seeds, dtype=np.int64))
+    seed_chunks = da.from_array(seeds, chunks=chunk_seeds)
+    if model not in ("simplified", "housner", "fixed_step"):
+        raise ValueError(f"unknown model '{model}'; use simplified or housner")
+    if model == "housner" and theta_cr is None:
+        raise ValueError("the Housner model needs theta_cr")
+    common = dict(dt=dt, g=g, e=e, sigma_p=sigma_p, theta_cr=theta_cr, pole=pole, theta0=theta0, theta_dot0=theta_dot0, burn_in=burn_in,
+                  spectrum=spectrum)
+
+    def block(chunk):
+        theta, theta_dot = simulate_model(model, chunk, n_points, **common)
+        return np.stack((add_sensor_noise(theta, chunk, sensor_std), theta_dot))
+
+    both = da.map_blocks(
+        block, seed_chunks, new_axis=[0, 2], chunks=((2,), seed_chunks.chunks[0], (n_points,)), dtype=np.float64
+    )
+    time = np.arange(n_points) * dt
+    if time[-1] > MAX_RECORD_SECONDS:
+        raise checks.InputError(
+            f"dt {dt:g} s x {n_points} points spans {time[-1]:.3g} s, longer than the {MAX_RECORD_SECONDS:.3g} s whose "
+            "times a NetCDF reader can decode; choose a smaller time step or fewer points"
+        )
+    ds = xr.Dataset(
+        {
+            "theta": (("seed", "time"), both[0], {"units": "rad", "long_name": "rocking angle"}),
+            "theta_dot": (
+                ("seed", "time"),
+                both[1],
+                {"units": "rad s-1", "long_name": "rocking angular velocity just after the impulse"},
+            ),
+        },
+        coords={
+            "seed": ("seed", seeds, {"long_name": "NumPy SeedSequence entropy of the series"}),
+            "time": ("time", time, TIME_ATTRS),
+        },
+    )
+    ds.attrs.update(
+        {"model": model, "dt": dt, "g": g, "e": e, "sigma_p": sigma_p, "burn_in": burn_in, "theta0": theta0, "theta_dot0": theta_dot0,
+         "load_pole": math.nan if spectrum is not None else pole, "sensor_noise_rad": sensor_std}
+    )
+    return ds

@@ -1,0 +1,327 @@
+"""What may be wrong with a measured record: the checks of ``rockdec estimate``, declared once.
+
+Every check is a :class:`Check`: its name, the defect it names, a cheap dimensionless
+statistic of the records and their analysis (:func:`rockdec.rdd.measured.analyse`), the side
+on which a large (``"high"``) or small (``"low"``) value is suspicious, its one-sentence
+message, and how its threshold is set. :data:`REGISTRY` lists them; the calibration
+(:mod:`rockdec.calibrate.calibration`) and ``rockdec estimate`` (:func:`rockdec.calibrate.inference.diagnose`)
+read it, and so do the study (:mod:`rockdec.studies.diagnostics_study`) and the docs.
+
+Thresholds. A warning is a claim, so it is set like an interval: from the simulations that
+calibrate ``e``. The calibration computes every statistic (:func:`statistics`) on each of
+its simulated record sets, which have the measured records' lengths and sampling and are
+clean (the record model the calibration simulates, nothing else), and stores them as
+``diagnostic(e_true, set, check)``. :func:`thresholds` pools the sets of the grid points
+inside the record's 95 % interval of ``e`` and the nearest grid point on each side of its
+corrected ``e``, and takes the
+:data:`QUANTILE` quantile of a ``"high"`` check (``1 - QUANTILE`` of a ``"low"`` one): on
+the calibration's own records near the record's ``e`` a check fires on at most
+``1 - QUANTILE`` of them, with room for the sampling error of a quantile of some hundred
+sets below the 5 % the checks promise. Pooling over the interval takes the widest null of
+the ``e`` the record allows. A record the calibration cannot place (no corrected ``e``)
+gets the strictest threshold of any grid point: pooling every ``e`` would give it the
+widest null (that of ``e = 0.4``) and let the records a defect has damaged most pass. The
+statistics are scale-free (the calibration has ``g =
+sigma_p = 1``): each is a ratio, a z score or a count. One compiled pass over each
+record (:func:`sums`) gives what they read, at about 2 % of the cost of simulating and
+analysing a calibration set.
+
+``coarse_sampling`` is the exception: the calibration copies the record's sampling, so its
+records say nothing about whether the sampling is too coarse; its threshold is the
+structural floor of the local fits of eq. 27 (:func:`rockdec.rdd.fits.min_points_per_cycle`).
+
+The false-alarm and detection rates of each check, on records simulated apart from any
+calibration, are measured by :mod:`rockdec.studies.diagnostics_study` (docs/method.md §10).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable, NamedTuple
+
+import numpy as np
+from numba import njit
+
+from rockdec.rdd import fits
+
+#: Share of the calibration's own records (near the record's ``e``) below a ``"high"``
+#: threshold; a check fires on ``1 - QUANTILE`` of them in expectation.
+QUANTILE = 0.975
+
+#: Consecutive blocks per record of the block statistics (drift and non-stationarity), each
+#: of at least ``BLOCK_MIN`` samples (fewer blocks for short records; none below 4).
+BLOCKS, BLOCK_MIN = 20, 1000
+
+#: ``e`` at which the structural floor of ``coarse_sampling`` is taken when the record gives
+#: no corrected ``e`` (the floor is highest for small ``e``; 0.95 is the paper's middle).
+FLOOR_E = 0.95
+
+
+@njit(nogil=True, cache=True)
+def _record_sums(y, n_blocks):
+    """One record's sums in two passes. First, per block of ``n_blocks`` consecutive equal
+    blocks (by sample index), the count of non-NaN samples and the sums of ``d`` and ``d^2``,
+    ``d = y - c`` with ``c`` the first non-NaN sample (a shift that keeps the variances
+    accurate). Then, about the record's mean ``m``, over triples ``y[k-1], y[k], y[k+1]``
+    all above ``m`` (side 1) or all below (side 0), the count and the sum of the second
+    difference ``y[k+1] - 2 y[k] + y[k-1]``, and the largest ``|y[k] - (y[k-1] + y[k+1])/2|``
+    over non-NaN triples. Returns ``(c, block counts, block sums (2, n_blocks), side counts,
+    side sums, largest)``."""
+    n = y.size
+    c = 0.0
+    for k in range(n):
+        if y[k] == y[k]:
+            c = y[k]
+            break
+    counts, blocks = np.zeros(n_blocks), np.zeros((2, n_blocks))
+    for j in range(n_blocks):
+        q, t1, t2 = 0, 0.0, 0.0
+        for k in range(j * n // n_blocks, (j + 1) * n // n_blocks):
+            d = y[k] - c
+            if d == d:  # NaN is not equal to itself
+                q += 1
+                t1 += d
+                t2 += d * d
+        counts[j], blocks[0, j], blocks[1, j] = q, t1, t2
+    total = counts.sum()
+    m = c + blocks[0].sum() / total if total else c
+    worst, n0, n1, s0, s1 = 0.0, 0.0, 0.0, 0.0, 0.0  # scalars: array elements here cost 6 times more
+    for k in range(1, n - 1):
+        a, b, e = y[k - 1], y[k], y[k + 1]
+        d2 = e - 2.0 * b + a
+        if abs(d2) > worst:  # NaN compares False
+            worst = abs(d2)
+        if a > m and b > m and e > m:
+            n1 += 1.0
+            s1 += d2
+        elif a < m and b < m and e < m:
+            n0 += 1.0
+            s0 += d2
+    return c, counts, blocks, np.array([n0, n1]), np.array([s0, s1]), 0.5 * worst
+
+
+class Sums(NamedTuple):
+    """What the checks read of the records (:func:`sums`), pooled over records: ``count``
+    finite samples; ``block_mean``, ``block_var`` per block of each record (:data:`BLOCKS`,
+    each of at least :data:`BLOCK_MIN` samples, fewer for short records, none below 4),
+    with ``block_record`` the record of each; ``side_count``, ``side_sum`` the count and sum
+    of the second differences of triples on one side of each record's mean (``[0]``
+    below, ``[1]`` above); ``off``: the largest distance of a sample from the line through
+    its neighbours (rad)."""
+
+    count: int
+    block_mean: np.ndarray
+    block_var: np.ndarray
+    block_record: np.ndarray
+    side_count: np.ndarray
+    side_sum: np.ndarray
+    off: float
+
+
+def sums(records) -> Sums:
+    """:class:`Sums` of ``records`` (1-D arrays, NaN allowed): one compiled pass per record
+    (:func:`_record_sums`)."""
+    count, off = 0, 0.0
+    side_n, side_s = np.zeros(2), np.zeros(2)
+    means, variances, owners = [], [], []
+    for i, y in enumerate(records):
+        y = np.ascontiguousarray(y, dtype=np.float64)
+        b = min(BLOCKS, y.size // BLOCK_MIN)
+        _, bn, (b1, b2), rn, rs, worst = _record_sums(y, max(b, 1))
+        count, off = count + int(bn.sum()), max(off, worst)
+        side_n, side_s = side_n + rn, side_s + rs
+        if b >= 4 and (bn > 1).all():
+            means.append(b1 / bn)
+            variances.append(b2 / bn - (b1 / bn) ** 2)
+            owners.append(np.full(b, i))
+    stack = (lambda parts: np.concatenate(parts) if parts else np.empty(0))
+    return Sums(count, stack(means), stack(variances), stack(owners), side_n, side_s, off)
+
+
+def _von_neumann_z(values: np.ndarray, owners: np.ndarray) -> float:
+    """Von Neumann's ratio ``eta`` of consecutive ``values`` (mean square successive
+    difference over variance, each record's ``values``, marked by ``owners``, about their
+    own mean, pooled) as the z score ``(2 - eta) / sd0``, ``sd0^2 = 4 (B - 2)/(B^2 - 1)`` for
+    ``B`` values: about N(0, 1) for independent values, large when they follow a slow
+    trend. NaN for fewer than 4 values."""
+    num = den = 0.0
+    for i in np.unique(owners):
+        v = values[owners == i]
+        v = v - v.mean()
+        num += float(np.sum(np.diff(v) ** 2))
+        den += float(np.sum(v**2))
+    count = values.size
+    if count < 4 or not den > 0.0:
+        return np.nan
+    return (2.0 - num / den) / np.sqrt(4.0 * (count - 2) / (count**2 - 1))
+
+
+def nonstationarity(s: Sums, analysis) -> float:
+    """:func:`_von_neumann_z` of ``ln`` of the blocks' variances (each block about its own
+    mean, so an offset does not count): large when the load's strength changes slowly or
+    steps along the record; scale-free."""
+    return _von_neumann_z(np.log(s.block_var), s.block_record)
+
+
+def drift(s: Sums, analysis) -> float:
+    """:func:`_von_neumann_z` of the block means: large for a slow offset (the ``drift_z``
+    of :mod:`rockdec.record.record_measure`, on equal blocks)."""
+    return _von_neumann_z(s.block_mean, s.block_record)
+
+
+def spikes(s: Sums, analysis) -> float:
+    """Largest ``|y[k] - (y[k-1] + y[k+1]) / 2|`` over ``sigma_Y``: how far one sample stands
+    off the line through its neighbours. Between impacts the block moves on parabolas, so
+    a clean record gives a few hundredths of ``sigma_Y`` at the paper's sampling (velocity
+    jumps at impacts); an isolated spike of ``k sigma_Y`` gives ``k``. Triples touching a
+    NaN are left out."""
+    return s.off / analysis.sigma_y
+
+
+def asymmetry(s: Sums, analysis) -> float:
+    """``|g_+ - g_-| / (g_+ + g_-)``: between impacts the block moves on parabolas (eq. 4), so
+    the mean second difference of triples on one side is ``-g dt^2`` there and ``+g dt^2``
+    on the other; a block leaning on one side (or a load pushing one way) falls back with
+    a different ``g`` on each (the asymmetry of :mod:`rockdec.record.record_measure`, without its
+    guard samples). Scale-free and 0 for a symmetric block."""
+    if not (s.side_count > 0).all():
+        return np.nan
+    g_minus, g_plus = s.side_sum[0] / s.side_count[0], -s.side_sum[1] / s.side_count[1]
+    return abs(g_plus - g_minus) / (g_plus + g_minus) if g_plus + g_minus > 0.0 else np.nan
+
+
+def triggers(s: Sums, analysis) -> float:
+    """Triggers of both signatures (``D_a`` and ``D_v``) in the largest window."""
+    return float(analysis.count["a"][-1] + analysis.count["v"][-1])
+
+
+def sampling(s: Sums, analysis) -> float:
+    """Samples per cycle at amplitude ``sigma_Y`` (eq. 5)."""
+    return float(analysis.points_per_cycle)
+
+
+@dataclass(frozen=True)
+class Check:
+    """One diagnostic of the records.
+
+    ``name``: the ``check`` coordinate of the calibration's ``diagnostic`` variable and the
+    key of ``rockdec estimate``'s JSON ``diagnostics``; ``defect``: what it finds, in a few
+    words; ``statistic``: ``f(sums, analysis) -> float`` (dimensionless; :func:`sums` of the
+    records, their :class:`rockdec.rdd.measured.Analysis`); ``side``:
+    ``"high"`` fires above the threshold, ``"low"`` below; ``threshold``: ``"calibrated"``
+    (:func:`thresholds`) or ``"structural"`` (``coarse_sampling``, module docstring);
+    ``message``: the warning, formatted with ``value`` and ``threshold``.
+    """
+
+    name: str
+    defect: str
+    statistic: Callable
+    side: str
+    threshold: str
+    message: str
+
+
+REGISTRY = (
+    Check("nonstationary", "the load's strength changes along the record", nonstationarity, "high", "calibrated",
+          "the response is not stationary: the rms of its blocks follows a trend more than in stationary records like it "
+          "(z {value:.1f}, calibrated limit {threshold:.1f}); the load changes along the record, so estimate stretches "
+          "of steady load apart"),
+    Check("drift", "a slow offset of the zero", drift, "high", "calibrated",
+          "the record's block means wander more than rocking makes them (drift z {value:.1f}, calibrated limit "
+          "{threshold:.1f}): the sensor's zero drifts; remove the trend (high-pass well below the rocking frequency)"),
+    Check("spikes", "isolated wrong samples", spikes, "high", "calibrated",
+          "a sample stands {value:.2f} sigma_Y off the line through its neighbours, where rocking records like it reach "
+          "{threshold:.2f}: the record holds spikes; remove them or mark them as gaps (NaN)"),
+    Check("asymmetry", "a block leaning on one side", asymmetry, "high", "calibrated",
+          "the response is asymmetric: the block falls back with a different g on each side (|g+ - g-|/(g+ + g-) "
+          "{value:.3f}, calibrated limit {threshold:.3f}); it may lean on one side or the load push one way, and the "
+          "model assumes a symmetric block"),
+    Check("few_triggers", "gaps or quiet stretches", triggers, "low", "calibrated",
+          "{value:.0f} triggers in the largest windows, fewer than records of this length and sampling give "
+          "({threshold:.0f}): gaps (NaN) or quiet stretches leave fewer segments than the calibration's records had, so "
+          "the interval may be too narrow; cut the record into pieces without them"),
+    Check("coarse_sampling", "too few samples per cycle for e1..e4", sampling, "low", "structural",
+          "{value:.1f} samples per cycle at sigma_Y is below {threshold:.1f}, too coarse for the local fits of e1..e4 "
+          "(eq. 27); sample faster"),
+)
+"""Every check, in the order of the ``check`` coordinate."""
+
+CHECKS = tuple(check.name for check in REGISTRY)
+"""Names of the checks, in registry order."""
+
+
+def statistics(records, analysis) -> np.ndarray:
+    """Every check's statistic on ``records`` (1-D arrays, NaN allowed) and their
+    :class:`rockdec.rdd.measured.Analysis`, in registry order."""
+    s = sums(records)
+    return np.array([check.statistic(s, analysis) for check in REGISTRY], dtype=float)
+
+
+def _near(e_grid: np.ndarray, e: float, interval) -> np.ndarray:
+    """Grid points pooled for a record of corrected ``e`` and 95 % ``interval``: those inside
+    the interval and the nearest on each side of ``e``."""
+    keep = np.zeros(e_grid.size, dtype=bool)
+    low, high = (np.nan, np.nan) if interval is None else (np.nan if v is None else v for v in interval)
+    if np.isfinite(low) and np.isfinite(high):
+        keep |= (e_grid >= low) & (e_grid <= high)
+    below, above = np.flatnonzero(e_grid <= e), np.flatnonzero(e_grid >= e)
+    keep[below[-1] if below.size else 0] = True
+    keep[above[0] if above.size else -1] = True
+    return keep
+
+
+def thresholds(cal, e: float | None, interval, level: float) -> dict:
+    """Each check's threshold for a record of corrected ``e`` and 95 % ``interval``, from the
+    calibration ``cal``'s ``diagnostic(e_true, set, check)`` (module docstring): the
+    :data:`QUANTILE` quantile of the sets pooled about ``e`` (``1 - QUANTILE`` for a
+    ``"low"`` check). A record without an ``e`` (``None`` or NaN: the calibration cannot
+    place it) gets the strictest grid point's threshold, each grid point's sets apart.
+    ``level``: the trigger level in ``sigma_Y`` (for the structural floor). NaN for a check
+    the calibration's records never gave a value."""
+    grid = np.asarray(cal["e_true"].values, dtype=float)
+    placed = e is not None and np.isfinite(e)
+    groups = [_near(grid, e, interval)] if placed else [grid == g for g in grid]
+    values = cal["diagnostic"].values  # (e_true, set, check)
+    out = {}
+    for j, check in enumerate(REGISTRY):
+        if check.threshold == "structural":
+            out[check.name] = fits.min_points_per_cycle(e if placed else FLOOR_E, level)
+            continue
+        q = QUANTILE if check.side == "high" else 1.0 - QUANTILE
+        limits = []
+        for group in groups:
+            column = values[group, :, j].ravel()
+            column = column[np.isfinite(column)]
+            if column.size:
+                limits.append(float(np.quantile(column, q)))
+        out[check.name] = (min(limits) if check.side == "high" else max(limits)) if limits else np.nan
+    return out
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """One check on a record: its ``statistic``, ``threshold`` and whether it ``fired``;
+    ``message`` is the warning (empty when it did not fire)."""
+
+    statistic: float
+    threshold: float
+    fired: bool
+    message: str
+
+
+def judge(values, limits: dict) -> dict:
+    """``{name: Outcome}`` (registry order) of the statistics ``values``
+    (:func:`statistics`) against the thresholds ``limits`` (:func:`thresholds`). A NaN
+    statistic or threshold never fires."""
+    out = {}
+    for check, value in zip(REGISTRY, values):
+        limit = limits[check.name]
+        fired = bool(value > limit if check.side == "high" else value < limit)  # NaN compares False
+        out[check.name] = Outcome(float(value), float(limit), fired, check.message.format(value=value, threshold=limit) if fired else "")
+    return out
+
+
+def evaluate(records, analysis, cal, e: float | None, interval, level: float) -> dict:
+    """Every check on ``records`` against the calibration ``cal``: :func:`judge` of
+    :func:`statistics` and :func:`thresholds`."""
+    return judge(statistics(records, analysis), thresholds(cal, e, interval, level))

@@ -1,0 +1,1 @@
+"""The products a reader sees: the paper's tables (eq. 28) and figures, and the studies'."""

@@ -1,0 +1,368 @@
+"""Does the interval of ``rockdec estimate`` hold? Coverage on simulated records of known ``e``.
+
+A cell of the study is a true ``e``, a condition (a sensor noise in units of ``sigma_Y``, a
+first-order low-pass load with its corner in rocking frequencies ``1/T(sigma_Y)``, eq. 5, or
+both; :data:`rockdec.pipeline.layout.COVERAGE_CONDITIONS`) and the simulator that makes its records
+(the compiled kernel of :mod:`rockdec.physics.simulate`, or a reference written apart and passed in,
+``tests/rocking_vectorised.py``). Every record goes through exactly the path of
+``rockdec estimate``: :func:`rockdec.calibrate.inference.estimate` with the record model measured
+from the record (``model=None``), and once more with the paper's model (white load,
+noise-free sensor: :data:`rockdec.physics.record_model.PAPER`), the calibration the tool used
+before it measured the record, for its width and coverage beside.
+
+Placing a record at its condition (:func:`stage`). Under a low-pass load the samples per
+cycle no longer go as ``dt^-2``, and a corner set in rocking frequencies moves with them:
+the pole ``c = exp(-2 pi corner / N)`` places the corner only for the ``N`` samples per
+cycle that the records actually have. :func:`stage` fixes ``c`` for the target ``N`` and
+searches the step until the median of the pilot records' own ``N = T(sigma_Y)/dt`` (the
+true ``g``) is within :data:`STAGE_TOLERANCE` of the target, so that ``N`` and the corner
+are both what the cell states; the records' achieved medians are reported per cell
+(:func:`summary`), beside the samples per cycle the tool reads off them.
+
+Seeds: the study's records and pilots start at :data:`STUDY_SEED_OFFSET`, apart from the
+calibration's (:data:`rockdec.calibrate.calibration.CALIBRATION_SEED_OFFSET`) and the scenes'.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import sys
+from collections import Counter
+
+import numpy as np
+import pandas as pd
+import xarray as xr
+
+from rockdec.pipeline import engine
+from rockdec.calibrate import inference
+from rockdec.rdd import registry
+from rockdec.pipeline.layout import COVERAGE_CASES, COVERAGE_CONDITIONS, COVERAGE_SIMULATORS
+from rockdec.physics.models import SCALE_CONSTANT_GUESS, period_from_g, step_for_density
+from rockdec.physics.record_model import PAPER, Load, RecordModel
+from rockdec.record.records import Record, RecordError
+
+#: Seeds of the study's records start here (apart from calibration and pilot seeds).
+STUDY_SEED_OFFSET = 2**60
+
+#: Seeds of one cell: records at ``offset + cell * CELL_SEEDS``, its pilots
+#: :data:`PILOT_SEEDS` further on.
+CELL_SEEDS, PILOT_SEEDS = 10**7, 9 * 10**6
+
+#: Samples per cycle at ``sigma_Y`` the records are placed at (the paper's, eq. 5).
+POINTS_PER_CYCLE = 75.0
+
+#: Pilot records of :func:`stage`, relative tolerance on their median samples per cycle,
+#: and largest number of step updates.
+STAGE_PILOTS, STAGE_TOLERANCE, STAGE_ITERATIONS = 16, 0.015, 14
+
+#: Lower and upper end of the coverage a 95 % interval is held to on 200 records
+#: (the binomial 95 % range of 200 draws at 0.95 is about 92-98 %).
+COVERAGE_BAND = (0.92, 0.98)
+
+#: Largest ``|corrected bias| / sd`` the study accepts.
+BIAS_RATIO = 0.25
+
+#: The model argument of :func:`rockdec.calibrate.inference.estimate` that measures the record's own model.
+MEASURED = None
+
+
+def true_points_per_cycle(theta: np.ndarray, dt: float) -> np.ndarray:
+    """Samples per cycle at each record's ``sigma_Y`` with the true ``g = 1`` (eq. 5)."""
+    sigma = np.sqrt(np.mean(np.atleast_2d(theta) ** 2, axis=1))
+    return period_from_g(sigma, 1.0) / dt
+
+
+def corner_of(pole: float, points_per_cycle) -> np.ndarray:
+    """The load's corner in rocking frequencies for a filter ``pole`` and records of
+    ``points_per_cycle``: ``-ln(c) N / (2 pi)`` (NaN for white noise)."""
+    return np.full(np.shape(points_per_cycle), np.nan) if pole == 0.0 else -math.log(pole) * np.asarray(points_per_cycle) / (2 * math.pi)
+
+
+def kernel_records(seeds, n_points: int, *, dt, e, burn_in, pole, noise) -> np.ndarray:
+    """Records of the compiled kernel (:func:`rockdec.physics.simulate.simulate_block`, ``g = sigma_p
+    = 1``) plus white sensor noise of ``noise`` times each record's rms
+    (:func:`rockdec.physics.loading.add_sensor_noise`, as the calibration adds it)."""
+    from rockdec.physics.loading import add_sensor_noise
+    from rockdec.physics.simulate import simulate_block
+
+    theta = simulate_block(seeds, n_points, dt=dt, g=1.0, e=e, sigma_p=1.0, burn_in=burn_in, pole=pole)[0]
+    if noise > 0.0:
+        for row, seed in zip(theta, seeds):
+            add_sensor_noise(row[None], [seed], noise * float(np.sqrt(np.mean(row**2))))
+    return theta
+
+
+def stage(e: float, n_points: int, corner: float | None, seed0: int, points_per_cycle: float = POINTS_PER_CYCLE) -> dict:
+    """Step ``dt`` and load pole placing records of ``n_points`` at ``points_per_cycle`` and
+    the load's ``corner`` (module docstring); ``g = sigma_p = 1``.
+
+    Secant steps in ``ln dt`` (:func:`rockdec.physics.simulate.secant_step`) on the median samples
+    per cycle of :data:`STAGE_PILOTS` pilot records (seeds from ``seed0``). Returns ``dt``,
+    ``pole``, ``burn_in`` and the pilots' median ``points_per_cycle``.
+    """
+    from rockdec.physics.simulate import default_burn_in, secant_step
+
+    pole = Load().pole(points_per_cycle) if corner is None else Load("lowpass", corner).pole(points_per_cycle)
+    burn_in = default_burn_in(e, points_per_cycle)
+    dt = step_for_density(SCALE_CONSTANT_GUESS, 1.0, 1.0, points_per_cycle)
+    seeds = seed0 + np.arange(STAGE_PILOTS)
+    history: list = []
+    best = (math.inf, dt, math.nan)
+    for _ in range(STAGE_ITERATIONS):
+        theta = kernel_records(seeds, n_points, dt=dt, e=e, burn_in=burn_in, pole=pole, noise=0.0)
+        achieved = float(np.median(true_points_per_cycle(theta, dt)))
+        miss = abs(math.log(achieved / points_per_cycle))
+        if miss < best[0]:
+            best = (miss, dt, achieved)
+        if miss < STAGE_TOLERANCE:
+            break
+        dt = secant_step(history, dt, achieved, points_per_cycle)
+    _, dt, achieved = best
+    return {"dt": dt, "pole": pole, "burn_in": burn_in, "points_per_cycle": achieved}
+
+
+def _num(x) -> float:
+    return math.nan if x is None else float(x)
+
+
+def _model_read(report: dict | None) -> dict:
+    """What the tool measured of the record's model (``record_model`` of
+    :func:`rockdec.calibrate.inference.estimate`): the sensor noise in ``sigma_Y`` and the load's
+    corner in rocking frequencies (NaN when not measured), and the model it simulated."""
+    measured = (report or {}).get("measured") or {}
+    detected = measured.get("detected") or {}
+    noise = (measured.get("sensor_noise_sigma_y") or {}).get("value")
+    corner = (measured.get("load_corner_rocking") or {}).get("value") if detected.get("colour") else None
+    simulated = (report or {}).get("simulated") or {}
+    paper = bool(simulated) and RecordModel.from_key(simulated) == PAPER
+    return {"noise_read": _num(noise), "corner_read": _num(corner), "model": simulated.get("described", ""), "paper": paper,
+            "noisy": bool(detected.get("sensor_noise")), "coloured": bool(detected.get("colour"))}
+
+
+def estimate_record(theta: np.ndarray, dt: float, source: str, cache_dir, model) -> dict:
+    """:func:`rockdec.calibrate.inference.estimate` of one record, flattened; a refusal
+    (:class:`rockdec.record.records.RecordError`) is a null ``e`` with the refusal as its reason."""
+    try:
+        out = inference.estimate([Record(theta, dt, source)], cache_dir=cache_dir, model=model)
+    except RecordError as exc:
+        return {"e": math.nan, "low": math.nan, "high": math.nan, "reason": f"refused: {exc}", "estimator": "", "warnings": [],
+                "points_per_cycle": math.nan, "calibration": "", "per": {}, **_model_read(None)}
+    interval = out["interval"] or [None, None]
+    return {
+        "e": _num(out["e"]),
+        "low": _num(interval[0]) if out["e"] is not None else math.nan,
+        "high": _num(interval[1]) if out["e"] is not None else math.nan,
+        "reason": out["reason"] or "",
+        "estimator": out["estimator"] or "",
+        "warnings": list(out["warnings"]),
+        "points_per_cycle": _num(out["points_per_cycle"]),
+        "calibration": out["calibration"]["file"],
+        "per": {name: (_num(v["e"]), *((_num(x) for x in v["interval"]) if v["e"] is not None else (math.nan, math.nan)))
+                for name, v in out["estimators"].items()},
+        **_model_read(out.get("record_model")),
+    }
+
+
+def _batch(simulate, seeds, n_points, staged, e, noise, cache_dir, model) -> list[tuple]:
+    """Simulate records ``seeds`` and estimate each with ``model`` and with the paper's."""
+    theta = simulate(seeds, n_points, dt=staged["dt"], e=e, burn_in=staged["burn_in"], pole=staged["pole"], noise=noise)
+    ppc = true_points_per_cycle(theta, staged["dt"])  # the noise moves it by noise^2 / 2 (0.1 % at 5 %)
+    out = []
+    for seed, row, n in zip(seeds, theta, ppc):
+        got = estimate_record(row, staged["dt"], f"record {seed}", cache_dir, model)
+        # a record whose measured model is the paper's went through the paper's calibration already
+        paper = got if got["paper"] else estimate_record(row, staged["dt"], f"record {seed}", cache_dir, PAPER)
+        out.append((float(n), got, paper))
+    return out
+
+
+def run_cell(cell: str, n_records: int, n_points: int, cache_dir, *, simulate=kernel_records, model=MEASURED, batch: int = 10) -> xr.Dataset:
+    """The study's cell ``cell`` (:data:`rockdec.pipeline.layout.COVERAGE_CASES`): ``n_records``
+    records of ``n_points`` samples, made by ``simulate`` (:func:`kernel_records`, or a
+    function of the same signature), each estimated by :func:`estimate_record` with
+    ``model`` and with :data:`rockdec.physics.record_model.PAPER`.
+
+    Records run in Dask tasks of ``batch``; calibrations are built as the records ask for
+    them and stored in ``cache_dir`` (shared by every cell). Returns per record (and
+    estimator): the reported ``e_hat``, ``low``, ``high``, ``reason`` (empty unless ``e`` is
+    null), ``reported_by`` (the estimator), ``warnings`` (joined by `` | ``), the tool's samples per cycle,
+    the calibration file, each estimator's ``est_e``/``est_low``/``est_high``, the paper
+    model's ``paper_e``/``paper_low``/``paper_high``/``paper_reason``, and the record's
+    true samples per cycle and corner.
+    """
+    import dask
+
+    simulator, condition, e = COVERAGE_CASES[cell]
+    noise, corner = COVERAGE_CONDITIONS[condition]
+    index = list(COVERAGE_CASES).index(cell)
+    seed0 = STUDY_SEED_OFFSET + index * CELL_SEEDS
+    staged = stage(e, n_points, corner, seed0 + PILOT_SEEDS)
+    print(f"coverage {cell}: dt = {staged['dt']:.4g}, pole = {staged['pole']:.6g}, pilots' median samples per cycle "
+          f"{staged['points_per_cycle']:.1f}", file=sys.stderr, flush=True)
+    seeds = seed0 + np.arange(n_records)
+    tasks = [dask.delayed(_batch)(simulate, seeds[i:i + batch], n_points, staged, e, noise, cache_dir, model)
+             for i in range(0, n_records, batch)]
+    rows = [row for part in engine.compute(*tasks) for row in part]
+    names = list(registry.ESTIMATORS)
+    ppc = np.array([r[0] for r in rows])
+    got = [r[1] for r in rows]
+    paper = [r[2] for r in rows]
+    per = np.array([[g["per"].get(name, (math.nan,) * 3) for name in names] for g in got]).reshape(n_records, len(names), 3)
+    rec, rest = ("record",), ("record", "estimator")
+
+    def strings(values):
+        return np.array(values, dtype=object).astype(str)
+
+    ds = xr.Dataset(
+        {
+            "e_hat": (rec, [g["e"] for g in got], {"units": "1", "long_name": "reported e (NaN: null)"}),
+            "low": (rec, [g["low"] for g in got], {"units": "1", "long_name": "lower end of the reported 95 % interval"}),
+            "high": (rec, [g["high"] for g in got], {"units": "1", "long_name": "upper end of the reported 95 % interval"}),
+            "reason": (rec, strings([g["reason"] for g in got]), {"long_name": "why e is null (empty when it is not)"}),
+            "reported_by": (rec, strings([g["estimator"] for g in got]), {"long_name": "estimator the tool reported"}),
+            "warnings": (rec, strings([" | ".join(g["warnings"]) for g in got]), {"long_name": "warnings of the tool, joined by ' | '"}),
+            "record_model": (rec, strings([g["model"] for g in got]), {"long_name": "record model the tool's calibration simulated"}),
+            "noise_read": (rec, [g["noise_read"] for g in got], {"units": "1", "long_name": "sensor noise the tool measured, in sigma_Y"}),
+            "corner_read": (rec, [g["corner_read"] for g in got], {"units": "1", "long_name": "load corner the tool measured, in rocking frequencies (NaN: no colour detected)"}),
+            "noisy": (rec, [g["noisy"] for g in got], {"long_name": "whether the tool detected sensor noise"}),
+            "coloured": (rec, [g["coloured"] for g in got], {"long_name": "whether the tool detected a coloured load"}),
+            "calibration": (rec, strings([g["calibration"] for g in got]), {"long_name": "calibration file the tool used"}),
+            "ppc_read": (rec, [g["points_per_cycle"] for g in got], {"units": "1", "long_name": "samples per cycle the tool read"}),
+            "ppc_true": (rec, ppc, {"units": "1", "long_name": "samples per cycle at the record's sigma_Y with the true g (eq. 5)"}),
+            "corner_true": (rec, corner_of(staged["pole"], ppc), {"units": "1", "long_name": "load corner in the record's rocking frequencies"}),
+            "est_e": (rest, per[..., 0], {"units": "1", "long_name": "corrected e of each estimator (NaN: none)"}),
+            "est_low": (rest, per[..., 1], {"units": "1", "long_name": "lower end of each estimator's 95 % interval"}),
+            "est_high": (rest, per[..., 2], {"units": "1", "long_name": "upper end of each estimator's 95 % interval"}),
+            "paper_e": (rec, [p["e"] for p in paper], {"units": "1", "long_name": "reported e under the paper's model"}),
+            "paper_low": (rec, [p["low"] for p in paper], {"units": "1", "long_name": "lower end under the paper's model"}),
+            "paper_high": (rec, [p["high"] for p in paper], {"units": "1", "long_name": "upper end under the paper's model"}),
+            "paper_reason": (rec, strings([p["reason"] for p in paper]), {"long_name": "why e is null under the paper's model"}),
+        },
+        coords={
+            "record": ("record", np.arange(n_records), {"long_name": "simulated record"}),
+            "estimator": ("estimator", names, {"long_name": "estimator of e"}),
+        },
+        attrs={
+            "cell": cell, "simulator": simulator, "condition": condition, "e_true": float(e),
+            "noise": float(noise), "corner": math.nan if corner is None else float(corner),
+            "n_points": int(n_points), "dt": float(staged["dt"]), "pole": float(staged["pole"]),
+            "burn_in": int(staged["burn_in"]), "pilot_points_per_cycle": float(staged["points_per_cycle"]),
+            "first_seed": int(seed0),
+        },
+    )
+    return ds
+
+
+_NUMBER = re.compile(r"[-+]?\d[\d.,]*(?:e[-+]?\d+)?")
+
+
+def _kind(sentence: str, clause: bool) -> str:
+    """A warning or reason without its numbers (``#``) and record names: what the counts of
+    :func:`summary` group by; cut at 80 characters, or at its first colon (``clause``: a
+    reason's details differ from record to record)."""
+    text = _NUMBER.sub("#", sentence).replace("record #: ", "")
+    return (text.split(":")[0] if clause else text)[:80].strip()
+
+
+def _counts(sentences, n: int, clause: bool = False) -> str:
+    """``"12 % <kind>; 3 % <kind>"``: how often each kind (:func:`_kind`) occurs among ``n`` records."""
+    counter = Counter(_kind(s, clause) for s in sentences if s)
+    return "; ".join(f"{100 * c / n:.0f} % {k}" for k, c in counter.most_common())
+
+
+def _coverage(e: float, low, high) -> float:
+    """Share of records whose interval holds ``e``; NaN ends (a null) count as not covered."""
+    low, high = np.asarray(low, dtype=float), np.asarray(high, dtype=float)
+    return float(np.mean((low <= e) & (e <= high)))
+
+
+def _median(values) -> float:
+    """Median of the finite ``values``; NaN when there is none."""
+    values = np.asarray(values, dtype=float)
+    return float(np.median(values[np.isfinite(values)])) if np.isfinite(values).any() else math.nan
+
+
+def summary(ds: xr.Dataset) -> dict:
+    """One row of the study's table for the cell ``ds`` (:func:`run_cell`)."""
+    e = ds.attrs["e_true"]
+    n = ds.sizes["record"]
+    values = ds["e_hat"].values
+    ok = np.isfinite(values)
+    cov = _coverage(e, ds["low"].values, ds["high"].values)
+    bias = float(np.mean(values[ok]) - e) if ok.any() else math.nan
+    sd = float(np.std(values[ok], ddof=1)) if ok.sum() > 1 else math.nan
+    paper_ok = np.isfinite(ds["paper_e"].values)
+    row = {
+        "simulator": ds.attrs["simulator"],
+        "condition": ds.attrs["condition"],
+        "noise": ds.attrs["noise"],
+        "corner": ds.attrs["corner"],
+        "e_true": e,
+        "records": n,
+        "coverage": cov,
+        "coverage_se": math.sqrt(max(cov * (1 - cov), 0.0) / n),
+        "bias": bias,
+        "sd": sd,
+        "bias_over_sd": bias / sd if sd > 0 else math.nan,
+        "median_width": _median(ds["high"].values - ds["low"].values),
+        "nulls": int((~ok).sum()),
+        "null_reasons": _counts(ds["reason"].values[~ok], n, clause=True),
+        "estimators": "; ".join(f"{k} {v}" for k, v in Counter(s for s in ds["reported_by"].values if s).most_common()),
+        "warnings": _counts([w for ws in ds["warnings"].values for w in set(str(ws).split(" | "))], n),
+        **{f"coverage_{name}": _coverage(e, ds["est_low"].sel(estimator=name).values, ds["est_high"].sel(estimator=name).values)
+           for name in ds["estimator"].values},
+        "paper_coverage": _coverage(e, ds["paper_low"].values, ds["paper_high"].values),
+        "paper_bias": float(np.mean(ds["paper_e"].values[paper_ok]) - e) if paper_ok.any() else math.nan,
+        "paper_median_width": _median(ds["paper_high"].values - ds["paper_low"].values),
+        "paper_nulls": int((~paper_ok).sum()),
+        "ppc_true": float(np.median(ds["ppc_true"].values)),
+        "corner_true": float(np.median(ds["corner_true"].values)),
+        "ppc_read": _median(ds["ppc_read"].values),
+        "noise_read": _median(ds["noise_read"].values),
+        "corner_read": _median(ds["corner_read"].values),
+        "noisy": float(np.mean(ds["noisy"].values)),
+        "coloured": float(np.mean(ds["coloured"].values)),
+        "calibrations": len({c for c in ds["calibration"].values if c}),
+    }
+    row["in_band"] = bool(COVERAGE_BAND[0] <= cov <= COVERAGE_BAND[1])
+    row["bias_ok"] = bool(abs(row["bias_over_sd"]) <= BIAS_RATIO)
+    return row
+
+
+def table(datasets) -> pd.DataFrame:
+    """The study's table: one :func:`summary` row per cell, in the order of
+    :data:`rockdec.pipeline.layout.COVERAGE_CONDITIONS`, e and simulator."""
+    out = pd.DataFrame([summary(ds) for ds in datasets])
+    order = {name: i for i, name in enumerate(COVERAGE_CONDITIONS)}
+    sims = {name: i for i, name in enumerate(COVERAGE_SIMULATORS)}
+    out["_c"], out["_s"] = out["condition"].map(order), out["simulator"].map(sims)
+    return out.sort_values(["_s", "_c", "e_true"]).drop(columns=["_c", "_s"]).reset_index(drop=True)
+
+
+def markdown(tab: pd.DataFrame) -> str:
+    """The table as Markdown: the reported interval's coverage (its binomial standard error;
+    bold outside :data:`COVERAGE_BAND`), corrected bias and sd, median width, nulls, the
+    paper model's width and coverage, and the records' samples per cycle, corner and noise
+    (true, and as the tool read them); the warnings and null reasons of each cell below."""
+    lines = [
+        "| simulator | condition | e | n | coverage | bias | sd | bias/sd | width | nulls | paper-model width | paper-model coverage | "
+        "samples/cycle (true, read) | corner (true, read) | noise read | noisy, coloured | reported by |",
+        "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
+    ]
+
+    def num(x, fmt):
+        return "-" if not np.isfinite(x) else format(x, fmt)
+
+    for r in tab.itertuples():
+        flag = "" if r.in_band else "**"
+        lines.append(
+            f"| {r.simulator} | {r.condition} | {r.e_true:g} | {r.records} | {flag}{100 * r.coverage:.0f} %{flag} "
+            f"(±{100 * r.coverage_se:.0f}) | {num(r.bias, '+.4f')} | {num(r.sd, '.4f')} | {num(r.bias_over_sd, '+.2f')} | "
+            f"{num(r.median_width, '.4f')} | {r.nulls} | {num(r.paper_median_width, '.4f')} | {100 * r.paper_coverage:.0f} % | "
+            f"{num(r.ppc_true, '.0f')}, {num(r.ppc_read, '.0f')} | {num(r.corner_true, '.2f')}, {num(r.corner_read, '.2f')} | "
+            f"{num(r.noise_read, '.3f')} | {100 * r.noisy:.0f} %, {100 * r.coloured:.0f} % | {r.estimators or '-'} |"
+        )
+    notes = [f"- {r.simulator} {r.condition} e = {r.e_true:g}: warnings: {r.warnings or 'none'}"
+             + (f"; nulls: {r.null_reasons}" if r.nulls else "") for r in tab.itertuples() if r.warnings or r.nulls]
+    return "\n".join(lines) + "\n\n" + "\n".join(notes) + "\n"

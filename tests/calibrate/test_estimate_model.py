@@ -1,0 +1,224 @@
+"""`rockdec estimate` under the record's own model: measured or declared, binned into the
+calibration's key, simulated by the calibration, reported; the reported estimator is the
+narrowest trusted candidate, and no value comes without a reason."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from rockdec.calibrate import calibration, inference
+from rockdec.rdd import measured
+from rockdec.record import record_measure
+from rockdec.cli import main, parse_sensor_noise
+from rockdec.physics.loading import series_rng
+from rockdec.physics.record_model import PAPER, Load, RecordModel, SensorNoise
+from rockdec.physics.simulate import secant_step, simulate_block
+
+import fake_calibration
+
+# Steps giving about 75 samples per cycle at sigma_Y (g = sigma_p = 1, e = 0.9), as in
+# tests/record/test_record_measure.py: white load, and a low-pass load with its corner at the
+# rocking frequency (Load("lowpass", 1).pole(75)).
+DT_WHITE, DT_CORNER_1, BURN_IN = 0.8043, 2.513, 4362
+
+#: A small calibration grid for the end-to-end tests (the belt needs 5 grid points).
+SMALL_GRID, SMALL_SETS = (0.6, 0.75, 0.85, 0.9, 0.95, 0.98), 6
+
+
+def _record(seed, n=40_000, pole=0.0, dt=DT_WHITE, noise=0.0):
+    y = simulate_block([seed], n, dt=dt, g=1.0, e=0.9, sigma_p=1.0, burn_in=BURN_IN, pole=pole)[0][0]
+    return y + noise * y.std() * series_rng(seed + 1000).standard_normal(y.size)
+
+
+@pytest.fixture
+def small_calibration(monkeypatch):
+    monkeypatch.setattr(calibration, "E_GRID", SMALL_GRID)
+    monkeypatch.setattr(calibration, "SETS_PER_E", SMALL_SETS)
+
+
+def test_binned_model_keeps_noise_and_pole_per_sample_within_half_a_bin():
+    """The calibration simulates the binned model: its noise and its pole per sample at the
+    binned samples per cycle lie within half a bin (relative) of the record's."""
+    rng = np.random.default_rng(3)
+    for ppc, corner, noise in zip(rng.uniform(20, 300, 50), rng.uniform(0.2, 10, 50), rng.uniform(0.002, 0.1, 50)):
+        model = RecordModel(load=Load("lowpass", corner), sensor=SensorNoise(noise))
+        binned = RecordModel.from_key(calibration.calibration_settings([20_000], ppc, model=model)["record_model"])
+        simulated_rate = -math.log(binned.load.pole(calibration.ppc_key(ppc)))
+        assert abs(math.log(simulated_rate / (2 * math.pi * corner / ppc))) <= calibration.POLE_BIN / 2 + 1e-3
+        assert abs(math.log(binned.sensor.std / noise)) <= calibration.NOISE_BIN / 2 + 1e-3
+    near = [RecordModel(sensor=SensorNoise(s)) for s in (0.0300, 0.0302)]
+    assert len({calibration.settings_hash(calibration.calibration_settings([20_000], 75.0, model=m)) for m in near}) == 1
+
+
+def test_measured_noise_and_colour_reach_the_calibration_key():
+    noisy = _record(21, noise=0.03)
+    analysis = measured.analyse([noisy], DT_WHITE)
+    m = record_measure.measure(noisy, DT_WHITE)
+    model, sources = inference.record_model(m, analysis)
+    assert m.noisy and sources["sensor_noise"] == "measured" and model.load.kind == "white"
+    key = calibration.calibration_settings([noisy.size], analysis.points_per_cycle, model=model)["record_model"]
+    assert key["sensor_noise"]["std"] == pytest.approx(0.03, rel=0.1)
+    coloured = _record(22, pole=Load("lowpass", 1.0).pole(75.0), dt=DT_CORNER_1, n=200_000)
+    analysis = measured.analyse([coloured], DT_CORNER_1)
+    m = record_measure.measure(coloured, DT_CORNER_1)
+    model, _ = inference.record_model(m, analysis)
+    assert m.coloured and model.load.kind == "lowpass"
+    assert model.load.pole(analysis.points_per_cycle) == pytest.approx(m.pole.value, rel=1e-9)  # the pole per sample measured
+    declared, sources = inference.record_model(m, analysis, load=Load(), sensor=SensorNoise(0.5 * analysis.sigma_y, "rad"))
+    assert declared.load.kind == "white" and declared.sensor == SensorNoise(0.5, "sigma_y")
+    assert sources["load"] == sources["sensor_noise"] == "declared"
+    assert inference.record_model(m, analysis, model=PAPER)[0] == PAPER
+
+
+def test_a_declared_spectrum_file_is_placed_at_the_records_rocking_frequency(tmp_path):
+    """--load spectrum:FILE with a table in Hz: read with the record's dt and samples per
+    cycle, so its frequencies in rocking frequencies are Hz times dt N; the calibration's
+    key carries the table."""
+    y = _record(24)
+    analysis = measured.analyse([y], DT_WHITE)
+    table = tmp_path / "psd.csv"
+    table.write_text("frequency_hz,psd\n0.0,1.0\n0.01,1.0\n0.02,0.1\n")
+    model, sources = inference.record_model(None, analysis, load=f"spectrum:{table}", sensor=SensorNoise())
+    assert model.load.kind == "spectrum" and sources["load"] == "declared"
+    f_rock = 1.0 / (DT_WHITE * analysis.points_per_cycle)
+    np.testing.assert_allclose(model.load.frequency, np.array([0.0, 0.01, 0.02]) / f_rock)
+    key = calibration.calibration_settings([y.size], analysis.points_per_cycle, model=model)["record_model"]
+    assert key["load"]["kind"] == "spectrum" and key["load"]["psd"] == [1.0, 1.0, 0.1]
+
+
+def test_noisy_record_json_names_the_noise_and_its_calibration_simulates_it(tmp_path, capsys, small_calibration):
+    y = _record(23, noise=0.03)
+    path = tmp_path / "r.npy"
+    np.save(path, y)
+    cache = tmp_path / "cache"
+    assert main(["estimate", str(path), "--dt", str(DT_WHITE), "--cache", str(cache), "--json"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    rm = res["record_model"]
+    assert rm["measured"]["detected"]["sensor_noise"] is True
+    assert rm["measured"]["sensor_noise_sigma_y"]["value"] == pytest.approx(0.03, rel=0.1)
+    assert rm["measured"]["sensor_noise_sigma_y"]["se"] > 0
+    assert rm["sources"]["sensor_noise"] == "measured"
+    assert rm["simulated"]["sensor_noise"]["std"] == pytest.approx(0.03, rel=0.1)
+    files = list(cache.glob("calibration-*.nc"))
+    assert [f.name for f in files] == [res["calibration"]["file"]]
+    import xarray as xr
+
+    with xr.open_dataset(files[0]) as ds:
+        assert json.loads(ds.attrs["settings"])["record_model"]["sensor_noise"] == rm["simulated"]["sensor_noise"]
+    assert res["estimator"] in [row["estimator"] for row in res["selection"] if row["holds"]]
+    widths = {row["estimator"]: row["width"] for row in res["selection"] if row["holds"]}
+    assert widths[res["estimator"]] == min(widths.values())
+    assert main(["estimate", str(path), "--dt", str(DT_WHITE), "--cache", str(cache), "--sensor-noise", "0"]) == 0
+    text = capsys.readouterr().out
+    assert "sensor noise declared" in text and "no sensor noise" in text
+
+
+@pytest.mark.parametrize("text, expected", [("auto", None), ("0", SensorNoise(0.0, "rad")), ("3%", SensorNoise(0.03)),
+                                            ("2e-4", SensorNoise(2e-4, "rad")), (" 0.5 % ", SensorNoise(0.005))])
+def test_sensor_noise_option_reads_its_forms(text, expected):
+    assert parse_sensor_noise(text) == expected
+
+
+@pytest.mark.parametrize("args, names", [
+    (["--sensor-noise", "-1"], "--sensor-noise '-1'"),
+    (["--sensor-noise", "nan"], "--sensor-noise 'nan'"),
+    (["--sensor-noise", "inf%"], "--sensor-noise 'inf%'"),
+    (["--sensor-noise", "loud"], "--sensor-noise 'loud'"),
+    (["--load", "pink"], "--load 'pink'"),
+    (["--load", "lowpass:-2"], "corner"),
+    (["--load", "spectrum:psd.csv"], "spectrum"),
+    (["--load", "base:ground.csv"], "base"),
+    (["--model", "housner"], "--theta-cr"),
+    (["--model", "housner", "--theta-cr", "2"], "--theta-cr 2"),
+    (["--theta-cr", "0.2"], "--model housner"),
+    (["--model", "newton"], "--model"),
+])
+def test_bad_model_options_end_in_one_sentence_before_any_calibration(tmp_path, capsys, args, names):
+    path = tmp_path / "r.npy"
+    np.save(path, np.zeros(10))  # never read: the options are refused first
+    cache = tmp_path / "cache"
+    assert main(["estimate", str(path), "--dt", "0.1", "--cache", str(cache), *args]) == 2
+    err = capsys.readouterr().err.strip()
+    assert names in err and len(err.splitlines()) == 1 and "Traceback" not in err
+    assert not cache.exists()
+
+
+def _entry(e, low, high, coverage, beyond=None, notes=()):
+    return {"e": e, "interval": [low, high], "coverage": coverage, "beyond": beyond, "notes": list(notes), "calibrated_range": [0.4, 0.995]}
+
+
+def test_the_narrowest_trusted_candidate_is_reported():
+    floor = inference.coverage_floor(600)
+    assert floor == pytest.approx(0.95 - 1.959964 * math.sqrt(0.95 * 0.05 / 600), abs=1e-6)
+    per = {"e_0": _entry(0.9, 0.85, 0.95, 0.95), "e4": _entry(0.9, 0.88, 0.92, floor - 0.01), "e_v": _entry(0.9, 0.87, 0.94, 0.94)}
+    name, rows, reason = inference.select(per, 600)
+    assert name == "e_v" and reason is None  # e4 is narrower, but its calibrated coverage does not hold
+    assert {row["estimator"]: row["holds"] for row in rows} == {"e_0": True, "e4": False, "e_v": True}
+    assert "below" in next(row["why_not"] for row in rows if row["estimator"] == "e4")
+
+
+def test_no_trusted_candidate_gives_null_with_a_one_sentence_reason():
+    from rockdec.cli import _estimate_text
+
+    per = {"e_0": _entry(None, None, None, 0.95, beyond="above"), "e4": _entry(0.9, 0.8, 0.99, 0.5),
+           "e_v": _entry(None, None, None, None, notes=["no raw estimate"])}
+    whole = inference.select({**per, "e_v": _entry(0.41, 0.4, 0.995, 0.95)}, 600)
+    assert whole[0] is None and "spans the whole calibrated range" in whole[2]  # an interval that says nothing
+    name, rows, reason = inference.select(per, 600)
+    assert name is None and not any(row["holds"] for row in rows)
+    assert reason.startswith("no estimator can be trusted") and all(n in reason for n in per) and "\n" not in reason
+    res = {"records": ["r.csv"], "samples": 1000, "dt": 0.01, "nan_samples": 0, "sigma_y": 0.01, "points_per_cycle": 75.0,
+           "g": None, "g_given": False, "g_raw": 1.0, "calibration": {"file": "c.nc", "cached": True, "seconds": 0.0},
+           "estimators": {}, "estimator": None, "e": None, "interval": [None, None], "coverage": None, "warnings": [],
+           "record_model": None, "selection": rows, "reason": reason}
+    assert f"e: not estimated: {reason}" in _estimate_text(res)
+
+
+def test_step_search_brackets_a_threshold_like_response():
+    """Samples per cycle falling two decades over 15 % of the step (as at a corner at the
+    rocking frequency, e = 0.98): the search reaches the target within 12 pilots from the
+    white law's first step."""
+    def read(dt):  # the white law at short steps, a drop to a few samples per cycle past dt = 2.6
+        return 3000.0 / dt**2 / (1.0 + math.exp(min(40.0 * (dt - 2.6), 700.0))) + 2.0
+
+    dt, history = 1.13, []
+    for _ in range(12):
+        dt = secant_step(history, dt, read(dt), 75.0)
+    assert read(dt) == pytest.approx(75.0, rel=0.03)
+
+
+def test_calibration_step_under_a_low_pass_load_reads_the_target(small_calibration):
+    """At a corner of 1 rocking frequency the calibration's records read the target samples
+    per cycle (median of 6 records within 25 %: their own spread is about 20 %)."""
+    model = RecordModel(load=Load("lowpass", 1.0))
+    dt, burn_in, _ = calibration.step_for(0.9, 75.0, [100_000], measured.DEFAULT_SETTINGS, 4321, model)
+    read = [
+        measured.analyse(calibration._simulate_set(777 + k, [100_000], dt, 0.9, burn_in, model, model.load.pole(75.0)), dt).points_per_cycle
+        for k in range(6)
+    ]
+    assert float(np.median(read)) == pytest.approx(75.0, rel=0.25)
+
+
+def test_housner_model_puts_sigma_y_over_theta_cr_in_the_calibration_key(tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(calibration, "_grid_point", fake_calibration.grid_point)
+    path = tmp_path / "r.npy"
+    y = _record(25)
+    np.save(path, 0.02 * y / y.std())  # sigma_Y = 0.02 rad
+    args = ["estimate", str(path), "--dt", str(DT_WHITE), "--cache", str(tmp_path / "cache"), "--json", "--load", "white",
+            "--sensor-noise", "0"]
+    assert main([*args, "--model", "housner", "--theta-cr", "0.4"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    ratio = res["sigma_y"] / 0.4
+    simulated = res["record_model"]["simulated"]
+    assert simulated["rocking"] == "housner" and res["record_model"]["sources"]["rocking"] == "declared"
+    assert abs(math.log(simulated["sigma_y_over_theta_cr"] / ratio)) <= calibration.RATIO_BIN / 2 + 1e-3
+    assert fake_calibration.grid_point.settings["sigma_y_over_theta_cr"] == simulated["sigma_y_over_theta_cr"]
+    sources = res["record_model"]["sources"]
+    assert sources["load"] == sources["sensor_noise"] == "declared"  # measured and reported, not used
+    assert simulated["load"] == {"kind": "white"} and simulated["sensor_noise"]["std"] == 0.0
+    assert main([*args, "--model", "housner", "--theta-cr", "0.8"]) == 0  # another ratio, another calibration
+    assert json.loads(capsys.readouterr().out)["calibration"]["file"] != res["calibration"]["file"]

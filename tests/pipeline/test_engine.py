@@ -1,0 +1,71 @@
+"""The Dask engine (rockdec.pipeline.engine): one setting, and the same numbers on every engine."""
+
+import numpy as np
+import pytest
+
+from rockdec.pipeline import config, engine, replicates
+from rockdec.physics import run
+
+
+def test_the_setting_names_an_engine_or_says_what_is_accepted(monkeypatch):
+    monkeypatch.delenv(engine.VARIABLE, raising=False)
+    assert engine.setting() == ("threads", None)
+    assert engine.setting("processes:3") == ("processes", 3)
+    assert engine.setting(" tcp://10.0.0.5:8786 ") == ("address", "tcp://10.0.0.5:8786")
+    monkeypatch.setenv(engine.VARIABLE, "processes:2")
+    assert engine.setting() == ("processes", 2)
+    for bad in ("thread", "processes:0", "processes:two", "tcp://", "slurm"):
+        with pytest.raises(engine.SchedulerError, match="threads.*processes:N.*tcp://"):
+            engine.setting(bad)
+
+
+@pytest.fixture(scope="module")
+def small():
+    """Two replicates of 12 series in chunks of 5 seeds (chunks straddle the replicates)."""
+    scene = config.validate_scene(
+        {
+            "excitation": {"dt": 0.0034, "burn_in": 2000},
+            "records": {"n_points": 3000, "replicates": 2, "series_per_replicate": 12, "chunk_seeds": 5},
+            "signatures": {"windows": [0.5, 1.0]},
+        }
+    )
+    return scene, run.calibrate(scene)
+
+
+def cubes_on(scene, contract, scheduler, monkeypatch):
+    monkeypatch.setenv(engine.VARIABLE, scheduler)
+    return replicates.scene_cubes(contract, scene["records"], scene["signatures"], ["pooled", "groups_of_10"], threads=2)
+
+
+def assert_identical(a: dict, b: dict):
+    for reading in a:
+        for name in ("signature_sum", "count", "skipped", "free_response"):
+            assert np.array_equal(a[reading][name].values, b[reading][name].values, equal_nan=True), (reading, name)
+
+
+@pytest.mark.slow
+def test_a_local_cluster_of_two_worker_processes_gives_the_threads_numbers_bit_for_bit(small, monkeypatch):
+    scene, contract = small
+    threads = cubes_on(scene, contract, "threads", monkeypatch)
+    assert int(threads["pooled"]["count"].sum()) > 0
+    assert_identical(threads, cubes_on(scene, contract, "processes:2", monkeypatch))
+
+
+@pytest.mark.slow
+def test_a_running_scheduler_given_by_its_address_gives_the_same_numbers(small, monkeypatch):
+    from dask.distributed import LocalCluster
+
+    scene, contract = small
+    threads = cubes_on(scene, contract, "threads", monkeypatch)
+    with LocalCluster(n_workers=2, threads_per_worker=1, host="127.0.0.1", dashboard_address=None) as cluster:
+        assert_identical(threads, cubes_on(scene, contract, cluster.scheduler_address, monkeypatch))
+
+
+def test_a_session_inside_a_session_starts_no_second_engine(monkeypatch):
+    import dask
+
+    monkeypatch.setenv(engine.VARIABLE, "threads")
+    with engine.session(2):
+        assert dask.config.get("num_workers") == 2
+        with engine.session(1):  # the inner request is served by the outer engine
+            assert dask.config.get("num_workers") == 2

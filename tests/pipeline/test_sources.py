@@ -1,0 +1,53 @@
+"""The code dependencies of a step (:mod:`rockdec.sources`) and the calibration's cache key."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from rockdec.calibrate import calibration
+from rockdec.physics import models
+from rockdec.sources import package_sources
+
+SRC = Path(calibration.__file__).resolve().parents[1]
+
+
+def names(paths):
+    return {Path(p).name for p in paths}
+
+
+def test_sources_follow_imports_through_other_modules():
+    """calibration imports simulate, which imports models: models is listed; figures is not."""
+    found = names(package_sources("rockdec.calibrate.calibration"))
+    assert {"calibration.py", "measured.py", "simulate.py", "models.py", "registry.py", "estimators.py"} <= found
+    assert "figures.py" not in found
+
+
+def test_a_script_lists_the_modules_it_reaches_not_itself(tmp_path):
+    script = tmp_path / "step.py"
+    script.write_text("from rockdec.report import tables\n\ndef f():\n    from rockdec.rdd.registry import ESTIMATORS\n")
+    found = names(package_sources(str(script)))
+    assert {"tables.py", "belt.py", "registry.py"} <= found
+    assert "step.py" not in found
+
+
+def test_every_listed_source_is_a_package_file():
+    for path in package_sources("rockdec.cli"):
+        assert Path(path).resolve().is_relative_to(SRC)
+
+
+def test_editing_models_changes_the_calibration_cache_key(monkeypatch):
+    """models.py sets the lag range and the samples-per-cycle bins: an edit to it must make
+    stored calibrations stale."""
+    key = calibration.calibration_settings([20_000], 75.0)
+    before = calibration.settings_hash(key)
+    models_file = Path(models.__file__).resolve()
+    read_bytes = Path.read_bytes
+    monkeypatch.setattr(Path, "read_bytes", lambda self: read_bytes(self) + (b"\n# edited\n" if self.resolve() == models_file else b""))
+    after = calibration.settings_hash(calibration.calibration_settings([20_000], 75.0))
+    assert after != before
+
+
+def test_kernels_do_not_reach_the_record_reader():
+    """The simulation, signature and estimator modules never import the user-file reader."""
+    for module in ("rockdec.rdd.signatures", "rockdec.rdd.estimators", "rockdec.physics.simulate", "rockdec.pipeline.replicates"):
+        assert "records.py" not in names(package_sources(module)), module

@@ -1,0 +1,149 @@
+"""The warnings of `rockdec estimate` (rockdec.record.diagnostics): thresholds from the calibration's
+own records, a clean record that fires nothing, and each gross defect named by its check.
+
+The calibration here is the checks' statistics on clean simulated records at the test
+record's e, length and sampling: what `rockdec.calibrate.calibration.build` stores for them.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from rockdec.calibrate import calibration
+from rockdec.record import diagnostics
+from rockdec.rdd import fits, measured
+from rockdec.calibrate.inference import diagnose
+from rockdec.record.records import Record
+from rockdec.physics.simulate import calibrate_dt, simulate_block
+
+E, N, SETS = 0.9, 40_000, 30
+LEVEL = measured.DEFAULT_SETTINGS["level"]
+
+
+def _calibration(values: np.ndarray, grid=(E,)) -> xr.Dataset:
+    """A calibration holding only the checks' statistics ``values(e_true, set, check)``."""
+    return xr.Dataset(
+        {"diagnostic": (("e_true", "set", "check"), values)},
+        coords={"e_true": list(grid), "set": np.arange(values.shape[1]), "check": list(diagnostics.CHECKS)},
+    )
+
+
+@pytest.fixture(scope="module")
+def clean():
+    """Clean records at e = 0.9 (75 samples per cycle, 40,000 samples): the first is the test
+    record, the others the calibration's sets."""
+    cal = calibrate_dt(e=E, g=1.0, sigma_p=0.003, points_per_cycle=75)
+    theta, _ = simulate_block(np.arange(SETS + 1) + 500, N, dt=cal["dt"], g=1.0, e=E, sigma_p=0.003, burn_in=cal["burn_in"])
+    dt = cal["dt"]
+    values = np.stack([diagnostics.statistics([y], measured.analyse([y], dt)) for y in theta[1:]])
+    return theta[0], dt, _calibration(values[None])
+
+
+def _fired(y, dt, cal):
+    """The checks that fire on record ``y`` and the warnings' text."""
+    analysis = measured.analyse([y], dt)
+    notes, checks = diagnose([Record(y, dt, "r")], analysis, {}, cal, E, (E - 0.05, E + 0.05))
+    return {name for name, c in checks.items() if c["fired"]}, " ".join(notes)
+
+
+def test_thresholds_fire_on_at_most_5_percent_of_the_calibrations_own_records():
+    rng = np.random.default_rng(1)
+    values = rng.lognormal(size=(len(calibration.E_GRID), 200, len(diagnostics.CHECKS)))
+    cal = _calibration(values, calibration.E_GRID)
+    limits = diagnostics.thresholds(cal, 0.85, (0.8, 0.9), LEVEL)
+    pooled = values[np.isin(calibration.E_GRID, (0.8, 0.85, 0.88))]  # inside the interval, and the grid points about e
+    for j, check in enumerate(diagnostics.REGISTRY):
+        if check.threshold == "structural":
+            continue
+        share = np.mean(pooled[..., j] > limits[check.name]) if check.side == "high" else np.mean(pooled[..., j] < limits[check.name])
+        assert 0.0 < share <= 0.05, check.name
+
+
+def test_a_doctored_calibration_moves_the_thresholds_and_the_structural_one_stays():
+    rng = np.random.default_rng(2)
+    values = rng.lognormal(size=(len(calibration.E_GRID), 40, len(diagnostics.CHECKS)))
+    base = diagnostics.thresholds(_calibration(values, calibration.E_GRID), 0.85, (0.8, 0.9), LEVEL)
+    doubled = diagnostics.thresholds(_calibration(3.0 * values, calibration.E_GRID), 0.85, (0.8, 0.9), LEVEL)
+    for check in diagnostics.REGISTRY:
+        if check.threshold == "structural":
+            assert doubled[check.name] == base[check.name] == fits.min_points_per_cycle(0.85, LEVEL)
+        else:
+            assert doubled[check.name] == pytest.approx(3.0 * base[check.name], rel=1e-12)
+
+
+def test_with_an_e_its_neighbours_are_pooled_and_without_one_the_strictest_grid_point_rules():
+    dense = np.array([0.4, 0.5, 0.6, 0.7, 0.75, 0.8, 0.85, 0.88, 0.91, 0.93, 0.95, 0.98, 0.995])
+    assert list(dense[diagnostics._near(dense, 0.86, (0.79, 0.9))]) == [0.8, 0.85, 0.88]  # inside, and a neighbour each side
+    assert list(dense[diagnostics._near(dense, 0.995, (None, None))]) == [0.995]
+    grid = np.asarray(calibration.E_GRID)
+    rng = np.random.default_rng(3)
+    spread = np.linspace(2.0, 1.0, grid.size)[:, None, None]  # the null narrows as e grows
+    values = spread * rng.lognormal(size=(grid.size, 200, len(diagnostics.CHECKS)))
+    cal = _calibration(values, calibration.E_GRID)
+    unplaced = diagnostics.thresholds(cal, None, None, LEVEL)
+    for j, check in enumerate(diagnostics.REGISTRY):
+        if check.threshold == "calibrated" and check.side == "high":
+            per_point = [diagnostics.thresholds(cal, float(e), None, LEVEL)[check.name] for e in grid]
+            assert unplaced[check.name] == pytest.approx(min(per_point))  # no looser than any e's
+            pooled = np.quantile(values[..., j], diagnostics.QUANTILE)
+            assert unplaced[check.name] < pooled  # pooling every e would let the widest null rule
+
+
+def test_every_statistic_is_scale_free(clean):
+    """The calibration has g = sigma_p = 1: a record's statistics must not depend on its units."""
+    theta, dt, _ = clean
+    base = diagnostics.statistics([theta], measured.analyse([theta], dt))
+    scaled = diagnostics.statistics([7.0 * theta], measured.analyse([7.0 * theta], 2.0 * dt))
+    np.testing.assert_allclose(scaled, base, rtol=1e-9)
+
+
+def test_a_clean_record_fires_nothing(clean):
+    theta, dt, cal = clean
+    fired, notes = _fired(theta, dt, cal)
+    assert fired == set() and notes == ""
+
+
+def test_warnings_name_what_looks_wrong(clean):
+    """Drift, a spike and a lean each raise their warning; the clean record raises none of them.
+    (Moved from test_estimate; the wording of the checks replaced 'spike or overturning'.)"""
+    theta, dt, cal = clean
+    sigma = float(np.std(theta))
+    assert not any(w in _fired(theta, dt, cal)[1] for w in ("stationary", "spike", "asymmetric"))
+    drifting = theta.copy()
+    drifting[-theta.size // 4 :] *= 3.0
+    assert "not stationary" in _fired(drifting, dt, cal)[1]
+    spiky = theta.copy()
+    spiky[500] = 40 * sigma
+    assert "spike" in _fired(spiky, dt, cal)[1]
+    assert "asymmetric" in _fired(theta + 0.8 * np.abs(theta), dt, cal)[1]
+
+
+@pytest.mark.parametrize("defect, words", [
+    ("nonstationary", "not stationary"),
+    ("drift", "zero drifts"),
+    ("spikes", "holds spikes"),
+    ("asymmetry", "lean on one side"),
+    ("few_triggers", "fewer than records of this length"),
+    ("coarse_sampling", "too coarse"),
+])
+def test_a_gross_defect_fires_its_check_and_names_it(clean, defect, words):
+    theta, dt, cal = clean
+    sigma = float(np.std(theta))
+    y, step = theta.copy(), dt
+    if defect == "nonstationary":
+        y *= np.linspace(0.3, 3.0, y.size)
+    elif defect == "drift":
+        y += 3.0 * sigma * np.linspace(-0.5, 0.5, y.size)
+    elif defect == "spikes":
+        y[::4000] = 5.0 * sigma
+    elif defect == "asymmetry":
+        y += 0.8 * np.abs(y)
+    elif defect == "few_triggers":
+        for start in range(1000, y.size, 5000):
+            y[start : start + 1000] = np.nan  # 20 % in gaps
+    else:
+        y, step = theta[::4], 4 * dt  # about 19 samples per cycle
+    fired, notes = _fired(y, step, cal)
+    assert defect in fired and words in notes

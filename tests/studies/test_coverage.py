@@ -1,0 +1,103 @@
+"""The coverage study (rockdec.studies.coverage) on tiny cells, and its second simulator
+(tests/rocking_vectorised.py) against the pure-Python reference flight."""
+
+import functools
+import math
+
+import numpy as np
+import pytest
+
+import rocking_vectorised
+from rocking_reference import flight_reference
+from rockdec.studies import coverage
+from rockdec.rdd import registry
+from rockdec.pipeline.layout import COVERAGE_CASES, COVERAGE_CONDITIONS
+from rockdec.physics.record_model import PAPER
+
+REFERENCE = functools.partial(rocking_vectorised.simulate_records, g=1.0, sigma_p=1.0)
+
+
+@pytest.mark.parametrize("e", [0.0, 0.5, 0.9, 1.0])
+def test_vectorised_flight_matches_the_reference_impact_by_impact(e):
+    rng = np.random.default_rng(4)
+    theta, omega = rng.normal(size=400) * 0.01, rng.normal(size=400) * 0.1
+    theta[:60] = 0.0  # at the pivot, moving or at rest
+    omega[:20] = 0.0
+    got_theta, got_omega = rocking_vectorised.flight(theta, omega, 0.05, 1.3, e)
+    want = np.array([flight_reference(t, w, 0.05, 1.3, e) for t, w in zip(theta, omega)])
+    np.testing.assert_allclose(got_theta, want[:, 0], rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(got_omega, want[:, 1], rtol=1e-12, atol=1e-15)
+
+
+def test_vectorised_records_depend_on_their_own_seed_only():
+    kw = dict(dt=0.3, e=0.9, burn_in=50, pole=0.8, noise=0.02)
+    together = REFERENCE([5, 6, 7], 3000, **kw)
+    alone = REFERENCE([6], 3000, **kw)
+    np.testing.assert_array_equal(together[1], alone[0])
+    assert not np.array_equal(together[0], together[2])
+
+
+def test_vectorised_records_without_load_stay_at_rest():
+    theta = rocking_vectorised.simulate_records([1, 2], 500, dt=0.1, g=1.0, e=0.8, sigma_p=0.0, burn_in=10)
+    assert not theta.any()
+
+
+def test_stage_places_white_records_at_75_samples_per_cycle():
+    staged = coverage.stage(0.9, 20_000, None, coverage.STUDY_SEED_OFFSET - 10**6)
+    assert abs(math.log(staged["points_per_cycle"] / coverage.POINTS_PER_CYCLE)) < coverage.STAGE_TOLERANCE
+    assert staged["pole"] == 0.0
+
+
+@pytest.fixture(scope="module")
+def tiny_table(tmp_path_factory):
+    """Two records of 20,000 samples in a cell of each class: clean (on the reference
+    simulator's records), sensor noise, and colour with noise."""
+    cache = tmp_path_factory.mktemp("coverage-cal")
+    cells = ["reference_clean_e0.9", "kernel_noise3_e0.9", "kernel_corner1_noise2_e0.9"]
+    datasets = [coverage.run_cell(c, 2, 20_000, cache, simulate=REFERENCE if c.startswith("reference") else coverage.kernel_records)
+                for c in cells]
+    return datasets, coverage.table(datasets)
+
+
+def test_tiny_study_table_has_its_columns_and_invariants(tiny_table):
+    datasets, table = tiny_table
+    need = {"simulator", "condition", "e_true", "records", "coverage", "bias", "sd", "median_width", "nulls", "null_reasons",
+            "estimators", "warnings", "paper_coverage", "paper_median_width", "ppc_true", "corner_true", "ppc_read",
+            *(f"coverage_{name}" for name in registry.ESTIMATORS)}
+    assert need <= set(table.columns)
+    assert len(table) == len(datasets)
+    for column in ["coverage", "paper_coverage", *(f"coverage_{name}" for name in registry.ESTIMATORS)]:
+        assert ((table[column] >= 0.0) & (table[column] <= 1.0)).all()
+    assert (table["nulls"] <= table["records"]).all()
+    for ds in datasets:
+        e_hat, low, high = ds["e_hat"].values, ds["low"].values, ds["high"].values
+        ok = np.isfinite(e_hat)
+        assert np.all((low[ok] <= e_hat[ok]) & (e_hat[ok] <= high[ok]))
+        assert all(reason for reason in ds["reason"].values[~ok])  # a null says why
+        assert all(not reason for reason in ds["reason"].values[ok])
+    markdown = coverage.markdown(table)
+    assert markdown.count("\n| kernel") + markdown.count("\n| reference") == len(table)
+
+
+def test_tiny_study_places_the_corner(tiny_table):
+    """The records' own corner, in their own rocking frequencies, is the cell's within the
+    spread of two records' sigma_Y (the median of the pilots is placed within 1.5 %)."""
+    datasets, _ = tiny_table
+    for ds in datasets:
+        noise, corner = COVERAGE_CONDITIONS[ds.attrs["condition"]]
+        if corner is not None:
+            assert np.median(ds["corner_true"].values) == pytest.approx(corner, rel=0.5)
+            assert ds.attrs["pilot_points_per_cycle"] == pytest.approx(coverage.POINTS_PER_CYCLE, rel=coverage.STAGE_TOLERANCE * 1.01)
+
+
+def test_every_cell_names_a_condition_and_a_simulator():
+    for simulator, condition, e in COVERAGE_CASES.values():
+        assert condition in COVERAGE_CONDITIONS and simulator in ("kernel", "reference") and 0.0 < e < 1.0
+
+
+def test_reduced_coverage_holds(tmp_path):
+    """40 records of 20,000 samples at e = 0.9: the 95 % interval of e_v covers e >= 85 %."""
+    ds = coverage.run_cell("kernel_clean_e0.9", 40, 20_000, tmp_path, model=PAPER)
+    row = coverage.summary(ds)
+    assert row["coverage_e_v"] >= 0.85
+    assert np.isfinite(ds["est_e"].sel(estimator="e_v").values).all()
