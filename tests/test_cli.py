@@ -348,6 +348,31 @@ def test_the_g_line_of_the_report_gives_g_s_interval_and_keeps_a_given_g_as_give
     assert "g = 1 rad/s^2 (given (--g))" in line and "interval" not in line
 
 
+@pytest.mark.parametrize("missing", [(), ("g",), ("g", "g_raw"), ("g_raw",), ("sigma_y", "points_per_cycle"),
+                                     ("g", "g_raw", "sigma_y", "points_per_cycle")],
+                         ids=["none", "g", "g and g_raw", "g_raw", "sigma_y", "all"])
+def test_the_text_report_prints_whatever_the_record_could_not_give(missing):
+    """Issue 21: the text report crashed when g could not be read off the record (after the
+    whole calibration); each value the analysis leaves undetermined (None in the JSON) is
+    shown as not determined, and the reason for a missing e is printed."""
+    from rockdec.cli import _estimate_text
+
+    est = {"raw": None, "e": None, "beyond": None, "calibrated_range": [0.4, 0.995], "interval": [None, None],
+           "coverage": None, "triggers": 0, "notes": []}
+    res = {"records": ["r.csv"], "samples": 1000, "dt": 0.01, "nan_samples": 0, "sigma_y": 0.01, "points_per_cycle": 75.0,
+           "g": 1.02, "g_given": False, "g_raw": 0.99, "g_interval": None, "g_coverage": None,
+           "calibration": {"file": "c.nc", "cached": True, "seconds": 0.0}, "estimators": {"e_v": est}, "estimator": None,
+           "reason": "no estimator gave a value", "e": None, "interval": [None, None], "coverage": None,
+           "warnings": ["w"], "record_model": None, "selection": []}
+    text = _estimate_text({**res, **dict.fromkeys(missing)})
+    g_line = next(line for line in text.splitlines() if "restoring acceleration" in line)
+    assert ("not determined" in g_line) == ("g" in missing)
+    assert ("0.99" in g_line) == ("g_raw" not in missing)
+    assert "e: not estimated: no estimator gave a value" in text and "warning: w" in text
+    if "sigma_y" in missing:
+        assert "sigma_Y = nan rad, nan samples per rocking cycle" in text
+
+
 def test_readme_explains_every_estimator_and_word_of_the_estimate_report():
     from pathlib import Path
 

@@ -543,18 +543,11 @@ def _estimate_text(res: dict) -> str:
     fmt = lambda x: "nan" if x is None else f"{x:.4f}"  # noqa: E731
     pct = lambda x: "-" if x is None else f"{x:.0%}"  # noqa: E731
     cal = res["calibration"]
-    if res["g_given"]:
-        g_how = "given (--g)"
-    else:
-        g_how = f"read off the record: raw {res['g_raw']:.4g}, corrected for the trigger window's bias"
-        if res.get("g_interval"):
-            held = "" if res.get("g_coverage") is None else f", held the true g on {res['g_coverage']:.0%} of the calibration's records"
-            g_how += f"; 95 % interval [{res['g_interval'][0]:.5g}, {res['g_interval'][1]:.5g}]{held}"
     lines = [
         f"records: {', '.join(res['records'])}",
         f"  {res['samples']} samples at dt = {res['dt']:.6g} s ({res['nan_samples']} NaN skipped); rms angle "
-        f"sigma_Y = {res['sigma_y']:.4g} rad, {res['points_per_cycle']:.1f} samples per rocking cycle at sigma_Y",
-        f"  restoring acceleration g = {res['g']:.5g} rad/s^2 ({g_how})" if res["g"] is not None else "  restoring acceleration g: not determined",
+        f"sigma_Y = {_number(res['sigma_y'], '.4g')} rad, {_number(res['points_per_cycle'], '.1f')} samples per rocking cycle at sigma_Y",
+        _g_line(res),
         f"  calibration: {cal['file']}, "
         + ("from the cache" if cal["cached"] else f"built in {cal['seconds']:.1f} s and stored for the next record like these"),
         *_model_lines(res["record_model"]),
@@ -586,6 +579,29 @@ def _estimate_text(res: dict) -> str:
     lines += [f"warning: {w}" for w in res["warnings"]]
     lines.append("(what each word means: rockdec estimate --help)")
     return "\n".join(lines)
+
+
+def _number(value, spec: str) -> str:
+    """``value`` in the format ``spec``; ``nan`` for a value the report could not determine (``None``)."""
+    return "nan" if value is None else format(value, spec)
+
+
+def _g_line(res: dict) -> str:
+    """The report's line on ``g``: its value and how it was found (given, or read off the
+    record with its raw value and interval), or that it could not be determined."""
+    if res["g"] is None:
+        raw = "" if res.get("g_raw") is None else f" (raw value read off the record {res['g_raw']:.4g}, not corrected)"
+        return f"  restoring acceleration g: not determined{raw}"
+    if res["g_given"]:
+        g_how = "given (--g)"
+    elif res.get("g_raw") is None:
+        g_how = "read off the record"
+    else:
+        g_how = f"read off the record: raw {res['g_raw']:.4g}, corrected for the trigger window's bias"
+        if res.get("g_interval"):
+            held = "" if res.get("g_coverage") is None else f", held the true g on {res['g_coverage']:.0%} of the calibration's records"
+            g_how += f"; 95 % interval [{res['g_interval'][0]:.5g}, {res['g_interval'][1]:.5g}]{held}"
+    return f"  restoring acceleration g = {res['g']:.5g} rad/s^2 ({g_how})"
 
 
 def _model_lines(report: dict | None) -> list[str]:
