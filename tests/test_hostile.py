@@ -839,6 +839,48 @@ def test_a_plot_claimed_by_a_running_estimate_is_refused_at_once(rocking, tmp_pa
                 ["being written by another run"])
 
 
+def test_a_plot_made_by_someone_else_during_the_calibration_is_kept_and_the_run_refuses(rocking, tiny_calibration, tmp_path, monkeypatch):
+    """Issue 21: ``--plot`` was checked only before the calibration, then written directly,
+    replacing a file made meanwhile by a program that takes no lock."""
+    plot = tmp_path / "p.png"
+    real = inference.estimate
+
+    def meanwhile(*args, **kwargs):
+        plot.write_bytes(b"made meanwhile")
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(inference, "estimate", meanwhile)
+    code, _, err = _estimate([rocking["csv"], "--plot", plot], tmp_path / "cache")
+    assert code == 2 and "appeared while this run wrote it" in err and "internal error" not in err, err
+    assert plot.read_bytes() == b"made meanwhile"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cache", "p.png"]  # no lock, no partial file
+
+
+@pytest.mark.parametrize("kind", ["npy", "csv"])
+def test_a_50_million_sample_record_is_refused_up_front_with_its_estimate(rocking, tmp_path, capsys, monkeypatch, kind):
+    """Issue 21: a 50-million-sample record hung. The refusal for time comes before the
+    record is read (the header of a .npy, the size of a .csv), with the estimate in the
+    sentence; the limit is set below that estimate, whatever the calibration costs."""
+    from rockdec import cli
+
+    monkeypatch.setattr(calibration, "E_GRID", FULL_CALIBRATION[0])
+    monkeypatch.setattr(calibration, "SETS_PER_E", FULL_CALIBRATION[1])
+    path = tmp_path / f"long.{kind}"
+    if kind == "npy":
+        with open(path, "wb") as handle:  # a header for 50 million float64 samples, then a hole
+            np.lib.format.write_array_header_1_0(handle, {"descr": "<f8", "fortran_order": False, "shape": (50_000_000,)})
+            handle.truncate(handle.tell() + 8 * 50_000_000)
+    else:
+        head = b"time,theta\n" + b"".join(f"{k * 0.01:.2f},{v:.8f}\n".encode() for k, v in enumerate(rocking["theta"][:4000]))
+        _sparse(path, head, 50_000_000 * (len(head) // 4001))
+    seconds, _ = inference.cost(50_000_000, kind == "csv", False)
+    monkeypatch.setattr(cli, "MAX_SECONDS", min(cli.MAX_SECONDS, seconds / 2))
+    argv = ["estimate", str(path), "--cache", str(tmp_path / "c")] + (["--dt", "0.01"] if kind == "npy" else [])
+    start = time.perf_counter()
+    refused(argv, tmp_path, capsys, ["e+07 samples need about", "on 2 cores", "pass --yes"])
+    assert time.perf_counter() - start < 10, "refused up front, not after reading the record"
+
+
 def test_overwrite_replaces_a_symlinked_plot_not_its_target(rocking, tiny_calibration, tmp_path):
     target = tmp_path / "precious.png"
     target.write_bytes(b"keep me")
