@@ -21,6 +21,7 @@ def run(args, capsys):
     return code, capsys.readouterr().err
 
 
+@pytest.mark.hostile("numbers", "refused")
 @pytest.mark.parametrize(
     "args, names",
     [
@@ -42,6 +43,7 @@ def test_bad_simulate_input_names_the_field_and_exits_2(tmp_path, capsys, args, 
     assert not out.exists() and not list(tmp_path.iterdir())
 
 
+@pytest.mark.hostile("output paths", "refused")
 def test_unwritable_or_existing_output_is_refused(tmp_path, capsys):
     code, err = run(["simulate", "--out", str(tmp_path / "missing" / "x.nc")], capsys)
     assert code == 2 and "does not exist" in err
@@ -52,6 +54,7 @@ def test_unwritable_or_existing_output_is_refused(tmp_path, capsys):
     assert existing.read_text() == "keep me"
 
 
+@pytest.mark.hostile("numbers", "refused")
 def test_e_one_needs_an_explicit_step(tmp_path, capsys):
     code, err = run(["simulate", "--out", str(tmp_path / "x.nc"), "--e", "1"], capsys)
     assert code == 2 and "--dt" in err
@@ -76,6 +79,7 @@ def test_free_response_run_writes_the_analytic_start(tmp_path, capsys):
         assert dt == pytest.approx(4 * 2**0.5 / 75)  # eq. 5 at amplitude 1, 75 points per cycle
 
 
+@pytest.mark.hostile("numbers", "refused")
 def test_console_script_exit_code_is_2_without_traceback(tmp_path):
     proc = subprocess.run(
         [sys.executable, "-m", "rockdec.cli", "simulate", "--out", str(tmp_path / "x.nc"), "--e", "2"],
@@ -98,6 +102,7 @@ def test_simulate_signatures_estimates_chain_gives_e_with_an_error_bar(tmp_path,
         assert abs(e_v - 0.95) < 0.02  # 60 series: the D_v estimate scatters ~0.005
 
 
+@pytest.mark.hostile("record files", "refused")
 def test_signatures_refuses_a_file_without_the_record(tmp_path, capsys):
     bad = tmp_path / "bad.nc"
     xr.Dataset({"x": ("time", [0.0, 1.0])}).to_netcdf(bad)
@@ -118,6 +123,7 @@ def test_model_option_chooses_the_model_the_file_records(tmp_path, model):
         assert ds.attrs["model"] == model and ds.attrs["model_reason"] == "requested"
 
 
+@pytest.mark.hostile("numbers", "refused")
 def test_unknown_model_names_the_option_and_writes_nothing(tmp_path, capsys):
     code, err = run(["simulate", "--out", str(tmp_path / "x.nc"), "--model", "rigid"], capsys)
     assert code == 2 and "--model 'rigid'" in err and "housner" in err
@@ -348,6 +354,7 @@ def test_the_g_line_of_the_report_gives_g_s_interval_and_keeps_a_given_g_as_give
     assert "g = 1 rad/s^2 (given (--g))" in line and "interval" not in line
 
 
+@pytest.mark.hostile("report", "answered")
 @pytest.mark.parametrize("missing", [(), ("g",), ("g", "g_raw"), ("g_raw",), ("sigma_y", "points_per_cycle"),
                                      ("g", "g_raw", "sigma_y", "points_per_cycle")],
                          ids=["none", "g", "g and g_raw", "g_raw", "sigma_y", "all"])

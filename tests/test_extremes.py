@@ -32,6 +32,7 @@ def estimates_of(theta, stats):
     return replicates.replicate_estimates(cube, fit_points=5)
 
 
+@pytest.mark.hostile("numbers", "answered")
 @pytest.mark.parametrize("scale", [2.0**40, 2.0**-40])
 def test_power_of_two_scaling_leaves_estimates_bit_identical(record, scale):
     base = estimates_of(record, STATS)
@@ -45,6 +46,7 @@ def test_power_of_two_scaling_leaves_estimates_bit_identical(record, scale):
     np.testing.assert_allclose(scaled["e_hat"].sel(estimator="e_g").values, base["e_hat"].sel(estimator="e_g").values, rtol=1e-13)
 
 
+@pytest.mark.hostile("numbers", "answered")
 @pytest.mark.parametrize("scale", [1e12, 1e-12])
 def test_decimal_scaling_changes_estimates_only_by_rounding(record, scale):
     base = estimates_of(record, STATS)
@@ -54,6 +56,7 @@ def test_decimal_scaling_changes_estimates_only_by_rounding(record, scale):
     np.testing.assert_allclose(scaled["e_hat0"].values, base["e_hat0"].values, rtol=1e-9)
 
 
+@pytest.mark.hostile("numbers", "answered")
 def test_float32_record_gives_the_float64_estimates_to_float32_precision(record):
     base = estimates_of(record, STATS)
     single = estimates_of(record.astype(np.float32), STATS)
@@ -62,6 +65,7 @@ def test_float32_record_gives_the_float64_estimates_to_float32_precision(record)
     np.testing.assert_allclose(single["e_hat0"].values, base["e_hat0"].values, atol=2e-3)
 
 
+@pytest.mark.hostile("numbers", "answered")
 @pytest.mark.parametrize("e", [0.0, 1e-12, 0.5, 0.999999, 1.0])
 def test_restitution_limits_simulate_at_a_given_step(e):
     theta, theta_dot = simulate.simulate_block(np.arange(3), 20_000, dt=DT, g=G, e=e, sigma_p=SIGMA_P)
@@ -72,6 +76,7 @@ def test_restitution_limits_simulate_at_a_given_step(e):
         assert np.mean(theta[:, -5000:] ** 2) > 10 * np.mean(theta[:, :5000] ** 2)
 
 
+@pytest.mark.hostile("sizes", "refused")
 def test_calibration_refuses_e_one_and_a_burn_in_too_long_to_run():
     with pytest.raises(ValueError, match="no energy"):
         simulate.calibrate_dt(e=1.0, g=G, sigma_p=SIGMA_P)
@@ -79,6 +84,7 @@ def test_calibration_refuses_e_one_and_a_burn_in_too_long_to_run():
         simulate.default_burn_in(0.999999, 75.0)
 
 
+@pytest.mark.hostile("numbers", "answered")
 def test_e_half_is_estimated_by_the_impact_slope():
     """At e = 0.5 the response rests often, but D_v still sees the velocity ratio of eq. 6."""
     cal = simulate.calibrate_dt(e=0.5, g=G, sigma_p=SIGMA_P, pilot_seeds=64, pilot_points=20_000)
@@ -98,6 +104,7 @@ def analytic_free_response(points_per_cycle, e=0.95, level=2.0, n_periods=2.5):
     return r, dt
 
 
+@pytest.mark.hostile("numbers", "warned")
 def test_local_fits_have_a_sampling_floor():
     """Below min_points_per_cycle the paper's N_h/8-point fits would have fewer than 3 points.
 

@@ -31,6 +31,20 @@ ROOT = Path(__file__).resolve().parents[1]
 #: A fast simulate call: an explicit step and no burn-in skip the calibration.
 FAST = ["--dt", "0.0034", "--burn-in", "0", "--seeds", "0", "--n-points", "50"]
 
+hostile = pytest.mark.hostile
+"""A hostile case, ``hostile(kind, outcome)``: what the user got wrong (``kind``) and what the
+tool does (``outcome``: refused, answered, warned, or refused or answered for generated
+values); ``benchmarks/hostile_matrix.py`` counts them by both."""
+
+
+def marked(table: dict, kind, outcome: str = "refused") -> list:
+    """The cases of ``table`` (name -> tuple of arguments) as parameters named by their case,
+    each marked :data:`hostile` with ``kind`` (a kind, or a function of the case's name)."""
+    return [
+        pytest.param(*args, id=name, marks=hostile(kind(name) if callable(kind) else kind, outcome))
+        for name, args in table.items()
+    ]
+
 
 @pytest.fixture(scope="module")
 def files(tmp_path_factory):
@@ -116,7 +130,15 @@ def _argv(extra):
     return argv
 
 
-@pytest.mark.parametrize("extra, keywords", SIMULATE_CASES.values(), ids=SIMULATE_CASES.keys())
+def _simulate_kind(name: str) -> str:
+    if "memory" in name:
+        return "limits"
+    if "never ends" in name:
+        return "sizes"
+    return "configs" if "scene" in name or "config" in name else "numbers"
+
+
+@pytest.mark.parametrize("extra, keywords", marked(SIMULATE_CASES, _simulate_kind))
 def test_simulate_refuses(tmp_path, capsys, extra, keywords):
     refused(["simulate", "--out", str(tmp_path / "out.nc"), *_argv(extra)], tmp_path, capsys, keywords)
 
@@ -137,7 +159,8 @@ SIGNATURE_CASES = {
 }
 
 
-@pytest.mark.parametrize("extra, keywords", SIGNATURE_CASES.values(), ids=SIGNATURE_CASES.keys())
+@pytest.mark.parametrize("extra, keywords", marked(
+    SIGNATURE_CASES, lambda name: "limits" if "GiB" in name else "record files" if "variable" in name else "numbers"))
 def test_signatures_refuses(files, tmp_path, capsys, extra, keywords):
     refused(["signatures", str(files / "sim.nc"), "--out", str(tmp_path / "o.nc"), *extra], tmp_path, capsys, keywords)
 
@@ -154,7 +177,9 @@ FILE_CASES = {
 }
 
 
-@pytest.mark.parametrize("argv, keywords", FILE_CASES.values(), ids=FILE_CASES.keys())
+@pytest.mark.parametrize("argv, keywords", marked(
+    FILE_CASES, lambda name: "output paths" if name.startswith("out") else "numbers" if " points" in name or "weights" in name
+    else "record files"))
 def test_files_are_refused(files, tmp_path, capsys, argv, keywords):
     argv = [a.format(files=files, out=tmp_path) for a in argv]
     if "--out" not in argv:
@@ -163,6 +188,7 @@ def test_files_are_refused(files, tmp_path, capsys, argv, keywords):
     assert sorted(p.name for p in files.iterdir()) == ["notes.txt", "sig.nc", "sim.nc"]
 
 
+@hostile("limits", "refused")
 def test_memory_check_names_the_flag(tmp_path, capsys, monkeypatch, files):
     """A request the machine cannot hold is refused before the work, by the flag that asks for it."""
     monkeypatch.setattr(checks, "available_memory", lambda: 2**16)
@@ -189,6 +215,7 @@ def test_internal_error_is_one_line_and_debug_shows_the_traceback(tmp_path, caps
     assert list(tmp_path.iterdir()) == []
 
 
+@hostile("limits", "refused")
 def test_disk_full_is_one_sentence_and_leaves_nothing(tmp_path, capsys, monkeypatch):
     def full(self, path, *args, **kwargs):
         Path(path).write_bytes(b"\0" * 100)  # a partial file, as a real write leaves
@@ -215,6 +242,7 @@ io.write_netcdf(xr.Dataset({"x": ("i", x)}), sys.argv[1])
 """
 
 
+@hostile("concurrency", "refused")
 def test_concurrent_runs_on_one_output_refuse_and_on_two_do_not_interfere(tmp_path):
     out, other, go = tmp_path / "a.nc", tmp_path / "b.nc", tmp_path / "go"
     proc = subprocess.Popen([sys.executable, "-c", WRITER, str(out), str(go)], stderr=subprocess.PIPE, text=True)
@@ -243,6 +271,7 @@ def test_concurrent_runs_on_one_output_refuse_and_on_two_do_not_interfere(tmp_pa
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.nc", "b.nc", "go"]
 
 
+@hostile("concurrency", "refused")
 def test_threads_on_one_output_one_wins_one_refuses(tmp_path):
     release = threading.Event()
 
@@ -271,6 +300,7 @@ def test_threads_on_one_output_one_wins_one_refuses(tmp_path):
         assert ds["x"].values.tolist() == [0.0, 1.0, 2.0, 3.0, 4.0]
 
 
+@hostile("kills", "answered")
 def test_a_lock_left_by_a_killed_run_is_taken_over(tmp_path):
     dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True)
     (tmp_path / ".o.nc.lock").write_text(dead.stdout)
@@ -312,6 +342,7 @@ def finite_or_refused(result):
 SIM = dict(dt=0.0034, g=1.0, e=0.95, sigma_p=0.003, theta0=0.001, theta_dot0=0.0)
 
 
+@hostile("numbers", "refused or answered")
 @FUZZ
 @given(name=st.sampled_from(sorted(SIM)), value=ANY_FLOAT, grid=st.booleans())
 def test_simulate_block_gives_finite_series_or_refuses(name, value, grid):
@@ -322,6 +353,7 @@ def test_simulate_block_gives_finite_series_or_refuses(name, value, grid):
 HOUSNER = dict(dt=0.0034, nu=2.0, theta_cr=0.25, e=0.95, sigma_p=0.003, theta0=0.001, theta_dot0=0.0)
 
 
+@hostile("numbers", "refused or answered")
 @FUZZ
 @given(name=st.sampled_from(sorted(HOUSNER)), value=ANY_FLOAT)
 def test_housner_gives_finite_series_until_it_falls_or_refuses(name, value):
@@ -334,6 +366,7 @@ def test_housner_gives_finite_series_until_it_falls_or_refuses(name, value):
     assert np.isnan(theta[~standing]).all()
 
 
+@hostile("numbers", "refused or answered")
 @FUZZ
 @given(
     theta=ANY_FLOAT, omega=ANY_FLOAT, dt=ANY_FLOAT, g=ANY_FLOAT, e=st.one_of(ANY_FLOAT, st.floats(0, 1)),
@@ -355,6 +388,7 @@ def test_kernel_steps_return_and_keep_nan(theta, omega, dt, g, e):
             assert not (math.isfinite(out[0]) and math.isfinite(out[1])), (step, out)
 
 
+@hostile("numbers", "refused or answered")
 @pytest.mark.filterwarnings("ignore::RuntimeWarning")  # a pilot that overflows: refused
 @settings(max_examples=25, deadline=None)
 @given(name=st.sampled_from(["e", "g", "sigma_p", "points_per_cycle"]), value=ANY_FLOAT)
@@ -372,6 +406,7 @@ def _free_response(n=120, e=0.95):
     return theta[0], dt
 
 
+@hostile("numbers", "refused or answered")
 @pytest.mark.filterwarnings("ignore::RuntimeWarning")  # overflow inside the fits: the reason says so
 @FUZZ
 @given(value=ANY_FLOAT, where=st.sampled_from(["dt", "scale", "sample", "d_sample"]))
@@ -397,6 +432,7 @@ def test_estimators_give_a_value_or_a_reason_or_refuse(value, where):
         assert np.isfinite(est.value) or (np.isnan(est.value) and est.reason), (name, est)
 
 
+@hostile("numbers", "refused or answered")
 @pytest.mark.filterwarnings("ignore::RuntimeWarning")  # the period of eq. 5 overflows to inf: refused
 @FUZZ
 @given(value=ANY_FLOAT, where=st.sampled_from(["level", "velocity", "width", "dt", "sample", "n_periods", "g"]))
@@ -415,6 +451,7 @@ def test_signature_functions_give_finite_sums_or_refuse(value, where):
     assert isinstance(lag, checks.InputError) or (isinstance(lag, int) and lag >= 0)
 
 
+@hostile("numbers", "refused or answered")
 @settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(
     flag=st.sampled_from(["--e", "--nu", "--theta-cr", "--sigma-p", "--dt", "--theta0", "--theta-dot0"]),
@@ -582,7 +619,18 @@ ESTIMATE_CASE_NAMES = [
 ]
 
 
-@pytest.mark.parametrize("name", ESTIMATE_CASE_NAMES)
+def _estimate_kind(name: str) -> str:
+    if name.startswith(("white noise", "--g ", "same file", "a copy", "two identical", "constant")):
+        return "wrong answers"
+    if "--plot" in name:
+        return "output paths"
+    for words, kind in (("units", "units"), ("--cache", "cache"), ("million samples", "sizes")):
+        if words in name:
+            return kind
+    return "numbers" if name.startswith(("--fs", "--dt", "dt attribute")) else "record files"
+
+
+@pytest.mark.parametrize("name", marked({name: (name,) for name in ESTIMATE_CASE_NAMES}, _estimate_kind))
 def test_estimate_refuses_in_one_sentence_before_any_calibration(name, rocking, tmp_path, capsys):
     case = _estimate_cases(rocking)[name]
     argv, words = list(case[0]), case[1]
@@ -643,7 +691,17 @@ def more_files(files):
     return files
 
 
-@pytest.mark.parametrize("argv, keywords", OTHER_CASES.values(), ids=OTHER_CASES.keys())
+def _other_kind(name: str) -> str:
+    if "1e8 seeds" in name:
+        return "sizes"
+    if "tcp" in name:
+        return "engines"
+    if "--out" in name:
+        return "output paths"
+    return "numbers" if "dt attribute" in name or "size" in name or "fit-points" in name else "wrong answers"
+
+
+@pytest.mark.parametrize("argv, keywords", marked(OTHER_CASES, _other_kind))
 def test_other_commands_refuse_in_one_sentence(more_files, tmp_path, capsys, argv, keywords):
     argv = [a.format(files=more_files, out=tmp_path) for a in argv]
     start = time.perf_counter()
@@ -654,6 +712,7 @@ def test_other_commands_refuse_in_one_sentence(more_files, tmp_path, capsys, arg
     assert time.perf_counter() - start < 30
 
 
+@hostile("engines", "refused")
 def test_a_listener_that_is_not_dask_is_refused_at_once(tmp_path, capsys):
     import socket
 
@@ -679,6 +738,7 @@ def test_a_listener_that_is_not_dask_is_refused_at_once(tmp_path, capsys):
         server.close()
 
 
+@hostile("limits", "refused")
 def test_a_file_size_limit_is_one_sentence(tmp_path):
     script = (
         "import resource, sys; resource.setrlimit(resource.RLIMIT_FSIZE, (20000, 20000)); "
@@ -694,6 +754,7 @@ def test_a_file_size_limit_is_one_sentence(tmp_path):
 # --------------------------------------------------------------------------- answered, with the right note
 
 
+@hostile("units", "answered")
 def test_units_degrees_and_milliseconds_give_the_radian_second_answer(rocking, tiny_calibration, tmp_path):
     theta, dt = rocking["theta"], rocking["dt"]
     cache = tmp_path / "cache"
@@ -707,6 +768,7 @@ def test_units_degrees_and_milliseconds_give_the_radian_second_answer(rocking, t
         assert other["e"] == pytest.approx(plain["e"], abs=1e-6)
 
 
+@hostile("record files", "answered")
 @pytest.mark.parametrize("sep", [";", "\t", " "], ids=["semicolon", "tab", "space"])
 def test_csv_separators_give_the_comma_answer(rocking, tiny_calibration, tmp_path, sep):
     path = tmp_path / "rec.csv"
@@ -718,12 +780,14 @@ def test_csv_separators_give_the_comma_answer(rocking, tiny_calibration, tmp_pat
     assert other["e"] == comma["e"] and other["interval"] == comma["interval"]
 
 
+@hostile("wrong answers", "answered")
 def test_a_given_g_near_the_records_own_is_used(rocking, tiny_calibration, tmp_path):
     code, res, err = _estimate([rocking["csv"], "--g", "1.0"], tmp_path / "cache")
     assert code == 0, err
     assert res["g"] == 1.0 and res["g_given"]
 
 
+@hostile("wrong answers", "warned")
 def test_a_null_e_always_carries_a_reason(rocking, tiny_calibration, tmp_path):
     drifting = rocking["theta"] * np.linspace(0.2, 3.0, rocking["theta"].size)
     path = tmp_path / "drift.csv"
@@ -735,6 +799,7 @@ def test_a_null_e_always_carries_a_reason(rocking, tiny_calibration, tmp_path):
         assert (res["e"] is None) == bool(res["reason"])
 
 
+@hostile("report", "answered")
 def test_the_text_report_prints_when_g_is_given(rocking, tiny_calibration, tmp_path, capsys):
     code = main(["estimate", str(rocking["csv"]), "--g", "1.0", "--cache", str(tmp_path / "cache")])
     out = capsys.readouterr()
@@ -750,6 +815,7 @@ def _cached_file(cache):
     return path
 
 
+@hostile("cache", "warned")
 @pytest.mark.parametrize("damage", ["tampered value", "truncated", "settings edited", "checksum removed", "not NetCDF"])
 def test_a_damaged_cache_file_is_rebuilt_with_a_note(rocking, tiny_calibration, tmp_path, damage):
     cache = tmp_path / "cache"
@@ -783,6 +849,7 @@ def test_a_damaged_cache_file_is_rebuilt_with_a_note(rocking, tiny_calibration, 
     assert third["calibration"]["cached"] is True and not any("rebuilt" in w for w in third["warnings"])
 
 
+@hostile("concurrency", "answered")
 def test_concurrent_builds_of_one_calibration_build_it_once(tmp_path, monkeypatch):
     built = []
     gate = threading.Event()
@@ -809,6 +876,7 @@ def test_concurrent_builds_of_one_calibration_build_it_once(tmp_path, monkeypatc
     assert sorted(p.name for p in tmp_path.iterdir()) == [f"calibration-{calibration.settings_hash(settings_)}.nc"]
 
 
+@hostile("kills", "answered")
 def test_a_build_lock_is_waited_for_while_fresh_and_taken_over_when_stale(tmp_path, monkeypatch):
     """The lock's liveness is its mtime (host and pid are for the reader): a lock from
     another node whose process is unknown here is still waited for while it is touched."""
@@ -832,6 +900,7 @@ def test_a_build_lock_is_waited_for_while_fresh_and_taken_over_when_stale(tmp_pa
 # --------------------------------------------------------------------------- the plot
 
 
+@hostile("concurrency", "refused")
 def test_a_plot_claimed_by_a_running_estimate_is_refused_at_once(rocking, tmp_path, capsys):
     plot = tmp_path / "p.png"
     with io.claimed(plot):
@@ -839,6 +908,7 @@ def test_a_plot_claimed_by_a_running_estimate_is_refused_at_once(rocking, tmp_pa
                 ["being written by another run"])
 
 
+@hostile("output paths", "refused")
 def test_a_plot_made_by_someone_else_during_the_calibration_is_kept_and_the_run_refuses(rocking, tiny_calibration, tmp_path, monkeypatch):
     """Issue 21: ``--plot`` was checked only before the calibration, then written directly,
     replacing a file made meanwhile by a program that takes no lock."""
@@ -856,6 +926,7 @@ def test_a_plot_made_by_someone_else_during_the_calibration_is_kept_and_the_run_
     assert sorted(p.name for p in tmp_path.iterdir()) == ["cache", "p.png"]  # no lock, no partial file
 
 
+@hostile("sizes", "refused")
 @pytest.mark.parametrize("kind", ["npy", "csv"])
 def test_a_50_million_sample_record_is_refused_up_front_with_its_estimate(rocking, tmp_path, capsys, monkeypatch, kind):
     """Issue 21: a 50-million-sample record hung. The refusal for time comes before the
@@ -881,6 +952,7 @@ def test_a_50_million_sample_record_is_refused_up_front_with_its_estimate(rockin
     assert time.perf_counter() - start < 10, "refused up front, not after reading the record"
 
 
+@hostile("output paths", "answered")
 def test_overwrite_replaces_a_symlinked_plot_not_its_target(rocking, tiny_calibration, tmp_path):
     target = tmp_path / "precious.png"
     target.write_bytes(b"keep me")
@@ -894,6 +966,7 @@ def test_overwrite_replaces_a_symlinked_plot_not_its_target(rocking, tiny_calibr
     assert sorted(p.name for p in tmp_path.iterdir()) == ["cache", "p.png", "precious.png"]
 
 
+@hostile("sizes", "warned")
 def test_a_long_record_is_warned_that_its_interval_may_cover_less(rocking, tiny_calibration, tmp_path, monkeypatch):
     monkeypatch.setattr(inference, "LONG_SAMPLES", 10_000)  # the rocking record has 20,000
     code, res, err = _estimate([rocking["csv"]], tmp_path / "cache")
@@ -901,6 +974,7 @@ def test_a_long_record_is_warned_that_its_interval_may_cover_less(rocking, tiny_
     assert any("narrower than the accuracy" in w for w in res["warnings"])
 
 
+@hostile("sizes", "refused")
 def test_a_40_million_sample_record_is_refused_with_its_time_unless_yes(tmp_path, capsys, monkeypatch):
     monkeypatch.setattr(calibration, "E_GRID", FULL_CALIBRATION[0])
     monkeypatch.setattr(calibration, "SETS_PER_E", FULL_CALIBRATION[1])
@@ -923,6 +997,7 @@ sys.exit(main(["estimate", sys.argv[1], "--json", "--cache", sys.argv[2]]))
 """
 
 
+@hostile("concurrency", "answered")
 def test_two_concurrent_estimates_on_one_record_build_one_calibration(rocking, tmp_path):
     """Issue 19: two processes, same settings; the second waits for the first's build."""
     cache = tmp_path / "cache"
@@ -936,6 +1011,7 @@ def test_two_concurrent_estimates_on_one_record_build_one_calibration(rocking, t
     assert [p.name for p in cache.iterdir()] == [results[0]["calibration"]["file"]]
 
 
+@hostile("units", "answered")
 def test_signatures_read_degrees_and_milliseconds_as_rad_and_s(rocking, tmp_path):
     theta, dt = rocking["theta"], rocking["dt"]
     files = {
@@ -953,6 +1029,7 @@ def test_signatures_read_degrees_and_milliseconds_as_rad_and_s(rocking, tmp_path
     np.testing.assert_allclose(cubes["ms"], cubes["rad"], rtol=1e-9, equal_nan=True)
 
 
+@hostile("engines", "answered")
 def test_a_running_dask_scheduler_passes_the_probe(tmp_path):
     from dask.distributed import LocalCluster
 

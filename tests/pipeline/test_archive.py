@@ -158,6 +158,7 @@ def verify(args, capsys) -> tuple[int, str]:
     return code, out.out + out.err
 
 
+@pytest.mark.hostile("archive", "refused")
 def test_verify_says_ok_then_names_each_changed_and_missing_file(reference, tmp_path, capsys):
     folder = tmp_path / "archive"
     shutil.copytree(reference / "results" / SCENE / "archive", folder)
@@ -174,6 +175,7 @@ def test_verify_says_ok_then_names_each_changed_and_missing_file(reference, tmp_
     assert sorted(out.strip().splitlines()) == ["changed: signatures.nc (SHA-256 differs from the manifest)", "missing: table.md"]
 
 
+@pytest.mark.hostile("archive", "refused")
 def test_verify_refuses_a_folder_without_manifest_and_an_existing_rebuild_folder(reference, tmp_path, capsys):
     code, out = verify([tmp_path], capsys)
     assert code == 2 and "holds no manifest.json" in out and "Traceback" not in out
@@ -288,6 +290,7 @@ def test_rocrate_library_lists_every_archived_file_with_its_checksum_and_the_run
     assert crates.profile_problems(json.loads((folder / "ro-crate-metadata.json").read_text())) == []
 
 
+@pytest.mark.hostile("archive", "refused")
 @pytest.mark.parametrize(
     "damage",
     [
@@ -331,6 +334,7 @@ def rewrite(folder: Path, manifest) -> None:
         (folder / "ro-crate-metadata.json").write_text(json.dumps(crate, indent=2) + "\n")
 
 
+@pytest.mark.hostile("archive", "refused")
 def test_verify_catches_an_edited_manifest(reference, tmp_path, capsys):
     folder = copy_archive(reference, tmp_path)
     manifest = json.loads((folder / "manifest.json").read_text())
@@ -341,6 +345,7 @@ def test_verify_catches_an_edited_manifest(reference, tmp_path, capsys):
     assert "#setting-system.e' differs" in out
 
 
+@pytest.mark.hostile("archive", "refused")
 @pytest.mark.parametrize("edit", ["checksum", "result", "name"])
 def test_verify_catches_an_edited_crate(reference, tmp_path, capsys, edit):
     folder = copy_archive(reference, tmp_path)
@@ -389,6 +394,7 @@ def watch_reads(monkeypatch) -> list[str]:
     return seen
 
 
+@pytest.mark.hostile("archive", "refused")
 @pytest.mark.parametrize("entry", ["climb", "absolute"])
 def test_verify_refuses_entries_outside_the_folder_without_opening_them(reference, tmp_path, capsys, monkeypatch, entry):
     folder = copy_archive(reference, tmp_path)
@@ -404,6 +410,7 @@ def test_verify_refuses_entries_outside_the_folder_without_opening_them(referenc
     assert str(secret) not in seen and not any(Path(p).resolve() == secret for p in seen)
 
 
+@pytest.mark.hostile("archive", "refused")
 @pytest.mark.parametrize("link", ["file", "folder"])
 def test_verify_refuses_a_symlinked_entry_with_updated_checksums_without_opening_it(reference, tmp_path, capsys, monkeypatch, link):
     folder = copy_archive(reference, tmp_path)
@@ -428,6 +435,7 @@ def test_verify_refuses_a_symlinked_entry_with_updated_checksums_without_opening
     assert all(os.path.realpath(p).startswith(str(folder.resolve()) + os.sep) for p in seen if Path(p).is_relative_to(folder))
 
 
+@pytest.mark.hostile("archive", "refused")
 def test_verify_reports_files_nobody_listed(reference, tmp_path, capsys):
     folder = copy_archive(reference, tmp_path)
     (folder / "notes.txt").write_text("added later\n")
@@ -440,6 +448,7 @@ def test_verify_reports_files_nobody_listed(reference, tmp_path, capsys):
     ]
 
 
+@pytest.mark.hostile("archive", "refused")
 @pytest.mark.parametrize(
     "change, words",
     [
@@ -466,6 +475,7 @@ def test_verify_refuses_a_malformed_manifest_in_one_sentence(reference, tmp_path
     assert "internal error" not in out and "Traceback" not in out
 
 
+@pytest.mark.hostile("archive", "refused")
 @pytest.mark.parametrize("text", ["[]", '"files"', "{not json", ""])
 def test_verify_refuses_a_manifest_that_is_not_an_object(reference, tmp_path, capsys, text):
     folder = copy_archive(reference, tmp_path)
@@ -474,6 +484,7 @@ def test_verify_refuses_a_manifest_that_is_not_an_object(reference, tmp_path, ca
     assert code == 2 and len(out.strip().splitlines()) == 1 and "internal error" not in out, out
 
 
+@pytest.mark.hostile("archive", "refused")
 def test_rebuild_refuses_tampered_settings_and_leaves_no_folder(reference, tmp_path, capsys):
     folder = copy_archive(reference, tmp_path)
     manifest = json.loads((folder / "manifest.json").read_text())
@@ -485,6 +496,7 @@ def test_rebuild_refuses_tampered_settings_and_leaves_no_folder(reference, tmp_p
     assert sorted(p.name for p in tmp_path.iterdir()) == ["archive"]
 
 
+@pytest.mark.hostile("limits", "refused")
 def test_a_rebuild_that_fails_half_way_leaves_no_folder(reference, tmp_path, capsys, monkeypatch):
     def broken(*args, **kwargs):
         raise OSError(28, "No space left on device")
@@ -515,6 +527,7 @@ def half_built(reference: Path, root: Path) -> Path:
     return results
 
 
+@pytest.mark.hostile("kills", "answered")
 @pytest.mark.slow
 def test_sigterm_then_the_readmes_command_gives_the_uninterrupted_outputs(reference, tmp_path):
     results = half_built(reference, tmp_path)
@@ -533,6 +546,7 @@ def test_sigterm_then_the_readmes_command_gives_the_uninterrupted_outputs(refere
     assert not partial_files(tmp_path)
 
 
+@pytest.mark.hostile("kills", "answered")
 @pytest.mark.slow
 def test_sigkill_then_the_readmes_recovery_command_gives_the_uninterrupted_outputs(reference, tmp_path):
     results = half_built(reference, tmp_path)

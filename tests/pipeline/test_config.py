@@ -57,6 +57,7 @@ CONFIG_CASES = {
 }
 
 
+@pytest.mark.hostile("configs", "refused")
 @pytest.mark.parametrize("body, keywords", CONFIG_CASES.values(), ids=CONFIG_CASES.keys())
 def test_config_refused_naming_the_file_passed(tmp_path, capsys, body, keywords):
     path = config_file(tmp_path, f"default_scene: s\nscenes:\n  s:\n    {body}\n")
@@ -64,6 +65,7 @@ def test_config_refused_naming_the_file_passed(tmp_path, capsys, body, keywords)
     refused(argv, tmp_path, capsys, [*keywords, str(path)])
 
 
+@pytest.mark.hostile("configs", "refused")
 @pytest.mark.parametrize(
     "text, keywords",
     [

@@ -154,6 +154,7 @@ def test_the_snakefile_names_the_snakemake_it_needs():
     assert re.search(r'^min_version\("9\.0"\)$', (REPO / "Snakefile").read_text(), re.M)
 
 
+@pytest.mark.hostile("configs", "refused")
 def test_a_bad_value_given_with_config_names_that_option(bare):
     code, out = snakemake(bare, "-n", "--config", "scenes={tiny: {records: {replicates: three}}}")
     assert code == 2, out
@@ -170,6 +171,7 @@ SIZES = {
 }
 
 
+@pytest.mark.hostile("sizes", "refused")
 @pytest.mark.parametrize("records, words", SIZES.values(), ids=SIZES.keys())
 def test_a_scene_too_large_is_refused_at_validation_with_the_estimate(records, words):
     scene = {"records": {"replicates": 4, "series_per_replicate": 40, **records}}
@@ -178,6 +180,7 @@ def test_a_scene_too_large_is_refused_at_validation_with_the_estimate(records, w
     assert words in str(refused.value) and str(refused.value).count(". ") == 1  # one sentence, then the fix
 
 
+@pytest.mark.hostile("sizes", "refused")
 def test_a_dry_run_refuses_a_scene_too_large_in_one_sentence(bare):
     records, words = SIZES["1e6 x 1e6 series"]  # a 7 TiB seed table if anything built it
     code, out = snakemake(bare, "-n", "--config", "scenes={tiny: {records: {replicates: 1000000, series_per_replicate: 1000000}}}")
@@ -201,6 +204,7 @@ class FakeJob:
         self.rule, self.log, self.output = "signatures", [str(folder / "rule.log")], [str(folder / "out.nc")]
 
 
+@pytest.mark.hostile("configs", "refused")
 def test_a_user_error_in_a_rule_shows_its_sentence_on_the_console_and_exits_2(tmp_path, capsys):
     def main(smk):
         raise InputError("output 'x.nc' exists already; remove it.")
@@ -240,6 +244,7 @@ def start_job_under_a_parent(tmp_path: Path):
     return parent, psutil.Process(pid)
 
 
+@pytest.mark.hostile("kills", "answered")
 def test_a_rerun_stops_the_orphan_of_a_killed_snakemake_and_clears_its_output(tmp_path, capsys):
     parent, orphan = start_job_under_a_parent(tmp_path)
     parent.kill()  # kill -9 of Snakemake alone: its job goes on
@@ -254,6 +259,7 @@ def test_a_rerun_stops_the_orphan_of_a_killed_snakemake_and_clears_its_output(tm
     assert not Path(FakeJob(tmp_path).log[0] + ".pid").exists()
 
 
+@pytest.mark.hostile("kills", "refused")
 def test_a_rerun_refuses_while_the_snakemake_of_a_running_job_still_runs(tmp_path, capsys):
     parent, orphan = start_job_under_a_parent(tmp_path)
     try:
