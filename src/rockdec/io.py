@@ -290,20 +290,39 @@ def claimed(path: str | Path, overwrite: bool = False):
 def write_claimed(path: Path, write, overwrite: bool = False, keep_suffix: bool = False) -> Path:
     """Write ``path`` (claimed with :func:`claimed`) atomically: ``write(tmp)`` fills a
     temporary file ``.<name>.<random>.partial`` beside it (ending in ``path``'s suffix too
-    with ``keep_suffix``, for writers that pick the format by it), renamed over ``path``
-    when complete. A symlink at ``path`` is replaced itself (with ``overwrite``), never
-    written through."""
+    with ``keep_suffix``, for writers that pick the format by it), given the name ``path``
+    when complete: renamed over it with ``overwrite``, else only if nothing took the name
+    meanwhile (:func:`_place_new`). A symlink at ``path`` is replaced itself (with
+    ``overwrite``), never written through."""
     tmp = _new_partial(path, path.suffix if keep_suffix else "")
     try:
         write(tmp)
-        if (path.exists() or path.is_symlink()) and not overwrite:  # made meanwhile by a writer that takes no lock
-            raise OutputError(f"output '{path}' appeared while this run wrote it; remove it or pass --overwrite.")
-        os.replace(tmp, path)
+        if overwrite:
+            os.replace(tmp, path)
+        else:
+            _place_new(tmp, path)
     except (OSError, RuntimeError) as exc:
         raise _write_failure(exc, path) from None
     finally:
         tmp.unlink(missing_ok=True)
     return path
+
+
+def _place_new(tmp: Path, path: Path) -> None:
+    """Give the complete file ``tmp`` the name ``path`` unless something holds that name:
+    a hard link fails on an existing name in one step, so a file made meanwhile by a writer
+    that takes no lock is never replaced; file systems without hard links check, then rename."""
+    appeared = OutputError(f"output '{path}' appeared while this run wrote it; remove it or pass --overwrite.")
+    try:
+        os.link(tmp, path, follow_symlinks=False)
+    except FileExistsError:
+        raise appeared from None
+    except OSError as exc:
+        if exc.errno not in (errno.EPERM, errno.ENOTSUP, errno.EOPNOTSUPP, errno.EXDEV, errno.EMLINK):
+            raise
+        if path.exists() or path.is_symlink():
+            raise appeared from None
+        os.replace(tmp, path)
 
 
 def coordinate_encoding(ds: xr.Dataset) -> dict:
