@@ -87,10 +87,11 @@ class Tally:
             )
 
 
-def table(rows: dict[str, str], kinds: dict[str, tuple[str, str]], columns) -> str:
+def table(rows: dict[str, str], kinds: dict[str, tuple[str, str]], columns, optional=()) -> str:
+    """Cases by kind (rows) and outcome (``columns``, then each of ``optional`` that occurs)."""
     counts = collections.Counter((kinds[node][0], outcome) for node, outcome in rows.items())
     names = sorted({kind for kind, _ in kinds.values()})
-    columns = [c for c in columns if any(counts[(k, c)] for k in names)] or list(columns[:1])
+    columns = [*columns, *(c for c in optional if any(counts[(k, c)] for k in names))]
     lines = ["| kind | " + " | ".join(columns) + " | cases |", "|---" * (len(columns) + 2) + "|"]
     for kind in names:
         lines.append(f"| {kind} | " + " | ".join(str(counts[(kind, c)]) for c in columns) + f" | {sum(counts[(kind, c)] for c in columns)} |")
@@ -113,7 +114,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.run:
         ran = {node: tally.result.get(node, "not run") for node in tally.cases}
         print(f"\nrun: outcome of each case (a failure: {', '.join(FAILED)})")
-        print(table(ran, tally.cases, (*OUTCOMES, *FAILED, "skipped", "not run")))
+        print(table(ran, tally.cases, (*OUTCOMES, "internal error", "hang"), ("failed", "skipped", "not run")))
         for node, outcome in sorted(ran.items()):
             if outcome in (*FAILED, "not run"):
                 print(f"{outcome}: {node}")
