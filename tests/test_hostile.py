@@ -788,6 +788,18 @@ def test_a_given_g_near_the_records_own_is_used(rocking, tiny_calibration, tmp_p
 
 
 @hostile("wrong answers", "warned")
+@pytest.mark.parametrize("g", ["0.7", "1.5"])
+def test_a_given_g_off_the_records_own_within_the_factor_is_warned(rocking, tiny_calibration, tmp_path, g):
+    """Issue 21: a given g was never compared with the record's own. Off by more than a
+    factor 2 it is refused (above); within it, the report warns either that g lies outside
+    the records' own calibrated interval or that the calibration gives none to check against."""
+    code, res, err = _estimate([rocking["csv"], "--g", g], tmp_path / "cache")
+    assert code == 0, err
+    assert res["g"] == float(g) and res["g_given"]
+    assert any(w.startswith(f"--g {g}") for w in res["warnings"]), res["warnings"]
+
+
+@hostile("wrong answers", "warned")
 def test_a_null_e_always_carries_a_reason(rocking, tiny_calibration, tmp_path):
     drifting = rocking["theta"] * np.linspace(0.2, 3.0, rocking["theta"].size)
     path = tmp_path / "drift.csv"

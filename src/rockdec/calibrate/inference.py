@@ -318,7 +318,8 @@ def estimate(
     Refuses (:class:`RecordError`) records given twice, records that do not look like
     rocking (:func:`rockdec.rdd.measured.rocking_shape`), and a ``g`` off the records' own by
     more than :data:`G_FACTOR`; a ``g`` outside the calibrated 95 % interval of the
-    records' own is warned about. Drift is one of the checks of :func:`diagnose` (the
+    records' own is warned about, and so is a ``g`` the calibration gives no such interval
+    to check against. Drift is one of the checks of :func:`diagnose` (the
     calibration simulates a stationary record).
     """
     settings = {**measured.DEFAULT_SETTINGS, **(settings or {})}
@@ -385,6 +386,12 @@ def estimate(
             notes.append(
                 f"--g {g:g} lies outside the records' own g, {low:.4g}-{high:.4g} rad/s^2 (calibrated 95 % interval): "
                 "the estimate rests on the given g"
+            )
+        elif not np.isfinite(low):
+            notes.append(
+                f"--g {g:g} was checked against the records' own g only to within a factor {G_FACTOR:g} "
+                f"({own.raw[measured.G_NAME]:.4g} rad/s^2 read off them, not corrected): this calibration gives their g no "
+                "interval; the estimate rests on the given g"
             )
     samples = int(sum(r.theta.size for r in records))
     if samples > LONG_SAMPLES:
