@@ -1,0 +1,519 @@
+"""A record's own model, measured from the record: sensor noise, load colour, drift.
+
+Why. The calibration of :mod:`rockdec.calibrate.calibration` simulates the paper's idealised record:
+white velocity impulses (§4), a noise-free sensor, a stationary response. A rig adds a
+sensor-noise floor, a load that is not white and slow drift. This module measures those
+from the record itself, each with a standard error, so that a calibration can simulate
+the record's own model.
+
+Second differences. Between impacts the simplified model (eq. 4) moves on parabolas
+(eqs. 21-24): with ``y[k]`` the angle at ``t = k dt`` and ``p_k`` the velocity impulse
+applied at that instant, three samples on one side of zero give
+
+    d_k = y[k+1] - 2 y[k] + y[k-1] = p_k dt - g dt^2 sgn(y[k]).
+
+A triple is kept when its samples have one sign and the samples two steps before and
+after it lie beyond a margin on that side (:func:`second_differences`): an impact inside
+the triple, a flight that crosses zero and returns between samples (the chatter of a
+block near rest), and a crossing hidden by sensor noise are all left out, and because
+the guard samples carry noise independent of the triple's own, the choice does not
+select the noise ``d`` holds (choosing by the triple's own samples biases ``g`` by -30 %
+at a noise of 5 % of ``sigma_Y``). The margin, several ``g dt^2`` and several
+``sigma_n``, is measured on a first pass without it and refined twice. Each side's mean
+``-g dt^2 sgn(y)`` is removed, which also measures ``g``:
+``g = (mean_- - mean_+) / (2 dt^2)``. The autocorrelation ``r(m)`` of what remains
+(over pairs of kept second differences ``m`` steps apart) separates three loads:
+
+* white impulses: ``r(m) = 0`` for ``m >= 1``;
+* white sensor noise ``n`` of variance ``sigma_n^2`` on the sampled angle adds
+  ``n[k+1] - 2 n[k] + n[k-1]``, a moving average of order 2 whose autocovariance is
+  ``sigma_n^2 h(m)`` with ``h(0) = 6``, ``h(1) = -4``, ``h(2) = 1``, ``h(m >= 3) = 0``;
+* a first-order low-pass load of pole ``alpha`` per sample
+  (``p_k = alpha p_{k-1} + sqrt(1 - alpha^2) w_k``, :mod:`rockdec.physics.loading`) keeps the
+  variance ``sigma_p^2`` and has autocorrelation ``alpha^m``.
+
+Impulses and noise are independent, so the autocovariance of ``d`` is
+``sigma_p^2 dt^2 alpha^|m| + sigma_n^2 h(m)``, and with ``q = sigma_n^2 / (sigma_p^2 dt^2)``
+and ``A = 1/(1 + 6 q)`` (the share of the impulses in the variance of ``d``)
+
+    r(m) = (alpha^m + q h(m)) / (1 + 6 q) = A alpha^m + (1 - A) h(m) / 6,   m >= 1.
+
+White noise alone (``A = 0``) gives ``r(1) = -2/3``, ``r(2) = 1/6``; white impulses with
+noise (``alpha = 0``) give ``r(1) = -4q/(1 + 6q)``, ``r(2) = q/(1 + 6q)``; a coloured load
+without noise (``A = 1``) gives ``r(m) = alpha^m`` (:func:`mixed_autocovariance`).
+
+The fit. A sensor noise of 2 % of ``sigma_Y`` already outweighs the impulses in ``d``
+hundreds of times under a low-pass load (``A`` near ``1e-3``), so a fit to ``r(1..M)``
+cannot see the colour beneath it. The span-``L`` second difference
+``y[k+L] - 2 y[k] + y[k-L]`` is the sum of ``d`` with triangle weights
+``w = 1, 2, .., L, .., 2, 1``; its variance, the structure function, grows with ``L``
+for the impulses and not for the noise:
+
+    S(L) = sigma_p^2 dt^2 V_L(alpha) + 6 sigma_n^2,   V_L(alpha) = sum_ij w_i w_j alpha^|i-j|,
+
+``V_L(0) = L (2 L^2 + 1) / 3`` for a white load and about ``L^4`` for a load correlated
+over more than ``L`` steps. ``S(L)`` is computed from the autocovariance of the kept
+``d`` (:func:`structure_function`, spans :data:`SPANS`), so the triples are chosen once,
+and :func:`fit_structure` fits ``(sigma_p^2 dt^2, sigma_n^2, alpha)`` in relative least
+squares: for a given ``alpha`` linear in the two variances, ``alpha`` by a grid then a
+bounded scalar search. The variances are not held positive and ``alpha`` may be
+negative, so that on a white noise-free record they scatter about 0 and their z scores
+are near normal; the reported ``sigma_n``, ``sigma_p`` clip them at 0. Then
+
+    f_c = -ln(alpha) / (2 pi dt)   (the corner of :mod:`rockdec.physics.loading`),
+
+and the corner in units of the rocking frequency is ``f_c T(sigma_Y)`` with
+``T(sigma_Y) = 4 sqrt(2 sigma_Y / g)`` (eq. 5), ``g`` from the side means and ``sigma_Y``
+the record's standard deviation with the noise variance taken out. Spans up to 8 are
+used: under a low-pass load the block's side follows the load, so removing the side
+means leaves a slow remainder that lengthens the tail of ``r(m)`` beyond ``alpha^m``, and
+longer spans weigh that tail more (they bias ``alpha`` upward).
+
+Drift. A slow offset does not change second differences (a trend's are of order
+``dt^2`` times its curvature); it shows in the means of consecutive blocks of the
+record. The statistic is von Neumann's ratio of the block means, ``eta = sum (b_{i+1} -
+b_i)^2 / sum (b_i - mean b)^2``: about 2 when block means are independent (a stationary
+record whose blocks are many correlation times long), well below 2 when a smooth drift
+dominates them. ``drift_z = (2 - eta) / sd0`` with ``sd0^2 = 4 (B - 2) / (B^2 - 1)`` (its
+null spread for ``B`` independent normal blocks); its measured null distribution on
+simulated records is in docs/method.md. When drift is detected the second differences
+are read off the record less the piecewise-linear line through its block means, so that
+the drift does not move the zero the sides are read from (not otherwise: under a
+low-pass load the block means of a stationary record are large, and taking them out
+would distort the excursions the colour is read from). The asymmetry of the two sides' ``g`` (a leaning
+block) is reported beside it.
+
+Standard errors. The records are cut into :data:`JACKKNIFE_BLOCKS` consecutive blocks; every
+quantity is a function of sums over triples and pairs, which add over blocks, so each
+is recomputed with one block left out and the delete-one-block jackknife gives its
+standard error. This holds for correlated second differences (a coloured load) where a
+count-based ``1/sqrt(N)`` would not.
+
+Detection. ``noisy``: ``sigma_n^2`` exceeds :data:`DETECT_Z` standard errors and
+``sigma_n / sigma_Y`` exceeds :data:`NOISE_FLOOR`; ``coloured``: ``alpha`` exceeds
+:data:`DETECT_Z` standard errors (:data:`COLOUR_Z_NOISY` on a noisy record); ``drifting``:
+``drift_z`` exceeds :data:`DRIFT_Z`. These say the defect is present, not that it moves
+``e``; the rates are measured by :mod:`rockdec.studies.record_measure_study`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import minimize_scalar
+
+from rockdec import validate as checks
+from rockdec.physics.models import period_from_g
+
+#: Spans ``L`` of the structure function ``S(L)`` that the fit uses.
+SPANS = (1, 2, 3, 4, 6, 8)
+
+#: Lags of the second differences' autocovariance that ``S(L)`` needs, ``0..2 max(L) - 2``.
+MAX_LAG = 2 * max(SPANS) - 2
+
+#: Lags ``0..DIRECT_LAGS`` of the autocovariance fitted directly beside ``S(L)``.
+DIRECT_LAGS = 8
+
+#: Consecutive blocks of the delete-one-block jackknife (over all records together).
+JACKKNIFE_BLOCKS = 20
+
+#: Blocks per record of the drift statistic and of the detrending, each of at least
+#: ``DRIFT_BLOCK_MIN`` samples (fewer blocks for short records; none below 4).
+DRIFT_BLOCKS, DRIFT_BLOCK_MIN = 20, 1000
+
+#: Standard errors above zero at which noise (``1 - A``) or colour (``alpha``) is detected.
+DETECT_Z = 4.0
+
+#: Smallest ``sigma_n / sigma_Y`` called noise, whatever its z: a low-pass load leaves a
+#: trace of a few 1e-4 (measured), five times below the smallest noise studied (1 %).
+NOISE_FLOOR = 0.002
+
+#: Standard errors above zero at which ``alpha`` is called colour when noise is detected:
+#: on noisy white records the choice of triples leaves a colour-like pattern whose z
+#: reaches 9.7 at the 99th percentile at 1-5 % noise (the study of docs/method.md).
+COLOUR_Z_NOISY = 10.0
+
+#: ``drift_z`` above which drift is detected (one-sided).
+DRIFT_Z = 3.0
+
+#: The MA(2) autocovariance of second-differenced white noise, ``h(0), h(1), h(2)``.
+NOISE_PATTERN = (6.0, -4.0, 1.0)
+
+#: Steps between a kept triple's middle sample and the guard samples that choose it.
+GUARD = 2
+
+#: The margin of the guard samples is the larger of ``MARGIN_G g dt^2`` and
+#: ``MARGIN_NOISE sigma_n``, both measured on the previous pass; passes after the first
+#: without a margin.
+MARGIN_G, MARGIN_NOISE, MARGIN_PASSES = 8.0, 3.0, 2
+
+#: Fewest kept triples for a measurement.
+MIN_TRIPLES = 1000
+
+#: Largest pole of the fit's search (a corner of ``1e-4`` of the sampling frequency).
+MAX_POLE = 1.0 - 1e-4
+
+
+@dataclass(frozen=True)
+class Quantity:
+    """A measured value and its standard error (same units)."""
+
+    value: float
+    se: float
+
+    @property
+    def z(self) -> float:
+        """``value / se``: standard errors from zero."""
+        return self.value / self.se if self.se > 0.0 else math.copysign(math.inf, self.value) if self.value else 0.0
+
+
+@dataclass(frozen=True)
+class MeasuredModel:
+    """What :func:`measure` reads off a set of records of one block.
+
+    Units: ``g`` rad/s^2, ``impulse_sd`` (``sigma_p``) rad/s, ``noise_sd`` (``sigma_n``) rad,
+    ``sigma_y`` rad, ``corner_hz`` Hz; ``noise_ratio`` is ``sigma_n / sigma_Y``,
+    ``corner_ratio`` the corner times ``T(sigma_Y)`` (eq. 5); ``impulse_var``
+    (``sigma_p^2 dt^2``, rad^2), ``noise_var`` (``sigma_n^2``, rad^2) and ``pole`` (``alpha``)
+    are the fit of the mixed model as fitted, without bounds (module docstring);
+    ``asymmetry`` ``(g_+ - g_-) / (g_+ + g_-)``, ``drift_rms`` the rms of the block means
+    over the record's rms. ``r`` holds ``r(1..MAX_LAG)`` and ``r_se`` their standard errors.
+    A corner is infinite (and its error NaN) when the fitted pole is not in ``(0, 1)``.
+    """
+
+    dt: float
+    triples: int
+    sigma_y: float
+    g: Quantity
+    asymmetry: Quantity
+    impulse_var: Quantity
+    noise_var: Quantity
+    pole: Quantity
+    impulse_sd: Quantity
+    noise_sd: Quantity
+    noise_ratio: Quantity
+    corner_hz: Quantity
+    corner_ratio: Quantity
+    drift_rms: float
+    drift_z: float
+    r: tuple
+    r_se: tuple
+
+    @property
+    def noisy(self) -> bool:
+        """Sensor noise detected: ``sigma_n^2`` is :data:`DETECT_Z` errors above 0 and
+        ``sigma_n / sigma_Y`` above :data:`NOISE_FLOOR`."""
+        return self.noise_var.z > DETECT_Z and self.noise_ratio.value > NOISE_FLOOR
+
+    @property
+    def coloured(self) -> bool:
+        """A low-pass load detected: ``alpha`` is :data:`DETECT_Z` errors above 0
+        (:data:`COLOUR_Z_NOISY` when noise is detected)."""
+        return self.pole.z > (COLOUR_Z_NOISY if self.noisy else DETECT_Z)
+
+    @property
+    def drifting(self) -> bool:
+        """Drift detected: ``drift_z`` above :data:`DRIFT_Z`."""
+        return self.drift_z > DRIFT_Z
+
+    @property
+    def kind(self) -> str:
+        """``white``, ``noisy``, ``coloured`` or ``both`` (noise and colour)."""
+        return {(False, False): "white", (True, False): "noisy", (False, True): "coloured", (True, True): "both"}[
+            (self.noisy, self.coloured)
+        ]
+
+
+def mixed_autocovariance(m, impulse_var: float, noise_var: float, pole: float) -> np.ndarray:
+    """``gamma(m) = sigma_p^2 dt^2 alpha^|m| + sigma_n^2 h(m)`` (module docstring): the
+    autocovariance of the second differences of a record under a first-order low-pass
+    load of pole ``alpha`` (``impulse_var = sigma_p^2 dt^2``) plus white sensor noise of
+    variance ``noise_var``; ``gamma(m) / gamma(0)`` is ``r(m)``."""
+    m = np.abs(np.asarray(m))
+    h = np.zeros(m.shape)
+    for lag, value in enumerate(NOISE_PATTERN):
+        h[m == lag] = value
+    return impulse_var * np.power(float(pole), m) + noise_var * h
+
+
+def _triangle_products() -> np.ndarray:
+    """``C[L, m] = sum_i w_i w_{i+|m|}`` (``m = 0..MAX_LAG``, doubled for ``m > 0``) of the
+    triangle weights ``w = 1, 2, .., L, .., 2, 1`` of :data:`SPANS`: ``S(L) = C @ gamma``."""
+    out = np.zeros((len(SPANS), MAX_LAG + 1))
+    for row, span in enumerate(SPANS):
+        w = span - np.abs(np.arange(-(span - 1), span))
+        full = np.correlate(w, w, mode="full")[w.size - 1 :]
+        out[row, : full.size] = full * np.where(np.arange(full.size) == 0, 1.0, 2.0)
+    return out
+
+
+_TRIANGLES = _triangle_products()
+
+
+def structure_function(gamma: np.ndarray) -> np.ndarray:
+    """``S(L) = Var(y[k+L] - 2 y[k] + y[k-L])`` for ``L`` in :data:`SPANS` from the
+    autocovariance ``gamma(0..MAX_LAG)`` of the one-step second differences (the span-``L``
+    difference is their sum with triangle weights)."""
+    return _TRIANGLES @ np.asarray(gamma, dtype=float)
+
+
+def structure_model(impulse_var: float, noise_var: float, pole: float) -> np.ndarray:
+    """``S(L) = sigma_p^2 dt^2 V_L(alpha) + 6 sigma_n^2`` (module docstring) for :data:`SPANS`:
+    :func:`structure_function` of :func:`mixed_autocovariance`."""
+    return structure_function(mixed_autocovariance(np.arange(MAX_LAG + 1), impulse_var, noise_var, pole))
+
+
+def fit_structure(gamma: np.ndarray) -> tuple[float, float, float]:
+    """Least-squares ``(sigma_p^2 dt^2, sigma_n^2, alpha)`` of the mixed model on the
+    autocovariance ``gamma(0..MAX_LAG)`` of the second differences.
+
+    The residuals are those of ``gamma(0..DIRECT_LAGS)`` over ``gamma(0)`` (the model of
+    :func:`mixed_autocovariance`, which pins a weak colour through ``r(1)``) and those of
+    the structure function over itself, ``S_model(L) / S(L) - 1`` (:func:`structure_model`,
+    which sums many lags and sees a colour under noise). For fixed ``alpha`` all are linear
+    in the two variances, solved in closed form; ``alpha`` minimises the profiled
+    residual: a grid over ``(-0.9, MAX_POLE)`` then a bounded Brent search around its best
+    point. Neither variance is held positive.
+    """
+    gamma = np.asarray(gamma, dtype=float)
+    s = structure_function(gamma)
+    lags = np.arange(DIRECT_LAGS + 1)
+    target = np.concatenate([gamma[: DIRECT_LAGS + 1] / gamma[0], np.ones(s.size)])
+    noise = np.concatenate([mixed_autocovariance(lags, 0.0, 1.0, 0.0) / gamma[0], structure_model(0.0, 1.0, 0.0) / s])
+
+    def profile(alpha):
+        """Variances and residual sum of squares at each pole of ``alpha`` (1-D)."""
+        powers = np.power(alpha[:, None], np.arange(MAX_LAG + 1))
+        impulse = np.concatenate([powers[:, : DIRECT_LAGS + 1] / gamma[0], (powers @ _TRIANGLES.T) / s], axis=1)
+        a11, a12, a22 = np.sum(impulse**2, axis=1), impulse @ noise, noise @ noise
+        b1, b2 = impulse @ target, noise @ target
+        det = a11 * a22 - a12**2
+        coef = np.stack([(a22 * b1 - a12 * b2) / det, (a11 * b2 - a12 * b1) / det], axis=1)
+        rss = np.sum((impulse * coef[:, :1] + noise * coef[:, 1:] - target) ** 2, axis=1)
+        return coef, rss
+
+    grid = np.concatenate([np.linspace(-0.9, 0.9, 91), 1.0 - np.geomspace(0.1, 1.0 - MAX_POLE, 60)])
+    rss = profile(grid)[1]
+    if not np.isfinite(rss).any():  # a structure function with no spread: nothing to fit a model to
+        raise checks.InputError(
+            "the second differences of the records have no usable spread (a record at rest, or one that chatters at zero "
+            "almost all the time), so their model cannot be measured; declare it (--load, --sensor-noise)"
+        )
+    best = int(np.nanargmin(rss))
+    lo, hi = grid[max(best - 1, 0)], grid[min(best + 1, grid.size - 1)]
+    res = minimize_scalar(lambda a: profile(np.array([a]))[1][0], bounds=(lo, hi), method="bounded", options={"xatol": 1e-7})
+    alpha = float(res.x) if res.fun <= rss[best] else float(grid[best])
+    impulse_var, noise_var = profile(np.array([alpha]))[0][0]
+    return float(impulse_var), float(noise_var), alpha
+
+
+def second_differences(y: np.ndarray, margin: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """``(d, side)``: ``d[k] = y[k+1] - 2 y[k] + y[k-1]`` where the triple is kept, NaN where
+    it is left out; ``side[k]`` is 1 on the positive side, 0 on the negative.
+
+    A triple is kept when its three samples have one sign and the samples
+    :data:`GUARD` steps before and after it (``y[k -+ GUARD]``) lie beyond ``margin`` on that
+    side; NaN anywhere in those five samples leaves it out. The guard samples carry
+    sensor noise independent of the triple's own, so choosing triples by them does not
+    select the noise that ``d`` holds; the margin (:func:`measure`: several ``g dt^2``, to
+    leave out flights that cross zero and return within the guard, and several
+    ``sigma_n``, so that noise cannot hide a crossing) leaves out the chatter near zero.
+    """
+    d = np.full(y.size, np.nan)
+    side = np.zeros(y.size, dtype=np.int8)
+    n = y.size - 2 * GUARD
+    if n > 0:
+        k = slice(GUARD, GUARD + n)
+        a, b, c = y[GUARD - 1 : GUARD - 1 + n], y[k], y[GUARD + 1 : GUARD + 1 + n]
+        lo, hi = y[:n], y[2 * GUARD :]
+        up = (a > 0) & (b > 0) & (c > 0) & (lo > margin) & (hi > margin)  # NaN compares False
+        down = (a < 0) & (b < 0) & (c < 0) & (lo < -margin) & (hi < -margin)
+        d[k] = np.where(up | down, c - 2.0 * b + a, np.nan)
+        side[k] = up
+    return d, side
+
+
+def _block_sums(records, n_blocks: int, margin: float) -> dict:
+    """Per-block sums of every measured quantity (they add over blocks).
+
+    Returns arrays indexed by block: ``n``, ``sy``, ``syy`` (finite samples, after each
+    record's mean is removed), ``n_side``, ``s_side`` (count and sum of kept second differences
+    per side, ``[:, 0]`` negative side, ``[:, 1]`` positive), and per record the second
+    differences (NaN where left out) with their side and block, for the lag sums.
+    """
+    total = sum(y.size for y in records)
+    out = {k: np.zeros(n_blocks) for k in ("n", "sy", "syy")}
+    out.update({k: np.zeros((n_blocks, 2)) for k in ("n_side", "s_side")})
+    diffs, sides, blocks = [], [], []
+    offset = 0
+    for y in records:
+        block = np.minimum((offset + np.arange(y.size)) * n_blocks // total, n_blocks - 1)
+        ok = np.isfinite(y)
+        out["n"] += np.bincount(block[ok], minlength=n_blocks)
+        out["sy"] += np.bincount(block[ok], weights=y[ok], minlength=n_blocks)
+        out["syy"] += np.bincount(block[ok], weights=y[ok] ** 2, minlength=n_blocks)
+        d, side = second_differences(y, margin)
+        keep = np.isfinite(d)
+        for s in (0, 1):
+            sel = keep & (side == s)
+            out["n_side"][:, s] += np.bincount(block[sel], minlength=n_blocks)
+            out["s_side"][:, s] += np.bincount(block[sel], weights=d[sel], minlength=n_blocks)
+        diffs.append(d)
+        sides.append(side)
+        blocks.append(block)
+        offset += y.size
+    out["d"], out["side"], out["block"] = diffs, sides, blocks
+    return out
+
+
+def _lag_sums(sums: dict, means: np.ndarray, max_lag: int, n_blocks: int) -> tuple[np.ndarray, np.ndarray]:
+    """``sum c_k c_{k+m}`` and pair counts per block and lag ``m = 0..max_lag`` of the
+    side-centred second differences ``c`` (pairs within one record, both kept)."""
+    prod = np.zeros((n_blocks, max_lag + 1))
+    count = np.zeros((n_blocks, max_lag + 1))
+    for d, side, block in zip(sums["d"], sums["side"], sums["block"]):
+        c = d - means[side]
+        for m in range(max_lag + 1):
+            if c.size <= m:
+                break
+            p = c[: c.size - m] * c[m:]
+            ok = np.isfinite(p)
+            prod[:, m] += np.bincount(block[: c.size - m][ok], weights=p[ok], minlength=n_blocks)
+            count[:, m] += np.bincount(block[: c.size - m][ok], minlength=n_blocks)
+    return prod, count
+
+
+def _block_means(y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(centres, means)`` of the finite samples of ``y`` cut into up to
+    :data:`DRIFT_BLOCKS` consecutive blocks of at least :data:`DRIFT_BLOCK_MIN` samples
+    (centres as sample indices); empty when fewer than 4 such blocks fit."""
+    where = np.flatnonzero(np.isfinite(y))
+    b = min(DRIFT_BLOCKS, where.size // DRIFT_BLOCK_MIN)
+    if b < 4:
+        return np.empty(0), np.empty(0)
+    pieces = np.array_split(where, b)
+    return np.array([p.mean() for p in pieces]), np.array([y[p].mean() for p in pieces])
+
+
+def _detrend(y: np.ndarray) -> np.ndarray:
+    """``y`` less the piecewise-linear line through its block means (:func:`_block_means`),
+    so that a slow drift does not move the zero the sides are read from."""
+    centres, means = _block_means(y)
+    return y - np.interp(np.arange(y.size), centres, means) if centres.size else y
+
+
+def _drift(records, sigma_y: float) -> tuple[float, float]:
+    """``(rms of block means / sigma_Y, z)`` of von Neumann's ratio pooled over records
+    (module docstring); NaN when no record has 4 blocks."""
+    num = den = 0.0
+    blocks = 0
+    means_all = []
+    for y in records:
+        _, means = _block_means(y)
+        if not means.size:
+            continue
+        means = means - means.mean()
+        num += float(np.sum(np.diff(means) ** 2))
+        den += float(np.sum(means**2))
+        blocks += means.size
+        means_all.append(means)
+    if not means_all or den == 0.0:
+        return math.nan, math.nan
+    eta = num / den
+    sd0 = math.sqrt(4.0 * (blocks - 2) / (blocks**2 - 1))
+    rms = float(np.sqrt(np.mean(np.concatenate(means_all) ** 2))) / sigma_y
+    return rms, (2.0 - eta) / sd0
+
+
+def _quantities(n, sy, syy, n_side, s_side, prod, count, dt):
+    """Every measured number from summed statistics (all records, or all but one block)."""
+    sigma2 = syy / n - (sy / n) ** 2
+    means = s_side / n_side
+    g_minus, g_plus = means[0] / dt**2, -means[1] / dt**2
+    gamma = prod / count
+    impulse_var, noise_var, alpha = fit_structure(gamma)
+    sigma_y = math.sqrt(max(sigma2 - max(noise_var, 0.0), 0.0))
+    g = 0.5 * (g_minus + g_plus)
+    if 0.0 < alpha < 1.0:
+        corner = -math.log(alpha) / (2.0 * math.pi * dt)
+    else:
+        corner = math.inf
+    return {
+        "sigma_y": sigma_y,
+        "g": g,
+        "asymmetry": (g_plus - g_minus) / (g_plus + g_minus) if g_plus + g_minus != 0.0 else math.nan,
+        "impulse_var": impulse_var,
+        "noise_var": noise_var,
+        "pole": alpha,
+        "impulse_sd": math.sqrt(max(impulse_var, 0.0)) / dt,
+        "noise_sd": math.sqrt(max(noise_var, 0.0)),
+        "noise_ratio": math.sqrt(max(noise_var, 0.0)) / sigma_y,
+        "corner_hz": corner,
+        "corner_ratio": corner * float(period_from_g(sigma_y, g)) if g > 0 else math.nan,
+        "r": gamma[1:] / gamma[0],
+    }
+
+
+def measure(records, dt: float, *, n_blocks: int = JACKKNIFE_BLOCKS) -> MeasuredModel:
+    """The record's model (module docstring) from ``records`` of one block sampled at ``dt``.
+
+    ``records``: one 1-D array of angles (rad) or a sequence of them, NaN allowed (triples
+    and pairs touching a NaN are skipped); each loses its own mean. Raises
+    :class:`rockdec.validate.InputError` for a bad ``dt`` or records with fewer than
+    :data:`MIN_TRIPLES` usable triples.
+    """
+    dt = checks.positive(dt, "dt", "give the sampling step in s, > 0")
+    if isinstance(records, np.ndarray) and records.ndim == 1:
+        records = [records]
+    records = [np.asarray(y, dtype=np.float64).ravel() for y in records]
+    records = [y - np.nanmean(y) if np.isfinite(y).any() else y for y in records]
+    finite = sum(int(np.isfinite(y).sum()) for y in records)
+    if finite < MIN_TRIPLES:
+        raise checks.InputError(
+            f"the records hold {finite} finite samples (at least {MIN_TRIPLES} are needed) to measure their model; give a longer record"
+        )
+    sigma_raw = math.sqrt(float(np.nanmean(np.concatenate(records) ** 2)))
+    drift_rms, drift_z = _drift(records, sigma_raw)
+    level = [_detrend(y) for y in records] if drift_z > DRIFT_Z else records
+    keys = ("n", "sy", "syy", "n_side", "s_side")
+    margin = 0.0
+    for _ in range(MARGIN_PASSES + 1):
+        sums = _block_sums(level, n_blocks, margin)
+        triples = int(sums["n_side"].sum())
+        if triples < MIN_TRIPLES or (sums["n_side"].sum(axis=0) == 0).any():
+            raise checks.InputError(
+                f"the records hold {triples} triples of samples on one side of zero (at least {MIN_TRIPLES}, on both "
+                "sides, are needed) to measure their model; give a longer record"
+            )
+        means = sums["s_side"].sum(axis=0) / sums["n_side"].sum(axis=0)
+        prod, count = _lag_sums(sums, means, MAX_LAG, n_blocks)
+        whole = _quantities(*(sums[k].sum(axis=0) for k in keys), prod.sum(axis=0), count.sum(axis=0), dt)
+        margin = max(MARGIN_G * abs(whole["g"]) * dt**2, MARGIN_NOISE * whole["noise_sd"])
+    used = [j for j in range(n_blocks) if sums["n"][j] > 0]
+    reps = []
+    for j in used:
+        rest = [sums[k].sum(axis=0) - sums[k][j] for k in keys]
+        reps.append(_quantities(*rest, prod.sum(axis=0) - prod[j], count.sum(axis=0) - count[j], dt))
+    jack = len(reps)
+
+    def q(name):
+        values = np.array([rep[name] for rep in reps], dtype=float)
+        if not np.isfinite(values).all() or jack < 2:
+            return Quantity(float(whole[name]), math.nan)
+        return Quantity(float(whole[name]), float(math.sqrt((jack - 1) / jack * np.sum((values - values.mean()) ** 2))))
+
+    r_reps = np.array([rep["r"] for rep in reps])
+    r_se = np.sqrt((jack - 1) / jack * np.sum((r_reps - r_reps.mean(axis=0)) ** 2, axis=0))
+    names = ("g", "asymmetry", "impulse_var", "noise_var", "pole", "impulse_sd", "noise_sd", "noise_ratio", "corner_hz", "corner_ratio")
+    return MeasuredModel(
+        dt=dt,
+        triples=triples,
+        sigma_y=whole["sigma_y"],
+        drift_rms=drift_rms,
+        drift_z=drift_z,
+        r=tuple(float(x) for x in whole["r"]),
+        r_se=tuple(float(x) for x in r_se),
+        **{name: q(name) for name in names},
+    )
