@@ -13,7 +13,8 @@ A plain script (not a test): prints timings and ratios, never asserts them.
    the record and :func:`rockdec.rdd.measured.analyse` on it (what any estimate must do:
    Python, NumPy, numba and its kernels loaded from the cache, the analysis); and, in a
    process that has everything loaded, the analysis alone and the whole estimate
-   (:func:`rockdec.calibrate.inference.estimate`, cached calibration), medians of ``--repeat``.
+   (:func:`rockdec.calibrate.inference.estimate`, cached calibration), and the analysis and
+   :func:`rockdec.record.record_measure.measure` on the record already read, medians of ``--repeat``.
 
 Wall seconds and CPU seconds (the child's ``user + sys``, every thread) of each. With
 ``--before`` the same cases run on a second source tree (``PYTHONPATH`` set to it), the two
@@ -75,8 +76,17 @@ def analysis():
 def whole():
     inference.estimate(records.read_records(sys.argv[1]), cache_dir=sys.argv[2])
 
+recs = records.read_records(sys.argv[1])
+
+def model():
+    inference.measure_model(recs, recs[0].dt)
+
+def analysis_only():
+    measured.analyse([r.theta for r in recs], recs[0].dt)
+
 whole()  # numba's kernels and the libraries loaded before timing
-print(json.dumps({"analysis": timed(analysis, int(sys.argv[3])), "estimate": timed(whole, int(sys.argv[3]))}))
+n = int(sys.argv[3])
+print(json.dumps({"analysis": timed(analysis, n), "estimate": timed(whole, n), "model": timed(model, n), "analyse": timed(analysis_only, n)}))
 """
 
 
@@ -167,7 +177,12 @@ def main() -> None:
     ]
     for label, key in rows:
         print(f"| {label} | " + " | ".join(f"{median(runs[t][key], 0):.2f} | {median(runs[t][key], 1):.2f}" for t in trees) + " |")
-    for label, key in (("in process: read + inference.estimate (cached)", "estimate"), ("in process: read + measured.analyse (the analysis alone)", "analysis")):
+    for label, key in (
+        ("in process: read + inference.estimate (cached)", "estimate"),
+        ("in process: read + measured.analyse (the analysis alone)", "analysis"),
+        ("in process: measured.analyse, the record already read", "analyse"),
+        ("in process: record_measure.measure (the record's model), the record already read", "model"),
+    ):
         print(f"| {label} | " + " | ".join(f"{runs[t]['inproc'][key][0]:.3f} | {runs[t]['inproc'][key][1]:.3f}" for t in trees) + " |")
     print()
     for t in trees:
