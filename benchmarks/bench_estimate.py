@@ -16,6 +16,11 @@ A plain script (not a test): prints timings and ratios, never asserts them.
    (:func:`rockdec.calibrate.inference.estimate`, cached calibration), and the analysis and
    :func:`rockdec.record.record_measure.measure` on the record already read, medians of ``--repeat``.
 
+5. **The cold build split**: a cold estimate in one process, the CPU seconds of each
+   calibration grid-point task summed per Dask thread; the cold command's CPU less the
+   tasks' is its serial part, so on idle cores it takes about that part plus the busiest
+   thread's.
+
 Wall seconds and CPU seconds (the child's ``user + sys``, every thread) of each. With
 ``--before`` the same cases run on a second source tree (``PYTHONPATH`` set to it), the two
 trees alternating run by run so that both see the same load on a shared machine; the warm
@@ -87,6 +92,31 @@ def analysis_only():
 whole()  # numba's kernels and the libraries loaded before timing
 n = int(sys.argv[3])
 print(json.dumps({"analysis": timed(analysis, n), "estimate": timed(whole, n), "model": timed(model, n), "analyse": timed(analysis_only, n)}))
+"""
+
+
+COLD_SPLIT = """
+import json, sys, tempfile, threading, time
+from rockdec.calibrate import calibration, inference
+from rockdec.record import records
+
+tasks = []
+grid_point = calibration._grid_point
+
+def timed_grid_point(*args):
+    cpu = time.thread_time()
+    out = grid_point(*args)
+    tasks.append((threading.get_ident(), time.thread_time() - cpu))
+    return out
+
+calibration._grid_point = timed_grid_point
+cpu = time.process_time()
+with tempfile.TemporaryDirectory() as cache:
+    inference.estimate(records.read_records(sys.argv[1]), cache_dir=cache)
+per_thread = {}
+for thread, seconds in tasks:
+    per_thread[thread] = per_thread.get(thread, 0.0) + seconds
+print(json.dumps({"process": time.process_time() - cpu, "tasks": len(tasks), "threads": sorted(per_thread.values())}))
 """
 
 
@@ -163,6 +193,7 @@ def main() -> None:
                 runs[t]["floor"].append(child(["-c", FLOOR, str(csv)], src))
         for t, src in trees.items():
             runs[t]["inproc"] = json.loads(child(["-c", IN_PROCESS, str(csv), str(caches[t]), str(args.repeat)], src)[2])
+            runs[t]["split"] = json.loads(child(["-c", COLD_SPLIT, str(csv)], src)[2])
             answers[t] = answer(runs[t]["warm"][-1][2])
 
     print(f"record: {args.samples} samples (CSV); cold: medians of {args.cold} runs, the rest medians of {args.repeat}")
@@ -194,6 +225,14 @@ def main() -> None:
             f"warm / analysis alone {warm / alone[0]:.1f} (wall), {warm_cpu / alone[1]:.1f} (CPU); "
             f"cold / analysis alone {cold / alone[0]:.0f} (wall), {cold_cpu / alone[1]:.0f} (CPU); "
             f"cold CPU / wall {cold_cpu / cold:.2f}"
+        )
+        split = runs[t]["split"]
+        busiest = max(split["threads"])
+        serial = cold_cpu - sum(split["threads"])
+        print(
+            f"{t}: the calibration's {split['tasks']} grid-point tasks ran on {len(split['threads'])} threads, CPU s per thread "
+            f"{', '.join(f'{x:.2f}' for x in split['threads'])} (in a cold estimate in process); the rest of the cold command "
+            f"{serial:.2f} s of CPU: on idle cores about {serial:.2f} + {busiest:.2f} = {serial + busiest:.1f} s"
         )
         loaded = runs[t]["warm"][-1][3].split("loaded:", 1)[1].strip()
         print(f"{t}: heavy libraries the warm command loaded: {loaded or 'none'} (of {', '.join(HEAVY)})")
