@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import ast
 import functools
+import re
 from importlib.util import find_spec
 from pathlib import Path
 
@@ -26,11 +27,40 @@ def _rockdec_imports(path: Path) -> tuple[str, ...]:
     return _parsed_imports(str(path), stat.st_mtime_ns, stat.st_size)
 
 
+#: A line that starts an absolute import of a ``rockdec`` module (indented too: inside a function).
+_IMPORT_LINE = re.compile(r"^[ \t]*(?:from[ \t]+rockdec[\w.]*[ \t]+import|import[ \t]+rockdec)\b", re.M)
+
+
+def _statement(text: str, start: int) -> str:
+    """The statement of ``text`` whose line starts at ``start``: that line and the lines an
+    open parenthesis or a closing backslash carries it on to."""
+    end = start
+    while True:
+        newline = text.find("\n", end)
+        end = len(text) if newline < 0 else newline
+        piece = text[start:end]
+        if end == len(text) or not (piece.count("(") > piece.count(")") or piece.rstrip().endswith("\\")):
+            return piece
+        end += 1
+
+
 @functools.lru_cache(maxsize=1024)
 def _parsed_imports(path: str, mtime_ns: int, size: int) -> tuple[str, ...]:
-    """:func:`_rockdec_imports` of the file ``path`` as it is at ``mtime_ns`` and ``size``."""
+    """:func:`_rockdec_imports` of the file ``path`` as it is at ``mtime_ns`` and ``size``.
+
+    Only the lines that start a ``rockdec`` import are parsed, each with its continuation
+    (:func:`_statement`; the syntax tree of every module costs a warm ``rockdec estimate``
+    more than its analysis), the whole file when one of them is no statement on its own (a
+    docstring's text, say). A docstring line that reads as a whole import counts as one:
+    it can only add a module to the list.
+    """
+    text = Path(path).read_text()
+    try:
+        nodes = [ast.parse(_statement(text, match.start()).strip()).body[0] for match in _IMPORT_LINE.finditer(text)]
+    except SyntaxError:
+        nodes = list(ast.walk(ast.parse(text)))
     names = []
-    for node in ast.walk(ast.parse(Path(path).read_text())):
+    for node in nodes:
         if isinstance(node, ast.ImportFrom) and node.level == 0 and (node.module or "").split(".")[0] == "rockdec":
             # ``from rockdec.physics import simulate`` imports a module by its package's name
             names += [node.module] + [f"{node.module}.{alias.name}" for alias in node.names]

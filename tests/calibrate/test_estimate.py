@@ -290,6 +290,21 @@ def test_g_interval_covers_the_true_g():
     assert math.isnan(belt.g_interval(band, b, g_belt, math.nan, 1.0)[0])
 
 
+def test_held_e_of_many_raw_values_is_each_ones_correction_held_inside_the_range():
+    """held_es finds every band at once; each value is what correct() gives that raw value
+    alone when its interval lies strictly inside the calibrated range, else NaN (raw values
+    on and beyond the mean curve, NaN, near both ends of the range)."""
+    b = belt.belt(curved_calibration(False, sets=calibration.SETS_PER_E, seed=4), "e_v")
+    raws = np.r_[np.linspace(b.mean.min() - 0.05, b.mean.max() + 0.05, 301), np.nan, np.inf]
+    held = belt.held_es(b, raws.reshape(-1, 1))
+    assert held.shape == (raws.size, 1)
+    for raw, got in zip(raws, held[:, 0]):
+        c = belt.correct(b, raw)
+        inside = b.mean.min() <= raw <= b.mean.max() and b.e[0] < c.low and c.high < b.e[-1]
+        assert (got == c.value) if inside else math.isnan(got), (raw, got, c)
+    assert np.isfinite(held).sum() > 100 and np.isnan(held).sum() > 20  # both kinds met
+
+
 def test_the_test_bed_measures_95_percent_on_pools_of_known_curves():
     """rockdec.studies.belt_study.study on synthetic pools (the test bed's grid of e, two seeds):
     belts of the calibration's grid and size from one pool, tested on the other, cover

@@ -6,7 +6,7 @@ from pathlib import Path
 
 from rockdec.calibrate import calibration
 from rockdec.physics import models
-from rockdec.sources import package_sources
+from rockdec.sources import _statement, package_sources
 
 SRC = Path(calibration.__file__).resolve().parents[1]
 
@@ -51,3 +51,24 @@ def test_kernels_do_not_reach_the_record_reader():
     """The simulation, signature and estimator modules never import the user-file reader."""
     for module in ("rockdec.rdd.signatures", "rockdec.rdd.estimators", "rockdec.physics.simulate", "rockdec.pipeline.replicates"):
         assert "records.py" not in names(package_sources(module)), module
+
+
+def test_continued_imports_are_read_whole_and_a_docstring_fragment_is_no_import(tmp_path):
+    """Only import lines are parsed: a parenthesised or backslash-continued import is read to
+    its end, and a docstring line that starts like an import but is no statement (an
+    unclosed parenthesis) sends the file to a whole parse, which finds only real imports."""
+    script = tmp_path / "step.py"
+    script.write_text(
+        'from rockdec.physics.models import (\n    period_from_g,\n    SCALE_CONSTANT_GUESS,\n)\n\n'
+        "def f():\n    import rockdec.report.tables, \\\n        rockdec.rdd.registry\n"
+    )
+    assert names(package_sources(str(script))) >= {"models.py", "tables.py", "registry.py"}
+    text = script.read_text()
+    assert _statement(text, 0) == text[: text.index(")") + 1]  # to the closing parenthesis, without a whole parse
+    start = text.index("    import")
+    assert _statement(text, start) == text[start:].rstrip("\n")  # over the backslash
+    assert "figures.py" not in names(package_sources(str(script)))
+    fragment = tmp_path / "fragment.py"
+    fragment.write_text('"""Usage:\n\nfrom rockdec.report import (figures\n"""\n\nfrom rockdec.physics import models\n')
+    found = names(package_sources(str(fragment)))
+    assert "models.py" in found and "figures.py" not in found

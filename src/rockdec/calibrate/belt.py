@@ -149,18 +149,15 @@ def _smooth(x: np.ndarray, y: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np
     n = x.size
     k = _penalty(x)
     wm = np.diag(w)
-    best = None
-    for lam in _LAMBDAS * w.sum() / np.trace(k):
-        hat = np.linalg.solve(wm + lam * k, wm)
-        fit = hat @ y
-        df = float(np.trace(hat))
-        if n - GCV_GAMMA * df <= 0.0:
-            continue
-        rss = float(np.sum(w * (y - fit) ** 2))
-        score = n * rss / (n - GCV_GAMMA * df) ** 2
-        if best is None or score < best[0]:
-            best = (score, fit, hat, rss / (n - df))
-    return best[1], best[2], best[3], best[0]
+    lams = _LAMBDAS * w.sum() / np.trace(k)
+    hats = np.linalg.solve(wm + lams[:, None, None] * k, np.broadcast_to(wm, (lams.size, n, n)))  # every smoothing at once
+    fits = hats @ y
+    dfs = np.trace(hats, axis1=1, axis2=2)
+    rss = np.sum(w * (y - fits) ** 2, axis=1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        scores = np.where(n - GCV_GAMMA * dfs > 0.0, n * rss / (n - GCV_GAMMA * dfs) ** 2, np.inf)
+    best = int(np.argmin(scores))  # the first of equal scores, the smoothest
+    return fits[best], hats[best], float(rss[best] / (n - dfs[best])), float(scores[best])
 
 
 def _weighted_quantiles(z: np.ndarray, w: np.ndarray, p) -> np.ndarray:
@@ -267,7 +264,7 @@ def g_band(cal: ncread.Stored | xr.Dataset, name: str, e_belt: Belt, g_belt: Bel
     ``e`` read by estimator ``name`` (its belt ``e_belt``; ``g_belt`` the belt of ``g``).
 
     Each set's ``g`` is corrected as a record's is (:func:`correct_g` at the set's corrected
-    ``e``, when its interval lies inside the calibrated range: :func:`held_e`), so the ratio
+    ``e``, when its interval lies inside the calibrated range: :func:`held_es`), so the ratio
     holds both the scatter of ``g`` at a given ``e`` and the error of the corrected ``e`` it
     is divided by, and their correlation; its belt (:func:`fit`) gives :func:`g_interval`.
     """
@@ -275,19 +272,9 @@ def g_band(cal: ncread.Stored | xr.Dataset, name: str, e_belt: Belt, g_belt: Bel
 
     raw_e = cal["raw"].sel(name=name).values
     raw_g = cal["raw"].sel(name=G_NAME).values
-    ratio = np.full(raw_e.shape, np.nan)
-    for j, k in zip(*np.nonzero(np.isfinite(raw_e) & np.isfinite(raw_g))):
-        ratio[j, k] = correct_g(g_belt, raw_g[j, k], held_e(e_belt, raw_e[j, k]))
+    e = held_es(e_belt, np.where(np.isfinite(raw_g), raw_e, np.nan))
+    ratio = np.full(raw_e.shape, np.nan) if g_belt.e.size == 0 else raw_g / np.interp(e, g_belt.e, g_belt.mean)
     return fit(cal["e_true"].values, ratio, ratio=True)
-
-
-def corrected_e(b: Belt, raw: float) -> float:
-    """The corrected ``e`` of ``raw`` (:func:`correct`), NaN when ``raw`` lies beyond every
-    value of the mean curve (the corrected value is then its nearest point, no estimate:
-    :func:`rockdec.calibrate.inference.beyond`)."""
-    if b.e.size == 0 or not (np.isfinite(raw) and b.mean.min() <= raw <= b.mean.max()):
-        return float("nan")
-    return correct(b, raw).value
 
 
 def held_e(b: Belt, raw: float) -> float:
@@ -296,11 +283,26 @@ def held_e(b: Belt, raw: float) -> float:
     An interval that reaches an end of the range holds ``e`` too loosely (on records of
     20,000 samples nearly every interval reaches ``e = 0.4``), and dividing ``g`` by the
     ratio at such an ``e`` covered 78-91 % below ``e = 0.8``."""
-    e = corrected_e(b, raw)
-    if not np.isfinite(e):
-        return e
-    c = correct(b, raw)
-    return e if b.e[0] < c.low and c.high < b.e[-1] else float("nan")
+    return float(held_es(b, np.array([raw]))[0])
+
+
+def held_es(b: Belt, raws: np.ndarray) -> np.ndarray:
+    """:func:`held_e` of every raw value of ``raws`` (any shape), their bands found at once."""
+    raws = np.asarray(raws, dtype=float)
+    out = np.full(raws.shape, np.nan)
+    if b.e.size == 0:
+        return out
+    with np.errstate(invalid="ignore"):
+        on_curve = np.isfinite(raws) & (b.mean.min() <= raws) & (raws <= b.mean.max())  # beyond the mean curve: no estimate (inference.beyond)
+    where = np.flatnonzero(on_curve.ravel())
+    observed = raws.ravel()[where]
+    inside = _inside(b, observed)
+    low, high = _ends(b, inside)
+    held = inside.any(axis=1) & (b.e[0] < low) & (high < b.e[-1])
+    flat = out.reshape(-1)
+    for i in np.flatnonzero(held):
+        flat[where[i]] = _corrected_value(b, observed[i], np.flatnonzero(inside[i]))[0]
+    return out
 
 
 def g_interval(band: Belt, e_belt: Belt, g_belt: Belt, raw_e: float, raw_g: float) -> tuple[float, float]:
@@ -311,21 +313,27 @@ def g_interval(band: Belt, e_belt: Belt, g_belt: Belt, raw_e: float, raw_g: floa
     NaN ends when ``e`` is not held inside the calibrated range (:func:`held_e`), or when
     the band is empty or its lower end not positive.
     """
-    e = held_e(e_belt, raw_e)
-    if band.e.size == 0 or not np.isfinite(e):
-        return float("nan"), float("nan")
-    g_value = correct_g(g_belt, raw_g, e)
-    mean, spread = np.interp(e, band.e, band.mean), np.interp(e, band.e, band.spread)
-    low = mean + np.interp(e, band.e, np.broadcast_to(band.q_low, band.e.shape)) * spread
-    high = mean + np.interp(e, band.e, np.broadcast_to(band.q_high, band.e.shape)) * spread
-    if not (low > 0.0 and np.isfinite(g_value)):
-        return float("nan"), float("nan")
-    return float(g_value / high), float(g_value / low)
+    low, high = g_intervals(e_belt, g_belt, band, np.array([raw_e]), np.array([raw_g]))[0]
+    return float(low), float(high)
 
 
 def g_intervals(e_belt: Belt, g_belt: Belt, band: Belt, raw_e: np.ndarray, raw_g: np.ndarray) -> np.ndarray:
     """``(set, 2)``: :func:`g_interval` for each pair of raw values ``raw_e``, ``raw_g``."""
-    return np.array([g_interval(band, e_belt, g_belt, x, g) for x, g in zip(np.ravel(raw_e), np.ravel(raw_g))]).reshape(-1, 2)
+    raw_e, raw_g = np.ravel(raw_e).astype(float), np.ravel(raw_g).astype(float)
+    out = np.full((raw_e.size, 2), np.nan)
+    if band.e.size == 0 or g_belt.e.size == 0:
+        return out
+    e = held_es(e_belt, raw_e)
+    ok = np.isfinite(e)
+    e = e[ok]
+    g_value = raw_g[ok] / np.interp(e, g_belt.e, g_belt.mean)
+    mean, spread = np.interp(e, band.e, band.mean), np.interp(e, band.e, band.spread)
+    low = mean + np.interp(e, band.e, np.broadcast_to(band.q_low, band.e.shape)) * spread
+    high = mean + np.interp(e, band.e, np.broadcast_to(band.q_high, band.e.shape)) * spread
+    good = (low > 0.0) & np.isfinite(g_value)
+    rows = np.flatnonzero(ok)[good]
+    out[rows, 0], out[rows, 1] = g_value[good] / high[good], g_value[good] / low[good]
+    return out
 
 
 def g_calibration_coverage(cal: ncread.Stored | xr.Dataset, name: str, e_belt: Belt, g_belt: Belt, band: Belt) -> float:
@@ -357,16 +365,22 @@ def correct(b: Belt, observed: float) -> Corrected:
     low, high = low[0], high[0]
     if idx[0] == 0 or idx[-1] == b.e.size - 1:
         notes.append(f"the interval reaches the end of the calibrated range [{b.e[0]:.3f}, {b.e[-1]:.3f}]")
-    # corrected value: where the mean curve meets the observation, inside the interval
+    value, on_curve = _corrected_value(b, observed, idx)
+    if not on_curve:
+        notes.append("the raw value lies beyond the calibrated mean curve; the corrected value is its nearest point")
+    return Corrected(value, float(low), float(high), tuple(notes))
+
+
+def _corrected_value(b: Belt, observed: float, idx: np.ndarray) -> tuple[float, bool]:
+    """The corrected value of ``observed`` whose band holds the dense ``e`` at ``idx``: where the
+    mean curve meets the observation inside the interval, and ``True``; else the interval's
+    point of the curve nearest it, and ``False``."""
     gap = b.mean[idx] - observed
     crossing = np.flatnonzero(np.diff(np.sign(gap)) != 0)
     if crossing.size:
         i = idx[crossing[0]]
-        value = float(np.interp(observed, sorted([b.mean[i], b.mean[i + 1]]), [b.e[i], b.e[i + 1]][:: 1 if b.mean[i] <= b.mean[i + 1] else -1]))
-    else:
-        value = float(b.e[idx[np.argmin(np.abs(gap))]])
-        notes.append("the raw value lies beyond the calibrated mean curve; the corrected value is its nearest point")
-    return Corrected(value, float(low), float(high), tuple(notes))
+        return float(np.interp(observed, sorted([b.mean[i], b.mean[i + 1]]), [b.e[i], b.e[i + 1]][:: 1 if b.mean[i] <= b.mean[i + 1] else -1])), True
+    return float(b.e[idx[np.argmin(np.abs(gap))]]), False
 
 
 def calibration_coverage(cal: ncread.Stored | xr.Dataset, name: str, b: Belt) -> float:

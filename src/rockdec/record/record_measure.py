@@ -56,7 +56,7 @@ over more than ``L`` steps. ``S(L)`` is computed from the autocovariance of the 
 ``d`` (:func:`structure_function`, spans :data:`SPANS`), so the triples are chosen once,
 and :func:`fit_structure` fits ``(sigma_p^2 dt^2, sigma_n^2, alpha)`` in relative least
 squares: for a given ``alpha`` linear in the two variances, ``alpha`` by a grid then a
-bounded scalar search. The variances are not held positive and ``alpha`` may be
+golden-section search between its neighbours. The variances are not held positive and ``alpha`` may be
 negative, so that on a white noise-free record they scatter about 0 and their z scores
 are near normal; the reported ``sigma_n``, ``sigma_p`` clip them at 0. Then
 
@@ -102,7 +102,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import minimize_scalar
 
 from rockdec import validate as checks
 from rockdec.physics.models import period_from_g
@@ -265,6 +264,81 @@ def structure_model(impulse_var: float, noise_var: float, pole: float) -> np.nda
     return structure_function(mixed_autocovariance(np.arange(MAX_LAG + 1), impulse_var, noise_var, pole))
 
 
+def _profiler(gammas: np.ndarray):
+    """The fit of :func:`fit_structure` profiled over the pole, for each row of ``gammas``
+    ``(G, MAX_LAG + 1)``: a function of the poles ``alphas`` ``(G, A)`` that gives the two
+    variances in closed form and the residual sum of squares (each ``(G, A)``)."""
+    s = gammas @ _TRIANGLES.T
+    g0 = gammas[:, :1]
+    lags = np.arange(DIRECT_LAGS + 1)
+    target = np.concatenate([gammas[:, : DIRECT_LAGS + 1] / g0, np.ones_like(s)], axis=1)
+    noise = np.concatenate([mixed_autocovariance(lags, 0.0, 1.0, 0.0)[None, :] / g0, structure_model(0.0, 1.0, 0.0)[None, :] / s], axis=1)
+    a22, b2 = np.sum(noise**2, axis=1)[:, None], np.sum(noise * target, axis=1)[:, None]
+    exponents = np.arange(MAX_LAG + 1)
+
+    def profile(alphas: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        powers = np.power(alphas[..., None], exponents)
+        impulse = np.concatenate([powers[..., : DIRECT_LAGS + 1] / g0[:, None, :], (powers @ _TRIANGLES.T) / s[:, None, :]], axis=2)
+        a11, a12, b1 = np.sum(impulse**2, axis=2), np.einsum("gar,gr->ga", impulse, noise), np.einsum("gar,gr->ga", impulse, target)
+        det = a11 * a22 - a12**2
+        c1, c2 = (a22 * b1 - a12 * b2) / det, (a11 * b2 - a12 * b1) / det
+        rss = np.sum((impulse * c1[..., None] + noise[:, None, :] * c2[..., None] - target[:, None, :]) ** 2, axis=2)
+        return c1, c2, rss
+
+    return profile
+
+
+#: Poles of the fit's first search, over ``(-0.9, MAX_POLE)``: even steps up to 0.9, then
+#: geometric steps in ``1 - alpha`` towards :data:`MAX_POLE`.
+POLE_GRID = np.concatenate([np.linspace(-0.9, 0.9, 91), 1.0 - np.geomspace(0.1, 1.0 - MAX_POLE, 60)])
+
+#: Width to which the golden-section search of :func:`fit_structures` narrows the pole:
+#: near the minimum the residual then still changes by more than its rounding, so that
+#: records scaled in angle and time take the same path (1e-9 does not).
+POLE_TOLERANCE = 1e-8
+
+_GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0
+
+
+def fit_structures(gammas: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`fit_structure` of each row of ``gammas`` ``(G, MAX_LAG + 1)`` at once: arrays of
+    ``(sigma_p^2 dt^2, sigma_n^2, alpha)``.
+
+    ``alpha`` minimises the profiled residual (:func:`_profiler`): the best of
+    :data:`POLE_GRID`, then a golden-section search between its two neighbours, run on
+    every row together down to :data:`POLE_TOLERANCE`; the search's end replaces the grid
+    point only where its residual is not larger. Raises :class:`rockdec.validate.InputError`
+    when a row has no finite residual (second differences with no spread).
+    """
+    gammas = np.atleast_2d(np.asarray(gammas, dtype=float))
+    rows = np.arange(gammas.shape[0])
+    profile = _profiler(gammas)
+    rss = profile(np.broadcast_to(POLE_GRID, (rows.size, POLE_GRID.size)))[2]
+    if not np.isfinite(rss).any(axis=1).all():  # a structure function with no spread: nothing to fit a model to
+        raise checks.InputError(
+            "the second differences of the records have no usable spread (a record at rest, or one that chatters at zero "
+            "almost all the time), so their model cannot be measured; declare it (--load, --sensor-noise)"
+        )
+    best = np.nanargmin(rss, axis=1)
+    lo, hi = POLE_GRID[np.maximum(best - 1, 0)], POLE_GRID[np.minimum(best + 1, POLE_GRID.size - 1)]
+
+    def f(alpha):
+        return profile(alpha[:, None])[2][:, 0]
+
+    c, d = hi - _GOLDEN * (hi - lo), lo + _GOLDEN * (hi - lo)
+    fc, fd = f(c), f(d)
+    for _ in range(max(0, math.ceil(math.log(POLE_TOLERANCE / max(float(np.max(hi - lo)), POLE_TOLERANCE)) / math.log(_GOLDEN)))):
+        left = ~(fd < fc)  # the minimum lies in [lo, d] (NaN residuals count as large)
+        lo, hi = np.where(left, lo, c), np.where(left, d, hi)
+        new = np.where(left, hi - _GOLDEN * (hi - lo), lo + _GOLDEN * (hi - lo))
+        fnew = f(new)
+        c, d, fc, fd = np.where(left, new, d), np.where(left, c, new), np.where(left, fnew, fd), np.where(left, fc, fnew)
+    x = 0.5 * (lo + hi)
+    alpha = np.where(f(x) <= rss[rows, best], x, POLE_GRID[best])
+    impulse_var, noise_var, _ = profile(alpha[:, None])
+    return impulse_var[:, 0], noise_var[:, 0], alpha
+
+
 def fit_structure(gamma: np.ndarray) -> tuple[float, float, float]:
     """Least-squares ``(sigma_p^2 dt^2, sigma_n^2, alpha)`` of the mixed model on the
     autocovariance ``gamma(0..MAX_LAG)`` of the second differences.
@@ -274,39 +348,10 @@ def fit_structure(gamma: np.ndarray) -> tuple[float, float, float]:
     the structure function over itself, ``S_model(L) / S(L) - 1`` (:func:`structure_model`,
     which sums many lags and sees a colour under noise). For fixed ``alpha`` all are linear
     in the two variances, solved in closed form; ``alpha`` minimises the profiled
-    residual: a grid over ``(-0.9, MAX_POLE)`` then a bounded Brent search around its best
-    point. Neither variance is held positive.
+    residual (:func:`fit_structures`). Neither variance is held positive.
     """
-    gamma = np.asarray(gamma, dtype=float)
-    s = structure_function(gamma)
-    lags = np.arange(DIRECT_LAGS + 1)
-    target = np.concatenate([gamma[: DIRECT_LAGS + 1] / gamma[0], np.ones(s.size)])
-    noise = np.concatenate([mixed_autocovariance(lags, 0.0, 1.0, 0.0) / gamma[0], structure_model(0.0, 1.0, 0.0) / s])
-
-    def profile(alpha):
-        """Variances and residual sum of squares at each pole of ``alpha`` (1-D)."""
-        powers = np.power(alpha[:, None], np.arange(MAX_LAG + 1))
-        impulse = np.concatenate([powers[:, : DIRECT_LAGS + 1] / gamma[0], (powers @ _TRIANGLES.T) / s], axis=1)
-        a11, a12, a22 = np.sum(impulse**2, axis=1), impulse @ noise, noise @ noise
-        b1, b2 = impulse @ target, noise @ target
-        det = a11 * a22 - a12**2
-        coef = np.stack([(a22 * b1 - a12 * b2) / det, (a11 * b2 - a12 * b1) / det], axis=1)
-        rss = np.sum((impulse * coef[:, :1] + noise * coef[:, 1:] - target) ** 2, axis=1)
-        return coef, rss
-
-    grid = np.concatenate([np.linspace(-0.9, 0.9, 91), 1.0 - np.geomspace(0.1, 1.0 - MAX_POLE, 60)])
-    rss = profile(grid)[1]
-    if not np.isfinite(rss).any():  # a structure function with no spread: nothing to fit a model to
-        raise checks.InputError(
-            "the second differences of the records have no usable spread (a record at rest, or one that chatters at zero "
-            "almost all the time), so their model cannot be measured; declare it (--load, --sensor-noise)"
-        )
-    best = int(np.nanargmin(rss))
-    lo, hi = grid[max(best - 1, 0)], grid[min(best + 1, grid.size - 1)]
-    res = minimize_scalar(lambda a: profile(np.array([a]))[1][0], bounds=(lo, hi), method="bounded", options={"xatol": 1e-7})
-    alpha = float(res.x) if res.fun <= rss[best] else float(grid[best])
-    impulse_var, noise_var = profile(np.array([alpha]))[0][0]
-    return float(impulse_var), float(noise_var), alpha
+    impulse_var, noise_var, alpha = fit_structures(np.asarray(gamma, dtype=float)[None, :])
+    return float(impulse_var[0]), float(noise_var[0]), float(alpha[0])
 
 
 def second_differences(y: np.ndarray, margin: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
@@ -335,53 +380,68 @@ def second_differences(y: np.ndarray, margin: float = 0.0) -> tuple[np.ndarray, 
     return d, side
 
 
+def _block_starts(offset: int, size: int, total: int, n_blocks: int) -> tuple[np.ndarray, np.ndarray]:
+    """``(blocks, starts)``: the jackknife blocks a record of ``size`` samples starting at
+    sample ``offset`` of ``total`` overlaps, and the index in the record where each begins
+    (sample ``i`` of all records is in block ``i n_blocks // total``)."""
+    first, last = offset * n_blocks // total, (offset + size - 1) * n_blocks // total
+    blocks = np.arange(first, last + 1)
+    starts = np.maximum(-(-blocks * total // n_blocks) - offset, 0)
+    return blocks, starts
+
+
 def _block_sums(records, n_blocks: int, margin: float) -> dict:
     """Per-block sums of every measured quantity (they add over blocks).
 
     Returns arrays indexed by block: ``n``, ``sy``, ``syy`` (finite samples, after each
     record's mean is removed), ``n_side``, ``s_side`` (count and sum of kept second differences
-    per side, ``[:, 0]`` negative side, ``[:, 1]`` positive), and per record the second
-    differences (NaN where left out) with their side and block, for the lag sums.
+    per side, ``[:, 0]`` negative side, ``[:, 1]`` positive), and per record its second
+    differences (NaN where left out), their side, and its blocks and where they start, for
+    the lag sums.
     """
     total = sum(y.size for y in records)
     out = {k: np.zeros(n_blocks) for k in ("n", "sy", "syy")}
     out.update({k: np.zeros((n_blocks, 2)) for k in ("n_side", "s_side")})
-    diffs, sides, blocks = [], [], []
+    out["d"], out["side"], out["blocks"] = [], [], []
     offset = 0
     for y in records:
-        block = np.minimum((offset + np.arange(y.size)) * n_blocks // total, n_blocks - 1)
-        ok = np.isfinite(y)
-        out["n"] += np.bincount(block[ok], minlength=n_blocks)
-        out["sy"] += np.bincount(block[ok], weights=y[ok], minlength=n_blocks)
-        out["syy"] += np.bincount(block[ok], weights=y[ok] ** 2, minlength=n_blocks)
-        d, side = second_differences(y, margin)
-        keep = np.isfinite(d)
-        for s in (0, 1):
-            sel = keep & (side == s)
-            out["n_side"][:, s] += np.bincount(block[sel], minlength=n_blocks)
-            out["s_side"][:, s] += np.bincount(block[sel], weights=d[sel], minlength=n_blocks)
-        diffs.append(d)
-        sides.append(side)
-        blocks.append(block)
+        if y.size:
+            blocks, starts = _block_starts(offset, y.size, total, n_blocks)
+            ok = np.isfinite(y)
+            y0 = np.where(ok, y, 0.0)
+            out["n"][blocks] += np.add.reduceat(ok.astype(float), starts)
+            out["sy"][blocks] += np.add.reduceat(y0, starts)
+            out["syy"][blocks] += np.add.reduceat(y0 * y0, starts)
+            d, side = second_differences(y, margin)
+            keep = np.isfinite(d)
+            for s in (0, 1):
+                sel = keep & (side == s)
+                out["n_side"][blocks, s] += np.add.reduceat(sel.astype(float), starts)
+                out["s_side"][blocks, s] += np.add.reduceat(np.where(sel, d, 0.0), starts)
+            out["d"].append(d)
+            out["side"].append(side)
+            out["blocks"].append((blocks, starts))
         offset += y.size
-    out["d"], out["side"], out["block"] = diffs, sides, blocks
     return out
 
 
 def _lag_sums(sums: dict, means: np.ndarray, max_lag: int, n_blocks: int) -> tuple[np.ndarray, np.ndarray]:
     """``sum c_k c_{k+m}`` and pair counts per block and lag ``m = 0..max_lag`` of the
-    side-centred second differences ``c`` (pairs within one record, both kept)."""
+    side-centred second differences ``c`` (pairs within one record, both kept; a pair
+    belongs to the block of its first sample)."""
     prod = np.zeros((n_blocks, max_lag + 1))
     count = np.zeros((n_blocks, max_lag + 1))
-    for d, side, block in zip(sums["d"], sums["side"], sums["block"]):
-        c = d - means[side]
-        for m in range(max_lag + 1):
-            if c.size <= m:
-                break
-            p = c[: c.size - m] * c[m:]
-            ok = np.isfinite(p)
-            prod[:, m] += np.bincount(block[: c.size - m][ok], weights=p[ok], minlength=n_blocks)
-            count[:, m] += np.bincount(block[: c.size - m][ok], minlength=n_blocks)
+    for d, side, (blocks, starts) in zip(sums["d"], sums["side"], sums["blocks"]):
+        keep = np.isfinite(d)
+        c = np.where(keep, d - means[side], 0.0)
+        k = keep.astype(float)
+        ends = np.append(starts[1:], c.size)
+        for b, lo, hi in zip(blocks, starts, ends):
+            for m in range(max_lag + 1):
+                top = min(hi, c.size - m)
+                if top > lo:
+                    prod[b, m] += c[lo:top] @ c[lo + m : top + m]
+                    count[b, m] += k[lo:top] @ k[lo + m : top + m]
     return prod, count
 
 
@@ -427,33 +487,35 @@ def _drift(records, sigma_y: float) -> tuple[float, float]:
     return rms, (2.0 - eta) / sd0
 
 
-def _quantities(n, sy, syy, n_side, s_side, prod, count, dt):
-    """Every measured number from summed statistics (all records, or all but one block)."""
+def _quantities(n, sy, syy, n_side, s_side, prod, count, dt) -> dict:
+    """Every measured number from summed statistics, one row per set of sums (all records,
+    or all but one block): ``n``, ``sy``, ``syy`` ``(rows,)``, ``n_side``, ``s_side`` ``(rows, 2)``,
+    ``prod``, ``count`` ``(rows, lags)``; each value an array over the rows (``r`` ``(rows, lags - 1)``)."""
     sigma2 = syy / n - (sy / n) ** 2
     means = s_side / n_side
-    g_minus, g_plus = means[0] / dt**2, -means[1] / dt**2
+    g_minus, g_plus = means[:, 0] / dt**2, -means[:, 1] / dt**2
     gamma = prod / count
-    impulse_var, noise_var, alpha = fit_structure(gamma)
-    sigma_y = math.sqrt(max(sigma2 - max(noise_var, 0.0), 0.0))
+    impulse_var, noise_var, alpha = fit_structures(gamma)
+    sigma_y = np.sqrt(np.maximum(sigma2 - np.maximum(noise_var, 0.0), 0.0))
     g = 0.5 * (g_minus + g_plus)
-    if 0.0 < alpha < 1.0:
-        corner = -math.log(alpha) / (2.0 * math.pi * dt)
-    else:
-        corner = math.inf
-    return {
-        "sigma_y": sigma_y,
-        "g": g,
-        "asymmetry": (g_plus - g_minus) / (g_plus + g_minus) if g_plus + g_minus != 0.0 else math.nan,
-        "impulse_var": impulse_var,
-        "noise_var": noise_var,
-        "pole": alpha,
-        "impulse_sd": math.sqrt(max(impulse_var, 0.0)) / dt,
-        "noise_sd": math.sqrt(max(noise_var, 0.0)),
-        "noise_ratio": math.sqrt(max(noise_var, 0.0)) / sigma_y,
-        "corner_hz": corner,
-        "corner_ratio": corner * float(period_from_g(sigma_y, g)) if g > 0 else math.nan,
-        "r": gamma[1:] / gamma[0],
-    }
+    pole = (0.0 < alpha) & (alpha < 1.0)
+    corner = np.where(pole, -np.log(np.where(pole, alpha, 1.0)) / (2.0 * math.pi * dt), math.inf)
+    g_sum = g_plus + g_minus
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return {
+            "sigma_y": sigma_y,
+            "g": g,
+            "asymmetry": np.where(g_sum != 0.0, (g_plus - g_minus) / np.where(g_sum != 0.0, g_sum, 1.0), math.nan),
+            "impulse_var": impulse_var,
+            "noise_var": noise_var,
+            "pole": alpha,
+            "impulse_sd": np.sqrt(np.maximum(impulse_var, 0.0)) / dt,
+            "noise_sd": np.sqrt(np.maximum(noise_var, 0.0)),
+            "noise_ratio": np.sqrt(np.maximum(noise_var, 0.0)) / sigma_y,
+            "corner_hz": corner,
+            "corner_ratio": np.where(g > 0, corner * period_from_g(sigma_y, np.where(g > 0, g, 1.0)), math.nan),
+            "r": gamma[:, 1:] / gamma[:, :1],
+        }
 
 
 def measure(records, dt: float, *, n_blocks: int = JACKKNIFE_BLOCKS) -> MeasuredModel:
@@ -477,7 +539,7 @@ def measure(records, dt: float, *, n_blocks: int = JACKKNIFE_BLOCKS) -> Measured
     sigma_raw = math.sqrt(float(np.nanmean(np.concatenate(records) ** 2)))
     drift_rms, drift_z = _drift(records, sigma_raw)
     level = [_detrend(y) for y in records] if drift_z > DRIFT_Z else records
-    keys = ("n", "sy", "syy", "n_side", "s_side")
+    keys = ("n", "sy", "syy", "n_side", "s_side", "prod", "count")
     margin = 0.0
     for _ in range(MARGIN_PASSES + 1):
         sums = _block_sums(level, n_blocks, margin)
@@ -488,29 +550,25 @@ def measure(records, dt: float, *, n_blocks: int = JACKKNIFE_BLOCKS) -> Measured
                 "sides, are needed) to measure their model; give a longer record"
             )
         means = sums["s_side"].sum(axis=0) / sums["n_side"].sum(axis=0)
-        prod, count = _lag_sums(sums, means, MAX_LAG, n_blocks)
-        whole = _quantities(*(sums[k].sum(axis=0) for k in keys), prod.sum(axis=0), count.sum(axis=0), dt)
+        sums["prod"], sums["count"] = _lag_sums(sums, means, MAX_LAG, n_blocks)
+        whole = {k: v[0] for k, v in _quantities(*(sums[k].sum(axis=0)[None] for k in keys), dt).items()}
         margin = max(MARGIN_G * abs(whole["g"]) * dt**2, MARGIN_NOISE * whole["noise_sd"])
-    used = [j for j in range(n_blocks) if sums["n"][j] > 0]
-    reps = []
-    for j in used:
-        rest = [sums[k].sum(axis=0) - sums[k][j] for k in keys]
-        reps.append(_quantities(*rest, prod.sum(axis=0) - prod[j], count.sum(axis=0) - count[j], dt))
-    jack = len(reps)
+    used = np.flatnonzero(sums["n"] > 0)
+    reps = _quantities(*(sums[k].sum(axis=0)[None] - sums[k][used] for k in keys), dt)  # each block left out in turn
+    jack = used.size
 
     def q(name):
-        values = np.array([rep[name] for rep in reps], dtype=float)
+        values = reps[name]
         if not np.isfinite(values).all() or jack < 2:
             return Quantity(float(whole[name]), math.nan)
         return Quantity(float(whole[name]), float(math.sqrt((jack - 1) / jack * np.sum((values - values.mean()) ** 2))))
 
-    r_reps = np.array([rep["r"] for rep in reps])
-    r_se = np.sqrt((jack - 1) / jack * np.sum((r_reps - r_reps.mean(axis=0)) ** 2, axis=0))
+    r_se = np.sqrt((jack - 1) / jack * np.sum((reps["r"] - reps["r"].mean(axis=0)) ** 2, axis=0))
     names = ("g", "asymmetry", "impulse_var", "noise_var", "pole", "impulse_sd", "noise_sd", "noise_ratio", "corner_hz", "corner_ratio")
     return MeasuredModel(
         dt=dt,
         triples=triples,
-        sigma_y=whole["sigma_y"],
+        sigma_y=float(whole["sigma_y"]),
         drift_rms=drift_rms,
         drift_z=drift_z,
         r=tuple(float(x) for x in whole["r"]),
