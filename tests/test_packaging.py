@@ -193,3 +193,31 @@ def test_provenance_records_no_commit_when_installed_inside_another_repository(t
     where, commit, dirty = proc.stdout.split()
     assert Path(where).is_relative_to(site)  # the copy ran, not the checkout
     assert commit == "unknown" and dirty == "None"
+
+
+def test_every_dotted_rockdec_name_in_the_docs_and_docstrings_resolves():
+    """``rockdec.<package>.<module>.<name>`` written in the package, the docs, the README or the
+    workflow names something that exists (a module moved or a function renamed leaves none
+    behind)."""
+    import importlib
+    import re
+
+    texts = [*PACKAGE.rglob("*.py"), *(REPO / "docs").glob("*.md"), REPO / "README.md", *(REPO / "workflow").rglob("*.smk"), *(REPO / "workflow").rglob("*.py")]
+    stale = set()
+    for path in texts:
+        for ref in set(re.findall(r"\brockdec(?:\.[A-Za-z_]\w*)+", path.read_text())):
+            if ref.endswith(".yaml"):  # the conda environment file workflow/envs/rockdec.yaml
+                continue
+            parts = ref.split(".")
+            for i in range(len(parts), 0, -1):  # the longest importable module prefix
+                try:
+                    obj = importlib.import_module(".".join(parts[:i]))
+                    break
+                except ImportError:
+                    continue
+            for part in parts[i:]:
+                if not hasattr(obj, part):
+                    stale.add(f"{path.relative_to(REPO)}: {ref}")
+                    break
+                obj = getattr(obj, part)
+    assert sorted(stale) == []
