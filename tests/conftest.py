@@ -73,12 +73,36 @@ def tiny_workflow(tmp_path_factory) -> dict:
 #: two tests change it at once).
 WORKFLOW_MODULES = ("tests/pipeline/test_workflow.py", "tests/pipeline/test_archive.py")
 
+#: The modules whose tests cost the most CPU (``--cpu-durations``), costliest first; the
+#: other modules follow in their collection order.
+COSTLIEST_FIRST = (
+    *WORKFLOW_MODULES,
+    "tests/test_hostile.py",
+    "tests/studies/test_coverage.py",
+    "tests/pipeline/test_workflow_rules.py",
+    "tests/calibrate/test_estimate.py",
+    "tests/pipeline/test_engine.py",
+    "tests/test_cli.py",
+)
+
+
+def pytest_collection_modifyitems(config, items):
+    """The modules of :data:`COSTLIEST_FIRST` first, each module's tests in their order:
+    xdist hands out modules in this order as workers run short, so the last ones are short
+    and both workers end together (the suite lasts as long as its busiest worker)."""
+    rank = {module: i for i, module in enumerate(COSTLIEST_FIRST)}
+    items.sort(key=lambda item: rank.get(item.nodeid.split("::")[0], len(rank)))
+
 
 @pytest.hookimpl(optionalhook=True)
 def pytest_xdist_make_scheduler(config, log):
     """With pytest-xdist (``-n``, pyproject.toml): a worker runs every test of a module, so
-    each module-scoped fixture is built once, and one worker runs :data:`WORKFLOW_MODULES`."""
+    each module-scoped fixture is built once, and one worker runs :data:`WORKFLOW_MODULES`;
+    modules are handed out in collection order (:func:`pytest_collection_modifyitems`), not
+    by their number of tests."""
     from xdist.scheduler import LoadFileScheduling
+
+    config.option.loadscopereorder = False
 
     class ByModule(LoadFileScheduling):
         def _split_scope(self, nodeid: str) -> str:
