@@ -1,5 +1,6 @@
-"""What several test modules share: one build of the tiny workflow per test session, and
-the hypothesis profile.
+"""What several test modules share: one build of the tiny workflow per test session, the
+hypothesis profile, how xdist shares the tests among its workers, and ``--cpu-durations``
+(the CPU each test costs, with the subprocesses it waited for).
 
 ``tests/`` is on ``sys.path`` (pytest's rootdir-relative imports), so the test modules also
 import their helpers from one another (``cf_check``, ``test_hostile``).
@@ -8,6 +9,7 @@ import their helpers from one another (``cf_check``, ``test_hostile``).
 from __future__ import annotations
 
 import os
+import resource
 import shutil
 import subprocess
 import sys
@@ -71,12 +73,36 @@ def tiny_workflow(tmp_path_factory) -> dict:
 #: two tests change it at once).
 WORKFLOW_MODULES = ("tests/pipeline/test_workflow.py", "tests/pipeline/test_archive.py")
 
+#: The modules whose tests cost the most CPU (``--cpu-durations``), costliest first; the
+#: other modules follow in their collection order.
+COSTLIEST_FIRST = (
+    *WORKFLOW_MODULES,
+    "tests/test_hostile.py",
+    "tests/studies/test_coverage.py",
+    "tests/pipeline/test_workflow_rules.py",
+    "tests/calibrate/test_estimate.py",
+    "tests/pipeline/test_engine.py",
+    "tests/test_cli.py",
+)
+
+
+def pytest_collection_modifyitems(config, items):
+    """The modules of :data:`COSTLIEST_FIRST` first, each module's tests in their order:
+    xdist hands out modules in this order as workers run short, so the last ones are short
+    and both workers end together (the suite lasts as long as its busiest worker)."""
+    rank = {module: i for i, module in enumerate(COSTLIEST_FIRST)}
+    items.sort(key=lambda item: rank.get(item.nodeid.split("::")[0], len(rank)))
+
 
 @pytest.hookimpl(optionalhook=True)
 def pytest_xdist_make_scheduler(config, log):
     """With pytest-xdist (``-n``, pyproject.toml): a worker runs every test of a module, so
-    each module-scoped fixture is built once, and one worker runs :data:`WORKFLOW_MODULES`."""
+    each module-scoped fixture is built once, and one worker runs :data:`WORKFLOW_MODULES`;
+    modules are handed out in collection order (:func:`pytest_collection_modifyitems`), not
+    by their number of tests."""
     from xdist.scheduler import LoadFileScheduling
+
+    config.option.loadscopereorder = False
 
     class ByModule(LoadFileScheduling):
         def _split_scope(self, nodeid: str) -> str:
@@ -84,3 +110,60 @@ def pytest_xdist_make_scheduler(config, log):
             return WORKFLOW_MODULES[0] if module in WORKFLOW_MODULES else module
 
     return ByModule(config, log)
+
+
+# --------------------------------------------------------------------------- CPU per test
+
+
+def pytest_addoption(parser):
+    parser.addoption(
+        "--cpu-durations", type=int, default=None, metavar="N",
+        help="list the N tests that cost the most CPU seconds (user + sys of the test process and of every "
+        "subprocess it waited for, setup to teardown) and each worker's sum: on a shared machine CPU, unlike "
+        "the wall time --durations lists, does not grow with the load.",
+    )
+
+
+def _cpu_seconds() -> float:
+    """User + system CPU of this process and of its waited-for children, in s."""
+    own, children = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_protocol(item, nextitem):
+    item._cpu_start = _cpu_seconds()
+    yield
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_makereport(item, call):
+    outcome = yield
+    if call.when == "teardown" and item.config.getoption("cpu_durations") is not None:
+        worker = os.environ.get("PYTEST_XDIST_WORKER", "main")  # the report travels to the xdist controller
+        outcome.get_result().user_properties += [("cpu_s", _cpu_seconds() - item._cpu_start), ("worker", worker)]
+
+
+_CPU_ROWS: list[tuple[float, str, str]] = []
+"""(CPU s, worker, test) of every test run, gathered where the reports arrive (the xdist controller)."""
+
+
+def pytest_runtest_logreport(report):
+    found = dict(report.user_properties)
+    if report.when == "teardown" and "cpu_s" in found:
+        _CPU_ROWS.append((found["cpu_s"], found["worker"], report.nodeid))
+
+
+def pytest_terminal_summary(terminalreporter, config):
+    count = config.getoption("cpu_durations")
+    if count is None:
+        return
+    per_worker: dict[str, float] = {}
+    for seconds, worker, _ in _CPU_ROWS:
+        per_worker[worker] = per_worker.get(worker, 0.0) + seconds
+    shown = sorted(_CPU_ROWS, reverse=True)[: count or None]
+    terminalreporter.write_sep("=", f"CPU seconds of the {len(shown)} costliest tests (--cpu-durations)")
+    for seconds, worker, nodeid in shown:
+        terminalreporter.write_line(f"{seconds:8.2f} {worker:>5} {nodeid}")
+    totals = ", ".join(f"{worker} {seconds:.1f}" for worker, seconds in sorted(per_worker.items()))
+    terminalreporter.write_line(f"CPU s per worker (the tests, without start-up and collection): {totals}; all {sum(per_worker.values()):.1f}")

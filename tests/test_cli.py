@@ -278,15 +278,14 @@ def test_workflow_without_snakemake_says_which_extra_to_install(monkeypatch, cap
     assert "pip install 'rockdec[workflow]'" in capsys.readouterr().err
 
 
-def test_workflow_passes_its_scene_and_every_other_option_to_snakemake(tmp_path, monkeypatch):
-    """A dry run (-n) of the tiny scene from an empty folder: Snakemake plans the tiny scene's jobs there."""
+def test_workflow_passes_its_scene_and_every_other_option_to_snakemake(tmp_path, monkeypatch, capfd):
+    """A dry run (-n) of the tiny scene from an empty folder: Snakemake plans the tiny scene's jobs there.
+    The command runs in this process; Snakemake, its child, writes to the captured descriptors."""
     monkeypatch.chdir(tmp_path)
-    proc = subprocess.run(
-        [sys.executable, "-m", "rockdec", "workflow", "--scene", "tiny", "-n", "--quiet", "rules"],
-        capture_output=True, text=True, timeout=300,
-    )
-    assert proc.returncode == 0, proc.stderr[-2000:]
-    text = proc.stdout + proc.stderr
+    code = main(["workflow", "--scene", "tiny", "-n", "--quiet", "rules"])
+    out = capfd.readouterr()
+    assert code == 0, out.err[-2000:]
+    text = out.out + out.err
     assert "calibrate" in text and "signatures" in text
     assert "results/paper" not in text
     assert not (tmp_path / "results").exists()  # a dry run writes nothing

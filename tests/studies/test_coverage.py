@@ -49,12 +49,18 @@ def test_stage_places_white_records_at_75_samples_per_cycle():
 
 
 @pytest.fixture(scope="module")
-def tiny_table(tmp_path_factory):
+def calibrations(tmp_path_factory):
+    """One calibration folder for the module, shared as the study's cells share it
+    (:func:`rockdec.studies.coverage.run_cell`): a calibration is built once per key."""
+    return tmp_path_factory.mktemp("coverage-cal")
+
+
+@pytest.fixture(scope="module")
+def tiny_table(calibrations):
     """Two records of 20,000 samples in a cell of each class: clean (on the reference
     simulator's records), sensor noise, and colour with noise."""
-    cache = tmp_path_factory.mktemp("coverage-cal")
     cells = ["reference_clean_e0.9", "kernel_noise3_e0.9", "kernel_corner1_noise2_e0.9"]
-    datasets = [coverage.run_cell(c, 2, 20_000, cache, simulate=REFERENCE if c.startswith("reference") else coverage.kernel_records)
+    datasets = [coverage.run_cell(c, 2, 20_000, calibrations, simulate=REFERENCE if c.startswith("reference") else coverage.kernel_records)
                 for c in cells]
     return datasets, coverage.table(datasets)
 
@@ -95,9 +101,10 @@ def test_every_cell_names_a_condition_and_a_simulator():
         assert condition in COVERAGE_CONDITIONS and simulator in ("kernel", "reference") and 0.0 < e < 1.0
 
 
-def test_reduced_coverage_holds(tmp_path):
-    """40 records of 20,000 samples at e = 0.9: the 95 % interval of e_v covers e >= 85 %."""
-    ds = coverage.run_cell("kernel_clean_e0.9", 40, 20_000, tmp_path, model=PAPER)
+def test_reduced_coverage_holds(calibrations):
+    """40 records of 20,000 samples at e = 0.9: the 95 % interval of e_v covers e >= 85 %
+    (on the paper model's calibration of those records, built once for the module)."""
+    ds = coverage.run_cell("kernel_clean_e0.9", 40, 20_000, calibrations, model=PAPER)
     row = coverage.summary(ds)
     assert row["coverage_e_v"] >= 0.85
     assert np.isfinite(ds["est_e"].sel(estimator="e_v").values).all()
