@@ -171,19 +171,24 @@ def _weighted_quantiles(z: np.ndarray, w: np.ndarray, p) -> np.ndarray:
     return np.interp(p, cum, z)
 
 
-def belt(cal: ncread.Stored | xr.Dataset, name: str, points: int = 4001) -> Belt:
+def belt(cal: ncread.Stored | xr.Dataset, name: str, points: int = 4001, scale: float = 1.0) -> Belt:
     """The belt of estimator ``name`` (or of ``g``'s ratio to the true ``g``) on a dense
-    grid of ``points`` values of ``e`` (:func:`fit`)."""
+    grid of ``points`` values of ``e``, its spread scaled by ``scale`` (:func:`fit`)."""
     from rockdec.rdd.measured import G_NAME
 
-    return fit(cal["e_true"].values, cal["raw"].sel(name=name).values, name == G_NAME, points)
+    return fit(cal["e_true"].values, cal["raw"].sel(name=name).values, name == G_NAME, points, scale)
 
 
-def fit(e_grid: np.ndarray, raw: np.ndarray, ratio: bool = False, points: int = 4001) -> Belt:
+def fit(e_grid: np.ndarray, raw: np.ndarray, ratio: bool = False, points: int = 4001, scale: float = 1.0) -> Belt:
     """The belt of raw values ``raw(e, set)`` simulated at the true ``e_grid``, on a dense grid
     of ``points`` values of ``e`` (module docstring): the mean is smoothed as its offset from
     ``e`` (from 1 for a ``ratio``) along ``e`` or ``u = log(1 - e)``, whichever
     cross-validates better; the spread along ``u``.
+
+    ``scale``: the belt of records whose spread is ``scale`` times the simulated sets'
+    (records longer than the simulated ones:
+    :func:`rockdec.calibrate.calibration.spread_scale`): the fitted spread ``s(e)`` is
+    scaled, the error of the fitted mean (``var m``, from the sets as simulated) is not.
 
     ``failed``: the fraction of sets that gave NaN. Fewer than 5 usable grid points (3 sets
     at least) give an empty belt, which :func:`correct` refuses to invert.
@@ -224,7 +229,7 @@ def fit(e_grid: np.ndarray, raw: np.ndarray, ratio: bool = False, points: int = 
     mean = (1.0 if ratio else dense) + basis @ bias
     var_mean = np.einsum("ij,jk,ik->i", basis, cov, basis)
     basis_s = _spline_basis(u, ud)
-    spread = np.sqrt(np.exp(basis_s @ log_s) ** 2 + var_mean)
+    spread = np.sqrt((scale * np.exp(basis_s @ log_s)) ** 2 + var_mean)
     var_log_s = np.einsum("ij,jk,ik->i", basis_s, (hat_s / (2.0 * (counts - 1.0))) @ hat_s.T * max(scatter_s, 1.0), basis_s)
     widen = _t_quantile(1.0 / (2.0 * var_log_s)) / Z95  # a spread estimated from few sets: Student's t
     return Belt(dense, mean, spread, failed, widen * np.interp(ud, u, q[:, 0]), widen * np.interp(ud, u, q[:, 1]))
@@ -237,9 +242,10 @@ def _t_quantile(dof: np.ndarray) -> np.ndarray:
     return z + (z**3 + z) / (4.0 * dof) + (5.0 * z**5 + 16.0 * z**3 + 3.0 * z) / (96.0 * dof**2)
 
 
-def belts(cal: ncread.Stored | xr.Dataset) -> dict[str, Belt]:
-    """The belt of every name the calibration holds (each estimator of ``e``, and ``g``)."""
-    return {str(name): belt(cal, str(name)) for name in cal["name"].values}
+def belts(cal: ncread.Stored | xr.Dataset, scale: float = 1.0) -> dict[str, Belt]:
+    """The belt of every name the calibration holds (each estimator of ``e``, and ``g``),
+    spreads scaled by ``scale`` (:func:`fit`)."""
+    return {str(name): belt(cal, str(name), scale=scale) for name in cal["name"].values}
 
 
 def _inside(b: Belt, observed: np.ndarray) -> np.ndarray:

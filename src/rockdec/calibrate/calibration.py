@@ -11,8 +11,11 @@ only on ``e`` and one dimensionless step (equivalently the samples per cycle at 
 ``sigma_Y``, eq. 5); a low-pass load adds its pole per sample, sensor noise its level in
 ``sigma_Y``, Housner's model (eq. 2) the ratio ``sigma_Y / theta_cr`` (the record model,
 :func:`binned_model`). So the calibration simulates, for each ``e`` of a grid
-(:data:`E_GRID`), :data:`SETS_PER_E` sets of records with the measured records' lengths,
-``g = 1`` and ``sigma_p = 1`` (scale-free), at the step for which the analysis
+(:data:`E_GRID`), :data:`SETS_PER_E` sets of records with the measured records' lengths
+(records of more than :data:`LENGTH_CAP` samples in all: sets of that many samples on the
+denser grid :data:`E_GRID_LONG`, the belt's spread scaled to the records' length:
+:func:`simulated_lengths`, :func:`spread_scale`), ``g = 1`` and ``sigma_p = 1``
+(scale-free), at the step for which the analysis
 (:func:`rockdec.rdd.measured.analyse`) reads the same samples per cycle off the simulated
 records as it reads off the measured ones; then it runs the identical analysis on each
 set and stores every estimator's zero-window value, and ``g``'s, per set, with every
@@ -74,6 +77,23 @@ E_GRID = (0.4, 0.55, 0.7, 0.8, 0.865, 0.92, 0.95, 0.972, 0.985, 0.995)
 
 #: Simulated record sets per grid point.
 SETS_PER_E = 30
+
+#: Records longer than this (samples in all) are calibrated on simulated records of this
+#: many samples in all (:func:`simulated_lengths`), their belt's spread scaled to the
+#: records' length (:func:`spread_scale`).
+LENGTH_CAP = 1_000_000
+
+
+def _with_midpoints(grid) -> tuple[float, ...]:
+    """``grid`` and the midpoint in ``log(1 - e)`` of each pair of neighbours (4 significant digits)."""
+    u = np.log1p(-np.asarray(grid, dtype=float))
+    return tuple(sorted({*grid, *(float(f"{1.0 - math.exp(0.5 * (a + b)):.4g}") for a, b in zip(u[:-1], u[1:]))}))
+
+
+#: True ``e`` of the calibration of records longer than :data:`LENGTH_CAP`: :data:`E_GRID`
+#: and the midpoints between its points, so that the mean curve follows the bias to a
+#: fraction of such a record's narrow spread.
+E_GRID_LONG = _with_midpoints(E_GRID)
 
 #: Pilot sets of each iteration of the step search, and the most samples of a pilot record
 #: (:func:`step_for`); under a coloured load a pilot record is as long as the record, up to
@@ -164,19 +184,50 @@ def calibration_settings(lengths, points_per_cycle: float, settings: dict | None
     housner = model.rocking == "housner"
     if housner != (theta_cr_ratio is not None):
         raise ValueError("a calibration of Housner's model (eq. 2) needs sigma_Y / theta_cr, which the simplified model (eq. 4) does not take")
+    simulated = simulated_lengths(lengths)
+    capped = simulated != [int(n) for n in lengths]
     out = {
-        "lengths": [int(n) for n in lengths],
+        "lengths": simulated,
         "points_per_cycle": ppc_key(points_per_cycle),
         "record_model": binned_model(model, points_per_cycle).key(),
         "analysis": {k: (list(v) if isinstance(v, tuple) else v) for k, v in {**measured.DEFAULT_SETTINGS, **(settings or {})}.items()},
-        "e_grid": list(E_GRID),
+        "e_grid": list(E_GRID_LONG if capped else E_GRID),
         "sets_per_e": SETS_PER_E,
         "rockdec_version": __version__,
         "pipeline": pipeline_fingerprint(),
     }
+    if capped:
+        out["length_cap"] = {"samples": LENGTH_CAP, "spread": "scaled by sqrt(simulated samples / record samples)"}
     if housner:
         out["sigma_y_over_theta_cr"] = log_bin(theta_cr_ratio, RATIO_BIN)
     return out
+
+
+def simulated_lengths(lengths) -> list[int]:
+    """The lengths of the records a calibration simulates for records of ``lengths``: the
+    same when they hold at most :data:`LENGTH_CAP` samples in all, else each shrunk in
+    proportion to :data:`LENGTH_CAP` in all (at least one sample each).
+
+    Why that holds. The bias of every estimator depends on ``e`` and the sampling (samples
+    per cycle, eq. 5), and its spread falls as ``1/sqrt(length)`` (a record's triggers are
+    independent beyond a few cycles); so the belt of the shorter records, its spread scaled
+    by :func:`spread_scale`, is the belt of the records. Measured, not assumed:
+    ``benchmarks/long_record.py coverage`` (README, "Long records").
+    """
+    lengths = [int(n) for n in lengths]
+    total = sum(lengths)
+    if total <= LENGTH_CAP:
+        return lengths
+    return [max(1, round(n * LENGTH_CAP / total)) for n in lengths]
+
+
+def spread_scale(cal_settings: dict, samples: int) -> float:
+    """Factor on the spread of the belt of the calibration ``cal_settings`` for records of
+    ``samples`` in all: ``sqrt(simulated / samples)`` for a calibration on shortened records
+    (:func:`simulated_lengths`), else 1."""
+    if "length_cap" not in cal_settings:
+        return 1.0
+    return math.sqrt(sum(cal_settings["lengths"]) / samples)
 
 
 def pipeline_fingerprint() -> str:
@@ -300,6 +351,49 @@ def _grid_point(j: int, e: float, cal_settings: dict, seed_base: int) -> tuple[n
     return out, diag
 
 
+#: Fewest seconds between two messages of the calibration's progress (:class:`_Countdown`).
+PROGRESS_EVERY_S = 10.0
+
+
+class _Countdown:
+    """Logs, as the grid points of a calibration finish, how many are done and the time
+    left (the mean time per finished point so far times the points left), at most every
+    :data:`PROGRESS_EVERY_S` seconds: a message a log file keeps, where a progress bar is
+    drawn only on a terminal (:func:`rockdec.console.progress`). Counts Dask's tasks of
+    :func:`_grid_point` on the local schedulers (threads, the default engine)."""
+
+    def __init__(self, points: int):
+        from dask.callbacks import Callback
+
+        self.points, self.done, self.start, self.last = points, 0, time.perf_counter(), time.perf_counter()
+        countdown = self
+
+        class _Finished(Callback):
+            def _posttask(self, key, result, dsk, state, worker_id):
+                if isinstance(key, tuple) or not str(key).startswith("_grid_point"):
+                    return
+                countdown.finished()
+
+        self.callback = _Finished()
+
+    def finished(self) -> None:
+        self.done += 1
+        now = time.perf_counter()
+        if self.done == self.points or now - self.last < PROGRESS_EVERY_S:
+            return
+        self.last = now
+        left = (now - self.start) / self.done * (self.points - self.done)
+        log.info(f"calibrating: {self.done} of {self.points} values of e done, about {left:.0f} s left")
+
+    def __enter__(self):
+        self.callback.__enter__()
+        return self
+
+    def __exit__(self, *exc):
+        self.callback.__exit__(*exc)
+        log.info(f"calibrating: {self.points} values of e done in {time.perf_counter() - self.start:.0f} s")
+
+
 def build(cal_settings: dict) -> xr.Dataset:
     """Simulate and analyse the calibration records; ``raw(e_true, set, name)`` and
     ``diagnostic(e_true, set, check)``.
@@ -311,11 +405,12 @@ def build(cal_settings: dict) -> xr.Dataset:
     import xarray as xr
 
     log.info(
-        f"calibrating: simulating {cal_settings['sets_per_e']} record sets at each of {len(cal_settings['e_grid'])} values of e "
-        "like the measured records (once; stored for every record with the same settings)"
+        f"calibrating: simulating {cal_settings['sets_per_e']} record sets of {sum(cal_settings['lengths'])} samples at each of "
+        f"{len(cal_settings['e_grid'])} values of e like the measured records (once; stored for every record with the same settings)"
     )
     tasks = [dask.delayed(_grid_point)(j, e, cal_settings, CALIBRATION_SEED_OFFSET) for j, e in enumerate(cal_settings["e_grid"])]
-    points = engine.compute(*tasks)
+    with _Countdown(len(tasks)):
+        points = engine.compute(*tasks)
     values = np.stack([raw for raw, _ in points])
     ds = xr.Dataset(
         {
