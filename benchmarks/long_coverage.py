@@ -12,7 +12,8 @@ gets every candidate's interval from the belt with its spread scaled to its leng
 (:func:`rockdec.calibrate.belt.belts`, :func:`rockdec.calibrate.calibration.spread_scale`) and the
 candidate ``rockdec estimate`` reports (:func:`rockdec.calibrate.inference.select`).
 
-Printed per ``e`` and estimator: coverage of the 95 % interval and its binomial sd, the mean
+Printed: the share of the test records on which each check of
+:mod:`rockdec.record.diagnostics` fires (false alarms: the records are clean), and per ``e`` and estimator: coverage of the 95 % interval and its binomial sd, the mean
 error of the corrected ``e`` over its sd across records (bias/sd), the offset of the records'
 mean raw value from the belt's mean curve in units of the belt's spread (``curve_z``), median
 width, and the wall and CPU seconds of the calibration and of the test records.
@@ -33,7 +34,8 @@ import pandas as pd
 import xarray as xr
 
 from rockdec.calibrate import belt, calibration, inference
-from rockdec.rdd import registry
+from rockdec.rdd import measured, registry
+from rockdec.record import diagnostics
 from rockdec.studies import belt_study
 
 
@@ -47,10 +49,11 @@ def test_records(cal_settings: dict, samples: int, e_values, records: int, repli
 
     seed = calibration.CALIBRATION_SEED_OFFSET + replica * belt_study.SEED_STRIDE
     tasks = [dask.delayed(calibration._grid_point)(j, e, settings, seed) for j, e in enumerate(settings["e_grid"])]
-    values = np.stack([raw for raw, _ in engine.compute(*tasks)])
+    points = engine.compute(*tasks)
     return xr.Dataset(
-        {"raw": (("e_true", "set", "name"), values)},
-        coords={"e_true": settings["e_grid"], "set": np.arange(records), "name": list(calibration.NAMES)},
+        {"raw": (("e_true", "set", "name"), np.stack([raw for raw, _ in points])),
+         "diagnostic": (("e_true", "set", "check"), np.stack([diag for _, diag in points]))},
+        coords={"e_true": settings["e_grid"], "set": np.arange(records), "name": list(calibration.NAMES), "check": list(diagnostics.CHECKS)},
         attrs={"samples": samples, "replica": replica},
     )
 
@@ -60,7 +63,7 @@ def table(cal, test: xr.Dataset, scale: float) -> pd.DataFrame:
     belts = belt.belts(cal, scale)
     n_sets = int(cal["raw"].sizes["e_true"] * cal["raw"].sizes["set"])
     cover = {name: belt.calibration_coverage(cal, name, belt.belt(cal, name)) for name in registry.CANDIDATES}  # as inference.estimate
-    rows = []
+    rows, alarms = [], []
     for e in test["e_true"].values:
         per_record = []
         for k in range(test.sizes["set"]):
@@ -73,7 +76,12 @@ def table(cal, test: xr.Dataset, scale: float) -> pd.DataFrame:
                              "interval": [None if not np.isfinite(c.low) else c.low, None if not np.isfinite(c.high) else c.high],
                              "coverage": cover[name], "calibrated_range": [belts[name].e[0], belts[name].e[-1]]}
             chosen, _, _ = inference.select(per, n_sets)
-            per_record.append({**per, "reported": per[chosen] if chosen else {"e": None, "interval": [None, None]}})
+            shown = per[chosen] if chosen else {"e": None, "interval": [None, None]}
+            if "diagnostic" in test:
+                limits = diagnostics.thresholds(cal, shown["e"], shown["interval"], measured.DEFAULT_SETTINGS["level"], 1.0 / scale**2)
+                fired = diagnostics.judge(test["diagnostic"].sel(e_true=e).values[k], limits)
+                alarms.append([fired[c].fired for c in diagnostics.CHECKS])
+            per_record.append({**per, "reported": shown})
         for name in (*registry.CANDIDATES, "reported"):
             value = np.array([np.nan if r[name]["e"] is None else r[name]["e"] for r in per_record])
             low = np.array([np.nan if r[name]["interval"][0] is None else r[name]["interval"][0] for r in per_record])
@@ -91,6 +99,10 @@ def table(cal, test: xr.Dataset, scale: float) -> pd.DataFrame:
             else:
                 row["reported"] = ",".join(f"{k}:{sum(1 for r in per_record if r['reported'] is r[k])}" for k in registry.CANDIDATES)
             rows.append(row)
+    if alarms:
+        rate = np.mean(alarms, axis=0)
+        print("false alarms on these clean records: " + ", ".join(f"{c} {r:.1%}" for c, r in zip(diagnostics.CHECKS, rate))
+              + f" ({len(alarms)} records)")
     return pd.DataFrame(rows)
 
 
@@ -100,7 +112,7 @@ def main() -> None:
     parser.add_argument("--e", type=float, nargs="+", default=[0.85, 0.95])
     parser.add_argument("--records", type=int, default=15)
     parser.add_argument("--ppc", type=float, default=75.0)
-    parser.add_argument("--replica", type=int, default=21)
+    parser.add_argument("--replica", type=int, nargs="+", default=[21], help="seed bases of the test records (their sets are pooled)")
     parser.add_argument("--out", type=Path, required=True)
     args = parser.parse_args()
     samples = int(args.samples)
@@ -110,16 +122,20 @@ def main() -> None:
     cal, cached = calibration.load_or_build(cal_settings, args.out / "cache")
     print(f"calibration ({'stored' if cached else 'built'}): {sum(cal_settings['lengths'])} samples x {len(cal_settings['e_grid'])} e x "
           f"{cal_settings['sets_per_e']} sets, wall {time.perf_counter() - wall:.0f} s, CPU {time.process_time() - cpu:.0f} s", flush=True)
-    path = args.out / f"test-{samples}-{args.replica}-{args.records}-{'_'.join(map(str, args.e))}.nc"
-    if not path.is_file():
-        wall, cpu = time.perf_counter(), time.process_time()
-        test_records(cal_settings, samples, args.e, args.records, args.replica).to_netcdf(path)
-        print(f"test records: {args.records} x {len(args.e)} of {samples} samples, wall {time.perf_counter() - wall:.0f} s, "
-              f"CPU {time.process_time() - cpu:.0f} s", flush=True)
+    tests = []
+    for replica in args.replica:
+        path = args.out / f"test-{samples}-{replica}-{args.records}-{'_'.join(map(str, args.e))}.nc"
+        if not path.is_file():
+            wall, cpu = time.perf_counter(), time.process_time()
+            test_records(cal_settings, samples, args.e, args.records, replica).to_netcdf(path)
+            print(f"test records: {args.records} x {len(args.e)} of {samples} samples, wall {time.perf_counter() - wall:.0f} s, "
+                  f"CPU {time.process_time() - cpu:.0f} s", flush=True)
+        tests.append(xr.load_dataset(path))
+    test = xr.concat(tests, "set").assign_coords(set=np.arange(sum(t.sizes["set"] for t in tests)))
     scale = calibration.spread_scale(cal_settings, samples)
     with pd.option_context("display.width", 250, "display.max_columns", 20):
         print(f"spread scale {scale:.4f}")
-        print(table(cal, xr.load_dataset(path), scale).round(4).to_string(index=False))
+        print(table(cal, test, scale).round(4).to_string(index=False))
 
 
 if __name__ == "__main__":

@@ -521,3 +521,48 @@ def test_the_cost_of_a_long_record_stops_growing_with_its_length():
     assert long["calibrating"] == pytest.approx(inference.stage_seconds(40_000_000, True, True)["calibrating"], rel=1e-12)
     assert long["calibrating"] == pytest.approx(
         calibration.LENGTH_CAP * len(calibration.E_GRID_LONG) * calibration.SETS_PER_E * inference.CALIBRATION_SECONDS / 2, rel=1e-12)
+
+
+def test_a_long_record_says_each_stage_and_the_time_left(monkeypatch, caplog, tmp_path):
+    """A record longer than the cap (cap lowered to 10,000 samples; grid points drawn by
+    tests/fake_calibration.py): the log says the analysis, the shortened calibration and its
+    spread factor, the grid points done with the time left, and the end; the JSON names the
+    simulated samples and the factor sqrt(10,000 / 20,000)."""
+    import logging
+
+    import fake_calibration
+    from rockdec.calibrate import inference
+    from rockdec.record.records import Record
+
+    monkeypatch.setattr(calibration, "LENGTH_CAP", 10_000)
+    monkeypatch.setattr(calibration, "PROGRESS_EVERY_S", 0.0)
+    monkeypatch.setattr(calibration, "_grid_point", fake_calibration.grid_point)
+    theta, dt = simulated_record(0.85, 20_000)
+    with caplog.at_level(logging.INFO, logger="rockdec"):
+        res = inference.estimate([Record(theta, dt, "long")], cache_dir=tmp_path)
+    text = "\n".join(r.getMessage() for r in caplog.records)
+    assert "analysing 20000 samples: about" in text and "s left in all" in text
+    assert "calibrated on simulated records of 10000 samples" in text and "sqrt(10000 / 20000) = 0.707" in text
+    assert f"of {len(calibration.E_GRID_LONG)} values of e done, about" in text and " s left" in text
+    assert f"{len(calibration.E_GRID_LONG)} values of e done in" in text
+    assert fake_calibration.grid_point.settings["lengths"] == [10_000]
+    assert res["calibration"]["simulated_samples"] == 10_000
+    assert res["calibration"]["spread_scale"] == pytest.approx(math.sqrt(0.5), rel=1e-12)
+
+
+def test_checks_of_long_records_take_thresholds_by_their_length_law():
+    """Thresholds for records `ratio` times as long as the calibration's: a largest value
+    (spikes) by the Gumbel law, against the empirical quantile of the largest of `ratio`
+    Gumbel draws (within 3 %); a difference of means (asymmetry) over sqrt(ratio); a count
+    (triggers) times ratio; a z score unchanged."""
+    from rockdec.record import diagnostics
+
+    checks = {check.name: check for check in diagnostics.REGISTRY}
+    rng = np.random.default_rng(2)
+    column = rng.gumbel(0.02, 0.003, 3000)
+    truth = np.quantile(rng.gumbel(0.02, 0.003, (20000, 20)).max(axis=1), 0.975)
+    assert diagnostics.length_threshold(checks["spikes"], column, 0.975, 20.0) == pytest.approx(truth, rel=0.03)
+    assert diagnostics.length_threshold(checks["spikes"], column, 0.975, 20.0) > np.quantile(column, 0.975)
+    assert diagnostics.length_threshold(checks["asymmetry"], column, 0.975, 16.0) == pytest.approx(np.quantile(column, 0.975) / 4)
+    assert diagnostics.length_threshold(checks["few_triggers"], column, 0.025, 16.0) == pytest.approx(np.quantile(column, 0.025) * 16)
+    assert diagnostics.length_threshold(checks["drift"], column, 0.975, 16.0) == pytest.approx(np.quantile(column, 0.975))

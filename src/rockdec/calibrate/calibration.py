@@ -359,20 +359,20 @@ class _Countdown:
     """Logs, as the grid points of a calibration finish, how many are done and the time
     left (the mean time per finished point so far times the points left), at most every
     :data:`PROGRESS_EVERY_S` seconds: a message a log file keeps, where a progress bar is
-    drawn only on a terminal (:func:`rockdec.console.progress`). Counts Dask's tasks of
-    :func:`_grid_point` on the local schedulers (threads, the default engine)."""
+    drawn only on a terminal (:func:`rockdec.console.progress`). Counts the Dask ``tasks``
+    (one per grid point) as they finish on the local schedulers (threads, the default engine)."""
 
-    def __init__(self, points: int):
+    def __init__(self, tasks):
         from dask.callbacks import Callback
 
-        self.points, self.done, self.start, self.last = points, 0, time.perf_counter(), time.perf_counter()
+        keys = {task.key for task in tasks}
+        self.points, self.done, self.start, self.last = len(keys), 0, time.perf_counter(), time.perf_counter()
         countdown = self
 
         class _Finished(Callback):
             def _posttask(self, key, result, dsk, state, worker_id):
-                if isinstance(key, tuple) or not str(key).startswith("_grid_point"):
-                    return
-                countdown.finished()
+                if key in keys:
+                    countdown.finished()
 
         self.callback = _Finished()
 
@@ -409,7 +409,7 @@ def build(cal_settings: dict) -> xr.Dataset:
         f"{len(cal_settings['e_grid'])} values of e like the measured records (once; stored for every record with the same settings)"
     )
     tasks = [dask.delayed(_grid_point)(j, e, cal_settings, CALIBRATION_SEED_OFFSET) for j, e in enumerate(cal_settings["e_grid"])]
-    with _Countdown(len(tasks)):
+    with _Countdown(tasks):
         points = engine.compute(*tasks)
     values = np.stack([raw for raw, _ in points])
     ds = xr.Dataset(

@@ -82,12 +82,15 @@ def cost(samples: int, csv: bool, g_given: bool, cores: int = 2) -> tuple[float,
     return sum(stage_seconds(samples, csv, g_given, cores).values()), samples * BYTES_PER_SAMPLE
 
 
-def diagnose(records: list[Record], analysis: measured.Analysis, settings: dict, cal, e: float | None, interval) -> tuple[list[str], dict]:
+def diagnose(
+    records: list[Record], analysis: measured.Analysis, settings: dict, cal, e: float | None, interval, length_ratio: float = 1.0,
+) -> tuple[list[str], dict]:
     """The checks of :mod:`rockdec.record.diagnostics` on the records, against thresholds from the
-    calibration ``cal`` near the corrected ``e`` and its 95 % ``interval``: the warnings of
-    the checks that fired, and per check ``{"statistic", "threshold", "fired"}`` (JSON-able)."""
+    calibration ``cal`` near the corrected ``e`` and its 95 % ``interval`` (``length_ratio``:
+    the records' length over the calibration's records'): the warnings of the checks that
+    fired, and per check ``{"statistic", "threshold", "fired"}`` (JSON-able)."""
     level = settings.get("level", measured.DEFAULT_SETTINGS["level"])
-    outcomes = diagnostics.evaluate([r.theta for r in records], analysis, cal, e, interval, level)
+    outcomes = diagnostics.evaluate([r.theta for r in records], analysis, cal, e, interval, level, length_ratio)
     notes = [o.message for o in outcomes.values() if o.fired]
     return notes, {name: {"statistic": _num(o.statistic), "threshold": _num(o.threshold), "fired": o.fired} for name, o in outcomes.items()}
 
@@ -420,7 +423,7 @@ def estimate(
                 "the estimate rests on the given g"
             )
     simulated = RecordModel.from_key(cal_settings["record_model"])
-    warned, checks = diagnose(records, analysis, settings, cal, shown["e"], shown["interval"])
+    warned, checks = diagnose(records, analysis, settings, cal, shown["e"], shown["interval"], 1.0 / scale**2)
     return {
         "e": shown["e"],
         "interval": shown["interval"],
