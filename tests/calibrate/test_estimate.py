@@ -443,8 +443,9 @@ def test_calibration_coverage_is_95_percent_when_the_belt_is_right_and_less_when
 
 def test_records_up_to_the_length_cap_keep_their_own_calibration():
     """Records of at most LENGTH_CAP samples in all: the calibration's settings are the ones
-    listed here key by key (their lengths, the grid E_GRID), so their cache name is unchanged
-    by the length handling; one sample more and the key names the cap and the denser grid."""
+    listed here key by key (their lengths, the grid E_GRID, samples per cycle on bins of
+    PPC_BIN), so their cache name is unchanged by the length handling; one sample more and the
+    key names the cap, the denser grid and the finer bins of PPC_BIN_LONG."""
     for lengths in ([20_000], [200_000], [300_000, 200_000], [calibration.LENGTH_CAP]):
         expected = {
             "lengths": lengths,
@@ -464,6 +465,11 @@ def test_records_up_to_the_length_cap_keep_their_own_calibration():
     longer = calibration.calibration_settings([calibration.LENGTH_CAP + 1], 75.0)
     assert longer["lengths"] == [calibration.LENGTH_CAP] and longer["length_cap"]["samples"] == calibration.LENGTH_CAP
     assert longer["e_grid"] == list(calibration.E_GRID_LONG)
+    assert longer["points_per_cycle"] == calibration.ppc_key(75.0, calibration.PPC_BIN_LONG) != at_cap["points_per_cycle"]
+    # samples per cycle 3 % apart share a calibration up to the cap, not beyond it (finer bins)
+    assert calibration.settings_hash(calibration.calibration_settings([200_000], 77.2)) == calibration.settings_hash(
+        calibration.calibration_settings([200_000], 75.0))
+    assert calibration.settings_hash(calibration.calibration_settings([20_000_000], 77.2)) != calibration.settings_hash(longer)
     assert calibration.settings_hash(longer) != calibration.settings_hash(at_cap)
     # every record longer than the cap shares one calibration
     assert calibration.settings_hash(calibration.calibration_settings([20_000_000], 75.0)) == calibration.settings_hash(longer)

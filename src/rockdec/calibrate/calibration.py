@@ -100,8 +100,11 @@ E_GRID_LONG = _with_midpoints(E_GRID)
 #: ``PILOT_SAMPLES_COLOURED``.
 PILOT_SETS, PILOT_SAMPLES, PILOT_SAMPLES_COLOURED = 8, 50_000, 200_000
 
-#: Calibrations are shared by records whose samples per cycle agree within this relative step.
-PPC_BIN = 0.1
+#: Calibrations are shared by records whose samples per cycle agree within this relative
+#: step; records longer than :data:`LENGTH_CAP`, within the finer ``PPC_BIN_LONG``: the bias
+#: of ``e_v`` moves by 0.001-0.0016 from one bin of ``PPC_BIN`` to the next (e = 0.95 and
+#: 0.85, records of 1,000,000 samples), more than a 20-million-sample record's spread (0.0007).
+PPC_BIN, PPC_BIN_LONG = 0.1, 0.02
 
 #: Calibrations are shared by records whose sensor noise (in ``sigma_Y``) and load pole
 #: (``-ln`` of the pole per sample) agree within these relative steps (:func:`binned_model`).
@@ -138,12 +141,12 @@ def log_bin(x: float, width: float) -> float:
     return float(f"{math.exp(width * round(math.log(x) / width)):.4g}")
 
 
-def ppc_key(points_per_cycle: float) -> float:
-    """Samples per cycle rounded to the calibration's bins (:data:`PPC_BIN`, relative)."""
-    return log_bin(points_per_cycle, PPC_BIN)
+def ppc_key(points_per_cycle: float, width: float = PPC_BIN) -> float:
+    """Samples per cycle rounded to the calibration's bins (:data:`PPC_BIN`, relative, or ``width``)."""
+    return log_bin(points_per_cycle, width)
 
 
-def binned_model(model: RecordModel, points_per_cycle: float) -> RecordModel:
+def binned_model(model: RecordModel, points_per_cycle: float, ppc_bin: float = PPC_BIN) -> RecordModel:
     """The record model a calibration simulates for records of ``model`` read at
     ``points_per_cycle`` samples per cycle: the sensor noise (in ``sigma_Y``) on the bins
     of :data:`NOISE_BIN`, and a low-pass load's pole per sample on the bins of
@@ -152,7 +155,7 @@ def binned_model(model: RecordModel, points_per_cycle: float) -> RecordModel:
     The load is matched by its pole per sample, ``alpha = exp(-2 pi corner / N)`` at the
     records' own ``N = points_per_cycle`` (what :func:`rockdec.record.record_measure.measure`
     reads directly): ``-ln alpha`` is binned and the corner stated at the binned samples
-    per cycle (:func:`ppc_key`), at which the calibration simulates, so that the
+    per cycle (:func:`ppc_key` on bins of ``ppc_bin``), at which the calibration simulates, so that the
     calibration's records carry the binned pole per sample and are read at the binned
     samples per cycle. A spectrum load is simulated as stated (its table in rocking
     frequencies, placed at the binned samples per cycle).
@@ -165,7 +168,7 @@ def binned_model(model: RecordModel, points_per_cycle: float) -> RecordModel:
     load = model.load
     if load.kind == "lowpass":
         rate = log_bin(-math.log(load.pole(points_per_cycle)), POLE_BIN)
-        load = Load("lowpass", float(f"{rate * ppc_key(points_per_cycle) / (2.0 * math.pi):.6g}"))
+        load = Load("lowpass", float(f"{rate * ppc_key(points_per_cycle, ppc_bin) / (2.0 * math.pi):.6g}"))
     return dataclasses.replace(model, load=load, sensor=sensor)
 
 
@@ -186,10 +189,11 @@ def calibration_settings(lengths, points_per_cycle: float, settings: dict | None
         raise ValueError("a calibration of Housner's model (eq. 2) needs sigma_Y / theta_cr, which the simplified model (eq. 4) does not take")
     simulated = simulated_lengths(lengths)
     capped = simulated != [int(n) for n in lengths]
+    ppc_bin = PPC_BIN_LONG if capped else PPC_BIN
     out = {
         "lengths": simulated,
-        "points_per_cycle": ppc_key(points_per_cycle),
-        "record_model": binned_model(model, points_per_cycle).key(),
+        "points_per_cycle": ppc_key(points_per_cycle, ppc_bin),
+        "record_model": binned_model(model, points_per_cycle, ppc_bin).key(),
         "analysis": {k: (list(v) if isinstance(v, tuple) else v) for k, v in {**measured.DEFAULT_SETTINGS, **(settings or {})}.items()},
         "e_grid": list(E_GRID_LONG if capped else E_GRID),
         "sets_per_e": SETS_PER_E,
