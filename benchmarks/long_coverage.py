@@ -4,7 +4,9 @@ than :data:`rockdec.calibrate.calibration.LENGTH_CAP` (README, "Long records").
 The calibration is ``rockdec estimate``'s own for records of ``--samples`` read at
 ``--ppc`` samples per cycle (:func:`rockdec.calibrate.calibration.calibration_settings`: sets of
 :data:`~rockdec.calibrate.calibration.LENGTH_CAP` samples on
-:data:`~rockdec.calibrate.calibration.E_GRID_LONG`), built or read from ``OUT/cache``. The test
+:data:`~rockdec.calibrate.calibration.E_GRID_LONG`), built or read from ``OUT/cache``, where it
+is named by what it simulates without the source's fingerprint (delete it after a change
+to the simulator or the analysis). The test
 records are ``--records`` records of ``--samples`` at each ``--e``, simulated and analysed exactly
 like a calibration's sets (:func:`rockdec.calibrate.calibration._grid_point`) on seeds of their own
 (:func:`rockdec.studies.belt_study.pool`'s, replica ``--replica``), stored in ``OUT``. Each record
@@ -18,8 +20,9 @@ error of the corrected ``e`` over its sd across records (bias/sd), the offset of
 mean raw value from the belt's mean curve in units of the belt's spread (``curve_z``), median
 width, and the wall and CPU seconds of the calibration and of the test records.
 
-Run: ``python benchmarks/long_coverage.py --samples 20e6 --records 15 --out DIR``. Prints
-numbers; asserts nothing.
+Run: ``python benchmarks/long_coverage.py --samples 20e6 --records 15 --replica 21 23 --out DIR``
+(``--cap``: calibrate on records of another length than
+:data:`~rockdec.calibrate.calibration.LENGTH_CAP`). Prints numbers; asserts nothing.
 """
 
 from __future__ import annotations
@@ -113,18 +116,21 @@ def main() -> None:
     parser.add_argument("--records", type=int, default=15)
     parser.add_argument("--ppc", type=float, default=75.0)
     parser.add_argument("--replica", type=int, nargs="+", default=[21], help="seed bases of the test records (their sets are pooled)")
+    parser.add_argument("--cap", type=float, default=calibration.LENGTH_CAP, help="samples of the calibration's records (LENGTH_CAP)")
     parser.add_argument("--out", type=Path, required=True)
     args = parser.parse_args()
     samples = int(args.samples)
+    calibration.LENGTH_CAP = int(args.cap)
     args.out.mkdir(parents=True, exist_ok=True)
-    cal_settings = calibration.calibration_settings([samples], args.ppc)
+    # stored by what it simulates, not by the source's fingerprint: reused across edits that change no number
+    cal_settings = {**calibration.calibration_settings([samples], args.ppc), "pipeline": "study"}
     wall, cpu = time.perf_counter(), time.process_time()
     cal, cached = calibration.load_or_build(cal_settings, args.out / "cache")
     print(f"calibration ({'stored' if cached else 'built'}): {sum(cal_settings['lengths'])} samples x {len(cal_settings['e_grid'])} e x "
           f"{cal_settings['sets_per_e']} sets, wall {time.perf_counter() - wall:.0f} s, CPU {time.process_time() - cpu:.0f} s", flush=True)
     tests = []
     for replica in args.replica:
-        path = args.out / f"test-{samples}-{replica}-{args.records}-{'_'.join(map(str, args.e))}.nc"
+        path = args.out / f"test-{samples}-{replica}-{args.records}-{'_'.join(map(str, args.e))}-ppc{cal_settings['points_per_cycle']}.nc"
         if not path.is_file():
             wall, cpu = time.perf_counter(), time.process_time()
             test_records(cal_settings, samples, args.e, args.records, replica).to_netcdf(path)

@@ -262,16 +262,16 @@ def statistics(records, analysis) -> np.ndarray:
     return np.array([check.statistic(s, analysis) for check in REGISTRY], dtype=float)
 
 
-def _near(e_grid: np.ndarray, e: float, interval) -> np.ndarray:
+def _near(e_grid: np.ndarray, e: float, interval, side: int = 1) -> np.ndarray:
     """Grid points pooled for a record of corrected ``e`` and 95 % ``interval``: those inside
-    the interval and the nearest on each side of ``e``."""
+    the interval and the ``side`` nearest on each side of ``e``."""
     keep = np.zeros(e_grid.size, dtype=bool)
     low, high = (np.nan, np.nan) if interval is None else (np.nan if v is None else v for v in interval)
     if np.isfinite(low) and np.isfinite(high):
         keep |= (e_grid >= low) & (e_grid <= high)
     below, above = np.flatnonzero(e_grid <= e), np.flatnonzero(e_grid >= e)
-    keep[below[-1] if below.size else 0] = True
-    keep[above[0] if above.size else -1] = True
+    keep[below[-side:] if below.size else 0] = True
+    keep[above[:side] if above.size else -1] = True
     return keep
 
 
@@ -303,10 +303,12 @@ def thresholds(cal, e: float | None, interval, level: float, length_ratio: float
     ``level``: the trigger level in ``sigma_Y`` (for the structural floor). NaN for a check
     the calibration's records never gave a value. ``length_ratio``: the records' length over
     the calibration's records' (above 1 for records longer than
-    :data:`rockdec.calibrate.calibration.LENGTH_CAP`: :func:`length_threshold`)."""
+    :data:`rockdec.calibrate.calibration.LENGTH_CAP`: :func:`length_threshold`, and the two
+    nearest grid points on each side of ``e`` pooled, :func:`_near`)."""
     grid = np.asarray(cal["e_true"].values, dtype=float)
     placed = e is not None and np.isfinite(e)
-    groups = [_near(grid, e, interval)] if placed else [grid == g for g in grid]
+    # a long record's narrow interval holds few grid points: two on each side keep the quantile's own error small
+    groups = [_near(grid, e, interval, 2 if length_ratio > 1.0 else 1)] if placed else [grid == g for g in grid]
     values = cal["diagnostic"].values  # (e_true, set, check)
     out = {}
     for j, check in enumerate(REGISTRY):
