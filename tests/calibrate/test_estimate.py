@@ -533,7 +533,8 @@ def test_a_long_record_says_each_stage_and_the_time_left(monkeypatch, caplog, tm
     """A record longer than the cap (cap lowered to 10,000 samples; grid points drawn by
     tests/fake_calibration.py): the log says the analysis, the shortened calibration and its
     spread factor, the grid points done with the time left, and the end; the JSON names the
-    simulated samples and the factor sqrt(10,000 / 20,000)."""
+    simulated samples and the factor sqrt(10,000 / 20,000); a record more than LONG_RATIO
+    times the simulated length is warned about."""
     import logging
 
     import fake_calibration
@@ -554,6 +555,11 @@ def test_a_long_record_says_each_stage_and_the_time_left(monkeypatch, caplog, tm
     assert fake_calibration.grid_point.settings["lengths"] == [10_000]
     assert res["calibration"]["simulated_samples"] == 10_000
     assert res["calibration"]["spread_scale"] == pytest.approx(math.sqrt(0.5), rel=1e-12)
+    # twice the simulated length is within inference.LONG_RATIO (4): no warning; five times is beyond it
+    assert not any("times the calibration's simulated records" in w for w in res["warnings"])
+    monkeypatch.setattr(calibration, "LENGTH_CAP", 4_000)
+    res = inference.estimate([Record(theta, dt, "long")], cache_dir=tmp_path)
+    assert any("20000 samples are 5 times the calibration's simulated records" in w for w in res["warnings"])
 
 
 def test_checks_of_long_records_take_thresholds_by_their_length_law():
