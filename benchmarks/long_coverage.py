@@ -44,8 +44,7 @@ from rockdec.studies import belt_study
 
 def test_records(cal_settings: dict, samples: int, e_values, records: int, replica: int) -> xr.Dataset:
     """``records`` test records of ``samples`` at each of ``e_values`` (module docstring)."""
-    base = {k: v for k, v in cal_settings.items() if k != "length_cap"}
-    settings = {**base, "lengths": [samples], "e_grid": [float(e) for e in e_values], "sets_per_e": records}
+    settings = {**cal_settings, "lengths": [samples], "e_grid": [float(e) for e in e_values], "sets_per_e": records}
     import dask
 
     from rockdec.pipeline import engine

@@ -525,8 +525,9 @@ def test_the_cost_of_a_long_record_stops_growing_with_its_length():
     assert inference.cost(n, False, False)[0] == pytest.approx(expected, rel=1e-12)
     long = inference.stage_seconds(20_000_000, False, False)
     assert long["calibrating"] == pytest.approx(inference.stage_seconds(40_000_000, True, True)["calibrating"], rel=1e-12)
+    sets = calibration.SETS_PER_E + calibration.PILOT_SETS * 3  # and the white step search's 3 rounds of pilots
     assert long["calibrating"] == pytest.approx(
-        calibration.LENGTH_CAP * len(calibration.E_GRID_LONG) * calibration.SETS_PER_E * inference.CALIBRATION_SECONDS / 2, rel=1e-12)
+        calibration.LENGTH_CAP * len(calibration.E_GRID_LONG) * sets * inference.CALIBRATION_SECONDS / 2, rel=1e-12)
 
 
 def test_a_long_record_says_each_stage_and_the_time_left(monkeypatch, caplog, tmp_path):

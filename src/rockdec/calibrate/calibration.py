@@ -275,6 +275,7 @@ def _simulate_set(
 
 def step_for(
     e: float, points_per_cycle: float, lengths, settings: dict, seed0: int, model: RecordModel = PAPER, theta_cr_ratio: float | None = None,
+    pilot_samples: int = PILOT_SAMPLES,
 ) -> tuple[float, int, float | None]:
     """Step ``dt`` (for ``g = sigma_p = 1``) at which :func:`rockdec.rdd.measured.analyse` reads
     ``points_per_cycle`` off simulated records at ``e``, the burn-in, and (Housner's model,
@@ -282,7 +283,10 @@ def step_for(
 
     Fixed point on the scale law: ``points_per_cycle`` goes as ``1/dt^2`` (``sigma_Y`` as
     ``S^2/g^3`` with ``S = sigma_p^2/dt``, and eq. 5), so ``dt <- dt sqrt(N_read / N)``, on
-    :data:`PILOT_SETS` sets of at most :data:`PILOT_SAMPLES` samples a record. Under a
+    :data:`PILOT_SETS` sets of at most ``pilot_samples`` (:data:`PILOT_SAMPLES`) samples a
+    record (a calibration of records beyond :data:`LENGTH_CAP`: as long as its records, for
+    their interval is narrow enough to see the bias move with a few per cent of samples per
+    cycle). Under a
     coloured load the samples per cycle read off a record grow with its length (rare large
     excursions) and fall steeply with ``dt``, so the pilot records are as long as the
     records (up to :data:`PILOT_SAMPLES_COLOURED`, as many sets as make
@@ -302,7 +306,7 @@ def step_for(
     white = model.load.kind == "white"
     housner = model.rocking == "housner"
     theta_cr = (points_per_cycle * dt / 4.0) ** 2 / 2.0 / theta_cr_ratio if housner else None
-    pilot = [min(int(n), PILOT_SAMPLES if white else PILOT_SAMPLES_COLOURED) for n in lengths]
+    pilot = [min(int(n), pilot_samples if white else PILOT_SAMPLES_COLOURED) for n in lengths]
     sets = PILOT_SETS if white else max(PILOT_SETS // 2, PILOT_SETS * PILOT_SAMPLES // sum(pilot))
     iterations = max(STEP_ITERATIONS[model.load.kind], HOUSNER_ITERATIONS if housner else 0)
     history: list = []
@@ -341,7 +345,8 @@ def _grid_point(j: int, e: float, cal_settings: dict, seed_base: int) -> tuple[n
     out = np.full((cal_settings["sets_per_e"], len(NAMES)), np.nan)
     diag = np.full((cal_settings["sets_per_e"], len(diagnostics.CHECKS)), np.nan)
     try:
-        dt, burn_in, theta_cr = step_for(e, ppc, lengths, settings, seed0 + 9 * 10**6, model, ratio)
+        pilot = LENGTH_CAP if "length_cap" in cal_settings else PILOT_SAMPLES
+        dt, burn_in, theta_cr = step_for(e, ppc, lengths, settings, seed0 + 9 * 10**6, model, ratio, pilot)
     except ValueError:  # no record at this e can be analysed: the belt leaves this e out
         return out, diag
     for k in range(cal_settings["sets_per_e"]):

@@ -71,14 +71,20 @@ def stage_seconds(samples: int, csv: bool, g_given: bool, cores: int = 2) -> dic
     (building the calibration: :data:`rockdec.calibrate.calibration.SETS_PER_E` sets at each
     ``e`` of its grid, of the records' length up to
     :data:`rockdec.calibrate.calibration.LENGTH_CAP` in all,
-    :func:`rockdec.calibrate.calibration.simulated_lengths`), from :data:`CSV_SECONDS` and
-    the other constants of the model."""
+    :func:`rockdec.calibrate.calibration.simulated_lengths`, and beyond it the step search's
+    pilot sets of that length), from :data:`CSV_SECONDS` and the other constants of the
+    model."""
     simulated = sum(calibration.simulated_lengths([samples]))
+    sets = calibration.SETS_PER_E
+    if simulated < samples:  # the step search's pilots are as long as the sets (calibration.step_for)
+        from rockdec.physics.simulate import STEP_ITERATIONS
+
+        sets += calibration.PILOT_SETS * STEP_ITERATIONS["white"]
     grid = calibration.E_GRID_LONG if simulated < samples else calibration.E_GRID
     return {
         "reading": samples * CSV_SECONDS * csv,
         "analysing": samples * ANALYSIS_SECONDS * (1 + g_given),
-        "calibrating": simulated * len(grid) * calibration.SETS_PER_E * CALIBRATION_SECONDS / cores,
+        "calibrating": simulated * len(grid) * sets * CALIBRATION_SECONDS / cores,
     }
 
 
