@@ -579,3 +579,12 @@ def test_checks_of_long_records_take_thresholds_by_their_length_law():
     assert diagnostics.length_threshold(checks["asymmetry"], column, 0.975, 16.0) == pytest.approx(np.quantile(column, 0.975) / 4)
     assert diagnostics.length_threshold(checks["few_triggers"], column, 0.025, 16.0) == pytest.approx(np.quantile(column, 0.025) * 16)
     assert diagnostics.length_threshold(checks["drift"], column, 0.975, 16.0) == pytest.approx(np.quantile(column, 0.975))
+
+
+def test_the_test_beds_pool_holds_the_raw_values_of_calibration_sets():
+    """belt_study.pool draws sets like a calibration's grid point (its raw values, not the
+    checks' statistics that _grid_point returns with them), on seeds of its own."""
+    pool = belt_study.pool((0.9,), 2, 20_000, replica=3)
+    assert pool["raw"].shape == (1, 2, len(calibration.NAMES))
+    e_v = pool["raw"].sel(name="e_v").values
+    assert np.all(np.abs(e_v - 0.9) < 0.2), e_v
