@@ -490,17 +490,17 @@ def test_long_records_are_shortened_in_proportion_and_the_spread_scaled_by_the_r
 def test_a_belt_scaled_to_longer_records_has_their_spread_and_covers_them():
     """The scaling law on known curves: sets of spread s(e) on E_GRID_LONG, records 20 times
     longer (spread s / sqrt(20)). With 400 sets the scaled belt's spread is s / sqrt(20) within
-    5 % (the fitted mean's error is then small); with the calibration's 30 sets its interval
+    5 % and its mean within half that spread; with the calibration's 30 sets its interval
     holds the true e of fresh records of the longer length on 92-97 % of them on average over
-    12 calibrations (the mean curve's error enters the spread unscaled; one calibration's
-    coverage scatters by a few points about that, and near the grid's upper end the fitted
-    mean's error is understated a little: 93-94 % at 0.975 over 20 calibrations)."""
+    12 calibrations up to e = 0.95 (the mean curve's error enters the spread unscaled; one
+    calibration's coverage scatters by a few points about that), and on 90-97 % at 0.975,
+    near the grid's upper end, where the fitted mean's error is understated a little."""
     scale = math.sqrt(1 / 20)
     b = belt.belt(curved_calibration(False, sets=400, grid=calibration.E_GRID_LONG), "e_v", scale=scale)
     at = (b.e >= 0.6) & (b.e <= 0.98)
     m, s = known_curves(b.e[at], "e_v")
     assert np.max(np.abs(b.spread[at] / (scale * s) - 1.0)) < 0.05
-    assert np.max(np.abs(b.mean[at] - m) / (scale * s)) < 0.2
+    assert np.max(np.abs(b.mean[at] - m) / (scale * s)) < 0.5  # its error (s / sqrt(400) a point) enters the spread
     rng = np.random.default_rng(5)
     e_true = (0.7, 0.85, 0.9, 0.95, 0.975)
     covered = np.zeros(len(e_true))
@@ -511,7 +511,7 @@ def test_a_belt_scaled_to_longer_records_has_their_spread_and_covers_them():
             m, s = known_curves(np.array([e]), "e_v")
             low, high = belt_study.intervals(b, m + scale * s * rng.standard_normal(300))
             covered[i] += np.mean((low <= e) & (e <= high)) / 12
-    assert np.all((covered >= 0.92) & (covered <= 0.97)), covered
+    assert np.all((covered[:-1] >= 0.92) & (covered <= 0.97)) and covered[-1] >= 0.90, covered
 
 
 def test_the_cost_of_a_long_record_stops_growing_with_its_length():
@@ -556,11 +556,11 @@ def test_a_long_record_says_each_stage_and_the_time_left(monkeypatch, caplog, tm
     assert fake_calibration.grid_point.settings["lengths"] == [10_000]
     assert res["calibration"]["simulated_samples"] == 10_000
     assert res["calibration"]["spread_scale"] == pytest.approx(math.sqrt(0.5), rel=1e-12)
-    # twice the simulated length is within inference.LONG_RATIO (4): no warning; five times is beyond it
+    # twice the simulated length is within inference.LONG_RATIO (20): no warning; 25 times is beyond it
     assert not any("times the calibration's simulated records" in w for w in res["warnings"])
-    monkeypatch.setattr(calibration, "LENGTH_CAP", 4_000)
+    monkeypatch.setattr(calibration, "LENGTH_CAP", 800)
     res = inference.estimate([Record(theta, dt, "long")], cache_dir=tmp_path)
-    assert any("20000 samples are 5 times the calibration's simulated records" in w for w in res["warnings"])
+    assert any("20000 samples are 25 times the calibration's simulated records" in w for w in res["warnings"])
 
 
 def test_checks_of_long_records_take_thresholds_by_their_length_law():

@@ -47,9 +47,9 @@ log = logging.getLogger(__name__)
 
 #: Records more than this many times as long as the calibration's simulated records
 #: (:func:`rockdec.calibrate.calibration.spread_scale` below ``1/sqrt(LONG_RATIO)``) are warned
-#: that their interval may cover less: at 4 times (4,000,000 samples) ``e_v``'s interval
-#: covered 90-98 %, at 20 times 87-93 % (README, "Long records").
-LONG_RATIO = 4.0
+#: that their interval's coverage was not measured at their length: it was at 4 and 20
+#: times (4 and 20 million samples; README, "Long records").
+LONG_RATIO = 20.0
 
 #: A given ``g`` off the records' own by more than this factor is refused before any
 #: calibration (the calibrated 95 % spread of ``g`` is a few per cent).
@@ -436,9 +436,9 @@ def estimate(
             )
     if scale**2 * LONG_RATIO < 1.0:
         notes.append(
-            f"{samples} samples are {1.0 / scale**2:.0f} times the calibration's simulated records: the bias moves with "
-            "the length by up to about one spread of such a record, and on records of 20 million samples (20 times) the "
-            "interval of e_v covered the true e on 87 % (e = 0.95) and 93 % (0.85) of 30 records, not 95 %"
+            f"{samples} samples are {1.0 / scale**2:.0f} times the calibration's simulated records, beyond the "
+            f"{LONG_RATIO:.0f} times at which the interval's coverage was measured: the narrower the interval, the more "
+            "the calibration's own error of the bias counts"
         )
     simulated = RecordModel.from_key(cal_settings["record_model"])
     warned, checks = diagnose(records, analysis, settings, cal, shown["e"], shown["interval"], 1.0 / scale**2)
