@@ -59,10 +59,12 @@ G_FACTOR = 2.0
 #: records (a spike that inflates ``sigma_Y`` leaves too few triggers).
 SPIKE_SIGMAS = 15.0
 
-#: Cost model of :func:`cost`, measured on an idle 2-core machine: seconds per sample to
-#: read a CSV (pandas) and to analyse a record; seconds per simulated and analysed
-#: calibration sample on one core; bytes held per sample while reading and analysing.
-CSV_SECONDS, ANALYSIS_SECONDS, CALIBRATION_SECONDS, BYTES_PER_SAMPLE = 5e-7, 1.2e-7, 1.3e-7, 96.0
+#: Cost model of :func:`cost`: seconds per sample to read a CSV (pandas, on an idle 2-core
+#: machine) and to do all but the calibration (read a NetCDF record, analyse it, measure
+#: its model, check it: 22.7 s of CPU on 20 million samples, ``benchmarks/long_record.py``);
+#: seconds per simulated and analysed calibration sample on one core (idle machine); bytes
+#: held per sample while reading and analysing.
+CSV_SECONDS, ANALYSIS_SECONDS, CALIBRATION_SECONDS, BYTES_PER_SAMPLE = 5e-7, 1.0e-6, 1.3e-7, 96.0
 
 
 def stage_seconds(samples: int, csv: bool, g_given: bool, cores: int = 2) -> dict[str, float]:
