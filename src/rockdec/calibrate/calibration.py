@@ -216,7 +216,7 @@ def simulated_lengths(lengths) -> list[int]:
     per cycle, eq. 5), and its spread falls as ``1/sqrt(length)`` (a record's triggers are
     independent beyond a few cycles); so the belt of the shorter records, its spread scaled
     by :func:`spread_scale`, is the belt of the records. Measured, not assumed:
-    ``benchmarks/long_record.py coverage`` (README, "Long records").
+    ``benchmarks/long_coverage.py`` (README, "Long records").
     """
     lengths = [int(n) for n in lengths]
     total = sum(lengths)
