@@ -63,8 +63,9 @@ SPIKE_SIGMAS = 15.0
 #: machine) and to do all but the calibration (read a NetCDF record, analyse it, measure
 #: its model, check it: 22.7 s of CPU on 20 million samples, ``benchmarks/long_record.py``);
 #: seconds per simulated and analysed calibration sample on one core (idle machine); bytes
-#: held per sample while reading and analysing.
-CSV_SECONDS, ANALYSIS_SECONDS, CALIBRATION_SECONDS, BYTES_PER_SAMPLE = 5e-7, 1.0e-6, 1.3e-7, 96.0
+#: held per sample while reading and analysing (a bound: 82 at the peak on 20 million
+#: samples of a NetCDF record, more than 120 on 200 million of a ``.npy``).
+CSV_SECONDS, ANALYSIS_SECONDS, CALIBRATION_SECONDS, BYTES_PER_SAMPLE = 5e-7, 1.0e-6, 1.3e-7, 160.0
 
 
 def stage_seconds(samples: int, csv: bool, g_given: bool, cores: int = 2) -> dict[str, float]:
