@@ -39,7 +39,7 @@ DT, G, E, SIGMA_P = 0.003432651166459561, 1.0, 0.95, 0.003
 STATS = {"sigma_y": 0.001992454115749987, "sigma_ydot": 0.03410016419092972, "g": G}
 
 
-def write(path: Path, points: int, chunk: int) -> None:
+def write(path: Path, points: int, chunk: int, seed: int = 0) -> None:
     start = time.perf_counter()
     with netCDF4.Dataset(path, "w") as nc:
         nc.createDimension("seed", 1)
@@ -48,7 +48,7 @@ def write(path: Path, points: int, chunk: int) -> None:
         var.units = "rad"
         nc.dt = DT
         done = 0
-        for theta, _ in long_series(0, points, chunk, dt=DT, g=G, e=E, sigma_p=SIGMA_P, burn_in=8087):
+        for theta, _ in long_series(seed, points, chunk, dt=DT, g=G, e=E, sigma_p=SIGMA_P, burn_in=8087):
             var[0, done : done + theta.size] = theta
             done += theta.size
             print(f"\rwritten {done / points:6.1%}", end="", file=sys.stderr)
@@ -114,10 +114,11 @@ def main() -> None:
     parser.add_argument("--file", default="/tmp/rockdec_long_record.nc")
     parser.add_argument("--step", choices=["all", "write", "analyse", "estimate"], default="all")
     parser.add_argument("--cache", default="/tmp/rockdec_long_record_cache")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the record written")
     args = parser.parse_args()
     path, points, chunk = Path(args.file), int(args.points), int(args.chunk)
     if args.step in ("all", "write"):
-        write(path, points, chunk)
+        write(path, points, chunk, args.seed)
     if args.step == "all":
         cmd = [sys.executable, __file__, "--step", "analyse", "--file", str(path), "--chunk", str(chunk),
                "--threads", str(args.threads), "--check", str(args.check)]
