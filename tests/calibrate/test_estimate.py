@@ -568,6 +568,10 @@ def test_a_long_record_says_each_stage_and_the_time_left(monkeypatch, caplog, tm
     monkeypatch.setattr(calibration, "LENGTH_CAP", 800)
     res = inference.estimate([Record(theta, dt, "long")], cache_dir=tmp_path)
     assert any("20000 samples are 25 times the calibration's simulated records" in w for w in res["warnings"])
+    monkeypatch.setattr(calibration, "LENGTH_CAP", 1_000)  # exactly LONG_RATIO times: measured, no warning
+    res = inference.estimate([Record(theta, dt, "long")], cache_dir=tmp_path)
+    assert res["calibration"]["simulated_samples"] == 1_000
+    assert not any("times the calibration's simulated records" in w for w in res["warnings"])
 
 
 def test_checks_of_long_records_take_thresholds_by_their_length_law():

@@ -45,8 +45,7 @@ if TYPE_CHECKING:
 
 log = logging.getLogger(__name__)
 
-#: Records more than this many times as long as the calibration's simulated records
-#: (:func:`rockdec.calibrate.calibration.spread_scale` below ``1/sqrt(LONG_RATIO)``) are warned
+#: Records more than this many times as long as the calibration's simulated records are warned
 #: that their interval's coverage was not measured at their length: it was at 4 and 20
 #: times (4 and 20 million samples; README, "Long records").
 LONG_RATIO = 20.0
@@ -437,9 +436,9 @@ def estimate(
                 f"--g {g:g} lies outside the records' own g, {low:.4g}-{high:.4g} rad/s^2 (calibrated 95 % interval): "
                 "the estimate rests on the given g"
             )
-    if scale**2 * LONG_RATIO < 1.0:
+    if samples > LONG_RATIO * sum(cal_settings["lengths"]):
         notes.append(
-            f"{samples} samples are {1.0 / scale**2:.0f} times the calibration's simulated records, beyond the "
+            f"{samples} samples are {samples / sum(cal_settings['lengths']):.0f} times the calibration's simulated records, beyond the "
             f"{LONG_RATIO:.0f} times at which the interval's coverage was measured: the narrower the interval, the more "
             "the calibration's own error of the bias counts"
         )
