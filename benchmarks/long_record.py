@@ -1,12 +1,18 @@
-"""A 1e8-point record processed in time chunks: wall time and peak memory (docs/method.md §4.4; issue 6).
+"""A long record: the signature cube of 1e8 points in time chunks (docs/method.md §4.4; issue 6),
+and ``rockdec estimate`` on 2e7 points (issue 21): wall time, CPU time and peak memory.
 
-Step 1 (``write``) simulates one long series block by block (``tests/long_series.py``)
-into a NetCDF file, never holding more than one block. Step 2 (``analyse``, a fresh process so
+Step ``write`` simulates one long series block by block (``tests/long_series.py``)
+into a NetCDF file, never holding more than one block. Step ``analyse`` (a fresh process so
 its peak RSS is its own) opens the file with Dask chunks in time and computes the signature cube
 with the overlap handled by :func:`rockdec.rdd.signatures.signature_cube`; it also computes the same
 cube on the first ``--check`` points in memory, chunked and whole, and prints their difference.
+Step ``estimate`` runs ``rockdec estimate`` on the file (a fresh process, calibration cache
+``--cache``; a missing calibration is built) and prints its wall and CPU seconds, the up-front
+estimate of :func:`rockdec.calibrate.inference.cost` and the answer (true ``e`` 0.95).
 
-Run: ``python benchmarks/long_record.py --points 100000000``. Prints numbers; asserts nothing.
+Run: ``python benchmarks/long_record.py --points 100000000`` (write, analyse), or
+``python benchmarks/long_record.py --points 2e7 --step write`` then ``--step estimate``.
+Prints numbers; asserts nothing.
 """
 
 from __future__ import annotations
@@ -33,7 +39,7 @@ DT, G, E, SIGMA_P = 0.003432651166459561, 1.0, 0.95, 0.003
 STATS = {"sigma_y": 0.001992454115749987, "sigma_ydot": 0.03410016419092972, "g": G}
 
 
-def write(path: Path, points: int, chunk: int) -> None:
+def write(path: Path, points: int, chunk: int, seed: int = 0) -> None:
     start = time.perf_counter()
     with netCDF4.Dataset(path, "w") as nc:
         nc.createDimension("seed", 1)
@@ -42,7 +48,7 @@ def write(path: Path, points: int, chunk: int) -> None:
         var.units = "rad"
         nc.dt = DT
         done = 0
-        for theta, _ in long_series(0, points, chunk, dt=DT, g=G, e=E, sigma_p=SIGMA_P, burn_in=8087):
+        for theta, _ in long_series(seed, points, chunk, dt=DT, g=G, e=E, sigma_p=SIGMA_P, burn_in=8087):
             var[0, done : done + theta.size] = theta
             done += theta.size
             print(f"\rwritten {done / points:6.1%}", end="", file=sys.stderr)
@@ -78,6 +84,27 @@ def analyse(path: Path, chunk: int, threads: int, check: int) -> None:
     print(f"chunked vs whole on the first {check:.3g} points: max |difference| of the signature {diff:.3g} rad")
 
 
+def estimate(path: Path, cache: Path) -> None:
+    import json
+    import os
+
+    from rockdec.calibrate import inference
+
+    with xr.open_dataset(path) as ds:
+        points = ds.sizes["time"]
+    before, start = os.times(), time.perf_counter()
+    out = subprocess.run([sys.executable, "-m", "rockdec", "estimate", str(path), "--json", "--cache", str(cache)],
+                         capture_output=True, text=True, check=True)
+    wall, after = time.perf_counter() - start, os.times()
+    cpu = (after.children_user - before.children_user) + (after.children_system - before.children_system)
+    peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
+    res = json.loads(out.stdout)
+    print(out.stderr, file=sys.stderr)
+    print(f"estimate: {points:.3g} points, wall {wall:.1f} s, CPU {cpu:.1f} s, peak RSS {peak:.0f} MiB; "
+          f"up-front estimate {inference.cost(points, False, False)[0]:.0f} s; calibration {res['calibration']}")
+    print(f"e = {res['e']} ({res['estimator']}), 95 % interval {res['interval']} (true {E}); warnings {res['warnings']}")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--points", type=float, default=1e8)
@@ -85,17 +112,21 @@ def main() -> None:
     parser.add_argument("--threads", type=int, default=2)
     parser.add_argument("--check", type=float, default=2e6)
     parser.add_argument("--file", default="/tmp/rockdec_long_record.nc")
-    parser.add_argument("--step", choices=["all", "write", "analyse"], default="all")
+    parser.add_argument("--step", choices=["all", "write", "analyse", "estimate"], default="all")
+    parser.add_argument("--cache", default="/tmp/rockdec_long_record_cache")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the record written")
     args = parser.parse_args()
     path, points, chunk = Path(args.file), int(args.points), int(args.chunk)
     if args.step in ("all", "write"):
-        write(path, points, chunk)
+        write(path, points, chunk, args.seed)
     if args.step == "all":
         cmd = [sys.executable, __file__, "--step", "analyse", "--file", str(path), "--chunk", str(chunk),
                "--threads", str(args.threads), "--check", str(args.check)]
         subprocess.run(cmd, check=True)
     elif args.step == "analyse":
         analyse(path, chunk, args.threads, int(args.check))
+    elif args.step == "estimate":
+        estimate(path, Path(args.cache))
 
 
 if __name__ == "__main__":

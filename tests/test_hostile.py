@@ -978,18 +978,22 @@ def test_overwrite_replaces_a_symlinked_plot_not_its_target(rocking, tiny_calibr
     assert sorted(p.name for p in tmp_path.iterdir()) == ["cache", "p.png", "precious.png"]
 
 
-@hostile("sizes", "warned")
-def test_a_long_record_is_warned_that_its_interval_may_cover_less(rocking, tiny_calibration, tmp_path, monkeypatch):
-    monkeypatch.setattr(inference, "LONG_SAMPLES", 10_000)  # the rocking record has 20,000
+@hostile("sizes", "answered")
+def test_a_long_record_is_calibrated_on_shorter_records_with_its_spread_scaled(rocking, tiny_calibration, tmp_path, monkeypatch):
+    monkeypatch.setattr(calibration, "LENGTH_CAP", 10_000)  # the rocking record has 20,000
+    monkeypatch.setattr(calibration, "E_GRID_LONG", calibration.E_GRID)  # tiny_calibration's grid
     code, res, err = _estimate([rocking["csv"]], tmp_path / "cache")
     assert code == 0, err
-    assert any("narrower than the accuracy" in w for w in res["warnings"])
+    assert res["calibration"]["simulated_samples"] == 10_000
+    assert res["calibration"]["spread_scale"] == pytest.approx(math.sqrt(0.5))
+    assert "calibrated on simulated records of 10000 samples" in err
 
 
 @hostile("sizes", "refused")
 def test_a_40_million_sample_record_is_refused_with_its_time_unless_yes(tmp_path, capsys, monkeypatch):
     monkeypatch.setattr(calibration, "E_GRID", FULL_CALIBRATION[0])
     monkeypatch.setattr(calibration, "SETS_PER_E", FULL_CALIBRATION[1])
+    monkeypatch.setattr(calibration, "LENGTH_CAP", 10**12)  # a calibration as long as the record: the refusal's path
     path = tmp_path / "long.npy"
     with open(path, "wb") as handle:  # a header for 40 million float64 samples, then a hole
         np.lib.format.write_array_header_1_0(handle, {"descr": "<f8", "fortran_order": False, "shape": (40_000_000,)})

@@ -90,6 +90,12 @@ QUANTILE_BANDWIDTH = 0.8
 #: splines (1 is plain GCV; above 1 guards against its undersmoothing on few points).
 GCV_GAMMA = 1.4
 
+#: The penalty of :data:`GCV_GAMMA` for a belt scaled to longer records than its sets
+#: (:func:`fit`, ``scale`` below 1): plain GCV, which follows the bias's bends closer (at
+#: 20 million samples ``e_v``'s bias bends by 0.003 between ``e`` = 0.8 and 0.92, several
+#: spreads, which :data:`GCV_GAMMA` smooths away by a third).
+GCV_GAMMA_LONG = 1.0
+
 #: Smoothing parameters tried by the cross-validation, relative to the weights' scale.
 _LAMBDAS = np.logspace(-6, 8, 57)
 
@@ -136,10 +142,10 @@ def _spline_basis(x: np.ndarray, at: np.ndarray) -> np.ndarray:
     return basis
 
 
-def _smooth(x: np.ndarray, y: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, float]:
+def _smooth(x: np.ndarray, y: np.ndarray, w: np.ndarray, gamma: float = GCV_GAMMA) -> tuple[np.ndarray, np.ndarray, float, float]:
     """Weighted cubic smoothing spline through ``(x, y)`` (``x`` increasing, weights ``w``:
-    inverse variances), its smoothing chosen by generalised cross-validation
-    (:data:`GCV_GAMMA`); from a straight line (infinite smoothing) to interpolation.
+    inverse variances), its smoothing chosen by generalised cross-validation (penalty
+    ``gamma``, :data:`GCV_GAMMA`); from a straight line (infinite smoothing) to interpolation.
 
     Returns the fitted values at ``x``, the hat matrix ``H`` (fitted = ``H @ y``), the
     residual variance in units of ``1/w`` (1 when the weights are right, more when the
@@ -155,7 +161,7 @@ def _smooth(x: np.ndarray, y: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np
     dfs = np.trace(hats, axis1=1, axis2=2)
     rss = np.sum(w * (y - fits) ** 2, axis=1)
     with np.errstate(divide="ignore", invalid="ignore"):
-        scores = np.where(n - GCV_GAMMA * dfs > 0.0, n * rss / (n - GCV_GAMMA * dfs) ** 2, np.inf)
+        scores = np.where(n - gamma * dfs > 0.0, n * rss / (n - gamma * dfs) ** 2, np.inf)
     best = int(np.argmin(scores))  # the first of equal scores, the smoothest
     return fits[best], hats[best], float(rss[best] / (n - dfs[best])), float(scores[best])
 
@@ -168,19 +174,25 @@ def _weighted_quantiles(z: np.ndarray, w: np.ndarray, p) -> np.ndarray:
     return np.interp(p, cum, z)
 
 
-def belt(cal: ncread.Stored | xr.Dataset, name: str, points: int = 4001) -> Belt:
+def belt(cal: ncread.Stored | xr.Dataset, name: str, points: int = 4001, scale: float = 1.0) -> Belt:
     """The belt of estimator ``name`` (or of ``g``'s ratio to the true ``g``) on a dense
-    grid of ``points`` values of ``e`` (:func:`fit`)."""
+    grid of ``points`` values of ``e``, its spread scaled by ``scale`` (:func:`fit`)."""
     from rockdec.rdd.measured import G_NAME
 
-    return fit(cal["e_true"].values, cal["raw"].sel(name=name).values, name == G_NAME, points)
+    return fit(cal["e_true"].values, cal["raw"].sel(name=name).values, name == G_NAME, points, scale)
 
 
-def fit(e_grid: np.ndarray, raw: np.ndarray, ratio: bool = False, points: int = 4001) -> Belt:
+def fit(e_grid: np.ndarray, raw: np.ndarray, ratio: bool = False, points: int = 4001, scale: float = 1.0) -> Belt:
     """The belt of raw values ``raw(e, set)`` simulated at the true ``e_grid``, on a dense grid
     of ``points`` values of ``e`` (module docstring): the mean is smoothed as its offset from
     ``e`` (from 1 for a ``ratio``) along ``e`` or ``u = log(1 - e)``, whichever
     cross-validates better; the spread along ``u``.
+
+    ``scale``: the belt of records whose spread is ``scale`` times the simulated sets'
+    (records longer than the simulated ones:
+    :func:`rockdec.calibrate.calibration.spread_scale`): the fitted spread ``s(e)`` is
+    scaled, the error of the fitted mean (``var m``, from the sets as simulated) is not, and
+    both curves are smoothed with the penalty :data:`GCV_GAMMA_LONG`.
 
     ``failed``: the fraction of sets that gave NaN. Fewer than 5 usable grid points (3 sets
     at least) give an empty belt, which :func:`correct` refuses to invert.
@@ -199,12 +211,13 @@ def fit(e_grid: np.ndarray, raw: np.ndarray, ratio: bool = False, points: int = 
     x = e_grid[use][order]
     u = np.log1p(-x)
     counts = n[use][order]
-    log_s, hat_s, scatter_s, _ = _smooth(u, np.log(sds[use][order]), 2.0 * (counts - 1.0))
+    gamma = GCV_GAMMA if scale == 1.0 else GCV_GAMMA_LONG
+    log_s, hat_s, scatter_s, _ = _smooth(u, np.log(sds[use][order]), 2.0 * (counts - 1.0), gamma)
     s_fit = np.exp(log_s)
     w = counts / s_fit**2
     centre = np.ones_like(x) if ratio else x
     # the mean along e (as -e: the order of u) or along u, whichever cross-validates better
-    along, (bias, hat, scatter, _) = min(((c, _smooth(c, means[use][order] - centre, w)) for c in (-x, u)), key=lambda t: t[1][3])
+    along, (bias, hat, scatter, _) = min(((c, _smooth(c, means[use][order] - centre, w, gamma)) for c in (-x, u)), key=lambda t: t[1][3])
     cov = (hat / w) @ hat.T * max(scatter, 1.0)
     sets = raw[use][order]
     # scatter about each point's own mean (the mean curve's error is var_mean's), in units of the
@@ -221,7 +234,7 @@ def fit(e_grid: np.ndarray, raw: np.ndarray, ratio: bool = False, points: int = 
     mean = (1.0 if ratio else dense) + basis @ bias
     var_mean = np.einsum("ij,jk,ik->i", basis, cov, basis)
     basis_s = _spline_basis(u, ud)
-    spread = np.sqrt(np.exp(basis_s @ log_s) ** 2 + var_mean)
+    spread = np.sqrt((scale * np.exp(basis_s @ log_s)) ** 2 + var_mean)
     var_log_s = np.einsum("ij,jk,ik->i", basis_s, (hat_s / (2.0 * (counts - 1.0))) @ hat_s.T * max(scatter_s, 1.0), basis_s)
     widen = _t_quantile(1.0 / (2.0 * var_log_s)) / Z95  # a spread estimated from few sets: Student's t
     return Belt(dense, mean, spread, failed, widen * np.interp(ud, u, q[:, 0]), widen * np.interp(ud, u, q[:, 1]))
@@ -234,9 +247,10 @@ def _t_quantile(dof: np.ndarray) -> np.ndarray:
     return z + (z**3 + z) / (4.0 * dof) + (5.0 * z**5 + 16.0 * z**3 + 3.0 * z) / (96.0 * dof**2)
 
 
-def belts(cal: ncread.Stored | xr.Dataset) -> dict[str, Belt]:
-    """The belt of every name the calibration holds (each estimator of ``e``, and ``g``)."""
-    return {str(name): belt(cal, str(name)) for name in cal["name"].values}
+def belts(cal: ncread.Stored | xr.Dataset, scale: float = 1.0) -> dict[str, Belt]:
+    """The belt of every name the calibration holds (each estimator of ``e``, and ``g``),
+    spreads scaled by ``scale`` (:func:`fit`)."""
+    return {str(name): belt(cal, str(name), scale=scale) for name in cal["name"].values}
 
 
 def _inside(b: Belt, observed: np.ndarray) -> np.ndarray:

@@ -11,8 +11,11 @@ only on ``e`` and one dimensionless step (equivalently the samples per cycle at 
 ``sigma_Y``, eq. 5); a low-pass load adds its pole per sample, sensor noise its level in
 ``sigma_Y``, Housner's model (eq. 2) the ratio ``sigma_Y / theta_cr`` (the record model,
 :func:`binned_model`). So the calibration simulates, for each ``e`` of a grid
-(:data:`E_GRID`), :data:`SETS_PER_E` sets of records with the measured records' lengths,
-``g = 1`` and ``sigma_p = 1`` (scale-free), at the step for which the analysis
+(:data:`E_GRID`), :data:`SETS_PER_E` sets of records with the measured records' lengths
+(records of more than :data:`LENGTH_CAP` samples in all: sets of that many samples on the
+denser grid :data:`E_GRID_LONG`, the belt's spread scaled to the records' length:
+:func:`simulated_lengths`, :func:`spread_scale`), ``g = 1`` and ``sigma_p = 1``
+(scale-free), at the step for which the analysis
 (:func:`rockdec.rdd.measured.analyse`) reads the same samples per cycle off the simulated
 records as it reads off the measured ones; then it runs the identical analysis on each
 set and stores every estimator's zero-window value, and ``g``'s, per set, with every
@@ -75,13 +78,33 @@ E_GRID = (0.4, 0.55, 0.7, 0.8, 0.865, 0.92, 0.95, 0.972, 0.985, 0.995)
 #: Simulated record sets per grid point.
 SETS_PER_E = 30
 
+#: Records longer than this (samples in all) are calibrated on simulated records of this
+#: many samples in all (:func:`simulated_lengths`), their belt's spread scaled to the
+#: records' length (:func:`spread_scale`).
+LENGTH_CAP = 1_000_000
+
+
+def _with_midpoints(grid) -> tuple[float, ...]:
+    """``grid`` and the midpoint in ``log(1 - e)`` of each pair of neighbours (4 significant digits)."""
+    u = np.log1p(-np.asarray(grid, dtype=float))
+    return tuple(sorted({*grid, *(float(f"{1.0 - math.exp(0.5 * (a + b)):.4g}") for a, b in zip(u[:-1], u[1:]))}))
+
+
+#: True ``e`` of the calibration of records longer than :data:`LENGTH_CAP`: :data:`E_GRID`
+#: and the midpoints between its points, so that the mean curve follows the bias to a
+#: fraction of such a record's narrow spread.
+E_GRID_LONG = _with_midpoints(E_GRID)
+
 #: Pilot sets of each iteration of the step search, and the most samples of a pilot record
 #: (:func:`step_for`); under a coloured load a pilot record is as long as the record, up to
 #: ``PILOT_SAMPLES_COLOURED``.
 PILOT_SETS, PILOT_SAMPLES, PILOT_SAMPLES_COLOURED = 8, 50_000, 200_000
 
-#: Calibrations are shared by records whose samples per cycle agree within this relative step.
-PPC_BIN = 0.1
+#: Calibrations are shared by records whose samples per cycle agree within this relative
+#: step; records longer than :data:`LENGTH_CAP`, within the finer ``PPC_BIN_LONG``: the bias
+#: of ``e_v`` moves by 0.001-0.0016 from one bin of ``PPC_BIN`` to the next (e = 0.95 and
+#: 0.85, records of 1,000,000 samples), more than a 20-million-sample record's spread (0.0007).
+PPC_BIN, PPC_BIN_LONG = 0.1, 0.02
 
 #: Calibrations are shared by records whose sensor noise (in ``sigma_Y``) and load pole
 #: (``-ln`` of the pole per sample) agree within these relative steps (:func:`binned_model`).
@@ -118,12 +141,12 @@ def log_bin(x: float, width: float) -> float:
     return float(f"{math.exp(width * round(math.log(x) / width)):.4g}")
 
 
-def ppc_key(points_per_cycle: float) -> float:
-    """Samples per cycle rounded to the calibration's bins (:data:`PPC_BIN`, relative)."""
-    return log_bin(points_per_cycle, PPC_BIN)
+def ppc_key(points_per_cycle: float, width: float = PPC_BIN) -> float:
+    """Samples per cycle rounded to the calibration's bins (:data:`PPC_BIN`, relative, or ``width``)."""
+    return log_bin(points_per_cycle, width)
 
 
-def binned_model(model: RecordModel, points_per_cycle: float) -> RecordModel:
+def binned_model(model: RecordModel, points_per_cycle: float, ppc_bin: float = PPC_BIN) -> RecordModel:
     """The record model a calibration simulates for records of ``model`` read at
     ``points_per_cycle`` samples per cycle: the sensor noise (in ``sigma_Y``) on the bins
     of :data:`NOISE_BIN`, and a low-pass load's pole per sample on the bins of
@@ -132,7 +155,7 @@ def binned_model(model: RecordModel, points_per_cycle: float) -> RecordModel:
     The load is matched by its pole per sample, ``alpha = exp(-2 pi corner / N)`` at the
     records' own ``N = points_per_cycle`` (what :func:`rockdec.record.record_measure.measure`
     reads directly): ``-ln alpha`` is binned and the corner stated at the binned samples
-    per cycle (:func:`ppc_key`), at which the calibration simulates, so that the
+    per cycle (:func:`ppc_key` on bins of ``ppc_bin``), at which the calibration simulates, so that the
     calibration's records carry the binned pole per sample and are read at the binned
     samples per cycle. A spectrum load is simulated as stated (its table in rocking
     frequencies, placed at the binned samples per cycle).
@@ -145,7 +168,7 @@ def binned_model(model: RecordModel, points_per_cycle: float) -> RecordModel:
     load = model.load
     if load.kind == "lowpass":
         rate = log_bin(-math.log(load.pole(points_per_cycle)), POLE_BIN)
-        load = Load("lowpass", float(f"{rate * ppc_key(points_per_cycle) / (2.0 * math.pi):.6g}"))
+        load = Load("lowpass", float(f"{rate * ppc_key(points_per_cycle, ppc_bin) / (2.0 * math.pi):.6g}"))
     return dataclasses.replace(model, load=load, sensor=sensor)
 
 
@@ -164,19 +187,51 @@ def calibration_settings(lengths, points_per_cycle: float, settings: dict | None
     housner = model.rocking == "housner"
     if housner != (theta_cr_ratio is not None):
         raise ValueError("a calibration of Housner's model (eq. 2) needs sigma_Y / theta_cr, which the simplified model (eq. 4) does not take")
+    simulated = simulated_lengths(lengths)
+    capped = simulated != [int(n) for n in lengths]
+    ppc_bin = PPC_BIN_LONG if capped else PPC_BIN
     out = {
-        "lengths": [int(n) for n in lengths],
-        "points_per_cycle": ppc_key(points_per_cycle),
-        "record_model": binned_model(model, points_per_cycle).key(),
+        "lengths": simulated,
+        "points_per_cycle": ppc_key(points_per_cycle, ppc_bin),
+        "record_model": binned_model(model, points_per_cycle, ppc_bin).key(),
         "analysis": {k: (list(v) if isinstance(v, tuple) else v) for k, v in {**measured.DEFAULT_SETTINGS, **(settings or {})}.items()},
-        "e_grid": list(E_GRID),
+        "e_grid": list(E_GRID_LONG if capped else E_GRID),
         "sets_per_e": SETS_PER_E,
         "rockdec_version": __version__,
         "pipeline": pipeline_fingerprint(),
     }
+    if capped:
+        out["length_cap"] = {"samples": LENGTH_CAP, "spread": "scaled by sqrt(simulated samples / record samples)"}
     if housner:
         out["sigma_y_over_theta_cr"] = log_bin(theta_cr_ratio, RATIO_BIN)
     return out
+
+
+def simulated_lengths(lengths) -> list[int]:
+    """The lengths of the records a calibration simulates for records of ``lengths``: the
+    same when they hold at most :data:`LENGTH_CAP` samples in all, else each shrunk in
+    proportion to :data:`LENGTH_CAP` in all (at least one sample each).
+
+    Why that holds. The bias of every estimator depends on ``e`` and the sampling (samples
+    per cycle, eq. 5), and its spread falls as ``1/sqrt(length)`` (a record's triggers are
+    independent beyond a few cycles); so the belt of the shorter records, its spread scaled
+    by :func:`spread_scale`, is the belt of the records. Measured, not assumed:
+    ``benchmarks/long_coverage.py`` (README, "Long records").
+    """
+    lengths = [int(n) for n in lengths]
+    total = sum(lengths)
+    if total <= LENGTH_CAP:
+        return lengths
+    return [max(1, round(n * LENGTH_CAP / total)) for n in lengths]
+
+
+def spread_scale(cal_settings: dict, samples: int) -> float:
+    """Factor on the spread of the belt of the calibration ``cal_settings`` for records of
+    ``samples`` in all: ``sqrt(simulated / samples)`` for a calibration on shortened records
+    (:func:`simulated_lengths`), else 1."""
+    if "length_cap" not in cal_settings:
+        return 1.0
+    return math.sqrt(sum(cal_settings["lengths"]) / samples)
 
 
 def pipeline_fingerprint() -> str:
@@ -220,6 +275,7 @@ def _simulate_set(
 
 def step_for(
     e: float, points_per_cycle: float, lengths, settings: dict, seed0: int, model: RecordModel = PAPER, theta_cr_ratio: float | None = None,
+    pilot_samples: int = PILOT_SAMPLES,
 ) -> tuple[float, int, float | None]:
     """Step ``dt`` (for ``g = sigma_p = 1``) at which :func:`rockdec.rdd.measured.analyse` reads
     ``points_per_cycle`` off simulated records at ``e``, the burn-in, and (Housner's model,
@@ -227,7 +283,10 @@ def step_for(
 
     Fixed point on the scale law: ``points_per_cycle`` goes as ``1/dt^2`` (``sigma_Y`` as
     ``S^2/g^3`` with ``S = sigma_p^2/dt``, and eq. 5), so ``dt <- dt sqrt(N_read / N)``, on
-    :data:`PILOT_SETS` sets of at most :data:`PILOT_SAMPLES` samples a record. Under a
+    :data:`PILOT_SETS` sets of at most ``pilot_samples`` (:data:`PILOT_SAMPLES`) samples a
+    record (a calibration of records beyond :data:`LENGTH_CAP`: as long as its records, for
+    their interval is narrow enough to see the bias move with a few per cent of samples per
+    cycle). Under a
     coloured load the samples per cycle read off a record grow with its length (rare large
     excursions) and fall steeply with ``dt``, so the pilot records are as long as the
     records (up to :data:`PILOT_SAMPLES_COLOURED`, as many sets as make
@@ -247,7 +306,7 @@ def step_for(
     white = model.load.kind == "white"
     housner = model.rocking == "housner"
     theta_cr = (points_per_cycle * dt / 4.0) ** 2 / 2.0 / theta_cr_ratio if housner else None
-    pilot = [min(int(n), PILOT_SAMPLES if white else PILOT_SAMPLES_COLOURED) for n in lengths]
+    pilot = [min(int(n), pilot_samples if white else PILOT_SAMPLES_COLOURED) for n in lengths]
     sets = PILOT_SETS if white else max(PILOT_SETS // 2, PILOT_SETS * PILOT_SAMPLES // sum(pilot))
     iterations = max(STEP_ITERATIONS[model.load.kind], HOUSNER_ITERATIONS if housner else 0)
     history: list = []
@@ -286,7 +345,8 @@ def _grid_point(j: int, e: float, cal_settings: dict, seed_base: int) -> tuple[n
     out = np.full((cal_settings["sets_per_e"], len(NAMES)), np.nan)
     diag = np.full((cal_settings["sets_per_e"], len(diagnostics.CHECKS)), np.nan)
     try:
-        dt, burn_in, theta_cr = step_for(e, ppc, lengths, settings, seed0 + 9 * 10**6, model, ratio)
+        pilot = LENGTH_CAP if "length_cap" in cal_settings else PILOT_SAMPLES
+        dt, burn_in, theta_cr = step_for(e, ppc, lengths, settings, seed0 + 9 * 10**6, model, ratio, pilot)
     except ValueError:  # no record at this e can be analysed: the belt leaves this e out
         return out, diag
     for k in range(cal_settings["sets_per_e"]):
@@ -300,6 +360,49 @@ def _grid_point(j: int, e: float, cal_settings: dict, seed_base: int) -> tuple[n
     return out, diag
 
 
+#: Fewest seconds between two messages of the calibration's progress (:class:`_Countdown`).
+PROGRESS_EVERY_S = 10.0
+
+
+class _Countdown:
+    """Logs, as the grid points of a calibration finish, how many are done and the time
+    left (the mean time per finished point so far times the points left), at most every
+    :data:`PROGRESS_EVERY_S` seconds: a message a log file keeps, where a progress bar is
+    drawn only on a terminal (:func:`rockdec.console.progress`). Counts the Dask ``tasks``
+    (one per grid point) as they finish on the local schedulers (threads, the default engine)."""
+
+    def __init__(self, tasks):
+        from dask.callbacks import Callback
+
+        keys = {task.key for task in tasks}
+        self.points, self.done, self.start, self.last = len(keys), 0, time.perf_counter(), time.perf_counter()
+        countdown = self
+
+        class _Finished(Callback):
+            def _posttask(self, key, result, dsk, state, worker_id):
+                if key in keys:
+                    countdown.finished()
+
+        self.callback = _Finished()
+
+    def finished(self) -> None:
+        self.done += 1
+        now = time.perf_counter()
+        if self.done == self.points or now - self.last < PROGRESS_EVERY_S:
+            return
+        self.last = now
+        left = (now - self.start) / self.done * (self.points - self.done)
+        log.info(f"calibrating: {self.done} of {self.points} values of e done, about {left:.0f} s left")
+
+    def __enter__(self):
+        self.callback.__enter__()
+        return self
+
+    def __exit__(self, *exc):
+        self.callback.__exit__(*exc)
+        log.info(f"calibrating: {self.points} values of e done in {time.perf_counter() - self.start:.0f} s")
+
+
 def build(cal_settings: dict) -> xr.Dataset:
     """Simulate and analyse the calibration records; ``raw(e_true, set, name)`` and
     ``diagnostic(e_true, set, check)``.
@@ -311,11 +414,12 @@ def build(cal_settings: dict) -> xr.Dataset:
     import xarray as xr
 
     log.info(
-        f"calibrating: simulating {cal_settings['sets_per_e']} record sets at each of {len(cal_settings['e_grid'])} values of e "
-        "like the measured records (once; stored for every record with the same settings)"
+        f"calibrating: simulating {cal_settings['sets_per_e']} record sets of {sum(cal_settings['lengths'])} samples at each of "
+        f"{len(cal_settings['e_grid'])} values of e like the measured records (once; stored for every record with the same settings)"
     )
     tasks = [dask.delayed(_grid_point)(j, e, cal_settings, CALIBRATION_SEED_OFFSET) for j, e in enumerate(cal_settings["e_grid"])]
-    points = engine.compute(*tasks)
+    with _Countdown(tasks):
+        points = engine.compute(*tasks)
     values = np.stack([raw for raw, _ in points])
     ds = xr.Dataset(
         {

@@ -11,18 +11,18 @@ and lists what looks wrong with the records (:func:`diagnose`: the checks of
 :mod:`rockdec.record.diagnostics`, their thresholds from the calibration's own simulated
 records). When no ``e`` can be given, ``reason`` says why.
 
-The calibration simulates records as long as the measured ones, so its cost grows with
-their length (:func:`cost`); the command line refuses, before reading the records, a run
-the machine cannot finish soon. Two shortcuts for long records were measured and do not
-cover (README): calibrating on shorter records with the spread scaled by the square
-root of the length ratio (the bias itself moves with the length), and fewer simulated
-sets per ``e`` (a cubic mean curve then misses the true mean by about 0.001, more
-than the spread of a record of 20 million samples). Records longer than
-:data:`LONG_SAMPLES` are answered with a warning that says so.
+The calibration simulates records as long as the measured ones up to
+:data:`rockdec.calibrate.calibration.LENGTH_CAP` samples; longer records get the belt of
+that length on a denser grid of ``e``, its spread scaled by the square root of the length
+ratio (:func:`rockdec.calibrate.calibration.spread_scale`), so the cost of a calibration
+stops growing with the records' length (:func:`cost`, :func:`stage_seconds`); the command
+line refuses, before reading the records, a run the machine cannot finish soon. Each
+stage logs what it does and the time it is estimated to take.
 """
 
 from __future__ import annotations
 
+import logging
 import math
 import time
 import warnings
@@ -43,9 +43,12 @@ from rockdec.rdd.registry import DEFAULT_ESTIMATOR
 if TYPE_CHECKING:
     from rockdec.record import record_measure
 
-#: Records (in all) longer than this are warned about: their spread falls below the
-#: accuracy of the belt's fitted mean (about 0.001 at e = 0.95, measured on 20-million-sample records).
-LONG_SAMPLES = 2_000_000
+log = logging.getLogger(__name__)
+
+#: Records more than this many times as long as the calibration's simulated records are warned
+#: that their interval's coverage was not measured at their length: it was at 4 and 20
+#: times (4 and 20 million samples; README, "Long records").
+LONG_RATIO = 20.0
 
 #: A given ``g`` off the records' own by more than this factor is refused before any
 #: calibration (the calibrated 95 % spread of ``g`` is a few per cent).
@@ -55,26 +58,53 @@ G_FACTOR = 2.0
 #: records (a spike that inflates ``sigma_Y`` leaves too few triggers).
 SPIKE_SIGMAS = 15.0
 
-#: Cost model of :func:`cost`, measured on an idle 2-core machine: seconds per sample to
-#: read a CSV (pandas) and to analyse a record; seconds per simulated and analysed
-#: calibration sample on one core; bytes held per sample while reading and analysing.
-CSV_SECONDS, ANALYSIS_SECONDS, CALIBRATION_SECONDS, BYTES_PER_SAMPLE = 5e-7, 1.2e-7, 1.3e-7, 96.0
+#: Cost model of :func:`cost`: seconds per sample to read a CSV (pandas, on an idle 2-core
+#: machine) and to do all but the calibration (read a NetCDF record, analyse it, measure
+#: its model, check it: 22.7 s of CPU on 20 million samples, ``benchmarks/long_record.py``);
+#: seconds per simulated and analysed calibration sample on one core (idle machine); bytes
+#: held per sample while reading and analysing (a bound: 82 at the peak on 20 million
+#: samples of a NetCDF record, more than 120 on 200 million of a ``.npy``).
+CSV_SECONDS, ANALYSIS_SECONDS, CALIBRATION_SECONDS, BYTES_PER_SAMPLE = 5e-7, 1.0e-6, 1.3e-7, 160.0
+
+
+def stage_seconds(samples: int, csv: bool, g_given: bool, cores: int = 2) -> dict[str, float]:
+    """Seconds each stage of :func:`estimate` takes on records of ``samples`` in all:
+    ``reading`` (a CSV), ``analysing`` (twice with a given ``g``) and ``calibrating``
+    (building the calibration: :data:`rockdec.calibrate.calibration.SETS_PER_E` sets at each
+    ``e`` of its grid, of the records' length up to
+    :data:`rockdec.calibrate.calibration.LENGTH_CAP` in all,
+    :func:`rockdec.calibrate.calibration.simulated_lengths`, and beyond it the step search's
+    pilot sets of that length), from :data:`CSV_SECONDS` and the other constants of the
+    model."""
+    simulated = sum(calibration.simulated_lengths([samples]))
+    sets = calibration.SETS_PER_E
+    if simulated < samples:  # the step search's pilots are as long as the sets (calibration.step_for)
+        from rockdec.physics.simulate import STEP_ITERATIONS
+
+        sets += calibration.PILOT_SETS * STEP_ITERATIONS["white"]
+    grid = calibration.E_GRID_LONG if simulated < samples else calibration.E_GRID
+    return {
+        "reading": samples * CSV_SECONDS * csv,
+        "analysing": samples * ANALYSIS_SECONDS * (1 + g_given),
+        "calibrating": simulated * len(grid) * sets * CALIBRATION_SECONDS / cores,
+    }
 
 
 def cost(samples: int, csv: bool, g_given: bool, cores: int = 2) -> tuple[float, float]:
     """``(seconds, bytes)`` that :func:`estimate` needs for records of ``samples`` in all,
-    calibration included (:data:`CSV_SECONDS` and the other constants of the model)."""
-    calibrated = samples * len(calibration.E_GRID) * calibration.SETS_PER_E
-    seconds = samples * (CSV_SECONDS * csv + ANALYSIS_SECONDS * (1 + g_given)) + calibrated * CALIBRATION_SECONDS / cores
-    return seconds, samples * BYTES_PER_SAMPLE
+    calibration included (:func:`stage_seconds`)."""
+    return sum(stage_seconds(samples, csv, g_given, cores).values()), samples * BYTES_PER_SAMPLE
 
 
-def diagnose(records: list[Record], analysis: measured.Analysis, settings: dict, cal, e: float | None, interval) -> tuple[list[str], dict]:
+def diagnose(
+    records: list[Record], analysis: measured.Analysis, settings: dict, cal, e: float | None, interval, length_ratio: float = 1.0,
+) -> tuple[list[str], dict]:
     """The checks of :mod:`rockdec.record.diagnostics` on the records, against thresholds from the
-    calibration ``cal`` near the corrected ``e`` and its 95 % ``interval``: the warnings of
-    the checks that fired, and per check ``{"statistic", "threshold", "fired"}`` (JSON-able)."""
+    calibration ``cal`` near the corrected ``e`` and its 95 % ``interval`` (``length_ratio``:
+    the records' length over the calibration's records'): the warnings of the checks that
+    fired, and per check ``{"statistic", "threshold", "fired"}`` (JSON-able)."""
     level = settings.get("level", measured.DEFAULT_SETTINGS["level"])
-    outcomes = diagnostics.evaluate([r.theta for r in records], analysis, cal, e, interval, level)
+    outcomes = diagnostics.evaluate([r.theta for r in records], analysis, cal, e, interval, level, length_ratio)
     notes = [o.message for o in outcomes.values() if o.fired]
     return notes, {name: {"statistic": _num(o.statistic), "threshold": _num(o.threshold), "fired": o.fired} for name, o in outcomes.items()}
 
@@ -312,7 +342,11 @@ def estimate(
     share of the calibration's simulated record sets whose ``g`` interval held their true
     ``g``, :func:`rockdec.calibrate.belt.g_calibration_coverage`), ``rockdec_version``,
     ``warnings``, ``diagnostics`` (per check of :mod:`rockdec.record.diagnostics`: ``statistic``,
-    ``threshold``, ``fired``), ``calibration`` (file, and whether it came from the cache), and, under
+    ``threshold``, ``fired``), ``calibration`` (file, whether it came from the cache, the
+    samples of its simulated record sets and the factor on its spread,
+    :func:`rockdec.calibrate.calibration.spread_scale`: records longer than
+    :data:`rockdec.calibrate.calibration.LENGTH_CAP` get ``e``'s belt scaled to their length,
+    ``g``'s interval at the simulated length), and, under
     keys starting with ``_``, the analysis and belts for plots.
 
     Refuses (:class:`RecordError`) records given twice, records that do not look like
@@ -327,6 +361,12 @@ def estimate(
     dt = same_step(records)
     names = ", ".join(r.source for r in records)
     notes = []
+    samples = int(sum(r.theta.size for r in records))
+    stages = stage_seconds(samples, False, g is not None)
+    log.info(
+        f"analysing {samples} samples: about {stages['analysing']:.0f} s "
+        f"(about {stages['analysing'] + stages['calibrating']:.0f} s left in all when the calibration must be built)"
+    )
     try:
         own = _analyse(records, dt, settings, None)
     except RecordError:
@@ -351,11 +391,21 @@ def estimate(
         raise InputError("Housner's model (eq. 2) needs the block's critical angle theta_cr, and only it; give both or neither.")
     ratio = analysis.sigma_y / theta_cr if theta_cr is not None else None
     cal_settings = calibration.calibration_settings([r.theta.size for r in records], analysis.points_per_cycle, settings, model, ratio)
+    scale = calibration.spread_scale(cal_settings, samples)
+    shortened = (
+        f"; the records' {samples} samples are calibrated on simulated records of {sum(cal_settings['lengths'])} samples, "
+        f"the spread scaled by sqrt({sum(cal_settings['lengths'])} / {samples}) = {scale:.3g}" if scale != 1.0 else ""
+    )
+    log.info(
+        f"calibration {calibration.settings_hash(cal_settings)}: about {stages['calibrating']:.0f} s to build when it is not stored"
+        f"{shortened}"
+    )
     started = time.perf_counter()
     cal, cached = calibration.load_or_build(cal_settings, cache_dir, notes)
     built_s = time.perf_counter() - started
     per = {}
-    belts = belt.belts(cal)
+    belts = belt.belts(cal, scale)  # e's belts at the records' length
+    simulated_belts = belts if scale == 1.0 else belt.belts(cal)  # at the simulated length: coverage on the sets, g's interval
     for name in registry.ESTIMATORS:
         c = belt.correct(belts[name], analysis.raw[name])
         trigger = registry.trigger(name)
@@ -366,16 +416,16 @@ def estimate(
             "beyond": side,
             "calibrated_range": [_num(belts[name].e[0]), _num(belts[name].e[-1])] if belts[name].e.size else None,
             "interval": [_num(c.low), _num(c.high)],
-            "coverage": _num(belt.calibration_coverage(cal, name, belts[name])),
+            "coverage": _num(belt.calibration_coverage(cal, name, simulated_belts[name])),
             "triggers": int(analysis.count[trigger][-1]),
             "notes": [note for note in c.notes if not (side and "nearest point" in note)],  # no value is shown
         }
     chosen, selection, reason = select(per, int(cal["raw"].sizes["e_true"] * cal["raw"].sizes["set"]))
     shown = per[chosen] if chosen else {"e": None, "interval": [None, None], "coverage": None, "raw": None}
     e_chosen = math.nan if shown["e"] is None else shown["e"]
-    g_belt = belts[measured.G_NAME]
+    g_belt = simulated_belts[measured.G_NAME]
     e_name = chosen or DEFAULT_ESTIMATOR  # the estimator whose corrected e corrects g
-    e_belt = belts[e_name]
+    e_belt = simulated_belts[e_name]
     g_band = belt.g_band(cal, e_name, e_belt, g_belt)
     g_value = g if g is not None else belt.correct_g(g_belt, analysis.raw[measured.G_NAME], e_chosen)
     no_interval = g is not None or chosen is None
@@ -393,14 +443,14 @@ def estimate(
                 f"({own.raw[measured.G_NAME]:.4g} rad/s^2 read off them, not corrected): this calibration gives their g no "
                 "interval; the estimate rests on the given g"
             )
-    samples = int(sum(r.theta.size for r in records))
-    if samples > LONG_SAMPLES:
+    if samples > LONG_RATIO * sum(cal_settings["lengths"]):
         notes.append(
-            f"{samples} samples make the interval narrower than the accuracy of the calibration's fitted mean curve "
-            "(about 0.001 at e = 0.95): on 20-million-sample records it covered the true e 73-90 % of the time, not 95 %"
+            f"{samples} samples are {samples / sum(cal_settings['lengths']):.0f} times the calibration's simulated records, beyond the "
+            f"{LONG_RATIO:.0f} times at which the interval's coverage was measured: the narrower the interval, the more "
+            "the calibration's own error of the bias counts"
         )
     simulated = RecordModel.from_key(cal_settings["record_model"])
-    warned, checks = diagnose(records, analysis, settings, cal, shown["e"], shown["interval"])
+    warned, checks = diagnose(records, analysis, settings, cal, shown["e"], shown["interval"], 1.0 / scale**2)
     return {
         "e": shown["e"],
         "interval": shown["interval"],
@@ -416,7 +466,9 @@ def estimate(
         "g_coverage": None if no_interval else _num(belt.g_calibration_coverage(cal, e_name, e_belt, g_belt, g_band)),
         "g_interval_note": "as given (--g)" if g is not None else (
             "95 % interval: the corrected g over the scatter of the corrected g about the true g on the calibration's "
-            "simulated records (the error of the corrected e included)" if np.isfinite(g_low) else
+            "simulated records (the error of the corrected e included)"
+            + (f", as long as those records ({sum(cal_settings['lengths'])} samples): wider than the records' own" if scale != 1.0 else "")
+            if np.isfinite(g_low) else
             "no interval: no e was estimated, and g is corrected at the corrected e" if chosen is None else
             "no interval: g's interval needs a corrected e whose interval lies inside the calibrated range"
         ),
@@ -433,6 +485,7 @@ def estimate(
         "rockdec_version": __version__,
         "calibration": {
             "file": f"calibration-{calibration.settings_hash(cal_settings)}.nc", "cached": cached, "seconds": round(built_s, 2),
+            "simulated_samples": sum(cal_settings["lengths"]), "spread_scale": scale,
         },
         "_analysis": analysis,
         "_belts": belts,

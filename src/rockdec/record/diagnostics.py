@@ -210,7 +210,11 @@ class Check:
     records, their :class:`rockdec.rdd.measured.Analysis`); ``side``:
     ``"high"`` fires above the threshold, ``"low"`` below; ``threshold``: ``"calibrated"``
     (:func:`thresholds`) or ``"structural"`` (``coarse_sampling``, module docstring);
-    ``message``: the warning, formatted with ``value`` and ``threshold``.
+    ``message``: the warning, formatted with ``value`` and ``threshold``; ``length``: how
+    the statistic of a clean record goes with its length, for records longer than the
+    calibration's (:func:`length_threshold`): ``"free"`` (a z score, a ratio of means),
+    ``"count"`` (in proportion), ``"root"`` (as ``1/sqrt(length)``: a difference of means)
+    or ``"max"`` (the largest of the samples').
     """
 
     name: str
@@ -219,6 +223,7 @@ class Check:
     side: str
     threshold: str
     message: str
+    length: str = "free"
 
 
 REGISTRY = (
@@ -231,15 +236,15 @@ REGISTRY = (
           "{threshold:.1f}): the sensor's zero drifts; remove the trend (high-pass well below the rocking frequency)"),
     Check("spikes", "isolated wrong samples", spikes, "high", "calibrated",
           "a sample stands {value:.2f} sigma_Y off the line through its neighbours, where rocking records like it reach "
-          "{threshold:.2f}: the record holds spikes; remove them or mark them as gaps (NaN)"),
+          "{threshold:.2f}: the record holds spikes; remove them or mark them as gaps (NaN)", "max"),
     Check("asymmetry", "a block leaning on one side", asymmetry, "high", "calibrated",
           "the response is asymmetric: the block falls back with a different g on each side (|g+ - g-|/(g+ + g-) "
           "{value:.3f}, calibrated limit {threshold:.3f}); it may lean on one side or the load push one way, and the "
-          "model assumes a symmetric block"),
+          "model assumes a symmetric block", "root"),
     Check("few_triggers", "gaps or quiet stretches", triggers, "low", "calibrated",
           "{value:.0f} triggers in the largest windows, fewer than records of this length and sampling give "
           "({threshold:.0f}): gaps (NaN) or quiet stretches leave fewer segments than the calibration's records had, so "
-          "the interval may be too narrow; cut the record into pieces without them"),
+          "the interval may be too narrow; cut the record into pieces without them", "count"),
     Check("coarse_sampling", "too few samples per cycle for e1..e4", sampling, "low", "structural",
           "{value:.1f} samples per cycle at sigma_Y is below {threshold:.1f}, too coarse for the local fits of e1..e4 "
           "(eq. 27); sample faster"),
@@ -257,30 +262,53 @@ def statistics(records, analysis) -> np.ndarray:
     return np.array([check.statistic(s, analysis) for check in REGISTRY], dtype=float)
 
 
-def _near(e_grid: np.ndarray, e: float, interval) -> np.ndarray:
+def _near(e_grid: np.ndarray, e: float, interval, side: int = 1) -> np.ndarray:
     """Grid points pooled for a record of corrected ``e`` and 95 % ``interval``: those inside
-    the interval and the nearest on each side of ``e``."""
+    the interval and the ``side`` nearest on each side of ``e``."""
     keep = np.zeros(e_grid.size, dtype=bool)
     low, high = (np.nan, np.nan) if interval is None else (np.nan if v is None else v for v in interval)
     if np.isfinite(low) and np.isfinite(high):
         keep |= (e_grid >= low) & (e_grid <= high)
     below, above = np.flatnonzero(e_grid <= e), np.flatnonzero(e_grid >= e)
-    keep[below[-1] if below.size else 0] = True
-    keep[above[0] if above.size else -1] = True
+    keep[below[-side:] if below.size else 0] = True
+    keep[above[:side] if above.size else -1] = True
     return keep
 
 
-def thresholds(cal, e: float | None, interval, level: float) -> dict:
+def length_threshold(check: Check, column: np.ndarray, q: float, ratio: float) -> float:
+    """The ``q`` quantile of ``check``'s statistic on records ``ratio`` (> 1) times as long as
+    the calibration's, from its values ``column`` on the calibration's records: by the
+    check's ``length`` law, the quantile of ``column`` times ``ratio`` (``"count"``: a low
+    quantile scaled so is lower than the longer records', a margin against false alarms) or
+    ``1/sqrt(ratio)`` (``"root"``); for ``"max"`` the largest of ``ratio`` records like the
+    calibration's, the values taken as Gumbel (moments: scale ``beta = sd sqrt(6) / pi``), whose
+    ``q`` quantile is ``mu + beta (ln ratio - ln(-ln q))``; ``"free"``: the quantile itself."""
+    if check.length == "count":
+        return float(np.quantile(column, q)) * ratio
+    if check.length == "root":
+        return float(np.quantile(column, q)) / np.sqrt(ratio)
+    if check.length == "max" and column.size > 1:
+        beta = float(np.std(column, ddof=1)) * np.sqrt(6.0) / np.pi
+        mu = float(np.mean(column)) - np.euler_gamma * beta
+        return mu + beta * (np.log(ratio) - np.log(-np.log(q)))
+    return float(np.quantile(column, q))
+
+
+def thresholds(cal, e: float | None, interval, level: float, length_ratio: float = 1.0) -> dict:
     """Each check's threshold for a record of corrected ``e`` and 95 % ``interval``, from the
     calibration ``cal``'s ``diagnostic(e_true, set, check)`` (module docstring): the
     :data:`QUANTILE` quantile of the sets pooled about ``e`` (``1 - QUANTILE`` for a
     ``"low"`` check). A record without an ``e`` (``None`` or NaN: the calibration cannot
     place it) gets the strictest grid point's threshold, each grid point's sets apart.
     ``level``: the trigger level in ``sigma_Y`` (for the structural floor). NaN for a check
-    the calibration's records never gave a value."""
+    the calibration's records never gave a value. ``length_ratio``: the records' length over
+    the calibration's records' (above 1 for records longer than
+    :data:`rockdec.calibrate.calibration.LENGTH_CAP`: :func:`length_threshold`, and the two
+    nearest grid points on each side of ``e`` pooled, :func:`_near`)."""
     grid = np.asarray(cal["e_true"].values, dtype=float)
     placed = e is not None and np.isfinite(e)
-    groups = [_near(grid, e, interval)] if placed else [grid == g for g in grid]
+    # a long record's narrow interval holds few grid points: two on each side keep the quantile's own error small
+    groups = [_near(grid, e, interval, 2 if length_ratio > 1.0 else 1)] if placed else [grid == g for g in grid]
     values = cal["diagnostic"].values  # (e_true, set, check)
     out = {}
     for j, check in enumerate(REGISTRY):
@@ -293,7 +321,7 @@ def thresholds(cal, e: float | None, interval, level: float) -> dict:
             column = values[group, :, j].ravel()
             column = column[np.isfinite(column)]
             if column.size:
-                limits.append(float(np.quantile(column, q)))
+                limits.append(length_threshold(check, column, q, length_ratio) if length_ratio > 1.0 else float(np.quantile(column, q)))
         out[check.name] = (min(limits) if check.side == "high" else max(limits)) if limits else np.nan
     return out
 
@@ -321,7 +349,8 @@ def judge(values, limits: dict) -> dict:
     return out
 
 
-def evaluate(records, analysis, cal, e: float | None, interval, level: float) -> dict:
+def evaluate(records, analysis, cal, e: float | None, interval, level: float, length_ratio: float = 1.0) -> dict:
     """Every check on ``records`` against the calibration ``cal``: :func:`judge` of
-    :func:`statistics` and :func:`thresholds`."""
-    return judge(statistics(records, analysis), thresholds(cal, e, interval, level))
+    :func:`statistics` and :func:`thresholds` (``length_ratio``: the records' length over
+    the calibration's records')."""
+    return judge(statistics(records, analysis), thresholds(cal, e, interval, level, length_ratio))

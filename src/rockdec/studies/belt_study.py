@@ -40,7 +40,7 @@ def pool(e_values, sets: int, n_points: int, points_per_cycle: float = 75.0, rep
     settings = {**calibration.calibration_settings([n_points], points_per_cycle), "e_grid": [float(e) for e in e_values], "sets_per_e": int(sets)}
     base = calibration.CALIBRATION_SEED_OFFSET + replica * SEED_STRIDE
     tasks = [dask.delayed(calibration._grid_point)(j, e, settings, base) for j, e in enumerate(settings["e_grid"])]
-    values = np.stack(engine.compute(*tasks))
+    values = np.stack([raw for raw, _ in engine.compute(*tasks)])  # _grid_point: (raw, the checks' statistics)
     return xr.Dataset(
         {"raw": (("e_true", "set", "name"), values, {"units": "1", "long_name": "zero-window estimate on a simulated record set (g in units of the true g)"})},
         coords={"e_true": ("e_true", np.asarray(settings["e_grid"])), "set": ("set", np.arange(sets)), "name": ("name", list(calibration.NAMES))},
