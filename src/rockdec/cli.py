@@ -555,7 +555,7 @@ def _estimate_text(res: dict) -> str:
         f"  {res['samples']} samples at dt = {res['dt']:.6g} s ({res['nan_samples']} NaN skipped); rms angle "
         f"sigma_Y = {res['sigma_y']:.4g} rad, {res['points_per_cycle']:.1f} samples per rocking cycle at sigma_Y",
         f"  restoring acceleration g = {res['g']:.5g} rad/s^2 ({g_how})" if res["g"] is not None else "  restoring acceleration g: not determined",
-        f"  calibration: {cal['file']}, "
+        "  calibration: none (the records are declined before calibrating)" if cal["file"] is None else f"  calibration: {cal['file']}, "
         + ("from the cache" if cal["cached"] else f"built in {cal['seconds']:.1f} s and stored for the next record like these"),
         *_model_lines(res["record_model"]),
         "",

@@ -55,6 +55,18 @@ G_FACTOR = 2.0
 #: records (a spike that inflates ``sigma_Y`` leaves too few triggers).
 SPIKE_SIGMAS = 15.0
 
+#: A load measured as low-pass with its corner below this many rocking frequencies
+#: ``1/T(sigma_Y)`` (eq. 5) at the samples per cycle the analysis reads is declined before
+#: any calibration (:func:`colour_decline`). Measured by the coverage study
+#: (:mod:`rockdec.studies.coverage`, README "Your own record"): records with the corner at
+#: 3 are read at 3.0-3.6 and their interval covers, records with the corner at 0.5 and 1
+#: are read at 0.55-1.7 and neither the measured model's calibration (0-75 % coverage,
+#: nulls on most records) nor the paper's (0-80 %) holds there; at ``e >= 0.92`` the
+#: records of such a load swing between rocking and hardly leaving rest (the samples per
+#: cycle read off one calibration's sets at one ``e`` span 3-500), so no calibration at
+#: one sampling describes them.
+COLOUR_CORNER_FLOOR = 2.0
+
 #: Cost model of :func:`cost`, measured on an idle 2-core machine: seconds per sample to
 #: read a CSV (pandas) and to analyse a record; seconds per simulated and analysed
 #: calibration sample on one core; bytes held per sample while reading and analysing.
@@ -239,6 +251,50 @@ def model_report(measurement, why_not: str | None, analysis: measured.Analysis, 
     return out
 
 
+def colour_decline(model: RecordModel, sources: dict, measurement) -> str | None:
+    """Why ``e`` is declined for a measured low-pass load whose corner lies below
+    :data:`COLOUR_CORNER_FLOOR` rocking frequencies (one sentence naming the measured
+    corner and what would help), or ``None``. A declared load is calibrated as declared:
+    the selection (:func:`select`) then judges its belts."""
+    if sources.get("load") != "measured" or model.load.kind != "lowpass" or model.load.corner >= COLOUR_CORNER_FLOOR:
+        return None
+    se = ""
+    if measurement is not None and 0.0 < measurement.pole.value < 1.0:
+        se = f" +- {model.load.corner * measurement.pole.se / (measurement.pole.value * -math.log(measurement.pole.value)):.2g}"
+    return (
+        f"the load measured on these records is low-pass with its corner at {model.load.corner:.2g}{se} times the rocking "
+        f"frequency, below {COLOUR_CORNER_FLOOR:g}, where the coverage study finds that no calibration tells such a load "
+        "apart from e; if the load is known, declare it (--load lowpass:CORNER, spectrum:FILE or base:FILE, a record of "
+        "the base's acceleration) and the calibration simulates it, with its coverage checked"
+    )
+
+
+def _declined(records: list[Record], analysis: measured.Analysis, notes: list, model_json: dict, g: float | None, reason: str) -> dict:
+    """:func:`estimate`'s answer to records declined before any calibration
+    (:func:`colour_decline`): every estimator's raw value, no corrected value or interval,
+    ``e`` null with ``reason``; ``g`` as given, else not corrected (``None``)."""
+    why = "not calibrated: the records are declined (see the reason)"
+    per = {
+        name: {
+            "raw": _num(analysis.raw[name]), "e": None, "beyond": None, "calibrated_range": None, "interval": [None, None],
+            "coverage": None, "triggers": int(analysis.count[registry.trigger(name)][-1]), "notes": [],
+        }
+        for name in registry.ESTIMATORS
+    }
+    return {
+        "e": None, "interval": [None, None], "reason": reason, "estimator": None,
+        "selection": [{"estimator": name, "width": None, "coverage": None, "holds": False, "why_not": why} for name in registry.CANDIDATES],
+        "coverage": None, "raw": None, "g": None if g is None else _num(g), "g_given": g is not None,
+        "g_raw": _num(analysis.raw[measured.G_NAME]), "g_interval": None, "g_coverage": None,
+        "g_interval_note": "as given (--g)" if g is not None else "no interval: no e was estimated, and g is corrected at the corrected e",
+        "points_per_cycle": _num(analysis.points_per_cycle), "sigma_y": _num(analysis.sigma_y), "dt": analysis.dt,
+        "records": [r.source for r in records], "samples": int(sum(r.theta.size for r in records)),
+        "nan_samples": int(analysis.nan_samples), "record_model": model_json, "estimators": per, "warnings": notes,
+        "diagnostics": {}, "rockdec_version": __version__, "calibration": {"file": None, "cached": False, "seconds": 0.0},
+        "_analysis": analysis, "_belts": {},
+    }
+
+
 def coverage_floor(n_sets: int) -> float:
     """Lowest calibrated coverage (:func:`rockdec.calibrate.belt.calibration_coverage`) at which an
     interval is taken to hold 95 %: the lower end of the binomial band
@@ -350,6 +406,11 @@ def estimate(
         raise InputError("Housner's model (eq. 2) needs the block's critical angle theta_cr, and only it; give both or neither.")
     ratio = analysis.sigma_y / theta_cr if theta_cr is not None else None
     cal_settings = calibration.calibration_settings([r.theta.size for r in records], analysis.points_per_cycle, settings, model, ratio)
+    declined = colour_decline(model, sources, measurement)
+    if declined:
+        simulated = RecordModel.from_key(cal_settings["record_model"])
+        model_json = model_report(measurement, why_not if measuring else None, analysis, sources, simulated, cal_settings)
+        return _declined(records, analysis, notes, model_json, g, declined)
     started = time.perf_counter()
     cal, cached = calibration.load_or_build(cal_settings, cache_dir, notes)
     built_s = time.perf_counter() - started
