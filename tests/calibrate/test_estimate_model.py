@@ -238,7 +238,7 @@ def test_a_measured_corner_below_the_floor_is_declined_with_its_corner_and_no_ca
     corner = res["record_model"]["measured"]["load_corner_rocking"]["value"]
     assert res["record_model"]["measured"]["detected"]["colour"] and corner < inference.COLOUR_CORNER_FLOOR
     assert res["e"] is None and res["interval"] == [None, None] and res["estimator"] is None
-    assert f"corner at {corner:.2g}" in res["reason"] and "--load" in res["reason"] and res["reason"].count(". ") == 0
+    assert f"corner at {corner:.2f} +- " in res["reason"] and "--load" in res["reason"] and res["reason"].count(". ") == 0
     assert not any(cache.glob("calibration-*.nc")) and res["calibration"]["file"] is None
     assert all(est["raw"] is not None or name not in ("e_0", "e_v") for name, est in res["estimators"].items())
     assert main(["estimate", str(path), "--dt", str(DT_CORNER_1), "--cache", str(cache)]) == 0
@@ -254,7 +254,7 @@ def test_the_colour_decline_takes_only_a_measured_corner_below_the_floor():
     assert inference.colour_decline(RecordModel(), {"load": "measured"}, None) is None
     assert inference.colour_decline(RecordModel(load=Load("lowpass", inference.COLOUR_CORNER_FLOOR)), {"load": "measured"}, None) is None
     reason = inference.colour_decline(low, {"load": "measured"}, None)
-    assert "0.7 times the rocking frequency" in reason and f"below {inference.COLOUR_CORNER_FLOOR:g}" in reason
+    assert "0.70 times the rocking frequency" in reason and f"below {inference.COLOUR_CORNER_FLOOR:g}" in reason
 
 
 def test_coloured_calibration_sets_are_moved_to_the_calibrations_samples_per_cycle(monkeypatch):

@@ -260,9 +260,9 @@ def colour_decline(model: RecordModel, sources: dict, measurement) -> str | None
         return None
     se = ""
     if measurement is not None and 0.0 < measurement.pole.value < 1.0:
-        se = f" +- {model.load.corner * measurement.pole.se / (measurement.pole.value * -math.log(measurement.pole.value)):.2g}"
+        se = f" +- {model.load.corner * measurement.pole.se / (measurement.pole.value * -math.log(measurement.pole.value)):.2f}"
     return (
-        f"the load measured on these records is low-pass with its corner at {model.load.corner:.2g}{se} times the rocking "
+        f"the load measured on these records is low-pass with its corner at {model.load.corner:.2f}{se} times the rocking "
         f"frequency, below {COLOUR_CORNER_FLOOR:g}, where the coverage study finds that no calibration tells such a load "
         "apart from e; if the load is known, declare it (--load lowpass:CORNER, spectrum:FILE or base:FILE, a record of "
         "the base's acceleration) and the calibration simulates it, with its coverage checked"
@@ -410,6 +410,7 @@ def estimate(
     if declined:
         simulated = RecordModel.from_key(cal_settings["record_model"])
         model_json = model_report(measurement, why_not if measuring else None, analysis, sources, simulated, cal_settings)
+        model_json["simulated"]["described"] = f"nothing (declined; a calibration would simulate {model_json['simulated']['described']})"
         return _declined(records, analysis, notes, model_json, g, declined)
     started = time.perf_counter()
     cal, cached = calibration.load_or_build(cal_settings, cache_dir, notes)
