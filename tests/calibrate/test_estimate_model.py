@@ -257,6 +257,21 @@ def test_the_colour_decline_takes_only_a_measured_corner_below_the_floor():
     assert "0.70 times the rocking frequency" in reason and f"below {inference.COLOUR_CORNER_FLOOR:g}" in reason
 
 
+@pytest.mark.parametrize("rate_se, declined", [(0.0, False), (0.02, False), (0.5, True)])
+def test_a_measured_corner_above_the_floor_must_be_clear_of_it_by_its_errors(rate_se, declined):
+    """A corner read at 3 with an error of a third of it is not shown to lie above the floor
+    (declined, the sentence says so); with a small error it is calibrated."""
+    from types import SimpleNamespace
+
+    alpha = math.exp(-2 * math.pi * 3.0 / 75.0)
+    measurement = SimpleNamespace(pole=SimpleNamespace(value=alpha, se=rate_se * alpha))  # se of -ln(alpha), relative
+    reason = inference.colour_decline(RecordModel(load=Load("lowpass", 3.0)), {"load": "measured"}, measurement)
+    assert (reason is not None) == declined
+    if declined:
+        se = 3.0 * rate_se / -math.log(alpha)
+        assert f"3.00 +- {se:.2f}" in reason and f"not {inference.COLOUR_CORNER_Z:g} errors above" in reason
+
+
 def test_coloured_calibration_sets_are_moved_to_the_calibrations_samples_per_cycle(monkeypatch):
     """Under a low-pass load the sets of a grid point are simulated again at a corrected
     step until their median samples per cycle is within SET_PPC_TOLERANCE of the

@@ -68,6 +68,12 @@ SPIKE_SIGMAS = 15.0
 #: read at 0.5-1.1, where the paper's calibration covers 38-78 %.
 COLOUR_CORNER_FLOOR = 2.0
 
+#: A measured corner counts as above :data:`COLOUR_CORNER_FLOOR` only when it lies this many
+#: standard errors above it: records of the coverage study whose corner (0.5 or 1) was read
+#: above 2 had errors of 0.65-1.7 (read 2.15 and 3.19), those at corner 3 errors of
+#: 0.03-0.06 (read 2.9-3.6, 19-34 errors above 2).
+COLOUR_CORNER_Z = 2.0
+
 #: Cost model of :func:`cost`, measured on an idle 2-core machine: seconds per sample to
 #: read a CSV (pandas) and to analyse a record; seconds per simulated and analysed
 #: calibration sample on one core; bytes held per sample while reading and analysing.
@@ -253,18 +259,23 @@ def model_report(measurement, why_not: str | None, analysis: measured.Analysis, 
 
 
 def colour_decline(model: RecordModel, sources: dict, measurement) -> str | None:
-    """Why ``e`` is declined for a measured low-pass load whose corner lies below
-    :data:`COLOUR_CORNER_FLOOR` rocking frequencies (one sentence naming the measured
-    corner and what would help), or ``None``. A declared load is calibrated as declared:
+    """Why ``e`` is declined for a measured low-pass load whose corner is not shown to lie
+    above :data:`COLOUR_CORNER_FLOOR` rocking frequencies (below it, or less than
+    :data:`COLOUR_CORNER_Z` standard errors above it), in one sentence naming the measured
+    corner and what would help; else ``None``. A declared load is calibrated as declared:
     the selection (:func:`select`) then judges its belts."""
-    if sources.get("load") != "measured" or model.load.kind != "lowpass" or model.load.corner >= COLOUR_CORNER_FLOOR:
+    if sources.get("load") != "measured" or model.load.kind != "lowpass":
         return None
-    se = ""
+    corner, se = model.load.corner, 0.0
     if measurement is not None and 0.0 < measurement.pole.value < 1.0:
-        se = f" +- {model.load.corner * measurement.pole.se / (measurement.pole.value * -math.log(measurement.pole.value)):.2f}"
+        se = corner * measurement.pole.se / (measurement.pole.value * -math.log(measurement.pole.value))
+    if corner - COLOUR_CORNER_Z * se >= COLOUR_CORNER_FLOOR:
+        return None
+    where = f"below {COLOUR_CORNER_FLOOR:g}" if corner < COLOUR_CORNER_FLOOR else f"not {COLOUR_CORNER_Z:g} errors above {COLOUR_CORNER_FLOOR:g}"
     return (
-        f"the load measured on these records is low-pass with its corner at {model.load.corner:.2f}{se} times the rocking "
-        f"frequency, below {COLOUR_CORNER_FLOOR:g}, where the coverage study finds that no calibration tells such a load "
+        f"the load measured on these records is low-pass with its corner at {corner:.2f}"
+        + (f" +- {se:.2f}" if se > 0.0 else "")
+        + f" times the rocking frequency, {where}, where the coverage study finds that no calibration tells such a load "
         "apart from e; if the load is known, declare it (--load lowpass:CORNER, spectrum:FILE or base:FILE, a record of "
         "the base's acceleration) and the calibration simulates it, with its coverage checked"
     )
