@@ -449,7 +449,7 @@ def _quantities(n, sy, syy, n_side, s_side, prod, count, dt):
         "pole": alpha,
         "impulse_sd": math.sqrt(max(impulse_var, 0.0)) / dt,
         "noise_sd": math.sqrt(max(noise_var, 0.0)),
-        "noise_ratio": math.sqrt(max(noise_var, 0.0)) / sigma_y,
+        "noise_ratio": math.sqrt(max(noise_var, 0.0)) / sigma_y if sigma_y > 0.0 else math.nan,  # the fit gives every variance to noise
         "corner_hz": corner,
         "corner_ratio": corner * float(period_from_g(sigma_y, g)) if g > 0 else math.nan,
         "r": gamma[1:] / gamma[0],
