@@ -296,7 +296,11 @@ def _median(values) -> float:
 
 
 def summary(ds: xr.Dataset) -> dict:
-    """One row of the study's table for the cell ``ds`` (:func:`run_cell`)."""
+    """One row of the study's table for the cell ``ds`` (:func:`run_cell`): ``coverage`` over
+    every record (a null counted as not covered) and, apart, ``declined`` (the share of
+    records with a null ``e``) and ``answered_coverage`` with its binomial standard error
+    over the ``answered`` records, by which ``in_band`` judges the cell (a cell declined
+    whole is not in the band)."""
     e = ds.attrs["e_true"]
     n = ds.sizes["record"]
     values = ds["e_hat"].values
