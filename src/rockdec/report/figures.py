@@ -622,7 +622,8 @@ def fig_coverage(table) -> Figure:
     fig = _new_figure(13.0, 4.5)
     cov_ax, bias_ax = fig.subplots(1, 2)
     width = 0.8 / len(es)
-    floor = min(0.5, float(np.nanmin(table["answered_coverage"])) - 0.05) if table["answered"].any() else 0.5
+    shown = np.concatenate([table["answered_coverage"].to_numpy(float), table["paper_coverage"].to_numpy(float)])
+    floor = min(0.5, float(np.nanmin(shown)) - 0.05) if np.isfinite(shown).any() else 0.5
     for row in table.itertuples():
         x = conditions.index(row.condition) + (es.index(row.e_true) - (len(es) - 1) / 2) * width
         colour = colours[es.index(row.e_true)]
@@ -652,6 +653,6 @@ def fig_coverage(table) -> Figure:
         ax.set_xticks(range(len(conditions)), [c.replace("_", "\n") for c in conditions], fontsize=8)
         ax.set(xlabel="condition", ylabel=what)
     cov_ax.set_ylim(floor, 1.02)
-    cov_ax.legend(fontsize=7, loc="lower left")
+    cov_ax.legend(fontsize=7, loc="lower left", bbox_to_anchor=(0.0, 1.02), ncol=4)  # above: the floor holds the declined cells
     bias_ax.legend(fontsize=7)
     return fig
