@@ -65,7 +65,7 @@ SPIKE_SIGMAS = 15.0
 #: records read at one sampling are no longer alike and no calibration at one sampling
 #: describes them. The coverage study (:mod:`rockdec.studies.coverage`) checks the
 #: threshold: records at corner 3 are read at 2.9-3.1 and covered, those at 0.5 and 1 are
-#: read at 0.5-1.1, where the paper's calibration covers 38-78 %.
+#: read at 0.5-1.1, where the paper's calibration covers 41-74 %.
 COLOUR_CORNER_FLOOR = 2.0
 
 #: A measured corner counts as above :data:`COLOUR_CORNER_FLOOR` only when it lies this many
