@@ -548,7 +548,7 @@ def _estimate_text(res: dict) -> str:
         f"  {res['samples']} samples at dt = {res['dt']:.6g} s ({res['nan_samples']} NaN skipped); rms angle "
         f"sigma_Y = {_number(res['sigma_y'], '.4g')} rad, {_number(res['points_per_cycle'], '.1f')} samples per rocking cycle at sigma_Y",
         _g_line(res),
-        f"  calibration: {cal['file']}, "
+        "  calibration: none (the records are declined before calibrating)" if cal["file"] is None else f"  calibration: {cal['file']}, "
         + ("from the cache" if cal["cached"] else f"built in {cal['seconds']:.1f} s and stored for the next record like these"),
         *_model_lines(res["record_model"]),
         "",

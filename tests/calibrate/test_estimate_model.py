@@ -222,3 +222,76 @@ def test_housner_model_puts_sigma_y_over_theta_cr_in_the_calibration_key(tmp_pat
     assert simulated["load"] == {"kind": "white"} and simulated["sensor_noise"]["std"] == 0.0
     assert main([*args, "--model", "housner", "--theta-cr", "0.8"]) == 0  # another ratio, another calibration
     assert json.loads(capsys.readouterr().out)["calibration"]["file"] != res["calibration"]["file"]
+
+
+def test_a_measured_corner_below_the_floor_is_declined_with_its_corner_and_no_calibration(tmp_path, capsys):
+    """A record under a low-pass load at half the rocking frequency: the colour is measured,
+    its corner lies below COLOUR_CORNER_FLOOR, and `rockdec estimate` answers `e: null` with
+    one sentence naming the measured corner and the declared load that would be calibrated,
+    before building any calibration; the text report says so too."""
+    y = _record(31, pole=Load("lowpass", 0.5).pole(75.0), dt=DT_CORNER_1, n=200_000)
+    path = tmp_path / "r.npy"
+    np.save(path, y)
+    cache = tmp_path / "cache"
+    assert main(["estimate", str(path), "--dt", str(DT_CORNER_1), "--cache", str(cache), "--json"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    corner = res["record_model"]["measured"]["load_corner_rocking"]["value"]
+    assert res["record_model"]["measured"]["detected"]["colour"] and corner < inference.COLOUR_CORNER_FLOOR
+    assert res["e"] is None and res["interval"] == [None, None] and res["estimator"] is None
+    assert f"corner at {corner:.2f} +- " in res["reason"] and "--load" in res["reason"] and res["reason"].count(". ") == 0
+    assert not any(cache.glob("calibration-*.nc")) and res["calibration"]["file"] is None
+    assert all(est["raw"] is not None or name not in ("e_0", "e_v") for name, est in res["estimators"].items())
+    assert main(["estimate", str(path), "--dt", str(DT_CORNER_1), "--cache", str(cache)]) == 0
+    text = capsys.readouterr().out
+    assert "e: not estimated: the load measured on these records is low-pass" in text and "calibration: none" in text
+
+
+def test_the_colour_decline_takes_only_a_measured_corner_below_the_floor():
+    """A declared load is calibrated as declared, a white load or a corner at or above the
+    floor is not declined; the sentence names the corner and the floor."""
+    low = RecordModel(load=Load("lowpass", 0.7))
+    assert inference.colour_decline(low, {"load": "declared"}, None) is None
+    assert inference.colour_decline(RecordModel(), {"load": "measured"}, None) is None
+    assert inference.colour_decline(RecordModel(load=Load("lowpass", inference.COLOUR_CORNER_FLOOR)), {"load": "measured"}, None) is None
+    reason = inference.colour_decline(low, {"load": "measured"}, None)
+    assert "0.70 times the rocking frequency" in reason and f"below {inference.COLOUR_CORNER_FLOOR:g}" in reason
+
+
+@pytest.mark.parametrize("rate_se, declined", [(0.0, False), (0.02, False), (0.5, True)])
+def test_a_measured_corner_above_the_floor_must_be_clear_of_it_by_its_errors(rate_se, declined):
+    """A corner read at 3 with an error of a third of it is not shown to lie above the floor
+    (declined, the sentence says so); with a small error it is calibrated."""
+    from types import SimpleNamespace
+
+    alpha = math.exp(-2 * math.pi * 3.0 / 75.0)
+    measurement = SimpleNamespace(pole=SimpleNamespace(value=alpha, se=rate_se * alpha))  # se of -ln(alpha), relative
+    reason = inference.colour_decline(RecordModel(load=Load("lowpass", 3.0)), {"load": "measured"}, measurement)
+    assert (reason is not None) == declined
+    if declined:
+        se = 3.0 * rate_se / -math.log(alpha)
+        assert f"3.00 +- {se:.2f}" in reason and f"not {inference.COLOUR_CORNER_Z:g} errors above" in reason
+
+
+def test_coloured_calibration_sets_are_moved_to_the_calibrations_samples_per_cycle(monkeypatch):
+    """Under a low-pass load the sets of a grid point are simulated again at a corrected
+    step until their median samples per cycle is within SET_PPC_TOLERANCE of the
+    calibration's, or SET_STEP_TRIES corrections are spent, and the try nearest the target
+    is kept; under a white load they are simulated once."""
+    calls = []
+    real = calibration._sets
+
+    def spy(*args):
+        out = real(*args)
+        calls.append((float(np.nanmedian(out[2])), out[0]))
+        return out
+
+    monkeypatch.setattr(calibration, "_sets", spy)
+    for load, n_max in ((Load("lowpass", 3.0), 1 + calibration.SET_STEP_TRIES), (Load(), 1)):
+        calls.clear()
+        settings = {**calibration.calibration_settings([20_000], 75.0, model=RecordModel(load=load)), "sets_per_e": 6}
+        raw, _ = calibration._grid_point(0, 0.8, settings, 12345)
+        assert 1 <= len(calls) <= n_max and np.isfinite(raw).any()
+        misses = [abs(math.log(m / settings["points_per_cycle"])) for m, _ in calls]
+        assert all(miss > calibration.SET_PPC_TOLERANCE for miss in misses[:-1])  # stops at the first within tolerance
+        assert len(calls) == n_max or misses[-1] <= calibration.SET_PPC_TOLERANCE or load.kind == "white"
+        np.testing.assert_array_equal(raw, calls[int(np.argmin(misses))][1])

@@ -206,3 +206,14 @@ def test_a_structure_function_without_spread_is_refused_in_one_sentence_not_an_i
         warnings.simplefilter("ignore", RuntimeWarning)
         with pytest.raises(InputError, match="no usable spread"):
             rm.fit_structure(np.zeros(rm.MAX_LAG + 1))
+
+
+def test_a_fit_that_gives_every_variance_to_noise_has_no_noise_ratio():
+    """Second differences of pure white noise (``sigma_n^2 (6, -4, 1, 0, ...)``) larger than
+    the record's variance leave no rocking ``sigma_Y``: the noise ratio is NaN, not a
+    division by zero (a jackknife block of a coloured, noisy record at e = 0.95 met it)."""
+    gamma = np.zeros(rm.MAX_LAG + 1)
+    gamma[:3] = [6.0, -4.0, 1.0]
+    out = rm._quantities(1000.0, 0.0, 1.0, np.array([500.0, 500.0]), np.array([-1.0, 1.0]), gamma * 1000.0,
+                         np.full(rm.MAX_LAG + 1, 1000.0), 0.1)
+    assert out["sigma_y"] == 0.0 and out["noise_var"] == pytest.approx(1.0) and math.isnan(out["noise_ratio"])

@@ -85,6 +85,28 @@ def test_tiny_study_table_has_its_columns_and_invariants(tiny_table):
     assert markdown.count("\n| kernel") + markdown.count("\n| reference") == len(table)
 
 
+def test_tiny_study_counts_declined_records_apart(tiny_table):
+    """Coverage of the answered records times their number is the coverage of every record
+    (a null not covered) times theirs; the declined share is the nulls' share; the table
+    shows it and the figure draws a cell of any kind."""
+    from rockdec.report import figures
+
+    datasets, table = tiny_table
+    for ds in datasets:
+        row = coverage.summary(ds)
+        n = ds.sizes["record"]
+        answered = np.isfinite(ds["low"].values) & np.isfinite(ds["high"].values)
+        assert row["answered"] == answered.sum() and row["declined"] == pytest.approx(1 - answered.sum() / n)
+        if answered.any():
+            assert row["answered_coverage"] * row["answered"] == pytest.approx(row["coverage"] * n)
+            assert 0.0 <= row["answered_coverage_se"] <= 0.5
+        else:
+            assert math.isnan(row["answered_coverage"]) and not row["in_band"]
+    markdown = coverage.markdown(table)
+    assert "| declined | coverage of answered |" in markdown
+    figures.fig_coverage(table)
+
+
 def test_tiny_study_places_the_corner(tiny_table):
     """The records' own corner, in their own rocking frequencies, is the cell's within the
     spread of two records' sigma_Y (the median of the pilots is placed within 1.5 %)."""

@@ -58,6 +58,25 @@ G_FACTOR = 2.0
 #: records (a spike that inflates ``sigma_Y`` leaves too few triggers).
 SPIKE_SIGMAS = 15.0
 
+#: A load measured as low-pass with its corner below this many rocking frequencies
+#: ``1/T(sigma_Y)`` (eq. 5) at the samples per cycle the analysis reads is declined before
+#: any calibration (:func:`colour_decline`). Measured on the calibration's own record sets
+#: (200,000 samples, 30 sets at one step, ``e`` = 0.8, 0.9, 0.95; README "Your own
+#: record"): the samples per cycle read off them spread by a factor (90th over 10th
+#: percentile) of 1.1-1.3 at corner 3, 1.2-1.6 at corner 2, 1.3-2.3 at 1.5, 1.4-8.7 at 1
+#: and 2-35 at 0.5: below 2 the block swings between rocking and hardly leaving rest, so
+#: records read at one sampling are no longer alike and no calibration at one sampling
+#: describes them. The coverage study (:mod:`rockdec.studies.coverage`) checks the
+#: threshold: records at corner 3 are read at 2.9-3.1 and covered, those at 0.5 and 1 are
+#: read at 0.5-1.1, where the paper's calibration covers 41-74 %.
+COLOUR_CORNER_FLOOR = 2.0
+
+#: A measured corner counts as above :data:`COLOUR_CORNER_FLOOR` only when it lies this many
+#: standard errors above it: records of the coverage study whose corner (0.5 or 1) was read
+#: above 2 had errors of 0.65-1.7 (read 2.15 and 3.19), those at corner 3 errors of
+#: 0.03-0.06 (read 2.9-3.6, 19-34 errors above 2).
+COLOUR_CORNER_Z = 2.0
+
 #: Cost model of :func:`cost`: seconds per sample to read a CSV (pandas, on an idle 2-core
 #: machine) and to do all but the calibration (read a NetCDF record, analyse it, measure
 #: its model, check it: 22.7 s of CPU on 20 million samples, ``benchmarks/long_record.py``);
@@ -269,6 +288,55 @@ def model_report(measurement, why_not: str | None, analysis: measured.Analysis, 
     return out
 
 
+def colour_decline(model: RecordModel, sources: dict, measurement) -> str | None:
+    """Why ``e`` is declined for a measured low-pass load whose corner is not shown to lie
+    above :data:`COLOUR_CORNER_FLOOR` rocking frequencies (below it, or less than
+    :data:`COLOUR_CORNER_Z` standard errors above it), in one sentence naming the measured
+    corner and what would help; else ``None``. A declared load is calibrated as declared:
+    the selection (:func:`select`) then judges its belts."""
+    if sources.get("load") != "measured" or model.load.kind != "lowpass":
+        return None
+    corner, se = model.load.corner, 0.0
+    if measurement is not None and 0.0 < measurement.pole.value < 1.0:
+        se = corner * measurement.pole.se / (measurement.pole.value * -math.log(measurement.pole.value))
+    if corner - COLOUR_CORNER_Z * se >= COLOUR_CORNER_FLOOR:
+        return None
+    where = f"below {COLOUR_CORNER_FLOOR:g}" if corner < COLOUR_CORNER_FLOOR else f"not {COLOUR_CORNER_Z:g} errors above {COLOUR_CORNER_FLOOR:g}"
+    return (
+        f"the load measured on these records is low-pass with its corner at {corner:.2f}"
+        + (f" +- {se:.2f}" if se > 0.0 else "")
+        + f" times the rocking frequency, {where}, where the coverage study finds that no calibration tells such a load "
+        "apart from e; if the load is known, declare it (--load lowpass:CORNER, spectrum:FILE or base:FILE, a record of "
+        "the base's acceleration) and the calibration simulates it, with its coverage checked"
+    )
+
+
+def _declined(records: list[Record], analysis: measured.Analysis, notes: list, model_json: dict, g: float | None, reason: str) -> dict:
+    """:func:`estimate`'s answer to records declined before any calibration
+    (:func:`colour_decline`): every estimator's raw value, no corrected value or interval,
+    ``e`` null with ``reason``; ``g`` as given, else not corrected (``None``)."""
+    why = "not calibrated: the records are declined (see the reason)"
+    per = {
+        name: {
+            "raw": _num(analysis.raw[name]), "e": None, "beyond": None, "calibrated_range": None, "interval": [None, None],
+            "coverage": None, "triggers": int(analysis.count[registry.trigger(name)][-1]), "notes": [],
+        }
+        for name in registry.ESTIMATORS
+    }
+    return {
+        "e": None, "interval": [None, None], "reason": reason, "estimator": None,
+        "selection": [{"estimator": name, "width": None, "coverage": None, "holds": False, "why_not": why} for name in registry.CANDIDATES],
+        "coverage": None, "raw": None, "g": None if g is None else _num(g), "g_given": g is not None,
+        "g_raw": _num(analysis.raw[measured.G_NAME]), "g_interval": None, "g_coverage": None,
+        "g_interval_note": "as given (--g)" if g is not None else "no interval: no e was estimated, and g is corrected at the corrected e",
+        "points_per_cycle": _num(analysis.points_per_cycle), "sigma_y": _num(analysis.sigma_y), "dt": analysis.dt,
+        "records": [r.source for r in records], "samples": int(sum(r.theta.size for r in records)),
+        "nan_samples": int(analysis.nan_samples), "record_model": model_json, "estimators": per, "warnings": notes,
+        "diagnostics": {}, "rockdec_version": __version__, "calibration": {"file": None, "cached": False, "seconds": 0.0},
+        "_analysis": analysis, "_belts": {},
+    }
+
+
 def coverage_floor(n_sets: int) -> float:
     """Lowest calibrated coverage (:func:`rockdec.calibrate.belt.calibration_coverage`) at which an
     interval is taken to hold 95 %: the lower end of the binomial band
@@ -391,6 +459,12 @@ def estimate(
         raise InputError("Housner's model (eq. 2) needs the block's critical angle theta_cr, and only it; give both or neither.")
     ratio = analysis.sigma_y / theta_cr if theta_cr is not None else None
     cal_settings = calibration.calibration_settings([r.theta.size for r in records], analysis.points_per_cycle, settings, model, ratio)
+    declined = colour_decline(model, sources, measurement)
+    if declined:
+        simulated = RecordModel.from_key(cal_settings["record_model"])
+        model_json = model_report(measurement, why_not if measuring else None, analysis, sources, simulated, cal_settings)
+        model_json["simulated"]["described"] = f"nothing (declined; a calibration would simulate {model_json['simulated']['described']})"
+        return _declined(records, analysis, notes, model_json, g, declined)
     scale = calibration.spread_scale(cal_settings, samples)
     shortened = (
         f"; the records' {samples} samples are calibrated on simulated records of {sum(cal_settings['lengths'])} samples, "

@@ -606,9 +606,11 @@ def fig_coverage(table) -> Figure:
 
     ``table``: :func:`rockdec.studies.coverage.table` (one row per cell). x axis: the conditions,
     the true ``e`` side by side within each; filled circles the kernel's records, crosses
-    the reference simulator's. Left: coverage (the band :data:`rockdec.studies.coverage.COVERAGE_BAND`
-    shaded, 95 % dashed) with its binomial standard error, and open circles for the paper
-    model's interval on the same records. Right: corrected bias over its sd (the band
+    the reference simulator's. Left: coverage on the records the tool answered (the band
+    :data:`rockdec.studies.coverage.COVERAGE_BAND` shaded, 95 % dashed) with its binomial
+    standard error, the share of records declined written beside it (a cell declined
+    whole is a triangle on the axis's floor), and open circles for the paper model's
+    interval on every record. Right: corrected bias over its sd (the band
     ``+-`` :data:`rockdec.studies.coverage.BIAS_RATIO` shaded).
     """
     from rockdec.studies.coverage import BIAS_RATIO, COVERAGE_BAND
@@ -620,13 +622,21 @@ def fig_coverage(table) -> Figure:
     fig = _new_figure(13.0, 4.5)
     cov_ax, bias_ax = fig.subplots(1, 2)
     width = 0.8 / len(es)
+    shown = np.concatenate([table["answered_coverage"].to_numpy(float), table["paper_coverage"].to_numpy(float)])
+    floor = min(0.5, float(np.nanmin(shown)) - 0.05) if np.isfinite(shown).any() else 0.5
     for row in table.itertuples():
         x = conditions.index(row.condition) + (es.index(row.e_true) - (len(es) - 1) / 2) * width
         colour = colours[es.index(row.e_true)]
         kernel = row.simulator == "kernel"
         x += 0.0 if kernel else width / 3
         marker = "o" if kernel else "x"
-        cov_ax.errorbar(x, row.coverage, yerr=row.coverage_se, color=colour, marker=marker, ms=5, lw=0.8, ls="none")
+        if row.answered:
+            cov_ax.errorbar(x, row.answered_coverage, yerr=row.answered_coverage_se, color=colour, marker=marker, ms=5, lw=0.8, ls="none")
+        else:
+            cov_ax.plot(x, floor + 0.01, marker="v", color=colour, ms=6, ls="none")
+        if row.declined > 0:
+            y = row.answered_coverage if row.answered else floor + 0.01
+            cov_ax.annotate(f"{row.declined:.0%}", (x, y), xytext=(0, 7), textcoords="offset points", ha="center", fontsize=6, color=colour)
         if kernel:
             cov_ax.plot(x, row.paper_coverage, marker="o", mfc="none", color=colour, ms=5, ls="none")
         bias_ax.plot(x, row.bias_over_sd, color=colour, marker=marker, ms=5, ls="none")
@@ -638,10 +648,11 @@ def fig_coverage(table) -> Figure:
         cov_ax.plot([], [], marker="o", color=colour, ls="none", label=f"e = {e:g}")
     cov_ax.plot([], [], marker="o", mfc="none", color="0.4", ls="none", label="paper model's interval")
     cov_ax.plot([], [], marker="x", color="0.4", ls="none", label="reference simulator")
-    for ax, what in ((cov_ax, "coverage of the reported 95 % interval"), (bias_ax, "corrected bias / sd")):
+    cov_ax.plot([], [], marker="v", color="0.4", ls="none", label="every record declined (% beside: share declined)")
+    for ax, what in ((cov_ax, "coverage of the reported 95 % interval (answered records)"), (bias_ax, "corrected bias / sd")):
         ax.set_xticks(range(len(conditions)), [c.replace("_", "\n") for c in conditions], fontsize=8)
         ax.set(xlabel="condition", ylabel=what)
-    cov_ax.set_ylim(min(0.5, float(np.nanmin(table["coverage"])) - 0.05) if len(table) else 0.5, 1.02)
-    cov_ax.legend(fontsize=7, loc="lower left")
+    cov_ax.set_ylim(floor, 1.02)
+    cov_ax.legend(fontsize=7, loc="lower left", bbox_to_anchor=(0.0, 1.02), ncol=4)  # above: the floor holds the declined cells
     bias_ax.legend(fontsize=7)
     return fig

@@ -157,7 +157,7 @@ def estimate_record(theta: np.ndarray, dt: float, source: str, cache_dir, model)
         "estimator": out["estimator"] or "",
         "warnings": list(out["warnings"]),
         "points_per_cycle": _num(out["points_per_cycle"]),
-        "calibration": out["calibration"]["file"],
+        "calibration": out["calibration"]["file"] or "",
         "per": {name: (_num(v["e"]), *((_num(x) for x in v["interval"]) if v["e"] is not None else (math.nan, math.nan)))
                 for name, v in out["estimators"].items()},
         **_model_read(out.get("record_model")),
@@ -277,6 +277,18 @@ def _coverage(e: float, low, high) -> float:
     return float(np.mean((low <= e) & (e <= high)))
 
 
+def _answered(e: float, low, high) -> tuple[float, float, int]:
+    """Coverage of ``e`` among the records answered (finite ends), its binomial standard
+    error and the number answered; NaN coverage and error when none is."""
+    low, high = np.asarray(low, dtype=float), np.asarray(high, dtype=float)
+    ok = np.isfinite(low) & np.isfinite(high)
+    n = int(ok.sum())
+    if n == 0:
+        return math.nan, math.nan, 0
+    cov = float(np.mean((low[ok] <= e) & (e <= high[ok])))
+    return cov, math.sqrt(cov * (1 - cov) / n), n
+
+
 def _median(values) -> float:
     """Median of the finite ``values``; NaN when there is none."""
     values = np.asarray(values, dtype=float)
@@ -284,7 +296,11 @@ def _median(values) -> float:
 
 
 def summary(ds: xr.Dataset) -> dict:
-    """One row of the study's table for the cell ``ds`` (:func:`run_cell`)."""
+    """One row of the study's table for the cell ``ds`` (:func:`run_cell`): ``coverage`` over
+    every record (a null counted as not covered) and, apart, ``declined`` (the share of
+    records with a null ``e``) and ``answered_coverage`` with its binomial standard error
+    over the ``answered`` records, by which ``in_band`` judges the cell (a cell declined
+    whole is not in the band)."""
     e = ds.attrs["e_true"]
     n = ds.sizes["record"]
     values = ds["e_hat"].values
@@ -293,6 +309,7 @@ def summary(ds: xr.Dataset) -> dict:
     bias = float(np.mean(values[ok]) - e) if ok.any() else math.nan
     sd = float(np.std(values[ok], ddof=1)) if ok.sum() > 1 else math.nan
     paper_ok = np.isfinite(ds["paper_e"].values)
+    answered, answered_se, n_answered = _answered(e, ds["low"].values, ds["high"].values)
     row = {
         "simulator": ds.attrs["simulator"],
         "condition": ds.attrs["condition"],
@@ -302,6 +319,10 @@ def summary(ds: xr.Dataset) -> dict:
         "records": n,
         "coverage": cov,
         "coverage_se": math.sqrt(max(cov * (1 - cov), 0.0) / n),
+        "answered": n_answered,
+        "answered_coverage": answered,
+        "answered_coverage_se": answered_se,
+        "declined": 1.0 - n_answered / n,
         "bias": bias,
         "sd": sd,
         "bias_over_sd": bias / sd if sd > 0 else math.nan,
@@ -325,7 +346,7 @@ def summary(ds: xr.Dataset) -> dict:
         "coloured": float(np.mean(ds["coloured"].values)),
         "calibrations": len({c for c in ds["calibration"].values if c}),
     }
-    row["in_band"] = bool(COVERAGE_BAND[0] <= cov <= COVERAGE_BAND[1])
+    row["in_band"] = bool(COVERAGE_BAND[0] <= answered <= COVERAGE_BAND[1])
     row["bias_ok"] = bool(abs(row["bias_over_sd"]) <= BIAS_RATIO)
     return row
 
@@ -341,13 +362,15 @@ def table(datasets) -> pd.DataFrame:
 
 
 def markdown(tab: pd.DataFrame) -> str:
-    """The table as Markdown: the reported interval's coverage (its binomial standard error;
-    bold outside :data:`COVERAGE_BAND`), corrected bias and sd, median width, nulls, the
-    paper model's width and coverage, and the records' samples per cycle, corner and noise
-    (true, and as the tool read them); the warnings and null reasons of each cell below."""
+    """The table as Markdown: the share of records declined (``e`` null), the coverage of
+    the reported interval on the records answered (its binomial standard error; bold
+    outside :data:`COVERAGE_BAND`, ``-`` when every record is declined), corrected bias and
+    sd, median width, the paper model's width and coverage (every record, a null counted
+    as not covered), and the records' samples per cycle, corner and noise (true, and as the
+    tool read them); the warnings and null reasons of each cell below."""
     lines = [
-        "| simulator | condition | e | n | coverage | bias | sd | bias/sd | width | nulls | paper-model width | paper-model coverage | "
-        "samples/cycle (true, read) | corner (true, read) | noise read | noisy, coloured | reported by |",
+        "| simulator | condition | e | n | declined | coverage of answered | bias | sd | bias/sd | width | paper-model width | "
+        "paper-model coverage | samples/cycle (true, read) | corner (true, read) | noise read | noisy, coloured | reported by |",
         "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
     ]
 
@@ -356,10 +379,12 @@ def markdown(tab: pd.DataFrame) -> str:
 
     for r in tab.itertuples():
         flag = "" if r.in_band else "**"
+        covered = "-" if not r.answered else (f"{flag}{100 * r.answered_coverage:.0f} %{flag} (±{100 * r.answered_coverage_se:.0f}, "
+                                              f"n = {r.answered})")
         lines.append(
-            f"| {r.simulator} | {r.condition} | {r.e_true:g} | {r.records} | {flag}{100 * r.coverage:.0f} %{flag} "
-            f"(±{100 * r.coverage_se:.0f}) | {num(r.bias, '+.4f')} | {num(r.sd, '.4f')} | {num(r.bias_over_sd, '+.2f')} | "
-            f"{num(r.median_width, '.4f')} | {r.nulls} | {num(r.paper_median_width, '.4f')} | {100 * r.paper_coverage:.0f} % | "
+            f"| {r.simulator} | {r.condition} | {r.e_true:g} | {r.records} | {100 * r.declined:.0f} % | {covered} "
+            f"| {num(r.bias, '+.4f')} | {num(r.sd, '.4f')} | {num(r.bias_over_sd, '+.2f')} | "
+            f"{num(r.median_width, '.4f')} | {num(r.paper_median_width, '.4f')} | {100 * r.paper_coverage:.0f} % | "
             f"{num(r.ppc_true, '.0f')}, {num(r.ppc_read, '.0f')} | {num(r.corner_true, '.2f')}, {num(r.corner_read, '.2f')} | "
             f"{num(r.noise_read, '.3f')} | {100 * r.noisy:.0f} %, {100 * r.coloured:.0f} % | {r.estimators or '-'} |"
         )
