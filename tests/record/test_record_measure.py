@@ -214,6 +214,6 @@ def test_a_fit_that_gives_every_variance_to_noise_has_no_noise_ratio():
     division by zero (a jackknife block of a coloured, noisy record at e = 0.95 met it)."""
     gamma = np.zeros(rm.MAX_LAG + 1)
     gamma[:3] = [6.0, -4.0, 1.0]
-    out = rm._quantities(1000.0, 0.0, 1.0, np.array([500.0, 500.0]), np.array([-1.0, 1.0]), gamma * 1000.0,
-                         np.full(rm.MAX_LAG + 1, 1000.0), 0.1)
-    assert out["sigma_y"] == 0.0 and out["noise_var"] == pytest.approx(1.0) and math.isnan(out["noise_ratio"])
+    out = rm._quantities(np.array([1000.0]), np.array([0.0]), np.array([1.0]), np.array([[500.0, 500.0]]), np.array([[-1.0, 1.0]]),
+                         gamma[None, :] * 1000.0, np.full((1, rm.MAX_LAG + 1), 1000.0), 0.1)
+    assert out["sigma_y"][0] == 0.0 and out["noise_var"][0] == pytest.approx(1.0) and math.isnan(out["noise_ratio"][0])

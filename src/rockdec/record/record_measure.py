@@ -511,7 +511,7 @@ def _quantities(n, sy, syy, n_side, s_side, prod, count, dt) -> dict:
             "pole": alpha,
             "impulse_sd": np.sqrt(np.maximum(impulse_var, 0.0)) / dt,
             "noise_sd": np.sqrt(np.maximum(noise_var, 0.0)),
-            "noise_ratio": np.sqrt(np.maximum(noise_var, 0.0)) / sigma_y,
+            "noise_ratio": np.where(sigma_y > 0.0, np.sqrt(np.maximum(noise_var, 0.0)) / np.where(sigma_y > 0.0, sigma_y, 1.0), math.nan),
             "corner_hz": corner,
             "corner_ratio": np.where(g > 0, corner * period_from_g(sigma_y, np.where(g > 0, g, 1.0)), math.nan),
             "r": gamma[:, 1:] / gamma[:, :1],
