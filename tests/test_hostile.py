@@ -958,9 +958,10 @@ def test_a_50_million_sample_record_is_refused_up_front_with_its_estimate(rockin
         _sparse(path, head, 50_000_000 * (len(head) // 4001))
     seconds, _ = inference.cost(50_000_000, kind == "csv", False)
     monkeypatch.setattr(cli, "MAX_SECONDS", min(cli.MAX_SECONDS, seconds / 2))
+    monkeypatch.setattr(checks, "available_memory", lambda: 2.0**50)  # the time refusal, whatever memory is free
     argv = ["estimate", str(path), "--cache", str(tmp_path / "c")] + (["--dt", "0.01"] if kind == "npy" else [])
     start = time.perf_counter()
-    refused(argv, tmp_path, capsys, ["e+07 samples need about", "on 2 cores", "pass --yes"])
+    refused(argv, tmp_path, capsys, ["e+07 samples need about", "on 2 cores", "pass --yes", "records of 1e+06 samples"])
     assert time.perf_counter() - start < 10, "refused up front, not after reading the record"
 
 

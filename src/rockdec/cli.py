@@ -389,8 +389,8 @@ def _check_estimate_size(args) -> float:
     if seconds > MAX_SECONDS and not args.yes:
         raise UsageError(
             f"{what} need about {_duration(seconds)} on 2 cores to read, analyse and calibrate (the calibration simulates "
-            f"{len(inference.calibration.E_GRID) * inference.calibration.SETS_PER_E} records as long); pass --yes to go on, "
-            "or give a shorter record."
+            f"{inference.calibration_sets(samples)} records of {sum(inference.calibration.simulated_lengths([samples])):.3g} "
+            "samples); pass --yes to go on, or give a shorter record."
         )
     return seconds
 

@@ -96,17 +96,24 @@ def stage_seconds(samples: int, csv: bool, g_given: bool, cores: int = 2) -> dic
     pilot sets of that length), from :data:`CSV_SECONDS` and the other constants of the
     model."""
     simulated = sum(calibration.simulated_lengths([samples]))
-    sets = calibration.SETS_PER_E
-    if simulated < samples:  # the step search's pilots are as long as the sets (calibration.step_for)
-        from rockdec.physics.simulate import STEP_ITERATIONS
-
-        sets += calibration.PILOT_SETS * STEP_ITERATIONS["white"]
-    grid = calibration.E_GRID_LONG if simulated < samples else calibration.E_GRID
     return {
         "reading": samples * CSV_SECONDS * csv,
         "analysing": samples * ANALYSIS_SECONDS * (1 + g_given),
-        "calibrating": simulated * len(grid) * sets * CALIBRATION_SECONDS / cores,
+        "calibrating": simulated * calibration_sets(samples) * CALIBRATION_SECONDS / cores,
     }
+
+
+def calibration_sets(samples: int) -> int:
+    """How many records a calibration for records of ``samples`` in all simulates:
+    :data:`rockdec.calibrate.calibration.SETS_PER_E` at each ``e`` of its grid, and beyond
+    :data:`rockdec.calibrate.calibration.LENGTH_CAP` the step search's pilot sets too (as
+    long as the sets, :func:`rockdec.calibrate.calibration.step_for`) on the longer grid."""
+    if sum(calibration.simulated_lengths([samples])) == samples:
+        return len(calibration.E_GRID) * calibration.SETS_PER_E
+    from rockdec.physics.simulate import STEP_ITERATIONS
+
+    sets = calibration.SETS_PER_E + calibration.PILOT_SETS * STEP_ITERATIONS["white"]
+    return len(calibration.E_GRID_LONG) * sets
 
 
 def cost(samples: int, csv: bool, g_given: bool, cores: int = 2) -> tuple[float, float]:
