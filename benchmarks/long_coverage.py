@@ -77,7 +77,7 @@ def table(cal, test: xr.Dataset, scale: float) -> pd.DataFrame:
                 per[name] = {"e": None if side or not np.isfinite(c.value) else c.value, "beyond": side, "notes": list(c.notes),
                              "interval": [None if not np.isfinite(c.low) else c.low, None if not np.isfinite(c.high) else c.high],
                              "coverage": cover[name], "calibrated_range": [belts[name].e[0], belts[name].e[-1]]}
-            chosen, _, _ = inference.select(per, n_sets)
+            chosen, _, _ = inference.select(per, n_sets, belts)
             shown = per[chosen] if chosen else {"e": None, "interval": [None, None]}
             if "diagnostic" in test:
                 limits = diagnostics.thresholds(cal, shown["e"], shown["interval"], measured.DEFAULT_SETTINGS["level"], 1.0 / scale**2)

@@ -514,8 +514,9 @@ GLOSSARY = """glossary:
              (near 95 % means the interval can be trusted)
   *          the reported e: of e_0, e4 and e_v, those with a value, an interval narrower
              than the calibrated range, and a coverage that holds (at least 95 % less
-             the binomial error of the calibration's sets, 92.5 % for 300), the one with
-             the narrowest interval; none: e is not estimated and the report says why
+             the binomial error of the calibration's sets, 92.5 % for 300), the one whose
+             calibration gives the narrowest interval at their common e (the median of
+             their values); none: e is not estimated and the report says why
   record model  what besides e makes the record, and what the calibration simulates:
              the load (white, or low-pass with its pole per sample and its corner in
              rocking frequencies), the sensor noise (in % of sigma_Y) and the rocking
@@ -571,7 +572,7 @@ def _estimate_text(res: dict) -> str:
         trusted = ", ".join(row["estimator"] for row in res["selection"] if row["holds"])
         lines += [
             f"e = {corrected}, 95 % interval [{fmt(res['interval'][0])}, {fmt(res['interval'][1])}] (estimator {res['estimator']}, "
-            f"marked *: the narrowest interval of the candidates whose calibrated coverage holds, {trusted});",
+            f"marked *: of the candidates whose calibrated coverage holds, {trusted}, the narrowest interval at their common e);",
             f"the interval held the true e on {pct(res['coverage'])} of the calibration's simulated records "
             "(in-sample; the README's coverage study checks independent records)",
         ]

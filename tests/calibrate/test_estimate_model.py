@@ -10,7 +10,7 @@ import math
 import numpy as np
 import pytest
 
-from rockdec.calibrate import calibration, inference
+from rockdec.calibrate import belt, calibration, inference
 from rockdec.rdd import measured
 from rockdec.record import record_measure
 from rockdec.cli import main, parse_sensor_noise
@@ -151,14 +151,34 @@ def _entry(e, low, high, coverage, beyond=None, notes=()):
     return {"e": e, "interval": [low, high], "coverage": coverage, "beyond": beyond, "notes": list(notes), "calibrated_range": [0.4, 0.995]}
 
 
-def test_the_narrowest_trusted_candidate_is_reported():
+def _unbiased_belts(**spreads):
+    """Belts with mean ``e`` and a constant spread per candidate over ``[0.4, 0.995]``:
+    away from the range's ends a raw value at the mean gets the interval ``e -+ Z95 spread``."""
+    e = np.linspace(0.4, 0.995, 4001)
+    return {name: belt.Belt(e, e.copy(), np.full_like(e, s), 0.0) for name, s in spreads.items()}
+
+
+def test_the_narrowest_trusted_candidate_at_the_common_e_is_reported():
     floor = inference.coverage_floor(600)
     assert floor == pytest.approx(0.95 - 1.959964 * math.sqrt(0.95 * 0.05 / 600), abs=1e-6)
+    belts = _unbiased_belts(e_0=0.03, e4=0.005, e_v=0.01)
     per = {"e_0": _entry(0.9, 0.85, 0.95, 0.95), "e4": _entry(0.9, 0.88, 0.92, floor - 0.01), "e_v": _entry(0.9, 0.87, 0.94, 0.94)}
-    name, rows, reason = inference.select(per, 600)
+    name, rows, reason = inference.select(per, 600, belts)
     assert name == "e_v" and reason is None  # e4 is narrower, but its calibrated coverage does not hold
     assert {row["estimator"]: row["holds"] for row in rows} == {"e_0": True, "e4": False, "e_v": True}
     assert "below" in next(row["why_not"] for row in rows if row["estimator"] == "e4")
+    widths = {row["estimator"]: row["width_at_common_e"] for row in rows}
+    assert widths["e_v"] == pytest.approx(2 * belt.Z95 * 0.01, abs=1e-3) and widths["e_0"] == pytest.approx(2 * belt.Z95 * 0.03, abs=1e-3)
+
+
+def test_a_record_interval_cut_short_at_the_range_end_does_not_win_the_selection():
+    """e_0's own interval is the shortest only because its scatter pushed it against the
+    calibrated range's lower end; e_v's belt is the narrower one at the candidates' common e."""
+    belts = _unbiased_belts(e_0=0.05, e4=0.05, e_v=0.02)
+    per = {"e_0": _entry(0.41, 0.4, 0.43, 0.95), "e4": _entry(0.6, 0.5, 0.7, 0.95), "e_v": _entry(0.62, 0.58, 0.66, 0.95)}
+    name, rows, _ = inference.select(per, 600, belts)
+    assert name == "e_v"
+    assert next(row["width"] for row in rows if row["estimator"] == "e_0") < next(row["width"] for row in rows if row["estimator"] == "e_v")
 
 
 def test_no_trusted_candidate_gives_null_with_a_one_sentence_reason():
@@ -166,9 +186,10 @@ def test_no_trusted_candidate_gives_null_with_a_one_sentence_reason():
 
     per = {"e_0": _entry(None, None, None, 0.95, beyond="above"), "e4": _entry(0.9, 0.8, 0.99, 0.5),
            "e_v": _entry(None, None, None, None, notes=["no raw estimate"])}
-    whole = inference.select({**per, "e_v": _entry(0.41, 0.4, 0.995, 0.95)}, 600)
+    belts = _unbiased_belts(e_0=0.03, e4=0.03, e_v=0.03)
+    whole = inference.select({**per, "e_v": _entry(0.41, 0.4, 0.995, 0.95)}, 600, belts)
     assert whole[0] is None and "spans the whole calibrated range" in whole[2]  # an interval that says nothing
-    name, rows, reason = inference.select(per, 600)
+    name, rows, reason = inference.select(per, 600, belts)
     assert name is None and not any(row["holds"] for row in rows)
     assert reason.startswith("no estimator can be trusted") and all(n in reason for n in per) and "\n" not in reason
     res = {"records": ["r.csv"], "samples": 1000, "dt": 0.01, "nan_samples": 0, "sigma_y": 0.01, "points_per_cycle": 75.0,

@@ -264,6 +264,17 @@ def _ends(b: Belt, inside: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return b.e[np.argmax(inside, axis=1)], b.e[b.e.size - 1 - np.argmax(inside[:, ::-1], axis=1)]
 
 
+def width_at(b: Belt, e: float) -> float:
+    """Width of the 95 % interval the belt gives a raw value equal to its mean at ``e``:
+    the interval an estimator gives at ``e`` apart from one record's scatter (wider where
+    the band is wide or the mean curve flat, narrower where it meets an end of the
+    calibrated range); NaN for an empty belt or a NaN ``e``."""
+    if b.e.size == 0 or not np.isfinite(e):
+        return float("nan")
+    low, high = _ends(b, _inside(b, np.array([np.interp(e, b.e, b.mean)])))
+    return float(high[0] - low[0])
+
+
 def correct_g(g_belt: Belt, g_raw: float, e: float) -> float:
     """``g`` read off a record, corrected for its window bias: ``g_raw`` over the mean
     ratio (measured ``g`` / true ``g``) of the calibration at the corrected ``e``; NaN when

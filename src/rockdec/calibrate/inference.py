@@ -332,7 +332,7 @@ def _declined(records: list[Record], analysis: measured.Analysis, notes: list, m
     }
     return {
         "e": None, "interval": [None, None], "reason": reason, "estimator": None,
-        "selection": [{"estimator": name, "width": None, "coverage": None, "holds": False, "why_not": why} for name in registry.CANDIDATES],
+        "selection": [{"estimator": name, "width": None, "width_at_common_e": None, "coverage": None, "holds": False, "why_not": why} for name in registry.CANDIDATES],
         "coverage": None, "raw": None, "g": None if g is None else _num(g), "g_given": g is not None,
         "g_raw": _num(analysis.raw[measured.G_NAME]), "g_interval": None, "g_coverage": None,
         "g_interval_note": "as given (--g)" if g is not None else "no interval: no e was estimated, and g is corrected at the corrected e",
@@ -352,13 +352,21 @@ def coverage_floor(n_sets: int) -> float:
     return 0.95 - belt.Z95 * math.sqrt(0.95 * 0.05 / max(n_sets, 1))
 
 
-def select(per: dict, n_sets: int) -> tuple[str | None, list[dict], str | None]:
+def select(per: dict, n_sets: int, belts: dict[str, belt.Belt]) -> tuple[str | None, list[dict], str | None]:
     """The reported estimator among :data:`rockdec.rdd.registry.CANDIDATES`: of those with a
     value, an interval narrower than the calibrated range, and a calibrated coverage that
-    holds (:func:`coverage_floor`), the one with the narrowest 95 % interval. Returns ``(name or None, selection, reason)``: ``selection``
-    lists each candidate's width, coverage, whether it holds and why not; ``reason`` is
-    one sentence when none can be trusted."""
+    holds (:func:`coverage_floor`), the one whose belt gives the narrowest 95 % interval at
+    a common ``e``, the median of the candidates' corrected values
+    (:func:`rockdec.calibrate.belt.width_at`). Each record's own intervals are not compared: an
+    estimator whose scatter put its interval against an end of the calibrated range, where
+    the interval is cut short, would be picked for that scatter, and the picked interval
+    would then miss more often than each candidate's own (on 20,000-sample records at
+    ``e = 0.85``: 89 % against 93-96 %). Returns ``(name or None, selection, reason)``:
+    ``selection`` lists each candidate's width, its width at the common ``e``, coverage,
+    whether it holds and why not; ``reason`` is one sentence when none can be trusted."""
     floor = coverage_floor(n_sets)
+    values = [per[name]["e"] for name in registry.CANDIDATES if per[name]["e"] is not None]
+    common = float(np.median(values)) if values else math.nan
     rows = []
     for name in registry.CANDIDATES:
         est = per[name]
@@ -375,10 +383,14 @@ def select(per: dict, n_sets: int) -> tuple[str | None, list[dict], str | None]:
             why = f"its calibrated coverage {'-' if cov is None else f'{cov:.1%}'} is below {floor:.1%}"
         else:
             why = None
-        rows.append({"estimator": name, "width": _num(width) if width is not None else None, "coverage": cov, "holds": why is None, "why_not": why})
+        rows.append({
+            "estimator": name, "width": _num(width) if width is not None else None,
+            "width_at_common_e": _num(belt.width_at(belts[name], common)) if why is None else None,
+            "coverage": cov, "holds": why is None, "why_not": why,
+        })
     trusted = [row for row in rows if row["holds"]]
     if trusted:
-        return min(trusted, key=lambda row: row["width"])["estimator"], rows, None
+        return min(trusted, key=lambda row: row["width_at_common_e"])["estimator"], rows, None
     reason = "no estimator can be trusted on these records: " + "; ".join(f"{row['estimator']}: {row['why_not']}" for row in rows)
     return None, rows, reason
 
@@ -501,7 +513,7 @@ def estimate(
             "triggers": int(analysis.count[trigger][-1]),
             "notes": [note for note in c.notes if not (side and "nearest point" in note)],  # no value is shown
         }
-    chosen, selection, reason = select(per, int(cal["raw"].sizes["e_true"] * cal["raw"].sizes["set"]))
+    chosen, selection, reason = select(per, int(cal["raw"].sizes["e_true"] * cal["raw"].sizes["set"]), belts)
     shown = per[chosen] if chosen else {"e": None, "interval": [None, None], "coverage": None, "raw": None}
     e_chosen = math.nan if shown["e"] is None else shown["e"]
     g_belt = simulated_belts[measured.G_NAME]
