@@ -147,3 +147,19 @@ def test_a_gross_defect_fires_its_check_and_names_it(clean, defect, words):
         y, step = theta[::4], 4 * dt  # about 19 samples per cycle
     fired, notes = _fired(y, step, cal)
     assert defect in fired and words in notes
+
+
+def test_the_trend_statistic_is_the_least_squares_slopes_t():
+    """One record: ``_trend_z`` is ``|slope / se|`` of scipy's straight-line fit; several: the
+    root mean square of the records' slopes over the pooled residual spread, so records with
+    opposite trends do not cancel; a trendless record stays near 1 and a trend grows it."""
+    from scipy import stats
+
+    rng = np.random.default_rng(3)
+    v = rng.normal(size=20)
+    fit = stats.linregress(np.arange(20), v)
+    assert diagnostics._trend_z(v, np.zeros(20, int)) == pytest.approx(abs(fit.slope / fit.stderr), rel=1e-12)
+    up, down = v + np.linspace(0, 4, 20), v[::-1] - np.linspace(0, 4, 20)
+    pooled = diagnostics._trend_z(np.r_[up, down], np.repeat([0, 1], 20))
+    assert pooled > 3 and pooled == pytest.approx(diagnostics._trend_z(np.r_[up, -down], np.repeat([0, 1], 20)), rel=1e-12)
+    assert np.isnan(diagnostics._trend_z(np.ones(20), np.zeros(20, int)))
