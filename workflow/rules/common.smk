@@ -107,6 +107,10 @@ FIGURES_CODE = find_spec("rockdec.report.figures").origin
 # that module reaches (rockdec.pipeline.steps and the modules it runs).
 STEPS_CODE = package_sources("rockdec.pipeline.in_snakemake")
 
+# `calibrate` runs there too, but reaches only the run contract's modules: editing a table or a
+# figure never recalibrates (and so never reruns the signature pass).
+CALIBRATE_CODE = [find_spec("rockdec.pipeline.in_snakemake").origin, *package_sources("rockdec.physics.run")]
+
 
 def step_code(script):
     """Source of every rockdec module workflow script ``script`` runs

@@ -1,8 +1,9 @@
 rule calibrate:
     """The run contract of the scene: model, step and burn-in from pilot simulations, and the
-    stationary statistics that set every trigger level."""
+    stationary statistics that set every trigger level. Inside the Snakemake process
+    (rockdec.pipeline.in_snakemake.calibrate): a second of work after imports the tables need anyway."""
     input:
-        code=step_code("calibrate.py"),
+        code=CALIBRATE_CODE,
     output:
         "results/{scene}/run.json",
     log:
@@ -10,12 +11,11 @@ rule calibrate:
     benchmark:
         "results/{scene}/benchmarks/calibrate.tsv"
     threads: 1
+    priority: 20  # the head of every path of the DAG
     params:
         physics=lambda w: physics(w.scene),
-    conda:
-        "../envs/rockdec.yaml"
-    script:
-        "../scripts/calibrate.py"
+    run:
+        in_snakemake.calibrate(log[0], params.physics, output[0])
 
 
 rule stored_series:
