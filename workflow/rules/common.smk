@@ -107,6 +107,13 @@ FIGURES_CODE = find_spec("rockdec.report.figures").origin
 # that module reaches (rockdec.pipeline.steps and the modules it runs).
 STEPS_CODE = package_sources("rockdec.pipeline.in_snakemake")
 
+# Those light steps (the stored series and their signature, the tables, the figures) ask for
+# no core of --cores when Snakemake runs the jobs itself: they are a thread of Snakemake's own
+# process, a second or less each, one at a time (rockdec.pipeline.in_snakemake.step), so the
+# stored series and fig. 2 are made while the signature pass holds the cores instead of
+# after it. A job sent elsewhere (a cluster) asks for one.
+IN_PROCESS_THREADS = 0 if workflow.local_exec else 1
+
 # `calibrate` runs there too, but reaches only the run contract's modules: editing a table or a
 # figure never recalibrates (and so never reruns the signature pass).
 CALIBRATE_CODE = [find_spec("rockdec.pipeline.in_snakemake").origin, *package_sources("rockdec.physics.run")]

@@ -19,23 +19,22 @@ rule calibrate:
 
 
 rule stored_series:
-    """The series the scene keeps (fig. 2), simulated under its run."""
+    """The series the scene keeps (fig. 2), simulated under its run: a handful of series,
+    inside the Snakemake process (rockdec.pipeline.steps.stored_series)."""
     input:
         "results/{scene}/run.json",
-        code=step_code("stored_series.py"),
+        code=STEPS_CODE,
     output:
         "results/{scene}/stored_series.nc",
     log:
         "results/{scene}/logs/stored_series.log",
     benchmark:
         "results/{scene}/benchmarks/stored_series.tsv"
-    threads: 1
+    threads: IN_PROCESS_THREADS
     params:
         records=lambda w: records(w.scene),
-    conda:
-        "../envs/rockdec.yaml"
-    script:
-        "../scripts/stored_series.py"
+    run:
+        in_snakemake.step(rule, log[0], input[0], output[0], params.records)
 
 
 rule series:
