@@ -2,6 +2,8 @@
 the run contract and the stored series, their files and their logs, without Snakemake."""
 
 import re
+import subprocess
+import sys
 import threading
 
 import netCDF4
@@ -69,3 +71,18 @@ def test_stored_series_are_the_simulators_series_of_the_stored_seeds_as_float32_
     steps.stored_signature(tmp_path / "s.nc", tmp_path / "sig.nc", SCENE["signatures"])
     with netCDF4.Dataset(tmp_path / "sig.nc") as nc:
         assert nc.dimensions["group"].size == 1 and run.Run.from_attrs(nc.__dict__) == contract
+
+
+def test_calibrate_loads_what_the_tables_need_beside_the_signature_pass(tmp_path):
+    probe = f"""
+import sys, threading
+from rockdec.pipeline import in_snakemake
+before = [name for name in in_snakemake.PRELOAD if name in sys.modules]
+in_snakemake.calibrate({str(tmp_path / 'c.log')!r}, {PHYSICS!r}, {str(tmp_path / 'run.json')!r})
+for thread in threading.enumerate():
+    if thread.name == "rockdec-preload":
+        thread.join()
+print(before, [name for name in in_snakemake.PRELOAD if name not in sys.modules])
+"""
+    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, check=True).stdout
+    assert out.split() == ["[]", "[]"]  # none loaded before, all loaded after

@@ -20,6 +20,13 @@ import traceback
 
 from rockdec.validate import InputError
 
+#: What the steps after the signature pass load on their first run and nothing before them
+#: does: the tables' code, xarray's groupby engine (flox, numpy_groupies) and the
+#: p-values' scipy.stats. :func:`calibrate` imports them in a thread of their own once the
+#: run contract is written, while the signature pass starts Python (one core idle), instead
+#: of on the path after the pass, where the tables and figures run one at a time.
+PRELOAD = ("rockdec.pipeline.replicates", "rockdec.report.tables", "flox", "scipy.stats")
+
 #: One :func:`step` at a time in a process: matplotlib (its fonts) and the HDF5 library
 #: under netCDF4 are not safe to use from two threads at once.
 _STEP_LOCK = threading.Lock()
@@ -51,7 +58,8 @@ def calibrate(log: str, physics: dict, output: str) -> None:
     (``run.json``), logged as :func:`step` logs, with the contract on a line of its own.
 
     Pilot simulations and a JSON file: neither matplotlib nor HDF5, so it takes no
-    :data:`_STEP_LOCK` and a figure that needs no data (fig. 1b) draws meanwhile.
+    :data:`_STEP_LOCK` and a figure that needs no data (fig. 1b) draws meanwhile. Then the
+    modules of :data:`PRELOAD` load beside the signature pass.
     """
 
     def work():
@@ -62,6 +70,15 @@ def calibrate(log: str, physics: dict, output: str) -> None:
         return f"run: {contract}"
 
     _logged("calibrate", log, work)
+    threading.Thread(target=_preload, name="rockdec-preload", daemon=True).start()
+
+
+def _preload() -> None:
+    """Import the modules of :data:`PRELOAD`."""
+    import importlib
+
+    for name in PRELOAD:
+        importlib.import_module(name)
 
 
 def _logged(rule: str, log: str, work) -> None:
