@@ -84,5 +84,5 @@ for thread in threading.enumerate():
         thread.join()
 print(before, [name for name in in_snakemake.PRELOAD if name not in sys.modules])
 """
-    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, check=True).stdout
+    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=120, check=True).stdout
     assert out.split() == ["[]", "[]"]  # none loaded before, all loaded after
