@@ -109,9 +109,11 @@ STEPS_CODE = package_sources("rockdec.pipeline.in_snakemake")
 
 # Those light steps (the stored series and their signature, the tables, the figures) ask for
 # no core of --cores when Snakemake runs the jobs itself: they are a thread of Snakemake's own
-# process, a second or less each, one at a time (rockdec.pipeline.in_snakemake.step), so the
-# stored series and fig. 2 are made while the signature pass holds the cores instead of
-# after it. A job sent elsewhere (a cluster) asks for one.
+# process, a second or less each, one at a time (rockdec.pipeline.in_snakemake.step). So the
+# stored series start with the signature pass instead of after it, and the tables and figures
+# all start as soon as it ends. (Snakemake starts no job, not even one of no core, while every
+# core is taken: the stored series' signature and fig. 2 wait for the pass's end.) A job
+# sent elsewhere (a cluster) asks for one.
 IN_PROCESS_THREADS = 0 if workflow.local_exec else 1
 
 # `calibrate` runs there too, but reaches only the run contract's modules: editing a table or a
