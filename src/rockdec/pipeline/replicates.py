@@ -24,8 +24,6 @@ reading's signatures are sums of units.
 
 from __future__ import annotations
 
-from concurrent.futures import ThreadPoolExecutor
-
 import numpy as np
 import pandas as pd
 import xarray as xr
@@ -155,20 +153,16 @@ def variant_cubes(run: Run, records: dict, variants, readings, series_files=(), 
         ]
         for settings in variants
     ]
-    def reading_cube(units, reading):
-        group_of_unit, replicate_of_group = groups[reading]
-        cube = signatures.pool(units, "group", by=group_of_unit)
-        cube = cube.assign_coords(replicate=("group", replicate_of_group + first_replicate, {"long_name": "replicate of the group"}))
-        cube.attrs.update({**run.to_attrs(), "reading": reading})
-        return cube
-
-    # each reading pools the units on its own (NumPy gathers and sums, the GIL released):
-    # on the pass's threads, every reading's numbers as one thread makes them
-    with ThreadPoolExecutor(max(1, int(threads))) as pool:
-        return [
-            dict(zip(groups, pool.map(reading_cube, [units] * len(groups), groups)))
-            for units in engine.compute(*lazy, threads=threads)
-        ]
+    out = []
+    for units in engine.compute(*lazy, threads=threads):
+        cubes = {}
+        for reading, (group_of_unit, replicate_of_group) in groups.items():
+            cube = signatures.pool(units, "group", by=group_of_unit)
+            cube = cube.assign_coords(replicate=("group", replicate_of_group + first_replicate, {"long_name": "replicate of the group"}))
+            cube.attrs.update({**run.to_attrs(), "reading": reading})
+            cubes[reading] = cube
+        out.append(cubes)
+    return out
 
 
 def gathered(cubes: list[xr.Dataset], curves: list[xr.Dataset]) -> tuple[xr.Dataset, xr.Dataset]:
