@@ -15,11 +15,12 @@ families, in the order a cold ``rockdec estimate`` meets them:
     :func:`rockdec.physics.simulate.simulate_block` (the exact integrator, eqs. 21-24);
 ``signatures``
     :func:`rockdec.rdd.signatures.trigger_sums` on float64 records (both triggers of eq. 19);
-``record model``
-    :func:`rockdec.record.record_measure.measure` (the record's load and noise model);
-``estimators``
+``analysis``
     :func:`rockdec.rdd.measured.analyse` with the kernels above already compiled: the
-    estimators of eqs. 25-27 and ``e_v``.
+    estimators of eqs. 25-27, ``e_v`` and ``g``;
+``record checks``
+    :func:`rockdec.record.diagnostics.sums` (the checks of a measured record and of the
+    calibration's sets; the record's model, :mod:`rockdec.record.record_measure`, is NumPy).
 
 Each later family runs after the earlier ones in its interpreter, the earlier ones compiled
 there but not counted, so a kernel two families share is counted once, in the first. With
@@ -37,7 +38,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-FAMILIES = ("numba's start", "simulation", "signatures", "record model", "estimators")
+FAMILIES = ("numba's start", "simulation", "signatures", "analysis", "record checks")
 
 CHILD = r"""
 import json, sys, time
@@ -45,7 +46,7 @@ import numpy as np
 import numba
 from rockdec.physics.simulate import simulate_block
 from rockdec.rdd import measured, signatures
-from rockdec.record import record_measure
+from rockdec.record import diagnostics
 
 def start():
     numba.njit(lambda x: x + 1.0)(1.0)
@@ -59,13 +60,13 @@ def signature_kernels():
     return signatures.trigger_sums(y, a=0.004, a_widths=np.array([0.0005, 0.001]), v=0.03,
                                    v_widths=np.array([0.005, 0.01]), n_lag=200, dt=0.0034, both_signs=True)
 
-def estimators():
+def analysis():
     return measured.analyse([y[0]], 0.0034)
 
-def record_model():
-    return record_measure.measure([y[0]], 0.0034)
+def record_checks():
+    return diagnostics.sums([y[0]])
 
-steps = [start, simulation, signature_kernels, record_model, estimators]
+steps = [start, simulation, signature_kernels, analysis, record_checks]
 target = int(sys.argv[1])
 times = {}
 for k, step in enumerate(steps[: target + 1]):
