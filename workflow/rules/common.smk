@@ -102,9 +102,9 @@ def default_products():
 
 FIGURES_CODE = find_spec("rockdec.report.figures").origin
 
-# The tables and figures run inside the Snakemake process (`run:` with rockdec.pipeline.in_snakemake.step,
-# in threads: profiles/default), so their libraries load once a run; their code input is what
-# that module reaches (rockdec.pipeline.steps and the modules it runs).
+# The stored series, the tables and the figures run inside the Snakemake process (`run:` with
+# rockdec.pipeline.in_snakemake.step, in threads: profiles/default), so their libraries load once
+# a run; their code input is what that module reaches (rockdec.pipeline.steps and the modules it runs).
 STEPS_CODE = package_sources("rockdec.pipeline.in_snakemake")
 
 # Those light steps (the stored series and their signature, the tables, the figures) ask for

@@ -1,15 +1,15 @@
-"""The workflow's rules that run inside the Snakemake process: the run contract, the tables
-and the figures.
+"""The workflow's rules that run inside the Snakemake process: the run contract, the stored
+series and their signature, the tables and the figures.
 
-``calibrate`` (a second of pilot simulations), ``estimates``, ``table_readings`` and the
-paper's figure rules take a fraction of a second to a few seconds each once NumPy, numba,
-xarray and matplotlib are loaded, so they are ``run:`` rules calling :func:`calibrate` and
-:func:`step` (the workflow's default profile runs those in threads of the Snakemake
-process, ``force-use-threads``) and load those libraries once a run instead of starting
-Python for each. The signature pass and the stored series stay scripts
-(:mod:`rockdec.pipeline.job`); this module is apart from that one so that the scripts' code
-inputs (:func:`rockdec.sources.package_sources`) do not reach :mod:`rockdec.pipeline.steps`
-and the figures through it.
+``calibrate`` (a second of pilot simulations), ``stored_series``, ``stored_signature``,
+``estimates``, ``table_readings`` and the paper's figure rules take a fraction of a second
+to a few seconds each once NumPy, numba, xarray and matplotlib are loaded, so they are
+``run:`` rules calling :func:`calibrate` and :func:`step` (the workflow's default profile
+runs those in threads of the Snakemake process, ``force-use-threads``) and load those
+libraries once a run instead of starting Python for each. The signature pass and the other
+compute rules stay scripts (:mod:`rockdec.pipeline.job`); this module is apart from that one
+so that the scripts' code inputs (:func:`rockdec.sources.package_sources`) do not reach
+:mod:`rockdec.pipeline.steps` and the figures through it.
 """
 
 from __future__ import annotations
