@@ -1,10 +1,11 @@
 """The paper run against a floor measured in the same run: the README's timing table.
 
 1. **The run**: ``snakemake --cores N`` from an empty ``results/`` in a temporary copy of the
-   workflow (the repository's ``Snakefile``, ``workflow/``, ``config/``, ``profiles/``),
-   default scene ``paper``. Wall time of the command, the CPU seconds of the command and
-   its jobs (``os.wait4`` of the process, children included), and each rule's wall and
-   CPU seconds from its benchmark file.
+   workflow (the tree's ``Snakefile``, ``workflow/``, ``config/``, ``profiles/``, its ``src/``
+   first on ``PYTHONPATH``), default scene ``paper``. Wall time of the command, the CPU
+   seconds of the command and its jobs (``os.wait4`` of the process, children included),
+   and each rule's wall and CPU seconds from its benchmark file. Then the same command
+   again, with nothing to do: the no-op rerun.
 2. **The floor**: in this one process, what the run cannot do without: the paper's
    20 x 1000 series simulated under the run's contract (``run.json`` of step 1, so no
    calibration), their pooled signatures (the paper's reading, one pass) and eq. 28 from
@@ -12,19 +13,27 @@
    threads; no files, no figures, no other readings. Its eq. 28 is compared with the
    run's ``table.csv``.
 
-Prints both, the ratio run / floor, and a markdown table of the rules. Numba's cache is
-whatever the interpreter finds: run once to fill it, then again to time a warm cache.
+With ``--before OTHER_TREE`` (another checkout of the repository) the run and the no-op
+rerun are timed for both trees, alternating which goes first at each of ``--repeat``
+rounds, with a floor in each round, so that both see the same load on a shared machine;
+the tables and figures of the two are compared byte for byte.
+
+Prints the runs, the floors, the ratios run / floor (the median over the rounds) and a
+markdown table of the rules of the last run of this tree. Numba's cache is whatever the
+interpreter finds: run once to fill it, then again to time a warm cache.
 
 Run: ``PYTHONPATH=src python benchmarks/bench_paper.py`` (``--cores``, ``--floor-threads``,
-``--keep`` to leave the copy). Measures; asserts nothing.
+``--before``, ``--repeat``, ``--keep`` to leave the copies). Measures; asserts nothing.
 """
 
 from __future__ import annotations
 
 import argparse
 import csv
+import filecmp
 import os
 import shutil
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -34,27 +43,38 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 
 
-def paper_run(root: Path, cores: int, scene: str) -> dict:
-    """``snakemake --cores`` in a fresh copy at ``root``: wall and CPU seconds, per-rule rows."""
-    shutil.copy(REPO / "Snakefile", root)
-    for folder in ("workflow", "config", "profiles"):
-        shutil.copytree(REPO / folder, root / folder)
+def snakemake(root: Path, tree: Path, cores: int, scene: str) -> tuple[float, float]:
+    """Wall and CPU seconds (the command and its jobs) of ``snakemake --cores`` in ``root``,
+    with ``tree``'s sources first on the path."""
+    env = {**os.environ, "PYTHONPATH": str(tree / "src")}
     start = time.perf_counter()
     proc = subprocess.Popen(
         [sys.executable, "-m", "snakemake", "--cores", str(cores), "-q", "--config", f"default_scene={scene}"],
-        cwd=root, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+        cwd=root, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
     )
     out = proc.stdout.read()
     _, status, usage = os.wait4(proc.pid, 0)
     wall = time.perf_counter() - start
     if os.waitstatus_to_exitcode(status) != 0:
-        sys.exit(f"the run failed:\n{out}")
+        sys.exit(f"the run in {root} failed:\n{out}")
+    return wall, usage.ru_utime + usage.ru_stime
+
+
+def paper_run(tree: Path, root: Path, cores: int, scene: str) -> dict:
+    """The run and its no-op rerun in a fresh copy of ``tree`` at ``root``: wall and CPU
+    seconds of each, per-rule rows."""
+    root.mkdir(parents=True)
+    shutil.copy(tree / "Snakefile", root)
+    for folder in ("workflow", "config", "profiles"):
+        shutil.copytree(tree / folder, root / folder)
+    wall, cpu = snakemake(root, tree, cores, scene)
+    noop_wall, noop_cpu = snakemake(root, tree, cores, scene)
     rules = []
     for path in sorted((root / "results" / scene / "benchmarks").glob("*.tsv")):
         with open(path) as f:
             row = next(csv.DictReader(f, delimiter="\t"))
         rules.append((path.stem, float(row["s"]), float(row["cpu_time"])))
-    return {"wall": wall, "cpu": usage.ru_utime + usage.ru_stime, "rules": rules}
+    return {"wall": wall, "cpu": cpu, "noop_wall": noop_wall, "noop_cpu": noop_cpu, "rules": rules, "root": root}
 
 
 def floor(root: Path, scene_name: str, threads: int) -> dict:
@@ -84,30 +104,70 @@ def largest_difference(table, path: Path) -> float:
     return float(np.nanmax(np.abs(table[common].to_numpy(float) - run_table[common].to_numpy(float))))
 
 
+def products(results: Path) -> list[Path]:
+    """The tables and figures of a scene's results, relative to ``results``."""
+    return sorted(p.relative_to(results) for p in [*results.glob("table*"), *results.glob("figures/*")] if p.is_file())
+
+
+def compared(a: Path, b: Path) -> str:
+    """Which tables and figures differ between two scenes' results, in words."""
+    names = products(a)
+    if names != products(b):
+        return f"different products: {sorted(set(map(str, names)) ^ set(map(str, products(b))))}"
+    differ = [str(n) for n in names if not filecmp.cmp(a / n, b / n, shallow=False)]
+    return f"all {len(names)} identical" if not differ else f"{len(differ)} of {len(names)} differ: {', '.join(differ)}"
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--scene", default="paper")
     parser.add_argument("--cores", type=int, default=2, help="snakemake --cores (default %(default)s)")
     parser.add_argument("--floor-threads", type=int, default=1, help="threads of the floor (default %(default)s)")
-    parser.add_argument("--keep", action="store_true", help="leave the copy of the workflow and print its path")
+    parser.add_argument("--before", type=Path, help="another checkout of the repository, timed in the same run")
+    parser.add_argument("--repeat", type=int, default=1, help="rounds (default %(default)s)")
+    parser.add_argument("--keep", action="store_true", help="leave the copies of the workflow and print their path")
     args = parser.parse_args()
-    root = Path(tempfile.mkdtemp(prefix="rockdec_bench_paper_"))
+    trees = {"this tree": REPO} | ({"before": args.before.resolve()} if args.before else {})
+    base = Path(tempfile.mkdtemp(prefix="rockdec_bench_paper_"))
+    runs = {label: [] for label in trees}
+    floors = []
     try:
-        run = paper_run(root, args.cores, args.scene)
-        low = floor(root, args.scene, args.floor_threads)
-        diff = largest_difference(low["table"], root / "results" / args.scene / "table.csv")
+        for k in range(args.repeat):
+            order = list(trees) if k % 2 == 0 else list(trees)[::-1]
+            for label in order:
+                runs[label].append(paper_run(trees[label], base / f"{label.replace(' ', '_')}_{k}", args.cores, args.scene))
+                print(f"round {k + 1}, {label}: {runs[label][-1]['wall']:.1f} s", file=sys.stderr, flush=True)
+            low = floor(runs["this tree"][-1]["root"], args.scene, args.floor_threads)
+            floors.append(low)
+        results = runs["this tree"][-1]["root"] / "results" / args.scene
+        diff = largest_difference(floors[-1]["table"], results / "table.csv")
+        same = compared(results, runs["before"][-1]["root"] / "results" / args.scene) if args.before else None
     finally:
         if args.keep:
-            print(f"copy kept in {root}")
+            print(f"copies kept in {base}")
         else:
-            shutil.rmtree(root, ignore_errors=True)
-    print(f"| rule | wall s | CPU s |\n|---|---:|---:|")
-    for name, wall, cpu in run["rules"]:
+            shutil.rmtree(base, ignore_errors=True)
+    print("| rule | wall s | CPU s |\n|---|---:|---:|")
+    for name, wall, cpu in runs["this tree"][-1]["rules"]:
         print(f"| {name} | {wall:.1f} | {cpu:.1f} |")
-    print(f"| **whole run** (`snakemake --cores {args.cores}`) | **{run['wall']:.1f}** | {run['cpu']:.1f} |")
-    print(f"| floor (one process, {args.floor_threads} thread(s)) | {low['wall']:.1f} | {low['cpu']:.1f} |")
-    print(f"\nrun / floor: {run['wall'] / low['wall']:.2f} (wall), {run['cpu'] / low['cpu']:.2f} (CPU)")
+    last = runs["this tree"][-1]
+    print(f"| **whole run** (`snakemake --cores {args.cores}`) | **{last['wall']:.1f}** | {last['cpu']:.1f} |")
+    print(f"| no-op rerun | {last['noop_wall']:.2f} | {last['noop_cpu']:.2f} |")
+    print(f"| floor (one process, {args.floor_threads} thread(s)) | {floors[-1]['wall']:.1f} | {floors[-1]['cpu']:.1f} |")
+    print()
+    def listed(rows, key, digits=1):
+        return ", ".join(f"{row[key]:.{digits}f}" for row in rows)
+
+    for label, rounds in runs.items():
+        walls = [r["wall"] / f["wall"] for r, f in zip(rounds, floors)]
+        cpus = [r["cpu"] / f["cpu"] for r, f in zip(rounds, floors)]
+        print(f"{label}: run {listed(rounds, 'wall')} s wall, {listed(rounds, 'cpu')} s CPU; "
+              f"no-op rerun {listed(rounds, 'noop_wall', 2)} s wall, {listed(rounds, 'noop_cpu', 2)} s CPU; "
+              f"run / floor (median of {len(rounds)}): {statistics.median(walls):.2f} wall, {statistics.median(cpus):.2f} CPU")
+    print(f"floors: {listed(floors, 'wall')} s wall, {listed(floors, 'cpu')} s CPU")
     print(f"floor's eq. 28 against the run's table.csv: largest |difference| {diff:.3g}")
+    if same is not None:
+        print(f"tables and figures, this tree against before: {same}")
 
 
 if __name__ == "__main__":

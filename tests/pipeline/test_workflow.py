@@ -101,6 +101,22 @@ def test_workflow_builds_every_product_and_each_opens(workflow):
 
 
 @pytest.mark.slow
+def test_every_rule_writes_its_benchmark_and_its_log_those_in_the_snakemake_process_too(workflow):
+    results = workflow["root"] / "results" / SCENE
+    singles = [name for name in JOBS if name not in ("all", "series")]
+    for name in [*singles, "series_0", "series_1"]:
+        with open(results / "benchmarks" / f"{name}.tsv") as f:
+            header, row = f.read().splitlines()[:2]
+        assert header.split("\t")[0] == "s" and float(row.split("\t")[0]) >= 0, name
+    in_process = ["calibrate", "stored_series", "stored_signature", "estimates", "table_readings", *figures.FIGURES]
+    for name in in_process:  # rockdec.pipeline.in_snakemake: a start line, an end line
+        lines = (results / "logs" / f"{name}.log").read_text().splitlines()
+        assert lines[0] == f"{name}: started" and re.fullmatch(rf"{name}: done in [\d.]+ s", lines[-1]), (name, lines)
+    contract = run.Run.read(results / "run.json")
+    assert (results / "logs" / "calibrate.log").read_text().splitlines()[1] == f"run: {contract}"
+
+
+@pytest.mark.slow
 def test_every_netcdf_product_is_cf_clean_and_carries_its_inputs_history(workflow, tmp_path):
     root = workflow["root"]
     products = sorted((root / "results" / SCENE).glob("*.nc"))

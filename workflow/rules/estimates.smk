@@ -11,7 +11,7 @@ rule estimates:
         "results/{scene}/logs/estimates.log",
     benchmark:
         "results/{scene}/benchmarks/estimates.tsv"
-    threads: 1
+    threads: IN_PROCESS_THREADS
     params:
         options=lambda w: estimate_options(w.scene),
     run:
@@ -31,7 +31,7 @@ rule table_readings:
         "results/{scene}/logs/table_readings.log",
     benchmark:
         "results/{scene}/benchmarks/table_readings.tsv"
-    threads: 1
+    threads: IN_PROCESS_THREADS
     params:
         weights=lambda w: scene(w.scene)["estimates"]["weights"],
     run:

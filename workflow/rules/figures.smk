@@ -1,26 +1,24 @@
-# Figures: one compute rule (the signature of the stored series, paper fig. 2c) and one plot
-# rule per figure. Plot rules only read NetCDF products, so changing a plot never reruns a
-# simulation; each also lists the plotting module, so editing it redraws every figure. They
-# run inside the Snakemake process (run: with rockdec.pipeline.in_snakemake.step, common.smk): matplotlib and
-# xarray load once for all of them.
+# Figures: the signature of the stored series (paper fig. 2c) and one plot rule per figure.
+# Plot rules only read NetCDF products, so changing a plot never reruns a simulation; each
+# also lists the plotting module, so editing it redraws every figure. All of them run inside
+# the Snakemake process (run: with rockdec.pipeline.in_snakemake.step, common.smk): matplotlib
+# and xarray load once for all of them.
 rule stored_signature:
     """Signature cube of the stored series pooled into one group (the estimate of fig. 2c)."""
     input:
         "results/{scene}/stored_series.nc",
-        code=step_code("stored_signature.py"),
+        code=STEPS_CODE,
     output:
         "results/{scene}/stored_signature.nc",
     log:
         "results/{scene}/logs/stored_signature.log",
     benchmark:
         "results/{scene}/benchmarks/stored_signature.tsv"
-    threads: 1
+    threads: IN_PROCESS_THREADS
     params:
         signatures=lambda w: scene(w.scene)["signatures"],
-    conda:
-        "../envs/rockdec.yaml"
-    script:
-        "../scripts/stored_signature.py"
+    run:
+        in_snakemake.step(rule, log[0], input[0], output[0], params.signatures)
 
 
 rule fig1b:
@@ -33,7 +31,7 @@ rule fig1b:
         "results/{scene}/logs/fig1b.log",
     benchmark:
         "results/{scene}/benchmarks/fig1b.tsv"
-    threads: 1
+    threads: IN_PROCESS_THREADS
     run:
         in_snakemake.step(rule, log[0], [output.png, output.pdf])
 
@@ -50,7 +48,7 @@ rule fig2:
         "results/{scene}/logs/fig2.log",
     benchmark:
         "results/{scene}/benchmarks/fig2.tsv"
-    threads: 1
+    threads: IN_PROCESS_THREADS
     run:
         in_snakemake.step(rule, log[0], input.sim, input.sig, [output.png, output.pdf])
 
@@ -66,7 +64,7 @@ rule fig3:
         "results/{scene}/logs/fig3.log",
     benchmark:
         "results/{scene}/benchmarks/fig3.tsv"
-    threads: 1
+    threads: IN_PROCESS_THREADS
     run:
         in_snakemake.step(rule, log[0], input.est, [output.png, output.pdf])
 
@@ -82,7 +80,7 @@ rule fig4:
         "results/{scene}/logs/fig4.log",
     benchmark:
         "results/{scene}/benchmarks/fig4.tsv"
-    threads: 1
+    threads: IN_PROCESS_THREADS
     run:
         in_snakemake.step(rule, log[0], input.est, [output.png, output.pdf])
 
@@ -99,6 +97,6 @@ rule fig_ev:
         "results/{scene}/logs/fig_ev.log",
     benchmark:
         "results/{scene}/benchmarks/fig_ev.tsv"
-    threads: 1
+    threads: IN_PROCESS_THREADS
     run:
         in_snakemake.step(rule, log[0], input.sig, input.est, [output.png, output.pdf])

@@ -1,8 +1,9 @@
 rule calibrate:
     """The run contract of the scene: model, step and burn-in from pilot simulations, and the
-    stationary statistics that set every trigger level."""
+    stationary statistics that set every trigger level. Inside the Snakemake process
+    (rockdec.pipeline.in_snakemake.calibrate): a second of work after imports the tables need anyway."""
     input:
-        code=step_code("calibrate.py"),
+        code=CALIBRATE_CODE,
     output:
         "results/{scene}/run.json",
     log:
@@ -10,32 +11,30 @@ rule calibrate:
     benchmark:
         "results/{scene}/benchmarks/calibrate.tsv"
     threads: 1
+    priority: 20  # the head of every path of the DAG
     params:
         physics=lambda w: physics(w.scene),
-    conda:
-        "../envs/rockdec.yaml"
-    script:
-        "../scripts/calibrate.py"
+    run:
+        in_snakemake.calibrate(log[0], params.physics, output[0])
 
 
 rule stored_series:
-    """The series the scene keeps (fig. 2), simulated under its run."""
+    """The series the scene keeps (fig. 2), simulated under its run: a handful of series,
+    inside the Snakemake process (rockdec.pipeline.steps.stored_series)."""
     input:
         "results/{scene}/run.json",
-        code=step_code("stored_series.py"),
+        code=STEPS_CODE,
     output:
         "results/{scene}/stored_series.nc",
     log:
         "results/{scene}/logs/stored_series.log",
     benchmark:
         "results/{scene}/benchmarks/stored_series.tsv"
-    threads: 1
+    threads: IN_PROCESS_THREADS
     params:
         records=lambda w: records(w.scene),
-    conda:
-        "../envs/rockdec.yaml"
-    script:
-        "../scripts/stored_series.py"
+    run:
+        in_snakemake.step(rule, log[0], input[0], output[0], params.records)
 
 
 rule series:

@@ -1,8 +1,9 @@
-"""The workflow's steps after the signatures, one function each: files in, files out.
+"""The workflow's light steps, one function each: files in, files out.
 
-The workflow's rules of the same names (``estimates``, ``table_readings``, ``fig1b``,
-``fig2``, ``fig3``, ``fig4``, ``fig_ev``: ``run:`` through :func:`rockdec.pipeline.in_snakemake.step`,
-inside the Snakemake process) and ``rockdec verify --rebuild``
+The workflow's rules of the same names (``stored_series``, ``stored_signature``,
+``estimates``, ``table_readings``, ``fig1b``, ``fig2``, ``fig3``, ``fig4``, ``fig_ev``:
+``run:`` through :func:`rockdec.pipeline.in_snakemake.step`, inside the Snakemake process)
+and ``rockdec verify --rebuild``
 (:func:`rockdec.pipeline.archive.rebuild`) call these functions, so a product rebuilt from an
 archive is made by the code that made it in the workflow. Figures import matplotlib, and
 the estimates the estimators' kernels, only when they run.
@@ -16,6 +17,41 @@ from pathlib import Path
 from rockdec import io
 
 Paths = Sequence[str | Path]
+
+
+def stored_series(run: str | Path, nc: str | Path, records: dict) -> None:
+    """Rule ``stored_series``: the series scene ``records`` keeps (fig. 2,
+    :func:`rockdec.pipeline.layout.simulation_seeds`), simulated under the run contract ``run``
+    (``run.json``) and written as float32. A handful of series: on one thread of Dask's
+    ``threads`` engine whatever ``ROCKDEC_DASK_SCHEDULER`` names (every engine gives the same
+    numbers, :mod:`rockdec.pipeline.engine`), so no worker process starts inside Snakemake's."""
+    from rockdec.pipeline import engine, layout
+    from rockdec.physics.run import Run
+
+    ds = Run.read(run).dataset(layout.simulation_seeds(records), records["n_points"], records["chunk_seeds"])
+    ds.attrs.update(io.provenance("stored_series", records, inputs=[run]))
+    with engine.session(1, scheduler="threads"):
+        io.write_netcdf(ds, nc, float32=("theta", "theta_dot"))
+
+
+def stored_signature(series: str | Path, nc: str | Path, settings: dict) -> None:
+    """Rule ``stored_signature``: the signatures of the stored series ``series`` pooled into one
+    group (fig. 2c), under a scene's ``signatures`` settings, with the run's attributes."""
+    import numpy as np
+
+    from rockdec.pipeline import replicates
+    from rockdec.physics.run import Run
+
+    with io.open_dataset(series) as sim:
+        run = Run.from_attrs(sim.attrs)
+        theta = sim["theta"].astype(np.float64).load().assign_attrs(dt=run.dt)
+    n = theta.sizes["seed"]
+    cube = replicates.scene_signatures(
+        theta, settings, sigma_y=run.sigma_y, sigma_ydot=run.sigma_ydot, g=run.g,
+        group=np.zeros(n, dtype=np.int64), replicate_of_group=[0],
+    )
+    cube.attrs.update({**run.to_attrs(), **io.provenance("stored_signature", settings, inputs=[series])})
+    io.write_netcdf(cube, nc)
 
 
 def estimates(signatures: str | Path, nc: str | Path, csv: str | Path, md: str | Path, options: dict) -> None:

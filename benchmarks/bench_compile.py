@@ -1,0 +1,119 @@
+"""What a first run on a fresh install compiles: numba's CPU seconds per family of kernels.
+
+A plain script (not a test): prints CPU seconds, never asserts them.
+
+    PYTHONPATH=src python benchmarks/bench_compile.py [--repeat 2] [--before OTHER/src]
+
+Each family is timed in a fresh interpreter whose numba cache (``NUMBA_CACHE_DIR``) is an
+empty temporary folder, on one thread: the first call of the family's entry point (numba
+compiles its kernels and writes them to the cache) against the second (compiled). The
+families, in the order a cold ``rockdec estimate`` meets them:
+
+``numba's start``
+    a one-line kernel: numba's compiler and LLVM target, paid once by the first kernel of a process;
+``simulation``
+    :func:`rockdec.physics.simulate.simulate_block` (the exact integrator, eqs. 21-24);
+``signatures``
+    :func:`rockdec.rdd.signatures.trigger_sums` on float64 records (both triggers of eq. 19);
+``analysis``
+    :func:`rockdec.rdd.measured.analyse` with the kernels above already compiled: the
+    estimators of eqs. 25-27, ``e_v`` and ``g``;
+``record checks``
+    :func:`rockdec.record.diagnostics.sums` (the checks of a measured record and of the
+    calibration's sets; the record's model, :mod:`rockdec.record.record_measure`, is NumPy).
+
+Each later family runs after the earlier ones in its interpreter, the earlier ones compiled
+there but not counted, so a kernel two families share is counted once, in the first. With
+``--before`` the same runs on a second source tree, the two trees alternating, so that both
+see the same load on a shared machine. Prints the middle run of ``--repeat`` (the later of two).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+FAMILIES = ("numba's start", "simulation", "signatures", "analysis", "record checks")
+
+CHILD = r"""
+import json, sys, time
+import numpy as np
+import numba
+from rockdec.physics.simulate import simulate_block
+from rockdec.rdd import measured, signatures
+from rockdec.record import diagnostics
+
+def start():
+    numba.njit(lambda x: x + 1.0)(1.0)
+
+def simulation():
+    return simulate_block([1, 2], 20000, dt=0.0034, g=1.0, e=0.9, sigma_p=0.003, burn_in=2000)[0]
+
+y = None
+
+def signature_kernels():
+    return signatures.trigger_sums(y, a=0.004, a_widths=np.array([0.0005, 0.001]), v=0.03,
+                                   v_widths=np.array([0.005, 0.01]), n_lag=200, dt=0.0034, both_signs=True)
+
+def analysis():
+    return measured.analyse([y[0]], 0.0034)
+
+def record_checks():
+    return diagnostics.sums([y[0]])
+
+steps = [start, simulation, signature_kernels, analysis, record_checks]
+target = int(sys.argv[1])
+times = {}
+for k, step in enumerate(steps[: target + 1]):
+    t = time.process_time()
+    out = step()
+    first = time.process_time() - t
+    if k == 1:
+        y = out
+    if k == target:
+        t = time.process_time()
+        step()
+        times = {"first": first, "second": time.process_time() - t}
+print(json.dumps(times))
+"""
+
+
+def family(index: int, src: str) -> dict:
+    """First and second call of family ``index`` in a fresh interpreter with an empty numba cache."""
+    with tempfile.TemporaryDirectory(prefix="rockdec_numba_") as cache:
+        env = {**os.environ, "PYTHONPATH": src, "NUMBA_CACHE_DIR": cache, "NUMBA_NUM_THREADS": "1"}
+        out = subprocess.run([sys.executable, "-c", CHILD, str(index)], env=env, capture_output=True, text=True, check=True)
+    return json.loads(out.stdout.splitlines()[-1])
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeat", type=int, default=2, help="runs of each family (default %(default)s)")
+    parser.add_argument("--before", help="another source tree (its src/), timed in the same run")
+    args = parser.parse_args()
+    trees = {"this tree": str(Path(__file__).resolve().parents[1] / "src")} | ({"before": args.before} if args.before else {})
+    firsts = {label: {name: [] for name in FAMILIES} for label in trees}
+    for k in range(args.repeat):
+        for label in (list(trees) if k % 2 == 0 else list(trees)[::-1]):
+            for index, name in enumerate(FAMILIES):
+                firsts[label][name].append(family(index, trees[label]))
+    print("| family | " + " | ".join(f"{label}: first call CPU s" for label in trees) + " |")
+    print("|---|" + "---:|" * len(trees))
+    for name in FAMILIES:
+        cells = []
+        for label in trees:
+            runs = sorted(r["first"] for r in firsts[label][name])
+            cells.append(f"{runs[len(runs) // 2]:.2f} (compiled: {max(r['second'] for r in firsts[label][name]):.3f})")
+        print(f"| {name} | " + " | ".join(cells) + " |")
+    for label in trees:
+        total = sum(sorted(r["first"] for r in firsts[label][name])[args.repeat // 2] for name in FAMILIES)
+        print(f"{label}: {total:.2f} s of CPU compiling in all")
+
+
+if __name__ == "__main__":
+    main()

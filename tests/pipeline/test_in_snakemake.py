@@ -1,0 +1,88 @@
+"""The steps the workflow runs inside the Snakemake process (rockdec.pipeline.in_snakemake):
+the run contract and the stored series, their files and their logs, without Snakemake."""
+
+import re
+import subprocess
+import sys
+import threading
+
+import netCDF4
+import numpy as np
+import pytest
+
+from rockdec.pipeline import config, in_snakemake, layout, steps
+from rockdec.physics import run
+from rockdec.physics.simulate import simulate_block
+from rockdec.validate import InputError
+
+SCENE = config.validate_scene(
+    {
+        "excitation": {"dt": 0.0034, "burn_in": 2000},
+        "records": {"n_points": 3000, "replicates": 1, "series_per_replicate": 10, "chunk_seeds": 4, "store_series": 3},
+        "signatures": {"windows": [0.5, 1.0]},
+    }
+)
+PHYSICS = {key: SCENE[key] for key in ("model", "system", "excitation")}
+
+
+def test_calibrate_writes_the_run_of_the_physics_and_logs_it_between_its_start_and_end(tmp_path):
+    log, out = tmp_path / "calibrate.log", tmp_path / "run.json"
+    in_snakemake.calibrate(str(log), PHYSICS, str(out))
+    contract = run.Run.read(out)
+    assert contract == run.calibrate(PHYSICS)
+    lines = log.read_text().splitlines()
+    assert lines[:2] == ["calibrate: started", f"run: {contract}"]
+    assert re.fullmatch(r"calibrate: done in [\d.]+ s", lines[2]) and len(lines) == 3
+
+
+def test_calibrate_does_not_wait_for_a_step_that_holds_the_lock(tmp_path):
+    done = threading.Event()
+    with in_snakemake._STEP_LOCK:  # a figure drawing meanwhile
+        worker = threading.Thread(target=lambda: (in_snakemake.calibrate(str(tmp_path / "c.log"), PHYSICS,
+                                                                          str(tmp_path / "run.json")), done.set()))
+        worker.start()
+        assert done.wait(60)
+    worker.join()
+
+
+def test_a_bad_setting_leaves_its_sentence_in_the_calibrate_log_and_is_raised(tmp_path):
+    bad = {**PHYSICS, "system": {**PHYSICS["system"], "e": 1.5}}
+    log = tmp_path / "calibrate.log"
+    with pytest.raises(InputError) as err:
+        in_snakemake.calibrate(str(log), bad, str(tmp_path / "run.json"))
+    assert log.read_text().splitlines() == ["calibrate: started", f"rockdec: error: {err.value}"]
+    assert not (tmp_path / "run.json").exists()
+
+
+@pytest.mark.parametrize("engine", ["threads", "processes:2"])
+def test_stored_series_are_the_simulators_series_of_the_stored_seeds_as_float32_on_any_engine(tmp_path, monkeypatch, engine):
+    monkeypatch.setenv("ROCKDEC_DASK_SCHEDULER", engine)  # in Snakemake's process: never a worker process
+    contract = run.calibrate(PHYSICS)
+    contract.write(tmp_path / "run.json")
+    rec = SCENE["records"]
+    in_snakemake.step("stored_series", str(tmp_path / "s.log"), str(tmp_path / "run.json"), str(tmp_path / "s.nc"), rec)
+    seeds = layout.simulation_seeds(rec)
+    theta, theta_dot = simulate_block(seeds, rec["n_points"], dt=contract.dt, g=contract.g, e=contract.e,
+                                      sigma_p=contract.sigma_p, burn_in=contract.burn_in)
+    with netCDF4.Dataset(tmp_path / "s.nc") as nc:
+        assert nc["theta"].dtype == np.float32 and list(nc["seed"][:]) == list(seeds)
+        np.testing.assert_array_equal(nc["theta"][:], theta.astype(np.float32))
+        np.testing.assert_array_equal(nc["theta_dot"][:], theta_dot.astype(np.float32))
+    steps.stored_signature(tmp_path / "s.nc", tmp_path / "sig.nc", SCENE["signatures"])
+    with netCDF4.Dataset(tmp_path / "sig.nc") as nc:
+        assert nc.dimensions["group"].size == 1 and run.Run.from_attrs(nc.__dict__) == contract
+
+
+def test_calibrate_loads_what_the_tables_need_beside_the_signature_pass(tmp_path):
+    probe = f"""
+import sys, threading
+from rockdec.pipeline import in_snakemake
+before = [name for name in in_snakemake.PRELOAD if name in sys.modules]
+in_snakemake.calibrate({str(tmp_path / 'c.log')!r}, {PHYSICS!r}, {str(tmp_path / 'run.json')!r})
+for thread in threading.enumerate():
+    if thread.name == "rockdec-preload":
+        thread.join()
+print(before, [name for name in in_snakemake.PRELOAD if name not in sys.modules])
+"""
+    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=120, check=True).stdout
+    assert out.split() == ["[]", "[]"]  # none loaded before, all loaded after
