@@ -32,12 +32,58 @@ TINY = "tiny"
 """The default scene of the built copy."""
 
 
+class Forks:
+    """The Snakemake runs of this test process, each a child forked by one process that has
+    imported Snakemake (tests/snakemake_forks.py), started at the first run: a run then
+    costs what Snakemake does, not its ~1 s of imports. ``cpu``: the CPU seconds of every
+    run so far (the children are the fork server's, not this process's)."""
+
+    SERVER = Path(__file__).with_name("snakemake_forks.py")
+
+    def __init__(self):
+        self.proc = None
+        self.cpu = 0.0
+
+    def run(self, workdir, args, timeout: float = 900.0, env: dict | None = None) -> tuple[int, str, str]:
+        """``python -m snakemake *args`` in ``workdir`` with environment ``env`` (default this
+        process's): exit code, standard output and standard error."""
+        import json
+        import select
+        import tempfile
+
+        if self.proc is None or self.proc.poll() is not None:
+            self.proc = subprocess.Popen([sys.executable, str(self.SERVER)], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+        with tempfile.TemporaryDirectory() as folder:
+            out, err = Path(folder) / "out", Path(folder) / "err"
+            request = {"cwd": str(Path(workdir).resolve()), "args": [str(a) for a in args], "env": dict(os.environ if env is None else env),
+                       "out": str(out), "err": str(err)}
+            self.proc.stdin.write(json.dumps(request) + "\n")
+            self.proc.stdin.flush()
+            ready, _, _ = select.select([self.proc.stdout], [], [], timeout)
+            if not ready:
+                self.proc.kill()
+                raise TimeoutError(f"snakemake {' '.join(map(str, args))} in {workdir} ran longer than {timeout} s")
+            reply = json.loads(self.proc.stdout.readline())
+            self.cpu += reply["cpu"]
+            return reply["code"], out.read_text(), err.read_text()
+
+    def close(self):
+        if self.proc is not None:
+            self.proc.stdin.close()
+            self.proc.wait(timeout=60)
+
+
+FORKS = Forks()
+
+
+def pytest_sessionfinish(session):
+    FORKS.close()
+
+
 def snakemake(workdir, *args) -> tuple[int, str]:
-    """``python -m snakemake --cores 2 *args`` in ``workdir``: exit code and output."""
-    proc = subprocess.run(
-        [sys.executable, "-m", "snakemake", "--cores", "2", *args], cwd=workdir, capture_output=True, text=True, timeout=900,
-    )
-    return proc.returncode, proc.stdout + proc.stderr
+    """``python -m snakemake --cores 2 *args`` in ``workdir`` (:class:`Forks`): exit code and output."""
+    code, out, err = FORKS.run(workdir, ["--cores", "2", *args])
+    return code, out + err
 
 
 def copy_workflow(root: Path) -> Path:
@@ -125,9 +171,9 @@ def pytest_addoption(parser):
 
 
 def _cpu_seconds() -> float:
-    """User + system CPU of this process and of its waited-for children, in s."""
+    """User + system CPU of this process, of its waited-for children and of its Snakemake runs (:class:`Forks`), in s."""
     own, children = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
-    return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
+    return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime + FORKS.cpu
 
 
 @pytest.hookimpl(hookwrapper=True)

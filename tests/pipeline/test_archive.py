@@ -16,6 +16,7 @@ import hashlib
 import json
 import os
 import re
+import shlex
 import shutil
 import signal
 import subprocess
@@ -29,6 +30,8 @@ import pytest
 import xarray as xr
 import yaml
 from rocrate.rocrate import ROCrate
+
+from conftest import FORKS
 
 from rockdec.pipeline import archive, steps
 from rockdec.physics import simulate
@@ -47,9 +50,18 @@ def environment() -> dict:
 
 
 def run(root: Path, command: str) -> tuple[int, str]:
-    """A shell command line run in ``root`` (as a user types it); exit code and output."""
-    proc = subprocess.run(command, shell=True, cwd=root, env=environment(), capture_output=True, text=True, timeout=900)
-    return proc.returncode, proc.stdout + proc.stderr
+    """A command line of ``snakemake`` commands joined by ``&&`` run in ``root`` as a user
+    types it: each one in turn as ``python -m snakemake`` (conftest.FORKS), up to the first
+    that fails; its exit code and the output of all."""
+    output = ""
+    for part in command.split("&&"):
+        words = shlex.split(part)
+        assert words[0] == "snakemake", command
+        code, out, err = FORKS.run(root, words[1:], env=environment())
+        output += out + err
+        if code != 0:
+            break
+    return code, output
 
 
 def start(root: Path) -> subprocess.Popen:

@@ -1,0 +1,71 @@
+"""A process that has imported Snakemake and forks one child per Snakemake run.
+
+Started by tests/conftest.py (:class:`Forks`), once per test process: each ``python -m
+snakemake`` a test runs costs about 1 s of CPU in imports before Snakemake reads the
+Snakefile, and most runs of the tests are dry runs of a second. A forked child starts with
+those imports done and then is what ``python -m snakemake ARGS`` in the folder is: its
+working directory first on ``sys.path`` (so the rules' ``find_spec("rockdec....")`` finds a
+package copied there), the caller's environment, ``sys.argv``, its standard output and
+error in files. rockdec is never imported here, so each child imports it afresh, from
+wherever its ``sys.path`` finds it.
+
+Protocol, one JSON line each way per run: ``{"cwd", "args", "env", "out", "err"}`` in;
+``{"code", "cpu"}`` out, ``cpu`` the user + system seconds of the child and of every process
+it waited for (its jobs).
+"""
+
+import json
+import os
+import sys
+
+import snakemake.api  # noqa: F401  (the imports every run pays: Snakemake, SQLAlchemy, pydantic)
+import snakemake.cli
+from snakemake_interface_executor_plugins.registry import ExecutorPluginRegistry
+
+ExecutorPluginRegistry()  # loads the installed executor plugins (the SLURM one imports pandas)
+
+
+def child(request: dict) -> None:
+    """Become ``python -m snakemake ARGS`` in ``cwd``; never returns."""
+    code = 1
+    try:
+        os.chdir(request["cwd"])
+        os.environ.clear()
+        os.environ.update(request["env"])
+        sys.path[0] = request["cwd"]
+        sys.argv = [snakemake.cli.__file__, *request["args"]]
+        for fd, path in ((1, request["out"]), (2, request["err"])):
+            target = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o644)
+            os.dup2(target, fd)
+            os.close(target)
+        try:
+            snakemake.cli.main(request["args"])
+            code = 0
+        except SystemExit as exc:
+            code = exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
+    except BaseException:
+        import traceback
+
+        traceback.print_exc()
+    finally:
+        for stream in (sys.stdout, sys.stderr):
+            try:
+                stream.flush()
+            except Exception:
+                pass
+        os._exit(code)
+
+
+def serve() -> None:
+    for line in sys.stdin:
+        request = json.loads(line)
+        pid = os.fork()
+        if pid == 0:
+            child(request)
+        _, status, usage = os.wait4(pid, 0)
+        code = os.waitstatus_to_exitcode(status)
+        print(json.dumps({"code": code, "cpu": usage.ru_utime + usage.ru_stime}), flush=True)
+
+
+if __name__ == "__main__":
+    serve()
