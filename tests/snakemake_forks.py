@@ -7,7 +7,7 @@ those imports done and then is what ``python -m snakemake ARGS`` in the folder i
 working directory first on ``sys.path`` (so the rules' ``find_spec("rockdec....")`` finds a
 package copied there), the caller's environment, ``sys.argv``, its standard output and
 error in files. rockdec is never imported here, so each child imports it afresh, from
-wherever its ``sys.path`` finds it.
+wherever its ``sys.path`` finds it; the third-party libraries its rules import are.
 
 Protocol, one JSON line each way per run: ``{"cwd", "args", "env", "out", "err"}`` in;
 ``{"code", "cpu"}`` out, ``cpu`` the user + system seconds of the child and of every process
@@ -23,6 +23,19 @@ import snakemake.cli
 from snakemake_interface_executor_plugins.registry import ExecutorPluginRegistry
 
 ExecutorPluginRegistry()  # loads the installed executor plugins (the SLURM one imports pandas)
+
+# The libraries the rules that run inside Snakemake (tables, figures: rockdec.pipeline.steps)
+# import, loaded once here as well; none starts a thread on import (fork-safe).
+import dask.array  # noqa: E402,F401
+import flox  # noqa: E402,F401
+import matplotlib  # noqa: E402
+
+matplotlib.use("Agg")  # as rockdec.report.figures does
+import matplotlib.pyplot  # noqa: E402,F401
+import netCDF4  # noqa: E402,F401
+import numba  # noqa: E402,F401
+import scipy.stats  # noqa: E402,F401
+import xarray  # noqa: E402,F401
 
 
 def child(request: dict) -> None:
