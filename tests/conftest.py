@@ -124,11 +124,11 @@ WORKFLOW_MODULES = ("tests/pipeline/test_workflow.py", "tests/pipeline/test_arch
 COSTLIEST_FIRST = (
     *WORKFLOW_MODULES,
     "tests/test_hostile.py",
-    "tests/studies/test_coverage.py",
-    "tests/pipeline/test_workflow_rules.py",
     "tests/calibrate/test_estimate.py",
     "tests/pipeline/test_engine.py",
+    "tests/studies/test_coverage.py",
     "tests/test_cli.py",
+    "tests/pipeline/test_workflow_rules.py",
 )
 
 
