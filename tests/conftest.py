@@ -1,4 +1,5 @@
-"""What several test modules share: one build of the tiny workflow per test session, the
+"""What several test modules share: one build of the tiny workflow per test session, one
+running Dask scheduler, the Snakemake runs (forked from one process, :class:`Forks`), the
 hypothesis profile, how xdist shares the tests among its workers, and ``--cpu-durations``
 (the CPU each test costs, with the subprocesses it waited for).
 
@@ -55,8 +56,10 @@ class Forks:
             self.proc = subprocess.Popen([sys.executable, str(self.SERVER)], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
         with tempfile.TemporaryDirectory() as folder:
             out, err = Path(folder) / "out", Path(folder) / "err"
-            request = {"cwd": str(Path(workdir).resolve()), "args": [str(a) for a in args], "env": dict(os.environ if env is None else env),
-                       "out": str(out), "err": str(err)}
+            args = [str(a) for a in args]
+            runs_rules = not {"-n", "--dry-run", "--lint", "--summary", "--unlock"} & set(args)
+            request = {"cwd": str(Path(workdir).resolve()), "args": args, "env": dict(os.environ if env is None else env),
+                       "out": str(out), "err": str(err), "preload": runs_rules}
             self.proc.stdin.write(json.dumps(request) + "\n")
             self.proc.stdin.flush()
             ready, _, _ = select.select([self.proc.stdout], [], [], timeout)
@@ -115,9 +118,19 @@ def tiny_workflow(tmp_path_factory) -> dict:
     return {"root": root, "dry_run": dry, "log": log}
 
 
-#: The test modules that use :func:`tiny_workflow` (one worker runs them: one build, and no
-#: two tests change it at once).
-WORKFLOW_MODULES = ("tests/pipeline/test_workflow.py", "tests/pipeline/test_archive.py")
+@pytest.fixture(scope="session")
+def running_scheduler():
+    """The address of a running Dask scheduler on loopback with 2 worker processes (the
+    ``tcp://`` engine of rockdec.pipeline.engine), started once for the session."""
+    from dask.distributed import LocalCluster
+
+    with LocalCluster(n_workers=2, threads_per_worker=1, host="127.0.0.1", dashboard_address=None) as cluster:
+        yield cluster.scheduler_address
+
+
+#: The test modules that use :func:`tiny_workflow` or :func:`running_scheduler` (one worker
+#: runs them: one build, no two tests change it at once, and one running scheduler).
+WORKFLOW_MODULES = ("tests/pipeline/test_workflow.py", "tests/pipeline/test_archive.py", "tests/pipeline/test_engine.py")
 
 #: The modules whose tests cost the most CPU (``--cpu-durations``), costliest first; the
 #: other modules follow in their collection order.
@@ -125,7 +138,6 @@ COSTLIEST_FIRST = (
     *WORKFLOW_MODULES,
     "tests/test_hostile.py",
     "tests/calibrate/test_estimate.py",
-    "tests/pipeline/test_engine.py",
     "tests/studies/test_coverage.py",
     "tests/test_cli.py",
     "tests/pipeline/test_workflow_rules.py",

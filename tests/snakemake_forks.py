@@ -7,9 +7,10 @@ those imports done and then is what ``python -m snakemake ARGS`` in the folder i
 working directory first on ``sys.path`` (so the rules' ``find_spec("rockdec....")`` finds a
 package copied there), the caller's environment, ``sys.argv``, its standard output and
 error in files. rockdec is never imported here, so each child imports it afresh, from
-wherever its ``sys.path`` finds it; the third-party libraries its rules import are.
+wherever its ``sys.path`` finds it; the third-party libraries its rules import are (:func:`preload`).
 
-Protocol, one JSON line each way per run: ``{"cwd", "args", "env", "out", "err"}`` in;
+Protocol, one JSON line each way per run: ``{"cwd", "args", "env", "out", "err", "preload"}`` in
+(``preload``: load the libraries of the rules that run inside Snakemake first, :func:`preload`);
 ``{"code", "cpu"}`` out, ``cpu`` the user + system seconds of the child and of every process
 it waited for (its jobs).
 """
@@ -24,18 +25,21 @@ from snakemake_interface_executor_plugins.registry import ExecutorPluginRegistry
 
 ExecutorPluginRegistry()  # loads the installed executor plugins (the SLURM one imports pandas)
 
-# The libraries the rules that run inside Snakemake (tables, figures: rockdec.pipeline.steps)
-# import, loaded once here as well; none starts a thread on import (fork-safe).
-import dask.array  # noqa: E402,F401
-import flox  # noqa: E402,F401
-import matplotlib  # noqa: E402
 
-matplotlib.use("Agg")  # as rockdec.report.figures does
-import matplotlib.pyplot  # noqa: E402,F401
-import netCDF4  # noqa: E402,F401
-import numba  # noqa: E402,F401
-import scipy.stats  # noqa: E402,F401
-import xarray  # noqa: E402,F401
+def preload() -> None:
+    """Import the libraries the rules that run inside Snakemake (tables, figures:
+    rockdec.pipeline.steps) import, once, before the first run that may run them (a dry
+    run does not: it is not worth the ~2 s). None starts a thread on import (fork-safe)."""
+    import dask.array  # noqa: F401
+    import flox  # noqa: F401
+    import matplotlib
+
+    matplotlib.use("Agg")  # as rockdec.report.figures does
+    import matplotlib.pyplot  # noqa: F401
+    import netCDF4  # noqa: F401
+    import numba  # noqa: F401
+    import scipy.stats  # noqa: F401
+    import xarray  # noqa: F401
 
 
 def child(request: dict) -> None:
@@ -72,6 +76,8 @@ def child(request: dict) -> None:
 def serve() -> None:
     for line in sys.stdin:
         request = json.loads(line)
+        if request["preload"]:
+            preload()
         pid = os.fork()
         if pid == 0:
             child(request)
