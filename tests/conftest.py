@@ -1,6 +1,5 @@
-"""What several test modules share: one build of the tiny workflow per test session, one
-running Dask scheduler, the Snakemake runs (forked from one process, :class:`Forks`), the
-hypothesis profile, how xdist shares the tests among its workers, and ``--cpu-durations``
+"""What several test modules share: one build of the tiny workflow per test session, the
+Snakemake runs (forked from one process, :class:`Forks`), the hypothesis profile, how xdist shares the tests among its workers, and ``--cpu-durations``
 (the CPU each test costs, with the subprocesses it waited for).
 
 ``tests/`` is on ``sys.path`` (pytest's rootdir-relative imports), so the test modules also
@@ -9,11 +8,14 @@ import their helpers from one another (``cf_check``, ``test_hostile``).
 
 from __future__ import annotations
 
+import json
 import os
 import resource
+import select
 import shutil
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 import pytest
@@ -48,10 +50,6 @@ class Forks:
     def run(self, workdir, args, timeout: float = 900.0, env: dict | None = None) -> tuple[int, str, str]:
         """``python -m snakemake *args`` in ``workdir`` with environment ``env`` (default this
         process's): exit code, standard output and standard error."""
-        import json
-        import select
-        import tempfile
-
         if self.proc is None or self.proc.poll() is not None:
             self.proc = subprocess.Popen([sys.executable, str(self.SERVER)], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
         with tempfile.TemporaryDirectory() as folder:
@@ -118,19 +116,9 @@ def tiny_workflow(tmp_path_factory) -> dict:
     return {"root": root, "dry_run": dry, "log": log}
 
 
-@pytest.fixture(scope="session")
-def running_scheduler():
-    """The address of a running Dask scheduler on loopback with 2 worker processes (the
-    ``tcp://`` engine of rockdec.pipeline.engine), started once for the session."""
-    from dask.distributed import LocalCluster
-
-    with LocalCluster(n_workers=2, threads_per_worker=1, host="127.0.0.1", dashboard_address=None) as cluster:
-        yield cluster.scheduler_address
-
-
-#: The test modules that use :func:`tiny_workflow` or :func:`running_scheduler` (one worker
-#: runs them: one build, no two tests change it at once, and one running scheduler).
-WORKFLOW_MODULES = ("tests/pipeline/test_workflow.py", "tests/pipeline/test_archive.py", "tests/pipeline/test_engine.py")
+#: The test modules that use :func:`tiny_workflow` (one worker runs them: one build, and no
+#: two tests change it at once).
+WORKFLOW_MODULES = ("tests/pipeline/test_workflow.py", "tests/pipeline/test_archive.py")
 
 #: The modules whose tests cost the most CPU (``--cpu-durations``), costliest first; the
 #: other modules follow in their collection order.
@@ -138,6 +126,7 @@ COSTLIEST_FIRST = (
     *WORKFLOW_MODULES,
     "tests/test_hostile.py",
     "tests/calibrate/test_estimate.py",
+    "tests/pipeline/test_engine.py",
     "tests/studies/test_coverage.py",
     "tests/test_cli.py",
     "tests/pipeline/test_workflow_rules.py",

@@ -77,11 +77,14 @@ def test_a_local_cluster_of_two_worker_processes_gives_the_threads_numbers_bit_f
 
 
 @pytest.mark.slow
-def test_a_running_scheduler_given_by_its_address_gives_the_same_numbers(small, threads, monkeypatch, running_scheduler):
+def test_a_running_scheduler_given_by_its_address_gives_the_same_numbers(small, threads, monkeypatch):
+    from dask.distributed import LocalCluster
+
     scene, contract = small
-    assert_identical(threads[0], cubes_on(scene, contract, running_scheduler, monkeypatch))
-    with engine.session():  # the address set by cubes_on
-        assert replicate_file(scene, contract).equals(threads[1])  # the series file, bit for bit
+    with LocalCluster(n_workers=2, threads_per_worker=1, host="127.0.0.1", dashboard_address=None) as cluster:
+        assert_identical(threads[0], cubes_on(scene, contract, cluster.scheduler_address, monkeypatch))
+        with engine.session():  # the address set by cubes_on
+            assert replicate_file(scene, contract).equals(threads[1])  # the series file, bit for bit
 
 
 def test_a_session_inside_a_session_starts_no_second_engine(monkeypatch):
