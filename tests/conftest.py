@@ -47,31 +47,65 @@ class Forks:
         self.proc = None
         self.cpu = 0.0
 
+    def _ask(self, request: dict, timeout: float) -> dict:
+        if self.proc is None or self.proc.poll() is not None:
+            self.proc = subprocess.Popen([sys.executable, str(self.SERVER)], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+        self.proc.stdin.write(json.dumps(request) + "\n")
+        self.proc.stdin.flush()
+        ready, _, _ = select.select([self.proc.stdout], [], [], timeout)
+        if not ready:
+            self.proc.kill()
+            raise TimeoutError(f"the Snakemake fork server gave no answer to {request} in {timeout} s")
+        reply = json.loads(self.proc.stdout.readline())
+        self.cpu += reply.get("cpu") or 0.0
+        return reply
+
+    def _request(self, workdir, args, env, out, err, background: bool) -> dict:
+        args = [str(a) for a in args]
+        runs_rules = not {"-n", "--dry-run", "--lint", "--summary", "--unlock"} & set(args)
+        return {"cwd": str(Path(workdir).resolve()), "args": args, "env": dict(os.environ if env is None else env),
+                "out": str(out), "err": str(err), "preload": runs_rules, "background": background}
+
     def run(self, workdir, args, timeout: float = 900.0, env: dict | None = None) -> tuple[int, str, str]:
         """``python -m snakemake *args`` in ``workdir`` with environment ``env`` (default this
         process's): exit code, standard output and standard error."""
-        if self.proc is None or self.proc.poll() is not None:
-            self.proc = subprocess.Popen([sys.executable, str(self.SERVER)], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
         with tempfile.TemporaryDirectory() as folder:
             out, err = Path(folder) / "out", Path(folder) / "err"
-            args = [str(a) for a in args]
-            runs_rules = not {"-n", "--dry-run", "--lint", "--summary", "--unlock"} & set(args)
-            request = {"cwd": str(Path(workdir).resolve()), "args": args, "env": dict(os.environ if env is None else env),
-                       "out": str(out), "err": str(err), "preload": runs_rules}
-            self.proc.stdin.write(json.dumps(request) + "\n")
-            self.proc.stdin.flush()
-            ready, _, _ = select.select([self.proc.stdout], [], [], timeout)
-            if not ready:
-                self.proc.kill()
-                raise TimeoutError(f"snakemake {' '.join(map(str, args))} in {workdir} ran longer than {timeout} s")
-            reply = json.loads(self.proc.stdout.readline())
-            self.cpu += reply["cpu"]
+            reply = self._ask(self._request(workdir, args, env, out, err, background=False), timeout)
             return reply["code"], out.read_text(), err.read_text()
+
+    def start(self, workdir, args, env: dict | None = None) -> "Forked":
+        """``python -m snakemake *args`` in ``workdir`` in the background, the leader of a
+        process group of its own (with its jobs), its output discarded."""
+        return Forked(self, self._ask(self._request(workdir, args, env, os.devnull, os.devnull, background=True), 60.0)["pid"])
 
     def close(self):
         if self.proc is not None:
             self.proc.stdin.close()
             self.proc.wait(timeout=60)
+
+
+class Forked:
+    """A Snakemake run started by :meth:`Forks.start`: what a test reads of a ``Popen``."""
+
+    def __init__(self, forks: Forks, pid: int):
+        self.forks, self.pid, self.returncode = forks, pid, None
+
+    def wait(self, timeout: float | None = None) -> int:
+        """Its exit code (minus the signal that ended it), waiting up to ``timeout`` s."""
+        if self.returncode is None:
+            wait = 3600.0 if timeout is None else timeout
+            self.returncode = self.forks._ask({"wait": self.pid, "timeout": wait}, wait + 60.0)["code"]
+            if self.returncode is None:
+                raise subprocess.TimeoutExpired(f"snakemake (process {self.pid})", wait)
+        return self.returncode
+
+    def poll(self) -> int | None:
+        """Its exit code if it has ended, else ``None``."""
+        try:
+            return self.wait(0.0)
+        except subprocess.TimeoutExpired:
+            return None
 
 
 FORKS = Forks()

@@ -9,15 +9,18 @@ package copied there), the caller's environment, ``sys.argv``, its standard outp
 error in files. rockdec is never imported here, so each child imports it afresh, from
 wherever its ``sys.path`` finds it; the third-party libraries its rules import are (:func:`preload`).
 
-Protocol, one JSON line each way per run: ``{"cwd", "args", "env", "out", "err", "preload"}`` in
-(``preload``: load the libraries of the rules that run inside Snakemake first, :func:`preload`);
-``{"code", "cpu"}`` out, ``cpu`` the user + system seconds of the child and of every process
-it waited for (its jobs).
+Protocol, one JSON line each way per request. A run: ``{"cwd", "args", "env", "out", "err",
+"preload", "background"}`` in (``preload``: load the libraries of the rules that run inside
+Snakemake first, :func:`preload`); out ``{"code", "cpu"}`` when it ends, ``cpu`` the user +
+system seconds of the child and of every process it waited for (its jobs) -- or, with
+``background``, ``{"pid"}`` at once, the child the leader of a process group of its own.
+Then ``{"wait": pid, "timeout"}`` in, :func:`ended` out.
 """
 
 import json
 import os
 import sys
+import time
 
 import snakemake.api  # noqa: F401  (the imports every run pays: Snakemake, SQLAlchemy, pydantic)
 import snakemake.cli
@@ -73,18 +76,34 @@ def child(request: dict) -> None:
         os._exit(code)
 
 
+def ended(pid: int, timeout: float) -> dict:
+    """``{"code", "cpu"}`` of child ``pid`` once it ends, waiting up to ``timeout`` s;
+    ``{"code": None}`` if it still runs then."""
+    deadline = time.monotonic() + timeout
+    while True:
+        done, status, usage = os.wait4(pid, os.WNOHANG)
+        if done:
+            return {"code": os.waitstatus_to_exitcode(status), "cpu": usage.ru_utime + usage.ru_stime}
+        if time.monotonic() >= deadline:
+            return {"code": None}
+        time.sleep(0.01)
+
+
 def serve() -> None:
     for line in sys.stdin:
         request = json.loads(line)
-        if request["preload"]:
-            preload()
-        pid = os.fork()
-        if pid == 0:
-            child(request)
-        _, status, usage = os.wait4(pid, 0)
-        code = os.waitstatus_to_exitcode(status)
-        print(json.dumps({"code": code, "cpu": usage.ru_utime + usage.ru_stime}), flush=True)
-
+        if "wait" in request:  # a run started in the background: has it ended?
+            reply = ended(request["wait"], request["timeout"])
+        else:
+            if request["preload"]:
+                preload()
+            pid = os.fork()
+            if pid == 0:
+                if request["background"]:
+                    os.setsid()  # a process group of its own, with its jobs, as a killed run needs
+                child(request)
+            reply = {"pid": pid} if request["background"] else ended(pid, float("inf"))
+        print(json.dumps(reply), flush=True)
 
 if __name__ == "__main__":
     serve()

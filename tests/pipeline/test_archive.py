@@ -19,7 +19,6 @@ import re
 import shlex
 import shutil
 import signal
-import subprocess
 import sys
 import time
 from pathlib import Path
@@ -64,15 +63,13 @@ def run(root: Path, command: str) -> tuple[int, str]:
     return code, output
 
 
-def start(root: Path) -> subprocess.Popen:
-    """`snakemake --cores 2` in the background, in a process group of its own (with its jobs)."""
-    return subprocess.Popen(
-        ["snakemake", "--cores", "2"], cwd=root, env=environment(), stdout=subprocess.DEVNULL,
-        stderr=subprocess.DEVNULL, start_new_session=True,
-    )
+def start(root: Path):
+    """`snakemake --cores 2` in the background, in a process group of its own (with its
+    jobs): a run forked by conftest.FORKS, read as a ``Popen``."""
+    return FORKS.start(root, ["--cores", "2"], env=environment())
 
 
-def wait_for(path: Path, proc: subprocess.Popen, timeout: float = 600.0) -> None:
+def wait_for(path: Path, proc, timeout: float = 600.0) -> None:
     """Wait until ``path`` exists (a job's log: the rule's script is running)."""
     deadline = time.monotonic() + timeout
     while not path.exists():
@@ -81,7 +78,7 @@ def wait_for(path: Path, proc: subprocess.Popen, timeout: float = 600.0) -> None
         time.sleep(0.02)
 
 
-def end_group(proc: subprocess.Popen) -> None:
+def end_group(proc) -> None:
     """SIGKILL whatever is left of the process group of ``proc`` (started by :func:`start`)."""
     try:
         os.killpg(proc.pid, signal.SIGKILL)
