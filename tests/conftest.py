@@ -1,6 +1,7 @@
 """What several test modules share: one build of the tiny workflow per test session, the
-Snakemake runs (forked from one process, :class:`Forks`), the hypothesis profile, how xdist shares the tests among its workers, and ``--cpu-durations``
-(the CPU each test costs, with the subprocesses it waited for).
+Snakemake runs (forked from one process, :class:`Forks`), the hypothesis profile, how
+xdist shares the tests among its workers, and ``--cpu-durations`` (the CPU each test
+costs, with the subprocesses it waited for and its Snakemake runs).
 
 ``tests/`` is on ``sys.path`` (pytest's rootdir-relative imports), so the test modules also
 import their helpers from one another (``cf_check``, ``test_hostile``).
@@ -48,6 +49,7 @@ class Forks:
         self.cpu = 0.0
 
     def _ask(self, request: dict, timeout: float) -> dict:
+        """One request to the fork server (started at the first), its answer within ``timeout`` s."""
         if self.proc is None or self.proc.poll() is not None:
             self.proc = subprocess.Popen([sys.executable, str(self.SERVER)], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
         self.proc.stdin.write(json.dumps(request) + "\n")
@@ -206,7 +208,8 @@ def pytest_addoption(parser):
 
 
 def _cpu_seconds() -> float:
-    """User + system CPU of this process, of its waited-for children and of its Snakemake runs (:class:`Forks`), in s."""
+    """User + system CPU of this process, of its waited-for children and of its Snakemake
+    runs (:class:`Forks`), in s."""
     own, children = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
     return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime + FORKS.cpu
 

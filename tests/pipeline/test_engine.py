@@ -47,10 +47,11 @@ def threads(small):
     scene, contract = small
     with pytest.MonkeyPatch.context() as monkeypatch:
         cubes = cubes_on(scene, contract, "threads", monkeypatch)
-    return cubes, replicate_file(scene, contract)
+        with engine.session():  # the threads engine cubes_on set
+            return cubes, replicate_file(scene, contract)
 
 
-def replicate_file(scene, contract, scheduler=None):
+def replicate_file(scene, contract):
     """The first replicate written by :func:`rockdec.pipeline.series.write_replicate` (rule
     ``series``) on the session's engine, read back."""
     with tempfile.TemporaryDirectory() as folder:
