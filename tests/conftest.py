@@ -1,6 +1,7 @@
 """What several test modules share: one build of the tiny workflow per test session, the
-hypothesis profile, how xdist shares the tests among its workers, and ``--cpu-durations``
-(the CPU each test costs, with the subprocesses it waited for).
+Snakemake runs (forked from one process, :class:`Forks`), the hypothesis profile, how
+xdist shares the tests among its workers, and ``--cpu-durations`` (the CPU each test
+costs, with the subprocesses it waited for and its Snakemake runs).
 
 ``tests/`` is on ``sys.path`` (pytest's rootdir-relative imports), so the test modules also
 import their helpers from one another (``cf_check``, ``test_hostile``).
@@ -8,11 +9,14 @@ import their helpers from one another (``cf_check``, ``test_hostile``).
 
 from __future__ import annotations
 
+import json
 import os
 import resource
+import select
 import shutil
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 import pytest
@@ -32,12 +36,91 @@ TINY = "tiny"
 """The default scene of the built copy."""
 
 
+class Forks:
+    """The Snakemake runs of this test process, each a child forked by one process that has
+    imported Snakemake (tests/snakemake_forks.py), started at the first run: a run then
+    costs what Snakemake does, not its ~1 s of imports. ``cpu``: the CPU seconds of every
+    run so far (the children are the fork server's, not this process's)."""
+
+    SERVER = Path(__file__).with_name("snakemake_forks.py")
+
+    def __init__(self):
+        self.proc = None
+        self.cpu = 0.0
+
+    def _ask(self, request: dict, timeout: float) -> dict:
+        """One request to the fork server (started at the first), its answer within ``timeout`` s."""
+        if self.proc is None or self.proc.poll() is not None:
+            self.proc = subprocess.Popen([sys.executable, str(self.SERVER)], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+        self.proc.stdin.write(json.dumps(request) + "\n")
+        self.proc.stdin.flush()
+        ready, _, _ = select.select([self.proc.stdout], [], [], timeout)
+        if not ready:
+            self.proc.kill()
+            raise TimeoutError(f"the Snakemake fork server gave no answer to {request} in {timeout} s")
+        reply = json.loads(self.proc.stdout.readline())
+        self.cpu += reply.get("cpu") or 0.0
+        return reply
+
+    def _request(self, workdir, args, env, out, err, background: bool) -> dict:
+        args = [str(a) for a in args]
+        runs_rules = not {"-n", "--dry-run", "--lint", "--summary", "--unlock"} & set(args)
+        return {"cwd": str(Path(workdir).resolve()), "args": args, "env": dict(os.environ if env is None else env),
+                "out": str(out), "err": str(err), "preload": runs_rules, "background": background}
+
+    def run(self, workdir, args, timeout: float = 900.0, env: dict | None = None) -> tuple[int, str, str]:
+        """``python -m snakemake *args`` in ``workdir`` with environment ``env`` (default this
+        process's): exit code, standard output and standard error."""
+        with tempfile.TemporaryDirectory() as folder:
+            out, err = Path(folder) / "out", Path(folder) / "err"
+            reply = self._ask(self._request(workdir, args, env, out, err, background=False), timeout)
+            return reply["code"], out.read_text(), err.read_text()
+
+    def start(self, workdir, args, env: dict | None = None) -> "Forked":
+        """``python -m snakemake *args`` in ``workdir`` in the background, the leader of a
+        process group of its own (with its jobs), its output discarded."""
+        return Forked(self, self._ask(self._request(workdir, args, env, os.devnull, os.devnull, background=True), 60.0)["pid"])
+
+    def close(self):
+        if self.proc is not None:
+            self.proc.stdin.close()
+            self.proc.wait(timeout=60)
+
+
+class Forked:
+    """A Snakemake run started by :meth:`Forks.start`: what a test reads of a ``Popen``."""
+
+    def __init__(self, forks: Forks, pid: int):
+        self.forks, self.pid, self.returncode = forks, pid, None
+
+    def wait(self, timeout: float | None = None) -> int:
+        """Its exit code (minus the signal that ended it), waiting up to ``timeout`` s."""
+        if self.returncode is None:
+            wait = 3600.0 if timeout is None else timeout
+            self.returncode = self.forks._ask({"wait": self.pid, "timeout": wait}, wait + 60.0)["code"]
+            if self.returncode is None:
+                raise subprocess.TimeoutExpired(f"snakemake (process {self.pid})", wait)
+        return self.returncode
+
+    def poll(self) -> int | None:
+        """Its exit code if it has ended, else ``None``."""
+        try:
+            return self.wait(0.0)
+        except subprocess.TimeoutExpired:
+            return None
+
+
+FORKS = Forks()
+
+
+def pytest_sessionfinish(session):
+    FORKS.close()
+
+
 def snakemake(workdir, *args) -> tuple[int, str]:
-    """``python -m snakemake --cores 2 *args`` in ``workdir``: exit code and output."""
-    proc = subprocess.run(
-        [sys.executable, "-m", "snakemake", "--cores", "2", *args], cwd=workdir, capture_output=True, text=True, timeout=900,
-    )
-    return proc.returncode, proc.stdout + proc.stderr
+    """``python -m snakemake --cores 2 *args`` in ``workdir`` (:class:`Forks`): exit code and output."""
+    code, out, err = FORKS.run(workdir, ["--cores", "2", *args])
+    return code, out + err
 
 
 def copy_workflow(root: Path) -> Path:
@@ -78,11 +161,11 @@ WORKFLOW_MODULES = ("tests/pipeline/test_workflow.py", "tests/pipeline/test_arch
 COSTLIEST_FIRST = (
     *WORKFLOW_MODULES,
     "tests/test_hostile.py",
-    "tests/studies/test_coverage.py",
-    "tests/pipeline/test_workflow_rules.py",
     "tests/calibrate/test_estimate.py",
     "tests/pipeline/test_engine.py",
+    "tests/studies/test_coverage.py",
     "tests/test_cli.py",
+    "tests/pipeline/test_workflow_rules.py",
 )
 
 
@@ -125,9 +208,10 @@ def pytest_addoption(parser):
 
 
 def _cpu_seconds() -> float:
-    """User + system CPU of this process and of its waited-for children, in s."""
+    """User + system CPU of this process, of its waited-for children and of its Snakemake
+    runs (:class:`Forks`), in s."""
     own, children = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
-    return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
+    return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime + FORKS.cpu
 
 
 @pytest.hookimpl(hookwrapper=True)

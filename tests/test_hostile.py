@@ -600,6 +600,13 @@ def _estimate_cases(r):
     return cases
 
 
+@pytest.fixture(scope="module")
+def estimate_cases(rocking):
+    """:func:`_estimate_cases`, its files written once for the module (each case refuses, so
+    none writes or changes a file: the test checks it)."""
+    return _estimate_cases(rocking)
+
+
 def _csv_bytes(path, data: bytes):
     path.write_bytes(data)
     return path
@@ -631,8 +638,8 @@ def _estimate_kind(name: str) -> str:
 
 
 @pytest.mark.parametrize("name", marked({name: (name,) for name in ESTIMATE_CASE_NAMES}, _estimate_kind))
-def test_estimate_refuses_in_one_sentence_before_any_calibration(name, rocking, tmp_path, capsys):
-    case = _estimate_cases(rocking)[name]
+def test_estimate_refuses_in_one_sentence_before_any_calibration(name, estimate_cases, rocking, tmp_path, capsys):
+    case = estimate_cases[name]
     argv, words = list(case[0]), case[1]
     cache = tmp_path / "cache"
     if "--cache-file" in argv:

@@ -16,9 +16,9 @@ import hashlib
 import json
 import os
 import re
+import shlex
 import shutil
 import signal
-import subprocess
 import sys
 import time
 from pathlib import Path
@@ -29,6 +29,8 @@ import pytest
 import xarray as xr
 import yaml
 from rocrate.rocrate import ROCrate
+
+from conftest import FORKS
 
 from rockdec.pipeline import archive, steps
 from rockdec.physics import simulate
@@ -47,20 +49,27 @@ def environment() -> dict:
 
 
 def run(root: Path, command: str) -> tuple[int, str]:
-    """A shell command line run in ``root`` (as a user types it); exit code and output."""
-    proc = subprocess.run(command, shell=True, cwd=root, env=environment(), capture_output=True, text=True, timeout=900)
-    return proc.returncode, proc.stdout + proc.stderr
+    """A command line of ``snakemake`` commands joined by ``&&`` run in ``root`` as a user
+    types it: each one in turn as ``python -m snakemake`` (conftest.FORKS), up to the first
+    that fails; its exit code and the output of all."""
+    output = ""
+    for part in command.split("&&"):
+        words = shlex.split(part)
+        assert words[0] == "snakemake", command
+        code, out, err = FORKS.run(root, words[1:], env=environment())
+        output += out + err
+        if code != 0:
+            break
+    return code, output
 
 
-def start(root: Path) -> subprocess.Popen:
-    """`snakemake --cores 2` in the background, in a process group of its own (with its jobs)."""
-    return subprocess.Popen(
-        ["snakemake", "--cores", "2"], cwd=root, env=environment(), stdout=subprocess.DEVNULL,
-        stderr=subprocess.DEVNULL, start_new_session=True,
-    )
+def start(root: Path):
+    """`snakemake --cores 2` in the background, in a process group of its own (with its
+    jobs): a run forked by conftest.FORKS, read as a ``Popen``."""
+    return FORKS.start(root, ["--cores", "2"], env=environment())
 
 
-def wait_for(path: Path, proc: subprocess.Popen, timeout: float = 600.0) -> None:
+def wait_for(path: Path, proc, timeout: float = 600.0) -> None:
     """Wait until ``path`` exists (a job's log: the rule's script is running)."""
     deadline = time.monotonic() + timeout
     while not path.exists():
@@ -69,7 +78,7 @@ def wait_for(path: Path, proc: subprocess.Popen, timeout: float = 600.0) -> None
         time.sleep(0.02)
 
 
-def end_group(proc: subprocess.Popen) -> None:
+def end_group(proc) -> None:
     """SIGKILL whatever is left of the process group of ``proc`` (started by :func:`start`)."""
     try:
         os.killpg(proc.pid, signal.SIGKILL)

@@ -8,6 +8,7 @@ import pytest
 from rockdec.pipeline import config, layout
 from rockdec.rdd import fits
 
+from conftest import FORKS
 from test_hostile import ROOT, config_file, refused
 
 
@@ -85,13 +86,10 @@ def test_config_file_refused(tmp_path, capsys, text, keywords):
 
 def test_workflow_names_the_configfile_passed(tmp_path):
     path = config_file(tmp_path, "default_scene: s\nscenes:\n  s:\n    system: {e: .nan}\n")
-    proc = subprocess.run(
-        [sys.executable, "-m", "snakemake", "-n", "--cores", "1", "--configfile", str(path)],
-        cwd=ROOT, capture_output=True, text=True, timeout=120,
-    )
-    assert proc.returncode == 2
-    assert f"Fix it in {path}" in proc.stderr and "scenes.s.system.e" in proc.stderr
-    assert "Traceback" not in proc.stderr
+    code, _, err = FORKS.run(ROOT, ["-n", "--cores", "1", "--configfile", str(path)], timeout=120)  # python -m snakemake
+    assert code == 2
+    assert f"Fix it in {path}" in err and "scenes.s.system.e" in err
+    assert "Traceback" not in err
 
 
 

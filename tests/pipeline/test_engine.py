@@ -1,9 +1,13 @@
 """The Dask engine (rockdec.pipeline.engine): one setting, and the same numbers on every engine."""
 
+import tempfile
+from pathlib import Path
+
 import numpy as np
 import pytest
+import xarray as xr
 
-from rockdec.pipeline import config, engine, replicates
+from rockdec.pipeline import config, engine, replicates, series
 from rockdec.physics import run
 
 
@@ -37,6 +41,25 @@ def cubes_on(scene, contract, scheduler, monkeypatch):
     return replicates.scene_cubes(contract, scene["records"], scene["signatures"], ["pooled", "groups_of_10"], threads=2)
 
 
+@pytest.fixture(scope="module")
+def threads(small):
+    """The cubes and the first replicate's series file of :func:`small` on the threads engine."""
+    scene, contract = small
+    with pytest.MonkeyPatch.context() as monkeypatch:
+        cubes = cubes_on(scene, contract, "threads", monkeypatch)
+        with engine.session():  # the threads engine cubes_on set
+            return cubes, replicate_file(scene, contract)
+
+
+def replicate_file(scene, contract):
+    """The first replicate written by :func:`rockdec.pipeline.series.write_replicate` (rule
+    ``series``) on the session's engine, read back."""
+    with tempfile.TemporaryDirectory() as folder:
+        path = series.write_replicate(contract, scene["records"], 0, Path(folder) / "replicate_0.nc")
+        with xr.open_dataset(path) as ds:
+            return ds.load()
+
+
 def assert_identical(a: dict, b: dict):
     for reading in a:
         for name in ("signature_sum", "count", "skipped", "free_response"):
@@ -44,21 +67,25 @@ def assert_identical(a: dict, b: dict):
 
 
 @pytest.mark.slow
-def test_a_local_cluster_of_two_worker_processes_gives_the_threads_numbers_bit_for_bit(small, monkeypatch):
+def test_a_local_cluster_of_two_worker_processes_gives_the_threads_numbers_bit_for_bit(small, threads, monkeypatch):
     scene, contract = small
-    threads = cubes_on(scene, contract, "threads", monkeypatch)
-    assert int(threads["pooled"]["count"].sum()) > 0
-    assert_identical(threads, cubes_on(scene, contract, "processes:2", monkeypatch))
+    cubes, written = threads
+    assert int(cubes["pooled"]["count"].sum()) > 0
+    monkeypatch.setenv(engine.VARIABLE, "processes:2")
+    with engine.session():  # one cluster for both: the inner computations use it
+        assert_identical(cubes, cubes_on(scene, contract, "processes:2", monkeypatch))
+        assert replicate_file(scene, contract).equals(written)  # the series file, bit for bit
 
 
 @pytest.mark.slow
-def test_a_running_scheduler_given_by_its_address_gives_the_same_numbers(small, monkeypatch):
+def test_a_running_scheduler_given_by_its_address_gives_the_same_numbers(small, threads, monkeypatch):
     from dask.distributed import LocalCluster
 
     scene, contract = small
-    threads = cubes_on(scene, contract, "threads", monkeypatch)
     with LocalCluster(n_workers=2, threads_per_worker=1, host="127.0.0.1", dashboard_address=None) as cluster:
-        assert_identical(threads, cubes_on(scene, contract, cluster.scheduler_address, monkeypatch))
+        assert_identical(threads[0], cubes_on(scene, contract, cluster.scheduler_address, monkeypatch))
+        with engine.session():  # the address set by cubes_on
+            assert replicate_file(scene, contract).equals(threads[1])  # the series file, bit for bit
 
 
 def test_a_session_inside_a_session_starts_no_second_engine(monkeypatch):

@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pytest
 
+import fake_calibration
 import rocking_vectorised
 from rocking_reference import flight_reference
 from rockdec.studies import coverage
@@ -56,12 +57,21 @@ def calibrations(tmp_path_factory):
 
 
 @pytest.fixture(scope="module")
-def tiny_table(calibrations):
+def tiny_table(tmp_path_factory):
     """Two records of 20,000 samples in a cell of each class: clean (on the reference
-    simulator's records), sensor noise, and colour with noise."""
+    simulator's records), sensor noise, and colour with noise. The tests of the table read
+    its bookkeeping (columns, intervals, nulls and their reasons, the declined share, the
+    staged corner), not the calibration's numbers: the calibration's grid points are
+    tests/fake_calibration.py's (in a folder of their own), whose intervals
+    test_reduced_coverage_holds and the workflow's coverage study measure for real."""
+    from rockdec.calibrate import calibration
+
     cells = ["reference_clean_e0.9", "kernel_noise3_e0.9", "kernel_corner1_noise2_e0.9"]
-    datasets = [coverage.run_cell(c, 2, 20_000, calibrations, simulate=REFERENCE if c.startswith("reference") else coverage.kernel_records)
-                for c in cells]
+    folder = tmp_path_factory.mktemp("coverage-fake-cal")
+    with pytest.MonkeyPatch.context() as monkeypatch:
+        monkeypatch.setattr(calibration, "_grid_point", fake_calibration.grid_point)
+        datasets = [coverage.run_cell(c, 2, 20_000, folder, simulate=REFERENCE if c.startswith("reference") else coverage.kernel_records)
+                    for c in cells]
     return datasets, coverage.table(datasets)
 
 
