@@ -8,6 +8,7 @@ and say how to fix it.
 from __future__ import annotations
 
 import copy
+import functools
 import shutil
 from importlib import resources
 from pathlib import Path
@@ -51,11 +52,16 @@ def _field_error(where: str, problem: str, fix: str) -> ConfigError:
     return ConfigError(f"config field '{where}': {problem}. {fix}", field=where, problem=problem)
 
 
+@functools.lru_cache(maxsize=1)
+def _parsed_schema() -> dict:
+    """The scene schema file, parsed once a process."""
+    return yaml.safe_load(resources.files("rockdec").joinpath("scene_schema.yaml").read_text())
+
+
 def schema() -> dict:
-    """The scene schema as a dict, with the defaults whose home is the code filled in
-    (``estimates.fit_points``: :data:`rockdec.rdd.fits.DEFAULT_FIT_POINTS`)."""
-    text = resources.files("rockdec").joinpath("scene_schema.yaml").read_text()
-    out = yaml.safe_load(text)
+    """The scene schema as a dict (a copy the caller may change), with the defaults whose
+    home is the code filled in (``estimates.fit_points``: :data:`rockdec.rdd.fits.DEFAULT_FIT_POINTS`)."""
+    out = copy.deepcopy(_parsed_schema())
     out["$defs"]["scene"]["properties"]["estimates"]["properties"]["fit_points"]["default"] = DEFAULT_FIT_POINTS
     return out
 
