@@ -71,7 +71,7 @@ def main() -> None:
     for condition in args.conditions:
         for e in args.e:
             r = cell_rates(f"kernel_{condition}_e{e:g}", args.records, args.offset)
-            z = ", ".join(f"{x:.1f}" for x in r["z"])
+            z = ", ".join(f"{x:.1f}" for x in r["z"]) if np.isfinite(r["z"]).all() else "-"
             print(f"| {condition} | {e:g} | {r['measured']} ({r['refused']}) | {100 * r['noisy']:.0f} % | {100 * r['coloured']:.0f} % | "
                   f"{100 * r['not_ruled_out']:.0f} % | {100 * r['declined']:.0f} % | {z} |", flush=True)
 
