@@ -512,12 +512,12 @@ def _block_sums(records, n_blocks: int, margin: float) -> dict:
             out["syy"][blocks] += np.add.reduceat(y0 * y0, starts)
             d, side = second_differences(y, margin)
             keep = np.isfinite(d)
+            spans = [span_differences(y, d, span) for span in SHAPE_SPANS]
             for s in (0, 1):
                 sel = keep & (side == s)
                 out["n_side"][blocks, s] += np.add.reduceat(sel.astype(float), starts)
                 out["s_side"][blocks, s] += np.add.reduceat(np.where(sel, d, 0.0), starts)
-                for j, span in enumerate(SHAPE_SPANS):
-                    x = span_differences(y, d, span)
+                for j, x in enumerate(spans):
                     sel = np.isfinite(x) & (side == s)
                     x = np.where(sel, x, 0.0)
                     out["n_span"][blocks, j, s] += np.add.reduceat(sel.astype(float), starts)
@@ -617,7 +617,8 @@ def _quantities(n, sy, syy, n_side, s_side, prod, count, n_span, s_span, ss_span
     corner_hz, corner_ratio = _corners(alpha, sigma_y, g, dt)
     g_sum = g_plus + g_minus
     with np.errstate(divide="ignore", invalid="ignore"):
-        spans = np.sum(ss_span - s_span**2 / n_span, axis=2) / (np.sum(n_span, axis=2) - 2.0)  # each side about its mean
+        sides = n_span > 0  # each side about its own mean; a side without windows adds nothing
+        spans = np.sum(np.where(sides, ss_span - s_span**2 / np.where(sides, n_span, 1.0), 0.0), axis=2) / (np.sum(n_span - sides, axis=2))
         shape = shape_ratio(spans)
         return {
             "sigma_y": sigma_y,
