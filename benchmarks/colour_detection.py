@@ -61,7 +61,7 @@ def cell_rates(cell: str, records: int, offset: int) -> dict:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--conditions", nargs="+", default=["clean", "noise1", "noise3", "noise5", "corner1_noise2", "corner3"])
+    parser.add_argument("--conditions", nargs="+", default=["clean", "noise1", "noise3", "noise5", "corner1_noise2"])
     parser.add_argument("--e", nargs="+", type=float, default=[0.8, 0.9, 0.95])
     parser.add_argument("--records", type=int, default=100)
     parser.add_argument("--offset", type=int, default=2_000_000, help="seeds past each cell's first (the thresholds: 1,000,000)")
