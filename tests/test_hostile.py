@@ -814,8 +814,9 @@ def test_a_null_e_always_carries_a_reason(rocking, tiny_calibration, tmp_path):
     code, res, err = _estimate([path], tmp_path / "cache")
     assert code in (0, 2), err
     if code == 0:
-        assert any("not stationary" in w for w in res["warnings"])
         assert (res["e"] is None) == bool(res["reason"])
+        if res["e"] is not None:  # answered: warned; declined (its model reads noise and a colour not ruled out): the reason
+            assert any("not stationary" in w for w in res["warnings"])
 
 
 @hostile("report", "answered")

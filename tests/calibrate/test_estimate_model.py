@@ -271,11 +271,29 @@ def test_the_colour_decline_takes_only_a_measured_corner_below_the_floor():
     """A declared load is calibrated as declared, a white load or a corner at or above the
     floor is not declined; the sentence names the corner and the floor."""
     low = RecordModel(load=Load("lowpass", 0.7))
-    assert inference.colour_decline(low, {"load": "declared"}, None) is None
-    assert inference.colour_decline(RecordModel(), {"load": "measured"}, None) is None
-    assert inference.colour_decline(RecordModel(load=Load("lowpass", inference.COLOUR_CORNER_FLOOR)), {"load": "measured"}, None) is None
-    reason = inference.colour_decline(low, {"load": "measured"}, None)
+    assert inference.colour_decline(low, {"load": "declared"}, None, 75.0) is None
+    assert inference.colour_decline(RecordModel(), {"load": "measured"}, None, 75.0) is None
+    assert inference.colour_decline(RecordModel(load=Load("lowpass", inference.COLOUR_CORNER_FLOOR)), {"load": "measured"}, None, 75.0) is None
+    reason = inference.colour_decline(low, {"load": "measured"}, None, 75.0)
     assert "0.70 times the rocking frequency" in reason and f"below {inference.COLOUR_CORNER_FLOOR:g}" in reason
+
+
+@pytest.mark.parametrize("shape, se, declined", [(8.0, 0.3, False), (11.8, 0.3, True), (8.0, 1.5, True), (8.0, math.nan, True)])
+def test_a_load_read_white_beneath_noise_is_declined_unless_its_shape_rules_out_a_low_corner(shape, se, declined):
+    """Beneath sensor noise a load read white is calibrated only when its shape ratio, 2
+    errors up, still means a corner above the floor (Q = 10.6 is a corner of 2 at 75 samples
+    per cycle); the sentence names the lowest corner it allows."""
+    from types import SimpleNamespace
+
+    from rockdec.record.record_measure import MeasuredModel, Quantity
+
+    measurement = SimpleNamespace(noisy=True, shape=Quantity(shape, se))
+    measurement.shape_corner_low = lambda n, z: MeasuredModel.shape_corner_low(measurement, n, z)
+    reason = inference.colour_decline(RecordModel(), {"load": "measured"}, measurement, 75.0)
+    assert (reason is not None) == declined
+    if declined:
+        assert "colour is not ruled out" in reason and f"below {inference.COLOUR_CORNER_FLOOR:g}" in reason
+    assert inference.colour_decline(RecordModel(), {"load": "declared"}, measurement, 75.0) is None
 
 
 @pytest.mark.parametrize("rate_se, declined", [(0.0, False), (0.02, False), (0.5, True)])
@@ -286,7 +304,7 @@ def test_a_measured_corner_above_the_floor_must_be_clear_of_it_by_its_errors(rat
 
     alpha = math.exp(-2 * math.pi * 3.0 / 75.0)
     measurement = SimpleNamespace(pole=SimpleNamespace(value=alpha, se=rate_se * alpha))  # se of -ln(alpha), relative
-    reason = inference.colour_decline(RecordModel(load=Load("lowpass", 3.0)), {"load": "measured"}, measurement)
+    reason = inference.colour_decline(RecordModel(load=Load("lowpass", 3.0)), {"load": "measured"}, measurement, 75.0)
     assert (reason is not None) == declined
     if declined:
         se = 3.0 * rate_se / -math.log(alpha)

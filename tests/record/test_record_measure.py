@@ -215,5 +215,50 @@ def test_a_fit_that_gives_every_variance_to_noise_has_no_noise_ratio():
     gamma = np.zeros(rm.MAX_LAG + 1)
     gamma[:3] = [6.0, -4.0, 1.0]
     out = rm._quantities(np.array([1000.0]), np.array([0.0]), np.array([1.0]), np.array([[500.0, 500.0]]), np.array([[-1.0, 1.0]]),
-                         gamma[None, :] * 1000.0, np.full((1, rm.MAX_LAG + 1), 1000.0), 0.1)
+                         gamma[None, :] * 1000.0, np.full((1, rm.MAX_LAG + 1), 1000.0),
+                         *(np.full((1, len(rm.SHAPE_SPANS), 2), v) for v in (500.0, 0.0, 3000.0)), 0.1)
     assert out["sigma_y"][0] == 0.0 and out["noise_var"][0] == pytest.approx(1.0) and math.isnan(out["noise_ratio"][0])
+
+
+def test_shape_ratio_closed_forms_and_its_inverse():
+    """White impulses: V_L = L (2 L^2 + 1) / 3, so Q = (V_16 - V_8) / (V_8 - V_4) = 2392 / 300;
+    a pole near 1 (V_L ~ L^4): Q -> (16^4 - 8^4) / (8^4 - 4^4) = 16; noise adds the same to
+    every span and cancels; pole_of_shape inverts shape_of_pole."""
+    assert rm.WHITE_SHAPE == pytest.approx(2392.0 / 300.0, rel=1e-12)
+    assert float(rm.shape_of_pole(rm.MAX_POLE)) == pytest.approx(16.0, abs=0.01)
+    s = rm._triangle_products(rm.SHAPE_SPANS) @ (0.9 ** np.arange(2 * max(rm.SHAPE_SPANS) - 1))
+    assert float(rm.shape_ratio(s + 6.0 * 123.0)) == pytest.approx(float(rm.shape_of_pole(0.9)), rel=1e-12)
+    poles = np.array([-0.5, 0.3, 0.78, 0.92, 0.99])
+    np.testing.assert_allclose(rm.pole_of_shape(rm.shape_of_pole(poles)), poles, atol=2e-3)
+
+
+def test_span_differences_sum_kept_second_differences_only():
+    """A span difference is the triangle-weighted sum of the one-step second differences
+    it spans, and is left out (NaN) when any of them is."""
+    y = series_rng(3).standard_normal(200).cumsum().cumsum() + 1e4
+    d, _ = rm.second_differences(y)
+    x = rm.span_differences(y, d, 4)
+    k = 50
+    assert x[k] == pytest.approx(np.dot([1, 2, 3, 4, 3, 2, 1], d[k - 3 : k + 4]), rel=1e-9)
+    d[k + 3] = np.nan
+    assert np.isnan(rm.span_differences(y, d, 4)[k]) and np.isfinite(rm.span_differences(y, d, 3)[k])
+
+
+@pytest.mark.parametrize("pole, dt, n, noise, coloured", [
+    (Load("lowpass", 1.0).pole(75.0), DT_CORNER_1, 200_000, 0.02, True),
+    (0.0, DT_WHITE, 100_000, 0.05, False),
+])
+def test_colour_beneath_sensor_noise_is_read_off_the_shape(pole, dt, n, noise, coloured):
+    """Beneath 2 % noise a load with its corner at the rocking frequency is coloured, its
+    shape near Q(alpha) and its corner below the floor even 2 errors up; noise alone over a
+    white load is not coloured and rules out a corner below 2 (benchmarks/colour_detection.py
+    measures the rates)."""
+    y = _simulated(16, n=n, pole=pole, dt=dt)
+    m = rm.measure(y + noise * y.std() * series_rng(17).standard_normal(y.size), dt)
+    assert m.noisy and m.coloured == coloured
+    if coloured:
+        assert m.shape.value == pytest.approx(float(rm.shape_of_pole(pole)), abs=1.5)
+        assert m.shape_corner_low(75.0, 2.0) < 2.0
+    else:
+        assert abs(m.shape.value - rm.WHITE_SHAPE) < 4 * m.shape.se
+        assert m.shape_corner_low(75.0, 2.0) > 2.0

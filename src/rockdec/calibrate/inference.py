@@ -284,6 +284,8 @@ def model_report(measurement, why_not: str | None, analysis: measured.Analysis, 
             "sensor_noise_z": _num(m.noise_var.z),
             "load_pole_per_sample": _quantity(m.pole),
             "load_pole_z": _num(m.pole.z),
+            "load_shape": _quantity(m.shape),
+            "load_shape_z": _num(m.shape_z),
             "load_corner_rocking": corner,
             "load_corner_hz": _quantity(m.corner_hz),
             "drift_rms_sigma_y": _num(m.drift_rms),
@@ -295,14 +297,31 @@ def model_report(measurement, why_not: str | None, analysis: measured.Analysis, 
     return out
 
 
-def colour_decline(model: RecordModel, sources: dict, measurement) -> str | None:
-    """Why ``e`` is declined for a measured low-pass load whose corner is not shown to lie
-    above :data:`COLOUR_CORNER_FLOOR` rocking frequencies (below it, or less than
-    :data:`COLOUR_CORNER_Z` standard errors above it), in one sentence naming the measured
-    corner and what would help; else ``None``. A declared load is calibrated as declared:
-    the selection (:func:`select`) then judges its belts."""
-    if sources.get("load") != "measured" or model.load.kind != "lowpass":
+def colour_decline(model: RecordModel, sources: dict, measurement, points_per_cycle: float) -> str | None:
+    """Why ``e`` is declined for a measured load whose corner is not shown to lie above
+    :data:`COLOUR_CORNER_FLOOR` rocking frequencies, in one sentence naming the measured
+    corner and what would help; else ``None``. A low-pass load: its corner is below the
+    floor, or less than :data:`COLOUR_CORNER_Z` standard errors above it. A load measured
+    white beneath sensor noise: its shape ratio
+    (:meth:`~rockdec.record.record_measure.MeasuredModel.shape_corner_low`, at the
+    ``points_per_cycle`` the analysis reads) allows a corner below the floor within
+    :data:`COLOUR_CORNER_Z` errors. A declared load is calibrated as declared: the selection
+    (:func:`select`) then judges its belts."""
+    if sources.get("load") != "measured":
         return None
+    if model.load.kind != "lowpass":
+        if measurement is None or not measurement.noisy:
+            return None
+        low = measurement.shape_corner_low(points_per_cycle, COLOUR_CORNER_Z)
+        if low >= COLOUR_CORNER_FLOOR:
+            return None
+        return (
+            f"beneath the sensor noise measured on these records the load's colour is not ruled out: its shape allows a "
+            f"low-pass corner down to {low:.2f} times the rocking frequency ({COLOUR_CORNER_Z:g} errors), below "
+            f"{COLOUR_CORNER_FLOOR:g}, where the coverage study finds that no calibration tells such a load apart from e; if "
+            "the load is known, declare it (--load white, lowpass:CORNER, spectrum:FILE or base:FILE) and the calibration "
+            "simulates it, with its coverage checked"
+        )
     corner, se = model.load.corner, 0.0
     if measurement is not None and 0.0 < measurement.pole.value < 1.0:
         se = corner * measurement.pole.se / (measurement.pole.value * -math.log(measurement.pole.value))
@@ -478,7 +497,7 @@ def estimate(
         raise InputError("Housner's model (eq. 2) needs the block's critical angle theta_cr, and only it; give both or neither.")
     ratio = analysis.sigma_y / theta_cr if theta_cr is not None else None
     cal_settings = calibration.calibration_settings([r.theta.size for r in records], analysis.points_per_cycle, settings, model, ratio)
-    declined = colour_decline(model, sources, measurement)
+    declined = colour_decline(model, sources, measurement, analysis.points_per_cycle)
     if declined:
         simulated = RecordModel.from_key(cal_settings["record_model"])
         model_json = model_report(measurement, why_not if measuring else None, analysis, sources, simulated, cal_settings)

@@ -69,6 +69,24 @@ used: under a low-pass load the block's side follows the load, so removing the s
 means leaves a slow remainder that lengthens the tail of ``r(m)`` beyond ``alpha^m``, and
 longer spans weigh that tail more (they bias ``alpha`` upward).
 
+The shape beneath noise. ``S(L)`` summed from the autocovariance mixes pairs of kept
+second differences that no window holds whole, so its noise does not cancel exactly and its
+error grows with ``L``: on the coverage study's records the fitted ``alpha``'s ``z`` ranged
+from below 1 to 130 at a corner of one rocking frequency beneath 2 % noise, and reached 14
+on white records beneath 5 % noise.
+:func:`span_differences` reads the span-``L`` differences off the windows whose every second
+difference is kept (one side, no impact), where the noise is ``n[k+L] - 2 n[k] + n[k-L]``
+exactly; each side's mean is removed (it holds ``-g dt^2 L^2``). With their variances at
+:data:`SHAPE_SPANS` ``(4, 8, 16)`` the shape ratio
+
+    Q = (S(16) - S(8)) / (S(8) - S(4)) = (V_16(alpha) - V_8(alpha)) / (V_8(alpha) - V_4(alpha))
+
+does not hold the noise at all (:func:`shape_ratio`): 7.97 for a white load, 9.66 at a
+corner of 3 rocking frequencies and 12.4 at a corner of 1 (75 samples per cycle), 16 as
+``alpha -> 1`` (:func:`shape_of_pole`); it is nearly flat for ``alpha < 0.5``, so it tells
+the low corners that matter, not a weak colour. On a noisy record the pole and the corner
+are read off ``Q`` (:func:`pole_of_shape`), and the fit keeps the two variances.
+
 Drift. A slow offset does not change second differences (a trend's are of order
 ``dt^2`` times its curvature); it shows in the means of consecutive blocks of the
 record. The statistic is von Neumann's ratio of the block means, ``eta = sum (b_{i+1} -
@@ -91,9 +109,13 @@ count-based ``1/sqrt(N)`` would not.
 
 Detection. ``noisy``: ``sigma_n^2`` exceeds :data:`DETECT_Z` standard errors and
 ``sigma_n / sigma_Y`` exceeds :data:`NOISE_FLOOR`; ``coloured``: ``alpha`` exceeds
-:data:`DETECT_Z` standard errors (:data:`COLOUR_Z_NOISY` on a noisy record); ``drifting``:
-``drift_z`` exceeds :data:`DRIFT_Z`. These say the defect is present, not that it moves
-``e``; the rates are measured by :mod:`rockdec.studies.record_measure_study`.
+:data:`DETECT_Z` standard errors, or on a noisy record ``Q`` exceeds a white load's by
+:data:`COLOUR_Z_NOISY` standard errors; ``drifting``: ``drift_z`` exceeds :data:`DRIFT_Z`.
+These say the defect is present, not that it moves ``e``; the rates are measured by
+:mod:`rockdec.studies.record_measure_study` and ``benchmarks/colour_detection.py``. A noisy
+record whose ``Q`` is not shown coloured may still leave a low corner possible
+(:meth:`MeasuredModel.shape_corner_low`), which :func:`rockdec.calibrate.inference.colour_decline`
+declines.
 """
 
 from __future__ import annotations
@@ -129,10 +151,11 @@ DETECT_Z = 4.0
 #: trace of a few 1e-4 (measured), five times below the smallest noise studied (1 %).
 NOISE_FLOOR = 0.002
 
-#: Standard errors above zero at which ``alpha`` is called colour when noise is detected:
-#: on noisy white records the choice of triples leaves a colour-like pattern whose z
-#: reaches 9.7 at the 99th percentile at 1-5 % noise (the study of docs/method.md).
-COLOUR_Z_NOISY = 10.0
+#: Standard errors by which the shape ratio ``Q`` (:func:`shape_ratio`) must exceed a white
+#: load's to be called colour when noise is detected: on 540 noisy white records of the
+#: coverage study's design (noise 1, 3, 5 % of ``sigma_Y``, ``e`` = 0.8, 0.9, 0.95) its z had
+#: 95th percentiles 0.6-1.8 and a largest value of 4.8 (``benchmarks/colour_detection.py``).
+COLOUR_Z_NOISY = 3.0
 
 #: ``drift_z`` above which drift is detected (one-sided).
 DRIFT_Z = 3.0
@@ -180,6 +203,8 @@ class MeasuredModel:
     ``asymmetry`` ``(g_+ - g_-) / (g_+ + g_-)``, ``drift_rms`` the rms of the block means
     over the record's rms. ``r`` holds ``r(1..MAX_LAG)`` and ``r_se`` their standard errors.
     A corner is infinite (and its error NaN) when the fitted pole is not in ``(0, 1)``.
+    ``shape`` is the shape ratio ``Q`` (:func:`shape_ratio`); on a noisy record ``pole`` and
+    the corners are read off it (:func:`pole_of_shape`), else they are the fit's.
     """
 
     dt: float
@@ -195,6 +220,7 @@ class MeasuredModel:
     noise_ratio: Quantity
     corner_hz: Quantity
     corner_ratio: Quantity
+    shape: Quantity
     drift_rms: float
     drift_z: float
     r: tuple
@@ -202,15 +228,30 @@ class MeasuredModel:
 
     @property
     def noisy(self) -> bool:
-        """Sensor noise detected: ``sigma_n^2`` is :data:`DETECT_Z` errors above 0 and
-        ``sigma_n / sigma_Y`` above :data:`NOISE_FLOOR`."""
-        return self.noise_var.z > DETECT_Z and self.noise_ratio.value > NOISE_FLOOR
+        """Sensor noise detected (:func:`_noisy`)."""
+        return _noisy(self.noise_var, self.noise_ratio)
+
+    @property
+    def shape_z(self) -> float:
+        """Standard errors by which the shape ratio ``Q`` exceeds a white load's
+        (:data:`WHITE_SHAPE`)."""
+        return Quantity(self.shape.value - WHITE_SHAPE, self.shape.se).z
+
+    def shape_corner_low(self, points_per_cycle: float, z: float) -> float:
+        """The lowest corner, in rocking frequencies at ``points_per_cycle`` samples per
+        cycle, that the shape ratio allows ``z`` standard errors above its value
+        (:func:`pole_of_shape`): 0 when its error is not finite, infinite when that pole is
+        not positive."""
+        if not math.isfinite(self.shape.value) or not math.isfinite(self.shape.se):
+            return 0.0
+        pole = float(pole_of_shape(self.shape.value + z * self.shape.se))
+        return -math.log(pole) * points_per_cycle / (2.0 * math.pi) if pole > 0.0 else math.inf
 
     @property
     def coloured(self) -> bool:
-        """A low-pass load detected: ``alpha`` is :data:`DETECT_Z` errors above 0
-        (:data:`COLOUR_Z_NOISY` when noise is detected)."""
-        return self.pole.z > (COLOUR_Z_NOISY if self.noisy else DETECT_Z)
+        """A low-pass load detected: without noise ``alpha`` is :data:`DETECT_Z` errors above
+        0; with noise the shape ratio is :data:`COLOUR_Z_NOISY` errors above a white load's."""
+        return self.shape_z > COLOUR_Z_NOISY if self.noisy else self.pole.z > DETECT_Z
 
     @property
     def drifting(self) -> bool:
@@ -225,6 +266,12 @@ class MeasuredModel:
         ]
 
 
+def _noisy(noise_var: Quantity, noise_ratio: Quantity) -> bool:
+    """Sensor noise detected: ``sigma_n^2`` is :data:`DETECT_Z` errors above 0 and
+    ``sigma_n / sigma_Y`` above :data:`NOISE_FLOOR`."""
+    return noise_var.z > DETECT_Z and noise_ratio.value > NOISE_FLOOR
+
+
 def mixed_autocovariance(m, impulse_var: float, noise_var: float, pole: float) -> np.ndarray:
     """``gamma(m) = sigma_p^2 dt^2 alpha^|m| + sigma_n^2 h(m)`` (module docstring): the
     autocovariance of the second differences of a record under a first-order low-pass
@@ -237,11 +284,11 @@ def mixed_autocovariance(m, impulse_var: float, noise_var: float, pole: float) -
     return impulse_var * np.power(float(pole), m) + noise_var * h
 
 
-def _triangle_products() -> np.ndarray:
-    """``C[L, m] = sum_i w_i w_{i+|m|}`` (``m = 0..MAX_LAG``, doubled for ``m > 0``) of the
-    triangle weights ``w = 1, 2, .., L, .., 2, 1`` of :data:`SPANS`: ``S(L) = C @ gamma``."""
-    out = np.zeros((len(SPANS), MAX_LAG + 1))
-    for row, span in enumerate(SPANS):
+def _triangle_products(spans=SPANS) -> np.ndarray:
+    """``C[L, m] = sum_i w_i w_{i+|m|}`` (``m = 0..2 max(spans) - 2``, doubled for ``m > 0``) of
+    the triangle weights ``w = 1, 2, .., L, .., 2, 1`` of ``spans``: ``S(L) = C @ gamma``."""
+    out = np.zeros((len(spans), 2 * max(spans) - 1))
+    for row, span in enumerate(spans):
         w = span - np.abs(np.arange(-(span - 1), span))
         full = np.correlate(w, w, mode="full")[w.size - 1 :]
         out[row, : full.size] = full * np.where(np.arange(full.size) == 0, 1.0, 2.0)
@@ -249,6 +296,32 @@ def _triangle_products() -> np.ndarray:
 
 
 _TRIANGLES = _triangle_products()
+
+#: Spans ``L1 < L2 < L3`` of the shape ratio (:func:`shape_ratio`), read off whole windows.
+SHAPE_SPANS = (4, 8, 16)
+
+_SHAPE_TRIANGLES = _triangle_products(SHAPE_SPANS)
+
+
+def shape_ratio(s) -> np.ndarray:
+    """``Q = (S(L3) - S(L2)) / (S(L2) - S(L1))`` of the structure function at
+    :data:`SHAPE_SPANS` (last axis of ``s``): white sensor noise adds ``6 sigma_n^2`` to every
+    span and cancels, so ``Q = (V_L3 - V_L2) / (V_L2 - V_L1)`` depends on the load's pole
+    alone (:func:`shape_of_pole`)."""
+    s = np.asarray(s, dtype=float)
+    return (s[..., 2] - s[..., 1]) / (s[..., 1] - s[..., 0])
+
+
+def shape_of_pole(pole) -> np.ndarray:
+    """``Q(alpha)`` (:func:`shape_ratio`) of a first-order low-pass load of pole ``alpha``:
+    7.97 for white impulses (``V_L = L (2 L^2 + 1) / 3``), rising to 16 (``V_L ~ L^4``) as
+    ``alpha -> 1``; 9.66 at ``alpha = 0.78``, 12.4 at 0.92."""
+    powers = np.power(np.asarray(pole, dtype=float)[..., None], np.arange(_SHAPE_TRIANGLES.shape[1]))
+    return shape_ratio(powers @ _SHAPE_TRIANGLES.T)
+
+
+#: ``Q`` of a white load, the null of :attr:`MeasuredModel.coloured` on a noisy record.
+WHITE_SHAPE = float(shape_of_pole(0.0))
 
 
 def structure_function(gamma: np.ndarray) -> np.ndarray:
@@ -291,6 +364,14 @@ def _profiler(gammas: np.ndarray):
 #: Poles of the fit's first search, over ``(-0.9, MAX_POLE)``: even steps up to 0.9, then
 #: geometric steps in ``1 - alpha`` towards :data:`MAX_POLE`.
 POLE_GRID = np.concatenate([np.linspace(-0.9, 0.9, 91), 1.0 - np.geomspace(0.1, 1.0 - MAX_POLE, 60)])
+
+_SHAPE_CURVE = shape_of_pole(POLE_GRID)
+
+
+def pole_of_shape(q) -> np.ndarray:
+    """The pole ``alpha`` whose :func:`shape_of_pole` is ``q`` (it increases with ``alpha``):
+    linear interpolation on :data:`POLE_GRID`, clipped to its ends."""
+    return np.interp(q, _SHAPE_CURVE, POLE_GRID)
 
 #: Width to which the golden-section search of :func:`fit_structures` narrows the pole:
 #: near the minimum the residual then still changes by more than its rounding, so that
@@ -380,6 +461,20 @@ def second_differences(y: np.ndarray, margin: float = 0.0) -> tuple[np.ndarray, 
     return d, side
 
 
+def span_differences(y: np.ndarray, d: np.ndarray, span: int) -> np.ndarray:
+    """``y[k+L] - 2 y[k] + y[k-L]`` (``L = span``) where every one-step second difference it
+    sums, ``d[k-L+1..k+L-1]`` (:func:`second_differences`, NaN where left out), is kept, so that
+    the window holds no impact and lies on one side; NaN elsewhere. Its sensor noise is
+    ``n[k+L] - 2 n[k] + n[k-L]`` exactly, of variance ``6 sigma_n^2`` whatever ``L``."""
+    out = np.full(y.size, np.nan)
+    if y.size > 2 * span:
+        gaps = np.concatenate([[0], np.cumsum(~np.isfinite(d))])
+        k = np.arange(span, y.size - span)
+        whole = gaps[k + span] == gaps[k - span + 1]
+        out[k] = np.where(whole, y[k + span] - 2.0 * y[k] + y[k - span], np.nan)
+    return out
+
+
 def _block_starts(offset: int, size: int, total: int, n_blocks: int) -> tuple[np.ndarray, np.ndarray]:
     """``(blocks, starts)``: the jackknife blocks a record of ``size`` samples starting at
     sample ``offset`` of ``total`` overlaps, and the index in the record where each begins
@@ -395,13 +490,16 @@ def _block_sums(records, n_blocks: int, margin: float) -> dict:
 
     Returns arrays indexed by block: ``n``, ``sy``, ``syy`` (finite samples, after each
     record's mean is removed), ``n_side``, ``s_side`` (count and sum of kept second differences
-    per side, ``[:, 0]`` negative side, ``[:, 1]`` positive), and per record its second
-    differences (NaN where left out), their side, and its blocks and where they start, for
-    the lag sums.
+    per side, ``[:, 0]`` negative side, ``[:, 1]`` positive), ``n_span``, ``s_span``, ``ss_span``
+    (count, sum and sum of squares per span of :data:`SHAPE_SPANS` and side, ``[:, span, side]``,
+    of the span differences :func:`span_differences`, each in the block of its middle sample),
+    and per record its second differences (NaN where left out), their side, and its blocks
+    and where they start, for the lag sums.
     """
     total = sum(y.size for y in records)
     out = {k: np.zeros(n_blocks) for k in ("n", "sy", "syy")}
     out.update({k: np.zeros((n_blocks, 2)) for k in ("n_side", "s_side")})
+    out.update({k: np.zeros((n_blocks, len(SHAPE_SPANS), 2)) for k in ("n_span", "s_span", "ss_span")})
     out["d"], out["side"], out["blocks"] = [], [], []
     offset = 0
     for y in records:
@@ -414,10 +512,17 @@ def _block_sums(records, n_blocks: int, margin: float) -> dict:
             out["syy"][blocks] += np.add.reduceat(y0 * y0, starts)
             d, side = second_differences(y, margin)
             keep = np.isfinite(d)
+            spans = [span_differences(y, d, span) for span in SHAPE_SPANS]
             for s in (0, 1):
                 sel = keep & (side == s)
                 out["n_side"][blocks, s] += np.add.reduceat(sel.astype(float), starts)
                 out["s_side"][blocks, s] += np.add.reduceat(np.where(sel, d, 0.0), starts)
+                for j, x in enumerate(spans):
+                    sel = np.isfinite(x) & (side == s)
+                    x = np.where(sel, x, 0.0)
+                    out["n_span"][blocks, j, s] += np.add.reduceat(sel.astype(float), starts)
+                    out["s_span"][blocks, j, s] += np.add.reduceat(x, starts)
+                    out["ss_span"][blocks, j, s] += np.add.reduceat(x * x, starts)
             out["d"].append(d)
             out["side"].append(side)
             out["blocks"].append((blocks, starts))
@@ -487,10 +592,21 @@ def _drift(records, sigma_y: float) -> tuple[float, float]:
     return rms, (2.0 - eta) / sd0
 
 
-def _quantities(n, sy, syy, n_side, s_side, prod, count, dt) -> dict:
+def _corners(alpha, sigma_y, g, dt) -> tuple[np.ndarray, np.ndarray]:
+    """``(corner in Hz, corner in rocking frequencies)`` of poles ``alpha`` (module docstring):
+    infinite where ``alpha`` is not in ``(0, 1)``, NaN in rocking frequencies where ``g <= 0``."""
+    pole = (0.0 < alpha) & (alpha < 1.0)
+    corner = np.where(pole, -np.log(np.where(pole, alpha, 1.0)) / (2.0 * math.pi * dt), math.inf)
+    with np.errstate(invalid="ignore"):
+        return corner, np.where(g > 0, corner * period_from_g(sigma_y, np.where(g > 0, g, 1.0)), math.nan)
+
+
+def _quantities(n, sy, syy, n_side, s_side, prod, count, n_span, s_span, ss_span, dt) -> dict:
     """Every measured number from summed statistics, one row per set of sums (all records,
     or all but one block): ``n``, ``sy``, ``syy`` ``(rows,)``, ``n_side``, ``s_side`` ``(rows, 2)``,
-    ``prod``, ``count`` ``(rows, lags)``; each value an array over the rows (``r`` ``(rows, lags - 1)``)."""
+    ``prod``, ``count`` ``(rows, lags)``, ``n_span``, ``s_span``, ``ss_span`` ``(rows, spans, 2)``;
+    each value an array over the rows (``r`` ``(rows, lags - 1)``). ``pole`` and the corners
+    are the fit's; ``shape_pole`` is :func:`pole_of_shape` of ``shape``."""
     sigma2 = syy / n - (sy / n) ** 2
     means = s_side / n_side
     g_minus, g_plus = means[:, 0] / dt**2, -means[:, 1] / dt**2
@@ -498,10 +614,12 @@ def _quantities(n, sy, syy, n_side, s_side, prod, count, dt) -> dict:
     impulse_var, noise_var, alpha = fit_structures(gamma)
     sigma_y = np.sqrt(np.maximum(sigma2 - np.maximum(noise_var, 0.0), 0.0))
     g = 0.5 * (g_minus + g_plus)
-    pole = (0.0 < alpha) & (alpha < 1.0)
-    corner = np.where(pole, -np.log(np.where(pole, alpha, 1.0)) / (2.0 * math.pi * dt), math.inf)
+    corner_hz, corner_ratio = _corners(alpha, sigma_y, g, dt)
     g_sum = g_plus + g_minus
     with np.errstate(divide="ignore", invalid="ignore"):
+        sides = n_span > 0  # each side about its own mean; a side without windows adds nothing
+        spans = np.sum(np.where(sides, ss_span - s_span**2 / np.where(sides, n_span, 1.0), 0.0), axis=2) / (np.sum(n_span - sides, axis=2))
+        shape = shape_ratio(spans)
         return {
             "sigma_y": sigma_y,
             "g": g,
@@ -512,8 +630,10 @@ def _quantities(n, sy, syy, n_side, s_side, prod, count, dt) -> dict:
             "impulse_sd": np.sqrt(np.maximum(impulse_var, 0.0)) / dt,
             "noise_sd": np.sqrt(np.maximum(noise_var, 0.0)),
             "noise_ratio": np.where(sigma_y > 0.0, np.sqrt(np.maximum(noise_var, 0.0)) / np.where(sigma_y > 0.0, sigma_y, 1.0), math.nan),
-            "corner_hz": corner,
-            "corner_ratio": np.where(g > 0, corner * period_from_g(sigma_y, np.where(g > 0, g, 1.0)), math.nan),
+            "corner_hz": corner_hz,
+            "corner_ratio": corner_ratio,
+            "shape": shape,
+            "shape_pole": pole_of_shape(shape),
             "r": gamma[:, 1:] / gamma[:, :1],
         }
 
@@ -539,7 +659,7 @@ def measure(records, dt: float, *, n_blocks: int = JACKKNIFE_BLOCKS) -> Measured
     sigma_raw = math.sqrt(float(np.nanmean(np.concatenate(records) ** 2)))
     drift_rms, drift_z = _drift(records, sigma_raw)
     level = [_detrend(y) for y in records] if drift_z > DRIFT_Z else records
-    keys = ("n", "sy", "syy", "n_side", "s_side", "prod", "count")
+    keys = ("n", "sy", "syy", "n_side", "s_side", "prod", "count", "n_span", "s_span", "ss_span")
     margin = 0.0
     for _ in range(MARGIN_PASSES + 1):
         sums = _block_sums(level, n_blocks, margin)
@@ -563,8 +683,12 @@ def measure(records, dt: float, *, n_blocks: int = JACKKNIFE_BLOCKS) -> Measured
             return Quantity(float(whole[name]), math.nan)
         return Quantity(float(whole[name]), float(math.sqrt((jack - 1) / jack * np.sum((values - values.mean()) ** 2))))
 
+    if _noisy(q("noise_var"), q("noise_ratio")):  # beneath the noise the load's pole is read off the shape (module docstring)
+        for row in (whole, reps):
+            row["pole"] = row["shape_pole"]
+            row["corner_hz"], row["corner_ratio"] = _corners(np.asarray(row["pole"]), row["sigma_y"], row["g"], dt)
     r_se = np.sqrt((jack - 1) / jack * np.sum((reps["r"] - reps["r"].mean(axis=0)) ** 2, axis=0))
-    names = ("g", "asymmetry", "impulse_var", "noise_var", "pole", "impulse_sd", "noise_sd", "noise_ratio", "corner_hz", "corner_ratio")
+    names = ("g", "asymmetry", "impulse_var", "noise_var", "pole", "impulse_sd", "noise_sd", "noise_ratio", "corner_hz", "corner_ratio", "shape")
     return MeasuredModel(
         dt=dt,
         triples=triples,
