@@ -334,3 +334,27 @@ def test_coloured_calibration_sets_are_moved_to_the_calibrations_samples_per_cyc
         assert all(miss > calibration.SET_PPC_TOLERANCE for miss in misses[:-1])  # stops at the first within tolerance
         assert len(calls) == n_max or misses[-1] <= calibration.SET_PPC_TOLERANCE or load.kind == "white"
         np.testing.assert_array_equal(raw, calls[int(np.argmin(misses))][1])
+
+
+def test_a_record_whose_model_cannot_be_measured_is_declined_unless_the_model_is_declared(tmp_path, capsys, monkeypatch):
+    """Too few triples to measure the record's model (MIN_TRIPLES raised above what the record
+    holds): `e` is null with one sentence that says why and names the options that would
+    help, before any calibration; declaring the load and the sensor noise, which leaves
+    nothing to measure, gives `e` under the declared model."""
+    from rockdec.record import record_measure
+
+    monkeypatch.setattr(record_measure, "MIN_TRIPLES", 10**9)
+    monkeypatch.setattr(calibration, "_grid_point", fake_calibration.grid_point)
+    path = tmp_path / "r.npy"
+    np.save(path, _record(27))
+    cache = tmp_path / "cache"
+    args = ["estimate", str(path), "--dt", str(DT_WHITE), "--cache", str(cache), "--json"]
+    assert main(args) == 0
+    res = json.loads(capsys.readouterr().out)
+    assert res["e"] is None and res["estimator"] is None and res["calibration"]["file"] is None
+    assert res["reason"].startswith("the record model could not be measured (the records hold ")
+    assert "--load white --sensor-noise 0" in res["reason"] and "\n" not in res["reason"]
+    assert not any(cache.glob("calibration-*.nc"))
+    assert main([*args, "--load", "white", "--sensor-noise", "0"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    assert res["e"] is not None and res["calibration"]["file"] is not None and res["reason"] is None

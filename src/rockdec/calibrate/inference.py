@@ -339,7 +339,7 @@ def colour_decline(model: RecordModel, sources: dict, measurement, points_per_cy
 
 def _declined(records: list[Record], analysis: measured.Analysis, notes: list, model_json: dict, g: float | None, reason: str) -> dict:
     """:func:`estimate`'s answer to records declined before any calibration
-    (:func:`colour_decline`): every estimator's raw value, no corrected value or interval,
+    (:func:`colour_decline`, or a record model left to measure that could not be): every estimator's raw value, no corrected value or interval,
     ``e`` null with ``reason``; ``g`` as given, else not corrected (``None``)."""
     why = "not calibrated: the records are declined (see the reason)"
     per = {
@@ -490,13 +490,19 @@ def estimate(
         raise RecordError(f"{names} does not look like a rocking record: {shape}; rockdec estimate gives e only for rocking records.")
     measuring = model is None and (load is None or sensor is None)  # a part is to be measured
     measurement, why_not = measure_model(records, dt) if model is None else (None, "declared")
-    if measuring and measurement is None:
-        notes.append(f"the record model could not be measured ({why_not}): the calibration simulates the paper's white load and noise-free sensor")
     model, sources = record_model(measurement, analysis, model=model, load=load, sensor=sensor, rocking=rocking)
     if (model.rocking == "housner") != (theta_cr is not None):
         raise InputError("Housner's model (eq. 2) needs the block's critical angle theta_cr, and only it; give both or neither.")
     ratio = analysis.sigma_y / theta_cr if theta_cr is not None else None
     cal_settings = calibration.calibration_settings([r.theta.size for r in records], analysis.points_per_cycle, settings, model, ratio)
+    if measuring and measurement is None:  # a part left to measure cannot be: no calibration is known to fit
+        model_json = model_report(None, why_not, analysis, sources, RecordModel.from_key(cal_settings["record_model"]), cal_settings)
+        model_json["simulated"]["described"] = "nothing (declined: the record model could not be measured)"
+        return _declined(records, analysis, notes, model_json, g, (
+            f"the record model could not be measured ({why_not}), so whether sensor noise or a coloured load moves e "
+            "here is not known; declare them (--load and --sensor-noise; --load white --sensor-noise 0 is the paper's "
+            "model) to have e estimated under the declared model"
+        ))
     declined = colour_decline(model, sources, measurement, analysis.points_per_cycle)
     if declined:
         simulated = RecordModel.from_key(cal_settings["record_model"])
