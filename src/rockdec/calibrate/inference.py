@@ -6,7 +6,8 @@ with the records' own, measures the records' own model (sensor noise, load colou
 drift: :func:`rockdec.record.record_measure.measure`) unless it is declared, fetches or builds
 the calibration for their lengths, sampling and model (:func:`record_model`,
 :mod:`rockdec.calibrate.calibration`), corrects every estimator and gives its 95 % interval,
-reports the narrowest trusted candidate (:func:`select`), corrects ``g`` the same way,
+reports the trusted candidate whose belt is narrowest at their common ``e`` (:func:`select`),
+corrects ``g`` the same way,
 and lists what looks wrong with the records (:func:`diagnose`: the checks of
 :mod:`rockdec.record.diagnostics`, their thresholds from the calibration's own simulated
 records). When no ``e`` can be given, ``reason`` says why.
