@@ -65,8 +65,8 @@ def _record_sums(y, n_blocks):
     accurate). Then, about the record's mean ``m``, over triples ``y[k-1], y[k], y[k+1]``
     all above ``m`` (side 1) or all below (side 0), the count and the sum of the second
     difference ``y[k+1] - 2 y[k] + y[k-1]``, and the largest ``|y[k] - (y[k-1] + y[k+1])/2|``
-    over non-NaN triples, their sum and their count. Returns ``(c, block counts, block sums
-    (2, n_blocks), side counts, side sums, largest, sum, count)``."""
+    over non-NaN triples. Returns ``(c, block counts, block sums (2, n_blocks), side counts,
+    side sums, largest)``."""
     n = y.size
     c = 0.0
     for k in range(n):
@@ -85,22 +85,19 @@ def _record_sums(y, n_blocks):
         counts[j], blocks[0, j], blocks[1, j] = q, t1, t2
     total = counts.sum()
     m = c + blocks[0].sum() / total if total else c
-    worst, n0, n1, s0, s1, total, finite = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0  # scalars: array elements here cost 6 times more
+    worst, n0, n1, s0, s1 = 0.0, 0.0, 0.0, 0.0, 0.0  # scalars: array elements here cost 6 times more
     for k in range(1, n - 1):
         a, b, e = y[k - 1], y[k], y[k + 1]
         d2 = e - 2.0 * b + a
-        if d2 == d2:  # NaN is not equal to itself
-            total += abs(d2)
-            finite += 1.0
-            if abs(d2) > worst:
-                worst = abs(d2)
+        if abs(d2) > worst:  # NaN compares False
+            worst = abs(d2)
         if a > m and b > m and e > m:
             n1 += 1.0
             s1 += d2
         elif a < m and b < m and e < m:
             n0 += 1.0
             s0 += d2
-    return c, counts, blocks, np.array([n0, n1]), np.array([s0, s1]), 0.5 * worst, 0.5 * total, finite
+    return c, counts, blocks, np.array([n0, n1]), np.array([s0, s1]), 0.5 * worst
 
 
 class Sums(NamedTuple):
@@ -110,8 +107,7 @@ class Sums(NamedTuple):
     with ``block_record`` the record of each; ``side_count``, ``side_sum`` the count and sum
     of the second differences of triples on one side of each record's mean (``[0]``
     below, ``[1]`` above); ``off``: the largest distance of a sample from the line through
-    its neighbours (rad), ``off_sum`` and ``off_count`` the sum and the count of those
-    distances over every non-NaN triple."""
+    its neighbours (rad)."""
 
     count: int
     block_mean: np.ndarray
@@ -120,28 +116,26 @@ class Sums(NamedTuple):
     side_count: np.ndarray
     side_sum: np.ndarray
     off: float
-    off_sum: float
-    off_count: float
 
 
 def sums(records) -> Sums:
     """:class:`Sums` of ``records`` (1-D arrays, NaN allowed): one compiled pass per record
     (:func:`_record_sums`)."""
-    count, off, off_sum, off_count = 0, 0.0, 0.0, 0.0
+    count, off = 0, 0.0
     side_n, side_s = np.zeros(2), np.zeros(2)
     means, variances, owners = [], [], []
     for i, y in enumerate(records):
         y = np.ascontiguousarray(y, dtype=np.float64)
         b = min(BLOCKS, y.size // BLOCK_MIN)
-        _, bn, (b1, b2), rn, rs, worst, total, finite = _record_sums(y, max(b, 1))
-        count, off, off_sum, off_count = count + int(bn.sum()), max(off, worst), off_sum + total, off_count + finite
+        _, bn, (b1, b2), rn, rs, worst = _record_sums(y, max(b, 1))
+        count, off = count + int(bn.sum()), max(off, worst)
         side_n, side_s = side_n + rn, side_s + rs
         if b >= 4 and (bn > 1).all():
             means.append(b1 / bn)
             variances.append(b2 / bn - (b1 / bn) ** 2)
             owners.append(np.full(b, i))
     stack = (lambda parts: np.concatenate(parts) if parts else np.empty(0))
-    return Sums(count, stack(means), stack(variances), stack(owners), side_n, side_s, off, off_sum, off_count)
+    return Sums(count, stack(means), stack(variances), stack(owners), side_n, side_s, off)
 
 
 def _von_neumann_z(values: np.ndarray, owners: np.ndarray) -> float:
@@ -201,15 +195,12 @@ def drift(s: Sums, analysis) -> float:
 
 
 def spikes(s: Sums, analysis) -> float:
-    """Largest ``|y[k] - (y[k-1] + y[k+1]) / 2|`` over its mean over the record: how far one
-    sample stands off the line through its neighbours, against how far samples stand off
-    it on average. Between impacts the block moves on parabolas, so on a clean record the
-    largest are the velocity jumps at impacts; sensor noise sets both the largest and the
-    mean, so the ratio does not move with the noise's level (a ratio to ``sigma_Y`` does, and
-    fires on records whose noise lies a few per cent above their calibration's bin); an isolated spike
-    stands tens to hundreds of means off. The mean, not the rms, so that sparse spikes
-    hardly raise it. Triples touching a NaN are left out; NaN without triples."""
-    return s.off / (s.off_sum / s.off_count) if s.off_sum > 0.0 else np.nan
+    """Largest ``|y[k] - (y[k-1] + y[k+1]) / 2|`` over ``sigma_Y``: how far one sample stands
+    off the line through its neighbours. Between impacts the block moves on parabolas, so
+    a clean record gives a few hundredths of ``sigma_Y`` at the paper's sampling (velocity
+    jumps at impacts); an isolated spike of ``k sigma_Y`` gives ``k``. Triples touching a
+    NaN are left out."""
+    return s.off / analysis.sigma_y
 
 
 def asymmetry(s: Sums, analysis) -> float:
@@ -269,9 +260,8 @@ REGISTRY = (
           "the record's block means wander more than rocking makes them (drift z {value:.1f}, calibrated limit "
           "{threshold:.1f}): the sensor's zero drifts; remove the trend (high-pass well below the rocking frequency)"),
     Check("spikes", "isolated wrong samples", spikes, "high", "calibrated",
-          "a sample stands {value:.0f} times the mean distance of the samples off the line through their neighbours, "
-          "where rocking records like it reach {threshold:.0f}: the record holds spikes; remove them or mark them as "
-          "gaps (NaN)", "max"),
+          "a sample stands {value:.2f} sigma_Y off the line through its neighbours, where rocking records like it reach "
+          "{threshold:.2f}: the record holds spikes; remove them or mark them as gaps (NaN)", "max"),
     Check("asymmetry", "a block leaning on one side", asymmetry, "high", "calibrated",
           "the response is asymmetric: the block falls back with a different g on each side (|g+ - g-|/(g+ + g-) "
           "{value:.3f}, calibrated limit {threshold:.3f}); it may lean on one side or the load push one way, and the "
