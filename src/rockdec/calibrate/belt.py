@@ -275,13 +275,14 @@ def width_at(b: Belt, e: float) -> float:
     return float(high[0] - low[0])
 
 
-def correct_g(g_belt: Belt, g_raw: float, e: float) -> float:
+def correct_g(g_belt: Belt, g_raw, e):
     """``g`` read off a record, corrected for its window bias: ``g_raw`` over the mean
-    ratio (measured ``g`` / true ``g``) of the calibration at the corrected ``e``; NaN when
-    ``e`` is NaN or the ``g`` belt is empty."""
-    if g_belt.e.size == 0 or not np.isfinite(e):
-        return float("nan")
-    return float(g_raw / np.interp(e, g_belt.e, g_belt.mean))
+    ratio (measured ``g`` / true ``g``) of the calibration at the corrected ``e``; NaN where
+    ``e`` is NaN or when the ``g`` belt is empty. ``g_raw`` and ``e``: numbers, or arrays of
+    one shape (one value each)."""
+    if g_belt.e.size == 0:
+        return np.full(np.shape(e), np.nan)[()]
+    return np.asarray(g_raw, dtype=float) / np.interp(e, g_belt.e, g_belt.mean)
 
 
 def g_band(cal: ncread.Stored | xr.Dataset, name: str, e_belt: Belt, g_belt: Belt) -> Belt:
@@ -298,8 +299,7 @@ def g_band(cal: ncread.Stored | xr.Dataset, name: str, e_belt: Belt, g_belt: Bel
     raw_e = cal["raw"].sel(name=name).values
     raw_g = cal["raw"].sel(name=G_NAME).values
     e = held_es(e_belt, np.where(np.isfinite(raw_g), raw_e, np.nan))
-    ratio = np.full(raw_e.shape, np.nan) if g_belt.e.size == 0 else raw_g / np.interp(e, g_belt.e, g_belt.mean)
-    return fit(cal["e_true"].values, ratio, ratio=True)
+    return fit(cal["e_true"].values, correct_g(g_belt, raw_g, e), ratio=True)
 
 
 def held_e(b: Belt, raw: float) -> float:
@@ -351,7 +351,7 @@ def g_intervals(e_belt: Belt, g_belt: Belt, band: Belt, raw_e: np.ndarray, raw_g
     e = held_es(e_belt, raw_e)
     ok = np.isfinite(e)
     e = e[ok]
-    g_value = raw_g[ok] / np.interp(e, g_belt.e, g_belt.mean)
+    g_value = correct_g(g_belt, raw_g[ok], e)
     mean, spread = np.interp(e, band.e, band.mean), np.interp(e, band.e, band.spread)
     low = mean + np.interp(e, band.e, np.broadcast_to(band.q_low, band.e.shape)) * spread
     high = mean + np.interp(e, band.e, np.broadcast_to(band.q_high, band.e.shape)) * spread
