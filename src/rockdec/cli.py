@@ -541,7 +541,7 @@ def _reads(name: str) -> str:
 
 def _estimate_text(res: dict) -> str:
     """The human-readable report of ``rockdec estimate`` (its words: :data:`GLOSSARY`)."""
-    fmt = lambda x: "nan" if x is None else f"{x:.4f}"  # noqa: E731
+    fmt = lambda x: _number(x, ".4f")  # noqa: E731
     pct = lambda x: "-" if x is None else f"{x:.0%}"  # noqa: E731
     cal = res["calibration"]
     lines = [

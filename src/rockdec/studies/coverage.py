@@ -285,7 +285,7 @@ def _answered(e: float, low, high) -> tuple[float, float, int]:
     n = int(ok.sum())
     if n == 0:
         return math.nan, math.nan, 0
-    cov = float(np.mean((low[ok] <= e) & (e <= high[ok])))
+    cov = _coverage(e, low[ok], high[ok])
     return cov, math.sqrt(cov * (1 - cov) / n), n
 
 
