@@ -497,14 +497,13 @@ def estimate(
     ratio = analysis.sigma_y / theta_cr if theta_cr is not None else None
     cal_settings = calibration.calibration_settings([r.theta.size for r in records], analysis.points_per_cycle, settings, model, ratio)
     if measuring and measurement is None:  # a part left to measure cannot be: no calibration is known to fit
-        model_json = model_report(None, why_not, analysis, sources, RecordModel.from_key(cal_settings["record_model"]), cal_settings)
-        model_json["simulated"]["described"] = "nothing (declined: the record model could not be measured)"
-        return _declined(records, analysis, notes, model_json, g, (
+        declined = (
             f"the record model could not be measured ({why_not}), so whether sensor noise or a coloured load moves e "
             "here is not known; declare them (--load and --sensor-noise; --load white --sensor-noise 0 is the paper's "
             "model) to have e estimated under the declared model"
-        ))
-    declined = colour_decline(model, sources, measurement, analysis.points_per_cycle)
+        )
+    else:
+        declined = colour_decline(model, sources, measurement, analysis.points_per_cycle)
     if declined:
         simulated = RecordModel.from_key(cal_settings["record_model"])
         model_json = model_report(measurement, why_not if measuring else None, analysis, sources, simulated, cal_settings)
