@@ -373,6 +373,7 @@ def pole_of_shape(q) -> np.ndarray:
     linear interpolation on :data:`POLE_GRID`, clipped to its ends."""
     return np.interp(q, _SHAPE_CURVE, POLE_GRID)
 
+
 #: Width to which the golden-section search of :func:`fit_structures` narrows the pole:
 #: near the minimum the residual then still changes by more than its rounding, so that
 #: records scaled in angle and time take the same path (1e-9 does not).
