@@ -328,6 +328,25 @@ def test_calibration_name_changes_with_every_setting():
     assert calibration.settings_hash(calibration.calibration_settings([200_000], 75.0, {"level": 2.5})) != h
 
 
+def test_each_records_calibration_draws_its_own_seeds_whatever_the_codes_version():
+    """Calibrations of different records start from different seeds (a calibration's sampling
+    error is not shared by all); the code's fingerprint and version do not move them; every base
+    stays below the belt study's first replica and leaves room for the grid's points."""
+    base = calibration.calibration_settings([200_000], 75.0)
+    others = [calibration.calibration_settings([200_000], ppc) for ppc in (60.0, 67.0, 82.0, 90.0)]
+    others.append(calibration.calibration_settings([100_000], 75.0))
+    bases = {calibration.seed_base(s) for s in [base, *others]}
+    assert len(bases) == 1 + len(others)
+    moved = {**base, "pipeline": "0" * 16, "rockdec_version": "9.9"}
+    assert calibration.seed_base(moved) == calibration.seed_base(base)
+    assert calibration.settings_hash(moved) != calibration.settings_hash(base)
+    top = calibration.CALIBRATION_SEED_OFFSET + belt_study.SEED_STRIDE
+    grid_span = len(base["e_grid"]) * 10**7
+    for b in bases:
+        assert calibration.CALIBRATION_SEED_OFFSET <= b and b + grid_span <= top
+        assert (b - calibration.CALIBRATION_SEED_OFFSET) % calibration.SEED_STRIDE == 0 and grid_span < calibration.SEED_STRIDE
+
+
 # --------------------------------------------------------------------------- bad input
 
 

@@ -126,8 +126,11 @@ HOUSNER_ITERATIONS = 5
 #: Names calibrated: every estimator of e, and g.
 NAMES = (*registry.ESTIMATORS, measured.G_NAME)
 
-#: Seeds of calibration records start here (apart from scene seeds and pilot seeds).
+#: Seeds of calibration records start here (apart from scene seeds and pilot seeds); each
+#: calibration draws from its own base, ``CALIBRATION_SEED_OFFSET + h * SEED_STRIDE`` with
+#: ``h < SEED_BASES`` (:func:`seed_base`), all below ``CALIBRATION_SEED_OFFSET + 2**50``.
 CALIBRATION_SEED_OFFSET = 2**61
+SEED_STRIDE, SEED_BASES = 10**9, 2**20
 
 #: Seconds between touches of a build lock, and age of its mtime after which it is stale.
 HEARTBEAT_S, STALE_S = 10.0, 120.0
@@ -254,6 +257,21 @@ def pipeline_fingerprint() -> str:
 def settings_hash(cal_settings: dict) -> str:
     """SHA-256 (first 16 hex digits) of the canonical JSON of the settings."""
     return hashlib.sha256(json.dumps(cal_settings, sort_keys=True).encode()).hexdigest()[:16]
+
+
+def seed_base(cal_settings: dict) -> int:
+    """First seed of the calibration for ``cal_settings``: :data:`CALIBRATION_SEED_OFFSET`
+    plus a multiple of :data:`SEED_STRIDE` taken from :func:`settings_hash` of the settings
+    without the code's fingerprint and version.
+
+    Calibrations of different records (lengths, samples per cycle, record model) draw
+    independent record sets, so that the sampling error of one calibration's spread (some
+    tens of sets per ``e``) is not repeated by every calibration of a study or of a user's
+    records; one record's calibration draws the same sets whatever the code's version.
+    """
+    description = {k: v for k, v in cal_settings.items() if k not in ("pipeline", "rockdec_version")}
+    h = int(settings_hash(description), 16) % SEED_BASES
+    return CALIBRATION_SEED_OFFSET + h * SEED_STRIDE
 
 
 def _simulate_set(
@@ -463,7 +481,8 @@ def build(cal_settings: dict) -> xr.Dataset:
         f"calibrating: simulating {cal_settings['sets_per_e']} record sets of {sum(cal_settings['lengths'])} samples at each of "
         f"{len(cal_settings['e_grid'])} values of e like the measured records (once; stored for every record with the same settings)"
     )
-    tasks = [dask.delayed(_grid_point)(j, e, cal_settings, CALIBRATION_SEED_OFFSET) for j, e in enumerate(cal_settings["e_grid"])]
+    base = seed_base(cal_settings)
+    tasks = [dask.delayed(_grid_point)(j, e, cal_settings, base) for j, e in enumerate(cal_settings["e_grid"])]
     with _Countdown(tasks):
         points = engine.compute(*tasks)
     values = np.stack([raw for raw, _ in points])

@@ -33,12 +33,13 @@ TEST_E = tuple(sorted({*calibration.E_GRID, 0.45, 0.55, 0.65, 0.72, 0.78, 0.82, 
 def pool(e_values, sets: int, n_points: int, points_per_cycle: float = 75.0, replica: int = 1) -> xr.Dataset:
     """``sets`` calibration record sets of one record of ``n_points`` at each ``e`` of
     ``e_values``, seed base ``calibration.CALIBRATION_SEED_OFFSET + replica * SEED_STRIDE``
-    (``replica = 0``: the calibration's own seeds); ``raw(e_true, set, name)`` as
+    (``replica = 0``: the seeds of the calibration of these settings,
+    :func:`rockdec.calibrate.calibration.seed_base`); ``raw(e_true, set, name)`` as
     :func:`rockdec.calibrate.calibration.build` stores it."""
     import dask
 
     settings = {**calibration.calibration_settings([n_points], points_per_cycle), "e_grid": [float(e) for e in e_values], "sets_per_e": int(sets)}
-    base = calibration.CALIBRATION_SEED_OFFSET + replica * SEED_STRIDE
+    base = calibration.CALIBRATION_SEED_OFFSET + replica * SEED_STRIDE if replica else calibration.seed_base(settings)
     tasks = [dask.delayed(calibration._grid_point)(j, e, settings, base) for j, e in enumerate(settings["e_grid"])]
     values = np.stack([raw for raw, _ in engine.compute(*tasks)])  # _grid_point: (raw, the checks' statistics)
     return xr.Dataset(
