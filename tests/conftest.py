@@ -115,6 +115,7 @@ FORKS = Forks()
 
 def pytest_sessionfinish(session):
     FORKS.close()
+    SCHEDULER.close()
 
 
 def snakemake(workdir, *args) -> tuple[int, str]:
@@ -152,9 +153,61 @@ def tiny_workflow(tmp_path_factory) -> dict:
     return {"root": root, "dry_run": dry, "log": log}
 
 
+class SharedScheduler:
+    """A Dask scheduler on loopback with two worker processes, started for the first test
+    that asks for :func:`dask_scheduler` and closed after the last test of the session marked
+    ``dask_scheduler`` (those that ask for it)
+    (an idle cluster costs about 0.08 CPU s a second in heartbeats): a cluster costs about 1 s
+    to start and its workers 1 to 2 s each to import what the first tasks need, once."""
+
+    def __init__(self):
+        self.cluster = None
+        self.users = 0  # tests of the session that ask for it and have not run yet
+
+    def address(self) -> str:
+        if self.cluster is None:
+            from dask.distributed import LocalCluster
+
+            self.cluster = LocalCluster(n_workers=2, threads_per_worker=1, host="127.0.0.1", dashboard_address=None)
+        return self.cluster.scheduler_address
+
+    def done(self, item) -> None:
+        """After ``item``: close the cluster once no test left of the session uses it."""
+        if item.get_closest_marker("dask_scheduler"):
+            self.users -= 1
+            if self.users <= 0:
+                self.close()
+
+    def close(self) -> None:
+        if self.cluster is not None:
+            self.cluster.close()
+            self.cluster = None
+
+
+SCHEDULER = SharedScheduler()
+
+
+def pytest_collection_finish(session):
+    SCHEDULER.users = sum(bool(item.get_closest_marker("dask_scheduler")) for item in session.items)
+
+
+@pytest.fixture
+def dask_scheduler(request) -> str:
+    """The address of :data:`SCHEDULER`'s running Dask scheduler, for a test marked
+    ``dask_scheduler`` (test_engine.py and test_workflow.py give it to the engine; one worker
+    runs both, :data:`WORKFLOW_MODULES`)."""
+    assert request.node.get_closest_marker("dask_scheduler"), f"{request.node.nodeid} asks for dask_scheduler unmarked"
+    return SCHEDULER.address()
+
+
+def pytest_runtest_teardown(item, nextitem):
+    SCHEDULER.done(item)
+
+
 #: The test modules that use :func:`tiny_workflow` (one worker runs them: one build, and no
-#: two tests change it at once).
-WORKFLOW_MODULES = ("tests/pipeline/test_workflow.py", "tests/pipeline/test_archive.py")
+#: two tests change it at once) and those that use :func:`dask_scheduler` (one cluster),
+#: in the order they run.
+WORKFLOW_MODULES = ("tests/pipeline/test_workflow.py", "tests/pipeline/test_engine.py", "tests/pipeline/test_archive.py")
 
 #: The modules whose tests cost the most CPU (``--cpu-durations``), costliest first; the
 #: other modules follow in their collection order.
@@ -162,7 +215,6 @@ COSTLIEST_FIRST = (
     *WORKFLOW_MODULES,
     "tests/test_hostile.py",
     "tests/calibrate/test_estimate.py",
-    "tests/pipeline/test_engine.py",
     "tests/studies/test_coverage.py",
     "tests/test_cli.py",
     "tests/pipeline/test_workflow_rules.py",
