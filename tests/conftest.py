@@ -204,10 +204,16 @@ def pytest_runtest_teardown(item, nextitem):
     SCHEDULER.done(item)
 
 
-#: The test modules that use :func:`tiny_workflow` (one worker runs them: one build, and no
-#: two tests change it at once) and those that use :func:`dask_scheduler` (one cluster),
-#: in the order they run.
-WORKFLOW_MODULES = ("tests/pipeline/test_workflow.py", "tests/pipeline/test_engine.py", "tests/pipeline/test_archive.py")
+#: The test modules one worker runs, in this order: those that use :func:`tiny_workflow` (one
+#: build, and no two tests change it at once), :func:`dask_scheduler` (one cluster) or
+#: :data:`FORKS` (one fork server, about 1.4 s of CPU to start).
+WORKFLOW_MODULES = (
+    "tests/pipeline/test_workflow.py",
+    "tests/pipeline/test_engine.py",
+    "tests/pipeline/test_archive.py",
+    "tests/pipeline/test_workflow_rules.py",
+    "tests/pipeline/test_config.py",
+)
 
 #: The modules whose tests cost the most CPU (``--cpu-durations``), costliest first; the
 #: other modules follow in their collection order.
@@ -217,7 +223,6 @@ COSTLIEST_FIRST = (
     "tests/calibrate/test_estimate.py",
     "tests/studies/test_coverage.py",
     "tests/test_cli.py",
-    "tests/pipeline/test_workflow_rules.py",
 )
 
 
