@@ -229,9 +229,22 @@ COSTLIEST_FIRST = (
 def pytest_collection_modifyitems(config, items):
     """The modules of :data:`COSTLIEST_FIRST` first, each module's tests in their order:
     xdist hands out modules in this order as workers run short, so the last ones are short
-    and both workers end together (the suite lasts as long as its busiest worker)."""
+    and both workers end together (the suite lasts as long as its busiest worker). The tests
+    marked ``dask_scheduler`` run one after the other (:class:`SharedScheduler` idles in
+    between): last in the first module that has some, first in the next ones."""
     rank = {module: i for i, module in enumerate(COSTLIEST_FIRST)}
-    items.sort(key=lambda item: rank.get(item.nodeid.split("::")[0], len(rank)))
+
+    def module(item) -> str:
+        return item.nodeid.split("::")[0]
+
+    def order(item) -> tuple[int, int]:
+        place = rank.get(module(item), len(rank))
+        if not item.get_closest_marker("dask_scheduler"):
+            return place, 0
+        return place, 1 if place == first else -1
+
+    first = min((rank.get(module(i), len(rank)) for i in items if i.get_closest_marker("dask_scheduler")), default=None)
+    items.sort(key=order)
 
 
 @pytest.hookimpl(optionalhook=True)
