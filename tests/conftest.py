@@ -39,19 +39,28 @@ TINY = "tiny"
 class Forks:
     """The Snakemake runs of this test process, each a child forked by one process that has
     imported Snakemake (tests/snakemake_forks.py), started at the first run: a run then
-    costs what Snakemake does, not its ~1 s of imports. ``cpu``: the CPU seconds of every
-    run so far (the children are the fork server's, not this process's)."""
+    costs what Snakemake does, not its ~1 s of imports; a shell's ``snakemake`` commands
+    too (:meth:`shell`). ``cpu``: the CPU seconds of every run so far (the children are the
+    fork server's, not this process's)."""
 
     SERVER = Path(__file__).with_name("snakemake_forks.py")
 
     def __init__(self):
         self.proc = None
         self.cpu = 0.0
+        self.folder = None  # the server's socket, and bin/snakemake that a shell finds (:meth:`shell`)
 
     def _ask(self, request: dict, timeout: float) -> dict:
         """One request to the fork server (started at the first), its answer within ``timeout`` s."""
         if self.proc is None or self.proc.poll() is not None:
-            self.proc = subprocess.Popen([sys.executable, str(self.SERVER)], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+            self.folder = Path(tempfile.mkdtemp(prefix="snakemake-forks-"))
+            socket = self.folder / "socket"
+            (self.folder / "bin").mkdir()
+            script = self.folder / "bin" / "snakemake"
+            script.write_text(f'#!/bin/sh\nexec "{sys.executable}" "{self.SERVER}" --client "{socket}" "$@"\n')
+            script.chmod(0o755)
+            self.proc = subprocess.Popen([sys.executable, str(self.SERVER), str(socket)], stdin=subprocess.PIPE,
+                                         stdout=subprocess.PIPE, text=True)
         self.proc.stdin.write(json.dumps(request) + "\n")
         self.proc.stdin.flush()
         ready, _, _ = select.select([self.proc.stdout], [], [], timeout)
@@ -63,10 +72,8 @@ class Forks:
         return reply
 
     def _request(self, workdir, args, env, out, err, background: bool) -> dict:
-        args = [str(a) for a in args]
-        runs_rules = not {"-n", "--dry-run", "--lint", "--summary", "--unlock"} & set(args)
-        return {"cwd": str(Path(workdir).resolve()), "args": args, "env": dict(os.environ if env is None else env),
-                "out": str(out), "err": str(err), "preload": runs_rules, "background": background}
+        return {"cwd": str(Path(workdir).resolve()), "args": [str(a) for a in args], "env": dict(os.environ if env is None else env),
+                "out": str(out), "err": str(err), "background": background}
 
     def run(self, workdir, args, timeout: float = 900.0, env: dict | None = None) -> tuple[int, str, str]:
         """``python -m snakemake *args`` in ``workdir`` with environment ``env`` (default this
@@ -75,6 +82,18 @@ class Forks:
             out, err = Path(folder) / "out", Path(folder) / "err"
             reply = self._ask(self._request(workdir, args, env, out, err, background=False), timeout)
             return reply["code"], out.read_text(), err.read_text()
+
+    def shell(self, workdir, command: str, env: dict | None = None, timeout: float = 900.0) -> tuple[int, str, str]:
+        """``bash -c command`` in ``workdir`` with environment ``env`` (default this process's),
+        ``snakemake`` on its ``PATH`` a client of the fork server (each run forked, as
+        :meth:`run`; ``python -m snakemake ARGS`` for ``snakemake ARGS``): exit code, standard
+        output and standard error."""
+        self._ask({"collect": True}, 60.0)  # the server runs and listens
+        env = dict(os.environ if env is None else env)
+        env["PATH"] = f"{self.folder / 'bin'}{os.pathsep}{env.get('PATH', '')}"
+        done = subprocess.run(["bash", "-c", command], cwd=workdir, env=env, capture_output=True, text=True, timeout=timeout)
+        self._ask({"collect": True}, 60.0)  # the CPU of the runs, into self.cpu
+        return done.returncode, done.stdout, done.stderr
 
     def start(self, workdir, args, env: dict | None = None) -> "Forked":
         """``python -m snakemake *args`` in ``workdir`` in the background, the leader of a
@@ -85,6 +104,7 @@ class Forks:
         if self.proc is not None:
             self.proc.stdin.close()
             self.proc.wait(timeout=60)
+            shutil.rmtree(self.folder, ignore_errors=True)
 
 
 class Forked:
