@@ -176,9 +176,9 @@ def tiny_workflow(tmp_path_factory) -> dict:
 class SharedScheduler:
     """A Dask scheduler on loopback with two worker processes, started for the first test
     that asks for :func:`dask_scheduler` and closed after the last test of the session marked
-    ``dask_scheduler`` (those that ask for it)
-    (an idle cluster costs about 0.08 CPU s a second in heartbeats): a cluster costs about 1 s
-    to start and its workers 1 to 2 s each to import what the first tasks need, once."""
+    ``dask_scheduler`` (those that ask for it), since an idle cluster costs about 0.08 CPU s
+    a second in heartbeats: a cluster costs about 1 s to start and its workers 1 to 2 s each
+    to import what the first tasks need, once."""
 
     def __init__(self):
         self.cluster = None
