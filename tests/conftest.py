@@ -39,19 +39,28 @@ TINY = "tiny"
 class Forks:
     """The Snakemake runs of this test process, each a child forked by one process that has
     imported Snakemake (tests/snakemake_forks.py), started at the first run: a run then
-    costs what Snakemake does, not its ~1 s of imports. ``cpu``: the CPU seconds of every
-    run so far (the children are the fork server's, not this process's)."""
+    costs what Snakemake does, not its ~1 s of imports; a shell's ``snakemake`` commands
+    too (:meth:`shell`). ``cpu``: the CPU seconds of every run so far (the children are the
+    fork server's, not this process's)."""
 
     SERVER = Path(__file__).with_name("snakemake_forks.py")
 
     def __init__(self):
         self.proc = None
         self.cpu = 0.0
+        self.folder = None  # the server's socket, and bin/snakemake that a shell finds (:meth:`shell`)
 
     def _ask(self, request: dict, timeout: float) -> dict:
         """One request to the fork server (started at the first), its answer within ``timeout`` s."""
         if self.proc is None or self.proc.poll() is not None:
-            self.proc = subprocess.Popen([sys.executable, str(self.SERVER)], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+            self.folder = Path(tempfile.mkdtemp(prefix="snakemake-forks-"))
+            socket = self.folder / "socket"
+            (self.folder / "bin").mkdir()
+            script = self.folder / "bin" / "snakemake"
+            script.write_text(f'#!/bin/sh\nexec "{sys.executable}" "{self.SERVER}" --client "{socket}" "$@"\n')
+            script.chmod(0o755)
+            self.proc = subprocess.Popen([sys.executable, str(self.SERVER), str(socket)], stdin=subprocess.PIPE,
+                                         stdout=subprocess.PIPE, text=True)
         self.proc.stdin.write(json.dumps(request) + "\n")
         self.proc.stdin.flush()
         ready, _, _ = select.select([self.proc.stdout], [], [], timeout)
@@ -63,10 +72,8 @@ class Forks:
         return reply
 
     def _request(self, workdir, args, env, out, err, background: bool) -> dict:
-        args = [str(a) for a in args]
-        runs_rules = not {"-n", "--dry-run", "--lint", "--summary", "--unlock"} & set(args)
-        return {"cwd": str(Path(workdir).resolve()), "args": args, "env": dict(os.environ if env is None else env),
-                "out": str(out), "err": str(err), "preload": runs_rules, "background": background}
+        return {"cwd": str(Path(workdir).resolve()), "args": [str(a) for a in args], "env": dict(os.environ if env is None else env),
+                "out": str(out), "err": str(err), "background": background}
 
     def run(self, workdir, args, timeout: float = 900.0, env: dict | None = None) -> tuple[int, str, str]:
         """``python -m snakemake *args`` in ``workdir`` with environment ``env`` (default this
@@ -75,6 +82,18 @@ class Forks:
             out, err = Path(folder) / "out", Path(folder) / "err"
             reply = self._ask(self._request(workdir, args, env, out, err, background=False), timeout)
             return reply["code"], out.read_text(), err.read_text()
+
+    def shell(self, workdir, command: str, env: dict | None = None, timeout: float = 900.0) -> tuple[int, str, str]:
+        """``bash -c command`` in ``workdir`` with environment ``env`` (default this process's),
+        ``snakemake`` on its ``PATH`` a client of the fork server (each run forked, as
+        :meth:`run`; ``python -m snakemake ARGS`` for ``snakemake ARGS``): exit code, standard
+        output and standard error."""
+        self._ask({"collect": True}, 60.0)  # the server runs and listens
+        env = dict(os.environ if env is None else env)
+        env["PATH"] = f"{self.folder / 'bin'}{os.pathsep}{env.get('PATH', '')}"
+        done = subprocess.run(["bash", "-c", command], cwd=workdir, env=env, capture_output=True, text=True, timeout=timeout)
+        self._ask({"collect": True}, 60.0)  # the CPU of the runs, into self.cpu
+        return done.returncode, done.stdout, done.stderr
 
     def start(self, workdir, args, env: dict | None = None) -> "Forked":
         """``python -m snakemake *args`` in ``workdir`` in the background, the leader of a
@@ -85,6 +104,7 @@ class Forks:
         if self.proc is not None:
             self.proc.stdin.close()
             self.proc.wait(timeout=60)
+            shutil.rmtree(self.folder, ignore_errors=True)
 
 
 class Forked:
@@ -115,6 +135,7 @@ FORKS = Forks()
 
 def pytest_sessionfinish(session):
     FORKS.close()
+    SCHEDULER.close()
 
 
 def snakemake(workdir, *args) -> tuple[int, str]:
@@ -152,9 +173,67 @@ def tiny_workflow(tmp_path_factory) -> dict:
     return {"root": root, "dry_run": dry, "log": log}
 
 
-#: The test modules that use :func:`tiny_workflow` (one worker runs them: one build, and no
-#: two tests change it at once).
-WORKFLOW_MODULES = ("tests/pipeline/test_workflow.py", "tests/pipeline/test_archive.py")
+class SharedScheduler:
+    """A Dask scheduler on loopback with two worker processes, started for the first test
+    that asks for :func:`dask_scheduler` and closed after the last test of the session marked
+    ``dask_scheduler`` (those that ask for it), since an idle cluster costs about 0.08 CPU s
+    a second in heartbeats: a cluster costs about 1 s to start and its workers 1 to 2 s each
+    to import what the first tasks need, once."""
+
+    def __init__(self):
+        self.cluster = None
+        self.users = 0  # tests of the session that ask for it and have not run yet
+
+    def address(self) -> str:
+        if self.cluster is None:
+            from dask.distributed import LocalCluster
+
+            self.cluster = LocalCluster(n_workers=2, threads_per_worker=1, host="127.0.0.1", dashboard_address=None)
+        return self.cluster.scheduler_address
+
+    def done(self, item) -> None:
+        """After ``item``: close the cluster once no test left of the session uses it."""
+        if item.get_closest_marker("dask_scheduler"):
+            self.users -= 1
+            if self.users <= 0:
+                self.close()
+
+    def close(self) -> None:
+        if self.cluster is not None:
+            self.cluster.close()
+            self.cluster = None
+
+
+SCHEDULER = SharedScheduler()
+
+
+def pytest_collection_finish(session):
+    SCHEDULER.users = sum(bool(item.get_closest_marker("dask_scheduler")) for item in session.items)
+
+
+@pytest.fixture
+def dask_scheduler(request) -> str:
+    """The address of :data:`SCHEDULER`'s running Dask scheduler, for a test marked
+    ``dask_scheduler`` (test_engine.py and test_workflow.py give it to the engine; one worker
+    runs both, :data:`WORKFLOW_MODULES`)."""
+    assert request.node.get_closest_marker("dask_scheduler"), f"{request.node.nodeid} asks for dask_scheduler unmarked"
+    return SCHEDULER.address()
+
+
+def pytest_runtest_teardown(item, nextitem):
+    SCHEDULER.done(item)
+
+
+#: The test modules one worker runs, in this order: those that use :func:`tiny_workflow` (one
+#: build, and no two tests change it at once), :func:`dask_scheduler` (one cluster) or
+#: :data:`FORKS` (one fork server, about 1.4 s of CPU to start).
+WORKFLOW_MODULES = (
+    "tests/pipeline/test_workflow.py",
+    "tests/pipeline/test_engine.py",
+    "tests/pipeline/test_archive.py",
+    "tests/pipeline/test_workflow_rules.py",
+    "tests/pipeline/test_config.py",
+)
 
 #: The modules whose tests cost the most CPU (``--cpu-durations``), costliest first; the
 #: other modules follow in their collection order.
@@ -162,19 +241,30 @@ COSTLIEST_FIRST = (
     *WORKFLOW_MODULES,
     "tests/test_hostile.py",
     "tests/calibrate/test_estimate.py",
-    "tests/pipeline/test_engine.py",
     "tests/studies/test_coverage.py",
     "tests/test_cli.py",
-    "tests/pipeline/test_workflow_rules.py",
 )
 
 
 def pytest_collection_modifyitems(config, items):
     """The modules of :data:`COSTLIEST_FIRST` first, each module's tests in their order:
     xdist hands out modules in this order as workers run short, so the last ones are short
-    and both workers end together (the suite lasts as long as its busiest worker)."""
+    and both workers end together (the suite lasts as long as its busiest worker). The tests
+    marked ``dask_scheduler`` run one after the other (:class:`SharedScheduler` idles in
+    between): last in the first module that has some, first in the next ones."""
     rank = {module: i for i, module in enumerate(COSTLIEST_FIRST)}
-    items.sort(key=lambda item: rank.get(item.nodeid.split("::")[0], len(rank)))
+
+    def module(item) -> str:
+        return item.nodeid.split("::")[0]
+
+    def order(item) -> tuple[int, int]:
+        place = rank.get(module(item), len(rank))
+        if not item.get_closest_marker("dask_scheduler"):
+            return place, 0
+        return place, 1 if place == first else -1
+
+    first = min((rank.get(module(i), len(rank)) for i in items if i.get_closest_marker("dask_scheduler")), default=None)
+    items.sort(key=order)
 
 
 @pytest.hookimpl(optionalhook=True)

@@ -9,12 +9,19 @@ package copied there), the caller's environment, ``sys.argv``, its standard outp
 error in files. rockdec is never imported here, so each child imports it afresh, from
 wherever its ``sys.path`` finds it; the third-party libraries its rules import are (:func:`preload`).
 
-Protocol, one JSON line each way per request. A run: ``{"cwd", "args", "env", "out", "err",
-"preload", "background"}`` in (``preload``: load the libraries of the rules that run inside
-Snakemake first, :func:`preload`); out ``{"code", "cpu"}`` when it ends, ``cpu`` the user +
-system seconds of the child and of every process it waited for (its jobs) -- or, with
-``background``, ``{"pid"}`` at once, the child the leader of a process group of its own.
-Then ``{"wait": pid, "timeout"}`` in, :func:`ended` out.
+Protocol, one JSON line each way per request, on standard input and output. A run:
+``{"cwd", "args", "env", "out", "err", "background"}`` in; out ``{"code", "cpu"}`` when it
+ends, ``cpu`` the user + system seconds of the child and of every process it waited for (its
+jobs) -- or, with ``background``, ``{"pid"}`` at once, the child the leader of a process
+group of its own. Then ``{"wait": pid, "timeout"}`` in, :func:`ended` out. ``{"collect":
+true}`` in: ``{"cpu"}`` out, the CPU of the runs asked for on the socket since the last
+answer on standard output.
+
+The socket (``python snakemake_forks.py SOCKET``): a command a shell runs
+(``snakemake ARGS`` with ``PATH`` leading to a script that runs ``python snakemake_forks.py
+--client SOCKET ARGS``, :func:`client`) asks for a run there, ``{"cwd", "args", "env",
+"out", "err"}``, and gets ``{"code"}``; the client prints the run's output and exits with
+its code, as ``snakemake ARGS`` would.
 """
 
 import json
@@ -22,11 +29,18 @@ import os
 import sys
 import time
 
-import snakemake.api  # noqa: F401  (the imports every run pays: Snakemake, SQLAlchemy, pydantic)
-import snakemake.cli
-from snakemake_interface_executor_plugins.registry import ExecutorPluginRegistry
+#: Arguments after which Snakemake runs no rule (the libraries of :func:`preload` are not needed).
+NO_RULES = {"-n", "--dry-run", "--lint", "--summary", "--unlock"}
 
-ExecutorPluginRegistry()  # loads the installed executor plugins (the SLURM one imports pandas)
+
+def load_snakemake() -> None:
+    """The imports every run pays: Snakemake, SQLAlchemy, pydantic, and the installed executor
+    plugins (the SLURM one imports pandas)."""
+    import snakemake.api  # noqa: F401
+    import snakemake.cli  # noqa: F401
+    from snakemake_interface_executor_plugins.registry import ExecutorPluginRegistry
+
+    ExecutorPluginRegistry()
 
 
 def preload() -> None:
@@ -47,6 +61,8 @@ def preload() -> None:
 
 def child(request: dict) -> None:
     """Become ``python -m snakemake ARGS`` in ``cwd``; never returns."""
+    import snakemake.cli
+
     code = 1
     try:
         os.chdir(request["cwd"])
@@ -89,21 +105,81 @@ def ended(pid: int, timeout: float) -> dict:
         time.sleep(0.01)
 
 
-def serve() -> None:
-    for line in sys.stdin:
-        request = json.loads(line)
-        if "wait" in request:  # a run started in the background: has it ended?
-            reply = ended(request["wait"], request["timeout"])
-        else:
-            if request["preload"]:
-                preload()
-            pid = os.fork()
-            if pid == 0:
-                if request["background"]:
-                    os.setsid()  # a process group of its own, with its jobs, as a killed run needs
-                child(request)
-            reply = {"pid": pid} if request["background"] else ended(pid, float("inf"))
-        print(json.dumps(reply), flush=True)
+def fork(request: dict) -> int:
+    """A child forked for the run ``request`` (:func:`child`), the libraries of the rules loaded
+    first unless it runs none (:func:`preload`); its process id."""
+    if not NO_RULES & set(request["args"]):
+        preload()
+    pid = os.fork()
+    if pid == 0:
+        if request.get("background"):
+            os.setsid()  # a process group of its own, with its jobs, as a killed run needs
+        child(request)
+    return pid
+
+
+def serve(socket_path: str | None = None) -> None:
+    """Answer the requests on standard input, and those on ``socket_path`` if given, until
+    standard input closes."""
+    import selectors
+    import socket
+
+    load_snakemake()
+    events = selectors.DefaultSelector()
+    events.register(sys.stdin, selectors.EVENT_READ)
+    if socket_path:
+        listener = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+        listener.bind(socket_path)
+        listener.listen()
+        events.register(listener, selectors.EVENT_READ)
+    elsewhere = 0.0  # CPU of the socket's runs not yet reported on standard output
+    while True:
+        for key, _ in events.select():
+            if key.fileobj is sys.stdin:
+                line = sys.stdin.readline()
+                if not line:
+                    return
+                request = json.loads(line)
+                if "wait" in request:  # a run started in the background: has it ended?
+                    reply = ended(request["wait"], request["timeout"])
+                elif "collect" in request:
+                    reply, elsewhere = {"cpu": elsewhere}, 0.0
+                else:
+                    pid = fork(request)
+                    reply = {"pid": pid} if request["background"] else ended(pid, float("inf"))
+                print(json.dumps(reply), flush=True)
+            else:
+                connection, _ = listener.accept()
+                with connection, connection.makefile("rw") as stream:
+                    done = ended(fork(json.loads(stream.readline())), float("inf"))
+                    elsewhere += done["cpu"]
+                    stream.write(json.dumps({"code": done["code"]}) + "\n")
+
+
+def client(socket_path: str, args: list[str]) -> None:
+    """``snakemake ARGS`` as the fork server on ``socket_path`` runs it in this folder with this
+    environment: its output printed, its exit code this process's."""
+    import socket
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as folder:
+        out, err = os.path.join(folder, "out"), os.path.join(folder, "err")
+        request = {"cwd": os.getcwd(), "args": args, "env": dict(os.environ), "out": out, "err": err}
+        with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as connection:
+            connection.connect(socket_path)
+            with connection.makefile("rw") as stream:
+                stream.write(json.dumps(request) + "\n")
+                stream.flush()
+                code = json.loads(stream.readline())["code"]
+        with open(out) as text:
+            sys.stdout.write(text.read())
+        with open(err) as text:
+            sys.stderr.write(text.read())
+    sys.exit(code)
+
 
 if __name__ == "__main__":
-    serve()
+    if sys.argv[1:2] == ["--client"]:
+        client(sys.argv[2], sys.argv[3:])
+    else:
+        serve(*sys.argv[1:2])

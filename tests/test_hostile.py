@@ -8,6 +8,7 @@ from __future__ import annotations
 import errno
 import json
 import math
+import shutil
 import subprocess
 import sys
 import textwrap
@@ -501,6 +502,23 @@ def rocking(tmp_path_factory):
     return {"folder": folder, "theta": theta, "dt": dt, "t": t, "csv": folder / "rec.csv"}
 
 
+@pytest.fixture(scope="module")
+def tiny_cache(rocking, tiny_calibration, tmp_path_factory) -> dict:
+    """``folder``: a calibration folder holding the tiny calibration of :func:`rocking`, built
+    once for the module by ``answer``, the estimate of :func:`rocking` that built it;
+    :func:`tiny_cache_copy` copies it for a test, as a user's cache serves every run."""
+    folder = tmp_path_factory.mktemp("tiny-cache") / "cache"
+    code, answer, err = _estimate([rocking["csv"]], folder)
+    assert code == 0 and answer["calibration"]["cached"] is False, err
+    return {"folder": folder, "answer": answer}
+
+
+def tiny_cache_copy(tiny_cache, tmp_path) -> Path:
+    """``tmp_path / "cache"``, a copy of :func:`tiny_cache`: the test's runs on :func:`rocking`
+    find its calibration there (the cache is keyed by content, so sharing it changes no answer)."""
+    return Path(shutil.copytree(tiny_cache["folder"], tmp_path / "cache"))
+
+
 def _estimate(argv, cache):
     """``rockdec estimate ARGV --json --cache CACHE``: exit code, parsed JSON (or None), stderr."""
     import io as _io
@@ -762,9 +780,9 @@ def test_a_file_size_limit_is_one_sentence(tmp_path):
 
 
 @hostile("units", "answered")
-def test_units_degrees_and_milliseconds_give_the_radian_second_answer(rocking, tiny_calibration, tmp_path):
+def test_units_degrees_and_milliseconds_give_the_radian_second_answer(rocking, tiny_cache, tmp_path):
     theta, dt = rocking["theta"], rocking["dt"]
-    cache = tmp_path / "cache"
+    cache = tiny_cache_copy(tiny_cache, tmp_path)
     _, plain, _ = _estimate([_nc(tmp_path / "rad.nc", theta, dt, theta_units="rad", time_units="s")], cache)
     _, deg, _ = _estimate([_nc(tmp_path / "deg.nc", np.degrees(theta), dt, theta_units="degrees")], cache)
     _, ms, _ = _estimate([_nc(tmp_path / "ms.nc", theta, dt * 1e3, time_units="ms")], cache)
@@ -777,10 +795,10 @@ def test_units_degrees_and_milliseconds_give_the_radian_second_answer(rocking, t
 
 @hostile("record files", "answered")
 @pytest.mark.parametrize("sep", [";", "\t", " "], ids=["semicolon", "tab", "space"])
-def test_csv_separators_give_the_comma_answer(rocking, tiny_calibration, tmp_path, sep):
+def test_csv_separators_give_the_comma_answer(rocking, tiny_cache, tmp_path, sep):
     path = tmp_path / "rec.csv"
     np.savetxt(path, np.c_[rocking["t"], rocking["theta"]], delimiter=sep, header=f"time{sep}theta", comments="", fmt="%.10g")
-    cache = tmp_path / "cache"
+    cache = tiny_cache_copy(tiny_cache, tmp_path)
     _, comma, _ = _estimate([rocking["csv"]], cache)
     code, other, err = _estimate([path], cache)
     assert code == 0, err
@@ -788,8 +806,8 @@ def test_csv_separators_give_the_comma_answer(rocking, tiny_calibration, tmp_pat
 
 
 @hostile("wrong answers", "answered")
-def test_a_given_g_near_the_records_own_is_used(rocking, tiny_calibration, tmp_path):
-    code, res, err = _estimate([rocking["csv"], "--g", "1.0"], tmp_path / "cache")
+def test_a_given_g_near_the_records_own_is_used(rocking, tiny_cache, tmp_path):
+    code, res, err = _estimate([rocking["csv"], "--g", "1.0"], tiny_cache_copy(tiny_cache, tmp_path))
     assert code == 0, err
     assert res["g"] == 1.0 and res["g_given"]
 
@@ -820,8 +838,8 @@ def test_a_null_e_always_carries_a_reason(rocking, tiny_calibration, tmp_path):
 
 
 @hostile("report", "answered")
-def test_the_text_report_prints_when_g_is_given(rocking, tiny_calibration, tmp_path, capsys):
-    code = main(["estimate", str(rocking["csv"]), "--g", "1.0", "--cache", str(tmp_path / "cache")])
+def test_the_text_report_prints_when_g_is_given(rocking, tiny_cache, tmp_path, capsys):
+    code = main(["estimate", str(rocking["csv"]), "--g", "1.0", "--cache", str(tiny_cache_copy(tiny_cache, tmp_path))])
     out = capsys.readouterr()
     assert code == 0, out.err
     assert "g = 1 rad/s^2 (given (--g))" in out.out
@@ -837,9 +855,11 @@ def _cached_file(cache):
 
 @hostile("cache", "warned")
 @pytest.mark.parametrize("damage", ["tampered value", "truncated", "settings edited", "checksum removed", "not NetCDF"])
-def test_a_damaged_cache_file_is_rebuilt_with_a_note(rocking, tiny_calibration, tmp_path, damage):
-    cache = tmp_path / "cache"
-    _, fresh, _ = _estimate([rocking["csv"]], cache)
+def test_a_damaged_cache_file_is_rebuilt_with_a_note(rocking, tiny_cache, tmp_path, damage):
+    """The module's calibration (:func:`tiny_cache`, built fresh) damaged in a copy: the
+    rebuilt one gives the fresh one's answer."""
+    cache = tiny_cache_copy(tiny_cache, tmp_path)
+    fresh = tiny_cache["answer"]
     path = _cached_file(cache)
     if damage == "tampered value":
         with xr.open_dataset(path) as ds:
@@ -929,7 +949,7 @@ def test_a_plot_claimed_by_a_running_estimate_is_refused_at_once(rocking, tmp_pa
 
 
 @hostile("output paths", "refused")
-def test_a_plot_made_by_someone_else_during_the_calibration_is_kept_and_the_run_refuses(rocking, tiny_calibration, tmp_path, monkeypatch):
+def test_a_plot_made_by_someone_else_during_the_calibration_is_kept_and_the_run_refuses(rocking, tiny_cache, tmp_path, monkeypatch):
     """Issue 21: ``--plot`` was checked only before the calibration, then written directly,
     replacing a file made meanwhile by a program that takes no lock."""
     plot = tmp_path / "p.png"
@@ -940,7 +960,7 @@ def test_a_plot_made_by_someone_else_during_the_calibration_is_kept_and_the_run_
         return real(*args, **kwargs)
 
     monkeypatch.setattr(inference, "estimate", meanwhile)
-    code, _, err = _estimate([rocking["csv"], "--plot", plot], tmp_path / "cache")
+    code, _, err = _estimate([rocking["csv"], "--plot", plot], tiny_cache_copy(tiny_cache, tmp_path))
     assert code == 2 and "appeared while this run wrote it" in err and "internal error" not in err, err
     assert plot.read_bytes() == b"made meanwhile"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["cache", "p.png"]  # no lock, no partial file
@@ -974,12 +994,12 @@ def test_a_50_million_sample_record_is_refused_up_front_with_its_estimate(rockin
 
 
 @hostile("output paths", "answered")
-def test_overwrite_replaces_a_symlinked_plot_not_its_target(rocking, tiny_calibration, tmp_path):
+def test_overwrite_replaces_a_symlinked_plot_not_its_target(rocking, tiny_cache, tmp_path):
     target = tmp_path / "precious.png"
     target.write_bytes(b"keep me")
     link = tmp_path / "p.png"
     link.symlink_to(target)
-    code, _, err = _estimate([rocking["csv"], "--plot", link], tmp_path / "cache")
+    code, _, err = _estimate([rocking["csv"], "--plot", link], tiny_cache_copy(tiny_cache, tmp_path))
     assert code == 2 and "exists already" in err
     code, _, err = _estimate([rocking["csv"], "--plot", link, "--overwrite"], tmp_path / "cache")
     assert code == 0, err

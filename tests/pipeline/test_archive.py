@@ -16,7 +16,6 @@ import hashlib
 import json
 import os
 import re
-import shlex
 import shutil
 import signal
 import sys
@@ -49,18 +48,10 @@ def environment() -> dict:
 
 
 def run(root: Path, command: str) -> tuple[int, str]:
-    """A command line of ``snakemake`` commands joined by ``&&`` run in ``root`` as a user
-    types it: each one in turn as ``python -m snakemake`` (conftest.FORKS), up to the first
-    that fails; its exit code and the output of all."""
-    output = ""
-    for part in command.split("&&"):
-        words = shlex.split(part)
-        assert words[0] == "snakemake", command
-        code, out, err = FORKS.run(root, words[1:], env=environment())
-        output += out + err
-        if code != 0:
-            break
-    return code, output
+    """A command line run by a shell in ``root`` as a user types it, ``snakemake`` being
+    ``python -m snakemake`` forked by conftest.FORKS; its exit code and output."""
+    code, out, err = FORKS.shell(root, command, env=environment())
+    return code, out + err
 
 
 def start(root: Path):

@@ -78,14 +78,13 @@ def test_a_local_cluster_of_two_worker_processes_gives_the_threads_numbers_bit_f
 
 
 @pytest.mark.slow
-def test_a_running_scheduler_given_by_its_address_gives_the_same_numbers(small, threads, monkeypatch):
-    from dask.distributed import LocalCluster
-
+@pytest.mark.dask_scheduler
+def test_a_running_scheduler_given_by_its_address_gives_the_same_numbers(small, threads, monkeypatch, dask_scheduler):
+    """On the session's running scheduler (tests/conftest.py, two worker processes on loopback)."""
     scene, contract = small
-    with LocalCluster(n_workers=2, threads_per_worker=1, host="127.0.0.1", dashboard_address=None) as cluster:
-        assert_identical(threads[0], cubes_on(scene, contract, cluster.scheduler_address, monkeypatch))
-        with engine.session():  # the address set by cubes_on
-            assert replicate_file(scene, contract).equals(threads[1])  # the series file, bit for bit
+    assert_identical(threads[0], cubes_on(scene, contract, dask_scheduler, monkeypatch))
+    with engine.session():  # the address set by cubes_on
+        assert replicate_file(scene, contract).equals(threads[1])  # the series file, bit for bit
 
 
 def test_a_session_inside_a_session_starts_no_second_engine(monkeypatch):

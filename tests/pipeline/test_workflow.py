@@ -188,8 +188,8 @@ def test_a_nested_config_override_is_read_as_yaml_values(workflow):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("scheduler", ["processes:2", "tcp"])
-def test_the_tiny_scene_on_worker_processes_gives_the_products_of_threads(workflow, tmp_path, scheduler, monkeypatch):
+@pytest.mark.parametrize("scheduler", ["processes:2", pytest.param("tcp", marks=pytest.mark.dask_scheduler)])
+def test_the_tiny_scene_on_worker_processes_gives_the_products_of_threads(workflow, tmp_path, scheduler, monkeypatch, request):
     """Rule ``signatures`` (the pass over the stored series on the Dask engine the variable
     names) rerun in a copy of the threads' build makes the threads' products. The rules after
     it read these files without Dask; the series written on each engine: test_engine.py."""
@@ -197,15 +197,10 @@ def test_the_tiny_scene_on_worker_processes_gives_the_products_of_threads(workfl
     shutil.copytree(workflow["root"], root, symlinks=True)  # threads' products, mtimes kept
     products = ["signatures.nc", "readings.nc"]
     targets = [f"results/{SCENE}/{name}" for name in products]
-    with contextlib.ExitStack() as stack:
-        if scheduler == "tcp":  # a running scheduler on loopback, given by its address
-            from dask.distributed import LocalCluster
-
-            cluster = stack.enter_context(LocalCluster(n_workers=2, threads_per_worker=1, host="127.0.0.1",
-                                                       dashboard_address=None))
-            scheduler = cluster.scheduler_address
-        monkeypatch.setenv("ROCKDEC_DASK_SCHEDULER", scheduler)  # the snakemake process inherits it
-        code, out = snakemake(root, "--forcerun", "signatures", "--", *targets)
+    if scheduler == "tcp":  # the session's running scheduler on loopback, given by its address (tests/conftest.py)
+        scheduler = request.getfixturevalue("dask_scheduler")
+    monkeypatch.setenv("ROCKDEC_DASK_SCHEDULER", scheduler)  # the snakemake process inherits it
+    code, out = snakemake(root, "--forcerun", "signatures", "--", *targets)
     assert code == 0, out
     assert job_stats(out) == {"signatures": 1}, out
     for name in products:
