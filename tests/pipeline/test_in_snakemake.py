@@ -9,8 +9,9 @@ import threading
 import netCDF4
 import numpy as np
 import pytest
+import xarray as xr
 
-from rockdec.pipeline import config, in_snakemake, layout, steps
+from rockdec.pipeline import config, in_snakemake, layout, replicates, steps
 from rockdec.physics import run
 from rockdec.physics.simulate import simulate_block
 from rockdec.validate import InputError
@@ -86,3 +87,34 @@ print(before, [name for name in in_snakemake.PRELOAD if name not in sys.modules]
 """
     out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=120, check=True).stdout
     assert out.split() == ["[]", "[]"]  # none loaded before, all loaded after
+
+
+class Named(list):
+    """Snakemake's input or output of a rule: a list of paths whose parts have names."""
+
+    def __init__(self, **parts):
+        super().__init__(p for part in parts.values() for p in (part if isinstance(part, list) else [part]))
+        self.__dict__.update(parts)
+
+
+def test_the_signature_pass_on_two_threads_writes_the_one_thread_cubes_bit_for_bit_and_logs_its_label(tmp_path):
+    contract = run.calibrate(PHYSICS)
+    contract.write(tmp_path / "run.json")
+    rec = {**SCENE["records"], "replicates": 2, "series_per_replicate": 12, "chunk_seeds": 5}  # chunks straddle replicates
+    readings = ["pooled", "per_series", "groups_of_10"]
+    settings = {"signatures": SCENE["signatures"], "readings": readings, "fit_points": SCENE["estimates"]["fit_points"]}
+    inputs = Named(run=str(tmp_path / "run.json"), series=[], cubes=[], curves=[], code=["x.py"])
+    outputs = Named(cube=str(tmp_path / "signatures.nc"), readings=str(tmp_path / "readings.nc"))
+    log = tmp_path / "signatures.log"
+    in_snakemake.signatures("signatures", str(log), inputs, outputs, rec, settings, 0, 2)
+    one = replicates.scene_cubes(contract, rec, SCENE["signatures"], readings, threads=1)
+    curves = replicates.reading_curves(one, settings["fit_points"])
+    with xr.open_dataset(outputs.cube) as cube, xr.open_dataset(outputs.readings) as got:
+        for name in ("signature_sum", "count", "skipped", "signature", "free_response"):
+            assert np.array_equal(cube[name].values, one["pooled"][name].values, equal_nan=True), name
+        assert np.array_equal(got["e_hat"].values, curves["e_hat"].values, equal_nan=True)
+        assert np.array_equal(got["count"].values, curves["count"].values)
+        assert cube.attrs["source_files"] == str(tmp_path / "run.json")  # the code inputs left out
+    lines = log.read_text().splitlines()
+    assert lines[0] == "signatures: 2 replicates x 12 series: started"
+    assert re.fullmatch(r"signatures: 2 replicates x 12 series: done in [\d.]+ s", lines[1]) and len(lines) == 2
