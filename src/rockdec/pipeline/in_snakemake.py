@@ -62,7 +62,8 @@ def signatures(rule: str, log: str, inputs, outputs, records: dict, settings: di
     """Rules ``signatures`` and ``signature_part``: one pass over the series of ``records``,
     the scene's cube (``outputs.cube``) and every compared reading's window curves
     (``outputs.readings``), under ``settings`` (:func:`rockdec.pipeline.replicates.scene_cubes`
-    on ``threads`` Dask threads, then :func:`rockdec.pipeline.replicates.reading_curves`). The
+    on ``threads`` Dask threads, the readings not written as sums only, then
+    :func:`rockdec.pipeline.replicates.reading_curves`). The
     series are simulated from their seeds under ``inputs.run`` or read from ``inputs.series``;
     a scene split into jobs (``inputs.cubes``, ``inputs.curves``) is gathered instead
     (:func:`rockdec.pipeline.replicates.gathered`). ``first_replicate`` numbers a part's
@@ -95,7 +96,7 @@ def signatures(rule: str, log: str, inputs, outputs, records: dict, settings: di
             with reads_files, console.progress(label, stream=sys.__stderr__):
                 cubes = replicates.scene_cubes(
                     Run.read(inputs.run), records, settings["signatures"], settings["readings"], inputs.series,
-                    threads=threads, first_replicate=first_replicate,
+                    threads=threads, first_replicate=first_replicate, sums_only=settings["readings"][1:],
                 )
             cube = cubes[settings["readings"][0]]
             curves = replicates.reading_curves(cubes, settings["fit_points"])

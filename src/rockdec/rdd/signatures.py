@@ -591,14 +591,16 @@ def _finish(sums: xr.Dataset) -> xr.Dataset:
     return out.assign_coords(lag_pos=("lag_pos", sums["lag"].values[n_lag:], {"units": "s", "long_name": "time lag tau >= 0"}))
 
 
-def pool(ds: xr.Dataset, dim, by=None) -> xr.Dataset:
+def pool(ds: xr.Dataset, dim, by=None, finish: bool = True) -> xr.Dataset:
     """Pool a signature cube over ``dim`` (a name or a list): sum of sums / sum of counts.
 
     Exact: the pooled signature is the mean over the union of the triggers of the pooled
     series (docs/method.md §4.4). NaN (with a :class:`NoTriggerWarning`) where the pooled count is 0.
     ``by`` (integer labels along the one dimension ``dim``, NumPy) pools within each label
     instead: the result has a ``group`` dimension, one per label >= 0 in ascending order;
-    entries labelled -1 are left out.
+    entries labelled -1 are left out. ``finish=False`` (with ``by``): the pooled sums and
+    counts only, without ``signature`` and ``free_response``, for a caller that reads
+    nothing else (:func:`rockdec.rdd.estimators.window_cube`).
     """
     import xarray as xr
 
@@ -612,7 +614,8 @@ def pool(ds: xr.Dataset, dim, by=None) -> xr.Dataset:
         out[name] = (tuple("group" if d == dim else d for d in var.dims), values, var.attrs)
     coords = {name: c for name, c in sums.coords.items() if dim not in c.dims}
     coords["group"] = ("group", labels, {"long_name": "group of series pooled into one signature"})
-    return _finish(xr.Dataset(out, coords=coords, attrs=ds.attrs))
+    pooled = xr.Dataset(out, coords=coords, attrs=ds.attrs)
+    return _finish(pooled) if finish else pooled
 
 
 def _label_reduction(by: np.ndarray):
