@@ -118,3 +118,41 @@ def test_the_signature_pass_on_two_threads_writes_the_one_thread_cubes_bit_for_b
     lines = log.read_text().splitlines()
     assert lines[0] == "signatures: 2 replicates x 12 series: started"
     assert re.fullmatch(r"signatures: 2 replicates x 12 series: done in [\d.]+ s", lines[1]) and len(lines) == 2
+
+
+def test_a_signal_stops_the_signature_pass_before_it_writes_and_says_so_in_its_log(tmp_path):
+    contract = run.calibrate(PHYSICS)
+    contract.write(tmp_path / "run.json")
+    settings = {"signatures": SCENE["signatures"], "readings": ["pooled"], "fit_points": SCENE["estimates"]["fit_points"]}
+    inputs = Named(run=str(tmp_path / "run.json"), series=[], cubes=[], curves=[])
+    outputs = Named(cube=str(tmp_path / "signatures.nc"), readings=str(tmp_path / "readings.nc"))
+    log = tmp_path / "signatures.log"
+    in_snakemake._STOP.set()
+    try:
+        with pytest.raises(in_snakemake.Stopped):
+            in_snakemake.signatures("signatures", str(log), inputs, outputs, SCENE["records"], settings, 0, 2)
+    finally:
+        in_snakemake._STOP.clear()
+    assert not list(tmp_path.glob("*.nc")) and not list(tmp_path.glob(".*"))
+    assert log.read_text().splitlines()[-1] == ("signatures: 1 replicates x 10 series: stopped by a signal before the "
+                                                "pass ended; nothing written")
+
+
+def test_the_signals_set_the_stop_and_still_reach_the_handlers_before_them():
+    probe = """
+import os, signal
+from rockdec.pipeline import in_snakemake
+seen = []
+signal.signal(signal.SIGTERM, lambda n, f: seen.append(n))  # Snakemake's graceful stop
+in_snakemake.stop_on_signals()
+os.kill(os.getpid(), signal.SIGTERM)
+print(in_snakemake._STOP.is_set(), seen == [signal.SIGTERM])
+in_snakemake.stop_on_signals()
+print(in_snakemake._STOP.is_set())
+try:
+    os.kill(os.getpid(), signal.SIGINT)
+except KeyboardInterrupt:
+    print("KeyboardInterrupt", in_snakemake._STOP.is_set())
+"""
+    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=120, check=True).stdout
+    assert out.split() == ["True", "True", "False", "KeyboardInterrupt", "True"]

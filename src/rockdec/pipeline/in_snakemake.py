@@ -14,11 +14,18 @@ on the run's longest path. The other compute rules stay scripts (:mod:`rockdec.p
 A rule's code input names the modules its function reaches (:func:`rockdec.sources.package_sources`
 of those modules, beside this file), not this module's, so that editing a figure never
 reruns the pass.
+
+A signal stops the pass as it stops a script job: the Snakefile's ``onstart`` calls
+:func:`stop_on_signals`, so SIGTERM and SIGINT (Ctrl-C) also set :data:`_STOP`, which the
+pass reads before each Dask task and before writing; it then fails, and Snakemake deletes
+its outputs. The light steps take a second or less and finish.
 """
 
 from __future__ import annotations
 
 import contextlib
+import os
+import signal
 import sys
 import threading
 import time
@@ -32,6 +39,40 @@ from rockdec.validate import InputError
 #: run contract is written, while the signature pass starts Python (one core idle), instead
 #: of on the path after the pass, where the tables and figures run one at a time.
 PRELOAD = ("rockdec.pipeline.replicates", "rockdec.report.tables", "flox", "scipy.stats")
+
+#: Set by SIGTERM or SIGINT once :func:`stop_on_signals` ran: the signature pass stops.
+_STOP = threading.Event()
+
+
+class Stopped(Exception):
+    """The signature pass stopped on a signal (:data:`_STOP`) before writing anything."""
+
+
+def stop_on_signals() -> None:
+    """Make SIGTERM and SIGINT set :data:`_STOP`, then do what they did before (Snakemake's
+    handling: a graceful stop after the running jobs, or a ``KeyboardInterrupt``). Called
+    in Snakemake's main thread once its scheduler has set its handlers (the Snakefile's
+    ``onstart``); clears :data:`_STOP` first."""
+    _STOP.clear()
+    for number in (signal.SIGTERM, signal.SIGINT):
+        previous = signal.getsignal(number)
+
+        def handler(signum, frame, previous=previous):
+            _STOP.set()
+            if callable(previous):
+                previous(signum, frame)
+            elif previous != signal.SIG_IGN:  # the default action: end the process as the signal does
+                signal.signal(signum, signal.SIG_DFL)
+                os.kill(os.getpid(), signum)
+
+        signal.signal(number, handler)
+
+
+def _check_stop(*_) -> None:
+    """Raise :class:`Stopped` once :data:`_STOP` is set."""
+    if _STOP.is_set():
+        raise Stopped("stopped by a signal before the pass ended; nothing written")
+
 
 #: One :func:`step` at a time in a process: matplotlib (its fonts) and the HDF5 library
 #: under netCDF4 are not safe to use from two threads at once.
@@ -80,6 +121,8 @@ def signatures(rule: str, log: str, inputs, outputs, records: dict, settings: di
         label = f"{rule}: {records['replicates']} replicates x {records['series_per_replicate']} series"
 
     def work():
+        from dask.callbacks import Callback
+
         from rockdec import console, io
         from rockdec.pipeline import replicates
         from rockdec.physics.run import Run
@@ -93,7 +136,7 @@ def signatures(rule: str, log: str, inputs, outputs, records: dict, settings: di
             cube, curves = replicates.gathered([loaded[p] for p in inputs.cubes], [loaded[p] for p in inputs.curves])
         else:
             reads_files = _STEP_LOCK if len(inputs.series) else contextlib.nullcontext()
-            with reads_files, console.progress(label, stream=sys.__stderr__):
+            with reads_files, console.progress(label, stream=sys.__stderr__), Callback(start=_check_stop, pretask=_check_stop):
                 cubes = replicates.scene_cubes(
                     Run.read(inputs.run), records, settings["signatures"], settings["readings"], inputs.series,
                     threads=threads, first_replicate=first_replicate, sums_only=settings["readings"][1:],
@@ -102,6 +145,7 @@ def signatures(rule: str, log: str, inputs, outputs, records: dict, settings: di
             curves = replicates.reading_curves(cubes, settings["fit_points"])
         cube.attrs.update(io.provenance(rule, settings["signatures"], inputs=inputs))
         curves.attrs.update(io.provenance("readings", settings, inputs=inputs))
+        _check_stop()
         with _STEP_LOCK:
             io.write_netcdf(cube, outputs.cube)
             io.write_netcdf(curves, outputs.readings)
@@ -149,6 +193,9 @@ def _logged(label: str, log: str, work) -> None:
             note = work()
         except InputError as exc:
             print(f"rockdec: error: {exc}", file=out, flush=True)
+            raise
+        except Stopped as exc:
+            print(f"{label}: {exc}", file=out, flush=True)
             raise
         except Exception:
             traceback.print_exc(file=out)
