@@ -2,6 +2,7 @@
 the run contract and the stored series, their files and their logs, without Snakemake."""
 
 import re
+import signal
 import subprocess
 import sys
 import threading
@@ -156,3 +157,11 @@ except KeyboardInterrupt:
 """
     out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=120, check=True).stdout
     assert out.split() == ["True", "True", "False", "KeyboardInterrupt", "True"]
+
+
+def test_outside_the_main_thread_no_handler_is_set():
+    before = signal.getsignal(signal.SIGTERM), signal.getsignal(signal.SIGINT)
+    worker = threading.Thread(target=in_snakemake.stop_on_signals)
+    worker.start()
+    worker.join()
+    assert (signal.getsignal(signal.SIGTERM), signal.getsignal(signal.SIGINT)) == before
