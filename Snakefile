@@ -45,6 +45,12 @@ localrules:
     fig_coverage,
 
 
+# A signal stops the signature pass inside Snakemake's process as it stops a script job
+# (rockdec.pipeline.in_snakemake.stop_on_signals): set after Snakemake's own handlers.
+onstart:
+    in_snakemake.stop_on_signals()
+
+
 rule all:
     default_target: True
     input:

@@ -197,3 +197,17 @@ def test_long_series_in_time_chunks_equals_the_whole_series(chunk):
     blocks = list(long_series(4, 10_007, chunk, **kwargs))
     assert all(b[0].size <= chunk for b in blocks)
     np.testing.assert_array_equal(np.concatenate([b[0] for b in blocks]), whole)
+
+
+@pytest.mark.parametrize("gap", [False, True])
+def test_pilot_statistics_are_the_nan_means_of_the_squares_bit_for_bit(gap):
+    """sigma_y and sigma_ydot: the root of np.nanmean of the squares (a NaN sample left out),
+    to the last bit, whichever way the mean is formed."""
+    theta = np.random.default_rng(3).standard_normal((7, 5001)) * 1e-3
+    if gap:
+        theta[2, 100:140] = np.nan
+    dt = 0.0034
+    stats = simulate.pilot_statistics(theta, dt, 1.0)
+    assert stats["sigma_y"] == float(np.sqrt(np.nanmean(theta**2)))
+    assert stats["sigma_ydot"] == float(np.sqrt(np.nanmean((np.diff(theta, axis=-1) / dt) ** 2)))
+    assert math.isfinite(stats["sigma_y"]) and math.isfinite(stats["sigma_ydot"])

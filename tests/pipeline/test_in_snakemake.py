@@ -2,6 +2,7 @@
 the run contract and the stored series, their files and their logs, without Snakemake."""
 
 import re
+import signal
 import subprocess
 import sys
 import threading
@@ -9,8 +10,9 @@ import threading
 import netCDF4
 import numpy as np
 import pytest
+import xarray as xr
 
-from rockdec.pipeline import config, in_snakemake, layout, steps
+from rockdec.pipeline import config, in_snakemake, layout, replicates, steps
 from rockdec.physics import run
 from rockdec.physics.simulate import simulate_block
 from rockdec.validate import InputError
@@ -86,3 +88,80 @@ print(before, [name for name in in_snakemake.PRELOAD if name not in sys.modules]
 """
     out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=120, check=True).stdout
     assert out.split() == ["[]", "[]"]  # none loaded before, all loaded after
+
+
+class Named(list):
+    """Snakemake's input or output of a rule: a list of paths whose parts have names."""
+
+    def __init__(self, **parts):
+        super().__init__(p for part in parts.values() for p in (part if isinstance(part, list) else [part]))
+        self.__dict__.update(parts)
+
+
+def test_the_signature_pass_on_two_threads_writes_the_one_thread_cubes_bit_for_bit_and_logs_its_label(tmp_path):
+    contract = run.calibrate(PHYSICS)
+    contract.write(tmp_path / "run.json")
+    rec = {**SCENE["records"], "replicates": 2, "series_per_replicate": 12, "chunk_seeds": 5}  # chunks straddle replicates
+    readings = ["pooled", "per_series", "groups_of_10"]
+    settings = {"signatures": SCENE["signatures"], "readings": readings, "fit_points": SCENE["estimates"]["fit_points"]}
+    inputs = Named(run=str(tmp_path / "run.json"), series=[], cubes=[], curves=[], code=["x.py"])
+    outputs = Named(cube=str(tmp_path / "signatures.nc"), readings=str(tmp_path / "readings.nc"))
+    log = tmp_path / "signatures.log"
+    in_snakemake.signatures("signatures", str(log), inputs, outputs, rec, settings, 0, 2)
+    one = replicates.scene_cubes(contract, rec, SCENE["signatures"], readings, threads=1)
+    curves = replicates.reading_curves(one, settings["fit_points"])
+    with xr.open_dataset(outputs.cube) as cube, xr.open_dataset(outputs.readings) as got:
+        for name in ("signature_sum", "count", "skipped", "signature", "free_response"):
+            assert np.array_equal(cube[name].values, one["pooled"][name].values, equal_nan=True), name
+        assert np.array_equal(got["e_hat"].values, curves["e_hat"].values, equal_nan=True)
+        assert np.array_equal(got["count"].values, curves["count"].values)
+        assert cube.attrs["source_files"] == str(tmp_path / "run.json")  # the code inputs left out
+    lines = log.read_text().splitlines()
+    assert lines[0] == "signatures: 2 replicates x 12 series: started"
+    assert re.fullmatch(r"signatures: 2 replicates x 12 series: done in [\d.]+ s", lines[1]) and len(lines) == 2
+
+
+def test_a_signal_stops_the_signature_pass_before_it_writes_and_says_so_in_its_log(tmp_path):
+    contract = run.calibrate(PHYSICS)
+    contract.write(tmp_path / "run.json")
+    settings = {"signatures": SCENE["signatures"], "readings": ["pooled"], "fit_points": SCENE["estimates"]["fit_points"]}
+    inputs = Named(run=str(tmp_path / "run.json"), series=[], cubes=[], curves=[])
+    outputs = Named(cube=str(tmp_path / "signatures.nc"), readings=str(tmp_path / "readings.nc"))
+    log = tmp_path / "signatures.log"
+    in_snakemake._STOP.set()
+    try:
+        with pytest.raises(in_snakemake.Stopped):
+            in_snakemake.signatures("signatures", str(log), inputs, outputs, SCENE["records"], settings, 0, 2)
+    finally:
+        in_snakemake._STOP.clear()
+    assert not list(tmp_path.glob("*.nc")) and not list(tmp_path.glob(".*"))
+    assert log.read_text().splitlines()[-1] == ("signatures: 1 replicates x 10 series: stopped by a signal before the "
+                                                "pass ended; nothing written")
+
+
+def test_the_signals_set_the_stop_and_still_reach_the_handlers_before_them():
+    probe = """
+import os, signal
+from rockdec.pipeline import in_snakemake
+seen = []
+signal.signal(signal.SIGTERM, lambda n, f: seen.append(n))  # Snakemake's graceful stop
+in_snakemake.stop_on_signals()
+os.kill(os.getpid(), signal.SIGTERM)
+print(in_snakemake._STOP.is_set(), seen == [signal.SIGTERM])
+in_snakemake.stop_on_signals()
+print(in_snakemake._STOP.is_set())
+try:
+    os.kill(os.getpid(), signal.SIGINT)
+except KeyboardInterrupt:
+    print("KeyboardInterrupt", in_snakemake._STOP.is_set())
+"""
+    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=120, check=True).stdout
+    assert out.split() == ["True", "True", "False", "KeyboardInterrupt", "True"]
+
+
+def test_outside_the_main_thread_no_handler_is_set():
+    before = signal.getsignal(signal.SIGTERM), signal.getsignal(signal.SIGINT)
+    worker = threading.Thread(target=in_snakemake.stop_on_signals)
+    worker.start()
+    worker.join()
+    assert (signal.getsignal(signal.SIGTERM), signal.getsignal(signal.SIGINT)) == before

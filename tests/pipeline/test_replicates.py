@@ -88,6 +88,23 @@ def test_readings_table_lists_every_reading_with_the_true_e(tiny):
     assert own.attrs["e_target"] == scene["system"]["e"]
 
 
+
+def test_readings_kept_as_sums_only_give_the_same_sums_and_window_curves(tiny):
+    """``sums_only`` leaves out a reading's signature and free response, and nothing its
+    window curves read: the curves are the finished cubes' bit for bit."""
+    scene, contract = tiny
+    rec, sig = scene["records"], scene["signatures"]
+    finished = replicates.scene_cubes(contract, rec, sig, replicates.READINGS)
+    sums = replicates.scene_cubes(contract, rec, sig, replicates.READINGS, sums_only=replicates.READINGS[1:])
+    assert {"signature", "free_response"} <= set(sums["pooled"].data_vars)
+    for reading in replicates.READINGS[1:]:
+        assert set(sums[reading].data_vars) == {"signature_sum", "count", "skipped"}
+        for name in ("signature_sum", "count", "skipped"):
+            assert np.array_equal(sums[reading][name].values, finished[reading][name].values), (reading, name)
+    got, want = replicates.reading_curves(sums, fit_points=5), replicates.reading_curves(finished, fit_points=5)
+    assert np.array_equal(got["e_hat"].values, want["e_hat"].values, equal_nan=True)
+    assert np.array_equal(got["count"].values, want["count"].values)
+
 def test_bias_row_matches_the_t_statistic_formula():
     values = np.array([0.951, 0.957, 0.949, 0.962, 0.955, np.nan])
     row = tables.bias_row(values, 0.95)

@@ -315,6 +315,41 @@ def test_pooled_signature_is_the_mean_over_the_union_of_triggers():
     assert set(pooled.dims) == {"trigger", "window", "lag", "lag_pos"}
 
 
+
+@pytest.mark.parametrize(
+    "by",
+    [
+        [0, 0, 0, 1, 1, 2, -1, -1, 3],  # runs in label order
+        [-1, 3, 3, 1, 0, 0, 2, 2, 2],  # one run a label, out of order (a pass's groups_of_10 units)
+        [1, 0, 1, -1, 0, 2, 2, 0, 1],  # labels split over several runs
+        [2, 0, -1, 1, 3, 4, 5, 6, 7],  # one entry a label
+    ],
+)
+def test_pooling_by_labels_adds_each_labels_entries_in_their_order(by):
+    """``pool(..., by=)`` sums each label's entries in their order along the dimension,
+    whichever way the labels lie: bit for bit the sum of the label's entries gathered
+    together (so a pass's pooled cube does not depend on how its units are laid out)."""
+    rng = np.random.default_rng(7)
+    by = np.array(by)
+    n = by.size
+    cube = xr.Dataset(
+        {
+            "signature_sum": (("unit", "trigger", "window", "lag"), rng.standard_normal((n, 2, 3, 9)) * 10.0 ** rng.integers(-8, 8, (n, 1, 1, 1))),
+            "count": (("unit", "trigger", "window"), rng.integers(1, 50, (n, 2, 3))),
+            "skipped": (("unit", "trigger", "window"), rng.integers(0, 3, (n, 2, 3))),
+        },
+        coords={"trigger": ["a", "v"], "window": [0.5, 0.75, 1.0], "lag": np.arange(-4, 5) * 0.1},
+    )
+    pooled = pool(cube, "unit", by=by)
+    labels = sorted(set(by[by >= 0]))
+    assert list(pooled.group.values) == labels
+    for name in ("signature_sum", "count", "skipped"):
+        for label in labels:
+            gathered = cube[name].values[by == label]
+            got = pooled[name].sel(group=label).values
+            assert np.array_equal(got, np.add.reduceat(gathered, [0], axis=0)[0]), (name, label)
+            np.testing.assert_allclose(got, sum(gathered[1:], gathered[0]), rtol=1e-12, atol=0)
+
 def test_kernels_sum_series_into_their_output_rows():
     """``rows_to`` adds each series into its row inside the kernel: the per-series sums added."""
     y = np.stack([ar2(8000, seed=s) for s in range(7)])

@@ -121,6 +121,11 @@ IN_PROCESS_THREADS = 0 if workflow.local_exec else 1
 CALIBRATE_CODE = [find_spec("rockdec.pipeline.in_snakemake").origin, *package_sources("rockdec.physics.run")]
 
 
+# The signature pass runs there too (rockdec.pipeline.in_snakemake.signatures), on its rule's
+# threads; its code input is what the pass reaches, so editing a table or a figure never reruns it.
+SIGNATURES_CODE = [find_spec("rockdec.pipeline.in_snakemake").origin, *package_sources("rockdec.pipeline.replicates", "rockdec.console")]
+
+
 def step_code(script):
     """Source of every rockdec module workflow script ``script`` runs
     (:func:`rockdec.sources.package_sources`): a compute rule's code input, so an edit to

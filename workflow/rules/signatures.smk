@@ -1,13 +1,14 @@
 rule signatures:
     """One pass over every series: the signature cube of the scene's reading, and the window
     curves of every reading it compares (signature sums pool exactly by adding). A scene
-    with `replicates_per_job` gathers its jobs' results instead."""
+    with `replicates_per_job` gathers its jobs' results instead. Inside the Snakemake process, on
+    the rule's threads (rockdec.pipeline.in_snakemake.signatures)."""
     input:
         run="results/{scene}/run.json",
         series=lambda w: [] if part_files(w.scene, "signatures") else series_files(w.scene),
         cubes=lambda w: part_files(w.scene, "signatures"),
         curves=lambda w: part_files(w.scene, "readings"),
-        code=step_code("signatures.py"),
+        code=SIGNATURES_CODE,
     output:
         cube="results/{scene}/signatures.nc",
         readings="results/{scene}/readings.nc",
@@ -24,10 +25,8 @@ rule signatures:
         records=lambda w: records(w.scene),
         settings=lambda w: signature_settings(w.scene),
         first_replicate=0,
-    conda:
-        "../envs/rockdec.yaml"
-    script:
-        "../scripts/signatures.py"
+    run:
+        in_snakemake.signatures(rule, log[0], input, output, params.records, params.settings, params.first_replicate, threads)
 
 
 rule signature_part:
@@ -35,7 +34,7 @@ rule signature_part:
     input:
         run="results/{scene}/run.json",
         series=lambda w: part_series(w.scene, w.part),
-        code=step_code("signatures.py"),
+        code=SIGNATURES_CODE,
     output:
         cube="results/{scene}/parts/signatures_{part}.nc",
         readings="results/{scene}/parts/readings_{part}.nc",
@@ -53,7 +52,5 @@ rule signature_part:
         records=lambda w: layout.part_records(records(w.scene), int(w.part))[0],
         settings=lambda w: signature_settings(w.scene),
         first_replicate=lambda w: layout.part_records(records(w.scene), int(w.part))[1],
-    conda:
-        "../envs/rockdec.yaml"
-    script:
-        "../scripts/signatures.py"
+    run:
+        in_snakemake.signatures(rule, log[0], input, output, params.records, params.settings, params.first_replicate, threads)

@@ -362,12 +362,18 @@ def secant_step(history: list, dt: float, achieved: float, target: float) -> flo
     return dt * (achieved / target) ** (1.0 / k)
 
 
+def _finite_mean(x: np.ndarray) -> float:
+    """``np.nanmean(x)``; without a NaN in ``x``, ``np.mean(x)``, which sums the same values
+    in the same order (so the same bits) without ``nanmean``'s copy of ``x``."""
+    return np.nanmean(x) if np.isnan(x).any() else np.mean(x)
+
+
 def pilot_statistics(theta: np.ndarray, dt: float, g: float | None = None) -> dict:
     """Stationary statistics of series ``theta(seed, time)``: ``sigma_y``, ``sigma_ydot`` (of
     ``diff(theta)/dt``) and, given ``g``, samples per cycle at ``sigma_y`` (eq. 5); NaN
     samples left out."""
-    sigma_y = float(np.sqrt(np.nanmean(theta**2)))
-    sigma_ydot = float(np.sqrt(np.nanmean((np.diff(theta, axis=-1) / dt) ** 2)))
+    sigma_y = float(np.sqrt(_finite_mean(theta**2)))
+    sigma_ydot = float(np.sqrt(_finite_mean((np.diff(theta, axis=-1) / dt) ** 2)))
     out = {"sigma_y": sigma_y, "sigma_ydot": sigma_ydot}
     if g is not None:
         out["points_per_cycle"] = float(period_from_g(sigma_y, g) / dt)

@@ -155,8 +155,17 @@ def _dask_config(options: dict):
 
 
 def compute(*collections, threads: int | None = None, scheduler: str | None = None):
-    """``dask.compute(*collections)`` on the configured engine (:func:`session`)."""
+    """``dask.compute(*collections)`` on the configured engine (:func:`session`).
+
+    On the ``threads`` engine outside a session, the threads are given to the call itself
+    instead of to Dask's configuration, which the whole process shares: computations in two
+    threads of one process (the workflow's signature pass and a light step inside Snakemake,
+    :mod:`rockdec.pipeline.in_snakemake`) each keep their own number of threads.
+    """
     import dask
 
+    if not _active.get() and setting(scheduler)[0] == "threads":
+        workers = {} if threads is None else {"num_workers": max(1, int(threads))}
+        return dask.compute(*collections, scheduler="threads", **workers)
     with session(threads, scheduler):
         return dask.compute(*collections)

@@ -1,19 +1,32 @@
-"""The workflow's rules that run inside the Snakemake process: the run contract, the stored
-series and their signature, the tables and the figures.
+"""The workflow's rules that run inside the Snakemake process: the run contract, the
+signature pass, the stored series and their signature, the tables and the figures.
 
 ``calibrate`` (a second of pilot simulations), ``stored_series``, ``stored_signature``,
 ``estimates``, ``table_readings`` and the paper's figure rules take a fraction of a second
 to a few seconds each once NumPy, numba, xarray and matplotlib are loaded, so they are
 ``run:`` rules calling :func:`calibrate` and :func:`step` (the workflow's default profile
 runs those in threads of the Snakemake process, ``force-use-threads``) and load those
-libraries once a run instead of starting Python for each. The signature pass and the other
-compute rules stay scripts (:mod:`rockdec.pipeline.job`); this module is apart from that one
-so that the scripts' code inputs (:func:`rockdec.sources.package_sources`) do not reach
-:mod:`rockdec.pipeline.steps` and the figures through it.
+libraries once a run instead of starting Python for each. The signature pass
+(:func:`signatures`, rules ``signatures`` and ``signature_part``) runs there too, on the
+Dask threads of its rule's ``threads``: it finds the simulator's kernels and the pass's
+modules loaded by :func:`calibrate`, where a script would start Python and load them again
+on the run's longest path. The other compute rules stay scripts (:mod:`rockdec.pipeline.job`).
+A rule's code input names the modules its function reaches (:func:`rockdec.sources.package_sources`
+of those modules, beside this file), not this module's, so that editing a figure never
+reruns the pass.
+
+A signal stops the pass as it stops a script job: the Snakefile's ``onstart`` calls
+:func:`stop_on_signals`, so SIGTERM and SIGINT (Ctrl-C) also set :data:`_STOP`, which the
+pass reads before each Dask task and before writing; it then fails, and Snakemake deletes
+its outputs. The light steps take a second or less and finish.
 """
 
 from __future__ import annotations
 
+import contextlib
+import os
+import signal
+import sys
 import threading
 import time
 import traceback
@@ -26,6 +39,43 @@ from rockdec.validate import InputError
 #: run contract is written, while the signature pass starts Python (one core idle), instead
 #: of on the path after the pass, where the tables and figures run one at a time.
 PRELOAD = ("rockdec.pipeline.replicates", "rockdec.report.tables", "flox", "scipy.stats")
+
+#: Set by SIGTERM or SIGINT once :func:`stop_on_signals` ran: the signature pass stops.
+_STOP = threading.Event()
+
+
+class Stopped(Exception):
+    """The signature pass stopped on a signal (:data:`_STOP`) before writing anything."""
+
+
+def stop_on_signals() -> None:
+    """Make SIGTERM and SIGINT set :data:`_STOP`, then do what they did before (Snakemake's
+    handling: a graceful stop after the running jobs, or a ``KeyboardInterrupt``). Called
+    in Snakemake's main thread once its scheduler has set its handlers (the Snakefile's
+    ``onstart``); clears :data:`_STOP` first. Snakemake run from another thread (its API)
+    sets no handler, and neither does this."""
+    _STOP.clear()
+    if threading.current_thread() is not threading.main_thread():
+        return
+    for number in (signal.SIGTERM, signal.SIGINT):
+        previous = signal.getsignal(number)
+
+        def handler(signum, frame, previous=previous):
+            _STOP.set()
+            if callable(previous):
+                previous(signum, frame)
+            elif previous != signal.SIG_IGN:  # the default action: end the process as the signal does
+                signal.signal(signum, signal.SIG_DFL)
+                os.kill(os.getpid(), signum)
+
+        signal.signal(number, handler)
+
+
+def _check_stop(*_) -> None:
+    """Raise :class:`Stopped` once :data:`_STOP` is set."""
+    if _STOP.is_set():
+        raise Stopped("stopped by a signal before the pass ended; nothing written")
+
 
 #: One :func:`step` at a time in a process: matplotlib (its fonts) and the HDF5 library
 #: under netCDF4 are not safe to use from two threads at once.
@@ -50,6 +100,60 @@ def step(rule: str, log: str, *args) -> None:
 
     with _STEP_LOCK:
         _logged(rule, log, work)
+
+
+def signatures(rule: str, log: str, inputs, outputs, records: dict, settings: dict, first_replicate: int, threads: int) -> None:
+    """Rules ``signatures`` and ``signature_part``: one pass over the series of ``records``,
+    the scene's cube (``outputs.cube``) and every compared reading's window curves
+    (``outputs.readings``), under ``settings`` (:func:`rockdec.pipeline.replicates.scene_cubes`
+    on ``threads`` Dask threads, the readings not written as sums only, then
+    :func:`rockdec.pipeline.replicates.reading_curves`). The
+    series are simulated from their seeds under ``inputs.run`` or read from ``inputs.series``;
+    a scene split into jobs (``inputs.cubes``, ``inputs.curves``) is gathered instead
+    (:func:`rockdec.pipeline.replicates.gathered`). ``first_replicate`` numbers a part's
+    replicates as the whole scene does; ``inputs`` (every input) go into the files' provenance.
+
+    The log has a labelled line at the start and at the end of the pass (and Dask's progress
+    bar on Snakemake's terminal); errors are logged as :func:`step` logs them. The pass takes
+    :data:`_STEP_LOCK` only to read and write files, so the light steps go on beside its
+    computation from seeds.
+    """
+    if inputs.cubes:
+        label = f"{rule}: gathering {len(inputs.cubes)} signature jobs"
+    else:
+        label = f"{rule}: {records['replicates']} replicates x {records['series_per_replicate']} series"
+
+    def work():
+        from dask.callbacks import Callback
+
+        from rockdec import console, io
+        from rockdec.pipeline import replicates
+        from rockdec.physics.run import Run
+
+        if inputs.cubes:
+            with _STEP_LOCK:
+                loaded = {}
+                for path in [*inputs.cubes, *inputs.curves]:
+                    with io.open_dataset(path) as ds:
+                        loaded[path] = ds.load()
+            cube, curves = replicates.gathered([loaded[p] for p in inputs.cubes], [loaded[p] for p in inputs.curves])
+        else:
+            reads_files = _STEP_LOCK if len(inputs.series) else contextlib.nullcontext()
+            with reads_files, console.progress(label, stream=sys.__stderr__), Callback(start=_check_stop, pretask=_check_stop):
+                cubes = replicates.scene_cubes(
+                    Run.read(inputs.run), records, settings["signatures"], settings["readings"], inputs.series,
+                    threads=threads, first_replicate=first_replicate, sums_only=settings["readings"][1:],
+                )
+            cube = cubes[settings["readings"][0]]
+            curves = replicates.reading_curves(cubes, settings["fit_points"])
+        cube.attrs.update(io.provenance(rule, settings["signatures"], inputs=inputs))
+        curves.attrs.update(io.provenance("readings", settings, inputs=inputs))
+        _check_stop()
+        with _STEP_LOCK:
+            io.write_netcdf(cube, outputs.cube)
+            io.write_netcdf(curves, outputs.readings)
+
+    _logged(label, log, work)
 
 
 def calibrate(log: str, physics: dict, output: str) -> None:
@@ -81,20 +185,24 @@ def _preload() -> None:
         importlib.import_module(name)
 
 
-def _logged(rule: str, log: str, work) -> None:
+def _logged(label: str, log: str, work) -> None:
     """``work()`` with the log of :func:`step`: a start line, what ``work`` returns (a line of
-    text, or ``None``), an end line; a user error's sentence or a traceback on failure."""
+    text, or ``None``), an end line, each led by ``label`` (the rule's name); a user error's
+    sentence or a traceback on failure."""
     with open(log, "w") as out:
         start = time.perf_counter()
-        print(f"{rule}: started", file=out, flush=True)
+        print(f"{label}: started", file=out, flush=True)
         try:
             note = work()
         except InputError as exc:
             print(f"rockdec: error: {exc}", file=out, flush=True)
+            raise
+        except Stopped as exc:
+            print(f"{label}: {exc}", file=out, flush=True)
             raise
         except Exception:
             traceback.print_exc(file=out)
             raise
         if note is not None:
             print(note, file=out, flush=True)
-        print(f"{rule}: done in {time.perf_counter() - start:.1f} s", file=out, flush=True)
+        print(f"{label}: done in {time.perf_counter() - start:.1f} s", file=out, flush=True)

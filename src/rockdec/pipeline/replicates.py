@@ -118,7 +118,8 @@ def scene_signatures(
     return cube.assign_coords(replicate=(dim, np.asarray(replicate_of_group), {"long_name": f"replicate of the {dim}"}))
 
 
-def scene_cubes(run: Run, records: dict, settings: dict, readings, series_files=(), threads: int = 1, first_replicate: int = 0) -> dict:
+def scene_cubes(run: Run, records: dict, settings: dict, readings, series_files=(), threads: int = 1, first_replicate: int = 0,
+                sums_only=()) -> dict:
     """The signature cube of every reading of ``readings``, from one pass over the series.
 
     Every series is simulated from its seed under ``run`` (Dask over seeds, chunks of
@@ -130,12 +131,15 @@ def scene_cubes(run: Run, records: dict, settings: dict, readings, series_files=
     (``threads`` threads by default). Each cube's attributes hold the run
     (:meth:`rockdec.physics.run.Run.to_attrs`) and its ``reading``. ``first_replicate`` numbers
     the replicates of a part of a scene (:func:`rockdec.pipeline.layout.part_records`) as the
-    whole scene does.
+    whole scene does. The cubes of the readings in ``sums_only`` hold the sums and counts
+    only (:func:`rockdec.rdd.signatures.pool`, ``finish=False``): all that their window
+    curves read (:func:`replicate_curves`).
     """
-    return variant_cubes(run, records, [settings], readings, series_files, threads, first_replicate)[0]
+    return variant_cubes(run, records, [settings], readings, series_files, threads, first_replicate, sums_only)[0]
 
 
-def variant_cubes(run: Run, records: dict, variants, readings, series_files=(), threads: int = 1, first_replicate: int = 0) -> list[dict]:
+def variant_cubes(run: Run, records: dict, variants, readings, series_files=(), threads: int = 1, first_replicate: int = 0,
+                  sums_only=()) -> list[dict]:
     """:func:`scene_cubes` for several signature settings ``variants`` at once: one Dask
     graph, so each series is simulated (or read) once for all of them."""
     seeds = scene_seeds(records)
@@ -157,7 +161,7 @@ def variant_cubes(run: Run, records: dict, variants, readings, series_files=(), 
     for units in engine.compute(*lazy, threads=threads):
         cubes = {}
         for reading, (group_of_unit, replicate_of_group) in groups.items():
-            cube = signatures.pool(units, "group", by=group_of_unit)
+            cube = signatures.pool(units, "group", by=group_of_unit, finish=reading not in sums_only)
             cube = cube.assign_coords(replicate=("group", replicate_of_group + first_replicate, {"long_name": "replicate of the group"}))
             cube.attrs.update({**run.to_attrs(), "reading": reading})
             cubes[reading] = cube

@@ -591,33 +591,65 @@ def _finish(sums: xr.Dataset) -> xr.Dataset:
     return out.assign_coords(lag_pos=("lag_pos", sums["lag"].values[n_lag:], {"units": "s", "long_name": "time lag tau >= 0"}))
 
 
-def pool(ds: xr.Dataset, dim, by=None) -> xr.Dataset:
+def pool(ds: xr.Dataset, dim, by=None, finish: bool = True) -> xr.Dataset:
     """Pool a signature cube over ``dim`` (a name or a list): sum of sums / sum of counts.
 
     Exact: the pooled signature is the mean over the union of the triggers of the pooled
     series (docs/method.md §4.4). NaN (with a :class:`NoTriggerWarning`) where the pooled count is 0.
     ``by`` (integer labels along the one dimension ``dim``, NumPy) pools within each label
     instead: the result has a ``group`` dimension, one per label >= 0 in ascending order;
-    entries labelled -1 are left out.
+    entries labelled -1 are left out. ``finish=False`` (with ``by``): the pooled sums and
+    counts only, without ``signature`` and ``free_response``, for a caller that reads
+    nothing else (:func:`rockdec.rdd.estimators.window_cube`).
     """
     import xarray as xr
 
     sums = ds[list(SUM_VARS)]
     if by is None:
         return _finish(sums.sum(dim, keep_attrs=True))
-    by = np.asarray(by)
-    kept = np.flatnonzero(by >= 0)
-    order = kept[np.argsort(by[kept], kind="stable")]  # each label's entries together, in their order
-    labels = by[order]
-    starts = np.flatnonzero(np.r_[True, labels[1:] != labels[:-1]])
+    labels, reduce = _label_reduction(np.asarray(by))
     out = {}
     for name, var in sums.data_vars.items():
-        axis = var.get_axis_num(dim)
-        values = np.add.reduceat(np.take(var.values, order, axis=axis), starts, axis=axis)
+        values = reduce(var.values, var.get_axis_num(dim))
         out[name] = (tuple("group" if d == dim else d for d in var.dims), values, var.attrs)
     coords = {name: c for name, c in sums.coords.items() if dim not in c.dims}
-    coords["group"] = ("group", labels[starts], {"long_name": "group of series pooled into one signature"})
-    return _finish(xr.Dataset(out, coords=coords, attrs=ds.attrs))
+    coords["group"] = ("group", labels, {"long_name": "group of series pooled into one signature"})
+    pooled = xr.Dataset(out, coords=coords, attrs=ds.attrs)
+    return _finish(pooled) if finish else pooled
+
+
+def _label_reduction(by: np.ndarray):
+    """The labels >= 0 of ``by`` in ascending order, and ``reduce(values, axis)``: the sum of
+    the entries of each label along ``axis``, in that order, entries labelled -1 left out.
+
+    Each label's entries are added in their order along the axis, so the sums do not depend
+    on how they are formed. When every label's entries are one contiguous run (a pass's
+    units, :func:`rockdec.pipeline.replicates.pass_units`), each run is summed where it lies
+    into its row of the result; otherwise each label's entries are first gathered together
+    (a copy of the kept entries).
+    """
+    runs = np.flatnonzero(np.r_[True, by[1:] != by[:-1]])
+    ends = np.r_[runs[1:], by.size]
+    kept = np.flatnonzero(by[runs] >= 0)
+    kept = kept[np.argsort(by[runs][kept])]
+    labels = by[runs][kept]
+    if np.any(labels[1:] == labels[:-1]):  # a label in several runs
+        entries = np.flatnonzero(by >= 0)
+        order = entries[np.argsort(by[entries], kind="stable")]  # each label's entries together, in their order
+        starts = np.flatnonzero(np.r_[True, by[order][1:] != by[order][:-1]])
+        return by[order][starts], lambda values, axis: np.add.reduceat(np.take(values, order, axis=axis), starts, axis=axis)
+    first, last = runs[kept], ends[kept]
+
+    def reduce(values, axis):
+        if np.all(last - first == 1):
+            return np.take(values, first, axis=axis)
+        source = np.moveaxis(values, axis, 0)
+        out = np.empty((labels.size, *source.shape[1:]), dtype=source.dtype)
+        for row, (lo, hi) in enumerate(zip(first, last)):
+            np.add.reduceat(source[lo:hi], [0], axis=0, out=out[row : row + 1])  # in order, as reduceat sums
+        return np.moveaxis(out, 0, axis)
+
+    return labels, reduce
 
 
 def signature_cube(
