@@ -144,6 +144,7 @@ def test_the_signals_set_the_stop_and_still_reach_the_handlers_before_them():
 import os, signal
 from rockdec.pipeline import in_snakemake
 seen = []
+signal.signal(signal.SIGINT, signal.default_int_handler)  # as Python starts, unless its parent ignores SIGINT (xdist's workers do)
 signal.signal(signal.SIGTERM, lambda n, f: seen.append(n))  # Snakemake's graceful stop
 in_snakemake.stop_on_signals()
 os.kill(os.getpid(), signal.SIGTERM)
@@ -157,6 +158,19 @@ except KeyboardInterrupt:
 """
     out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=120, check=True).stdout
     assert out.split() == ["True", "True", "False", "KeyboardInterrupt", "True"]
+
+
+def test_a_signal_the_process_ignores_stays_ignored_and_stops_nothing():
+    probe = """
+import os, signal
+from rockdec.pipeline import in_snakemake
+signal.signal(signal.SIGINT, signal.SIG_IGN)
+in_snakemake.stop_on_signals()
+os.kill(os.getpid(), signal.SIGINT)
+print(signal.getsignal(signal.SIGINT) == signal.SIG_IGN, in_snakemake._STOP.is_set())
+"""
+    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=120, check=True).stdout
+    assert out.split() == ["True", "False"]
 
 
 def test_outside_the_main_thread_no_handler_is_set():

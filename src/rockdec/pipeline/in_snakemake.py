@@ -52,19 +52,21 @@ def stop_on_signals() -> None:
     """Make SIGTERM and SIGINT set :data:`_STOP`, then do what they did before (Snakemake's
     handling: a graceful stop after the running jobs, or a ``KeyboardInterrupt``). Called
     in Snakemake's main thread once its scheduler has set its handlers (the Snakefile's
-    ``onstart``); clears :data:`_STOP` first. Snakemake run from another thread (its API)
-    sets no handler, and neither does this."""
+    ``onstart``); clears :data:`_STOP` first. A signal the process ignores stays ignored.
+    Snakemake run from another thread (its API) sets no handler, and neither does this."""
     _STOP.clear()
     if threading.current_thread() is not threading.main_thread():
         return
     for number in (signal.SIGTERM, signal.SIGINT):
         previous = signal.getsignal(number)
+        if previous == signal.SIG_IGN:
+            continue
 
         def handler(signum, frame, previous=previous):
             _STOP.set()
             if callable(previous):
                 previous(signum, frame)
-            elif previous != signal.SIG_IGN:  # the default action: end the process as the signal does
+            else:  # the default action: end the process as the signal does
                 signal.signal(signum, signal.SIG_DFL)
                 os.kill(os.getpid(), signum)
 
