@@ -52,6 +52,12 @@ QUANTILE = 0.975
 #: of at least ``BLOCK_MIN`` samples (fewer blocks for short records; none below 4).
 BLOCKS, BLOCK_MIN = 20, 1000
 
+#: Quantile of a record's distances of samples from the line through their neighbours that
+#: :func:`spikes` reads its largest distance against: in clean records the top per cent are
+#: impacts (a few per cent of the triples), in noisy ones the noise; isolated spikes in fewer
+#: than about 0.3 % of the samples (1 % of the triples) leave it where it is.
+SPIKE_REFERENCE = 0.99
+
 #: ``e`` at which the structural floor of ``coarse_sampling`` is taken when the record gives
 #: no corrected ``e`` (the floor is highest for small ``e``; 0.95 is the paper's middle).
 FLOOR_E = 0.95
@@ -106,8 +112,9 @@ class Sums(NamedTuple):
     each of at least :data:`BLOCK_MIN` samples, fewer for short records, none below 4),
     with ``block_record`` the record of each; ``side_count``, ``side_sum`` the count and sum
     of the second differences of triples on one side of each record's mean (``[0]``
-    below, ``[1]`` above); ``off``: the largest distance of a sample from the line through
-    its neighbours (rad)."""
+    below, ``[1]`` above); ``off``: over records, the largest ratio of a record's largest
+    distance of a sample from the line through its neighbours to its
+    :data:`SPIKE_REFERENCE` quantile of those distances (:func:`_spike_ratio`)."""
 
     count: int
     block_mean: np.ndarray
@@ -118,24 +125,37 @@ class Sums(NamedTuple):
     off: float
 
 
+def _spike_ratio(y: np.ndarray, largest: float) -> float:
+    """``largest`` (the largest ``|y[k] - (y[k-1] + y[k+1]) / 2|`` of record ``y``) over the
+    :data:`SPIKE_REFERENCE` quantile of those distances over the triples without a NaN; NaN
+    when there is none or the quantile is 0."""
+    distance = np.abs(y[2:] - 2.0 * y[1:-1] + y[:-2])
+    distance = distance[np.isfinite(distance)]
+    if not distance.size:
+        return np.nan
+    k = min(int(SPIKE_REFERENCE * distance.size), distance.size - 1)
+    reference = 0.5 * float(np.partition(distance, k)[k])
+    return largest / reference if reference > 0.0 else np.nan
+
+
 def sums(records) -> Sums:
     """:class:`Sums` of ``records`` (1-D arrays, NaN allowed): one compiled pass per record
-    (:func:`_record_sums`)."""
-    count, off = 0, 0.0
+    (:func:`_record_sums`) and the quantile of :func:`_spike_ratio`."""
+    count, off = 0, np.nan
     side_n, side_s = np.zeros(2), np.zeros(2)
     means, variances, owners = [], [], []
     for i, y in enumerate(records):
         y = np.ascontiguousarray(y, dtype=np.float64)
         b = min(BLOCKS, y.size // BLOCK_MIN)
         _, bn, (b1, b2), rn, rs, worst = _record_sums(y, max(b, 1))
-        count, off = count + int(bn.sum()), max(off, worst)
+        count, off = count + int(bn.sum()), np.fmax(off, _spike_ratio(y, worst))
         side_n, side_s = side_n + rn, side_s + rs
         if b >= 4 and (bn > 1).all():
             means.append(b1 / bn)
             variances.append(b2 / bn - (b1 / bn) ** 2)
             owners.append(np.full(b, i))
     stack = (lambda parts: np.concatenate(parts) if parts else np.empty(0))
-    return Sums(count, stack(means), stack(variances), stack(owners), side_n, side_s, off)
+    return Sums(count, stack(means), stack(variances), stack(owners), side_n, side_s, float(off))
 
 
 def _von_neumann_z(values: np.ndarray, owners: np.ndarray) -> float:
@@ -195,13 +215,15 @@ def drift(s: Sums, analysis) -> float:
 
 
 def spikes(s: Sums, analysis) -> float:
-    """Largest ``|y[k] - (y[k-1] + y[k+1]) / 2|`` over ``sigma_Y``: how far one sample stands
-    off the line through its neighbours. Between impacts the block moves on parabolas, so
-    a clean record gives a few hundredths of ``sigma_Y`` at the paper's sampling (velocity
-    jumps at impacts); an isolated spike of ``k sigma_Y`` gives ``k``. Triples touching a
-    NaN are left out."""
-    return s.off / analysis.sigma_y
-
+    """Largest ``|y[k] - (y[k-1] + y[k+1]) / 2|`` over the :data:`SPIKE_REFERENCE` quantile
+    of the same record's distances (the largest over records): how far one sample stands off
+    the line through its neighbours, against the record's own largest distances. Between
+    impacts the block moves on parabolas, so in a clean record the top per cent of the
+    distances are the velocity jumps at impacts and in a noisy one the sensor noise; either
+    way the ratio is about 2, whatever the noise level and the samples per cycle (both scale
+    the largest distance and the quantile alike), while an isolated spike of ``k sigma_Y``
+    stands ``k sigma_Y`` off. Triples touching a NaN are left out."""
+    return s.off
 
 def asymmetry(s: Sums, analysis) -> float:
     """``|g_+ - g_-| / (g_+ + g_-)``: between impacts the block moves on parabolas (eq. 4), so
@@ -260,8 +282,9 @@ REGISTRY = (
           "the record's block means wander more than rocking makes them (drift z {value:.1f}, calibrated limit "
           "{threshold:.1f}): the sensor's zero drifts; remove the trend (high-pass well below the rocking frequency)"),
     Check("spikes", "isolated wrong samples", spikes, "high", "calibrated",
-          "a sample stands {value:.2f} sigma_Y off the line through its neighbours, where rocking records like it reach "
-          "{threshold:.2f}: the record holds spikes; remove them or mark them as gaps (NaN)", "max"),
+          "a sample stands {value:.1f} times farther off the line through its neighbours than the record's top 1 % of "
+          "samples, where rocking records like it reach {threshold:.1f}: the record holds spikes; remove them or mark "
+          "them as gaps (NaN)", "max"),
     Check("asymmetry", "a block leaning on one side", asymmetry, "high", "calibrated",
           "the response is asymmetric: the block falls back with a different g on each side (|g+ - g-|/(g+ + g-) "
           "{value:.3f}, calibrated limit {threshold:.3f}); it may lean on one side or the load push one way, and the "
