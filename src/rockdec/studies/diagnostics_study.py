@@ -3,15 +3,17 @@
 Records of known ``e`` are simulated apart from any calibration (``g = sigma_p = 1``, the
 step calibrated to :data:`POINTS_PER_CYCLE` samples per cycle at ``sigma_Y``, eq. 5; seeds
 from :data:`STUDY_SEED_OFFSET`), with or without one defect of a given size
-(:data:`DEFECTS`), and each goes through what ``rockdec estimate`` does with a record: the
-analysis (:func:`rockdec.rdd.measured.analyse`), the calibration for its own length and
-sampling (:mod:`rockdec.calibrate.calibration`, shared by records in one samples-per-cycle bin), the
-corrected ``e`` and interval of the default estimator (no ``e`` when the raw value lies
-beyond the calibration, :func:`rockdec.calibrate.inference.beyond`), and every check of
-:mod:`rockdec.record.diagnostics` against the calibration's thresholds.
+(:data:`DEFECTS`), each at every sensor noise level of :data:`NOISE_LEVELS` (white, a share
+of the clean record's rms, as the calibration simulates it), and each goes through
+``rockdec estimate`` itself (:func:`rockdec.calibrate.inference.estimate`): the record model
+measured off the record (:mod:`rockdec.record.record_measure`), the calibration for that
+model, its length and its sampling (:mod:`rockdec.calibrate.calibration`, shared by records
+in one bin), the corrected ``e`` and interval of the estimator it selects (none when it
+gives none), and every check of :mod:`rockdec.record.diagnostics` against the
+calibration's thresholds.
 
-The defects, each on the same seeds as the clean records (so the shift of ``e`` is read
-record by record):
+The defects, each on the same seeds (and sensor noise) as the clean records, so the shift
+of ``e`` is read record by record:
 
 * ``nonstationary``: the impulses' standard deviation ramps linearly from ``1 - m`` to
   ``1 + m`` along the record (``m`` the size);
@@ -25,7 +27,7 @@ record by record):
 
 A defect *matters* at a size when it moves the corrected ``e`` by more than half the
 median 95 % interval (median over records of the paired shift). :func:`summary` gives per
-check and ``e`` the false-alarm rate on the clean records and, per size, the shift, half
+check, ``e`` and noise level the false-alarm rate on the clean records and, per size, the shift, half
 the interval, and the detection rate (the share of defective records on which the
 check fires).
 """
