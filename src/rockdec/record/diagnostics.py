@@ -235,6 +235,7 @@ def spikes(s: Sums, analysis) -> float:
     touching a NaN are left out."""
     return s.off
 
+
 def asymmetry(s: Sums, analysis) -> float:
     """``|g_+ - g_-| / (g_+ + g_-)``: between impacts the block moves on parabolas (eq. 4), so
     the mean second difference of triples on one side is ``-g dt^2`` there and ``+g dt^2``
