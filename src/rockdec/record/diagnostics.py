@@ -293,9 +293,9 @@ REGISTRY = (
           "the record's block means wander more than rocking makes them (drift z {value:.1f}, calibrated limit "
           "{threshold:.1f}): the sensor's zero drifts; remove the trend (high-pass well below the rocking frequency)"),
     Check("spikes", "isolated wrong samples", spikes, "high", "calibrated",
-          "a sample stands {value:.1f} times farther off the line through its neighbours than the record's top 1 % of "
-          "samples, where rocking records like it reach {threshold:.1f}: the record holds spikes; remove them or mark "
-          "them as gaps (NaN)", "max"),
+          "a sample stands {value:.1f} times as far off the line through its neighbours as the record's 99th percentile "
+          "of that distance, where rocking records like it reach {threshold:.1f}: the record holds spikes; remove them "
+          "or mark them as gaps (NaN)", "max"),
     Check("asymmetry", "a block leaning on one side", asymmetry, "high", "calibrated",
           "the response is asymmetric: the block falls back with a different g on each side (|g+ - g-|/(g+ + g-) "
           "{value:.3f}, calibrated limit {threshold:.3f}); it may lean on one side or the load push one way, and the "
