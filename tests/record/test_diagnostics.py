@@ -163,3 +163,77 @@ def test_the_trend_statistic_is_the_least_squares_slopes_t():
     pooled = diagnostics._trend_z(np.r_[up, down], np.repeat([0, 1], 20))
     assert pooled > 3 and pooled == pytest.approx(diagnostics._trend_z(np.r_[up, -down], np.repeat([0, 1], 20)), rel=1e-12)
     assert np.isnan(diagnostics._trend_z(np.ones(20), np.zeros(20, int)))
+
+
+def test_the_spikes_statistic_does_not_grow_with_the_sensor_noise(clean):
+    """The largest distance off the neighbours' line is read against the record's own 99th
+    percentile of it, so white sensor noise of 1, 3 or 5 % of sigma_Y gives the same ratio
+    (within 10 %), while the largest distance itself, in sigma_Y, grows about fivefold."""
+    theta, dt, _ = clean
+    sigma = float(np.std(theta))
+    draw = np.random.default_rng(4).standard_normal(theta.size)
+    ratio, largest = [], []
+    for level in (0.01, 0.03, 0.05):
+        y = theta + level * sigma * draw
+        ratio.append(diagnostics.spikes(diagnostics.sums([y]), None))
+        largest.append(np.max(np.abs(y[2:] - 2 * y[1:-1] + y[:-2])) / 2 / sigma)
+    assert max(ratio) / min(ratio) < 1.1
+    assert largest[-1] / largest[0] > 3.0
+
+
+def test_the_spikes_statistic_leaves_out_nan_and_needs_a_spread():
+    """Triples touching a NaN are left out; a record without a triple, or whose distances
+    are all zero (a straight line), gives no statistic (NaN, which never fires)."""
+    y = np.sin(np.linspace(0.0, 60.0, 5000)) + 1e-3 * np.random.default_rng(5).standard_normal(5000)
+    gappy = y.copy()
+    gappy[1000:1100] = np.nan
+    assert np.isfinite(diagnostics.sums([gappy]).off)
+    assert diagnostics.sums([gappy]).off == pytest.approx(diagnostics.sums([y]).off, rel=0.2)
+    gappy[3000] = 1.0  # a spike beside the gap's edge is still seen
+    assert diagnostics.sums([gappy]).off > 50.0 * diagnostics.sums([y]).off
+    assert np.isnan(diagnostics.sums([np.full(50, np.nan)]).off)
+    assert np.isnan(diagnostics.sums([np.arange(50.0)]).off)
+
+
+def test_a_mirrored_record_gives_the_same_statistics(clean):
+    """A block leaning left or right is the same defect: mirroring the record (``-y``) swaps
+    the sides' g and leaves the asymmetry's magnitude, and every other statistic, unchanged."""
+    theta, dt, _ = clean
+    leaning = theta + 0.3 * np.abs(theta)
+    for y in (theta, leaning):
+        base = diagnostics.statistics([y], measured.analyse([y], dt))
+        mirrored = diagnostics.statistics([-y], measured.analyse([-y], dt))
+        np.testing.assert_allclose(mirrored, base, rtol=1e-9)
+    j = diagnostics.CHECKS.index("asymmetry")
+    assert diagnostics.statistics([leaning], measured.analyse([leaning], dt))[j] > 0.1
+
+
+def test_the_null_takes_its_shape_from_every_grid_point_and_its_place_from_the_nearest():
+    """When every grid point's values are one shape located and scaled (``m_j + s_j z``), the
+    null of a point is exactly that point's values. On normal values (30 sets a point, 10
+    points, the null narrowing with the grid), the null's quantile fires on the true null of
+    the pooled points at about ``1 - QUANTILE``, and fewer of 400 calibrations fire on more
+    than 5 % of it than with the quantile of the pooled points' own sets."""
+    from scipy.stats import norm
+
+    z = np.random.default_rng(6).standard_normal(30)
+    m, s = np.linspace(1.0, 5.0, 10)[:, None], np.linspace(0.5, 2.0, 10)[:, None]
+    values = m + s * z  # the same standardized values at every point
+    for j in (0, 4, 9):
+        group = np.arange(10) == j
+        np.testing.assert_allclose(np.sort(diagnostics.null(values, group)), np.sort(np.tile(values[j], 10)), rtol=1e-12)
+    rng = np.random.default_rng(7)
+    near = (3, 4, 5)
+    group = np.isin(np.arange(10), near)
+
+    def fires(limit):  # share of the pooled points' true null above the limit
+        return np.mean([norm.sf((limit - m[j, 0]) / s[j, 0]) for j in near])
+
+    null, own = [], []
+    for _ in range(400):
+        v = m + s * rng.standard_normal((10, 30))
+        null.append(fires(np.quantile(diagnostics.null(v, group), diagnostics.QUANTILE)))
+        own.append(fires(np.quantile(v[group], diagnostics.QUANTILE)))
+    null, own = np.array(null), np.array(own)
+    assert np.mean(null) < 1.0 - diagnostics.QUANTILE + 0.01
+    assert np.mean(null > 0.05) < 0.5 * np.mean(own > 0.05)

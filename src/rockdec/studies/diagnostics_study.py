@@ -3,15 +3,17 @@
 Records of known ``e`` are simulated apart from any calibration (``g = sigma_p = 1``, the
 step calibrated to :data:`POINTS_PER_CYCLE` samples per cycle at ``sigma_Y``, eq. 5; seeds
 from :data:`STUDY_SEED_OFFSET`), with or without one defect of a given size
-(:data:`DEFECTS`), and each goes through what ``rockdec estimate`` does with a record: the
-analysis (:func:`rockdec.rdd.measured.analyse`), the calibration for its own length and
-sampling (:mod:`rockdec.calibrate.calibration`, shared by records in one samples-per-cycle bin), the
-corrected ``e`` and interval of the default estimator (no ``e`` when the raw value lies
-beyond the calibration, :func:`rockdec.calibrate.inference.beyond`), and every check of
-:mod:`rockdec.record.diagnostics` against the calibration's thresholds.
+(:data:`DEFECTS`), each at every sensor noise level of :data:`NOISE_LEVELS` (white, a share
+of the clean record's rms, as the calibration simulates it), and each goes through
+``rockdec estimate`` itself (:func:`rockdec.calibrate.inference.estimate`): the record model
+measured off the record (:mod:`rockdec.record.record_measure`), the calibration for that
+model, its length and its sampling (:mod:`rockdec.calibrate.calibration`, shared by records
+in one bin), the corrected ``e`` and interval of the estimator it selects (none when it
+gives none), and every check of :mod:`rockdec.record.diagnostics` against the
+calibration's thresholds.
 
-The defects, each on the same seeds as the clean records (so the shift of ``e`` is read
-record by record):
+The defects, each on the same seeds (and sensor noise) as the clean records, so the shift
+of ``e`` is read record by record:
 
 * ``nonstationary``: the impulses' standard deviation ramps linearly from ``1 - m`` to
   ``1 + m`` along the record (``m`` the size);
@@ -25,7 +27,7 @@ record by record):
 
 A defect *matters* at a size when it moves the corrected ``e`` by more than half the
 median 95 % interval (median over records of the paired shift). :func:`summary` gives per
-check and ``e`` the false-alarm rate on the clean records and, per size, the shift, half
+check, ``e`` and noise level the false-alarm rate on the clean records and, per size, the shift, half
 the interval, and the detection rate (the share of defective records on which the
 check fires).
 """
@@ -40,13 +42,14 @@ import dask
 import numpy as np
 import pandas as pd
 
-from rockdec.calibrate import belt, calibration, inference
+from rockdec.calibrate import calibration, inference
 from rockdec.record import diagnostics
 from rockdec.pipeline import engine
 from rockdec.rdd import measured
-from rockdec.physics.loading import draw_impulses, series_rng
-from rockdec.rdd.registry import DEFAULT_ESTIMATOR
+from rockdec.physics.loading import add_sensor_noise, draw_impulses, series_rng
 from rockdec.physics.simulate import calibrate_dt, integrate
+from rockdec.record.records import Record
+from rockdec.validate import InputError
 
 #: Seeds of the study's records start here (apart from scenes, pilots, calibrations and
 #: the other studies).
@@ -57,6 +60,10 @@ POINTS_PER_CYCLE = 75.0
 
 #: True ``e`` of the study.
 E_VALUES = (0.6, 0.8, 0.95, 0.98)
+
+#: Sensor noise of the records, in units of each clean record's rms (white, as the
+#: calibration simulates it once the record's own noise is measured).
+NOISE_LEVELS = (0.0, 0.01, 0.03, 0.05)
 
 #: Records per cell and their length (``coarse_sampling`` uses :data:`COARSE_POINTS`).
 RECORDS, N_POINTS, COARSE_POINTS = 40, 100_000, 50_000
@@ -111,84 +118,122 @@ def add_defect(theta: np.ndarray, defect: str | None, size: float, seed: int) ->
     return y
 
 
-def _cell(e: float, defect: str | None, size: float, seeds, n: int, dt: float, burn_in: int) -> list:
-    """``(analysis, statistics, seconds to simulate and analyse, seconds for the
-    statistics)`` per seed of one cell; ``analysis`` and ``statistics`` ``None`` when the
-    record cannot be analysed."""
+def record(e: float, seed: int, n: int, dt: float, burn_in: int, defect: str | None, size: float, noise: float) -> np.ndarray:
+    """The study's record: :func:`simulate`, :func:`add_defect`, then white sensor noise of
+    ``noise`` times the clean record's rms (:func:`rockdec.physics.loading.add_sensor_noise`,
+    as the calibration and the coverage study add it)."""
+    theta = simulate(e, seed, n, dt, burn_in, defect, size)
+    y = add_defect(theta, defect, size, seed)
+    return add_sensor_noise(y[None], [seed], noise * float(np.sqrt(np.mean(theta**2))))[0]
+
+
+def _cell(e: float, defect: str | None, size: float, noise: float, seeds, n: int, dt: float, burn_in: int) -> list:
+    """``(calibration settings, seconds to simulate and analyse, seconds for the
+    statistics)`` per seed of one cell: the settings ``rockdec estimate`` calibrates the record
+    with (its measured record model, :func:`rockdec.calibrate.inference.record_model`); ``None``
+    when the record cannot be analysed."""
     out = []
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         for seed in seeds:
             tick = time.perf_counter()
-            y = add_defect(simulate(e, int(seed), n, dt, burn_in, defect, size), defect, size, int(seed))
+            y = record(e, int(seed), n, dt, burn_in, defect, size, noise)
             try:
                 analysis = measured.analyse([y], dt)
             except ValueError:
-                out.append((None, None, 0.0, 0.0))
+                out.append((None, 0.0, 0.0))
                 continue
             tock = time.perf_counter()
-            values = diagnostics.statistics([y], analysis)
-            out.append((analysis, values, tock - tick, time.perf_counter() - tock))
+            diagnostics.statistics([y], analysis)
+            spent = time.perf_counter() - tock
+            measurement, _ = inference.measure_model([Record(y, dt, "study")], dt)
+            model, _ = inference.record_model(measurement, analysis)
+            out.append((calibration.calibration_settings([n], analysis.points_per_cycle, None, model), tock - tick, spent))
     return out
 
 
-def run(e_values=E_VALUES, defects=DEFECTS, n_records: int = RECORDS, n_points: int = N_POINTS, cache_dir=None) -> pd.DataFrame:
-    """One row per record and cell (``e``, ``defect``, ``size``; ``defect`` ``"clean"`` for the
-    clean records): the corrected ``e`` and interval of the default estimator, and per
-    check its statistic, threshold and whether it fired. Calibrations are stored in
-    ``cache_dir``. The result's attributes ``statistics_s`` and ``simulate_analyse_s`` hold
-    the seconds spent on the checks' statistics and on simulating and analysing the records
-    (their ratio is the checks' share of a calibration's work), ``calibrations`` how many
-    calibrations the records used."""
+def _estimates(e: float, defect: str | None, size: float, noise: float, seeds, n: int, dt: float, burn_in: int, cache_dir) -> list:
+    """Per seed of one cell, what :func:`rockdec.calibrate.inference.estimate` gives the record
+    (its calibration stored in ``cache_dir``): ``e`` (``None`` when it gives none), the
+    interval, the calibration's file name, and per check its statistic, threshold and whether it fired; ``None`` for a
+    record it refuses."""
+    out = []
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for seed in seeds:
+            y = record(e, int(seed), n, dt, burn_in, defect, size, noise)
+            try:
+                got = inference.estimate([Record(y, dt, f"record {seed}")], cache_dir=cache_dir)
+            except InputError:
+                out.append(None)
+                continue
+            row = {"e_hat": got["e"], "low": got["interval"][0] if got["e"] is not None else np.nan,
+                   "high": got["interval"][1] if got["e"] is not None else np.nan, "calibration": got["calibration"]["file"]}
+            for name, c in got["diagnostics"].items():
+                row[f"{name}_statistic"], row[f"{name}_threshold"], row[f"{name}_fired"] = c["statistic"], c["threshold"], c["fired"]
+            out.append(row)
+    return out
+
+
+def run(
+    e_values=E_VALUES, defects=DEFECTS, n_records: int = RECORDS, n_points: int = N_POINTS, cache_dir=None, noise_levels=NOISE_LEVELS,
+) -> pd.DataFrame:
+    """One row per record and cell (``e``, sensor ``noise``, ``defect``, ``size``; ``defect``
+    ``"clean"`` for the records without one): the corrected ``e`` and interval
+    ``rockdec estimate`` gives (:func:`rockdec.calibrate.inference.estimate`, the record model
+    measured off the record), and per check its statistic, threshold and whether it fired.
+    Calibrations are stored in ``cache_dir`` and built before the records are estimated. The
+    result's attributes ``statistics_s`` and ``simulate_analyse_s`` hold the seconds spent on
+    the checks' statistics and on simulating and analysing the records (their ratio is the
+    checks' share of a calibration's work), ``calibrations`` how many calibrations the
+    records used."""
     cells = []
     for i, e in enumerate(e_values):
         seeds = STUDY_SEED_OFFSET + i * 10**6 + np.arange(n_records)
-        cells.append((e, "clean", 0.0, seeds, n_points, POINTS_PER_CYCLE))
-        for defect, sizes in defects.items():
-            for size in sizes:
-                if defect == "coarse_sampling":
-                    cells.append((e, defect, size, seeds, COARSE_POINTS, size))
-                else:
-                    cells.append((e, defect, size, seeds, n_points, POINTS_PER_CYCLE))
+        for noise in noise_levels:
+            cells.append((e, noise, "clean", 0.0, seeds, n_points, POINTS_PER_CYCLE))
+            for defect, sizes in defects.items():
+                for size in sizes:
+                    if defect == "coarse_sampling":
+                        cells.append((e, noise, defect, size, seeds, COARSE_POINTS, size))
+                    else:
+                        cells.append((e, noise, defect, size, seeds, n_points, POINTS_PER_CYCLE))
     steps = {}
-    for e, _, _, _, _, ppc in cells:
+    for e, _, _, _, _, _, ppc in cells:
         if (e, ppc) not in steps:
             steps[e, ppc] = calibrate_dt(e=e, g=1.0, sigma_p=1.0, points_per_cycle=ppc)
-    tasks = [
-        dask.delayed(_cell)(e, None if d in ("clean", "coarse_sampling") else d, size, seeds, n, steps[e, ppc]["dt"], steps[e, ppc]["burn_in"])
-        for e, d, size, seeds, n, ppc in cells
-    ]
+
+    def simulated(e, defect, size, ppc):
+        return None if defect in ("clean", "coarse_sampling") else defect, size, steps[e, ppc]["dt"], steps[e, ppc]["burn_in"]
+
+    staged = []
+    for e, noise, defect, size, seeds, n, ppc in cells:
+        d, size, dt, burn_in = simulated(e, defect, size, ppc)
+        staged.append(dask.delayed(_cell)(e, d, size, noise, seeds, n, dt, burn_in))
+    settings = engine.compute(*staged)
+    keys = {calibration.settings_hash(s): s for records in settings for s, _, _ in records if s is not None}
+    print(f"diagnostics study: {len(cells)} cells of {n_records} records simulated and analysed; {len(keys)} calibrations",
+          file=sys.stderr, flush=True)
+    for key in keys.values():
+        calibration.load_or_build(key, cache_dir)
+    tasks = []
+    for e, noise, defect, size, seeds, n, ppc in cells:
+        d, size, dt, burn_in = simulated(e, defect, size, ppc)
+        tasks.append(dask.delayed(_estimates)(e, d, size, noise, seeds, n, dt, burn_in, cache_dir))
     results = engine.compute(*tasks)
-    print(f"diagnostics study: {len(cells)} cells of {n_records} records simulated and analysed; correcting", file=sys.stderr, flush=True)
-    level = measured.DEFAULT_SETTINGS["level"]
-    by_hash: dict = {}
     rows = []
     cost = np.zeros(2)
-    for (e, defect, size, seeds, n, _), records in zip(cells, results):
-        for seed, (analysis, values, work_s, statistics_s) in zip(seeds, records):
-            row = {"e_true": e, "defect": defect, "size": size, "seed": int(seed), "n_points": n}
-            rows.append(row)
-            if analysis is None:
-                continue
+    for (e, noise, defect, size, seeds, n, _), staged_cell, got in zip(cells, settings, results):
+        for seed, (_, work_s, statistics_s), estimated in zip(seeds, staged_cell, got):
             cost += (work_s, statistics_s)
-            key = calibration.calibration_settings([n], analysis.points_per_cycle)
-            h = calibration.settings_hash(key)
-            if h not in by_hash:
-                cal = calibration.load_or_build(key, cache_dir)[0]
-                by_hash[h] = (cal, belt.belts(cal))
-            cal, belts = by_hash[h]
-            c = belt.correct(belts[DEFAULT_ESTIMATOR], analysis.raw[DEFAULT_ESTIMATOR])
-            placed = None if inference.beyond(belts[DEFAULT_ESTIMATOR], analysis.raw[DEFAULT_ESTIMATOR], c) else c.value
-            row.update(e_hat=placed, low=c.low, high=c.high)
-            for name, o in diagnostics.judge(values, diagnostics.thresholds(cal, placed, (c.low, c.high), level)).items():
-                row[f"{name}_statistic"], row[f"{name}_threshold"], row[f"{name}_fired"] = o.statistic, o.threshold, o.fired
+            rows.append({"e_true": e, "noise": noise, "defect": defect, "size": size, "seed": int(seed), "n_points": n, **(estimated or {})})
     table = pd.DataFrame(rows)
-    table.attrs.update(simulate_analyse_s=float(cost[0]), statistics_s=float(cost[1]), calibrations=len(by_hash))
+    table.attrs.update(simulate_analyse_s=float(cost[0]), statistics_s=float(cost[1]), calibrations=len(keys))
     return table
 
 
 def summary(table: pd.DataFrame) -> pd.DataFrame:
-    """Per check, ``e`` and size: records analysed; the median shift of the corrected ``e``
+    """Per check, ``e``, sensor noise and size: records analysed; the median shift of the corrected ``e``
     from the same seeds' clean records (``coarse_sampling``: from their mean) over the
     records that keep an ``e``; the share of records that lose the ``e`` their clean record
     had (``lost_pct``); half the median 95 % interval of the clean records; whether the
@@ -196,12 +241,12 @@ def summary(table: pd.DataFrame) -> pd.DataFrame:
     ``e``); and the share of records on which the check fires (on the clean records, size
     0: the false-alarm rate)."""
     rows = []
-    for e, at_e in table.groupby("e_true"):
+    for (e, noise), at_e in table.groupby(["e_true", "noise"]):
         clean = at_e[at_e["defect"] == "clean"].set_index("seed")
         half = 0.5 * float(np.nanmedian(clean["high"] - clean["low"]))
         for check in diagnostics.CHECKS:
             fired = clean[f"{check}_fired"].dropna().astype(bool)
-            rows.append({"check": check, "e_true": e, "size": 0.0, "records": int(fired.size), "e_shift": 0.0, "lost_pct": 0.0,
+            rows.append({"check": check, "e_true": e, "noise": noise, "size": 0.0, "records": int(fired.size), "e_shift": 0.0, "lost_pct": 0.0,
                          "half_interval": half, "matters": False, "fired_pct": 100.0 * float(fired.mean())})
             for size, cell in at_e[at_e["defect"] == check].groupby("size"):
                 cell = cell.set_index("seed")
@@ -212,7 +257,7 @@ def summary(table: pd.DataFrame) -> pd.DataFrame:
                     shift = float(np.nanmedian(cell["e_hat"] - base)) if (cell["e_hat"] - base).notna().any() else np.nan
                 lost = float(np.mean(cell["e_hat"].isna() & base.notna()))
                 fired = cell[f"{check}_fired"].dropna().astype(bool)
-                rows.append({"check": check, "e_true": e, "size": size, "records": int(fired.size), "e_shift": shift,
+                rows.append({"check": check, "e_true": e, "noise": noise, "size": size, "records": int(fired.size), "e_shift": shift,
                              "lost_pct": 100.0 * lost, "half_interval": half, "matters": bool(abs(shift) > half or lost >= 0.5),
                              "fired_pct": 100.0 * float(fired.mean()) if fired.size else np.nan})
     return pd.DataFrame(rows)

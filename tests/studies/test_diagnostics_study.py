@@ -1,0 +1,50 @@
+"""The warnings' study (rockdec.studies.diagnostics_study): its records and its summary, without
+calibrations (the study itself runs in the workflow)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from rockdec.record import diagnostics
+from rockdec.studies import diagnostics_study as ds
+from rockdec.physics.simulate import calibrate_dt
+
+E, N = 0.9, 20_000
+
+
+@pytest.fixture(scope="module")
+def step():
+    return calibrate_dt(e=E, g=1.0, sigma_p=1.0, points_per_cycle=ds.POINTS_PER_CYCLE)
+
+
+def test_a_noisy_record_is_the_clean_one_plus_noise_of_its_share_of_the_rms(step):
+    clean = ds.record(E, 11, N, step["dt"], step["burn_in"], None, 0.0, 0.0)
+    np.testing.assert_array_equal(clean, ds.simulate(E, 11, N, step["dt"], step["burn_in"]))
+    noisy = ds.record(E, 11, N, step["dt"], step["burn_in"], None, 0.0, 0.03)
+    assert np.std(noisy - clean) / np.sqrt(np.mean(clean**2)) == pytest.approx(0.03, rel=0.03)
+
+
+def test_a_defect_rides_on_the_same_noise_as_its_clean_record(step):
+    """Pairing: the drifting record less the clean one, both at 5 % noise, is the trend alone."""
+    clean = ds.record(E, 12, N, step["dt"], step["burn_in"], None, 0.0, 0.05)
+    drifting = ds.record(E, 12, N, step["dt"], step["burn_in"], "drift", 1.0, 0.05)
+    sigma = np.std(ds.simulate(E, 12, N, step["dt"], step["burn_in"]))
+    np.testing.assert_allclose(drifting - clean, sigma * np.linspace(-0.5, 0.5, N), atol=1e-12 * sigma)
+
+
+def test_the_summary_reads_false_alarms_and_detections_per_noise_level():
+    rows = []
+    for noise, fires in ((0.0, (True, False, False, False)), (0.05, (False, False, False, False))):
+        for seed, fired in enumerate(fires):
+            row = {"e_true": E, "noise": noise, "defect": "clean", "size": 0.0, "seed": seed, "e_hat": E, "low": E - 0.02, "high": E + 0.02}
+            row.update({f"{c}_fired": fired and c == "drift" for c in diagnostics.CHECKS})
+            rows.append(row)
+            defective = dict(row, defect="drift", size=1.0, e_hat=E + 0.05 * (noise == 0.0))
+            defective.update({f"{c}_fired": c == "drift" and seed < 3 for c in diagnostics.CHECKS})
+            rows.append(defective)
+    s = ds.summary(pd.DataFrame(rows)).set_index(["check", "noise", "size"])
+    assert s.loc[("drift", 0.0, 0.0), "fired_pct"] == 25.0 and s.loc[("drift", 0.05, 0.0), "fired_pct"] == 0.0
+    assert s.loc[("drift", 0.0, 1.0), "fired_pct"] == 75.0 and s.loc[("drift", 0.0, 1.0), "matters"]
+    assert not s.loc[("drift", 0.05, 1.0), "matters"]  # at 5 % noise the defect does not move e here
