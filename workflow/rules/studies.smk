@@ -68,7 +68,7 @@ rule diagnostics_records:
     threads: 2
     resources:
         mem_mb=4000,
-        runtime=60,
+        runtime=240,
     params:
         cache="results/studies/diagnostics/calibration",
     conda:
