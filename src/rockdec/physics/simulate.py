@@ -188,17 +188,16 @@ def integrate(impulses, dt, g, e, theta0, omega0, burn_in, theta_out, omega_out,
     """
     theta = theta0
     omega = omega0
-    n = theta_out.shape[0]
-    for i in range(burn_in):
+    if burn_in == 0:
+        theta_out[0] = theta
+        omega_out[0] = omega
+    for i in range(burn_in + theta_out.shape[0] - 1):
         theta, omega = _advance(theta, omega, dt, g, e, grid_impacts)
         omega += impulses[i]
-    theta_out[0] = theta
-    omega_out[0] = omega
-    for j in range(1, n):
-        theta, omega = _advance(theta, omega, dt, g, e, grid_impacts)
-        omega += impulses[burn_in + j - 1]
-        theta_out[j] = theta
-        omega_out[j] = omega
+        j = i + 1 - burn_in  # the sample this step reaches; the burn-in's are not written
+        if j >= 0:
+            theta_out[j] = theta
+            omega_out[j] = omega
 
 
 def simulate_block(seeds, n_points, *, dt, g, e, sigma_p, theta0=0.0, theta_dot0=0.0, burn_in=0, grid_impacts=False, pole=0.0,

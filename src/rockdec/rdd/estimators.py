@@ -168,8 +168,9 @@ def _finite(value):
 
 
 @_jit
-def _fit2(t, y):
-    """Least-squares parabola ``y = c0 + c1 (t - tc) + c2 (t - tc)^2`` through ``(t, y)``.
+def _fit2(k0, dt, y):
+    """Least-squares parabola ``y = c0 + c1 (t - tc) + c2 (t - tc)^2`` through the samples
+    ``y[j]`` at the times ``t_j = (k0 + j) dt`` (lag ``k0 + j``, ``k0`` an integer).
 
     Returns ``(tc, c0, c1, c2)``. Solved by the 3x3 normal equations in the scaled variable
     ``u = (t - tc)/h`` in ``[-1, 1]`` (``tc``, ``h`` the centre and half-range of ``t``,
@@ -177,12 +178,13 @@ def _fit2(t, y):
     does: well conditioned for the few points of each fit, and far cheaper than a general
     polynomial fit.
     """
-    n = t.size
-    tc = 0.5 * (t[0] + t[n - 1])
-    h = 0.5 * (t[n - 1] - t[0])
+    n = y.size
+    first, last = dt * k0, dt * (k0 + n - 1)
+    tc = 0.5 * (first + last)
+    h = 0.5 * (last - first)
     s1 = s2 = s3 = s4 = b0 = b1 = b2 = 0.0
     for j in range(n):
-        u = (t[j] - tc) / h
+        u = (dt * (k0 + j) - tc) / h
         u2 = u * u
         s1 += u
         s2 += u2
@@ -191,7 +193,10 @@ def _fit2(t, y):
         b0 += y[j]
         b1 += u * y[j]
         b2 += u2 * y[j]
-    a = np.array([[float(n), s1, s2, b0], [s1, s2, s3, b1], [s2, s3, s4, b2]])
+    a = np.empty((3, 4))  # the augmented normal equations [A | b]
+    a[0, 0], a[0, 1], a[0, 2], a[0, 3] = n, s1, s2, b0
+    a[1, 0], a[1, 1], a[1, 2], a[1, 3] = s1, s2, s3, b1
+    a[2, 0], a[2, 1], a[2, 2], a[2, 3] = s2, s3, s4, b2
     for col in range(3):  # LU with partial pivoting, the order of operations of LAPACK's gesv
         pivot = col
         for row in range(col + 1, 3):
@@ -227,6 +232,7 @@ def _slope(p, t):
 #: A slope within this many rounding units of the fitted values' scale over the fit's
 #: span is zero: a flat stretch fits to 0 or to +-1e-17, depending on the order of operations.
 FLAT_ULPS = 64.0
+_EPS = float(np.finfo(np.float64).eps)
 
 
 @_jit
@@ -235,7 +241,7 @@ def _flat(slope, y, span):
     scale = 0.0
     for k in range(y.size):
         scale = max(scale, abs(y[k]))
-    return abs(slope) * span <= FLAT_ULPS * np.finfo(np.float64).eps * scale
+    return abs(slope) * span <= FLAT_ULPS * _EPS * scale
 
 
 @_jit
@@ -350,24 +356,23 @@ def _half_cycle(r, dt, code, lobes):
     a_min, b_min = max(start1, m - (n4 - 1) // 2), min(end1, m + n4 // 2 + 1)
     if min(b_start - a_start, b_before - a_before, b_after - a_after, b_min - a_min) < MIN_FIT_POINTS:
         return nan6, _FEW_POINTS
-    tau = dt * np.arange(r.size)
-    before = _fit2(tau[a_before:b_before], r[a_before:b_before])
-    found, t1 = _root_nearest(before, 0.5 * (tau[end0 - 1] + tau[start1]))
+    before = _fit2(a_before, dt, r[a_before:b_before])
+    found, t1 = _root_nearest(before, 0.5 * (dt * (end0 - 1) + dt * start1))
     if not found:
         return nan6, _NO_ROOT
     v1 = _slope(before, t1)
     if v1 == 0.0:
         return nan6, _TOUCHES_ZERO
-    minimum = _fit2(tau[a_min:b_min], r[a_min:b_min])
+    minimum = _fit2(a_min, dt, r[a_min:b_min])
     if not minimum[3] > 0.0:
         return nan6, _NO_MINIMUM
     t2 = minimum[0] - minimum[2] / (2.0 * minimum[3])
-    c1 = _value(_fit2(tau[a_start:b_start], r[a_start:b_start]), 0.0)
+    c1 = _value(_fit2(a_start, dt, r[a_start:b_start]), 0.0)
     if not c1 > 0.0:
         return nan6, _C1_NOT_POSITIVE
     if not 0.0 < t1 < t2:
         return nan6, _T1_OUTSIDE
-    v2 = _slope(_fit2(tau[a_after:b_after], r[a_after:b_after]), t1)
+    v2 = _slope(_fit2(a_after, dt, r[a_after:b_after]), t1)
     return (c1, t1, v1, v2, t2, _value(minimum, t2)), _OK
 
 
@@ -412,10 +417,9 @@ def _e_impact_slope(d, dt, fit_points):
     lag0 = d.size // 2
     if lag0 < fit_points:
         return np.nan, _FEW_LAGS
-    tau = dt * np.arange(1, fit_points + 1)
-    before = _slope(_fit2(-tau[::-1], d[lag0 - fit_points : lag0]), 0.0)
-    after = _slope(_fit2(tau, d[lag0 + 1 : lag0 + 1 + fit_points]), 0.0)
-    if _flat(before, d[lag0 - fit_points : lag0], tau[-1]):
+    before = _slope(_fit2(-fit_points, dt, d[lag0 - fit_points : lag0]), 0.0)
+    after = _slope(_fit2(1, dt, d[lag0 + 1 : lag0 + 1 + fit_points]), 0.0)
+    if _flat(before, d[lag0 - fit_points : lag0], dt * fit_points):
         return np.nan, _ZERO_SLOPE
     return _finite(after / before)
 
