@@ -157,9 +157,10 @@ def _as_estimate(value, code, fit_points=None) -> Estimate:
 # --------------------------------------------------------------------------- numba kernels
 
 _jit = njit(nogil=True, cache=True, error_model="numpy")  # IEEE results (inf, NaN), never raise
+_inline = njit(nogil=True, cache=True, error_model="numpy", inline="always")
 
 
-@_jit
+@_inline
 def _finite(value):
     """``(value, 0)``, or ``(NaN, not finite)`` when the arithmetic left the floating-point range."""
     if np.isfinite(value):
@@ -218,13 +219,13 @@ def _fit2(k0, dt, y):
     return tc, a0, a1 / h, a2 / (h * h)
 
 
-@_jit
+@_inline
 def _value(p, t):
     u = t - p[0]
     return p[1] + u * (p[2] + u * p[3])
 
 
-@_jit
+@_inline
 def _slope(p, t):
     return p[2] + 2.0 * p[3] * (t - p[0])
 
@@ -235,7 +236,7 @@ FLAT_ULPS = 64.0
 _EPS = float(np.finfo(np.float64).eps)
 
 
-@_jit
+@_inline
 def _flat(slope, y, span):
     """Whether ``slope`` (rad/s) is zero to rounding, given values ``y`` fitted over ``span`` s."""
     scale = 0.0
@@ -244,7 +245,7 @@ def _flat(slope, y, span):
     return abs(slope) * span <= FLAT_ULPS * _EPS * scale
 
 
-@_jit
+@_inline
 def _root_nearest(p, target):
     """``(found, t)``: the real root of parabola ``p`` nearest ``target``, computed without
     cancellation (``q = -(c1 + sign(c1) sqrt(disc))/2``, roots ``q/c2`` and ``c0/q``); a NaN
@@ -311,7 +312,7 @@ def _lobes(r):
     return _OK, table[:n]
 
 
-@_jit
+@_inline
 def _e_global(r, code, lobes):
     """``e_g`` (eqs. 25, 7) from the lobes of ``r``: ``(value, code)``.
 
@@ -331,7 +332,7 @@ def _e_global(r, code, lobes):
     return _finite(np.exp(num / den / 4.0))
 
 
-@_jit
+@_inline
 def _e_first_peak(r, code, lobes):
     """``e_0 = sqrt(|r_1| / r_0)`` (eq. 26), the first two sampled extremes of ``r``: ``(value, code)``."""
     if code != _OK:
@@ -350,7 +351,7 @@ def _half_cycle(r, dt, code, lobes):
     n_h = m + 1
     n8 = max(MIN_FIT_POINTS, n_h // 8)
     n4 = max(MIN_FIT_POINTS, n_h // 4)
-    a_start, b_start = 0, min(n8, end0)
+    a_start, b_start = lobes[0, 0], min(n8, end0)  # lobe 0 starts at lag 0 (r[0] > 0)
     a_before, b_before = max(0, end0 - n8), end0
     a_after, b_after = start1, min(start1 + n8, end1)
     a_min, b_min = max(start1, m - (n4 - 1) // 2), min(end1, m + n4 // 2 + 1)
@@ -376,7 +377,7 @@ def _half_cycle(r, dt, code, lobes):
     return (c1, t1, v1, v2, t2, _value(minimum, t2)), _OK
 
 
-@_jit
+@_inline
 def _local_measures(h, code, values, codes, columns):
     """``e1..e4`` of eq. 27 from the half-cycle features ``h`` into ``values[columns[k]]``,
     ``codes[columns[k]]`` (``columns``: the columns of ``e1..e4``).
@@ -417,9 +418,10 @@ def _e_impact_slope(d, dt, fit_points):
     lag0 = d.size // 2
     if lag0 < fit_points:
         return np.nan, _FEW_LAGS
-    before = _slope(_fit2(-fit_points, dt, d[lag0 - fit_points : lag0]), 0.0)
-    after = _slope(_fit2(1, dt, d[lag0 + 1 : lag0 + 1 + fit_points]), 0.0)
-    if _flat(before, d[lag0 - fit_points : lag0], dt * fit_points):
+    lo, hi = lag0 - fit_points, lag0 + 1  # the first sample of each side's fit
+    before = _slope(_fit2(lo - lag0, dt, d[lo:lag0]), 0.0)
+    after = _slope(_fit2(hi - lag0, dt, d[hi : hi + fit_points]), 0.0)
+    if _flat(before, d[lo:lag0], dt * fit_points):
         return np.nan, _ZERO_SLOPE
     return _finite(after / before)
 
