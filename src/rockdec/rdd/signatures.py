@@ -139,11 +139,23 @@ def _close_windows(sums, counts, skipped):
 
 
 @njit(nogil=True, cache=True)
-def _add_interpolated(seg, row, base, k0, k1, sign, frac):
-    """``seg[k] += sign * y(t_base + (k + frac) dt)`` for ``k0 <= k < k1``, linear interpolation."""
-    for k in range(k0, k1):
-        left = np.float64(row[base + k])
-        seg[k] += sign * (left + frac * (np.float64(row[base + k + 1]) - left))
+def _window(edges, dist):
+    """The smallest window ``w`` with ``dist <= edges[w]`` (``np.searchsorted``; ``dist`` at most
+    ``edges[-1]``): a scan, as short as the few windows."""
+    w = 0
+    while edges[w] < dist:
+        w += 1
+    return w
+
+
+@njit(nogil=True, cache=True)
+def _add_interpolated(seg, row, base, n_lag, sign, frac):
+    """``seg[k] += sign * y(t_base + (k + frac) dt)`` for every ``k`` of ``0..2 n_lag`` but lag 0
+    (``k = n_lag``, the chord root, where the interpolant is 0), linear interpolation."""
+    for k in range(2 * n_lag + 1):
+        if k != n_lag:
+            left = np.float64(row[base + k])
+            seg[k] += sign * (left + frac * (np.float64(row[base + k + 1]) - left))
 
 
 @njit(nogil=True, cache=True)
@@ -172,7 +184,7 @@ def _extremum_kernel(y, rows_to, level, edges, n_lag, both_signs, lo, hi, sums, 
                 dist = below
             else:
                 continue
-            w = np.searchsorted(edges, dist)  # smallest window holding the trigger
+            w = _window(edges, dist)  # smallest window holding the trigger
             if nan_before[i + n_lag + 1] != nan_before[i - n_lag]:
                 skipped[out, w] += 1
                 continue
@@ -215,16 +227,14 @@ def _crossing_kernel(y, rows_to, velocity, edges, n_lag, inv_dt, both_signs, lo,
             dist = abs(sign * slope * inv_dt - velocity)
             if not dist <= widest:
                 continue
-            w = np.searchsorted(edges, dist)
+            w = _window(edges, dist)
             if nan_before[i + n_lag + 2] != nan_before[i - n_lag]:
                 skipped[out, w] += 1
                 continue
             counts[out, w] += 1
             seg = sums[out, w]
             base = i - n_lag
-            # lag 0 is the chord root, where the interpolant is 0: left out, stays exactly 0
-            _add_interpolated(seg, row, base, 0, n_lag, sign, frac)
-            _add_interpolated(seg, row, base, n_lag + 1, 2 * n_lag + 1, sign, frac)
+            _add_interpolated(seg, row, base, n_lag, sign, frac)  # lag 0 stays exactly 0
     for out in range(sums.shape[0]):
         _close_windows(sums[out], counts[out], skipped[out])
 

@@ -73,7 +73,8 @@ def _record_sums(y, n_blocks):
         if y[k] == y[k]:
             c = y[k]
             break
-    counts, blocks = np.zeros(n_blocks), np.zeros((2, n_blocks))
+    counts, blocks = np.empty(n_blocks), np.empty((2, n_blocks))
+    total, shift = 0.0, 0.0  # sums of the counts and of the blocks' sums of d, in block order
     for j in range(n_blocks):
         q, t1, t2 = 0, 0.0, 0.0
         for k in range(j * n // n_blocks, (j + 1) * n // n_blocks):
@@ -83,8 +84,9 @@ def _record_sums(y, n_blocks):
                 t1 += d
                 t2 += d * d
         counts[j], blocks[0, j], blocks[1, j] = q, t1, t2
-    total = counts.sum()
-    m = c + blocks[0].sum() / total if total else c
+        total += q
+        shift += t1
+    m = c + shift / total if total else c
     worst, n0, n1, s0, s1 = 0.0, 0.0, 0.0, 0.0, 0.0  # scalars: array elements here cost 6 times more
     for k in range(1, n - 1):
         a, b, e = y[k - 1], y[k], y[k + 1]
