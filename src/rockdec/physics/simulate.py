@@ -177,15 +177,22 @@ def _advance(theta, omega, dt, g, e, grid_impacts):
     return flight(theta, omega, dt, g, e)
 
 
-@numba.njit(nogil=True, cache=True)
 def integrate(impulses, dt, g, e, theta0, omega0, burn_in, theta_out, omega_out, grid_impacts=False):
     """Integrate one series (eqs. 21-24) and write the recorded part.
 
     ``impulses`` holds ``burn_in + n - 1`` velocity impulses (rad/s); the first ``burn_in``
     steps are discarded, then ``n = len(theta_out)`` samples are written, the first one
     being the state after the burn-in. ``grid_impacts`` swaps the exact flight for the
-    fixed-step integrator (:func:`rockdec.physics.fixed_step.step`).
+    fixed-step integrator (:func:`rockdec.physics.fixed_step.step`). The scalars go to the
+    kernel :func:`_integrate` as float64, int64 and bool, so it compiles once.
     """
+    _integrate(impulses, float(dt), float(g), float(e), float(theta0), float(omega0), int(burn_in), theta_out, omega_out,
+               bool(grid_impacts))
+
+
+@numba.njit(nogil=True, cache=True)
+def _integrate(impulses, dt, g, e, theta0, omega0, burn_in, theta_out, omega_out, grid_impacts):
+    """:func:`integrate`'s loop: one pass of :func:`_advance` and the impulse per step."""
     theta = theta0
     omega = omega0
     if burn_in == 0:

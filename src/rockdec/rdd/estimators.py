@@ -163,7 +163,7 @@ _inline = njit(nogil=True, cache=True, error_model="numpy", inline="always")
 @_inline
 def _finite(value):
     """``(value, 0)``, or ``(NaN, not finite)`` when the arithmetic left the floating-point range."""
-    if np.isfinite(value):
+    if math.isfinite(value):
         return value, _OK
     return np.nan, _NOT_FINITE
 
@@ -258,13 +258,13 @@ def _root_nearest(p, target):
     disc = c1 * c1 - 4.0 * c2 * c0
     if disc < 0.0:
         return False, np.nan
-    q = -0.5 * (c1 + math.copysign(np.sqrt(disc), c1))
+    q = -0.5 * (c1 + math.copysign(math.sqrt(disc), c1))
     first = tc + q / c2
     if q == 0.0:
         return True, first
     second = tc + c0 / q
     d0, d1 = abs(first - target), abs(second - target)
-    if not np.isnan(d0) and (np.isnan(d1) or d1 < d0):
+    if not math.isnan(d0) and (math.isnan(d1) or d1 < d0):
         return True, second
     return True, first
 
@@ -284,7 +284,7 @@ def _lobes(r):
     if r.size == 0:
         return _EMPTY, table[:0]
     for k in range(r.size):
-        if not np.isfinite(r[k]):
+        if not math.isfinite(r[k]):
             return _NAN, table[:0]
     if r[0] <= 0.0:
         return _R0_NOT_POSITIVE, table[:0]
@@ -327,9 +327,9 @@ def _e_global(r, code, lobes):
     num = den = 0.0
     for j in range(n):
         i = j - 0.5 * (n - 1)  # centred index: the slope needs no intercept
-        num += i * (2.0 * np.log(abs(r[lobes[j, 2]])))
+        num += i * (2.0 * math.log(abs(r[lobes[j, 2]])))
         den += i * i
-    return _finite(np.exp(num / den / 4.0))
+    return _finite(math.exp(num / den / 4.0))
 
 
 @_inline
@@ -337,7 +337,7 @@ def _e_first_peak(r, code, lobes):
     """``e_0 = sqrt(|r_1| / r_0)`` (eq. 26), the first two sampled extremes of ``r``: ``(value, code)``."""
     if code != _OK:
         return np.nan, code
-    return _finite(np.sqrt(abs(r[lobes[1, 2]]) / r[lobes[0, 2]]))
+    return _finite(math.sqrt(abs(r[lobes[1, 2]]) / r[lobes[0, 2]]))
 
 
 @_jit
@@ -393,7 +393,7 @@ def _local_measures(h, code, values, codes, columns):
         return
     c1, t1, v1, v2, t2, c2 = h
     ratio = abs(c2) / c1
-    values[columns[0]], codes[columns[0]] = _finite(np.sqrt(ratio))
+    values[columns[0]], codes[columns[0]] = _finite(math.sqrt(ratio))
     values[columns[1]], codes[columns[1]] = _finite(v2 / v1)
     values[columns[2]], codes[columns[2]] = _finite(ratio * t1 / (t2 - t1))
     values[columns[3]], codes[columns[3]] = _finite((t2 - t1) / t1)
@@ -413,7 +413,7 @@ def _e_impact_slope(d, dt, fit_points):
     if d.size % 2 == 0:
         return np.nan, _EVEN_LENGTH
     for k in range(d.size):
-        if not np.isfinite(d[k]):
+        if not math.isfinite(d[k]):
             return np.nan, _NAN
     lag0 = d.size // 2
     if lag0 < fit_points:

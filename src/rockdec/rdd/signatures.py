@@ -154,8 +154,8 @@ def _add_interpolated(seg, row, base, n_lag, sign, frac):
     (``k = n_lag``, the chord root, where the interpolant is 0), linear interpolation."""
     for k in range(2 * n_lag + 1):
         if k != n_lag:
-            left = np.float64(row[base + k])
-            seg[k] += sign * (left + frac * (np.float64(row[base + k + 1]) - left))
+            left = row[base + k]
+            seg[k] += sign * (left + frac * (row[base + k + 1] - left))
 
 
 @njit(nogil=True, cache=True)
@@ -173,7 +173,7 @@ def _extremum_kernel(y, rows_to, level, edges, n_lag, both_signs, lo, hi, sums, 
         out = rows_to[r]
         _nan_prefix(row, nan_before)
         for i in range(max(lo, reach), min(hi, n - reach)):
-            y0 = np.float64(row[i])
+            y0 = row[i]
             above = abs(y0 - level)  # level test first: cheap, and rarely passed
             below = abs(y0 + level)
             if above <= widest and row[i - 1] < row[i] and row[i] >= row[i + 1]:
@@ -211,8 +211,8 @@ def _crossing_kernel(y, rows_to, velocity, edges, n_lag, inv_dt, both_signs, lo,
         out = rows_to[r]
         _nan_prefix(row, nan_before)
         for i in range(max(lo, n_lag, 2), min(hi, n - n_lag - 1)):
-            y0 = np.float64(row[i])
-            y1 = np.float64(row[i + 1])
+            y0 = row[i]
+            y1 = row[i + 1]
             if y0 < 0.0 and y1 >= 0.0:
                 sign = 1.0
             elif both_signs and y0 > 0.0 and y1 <= 0.0:
@@ -220,8 +220,8 @@ def _crossing_kernel(y, rows_to, velocity, edges, n_lag, inv_dt, both_signs, lo,
             else:
                 continue
             frac = y0 / (y0 - y1)  # chord root: crossing at t_i + frac dt
-            ym1 = np.float64(row[i - 1])
-            ym2 = np.float64(row[i - 2])
+            ym1 = row[i - 1]
+            ym2 = row[i - 2]
             # derivative at frac of the parabola through the samples i-2, i-1, i
             slope = 0.5 * (3.0 * y0 - 4.0 * ym1 + ym2) + (y0 - 2.0 * ym1 + ym2) * frac
             dist = abs(sign * slope * inv_dt - velocity)
@@ -248,8 +248,6 @@ def _run(trigger, y, target, half_widths, n_lag, dt, both_signs, owned, rows_to)
     y = np.asarray(y)
     if y.ndim == 0:
         raise ValueError("the record must have a time axis (the last axis)")
-    if y.dtype not in (np.float32, np.float64):
-        y = y.astype(np.float64)
     edges = np.atleast_1d(np.asarray(half_widths, dtype=np.float64))
     if edges.ndim != 1 or edges.size == 0 or not np.all(np.isfinite(edges) & (edges >= 0)) or np.any(np.diff(edges) < 0):
         raise checks.InputError(
@@ -277,7 +275,7 @@ def _run(trigger, y, target, half_widths, n_lag, dt, both_signs, owned, rows_to)
     sums = np.zeros((n_out, edges.size, 2 * n_lag + 1))
     counts = np.zeros((n_out, edges.size), np.int64)
     skipped = np.zeros((n_out, edges.size), np.int64)
-    y = np.ascontiguousarray(y.reshape(rows, n))
+    y = np.ascontiguousarray(y.reshape(rows, n), dtype=np.float64)  # one compiled type: float32 converts exactly
     if trigger == "a":
         _extremum_kernel(y, rows_to, float(target), edges, n_lag, bool(both_signs), lo, hi, sums, counts, skipped)
     else:
