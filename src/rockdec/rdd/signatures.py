@@ -120,7 +120,7 @@ class SignatureSums(NamedTuple):
 # --------------------------------------------------------------------------- kernels
 
 
-@njit(nogil=True, cache=True)
+@njit(nogil=True, cache=True, inline="always")
 def _nan_prefix(row, out):
     """``out[j]`` = number of NaN among ``row[:j]``."""
     out[0] = 0
@@ -128,7 +128,7 @@ def _nan_prefix(row, out):
         out[j + 1] = out[j] + (1 if np.isnan(row[j]) else 0)
 
 
-@njit(nogil=True, cache=True)
+@njit(nogil=True, cache=True, inline="always")
 def _close_windows(sums, counts, skipped):
     """Per-bin accumulators of one output row -> cumulative over the nested windows."""
     for w in range(1, counts.size):
@@ -138,7 +138,7 @@ def _close_windows(sums, counts, skipped):
             sums[w, k] += sums[w - 1, k]
 
 
-@njit(nogil=True, cache=True)
+@njit(nogil=True, cache=True, inline="always")
 def _window(edges, dist):
     """The smallest window ``w`` with ``dist <= edges[w]`` (``np.searchsorted``; ``dist`` at most
     ``edges[-1]``): a scan, as short as the few windows."""
@@ -148,7 +148,7 @@ def _window(edges, dist):
     return w
 
 
-@njit(nogil=True, cache=True)
+@njit(nogil=True, cache=True, inline="always")
 def _add_interpolated(seg, row, base, n_lag, sign, frac):
     """``seg[k] += sign * y(t_base + (k + frac) dt)`` for every ``k`` of ``0..2 n_lag`` but lag 0
     (``k = n_lag``, the chord root, where the interpolant is 0), linear interpolation."""
