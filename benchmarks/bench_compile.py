@@ -5,19 +5,23 @@ A plain script (not a test): prints CPU seconds, never asserts them.
     PYTHONPATH=src python benchmarks/bench_compile.py [--repeat 2] [--before OTHER/src]
 
 Each family is timed in a fresh interpreter whose numba cache (``NUMBA_CACHE_DIR``) is an
-empty temporary folder, on one thread: the first call of the family's entry point (numba
-compiles its kernels and writes them to the cache) against the second (compiled). The
-families, in the order a cold ``rockdec estimate`` meets them:
+empty temporary folder, on one thread: the CPU seconds of the first call of the family's
+entry point (numba compiles its kernels and writes them to the cache), then of its compiled
+kernels on a larger load (``work()``, about 0.2 s of CPU each, the best of three), so that a
+change that compiles faster is seen not to run slower. The families, in the order a cold
+``rockdec estimate`` meets them:
 
 ``numba's start``
     a one-line kernel: numba's compiler and LLVM target, paid once by the first kernel of a process;
 ``simulation``
-    :func:`rockdec.physics.simulate.simulate_block` (the exact integrator, eqs. 21-24);
+    :func:`rockdec.physics.simulate.simulate_block` (the exact integrator, eqs. 21-24; its
+    work: :func:`rockdec.physics.simulate.integrate` over 4e6 steps);
 ``signatures``
     :func:`rockdec.rdd.signatures.trigger_sums` on float64 records (both triggers of eq. 19);
 ``analysis``
     :func:`rockdec.rdd.measured.analyse` with the kernels above already compiled: the
-    estimators of eqs. 25-27, ``e_v`` and ``g``;
+    estimators of eqs. 25-27, ``e_v`` and ``g`` (its work:
+    :func:`rockdec.rdd.estimators.window_estimates` on 3200 rows of signatures);
 ``record checks``
     :func:`rockdec.record.diagnostics.sums` (the checks of a measured record and of the
     calibration's sets; the record's model, :mod:`rockdec.record.record_measure`, is NumPy).
@@ -25,7 +29,8 @@ families, in the order a cold ``rockdec estimate`` meets them:
 Each later family runs after the earlier ones in its interpreter, the earlier ones compiled
 there but not counted, so a kernel two families share is counted once, in the first. With
 ``--before`` the same runs on a second source tree, the two trees alternating, so that both
-see the same load on a shared machine. Prints the middle run of ``--repeat`` (the later of two).
+see the same load on a shared machine, and the ratio of the compiled work of the two is
+printed. Prints the middle run of ``--repeat`` (the later of two).
 """
 
 from __future__ import annotations
@@ -95,22 +100,19 @@ for k, step in enumerate(steps[: target + 1]):
     if k == 1:
         y = out
     if k == target:
-        t = time.process_time()
-        step()
-        times = {"first": first, "second": time.process_time() - t}
         timed = work()[k]
         runs = []
         for _ in range(3):
             t = time.process_time()
             timed()
             runs.append(time.process_time() - t)
-        times["work"] = min(runs)
+        times = {"first": first, "work": min(runs)}
 print(json.dumps(times))
 """
 
 
 def family(index: int, src: str) -> dict:
-    """First and second call of family ``index`` in a fresh interpreter with an empty numba cache."""
+    """First call and compiled work of family ``index`` in a fresh interpreter with an empty numba cache."""
     with tempfile.TemporaryDirectory(prefix="rockdec_numba_") as cache:
         env = {**os.environ, "PYTHONPATH": src, "NUMBA_CACHE_DIR": cache, "NUMBA_NUM_THREADS": "1"}
         out = subprocess.run([sys.executable, "-c", CHILD, str(index)], env=env, capture_output=True, text=True, check=True)
@@ -128,6 +130,7 @@ def main() -> None:
         for label in (list(trees) if k % 2 == 0 else list(trees)[::-1]):
             for index, name in enumerate(FAMILIES):
                 firsts[label][name].append(family(index, trees[label]))
+
     def middle(label, name, key):
         runs = sorted(r[key] for r in firsts[label][name])
         return runs[len(runs) // 2]
@@ -143,6 +146,7 @@ def main() -> None:
     for label in trees:
         total = sum(middle(label, name, "first") for name in FAMILIES)
         print(f"{label}: numba's start {middle(label, FAMILIES[0], 'first'):.2f} s, {total:.2f} s of CPU compiling in all")
+
 
 if __name__ == "__main__":
     main()
