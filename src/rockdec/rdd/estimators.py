@@ -399,7 +399,7 @@ def _local_measures(h, code, values, codes, columns):
     values[columns[3]], codes[columns[3]] = _finite((t2 - t1) / t1)
 
 
-@_jit
+@_inline
 def _e_impact_slope(d, dt, fit_points):
     """``e_v`` (eq. 6): the ratio of the slopes of a ``D_v`` signature ``d`` after and before
     lag 0, ``(value, code)``.
