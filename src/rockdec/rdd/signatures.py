@@ -159,15 +159,15 @@ def _add_interpolated(seg, row, base, n_lag, sign, frac):
 
 
 @njit(nogil=True, cache=True)
-def _extremum_kernel(y, rows_to, level, edges, n_lag, both_signs, lo, hi, sums, counts, skipped):
+def _extremum_kernel(y, rows_to, level, edges, n_lag, both_signs, lo, hi, sums, counts, skipped, nan_before):
     """One pass of the extremum trigger over ``y[row, time]`` for all windows ``edges``.
 
-    Row ``r`` adds its segments, counts and skips into output row ``rows_to[r]``.
+    Row ``r`` adds its segments, counts and skips into output row ``rows_to[r]``;
+    ``nan_before`` (``time + 1`` int64) is scratch for each row's NaN counts (:func:`_nan_prefix`).
     """
     n_rows, n = y.shape
     widest = edges[edges.size - 1]
     reach = max(n_lag, 1)
-    nan_before = np.empty(n + 1, np.int64)
     for r in range(n_rows):
         row = y[r]
         out = rows_to[r]
@@ -198,14 +198,14 @@ def _extremum_kernel(y, rows_to, level, edges, n_lag, both_signs, lo, hi, sums, 
 
 
 @njit(nogil=True, cache=True)
-def _crossing_kernel(y, rows_to, velocity, edges, n_lag, inv_dt, both_signs, lo, hi, sums, counts, skipped):
+def _crossing_kernel(y, rows_to, velocity, edges, n_lag, inv_dt, both_signs, lo, hi, sums, counts, skipped, nan_before):
     """One pass of the zero-crossing trigger over ``y[row, time]`` for all windows ``edges``.
 
-    Row ``r`` adds its segments, counts and skips into output row ``rows_to[r]``.
+    Row ``r`` adds its segments, counts and skips into output row ``rows_to[r]``;
+    ``nan_before`` as in :func:`_extremum_kernel`.
     """
     n_rows, n = y.shape
     widest = edges[edges.size - 1]
-    nan_before = np.empty(n + 1, np.int64)
     for r in range(n_rows):
         row = y[r]
         out = rows_to[r]
@@ -275,12 +275,14 @@ def _run(trigger, y, target, half_widths, n_lag, dt, both_signs, owned, rows_to)
     sums = np.zeros((n_out, edges.size, 2 * n_lag + 1))
     counts = np.zeros((n_out, edges.size), np.int64)
     skipped = np.zeros((n_out, edges.size), np.int64)
+    nan_before = np.empty(n + 1, np.int64)  # allocated here: the kernels then compile no np.empty
     y = np.ascontiguousarray(y.reshape(rows, n), dtype=np.float64)  # one compiled type: float32 converts exactly
     if trigger == "a":
-        _extremum_kernel(y, rows_to, float(target), edges, n_lag, bool(both_signs), lo, hi, sums, counts, skipped)
+        _extremum_kernel(y, rows_to, float(target), edges, n_lag, bool(both_signs), lo, hi, sums, counts, skipped, nan_before)
     else:
         _crossing_kernel(
-            y, rows_to, float(target), edges, n_lag, 1.0 / float(dt), bool(both_signs), lo, hi, sums, counts, skipped
+            y, rows_to, float(target), edges, n_lag, 1.0 / float(dt), bool(both_signs), lo, hi, sums, counts, skipped,
+            nan_before,
         )
     return SignatureSums(
         sums.reshape(out_shape + sums.shape[1:]),
