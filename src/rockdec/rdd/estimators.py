@@ -157,7 +157,7 @@ def _as_estimate(value, code, fit_points=None) -> Estimate:
 # --------------------------------------------------------------------------- numba kernels
 
 _jit = njit(nogil=True, cache=True, error_model="numpy")  # IEEE results (inf, NaN), never raise
-_inline = njit(nogil=True, cache=True, error_model="numpy", inline="always")
+_inline = njit(nogil=True, cache=True, error_model="numpy", inline="always")  # typed into each caller: no compile of its own
 
 
 @_inline
@@ -233,7 +233,7 @@ def _slope(p, t):
 #: A slope within this many rounding units of the fitted values' scale over the fit's
 #: span is zero: a flat stretch fits to 0 or to +-1e-17, depending on the order of operations.
 FLAT_ULPS = 64.0
-_EPS = float(np.finfo(np.float64).eps)
+_EPS = float(np.finfo(np.float64).eps)  # a constant to the kernels: no np.finfo to compile
 
 
 @_inline
