@@ -66,7 +66,7 @@ def _record_sums(y, n_blocks):
     all above ``m`` (side 1) or all below (side 0), the count and the sum of the second
     difference ``y[k+1] - 2 y[k] + y[k-1]``, and the largest ``|y[k] - (y[k-1] + y[k+1])/2|``
     over non-NaN triples. Returns ``(c, block counts, block sums (2, n_blocks), side counts,
-    side sums, largest)``."""
+    side sums, largest)``, the side counts and sums as pairs (side 0, side 1)."""
     n = y.size
     c = 0.0
     for k in range(n):
@@ -99,7 +99,7 @@ def _record_sums(y, n_blocks):
         elif a < m and b < m and e < m:
             n0 += 1.0
             s0 += d2
-    return c, counts, blocks, np.array([n0, n1]), np.array([s0, s1]), 0.5 * worst
+    return c, counts, blocks, (n0, n1), (s0, s1), 0.5 * worst
 
 
 class Sums(NamedTuple):
