@@ -168,37 +168,40 @@ def _bounce_time(f1, e, k):
     return f1 * k
 
 
-@numba.njit(nogil=True, cache=True, inline="always")
-def _advance(theta, omega, dt, g, e, grid_impacts):
-    """One unloaded step: the exact :func:`flight`, or the grid-impact step of
-    :mod:`rockdec.physics.fixed_step` (what most public rocking codes do)."""
-    if grid_impacts:
-        return grid_step(theta, omega, dt, g, e)
-    return flight(theta, omega, dt, g, e)
-
-
-@numba.njit(nogil=True, cache=True)
 def integrate(impulses, dt, g, e, theta0, omega0, burn_in, theta_out, omega_out, grid_impacts=False):
     """Integrate one series (eqs. 21-24) and write the recorded part.
 
     ``impulses`` holds ``burn_in + n - 1`` velocity impulses (rad/s); the first ``burn_in``
     steps are discarded, then ``n = len(theta_out)`` samples are written, the first one
     being the state after the burn-in. ``grid_impacts`` swaps the exact flight for the
-    fixed-step integrator (:func:`rockdec.physics.fixed_step.step`).
+    fixed-step integrator (:func:`rockdec.physics.fixed_step.step`, what most public rocking
+    codes do). The scalars go to the kernel :func:`_integrate` as float64 and int64, so it
+    compiles once for each of the two steps.
     """
+    _integrate(impulses, float(dt), float(g), float(e), float(theta0), float(omega0), int(burn_in), theta_out, omega_out,
+               True if grid_impacts else None)
+
+
+@numba.njit(nogil=True, cache=True)
+def _integrate(impulses, dt, g, e, theta0, omega0, burn_in, theta_out, omega_out, grid):
+    """:func:`integrate`'s loop: one unloaded step and the impulse per step. ``grid`` None: the
+    exact :func:`flight`; True: the grid-impact step. None is a type of its own to numba, which
+    drops the other branch before typing it, so each choice compiles only its own step."""
     theta = theta0
     omega = omega0
-    n = theta_out.shape[0]
-    for i in range(burn_in):
-        theta, omega = _advance(theta, omega, dt, g, e, grid_impacts)
+    if burn_in == 0:
+        theta_out[0] = theta
+        omega_out[0] = omega
+    for i in range(burn_in + theta_out.shape[0] - 1):
+        if grid is None:
+            theta, omega = flight(theta, omega, dt, g, e)
+        else:
+            theta, omega = grid_step(theta, omega, dt, g, e)
         omega += impulses[i]
-    theta_out[0] = theta
-    omega_out[0] = omega
-    for j in range(1, n):
-        theta, omega = _advance(theta, omega, dt, g, e, grid_impacts)
-        omega += impulses[burn_in + j - 1]
-        theta_out[j] = theta
-        omega_out[j] = omega
+        j = i + 1 - burn_in  # the sample this step reaches; the burn-in's are not written
+        if j >= 0:
+            theta_out[j] = theta
+            omega_out[j] = omega
 
 
 def simulate_block(seeds, n_points, *, dt, g, e, sigma_p, theta0=0.0, theta_dot0=0.0, burn_in=0, grid_impacts=False, pole=0.0,

@@ -157,19 +157,21 @@ def _as_estimate(value, code, fit_points=None) -> Estimate:
 # --------------------------------------------------------------------------- numba kernels
 
 _jit = njit(nogil=True, cache=True, error_model="numpy")  # IEEE results (inf, NaN), never raise
+_inline = njit(nogil=True, cache=True, error_model="numpy", inline="always")  # typed into each caller: no compile of its own
 
 
-@_jit
+@_inline
 def _finite(value):
     """``(value, 0)``, or ``(NaN, not finite)`` when the arithmetic left the floating-point range."""
-    if np.isfinite(value):
+    if math.isfinite(value):
         return value, _OK
     return np.nan, _NOT_FINITE
 
 
 @_jit
-def _fit2(t, y):
-    """Least-squares parabola ``y = c0 + c1 (t - tc) + c2 (t - tc)^2`` through ``(t, y)``.
+def _fit2(k0, dt, y):
+    """Least-squares parabola ``y = c0 + c1 (t - tc) + c2 (t - tc)^2`` through the samples
+    ``y[j]`` at the times ``t_j = (k0 + j) dt`` (lag ``k0 + j``, ``k0`` an integer).
 
     Returns ``(tc, c0, c1, c2)``. Solved by the 3x3 normal equations in the scaled variable
     ``u = (t - tc)/h`` in ``[-1, 1]`` (``tc``, ``h`` the centre and half-range of ``t``,
@@ -177,12 +179,13 @@ def _fit2(t, y):
     does: well conditioned for the few points of each fit, and far cheaper than a general
     polynomial fit.
     """
-    n = t.size
-    tc = 0.5 * (t[0] + t[n - 1])
-    h = 0.5 * (t[n - 1] - t[0])
+    n = y.size
+    first, last = dt * k0, dt * (k0 + n - 1)
+    tc = 0.5 * (first + last)
+    h = 0.5 * (last - first)
     s1 = s2 = s3 = s4 = b0 = b1 = b2 = 0.0
     for j in range(n):
-        u = (t[j] - tc) / h
+        u = (dt * (k0 + j) - tc) / h
         u2 = u * u
         s1 += u
         s2 += u2
@@ -191,7 +194,10 @@ def _fit2(t, y):
         b0 += y[j]
         b1 += u * y[j]
         b2 += u2 * y[j]
-    a = np.array([[float(n), s1, s2, b0], [s1, s2, s3, b1], [s2, s3, s4, b2]])
+    a = np.empty((3, 4))  # the augmented normal equations [A | b]
+    a[0, 0], a[0, 1], a[0, 2], a[0, 3] = n, s1, s2, b0
+    a[1, 0], a[1, 1], a[1, 2], a[1, 3] = s1, s2, s3, b1
+    a[2, 0], a[2, 1], a[2, 2], a[2, 3] = s2, s3, s4, b2
     for col in range(3):  # LU with partial pivoting, the order of operations of LAPACK's gesv
         pivot = col
         for row in range(col + 1, 3):
@@ -213,13 +219,13 @@ def _fit2(t, y):
     return tc, a0, a1 / h, a2 / (h * h)
 
 
-@_jit
+@_inline
 def _value(p, t):
     u = t - p[0]
     return p[1] + u * (p[2] + u * p[3])
 
 
-@_jit
+@_inline
 def _slope(p, t):
     return p[2] + 2.0 * p[3] * (t - p[0])
 
@@ -227,18 +233,19 @@ def _slope(p, t):
 #: A slope within this many rounding units of the fitted values' scale over the fit's
 #: span is zero: a flat stretch fits to 0 or to +-1e-17, depending on the order of operations.
 FLAT_ULPS = 64.0
+_EPS = float(np.finfo(np.float64).eps)  # a constant to the kernels: no np.finfo to compile
 
 
-@_jit
+@_inline
 def _flat(slope, y, span):
     """Whether ``slope`` (rad/s) is zero to rounding, given values ``y`` fitted over ``span`` s."""
     scale = 0.0
     for k in range(y.size):
         scale = max(scale, abs(y[k]))
-    return abs(slope) * span <= FLAT_ULPS * np.finfo(np.float64).eps * scale
+    return abs(slope) * span <= FLAT_ULPS * _EPS * scale
 
 
-@_jit
+@_inline
 def _root_nearest(p, target):
     """``(found, t)``: the real root of parabola ``p`` nearest ``target``, computed without
     cancellation (``q = -(c1 + sign(c1) sqrt(disc))/2``, roots ``q/c2`` and ``c0/q``); a NaN
@@ -251,13 +258,13 @@ def _root_nearest(p, target):
     disc = c1 * c1 - 4.0 * c2 * c0
     if disc < 0.0:
         return False, np.nan
-    q = -0.5 * (c1 + math.copysign(np.sqrt(disc), c1))
+    q = -0.5 * (c1 + math.copysign(math.sqrt(disc), c1))
     first = tc + q / c2
     if q == 0.0:
         return True, first
     second = tc + c0 / q
     d0, d1 = abs(first - target), abs(second - target)
-    if not np.isnan(d0) and (np.isnan(d1) or d1 < d0):
+    if not math.isnan(d0) and (math.isnan(d1) or d1 < d0):
         return True, second
     return True, first
 
@@ -277,7 +284,7 @@ def _lobes(r):
     if r.size == 0:
         return _EMPTY, table[:0]
     for k in range(r.size):
-        if not np.isfinite(r[k]):
+        if not math.isfinite(r[k]):
             return _NAN, table[:0]
     if r[0] <= 0.0:
         return _R0_NOT_POSITIVE, table[:0]
@@ -305,7 +312,7 @@ def _lobes(r):
     return _OK, table[:n]
 
 
-@_jit
+@_inline
 def _e_global(r, code, lobes):
     """``e_g`` (eqs. 25, 7) from the lobes of ``r``: ``(value, code)``.
 
@@ -320,17 +327,17 @@ def _e_global(r, code, lobes):
     num = den = 0.0
     for j in range(n):
         i = j - 0.5 * (n - 1)  # centred index: the slope needs no intercept
-        num += i * (2.0 * np.log(abs(r[lobes[j, 2]])))
+        num += i * (2.0 * math.log(abs(r[lobes[j, 2]])))
         den += i * i
-    return _finite(np.exp(num / den / 4.0))
+    return _finite(math.exp(num / den / 4.0))
 
 
-@_jit
+@_inline
 def _e_first_peak(r, code, lobes):
     """``e_0 = sqrt(|r_1| / r_0)`` (eq. 26), the first two sampled extremes of ``r``: ``(value, code)``."""
     if code != _OK:
         return np.nan, code
-    return _finite(np.sqrt(abs(r[lobes[1, 2]]) / r[lobes[0, 2]]))
+    return _finite(math.sqrt(abs(r[lobes[1, 2]]) / r[lobes[0, 2]]))
 
 
 @_jit
@@ -344,34 +351,33 @@ def _half_cycle(r, dt, code, lobes):
     n_h = m + 1
     n8 = max(MIN_FIT_POINTS, n_h // 8)
     n4 = max(MIN_FIT_POINTS, n_h // 4)
-    a_start, b_start = 0, min(n8, end0)
+    a_start, b_start = lobes[0, 0], min(n8, end0)  # lobe 0 starts at lag 0 (r[0] > 0)
     a_before, b_before = max(0, end0 - n8), end0
     a_after, b_after = start1, min(start1 + n8, end1)
     a_min, b_min = max(start1, m - (n4 - 1) // 2), min(end1, m + n4 // 2 + 1)
     if min(b_start - a_start, b_before - a_before, b_after - a_after, b_min - a_min) < MIN_FIT_POINTS:
         return nan6, _FEW_POINTS
-    tau = dt * np.arange(r.size)
-    before = _fit2(tau[a_before:b_before], r[a_before:b_before])
-    found, t1 = _root_nearest(before, 0.5 * (tau[end0 - 1] + tau[start1]))
+    before = _fit2(a_before, dt, r[a_before:b_before])
+    found, t1 = _root_nearest(before, 0.5 * (dt * (end0 - 1) + dt * start1))
     if not found:
         return nan6, _NO_ROOT
     v1 = _slope(before, t1)
     if v1 == 0.0:
         return nan6, _TOUCHES_ZERO
-    minimum = _fit2(tau[a_min:b_min], r[a_min:b_min])
+    minimum = _fit2(a_min, dt, r[a_min:b_min])
     if not minimum[3] > 0.0:
         return nan6, _NO_MINIMUM
     t2 = minimum[0] - minimum[2] / (2.0 * minimum[3])
-    c1 = _value(_fit2(tau[a_start:b_start], r[a_start:b_start]), 0.0)
+    c1 = _value(_fit2(a_start, dt, r[a_start:b_start]), 0.0)
     if not c1 > 0.0:
         return nan6, _C1_NOT_POSITIVE
     if not 0.0 < t1 < t2:
         return nan6, _T1_OUTSIDE
-    v2 = _slope(_fit2(tau[a_after:b_after], r[a_after:b_after]), t1)
+    v2 = _slope(_fit2(a_after, dt, r[a_after:b_after]), t1)
     return (c1, t1, v1, v2, t2, _value(minimum, t2)), _OK
 
 
-@_jit
+@_inline
 def _local_measures(h, code, values, codes, columns):
     """``e1..e4`` of eq. 27 from the half-cycle features ``h`` into ``values[columns[k]]``,
     ``codes[columns[k]]`` (``columns``: the columns of ``e1..e4``).
@@ -387,13 +393,13 @@ def _local_measures(h, code, values, codes, columns):
         return
     c1, t1, v1, v2, t2, c2 = h
     ratio = abs(c2) / c1
-    values[columns[0]], codes[columns[0]] = _finite(np.sqrt(ratio))
+    values[columns[0]], codes[columns[0]] = _finite(math.sqrt(ratio))
     values[columns[1]], codes[columns[1]] = _finite(v2 / v1)
     values[columns[2]], codes[columns[2]] = _finite(ratio * t1 / (t2 - t1))
     values[columns[3]], codes[columns[3]] = _finite((t2 - t1) / t1)
 
 
-@_jit
+@_inline
 def _e_impact_slope(d, dt, fit_points):
     """``e_v`` (eq. 6): the ratio of the slopes of a ``D_v`` signature ``d`` after and before
     lag 0, ``(value, code)``.
@@ -407,15 +413,15 @@ def _e_impact_slope(d, dt, fit_points):
     if d.size % 2 == 0:
         return np.nan, _EVEN_LENGTH
     for k in range(d.size):
-        if not np.isfinite(d[k]):
+        if not math.isfinite(d[k]):
             return np.nan, _NAN
     lag0 = d.size // 2
     if lag0 < fit_points:
         return np.nan, _FEW_LAGS
-    tau = dt * np.arange(1, fit_points + 1)
-    before = _slope(_fit2(-tau[::-1], d[lag0 - fit_points : lag0]), 0.0)
-    after = _slope(_fit2(tau, d[lag0 + 1 : lag0 + 1 + fit_points]), 0.0)
-    if _flat(before, d[lag0 - fit_points : lag0], tau[-1]):
+    lo, hi = lag0 - fit_points, lag0 + 1  # the first sample of each side's fit
+    before = _slope(_fit2(lo - lag0, dt, d[lo:lag0]), 0.0)
+    after = _slope(_fit2(hi - lag0, dt, d[hi : hi + fit_points]), 0.0)
+    if _flat(before, d[lo:lag0], dt * fit_points):
         return np.nan, _ZERO_SLOPE
     return _finite(after / before)
 

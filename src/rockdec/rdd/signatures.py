@@ -120,7 +120,7 @@ class SignatureSums(NamedTuple):
 # --------------------------------------------------------------------------- kernels
 
 
-@njit(nogil=True, cache=True)
+@njit(nogil=True, cache=True, inline="always")
 def _nan_prefix(row, out):
     """``out[j]`` = number of NaN among ``row[:j]``."""
     out[0] = 0
@@ -128,7 +128,7 @@ def _nan_prefix(row, out):
         out[j + 1] = out[j] + (1 if np.isnan(row[j]) else 0)
 
 
-@njit(nogil=True, cache=True)
+@njit(nogil=True, cache=True, inline="always")
 def _close_windows(sums, counts, skipped):
     """Per-bin accumulators of one output row -> cumulative over the nested windows."""
     for w in range(1, counts.size):
@@ -138,30 +138,42 @@ def _close_windows(sums, counts, skipped):
             sums[w, k] += sums[w - 1, k]
 
 
-@njit(nogil=True, cache=True)
-def _add_interpolated(seg, row, base, k0, k1, sign, frac):
-    """``seg[k] += sign * y(t_base + (k + frac) dt)`` for ``k0 <= k < k1``, linear interpolation."""
-    for k in range(k0, k1):
-        left = np.float64(row[base + k])
-        seg[k] += sign * (left + frac * (np.float64(row[base + k + 1]) - left))
+@njit(nogil=True, cache=True, inline="always")
+def _window(edges, dist):
+    """The smallest window ``w`` with ``dist <= edges[w]`` (``np.searchsorted``; ``dist`` at most
+    ``edges[-1]``): a scan, as short as the few windows."""
+    w = 0
+    while edges[w] < dist:
+        w += 1
+    return w
+
+
+@njit(nogil=True, cache=True, inline="always")
+def _add_interpolated(seg, row, base, n_lag, sign, frac):
+    """``seg[k] += sign * y(t_base + (k + frac) dt)`` for every ``k`` of ``0..2 n_lag`` but lag 0
+    (``k = n_lag``, the chord root, where the interpolant is 0), linear interpolation."""
+    for k in range(2 * n_lag + 1):
+        if k != n_lag:
+            left = row[base + k]
+            seg[k] += sign * (left + frac * (row[base + k + 1] - left))
 
 
 @njit(nogil=True, cache=True)
-def _extremum_kernel(y, rows_to, level, edges, n_lag, both_signs, lo, hi, sums, counts, skipped):
+def _extremum_kernel(y, rows_to, level, edges, n_lag, both_signs, lo, hi, sums, counts, skipped, nan_before):
     """One pass of the extremum trigger over ``y[row, time]`` for all windows ``edges``.
 
-    Row ``r`` adds its segments, counts and skips into output row ``rows_to[r]``.
+    Row ``r`` adds its segments, counts and skips into output row ``rows_to[r]``;
+    ``nan_before`` (``time + 1`` int64) is scratch for each row's NaN counts (:func:`_nan_prefix`).
     """
     n_rows, n = y.shape
     widest = edges[edges.size - 1]
     reach = max(n_lag, 1)
-    nan_before = np.empty(n + 1, np.int64)
     for r in range(n_rows):
         row = y[r]
         out = rows_to[r]
         _nan_prefix(row, nan_before)
         for i in range(max(lo, reach), min(hi, n - reach)):
-            y0 = np.float64(row[i])
+            y0 = row[i]
             above = abs(y0 - level)  # level test first: cheap, and rarely passed
             below = abs(y0 + level)
             if above <= widest and row[i - 1] < row[i] and row[i] >= row[i + 1]:
@@ -172,7 +184,7 @@ def _extremum_kernel(y, rows_to, level, edges, n_lag, both_signs, lo, hi, sums, 
                 dist = below
             else:
                 continue
-            w = np.searchsorted(edges, dist)  # smallest window holding the trigger
+            w = _window(edges, dist)  # smallest window holding the trigger
             if nan_before[i + n_lag + 1] != nan_before[i - n_lag]:
                 skipped[out, w] += 1
                 continue
@@ -186,21 +198,21 @@ def _extremum_kernel(y, rows_to, level, edges, n_lag, both_signs, lo, hi, sums, 
 
 
 @njit(nogil=True, cache=True)
-def _crossing_kernel(y, rows_to, velocity, edges, n_lag, inv_dt, both_signs, lo, hi, sums, counts, skipped):
+def _crossing_kernel(y, rows_to, velocity, edges, n_lag, inv_dt, both_signs, lo, hi, sums, counts, skipped, nan_before):
     """One pass of the zero-crossing trigger over ``y[row, time]`` for all windows ``edges``.
 
-    Row ``r`` adds its segments, counts and skips into output row ``rows_to[r]``.
+    Row ``r`` adds its segments, counts and skips into output row ``rows_to[r]``;
+    ``nan_before`` as in :func:`_extremum_kernel`.
     """
     n_rows, n = y.shape
     widest = edges[edges.size - 1]
-    nan_before = np.empty(n + 1, np.int64)
     for r in range(n_rows):
         row = y[r]
         out = rows_to[r]
         _nan_prefix(row, nan_before)
         for i in range(max(lo, n_lag, 2), min(hi, n - n_lag - 1)):
-            y0 = np.float64(row[i])
-            y1 = np.float64(row[i + 1])
+            y0 = row[i]
+            y1 = row[i + 1]
             if y0 < 0.0 and y1 >= 0.0:
                 sign = 1.0
             elif both_signs and y0 > 0.0 and y1 <= 0.0:
@@ -208,23 +220,21 @@ def _crossing_kernel(y, rows_to, velocity, edges, n_lag, inv_dt, both_signs, lo,
             else:
                 continue
             frac = y0 / (y0 - y1)  # chord root: crossing at t_i + frac dt
-            ym1 = np.float64(row[i - 1])
-            ym2 = np.float64(row[i - 2])
+            ym1 = row[i - 1]
+            ym2 = row[i - 2]
             # derivative at frac of the parabola through the samples i-2, i-1, i
             slope = 0.5 * (3.0 * y0 - 4.0 * ym1 + ym2) + (y0 - 2.0 * ym1 + ym2) * frac
             dist = abs(sign * slope * inv_dt - velocity)
             if not dist <= widest:
                 continue
-            w = np.searchsorted(edges, dist)
+            w = _window(edges, dist)
             if nan_before[i + n_lag + 2] != nan_before[i - n_lag]:
                 skipped[out, w] += 1
                 continue
             counts[out, w] += 1
             seg = sums[out, w]
             base = i - n_lag
-            # lag 0 is the chord root, where the interpolant is 0: left out, stays exactly 0
-            _add_interpolated(seg, row, base, 0, n_lag, sign, frac)
-            _add_interpolated(seg, row, base, n_lag + 1, 2 * n_lag + 1, sign, frac)
+            _add_interpolated(seg, row, base, n_lag, sign, frac)  # lag 0 stays exactly 0
     for out in range(sums.shape[0]):
         _close_windows(sums[out], counts[out], skipped[out])
 
@@ -238,8 +248,6 @@ def _run(trigger, y, target, half_widths, n_lag, dt, both_signs, owned, rows_to)
     y = np.asarray(y)
     if y.ndim == 0:
         raise ValueError("the record must have a time axis (the last axis)")
-    if y.dtype not in (np.float32, np.float64):
-        y = y.astype(np.float64)
     edges = np.atleast_1d(np.asarray(half_widths, dtype=np.float64))
     if edges.ndim != 1 or edges.size == 0 or not np.all(np.isfinite(edges) & (edges >= 0)) or np.any(np.diff(edges) < 0):
         raise checks.InputError(
@@ -267,12 +275,14 @@ def _run(trigger, y, target, half_widths, n_lag, dt, both_signs, owned, rows_to)
     sums = np.zeros((n_out, edges.size, 2 * n_lag + 1))
     counts = np.zeros((n_out, edges.size), np.int64)
     skipped = np.zeros((n_out, edges.size), np.int64)
-    y = np.ascontiguousarray(y.reshape(rows, n))
+    nan_before = np.empty(n + 1, np.int64)  # allocated here: the kernels then compile no np.empty
+    y = np.ascontiguousarray(y.reshape(rows, n), dtype=np.float64)  # one compiled type: float32 converts exactly
     if trigger == "a":
-        _extremum_kernel(y, rows_to, float(target), edges, n_lag, bool(both_signs), lo, hi, sums, counts, skipped)
+        _extremum_kernel(y, rows_to, float(target), edges, n_lag, bool(both_signs), lo, hi, sums, counts, skipped, nan_before)
     else:
         _crossing_kernel(
-            y, rows_to, float(target), edges, n_lag, 1.0 / float(dt), bool(both_signs), lo, hi, sums, counts, skipped
+            y, rows_to, float(target), edges, n_lag, 1.0 / float(dt), bool(both_signs), lo, hi, sums, counts, skipped,
+            nan_before,
         )
     return SignatureSums(
         sums.reshape(out_shape + sums.shape[1:]),

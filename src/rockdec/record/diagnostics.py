@@ -80,14 +80,15 @@ def _record_sums(y, n_blocks):
     all above ``m`` (side 1) or all below (side 0), the count and the sum of the second
     difference ``y[k+1] - 2 y[k] + y[k-1]``, and the largest ``|y[k] - (y[k-1] + y[k+1])/2|``
     over non-NaN triples. Returns ``(c, block counts, block sums (2, n_blocks), side counts,
-    side sums, largest)``."""
+    side sums, largest)``, the side counts and sums as pairs (side 0, side 1)."""
     n = y.size
     c = 0.0
     for k in range(n):
         if y[k] == y[k]:
             c = y[k]
             break
-    counts, blocks = np.zeros(n_blocks), np.zeros((2, n_blocks))
+    counts, blocks = np.empty(n_blocks), np.empty((2, n_blocks))
+    total, shift = 0.0, 0.0  # sums of the counts and of the blocks' sums of d, in block order
     for j in range(n_blocks):
         q, t1, t2 = 0, 0.0, 0.0
         for k in range(j * n // n_blocks, (j + 1) * n // n_blocks):
@@ -97,8 +98,9 @@ def _record_sums(y, n_blocks):
                 t1 += d
                 t2 += d * d
         counts[j], blocks[0, j], blocks[1, j] = q, t1, t2
-    total = counts.sum()
-    m = c + blocks[0].sum() / total if total else c
+        total += q
+        shift += t1
+    m = c + shift / total if total else c
     worst, n0, n1, s0, s1 = 0.0, 0.0, 0.0, 0.0, 0.0  # scalars: array elements here cost 6 times more
     for k in range(1, n - 1):
         a, b, e = y[k - 1], y[k], y[k + 1]
@@ -111,7 +113,7 @@ def _record_sums(y, n_blocks):
         elif a < m and b < m and e < m:
             n0 += 1.0
             s0 += d2
-    return c, counts, blocks, np.array([n0, n1]), np.array([s0, s1]), 0.5 * worst
+    return c, counts, blocks, (n0, n1), (s0, s1), 0.5 * worst
 
 
 class Sums(NamedTuple):
