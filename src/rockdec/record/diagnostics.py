@@ -72,15 +72,17 @@ FLOOR_E = 0.95
 
 
 @njit(nogil=True, cache=True)
-def _record_sums(y, n_blocks):
+def _record_sums(y, n_blocks, distance):
     """One record's sums in two passes. First, per block of ``n_blocks`` consecutive equal
     blocks (by sample index), the count of non-NaN samples and the sums of ``d`` and ``d^2``,
     ``d = y - c`` with ``c`` the first non-NaN sample (a shift that keeps the variances
     accurate). Then, about the record's mean ``m``, over triples ``y[k-1], y[k], y[k+1]``
     all above ``m`` (side 1) or all below (side 0), the count and the sum of the second
     difference ``y[k+1] - 2 y[k] + y[k-1]``, and the largest ``|y[k] - (y[k-1] + y[k+1])/2|``
-    over non-NaN triples. Returns ``(c, block counts, block sums (2, n_blocks), side counts,
-    side sums, largest)``, the side counts and sums as pairs (side 0, side 1)."""
+    over non-NaN triples; the finite ``|y[k+1] - 2 y[k] + y[k-1]|`` go to the front of
+    ``distance`` (``n - 2`` floats, scratch). Returns ``(c, block counts, block sums
+    (2, n_blocks), side counts, side sums, largest, number of distances written)``, the side
+    counts and sums as pairs (side 0, side 1)."""
     n = y.size
     c = 0.0
     for k in range(n):
@@ -102,18 +104,22 @@ def _record_sums(y, n_blocks):
         shift += t1
     m = c + shift / total if total else c
     worst, n0, n1, s0, s1 = 0.0, 0.0, 0.0, 0.0, 0.0  # scalars: array elements here cost 6 times more
+    written = 0
     for k in range(1, n - 1):
         a, b, e = y[k - 1], y[k], y[k + 1]
         d2 = e - 2.0 * b + a
         if abs(d2) > worst:  # NaN compares False
             worst = abs(d2)
+        if abs(d2) < np.inf:  # finite: NaN compares False
+            distance[written] = abs(d2)
+            written += 1
         if a > m and b > m and e > m:
             n1 += 1.0
             s1 += d2
         elif a < m and b < m and e < m:
             n0 += 1.0
             s0 += d2
-    return c, counts, blocks, (n0, n1), (s0, s1), 0.5 * worst
+    return c, counts, blocks, (n0, n1), (s0, s1), 0.5 * worst, written
 
 
 class Sums(NamedTuple):
@@ -135,12 +141,10 @@ class Sums(NamedTuple):
     off: float
 
 
-def _spike_ratio(y: np.ndarray, largest: float) -> float:
-    """``largest`` (the largest ``|y[k] - (y[k-1] + y[k+1]) / 2|`` of record ``y``) over the
-    :data:`SPIKE_REFERENCE` quantile of those distances over the triples without a NaN; NaN
-    when there is none or the quantile is 0."""
-    distance = np.abs(y[2:] - 2.0 * y[1:-1] + y[:-2])
-    distance = distance[np.isfinite(distance)]
+def _spike_ratio(distance: np.ndarray, largest: float) -> float:
+    """``largest`` (the largest ``|y[k] - (y[k-1] + y[k+1]) / 2|`` of a record) over the
+    :data:`SPIKE_REFERENCE` quantile of those distances, ``distance`` holding twice each one
+    of its finite triples (:func:`_record_sums`); NaN when there is none or the quantile is 0."""
     if not distance.size:
         return np.nan
     k = min(int(SPIKE_REFERENCE * distance.size), distance.size - 1)
@@ -157,8 +161,9 @@ def sums(records) -> Sums:
     for i, y in enumerate(records):
         y = np.ascontiguousarray(y, dtype=np.float64)
         b = min(BLOCKS, y.size // BLOCK_MIN)
-        _, bn, (b1, b2), rn, rs, worst = _record_sums(y, max(b, 1))
-        count, off = count + int(bn.sum()), np.fmax(off, _spike_ratio(y, worst))
+        distance = np.empty(max(y.size - 2, 0))  # allocated here: the kernel then compiles no np.empty
+        _, bn, (b1, b2), rn, rs, worst, written = _record_sums(y, max(b, 1), distance)
+        count, off = count + int(bn.sum()), np.fmax(off, _spike_ratio(distance[:written], worst))
         side_n, side_s = side_n + rn, side_s + rs
         if b >= 4 and (bn > 1).all():
             means.append(b1 / bn)
