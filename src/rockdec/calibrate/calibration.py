@@ -467,6 +467,13 @@ class _Countdown:
         log.info(f"calibrating: {self.points} values of e done in {time.perf_counter() - self.start:.0f} s")
 
 
+def grid_tasks(cal_settings: dict, base: int) -> list:
+    """One Dask task per ``e`` of the settings' grid, :func:`_grid_point` from seed ``base``."""
+    import dask
+
+    return [dask.delayed(_grid_point)(j, e, cal_settings, base) for j, e in enumerate(cal_settings["e_grid"])]
+
+
 def build(cal_settings: dict) -> xr.Dataset:
     """Simulate and analyse the calibration records; ``raw(e_true, set, name)`` and
     ``diagnostic(e_true, set, check)``.
@@ -474,15 +481,13 @@ def build(cal_settings: dict) -> xr.Dataset:
     Grid points run as Dask tasks on the engine of :mod:`rockdec.pipeline.engine` (threads by
     default); the simulation and signature kernels release the GIL.
     """
-    import dask
     import xarray as xr
 
     log.info(
         f"calibrating: simulating {cal_settings['sets_per_e']} record sets of {sum(cal_settings['lengths'])} samples at each of "
         f"{len(cal_settings['e_grid'])} values of e like the measured records (once; stored for every record with the same settings)"
     )
-    base = seed_base(cal_settings)
-    tasks = [dask.delayed(_grid_point)(j, e, cal_settings, base) for j, e in enumerate(cal_settings["e_grid"])]
+    tasks = grid_tasks(cal_settings, seed_base(cal_settings))
     with _Countdown(tasks):
         points = engine.compute(*tasks)
     values = np.stack([raw for raw, _ in points])

@@ -1,7 +1,7 @@
 """Does the belt's interval hold at every ``e``? A test bed made of calibration record sets.
 
 A calibration's record sets are records of known ``e`` analysed exactly like a measured
-record (:func:`rockdec.calibrate.calibration._grid_point`), so calibrations built with identical
+record (:func:`rockdec.calibrate.calibration.grid_tasks`), so calibrations built with identical
 settings but different seed bases are independent samples of the same distribution: one
 serves as the belt, the sets of the others as test records, at the calibration's grid and
 at any other ``e`` (:func:`pool` draws sets on any grid of ``e``). The coverage of the 95 %
@@ -36,12 +36,9 @@ def pool(e_values, sets: int, n_points: int, points_per_cycle: float = 75.0, rep
     (``replica = 0``: the seeds of the calibration of these settings,
     :func:`rockdec.calibrate.calibration.seed_base`); ``raw(e_true, set, name)`` as
     :func:`rockdec.calibrate.calibration.build` stores it."""
-    import dask
-
     settings = {**calibration.calibration_settings([n_points], points_per_cycle), "e_grid": [float(e) for e in e_values], "sets_per_e": int(sets)}
     base = calibration.CALIBRATION_SEED_OFFSET + replica * SEED_STRIDE if replica else calibration.seed_base(settings)
-    tasks = [dask.delayed(calibration._grid_point)(j, e, settings, base) for j, e in enumerate(settings["e_grid"])]
-    values = np.stack([raw for raw, _ in engine.compute(*tasks)])  # _grid_point: (raw, the checks' statistics)
+    values = np.stack([raw for raw, _ in engine.compute(*calibration.grid_tasks(settings, base))])  # (raw, the checks' statistics)
     return xr.Dataset(
         {"raw": (("e_true", "set", "name"), values, {"units": "1", "long_name": "zero-window estimate on a simulated record set (g in units of the true g)"})},
         coords={"e_true": ("e_true", np.asarray(settings["e_grid"])), "set": ("set", np.arange(sets)), "name": ("name", list(calibration.NAMES))},
