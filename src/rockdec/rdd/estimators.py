@@ -351,7 +351,7 @@ def _half_cycle(r, dt, code, lobes):
     n_h = m + 1
     n8 = max(MIN_FIT_POINTS, n_h // 8)
     n4 = max(MIN_FIT_POINTS, n_h // 4)
-    a_start, b_start = lobes[0, 0], min(n8, end0)  # lobe 0 starts at lag 0 (r[0] > 0)
+    a_start, b_start = lobes[0, 0], min(n8, end0)  # lag 0, where lobe 0 starts (r[0] > 0); a literal 0 would compile _fit2 again
     a_before, b_before = max(0, end0 - n8), end0
     a_after, b_after = start1, min(start1 + n8, end1)
     a_min, b_min = max(start1, m - (n4 - 1) // 2), min(end1, m + n4 // 2 + 1)
