@@ -112,3 +112,33 @@ def test_coordinates_are_written_without_fill_values(tmp_path):
     with xr.open_dataset(path) as back:
         assert "_FillValue" not in back["x"].encoding and "_FillValue" not in back["label"].encoding
         assert np.isnan(back["y"].encoding["_FillValue"])  # data variables keep NaN as missing
+
+
+def test_a_lock_is_never_seen_without_its_owner_while_runs_claim_it(tmp_path):
+    """Another run that reads the lock at any moment finds a live owner in it, never an empty
+    file it would take for a stale lock and take over."""
+    import threading
+
+    path = tmp_path / "out.nc"
+    lock = path.with_name(f".{path.name}.lock")
+    seen, done = [], threading.Event()
+
+    def read():
+        while not done.is_set():
+            try:
+                seen.append(lock.read_text())
+            except FileNotFoundError:
+                pass
+
+    reader = threading.Thread(target=read)
+    reader.start()
+    try:
+        for _ in range(300):
+            with io.claimed(path):
+                pass
+    finally:
+        done.set()
+        reader.join()
+    assert seen, "the reader never saw the lock"
+    assert set(seen) == {f"{__import__('os').getpid()}\n"}
+    assert sorted(p.name for p in tmp_path.iterdir()) == [], "a claim left a file behind"

@@ -206,27 +206,54 @@ def _live_owner(lock: Path) -> int | None:
     return pid
 
 
+#: What ``os.link`` raises on a file system that keeps no hard links.
+_NO_HARD_LINKS = (errno.EPERM, errno.ENOTSUP, errno.EOPNOTSUPP, errno.EXDEV, errno.EMLINK)
+
+
+def _place(mine: Path, lock: Path, owner: str) -> None:
+    """Give ``lock`` the content of ``mine`` at once (a hard link); on a file system without
+    hard links, create it exclusively and write ``owner`` into it. Raises
+    :class:`FileExistsError` if ``lock`` exists."""
+    try:
+        os.link(mine, lock)
+    except FileExistsError:
+        raise
+    except OSError as exc:
+        if exc.errno not in _NO_HARD_LINKS:
+            raise
+        fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+        os.write(fd, owner.encode())
+        os.close(fd)
+
+
 @contextlib.contextmanager
 def _claim(path: Path):
-    """Hold the lock file of ``path`` (created with ``O_EXCL``) while writing it.
+    """Hold the lock file of ``path`` while writing it.
 
-    A lock left by a run that was killed (its process is gone) is taken over, and that
-    run's temporary files are removed.
+    The lock appears with its owner's process id already in it (:func:`_place`: the id is
+    written to a file of this claim's own and hard-linked to the lock's name, which fails if
+    the lock exists), so no other run reads an empty lock and takes it for a stale one. A lock
+    left by a run that was killed (its process is gone) is taken over, and that run's
+    temporary files are removed.
     """
     lock = _lock_path(path)
-    for attempt in range(2):
-        try:
-            fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
-            break
-        except FileExistsError:
-            if attempt or _live_owner(lock) is not None:
-                raise _busy(path) from None
-            for stale in path.parent.glob(f".{path.name}.*.partial*"):
-                stale.unlink(missing_ok=True)
-            lock.unlink(missing_ok=True)
+    owner = f"{os.getpid()}\n"
+    mine = _new_partial(lock)
+    mine.write_text(owner)
     try:
-        os.write(fd, f"{os.getpid()}\n".encode())
-        os.close(fd)
+        for attempt in range(2):
+            try:
+                _place(mine, lock, owner)
+                break
+            except FileExistsError:
+                if attempt or _live_owner(lock) is not None:
+                    raise _busy(path) from None
+                for stale in path.parent.glob(f".{path.name}.*.partial*"):
+                    stale.unlink(missing_ok=True)
+                lock.unlink(missing_ok=True)
+    finally:
+        mine.unlink(missing_ok=True)
+    try:
         yield
     finally:
         lock.unlink(missing_ok=True)
@@ -318,7 +345,7 @@ def _place_new(tmp: Path, path: Path) -> None:
     except FileExistsError:
         raise appeared from None
     except OSError as exc:
-        if exc.errno not in (errno.EPERM, errno.ENOTSUP, errno.EOPNOTSUPP, errno.EXDEV, errno.EMLINK):
+        if exc.errno not in _NO_HARD_LINKS:
             raise
         if path.exists() or path.is_symlink():
             raise appeared from None
