@@ -40,12 +40,15 @@ class Forks:
     """The Snakemake runs of this test process, each a child forked by one process that has
     imported Snakemake (tests/snakemake_forks.py), started at the first run: a run then
     costs what Snakemake does, not its ~1 s of imports; a shell's ``snakemake`` commands
-    too (:meth:`shell`). ``cpu``: the CPU seconds of every run so far (the children are the
-    fork server's, not this process's)."""
+    too (:meth:`shell`). With ``python``, the ``python -c`` scripts of this process instead
+    (:meth:`script`, :meth:`start_script`), forked by one that has imported the rockdec
+    command's libraries. ``cpu``: the CPU seconds of every run so far and of the server's
+    start-up (the children are the fork server's, not this process's)."""
 
     SERVER = Path(__file__).with_name("snakemake_forks.py")
 
-    def __init__(self):
+    def __init__(self, python: bool = False):
+        self.python = python
         self.proc = None
         self.cpu = 0.0
         self.folder = None  # the server's socket, and bin/snakemake that a shell finds (:meth:`shell`)
@@ -53,14 +56,17 @@ class Forks:
     def _ask(self, request: dict, timeout: float) -> dict:
         """One request to the fork server (started at the first), its answer within ``timeout`` s."""
         if self.proc is None or self.proc.poll() is not None:
-            self.folder = Path(tempfile.mkdtemp(prefix="snakemake-forks-"))
-            socket = self.folder / "socket"
-            (self.folder / "bin").mkdir()
-            script = self.folder / "bin" / "snakemake"
-            script.write_text(f'#!/bin/sh\nexec "{sys.executable}" "{self.SERVER}" --client "{socket}" "$@"\n')
-            script.chmod(0o755)
-            self.proc = subprocess.Popen([sys.executable, str(self.SERVER), str(socket)], stdin=subprocess.PIPE,
-                                         stdout=subprocess.PIPE, text=True)
+            if self.python:
+                command = [sys.executable, str(self.SERVER), "--python"]
+            else:
+                self.folder = Path(tempfile.mkdtemp(prefix="snakemake-forks-"))
+                socket = self.folder / "socket"
+                (self.folder / "bin").mkdir()
+                script = self.folder / "bin" / "snakemake"
+                script.write_text(f'#!/bin/sh\nexec "{sys.executable}" "{self.SERVER}" --client "{socket}" "$@"\n')
+                script.chmod(0o755)
+                command = [sys.executable, str(self.SERVER), str(socket)]
+            self.proc = subprocess.Popen(command, stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
         self.proc.stdin.write(json.dumps(request) + "\n")
         self.proc.stdin.flush()
         ready, _, _ = select.select([self.proc.stdout], [], [], timeout)
@@ -100,18 +106,36 @@ class Forks:
         process group of its own (with its jobs), its output discarded."""
         return Forked(self, self._ask(self._request(workdir, args, env, os.devnull, os.devnull, background=True), 60.0)["pid"])
 
+    def script(self, script: str, *args, timeout: float = 300.0) -> tuple[int, str, str]:
+        """``python -c script *args`` in this process's folder and environment (a server
+        made with ``python``): exit code, standard output and standard error."""
+        with tempfile.TemporaryDirectory() as folder:
+            out, err = Path(folder) / "out", Path(folder) / "err"
+            reply = self._ask({**self._request(os.getcwd(), [script, *args], None, out, err, background=False), "python": True}, timeout)
+            return reply["code"], out.read_text(), err.read_text()
+
+    def start_script(self, script: str, *args, output: Path) -> "Forked":
+        """``python -c script *args`` as :meth:`script` does, in the background; its standard
+        output and error in ``output``.out and ``output``.err (:meth:`Forked.communicate`)."""
+        out, err = output.with_suffix(".out"), output.with_suffix(".err")
+        reply = self._ask({**self._request(os.getcwd(), [script, *args], None, out, err, background=True), "python": True}, 60.0)
+        return Forked(self, reply["pid"], out, err)
+
     def close(self):
         if self.proc is not None:
             self.proc.stdin.close()
             self.proc.wait(timeout=60)
-            shutil.rmtree(self.folder, ignore_errors=True)
+            if self.folder is not None:
+                shutil.rmtree(self.folder, ignore_errors=True)
 
 
 class Forked:
-    """A Snakemake run started by :meth:`Forks.start`: what a test reads of a ``Popen``."""
+    """A run started by :meth:`Forks.start` or :meth:`Forks.start_script`: what a test reads
+    of a ``Popen``."""
 
-    def __init__(self, forks: Forks, pid: int):
+    def __init__(self, forks: Forks, pid: int, out: Path | None = None, err: Path | None = None):
         self.forks, self.pid, self.returncode = forks, pid, None
+        self.out, self.err = out, err
 
     def wait(self, timeout: float | None = None) -> int:
         """Its exit code (minus the signal that ended it), waiting up to ``timeout`` s."""
@@ -129,12 +153,21 @@ class Forked:
         except subprocess.TimeoutExpired:
             return None
 
+    def communicate(self, timeout: float | None = None) -> tuple[str, str]:
+        """Its standard output and error (:meth:`Forks.start_script`), once it has ended."""
+        self.wait(timeout)
+        return self.out.read_text(), self.err.read_text()
+
 
 FORKS = Forks()
+
+PYTHON_FORKS = Forks(python=True)
+"""The ``python -c`` scripts of the tests whose subject is a second process (test_hostile.py)."""
 
 
 def pytest_sessionfinish(session):
     FORKS.close()
+    PYTHON_FORKS.close()
     SCHEDULER.close()
 
 
@@ -298,10 +331,10 @@ def pytest_addoption(parser):
 
 
 def _cpu_seconds() -> float:
-    """User + system CPU of this process, of its waited-for children and of its Snakemake
-    runs (:class:`Forks`), in s."""
+    """User + system CPU of this process, of its waited-for children and of its forked runs
+    (:class:`Forks`, with the fork servers' start-up), in s."""
     own, children = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
-    return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime + FORKS.cpu
+    return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime + FORKS.cpu + PYTHON_FORKS.cpu
 
 
 @pytest.hookimpl(hookwrapper=True)
