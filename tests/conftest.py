@@ -162,7 +162,7 @@ class Forked:
 FORKS = Forks()
 
 PYTHON_FORKS = Forks(python=True)
-"""The ``python -c`` scripts of the tests whose subject is a second process (test_hostile.py)."""
+"""The ``python -c`` scripts of the tests whose subject is a second process (:data:`SCRIPT_MODULES`)."""
 
 
 def pytest_sessionfinish(session):
@@ -268,11 +268,18 @@ WORKFLOW_MODULES = (
     "tests/pipeline/test_config.py",
 )
 
+#: The test modules one worker runs, in this order: those that fork scripts from
+#: :data:`PYTHON_FORKS` (one server, about 1.3 s of CPU to start).
+SCRIPT_MODULES = (
+    "tests/test_hostile.py",
+    "tests/pipeline/test_in_snakemake.py",
+)
+
 #: The modules whose tests cost the most CPU (``--cpu-durations``), costliest first; the
 #: other modules follow in their collection order.
 COSTLIEST_FIRST = (
     *WORKFLOW_MODULES,
-    "tests/test_hostile.py",
+    *SCRIPT_MODULES,
     "tests/calibrate/test_estimate.py",
     "tests/studies/test_coverage.py",
     "tests/test_cli.py",
@@ -303,9 +310,9 @@ def pytest_collection_modifyitems(config, items):
 @pytest.hookimpl(optionalhook=True)
 def pytest_xdist_make_scheduler(config, log):
     """With pytest-xdist (``-n``, pyproject.toml): a worker runs every test of a module, so
-    each module-scoped fixture is built once, and one worker runs :data:`WORKFLOW_MODULES`;
-    modules are handed out in collection order (:func:`pytest_collection_modifyitems`), not
-    by their number of tests."""
+    each module-scoped fixture is built once, one worker runs :data:`WORKFLOW_MODULES` and
+    one :data:`SCRIPT_MODULES`; modules are handed out in collection order
+    (:func:`pytest_collection_modifyitems`), not by their number of tests."""
     from xdist.scheduler import LoadFileScheduling
 
     config.option.loadscopereorder = False
@@ -313,7 +320,10 @@ def pytest_xdist_make_scheduler(config, log):
     class ByModule(LoadFileScheduling):
         def _split_scope(self, nodeid: str) -> str:
             module = super()._split_scope(nodeid)
-            return WORKFLOW_MODULES[0] if module in WORKFLOW_MODULES else module
+            for group in (WORKFLOW_MODULES, SCRIPT_MODULES):
+                if module in group:
+                    return group[0]
+            return module
 
     return ByModule(config, log)
 
