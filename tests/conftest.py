@@ -42,8 +42,8 @@ class Forks:
     costs what Snakemake does, not its ~1 s of imports; a shell's ``snakemake`` commands
     too (:meth:`shell`). With ``python``, the ``python -c`` scripts of this process instead
     (:meth:`script`, :meth:`start_script`), forked by one that has imported the rockdec
-    command's libraries. ``cpu``: the CPU seconds of every run so far and of the server's
-    start-up (the children are the fork server's, not this process's)."""
+    command's libraries. ``cpu``: the CPU seconds of every run so far and of the server
+    itself (start-up, preloads; the children are the fork server's, not this process's)."""
 
     SERVER = Path(__file__).with_name("snakemake_forks.py")
 
@@ -342,7 +342,7 @@ def pytest_addoption(parser):
 
 def _cpu_seconds() -> float:
     """User + system CPU of this process, of its waited-for children and of its forked runs
-    (:class:`Forks`, with the fork servers' start-up), in s."""
+    (:class:`Forks`, with the fork servers' own), in s."""
     own, children = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
     return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime + FORKS.cpu + PYTHON_FORKS.cpu
 

@@ -21,7 +21,8 @@ user + system seconds of the child and of every process it waited for (its jobs)
 ``background``, ``{"pid"}`` at once, the child the leader of a process group of its own.
 Then ``{"wait": pid, "timeout"}`` in, :func:`ended` out. ``{"collect": true}`` in:
 ``{"cpu"}`` out, the CPU of the runs asked for on the socket since the last answer on
-standard output. The first answer's ``cpu`` also holds the server's own start-up.
+standard output. Every answer's ``cpu`` also holds the server's own CPU since the last
+answer (its start-up, :func:`preload`).
 
 The socket (``python snakemake_forks.py SOCKET``): a command a shell runs
 (``snakemake ARGS`` with ``PATH`` leading to a script that runs ``python snakemake_forks.py
@@ -154,9 +155,11 @@ def serve(socket_path: str | None = None, python: bool = False) -> None:
     import selectors
     import socket
 
-    load_python() if python else load_snakemake()
-    own = resource.getrusage(resource.RUSAGE_SELF)
-    start_up = own.ru_utime + own.ru_stime  # reported with the first answer
+    if python:
+        load_python()
+    else:
+        load_snakemake()
+    reported = 0.0  # the server's own CPU reported so far (start-up, preload)
     events = selectors.DefaultSelector()
     events.register(sys.stdin, selectors.EVENT_READ)
     if socket_path:
@@ -179,7 +182,9 @@ def serve(socket_path: str | None = None, python: bool = False) -> None:
                 else:
                     pid = fork(request)
                     reply = {"pid": pid} if request["background"] else ended(pid, float("inf"))
-                reply["cpu"], start_up = (reply.get("cpu") or 0.0) + start_up, 0.0
+                own = resource.getrusage(resource.RUSAGE_SELF)
+                reply["cpu"] = (reply.get("cpu") or 0.0) + own.ru_utime + own.ru_stime - reported
+                reported = own.ru_utime + own.ru_stime
                 print(json.dumps(reply), flush=True)
             else:
                 connection, _ = listener.accept()
