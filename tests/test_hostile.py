@@ -251,10 +251,10 @@ def test_concurrent_runs_on_one_output_refuse_and_on_two_do_not_interfere(tmp_pa
     proc = PYTHON_FORKS.start_script(WRITER, out, go, output=tmp_path.parent / f"{tmp_path.name}-writer")  # a second process
     try:
         lock = tmp_path / ".a.nc.lock"
-        end = time.time() + 60
-        while not lock.exists() and time.time() < end:
+        end = time.time() + 60  # claimed: the lock holds the writer's pid (io._claim creates it, then writes the pid)
+        while not (lock.exists() and lock.read_text().strip()) and time.time() < end:
             time.sleep(0.01)
-        assert lock.exists(), "the first writer never claimed its output"
+        assert lock.exists() and lock.read_text().strip() == str(proc.pid), "the first writer never claimed its output"
         ds = xr.Dataset({"y": ("i", np.ones(10))})
         with pytest.raises(io.OutputError, match="being written by another run"):
             io.write_netcdf(ds, out)
