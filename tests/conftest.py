@@ -40,12 +40,15 @@ class Forks:
     """The Snakemake runs of this test process, each a child forked by one process that has
     imported Snakemake (tests/snakemake_forks.py), started at the first run: a run then
     costs what Snakemake does, not its ~1 s of imports; a shell's ``snakemake`` commands
-    too (:meth:`shell`). ``cpu``: the CPU seconds of every run so far (the children are the
-    fork server's, not this process's)."""
+    too (:meth:`shell`). With ``python``, the ``python -c`` scripts of this process instead
+    (:meth:`script`, :meth:`start_script`), forked by one that has imported the rockdec
+    command's libraries. ``cpu``: the CPU seconds of every run so far and of the server
+    itself (start-up, preloads; the children are the fork server's, not this process's)."""
 
     SERVER = Path(__file__).with_name("snakemake_forks.py")
 
-    def __init__(self):
+    def __init__(self, python: bool = False):
+        self.python = python
         self.proc = None
         self.cpu = 0.0
         self.folder = None  # the server's socket, and bin/snakemake that a shell finds (:meth:`shell`)
@@ -53,14 +56,17 @@ class Forks:
     def _ask(self, request: dict, timeout: float) -> dict:
         """One request to the fork server (started at the first), its answer within ``timeout`` s."""
         if self.proc is None or self.proc.poll() is not None:
-            self.folder = Path(tempfile.mkdtemp(prefix="snakemake-forks-"))
-            socket = self.folder / "socket"
-            (self.folder / "bin").mkdir()
-            script = self.folder / "bin" / "snakemake"
-            script.write_text(f'#!/bin/sh\nexec "{sys.executable}" "{self.SERVER}" --client "{socket}" "$@"\n')
-            script.chmod(0o755)
-            self.proc = subprocess.Popen([sys.executable, str(self.SERVER), str(socket)], stdin=subprocess.PIPE,
-                                         stdout=subprocess.PIPE, text=True)
+            if self.python:
+                command = [sys.executable, str(self.SERVER), "--python"]
+            else:
+                self.folder = Path(tempfile.mkdtemp(prefix="snakemake-forks-"))
+                socket = self.folder / "socket"
+                (self.folder / "bin").mkdir()
+                script = self.folder / "bin" / "snakemake"
+                script.write_text(f'#!/bin/sh\nexec "{sys.executable}" "{self.SERVER}" --client "{socket}" "$@"\n')
+                script.chmod(0o755)
+                command = [sys.executable, str(self.SERVER), str(socket)]
+            self.proc = subprocess.Popen(command, stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
         self.proc.stdin.write(json.dumps(request) + "\n")
         self.proc.stdin.flush()
         ready, _, _ = select.select([self.proc.stdout], [], [], timeout)
@@ -100,18 +106,36 @@ class Forks:
         process group of its own (with its jobs), its output discarded."""
         return Forked(self, self._ask(self._request(workdir, args, env, os.devnull, os.devnull, background=True), 60.0)["pid"])
 
+    def script(self, script: str, *args, timeout: float = 300.0) -> tuple[int, str, str]:
+        """``python -c script *args`` in this process's folder and environment (a server
+        made with ``python``): exit code, standard output and standard error."""
+        with tempfile.TemporaryDirectory() as folder:
+            out, err = Path(folder) / "out", Path(folder) / "err"
+            reply = self._ask({**self._request(os.getcwd(), [script, *args], None, out, err, background=False), "python": True}, timeout)
+            return reply["code"], out.read_text(), err.read_text()
+
+    def start_script(self, script: str, *args, output: Path) -> "Forked":
+        """``python -c script *args`` as :meth:`script` does, in the background; its standard
+        output and error in ``output``.out and ``output``.err (:meth:`Forked.communicate`)."""
+        out, err = output.with_suffix(".out"), output.with_suffix(".err")
+        reply = self._ask({**self._request(os.getcwd(), [script, *args], None, out, err, background=True), "python": True}, 60.0)
+        return Forked(self, reply["pid"], out, err)
+
     def close(self):
         if self.proc is not None:
             self.proc.stdin.close()
             self.proc.wait(timeout=60)
-            shutil.rmtree(self.folder, ignore_errors=True)
+            if self.folder is not None:
+                shutil.rmtree(self.folder, ignore_errors=True)
 
 
 class Forked:
-    """A Snakemake run started by :meth:`Forks.start`: what a test reads of a ``Popen``."""
+    """A run started by :meth:`Forks.start` or :meth:`Forks.start_script`: what a test reads
+    of a ``Popen``."""
 
-    def __init__(self, forks: Forks, pid: int):
+    def __init__(self, forks: Forks, pid: int, out: Path | None = None, err: Path | None = None):
         self.forks, self.pid, self.returncode = forks, pid, None
+        self.out, self.err = out, err
 
     def wait(self, timeout: float | None = None) -> int:
         """Its exit code (minus the signal that ended it), waiting up to ``timeout`` s."""
@@ -129,12 +153,21 @@ class Forked:
         except subprocess.TimeoutExpired:
             return None
 
+    def communicate(self, timeout: float | None = None) -> tuple[str, str]:
+        """Its standard output and error (:meth:`Forks.start_script`), once it has ended."""
+        self.wait(timeout)
+        return self.out.read_text(), self.err.read_text()
+
 
 FORKS = Forks()
+
+PYTHON_FORKS = Forks(python=True)
+"""The ``python -c`` scripts of the tests whose subject is a second process (:data:`SCRIPT_MODULES`)."""
 
 
 def pytest_sessionfinish(session):
     FORKS.close()
+    PYTHON_FORKS.close()
     SCHEDULER.close()
 
 
@@ -235,14 +268,31 @@ WORKFLOW_MODULES = (
     "tests/pipeline/test_config.py",
 )
 
+#: The test modules one worker runs, in this order: those that fork scripts from
+#: :data:`PYTHON_FORKS` (one server, about 1.3 s of CPU to start).
+SCRIPT_MODULES = (
+    "tests/test_hostile.py",
+    "tests/pipeline/test_in_snakemake.py",
+)
+
 #: The modules whose tests cost the most CPU (``--cpu-durations``), costliest first; the
-#: other modules follow in their collection order.
+#: other modules (under 2 s each) follow in their collection order.
 COSTLIEST_FIRST = (
     *WORKFLOW_MODULES,
-    "tests/test_hostile.py",
+    *SCRIPT_MODULES,
     "tests/calibrate/test_estimate.py",
     "tests/studies/test_coverage.py",
     "tests/test_cli.py",
+    "tests/report/test_figures.py",
+    "tests/rdd/test_signatures.py",
+    "tests/physics/test_housner.py",
+    "tests/calibrate/test_estimate_model.py",
+    "tests/physics/test_load_spectrum.py",
+    "tests/pipeline/test_replicates.py",
+    "tests/test_io.py",
+    "tests/physics/test_simulate.py",
+    "tests/physics/test_record_model.py",
+    "tests/record/test_diagnostics.py",
 )
 
 
@@ -270,9 +320,9 @@ def pytest_collection_modifyitems(config, items):
 @pytest.hookimpl(optionalhook=True)
 def pytest_xdist_make_scheduler(config, log):
     """With pytest-xdist (``-n``, pyproject.toml): a worker runs every test of a module, so
-    each module-scoped fixture is built once, and one worker runs :data:`WORKFLOW_MODULES`;
-    modules are handed out in collection order (:func:`pytest_collection_modifyitems`), not
-    by their number of tests."""
+    each module-scoped fixture is built once, one worker runs :data:`WORKFLOW_MODULES` and
+    one :data:`SCRIPT_MODULES`; modules are handed out in collection order
+    (:func:`pytest_collection_modifyitems`), not by their number of tests."""
     from xdist.scheduler import LoadFileScheduling
 
     config.option.loadscopereorder = False
@@ -280,7 +330,10 @@ def pytest_xdist_make_scheduler(config, log):
     class ByModule(LoadFileScheduling):
         def _split_scope(self, nodeid: str) -> str:
             module = super()._split_scope(nodeid)
-            return WORKFLOW_MODULES[0] if module in WORKFLOW_MODULES else module
+            for group in (WORKFLOW_MODULES, SCRIPT_MODULES):
+                if module in group:
+                    return group[0]
+            return module
 
     return ByModule(config, log)
 
@@ -298,10 +351,10 @@ def pytest_addoption(parser):
 
 
 def _cpu_seconds() -> float:
-    """User + system CPU of this process, of its waited-for children and of its Snakemake
-    runs (:class:`Forks`), in s."""
+    """User + system CPU of this process, of its waited-for children and of its forked runs
+    (:class:`Forks`, with the fork servers' own), in s."""
     own, children = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
-    return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime + FORKS.cpu
+    return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime + FORKS.cpu + PYTHON_FORKS.cpu
 
 
 @pytest.hookimpl(hookwrapper=True)

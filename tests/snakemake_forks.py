@@ -1,4 +1,6 @@
-"""A process that has imported Snakemake and forks one child per Snakemake run.
+"""A process that has imported Snakemake and forks one child per Snakemake run; with
+``--python``, one that has imported the rockdec command's libraries and forks one child per
+``python -c SCRIPT ARGS``.
 
 Started by tests/conftest.py (:class:`Forks`), once per test process: each ``python -m
 snakemake`` a test runs costs about 1 s of CPU in imports before Snakemake reads the
@@ -6,16 +8,21 @@ Snakefile, and most runs of the tests are dry runs of a second. A forked child s
 those imports done and then is what ``python -m snakemake ARGS`` in the folder is: its
 working directory first on ``sys.path`` (so the rules' ``find_spec("rockdec....")`` finds a
 package copied there), the caller's environment, ``sys.argv``, its standard output and
-error in files. rockdec is never imported here, so each child imports it afresh, from
-wherever its ``sys.path`` finds it; the third-party libraries its rules import are (:func:`preload`).
+error in files. rockdec is never imported by the Snakemake server, so each child imports it
+afresh, from wherever its ``sys.path`` finds it; the third-party libraries its rules import
+are (:func:`preload`). The ``--python`` server (:func:`load_python`) is for the tests whose
+subject is a second process (a lock between two runs, a file-size limit): a ``python -c``
+script that runs the rockdec command pays about 2 s of CPU in imports before it computes.
 
 Protocol, one JSON line each way per request, on standard input and output. A run:
-``{"cwd", "args", "env", "out", "err", "background"}`` in; out ``{"code", "cpu"}`` when it
-ends, ``cpu`` the user + system seconds of the child and of every process it waited for (its
-jobs) -- or, with ``background``, ``{"pid"}`` at once, the child the leader of a process
-group of its own. Then ``{"wait": pid, "timeout"}`` in, :func:`ended` out. ``{"collect":
-true}`` in: ``{"cpu"}`` out, the CPU of the runs asked for on the socket since the last
-answer on standard output.
+``{"cwd", "args", "env", "out", "err", "background"}`` in (and ``"python": true`` for a
+script, ``args`` its text and arguments); out ``{"code", "cpu"}`` when it ends, ``cpu`` the
+user + system seconds of the child and of every process it waited for (its jobs) -- or, with
+``background``, ``{"pid"}`` at once, the child the leader of a process group of its own.
+Then ``{"wait": pid, "timeout"}`` in, :func:`ended` out. ``{"collect": true}`` in:
+``{"cpu"}`` out, the CPU of the runs asked for on the socket since the last answer on
+standard output. Every answer's ``cpu`` also holds the server's own CPU since the last
+answer (its start-up, :func:`preload`).
 
 The socket (``python snakemake_forks.py SOCKET``): a command a shell runs
 (``snakemake ARGS`` with ``PATH`` leading to a script that runs ``python snakemake_forks.py
@@ -26,6 +33,7 @@ its code, as ``snakemake ARGS`` would.
 
 import json
 import os
+import resource
 import sys
 import time
 
@@ -59,23 +67,45 @@ def preload() -> None:
     import xarray  # noqa: F401
 
 
-def child(request: dict) -> None:
-    """Become ``python -m snakemake ARGS`` in ``cwd``; never returns."""
-    import snakemake.cli
+def load_python() -> None:
+    """The imports a ``python -c`` script of the tests pays before the rockdec command
+    computes: NumPy, xarray, Dask, netCDF4, numba and rockdec's command and its numerical
+    modules (rockdec from the server's ``sys.path``: the tests' scripts run the installed
+    package). None starts a thread on import (fork-safe)."""
+    import dask.array  # noqa: F401
+    import netCDF4  # noqa: F401
+    import numba  # noqa: F401
+    import xarray  # noqa: F401
 
+    import rockdec.calibrate.inference  # noqa: F401
+    import rockdec.cli  # noqa: F401
+    import rockdec.io  # noqa: F401
+    import rockdec.physics.simulate  # noqa: F401
+
+
+def child(request: dict) -> None:
+    """Become ``python -m snakemake ARGS`` in ``cwd`` (``python -c ARGS[0] ARGS[1:]`` for a
+    request with ``"python"``); never returns."""
     code = 1
     try:
         os.chdir(request["cwd"])
         os.environ.clear()
         os.environ.update(request["env"])
         sys.path[0] = request["cwd"]
-        sys.argv = [snakemake.cli.__file__, *request["args"]]
         for fd, path in ((1, request["out"]), (2, request["err"])):
             target = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o644)
             os.dup2(target, fd)
             os.close(target)
         try:
-            snakemake.cli.main(request["args"])
+            if request.get("python"):
+                script, *args = request["args"]
+                sys.argv = ["-c", *args]
+                exec(compile(script, "<string>", "exec"), {"__name__": "__main__"})
+            else:
+                import snakemake.cli
+
+                sys.argv = [snakemake.cli.__file__, *request["args"]]
+                snakemake.cli.main(request["args"])
             code = 0
         except SystemExit as exc:
             code = exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
@@ -108,7 +138,7 @@ def ended(pid: int, timeout: float) -> dict:
 def fork(request: dict) -> int:
     """A child forked for the run ``request`` (:func:`child`), the libraries of the rules loaded
     first unless it runs none (:func:`preload`); its process id."""
-    if not NO_RULES & set(request["args"]):
+    if not request.get("python") and not NO_RULES & set(request["args"]):
         preload()
     pid = os.fork()
     if pid == 0:
@@ -118,13 +148,18 @@ def fork(request: dict) -> int:
     return pid
 
 
-def serve(socket_path: str | None = None) -> None:
+def serve(socket_path: str | None = None, python: bool = False) -> None:
     """Answer the requests on standard input, and those on ``socket_path`` if given, until
-    standard input closes."""
+    standard input closes; Snakemake's imports loaded first, or with ``python`` those of
+    :func:`load_python`."""
     import selectors
     import socket
 
-    load_snakemake()
+    if python:
+        load_python()
+    else:
+        load_snakemake()
+    reported = 0.0  # the server's own CPU reported so far (start-up, preload)
     events = selectors.DefaultSelector()
     events.register(sys.stdin, selectors.EVENT_READ)
     if socket_path:
@@ -147,6 +182,9 @@ def serve(socket_path: str | None = None) -> None:
                 else:
                     pid = fork(request)
                     reply = {"pid": pid} if request["background"] else ended(pid, float("inf"))
+                own = resource.getrusage(resource.RUSAGE_SELF)
+                reply["cpu"] = (reply.get("cpu") or 0.0) + own.ru_utime + own.ru_stime - reported
+                reported = own.ru_utime + own.ru_stime
                 print(json.dumps(reply), flush=True)
             else:
                 connection, _ = listener.accept()
@@ -181,5 +219,7 @@ def client(socket_path: str, args: list[str]) -> None:
 if __name__ == "__main__":
     if sys.argv[1:2] == ["--client"]:
         client(sys.argv[2], sys.argv[3:])
+    elif sys.argv[1:2] == ["--python"]:
+        serve(python=True)
     else:
         serve(*sys.argv[1:2])

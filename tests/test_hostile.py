@@ -28,6 +28,8 @@ from rockdec import io
 from rockdec import validate as checks
 from rockdec.cli import main
 
+from conftest import PYTHON_FORKS
+
 ROOT = Path(__file__).resolve().parents[1]
 #: A fast simulate call: an explicit step and no burn-in skip the calibration.
 FAST = ["--dt", "0.0034", "--burn-in", "0", "--seeds", "0", "--n-points", "50"]
@@ -246,13 +248,13 @@ io.write_netcdf(xr.Dataset({"x": ("i", x)}), sys.argv[1])
 @hostile("concurrency", "refused")
 def test_concurrent_runs_on_one_output_refuse_and_on_two_do_not_interfere(tmp_path):
     out, other, go = tmp_path / "a.nc", tmp_path / "b.nc", tmp_path / "go"
-    proc = subprocess.Popen([sys.executable, "-c", WRITER, str(out), str(go)], stderr=subprocess.PIPE, text=True)
+    proc = PYTHON_FORKS.start_script(WRITER, out, go, output=tmp_path.parent / f"{tmp_path.name}-writer")  # a second process
     try:
         lock = tmp_path / ".a.nc.lock"
-        end = time.time() + 60
-        while not lock.exists() and time.time() < end:
+        end = time.time() + 60  # claimed: the lock holds the writer's pid (io._claim creates it, then writes the pid)
+        while not (lock.exists() and lock.read_text().strip()) and time.time() < end:
             time.sleep(0.01)
-        assert lock.exists(), "the first writer never claimed its output"
+        assert lock.exists() and lock.read_text().strip() == str(proc.pid), "the first writer never claimed its output"
         ds = xr.Dataset({"y": ("i", np.ones(10))})
         with pytest.raises(io.OutputError, match="being written by another run"):
             io.write_netcdf(ds, out)
@@ -266,7 +268,7 @@ def test_concurrent_runs_on_one_output_refuse_and_on_two_do_not_interfere(tmp_pa
         assert len(partials) == 1  # the first run's own temporary file survived the refused writes
     finally:
         go.touch()
-        assert proc.wait(timeout=120) == 0, proc.stderr.read()
+        assert proc.wait(timeout=120) == 0, proc.communicate()[1]
     with xr.open_dataset(out) as a, xr.open_dataset(other) as b:
         assert a["x"].values.tolist() == list(range(1000)) and b["y"].values.tolist() == [1.0] * 10
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.nc", "b.nc", "go"]
@@ -770,9 +772,9 @@ def test_a_file_size_limit_is_one_sentence(tmp_path):
         "from rockdec.cli import main; "
         f"sys.exit(main(['simulate', '--out', {str(tmp_path / 'o.nc')!r}, '--dt', '0.0034', '--burn-in', '0', '--seeds', '0-9', '--n-points', '20000']))"
     )
-    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=300)
-    assert proc.returncode == 2, proc.stderr
-    assert "ulimit -f" in proc.stderr and "internal error" not in proc.stderr
+    code, _, err = PYTHON_FORKS.script(script)  # a process of its own, with its own limit
+    assert code == 2, err
+    assert "ulimit -f" in err and "internal error" not in err
     assert list(tmp_path.iterdir()) == []
 
 
@@ -1046,8 +1048,7 @@ sys.exit(main(["estimate", sys.argv[1], "--json", "--cache", sys.argv[2]]))
 def test_two_concurrent_estimates_on_one_record_build_one_calibration(rocking, tmp_path):
     """Issue 19: two processes, same settings; the second waits for the first's build."""
     cache = tmp_path / "cache"
-    procs = [subprocess.Popen([sys.executable, "-c", ESTIMATE_PROCESS, str(rocking["csv"]), str(cache)],
-                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True) for _ in range(2)]
+    procs = [PYTHON_FORKS.start_script(ESTIMATE_PROCESS, rocking["csv"], cache, output=tmp_path / f"process-{i}") for i in range(2)]
     outs = [p.communicate(timeout=300) for p in procs]
     assert [p.returncode for p in procs] == [0, 0], [err for _, err in outs]
     results = [json.loads(out) for out, _ in outs]

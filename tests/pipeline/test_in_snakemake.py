@@ -17,6 +17,8 @@ from rockdec.physics import run
 from rockdec.physics.simulate import simulate_block
 from rockdec.validate import InputError
 
+from conftest import PYTHON_FORKS
+
 SCENE = config.validate_scene(
     {
         "excitation": {"dt": 0.0034, "burn_in": 2000},
@@ -86,7 +88,8 @@ for thread in threading.enumerate():
         thread.join()
 print(before, [name for name in in_snakemake.PRELOAD if name not in sys.modules])
 """
-    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=120, check=True).stdout
+    code, out, err = PYTHON_FORKS.script(probe, timeout=120)  # a process whose libraries load none of them
+    assert code == 0, err
     assert out.split() == ["[]", "[]"]  # none loaded before, all loaded after
 
 

@@ -190,19 +190,20 @@ def test_a_nested_config_override_is_read_as_yaml_values(workflow):
 @pytest.mark.slow
 @pytest.mark.parametrize("scheduler", ["processes:2", pytest.param("tcp", marks=pytest.mark.dask_scheduler)])
 def test_the_tiny_scene_on_worker_processes_gives_the_products_of_threads(workflow, tmp_path, scheduler, monkeypatch, request):
-    """Rule ``signatures`` (the pass over the stored series on the Dask engine the variable
-    names) rerun in a copy of the threads' build makes the threads' products. The rules after
-    it read these files without Dask; the series written on each engine: test_engine.py."""
+    """Rules ``signatures`` (the pass over the stored series on the Dask engine the variable
+    names) and ``stored_series`` rerun in a copy of the threads' build, with the estimates of
+    both readings after them, make the threads' products. The series written on each engine
+    (rule ``series``): test_engine.py."""
     root = tmp_path / "copy"
     shutil.copytree(workflow["root"], root, symlinks=True)  # threads' products, mtimes kept
-    products = ["signatures.nc", "readings.nc"]
+    products = ["stored_series.nc", "signatures.nc", "readings.nc", "estimates.nc", "estimates_readings.nc"]
     targets = [f"results/{SCENE}/{name}" for name in products]
     if scheduler == "tcp":  # the session's running scheduler on loopback, given by its address (tests/conftest.py)
         scheduler = request.getfixturevalue("dask_scheduler")
     monkeypatch.setenv("ROCKDEC_DASK_SCHEDULER", scheduler)  # the snakemake process inherits it
-    code, out = snakemake(root, "--forcerun", "signatures", "--", *targets)
+    code, out = snakemake(root, "--forcerun", "signatures", "stored_series", "--", *targets)
     assert code == 0, out
-    assert job_stats(out) == {"signatures": 1}, out
+    assert job_stats(out) == {"stored_series": 1, "signatures": 1, "estimates": 1, "table_readings": 1}, out
     for name in products:
         with xr.open_dataset(root / "results" / SCENE / name) as got, \
                 xr.open_dataset(workflow["root"] / "results" / SCENE / name) as want:

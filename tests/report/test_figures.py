@@ -181,6 +181,13 @@ def drawn(fig: Figure) -> Figure:
     return fig
 
 
+@pytest.fixture(scope="module")
+def rendered(products) -> dict[str, Figure]:
+    """fig3, fig4 and fig_ev of :func:`products` rendered once (:func:`drawn`), for the
+    tests that only read their layout."""
+    return {name: drawn(draw(name, products)) for name in ("fig3", "fig4", "fig_ev")}
+
+
 @pytest.mark.parametrize("name", figures.FIGURES)
 def test_no_figure_carries_a_title_naming_the_papers_figure(name, products):
     fig = draw(name, products)
@@ -189,8 +196,8 @@ def test_no_figure_carries_a_title_naming_the_papers_figure(name, products):
 
 
 @pytest.mark.parametrize("name", ["fig3", "fig4", "fig_ev"])
-def test_legends_sit_below_the_axes_off_the_data_each_entry_once(name, products):
-    fig = drawn(draw(name, products))
+def test_legends_sit_below_the_axes_off_the_data_each_entry_once(name, rendered):
+    fig = rendered[name]
     assert not any(ax.get_legend() for ax in fig.axes) and len(fig.legends) == 1
     box = fig.legends[0].get_window_extent()
     assert all(box.y1 <= ax.get_window_extent().y0 + 1 for ax in fig.axes)
@@ -200,8 +207,8 @@ def test_legends_sit_below_the_axes_off_the_data_each_entry_once(name, products)
 
 
 @pytest.mark.parametrize("name", ["fig3", "fig4", "fig_ev"])
-def test_the_target_line_stays_clear_of_the_frame(name, products):
-    fig = drawn(draw(name, products))
+def test_the_target_line_stays_clear_of_the_frame(name, rendered):
+    fig = rendered[name]
     for ax in fig.axes:
         for line in ax.lines:
             if line.get_label().startswith("target"):
