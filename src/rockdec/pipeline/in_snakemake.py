@@ -2,15 +2,17 @@
 signature pass, the stored series and their signature, the tables and the figures.
 
 ``calibrate`` (a second of pilot simulations), ``stored_series``, ``stored_signature``,
-``estimates``, ``table_readings`` and the paper's figure rules take a fraction of a second
-to a few seconds each once NumPy, numba, xarray and matplotlib are loaded, so they are
-``run:`` rules calling :func:`calibrate` and :func:`step` (the workflow's default profile
-runs those in threads of the Snakemake process, ``force-use-threads``) and load those
-libraries once a run instead of starting Python for each. The signature pass
-(:func:`signatures`, rules ``signatures`` and ``signature_part``) runs there too, on the
-Dask threads of its rule's ``threads``: it finds the simulator's kernels and the pass's
-modules loaded by :func:`calibrate`, where a script would start Python and load them again
-on the run's longest path. The other compute rules stay scripts (:mod:`rockdec.pipeline.job`).
+``estimates`` and ``table_readings`` take a fraction of a second to a few seconds each once
+NumPy, numba and xarray are loaded, so they are ``run:`` rules calling :func:`calibrate`
+and :func:`step` (the workflow's default profile runs those in threads of the Snakemake
+process, ``force-use-threads``) and load those libraries once a run instead of starting
+Python for each. The signature pass (:func:`signatures`, rules ``signatures`` and
+``signature_part``) runs there too, on the Dask threads of its rule's ``threads``: it finds
+the simulator's kernels and the pass's modules loaded by :func:`calibrate`, where a script
+would start Python and load them again on the run's longest path. The paper's figure rules
+are ``run:`` rules too, calling :func:`draw`, which hands each figure to one of two worker
+processes that load matplotlib once a run (:mod:`rockdec.pipeline.figure_workers`). The
+other compute rules stay scripts (:mod:`rockdec.pipeline.job`).
 A rule's code input names the modules its function reaches (:func:`rockdec.sources.package_sources`
 of those modules, beside this file), not this module's, so that editing a figure never
 reruns the pass.
@@ -37,7 +39,7 @@ from rockdec.validate import InputError
 #: does: the tables' code, xarray's groupby engine (flox, numpy_groupies) and the
 #: p-values' scipy.stats. :func:`calibrate` imports them in a thread of their own once the
 #: run contract is written, while the signature pass starts Python (one core idle), instead
-#: of on the path after the pass, where the tables and figures run one at a time.
+#: of on the path after the pass, where the tables run one at a time.
 PRELOAD = ("rockdec.pipeline.replicates", "rockdec.report.tables", "flox", "scipy.stats")
 
 #: Set by SIGTERM or SIGINT once :func:`stop_on_signals` ran: the signature pass stops.
@@ -79,8 +81,8 @@ def _check_stop(*_) -> None:
         raise Stopped("stopped by a signal before the pass ended; nothing written")
 
 
-#: One :func:`step` at a time in a process: matplotlib (its fonts) and the HDF5 library
-#: under netCDF4 are not safe to use from two threads at once.
+#: One :func:`step` at a time in a process: the HDF5 library under netCDF4 is not safe to
+#: use from two threads at once.
 _STEP_LOCK = threading.Lock()
 
 
@@ -102,6 +104,16 @@ def step(rule: str, log: str, *args) -> None:
 
     with _STEP_LOCK:
         _logged(rule, log, work)
+
+
+def draw(rule: str, log: str, *args) -> None:
+    """Run figure rule ``rule`` as the :mod:`rockdec.pipeline.steps` function of that name, on
+    ``*args``, in a worker process (:mod:`rockdec.pipeline.figure_workers`): the figure's
+    Python holds no GIL of the Snakemake process, and two figures draw at once. Logged as
+    :func:`step` logs; it takes no :data:`_STEP_LOCK`."""
+    from rockdec.pipeline import figure_workers
+
+    _logged(rule, log, lambda: figure_workers.draw(rule, *args))
 
 
 def signatures(rule: str, log: str, inputs, outputs, records: dict, settings: dict, first_replicate: int, threads: int) -> None:
@@ -163,8 +175,7 @@ def calibrate(log: str, physics: dict, output: str) -> None:
     and ``excitation`` sections; :func:`rockdec.physics.run.calibrate`) written to ``output``
     (``run.json``), logged as :func:`step` logs, with the contract on a line of its own.
 
-    Pilot simulations and a JSON file: neither matplotlib nor HDF5, so it takes no
-    :data:`_STEP_LOCK` and a figure that needs no data (fig. 1b) draws meanwhile. Then the
+    Pilot simulations and a JSON file: no HDF5, so it takes no :data:`_STEP_LOCK`. Then the
     modules of :data:`PRELOAD` load beside the signature pass.
     """
 
