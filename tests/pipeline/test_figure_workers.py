@@ -28,8 +28,7 @@ def test_a_figure_drawn_by_a_worker_is_the_figure_drawn_here_byte_for_byte_and_l
     assert [p.read_bytes() for p in there] == [p.read_bytes() for p in here]
     lines = log.read_text().splitlines()
     assert lines[0] == "fig1b: started" and re.fullmatch(r"fig1b: done in [\d.]+ s", lines[1]) and len(lines) == 2
-    assert len(figure_workers._workers) == figure_workers.PROCESSES
-    assert all(w.process.pid != os.getpid() for w in figure_workers._workers)
+    assert len(figure_workers._workers) == figure_workers.PROCESSES and len(figure_workers._processes) == 1  # the others forked
 
 
 def test_two_figures_draw_at_once_in_the_two_workers(tmp_path):
@@ -78,25 +77,36 @@ class _Exit:
         return os._exit, (3,)
 
 
-def test_a_worker_ignores_ctrl_c_one_ended_while_idle_is_replaced_and_one_that_ends_fails_its_figure():
+def test_workers_ignore_ctrl_c_and_one_that_ends_is_replaced_and_gets_the_figure_again():
     every = figure_workers.PROCESSES
     assert answered()  # started
-    for worker in list(figure_workers._workers):
-        os.kill(worker.process.pid, signal.SIGINT)
+    first = figure_workers._processes[0]
+    for pid in _worker_pids(first.pid):
+        os.kill(pid, signal.SIGINT)
     assert all(answered() for _ in range(every))
-    killed = figure_workers._workers[0]
-    killed.process.kill()
-    killed.process.wait()
-    assert all(answered() for _ in range(every))  # one of them the killed one's turn
-    with pytest.raises(figure_workers.WorkerError, match=r"the process drawing fig1b ended \(exit code 3\)"):
-        figure_workers.draw("fig1b", _Exit())
+    first.kill()  # the first worker, while idle; the one it forked goes on
+    first.wait()
+    assert all(answered() for _ in range(2 * every))  # the killed one's turn among them: asked again of a new one
+    assert len(figure_workers._workers) == every and len(figure_workers._processes) == 2
+    with pytest.raises(figure_workers.WorkerError, match=r"the process drawing fig1b ended before it finished, twice"):
+        figure_workers.draw("fig1b", _Exit())  # ends its worker, and the new one
     assert all(answered() for _ in range(every))
-    assert len(figure_workers._workers) == every and killed not in figure_workers._workers
-    assert all(w.process.poll() is None for w in figure_workers._workers)
+
+
+def _worker_pids(first: int) -> list[int]:
+    """The first worker's pid and those of the workers it forked (its children)."""
+    with open(f"/proc/{first}/task/{first}/children") as f:
+        return [first, *map(int, f.read().split())]
 
 
 def test_close_ends_the_workers_and_waits_for_them():
-    assert answered()
-    started = list(figure_workers._workers)
     figure_workers.close()
-    assert not figure_workers._workers and [w.process.returncode for w in started] == [0] * len(started)
+    assert answered()  # a new set
+    started = list(figure_workers._processes)
+    forked = _worker_pids(started[0].pid)[1:]
+    assert len(started) == 1 and len(forked) == figure_workers.PROCESSES - 1
+    figure_workers.close()
+    assert not figure_workers._workers and [p.returncode for p in started] == [0] * len(started)
+    for pid in forked:
+        with pytest.raises(ProcessLookupError):
+            os.kill(pid, 0)  # ended and reaped by the first worker

@@ -4,21 +4,22 @@ Drawing a figure is Python (matplotlib's layout, text and rendering) that holds 
 for its whole second; in a thread of the Snakemake process it would share one core with the
 signature pass and the tables. So the figure rules (:func:`rockdec.pipeline.in_snakemake.draw`)
 hand their :mod:`rockdec.pipeline.steps` function to one of :data:`PROCESSES` worker
-processes, started together at the first figure of a run (fig. 1b, which needs no data,
-starts with the run). Each loads matplotlib, xarray, netCDF4 and the figures' code
-(:data:`LOADS`) and renders a figure with text and mathematics once (the fonts and
-mathtext's parser), on the core ``calibrate`` leaves free, then draws one figure at a time;
-after the signature pass the figures that read its products are drawn on two cores at
-once.
+processes, started at the first figure of a run (fig. 1b, which needs no data, starts with
+the run). One Python process starts, loads matplotlib, xarray, netCDF4 and the figures'
+code (:data:`LOADS`), renders a figure with text and mathematics once (the fonts and
+mathtext's parser), then forks the other workers, which find all of it loaded: the loading
+costs one process's CPU, on the core ``calibrate`` leaves free. After the signature pass
+the figures that read its products are drawn two at once.
 
-A worker reads ``(rule, args)`` requests from its standard input and answers each on its
-standard output (pickles): ``("done", None)``, ``("input", sentence)`` for a
+A worker reads ``(rule, args)`` requests from a pipe and answers each on another
+(pickles): ``("done", None)``, ``("input", sentence)`` for a
 :class:`rockdec.validate.InputError` (raised again as one in the Snakemake process) or
 ``("error", traceback)``. Anything the drawing prints goes to standard error. A worker
 ignores SIGINT, so a Ctrl-C lets a figure finish, as the light steps do; it ends when its
-standard input closes: :func:`close`, which the process that started it calls as it exits
-(so it waits for its workers, and their CPU counts as its children's), or that process
-ending however it ends.
+request pipe closes: :func:`close`, which the process that started the workers calls as it
+exits (it waits for them, so their CPU counts as its children's), or that process ending
+however it ends. A worker that ends before answering (killed, crashed) is replaced by a
+newly started one, which gets the request once more.
 """
 
 from __future__ import annotations
@@ -35,76 +36,97 @@ from pathlib import Path
 
 from rockdec.validate import InputError
 
-#: Worker processes: two cores draw the three figures that wait for the signature pass.
+#: Worker processes: two cores draw the figures that wait for the signature pass.
 PROCESSES = 2
 
-#: What a worker loads before its first request.
+#: What the first worker loads before it forks the others.
 LOADS = ("rockdec.pipeline.steps", "rockdec.report.figures", "rockdec.report.tables", "rockdec.rdd.signatures")
 
 
 class WorkerError(RuntimeError):
     """A figure failed in its worker process (the worker's traceback is the message), or
-    the worker ended before answering."""
+    its worker ended before answering, twice."""
 
 
 class _Worker:
-    """One worker process and its pipes."""
+    """The Snakemake process's ends of one worker's pipes, and the process it started (the
+    first worker, or a replacement; ``None`` for a worker forked by the first)."""
 
-    def __init__(self) -> None:
-        package_root = str(Path(__file__).resolve().parents[2])  # the directory that holds rockdec
-        path = os.environ.get("PYTHONPATH")
-        env = {**os.environ, "PYTHONPATH": package_root if not path else os.pathsep.join([package_root, path])}
-        self.process = subprocess.Popen(
-            [sys.executable, "-c", f"from {__name__} import serve; serve()"],
-            stdin=subprocess.PIPE, stdout=subprocess.PIPE, env=env,
-        )
+    def __init__(self, requests, answers, process: subprocess.Popen | None) -> None:
+        self.requests, self.answers, self.process = requests, answers, process
 
     def run(self, rule: str, args: tuple):
-        """Send one request, wait for its answer."""
+        """Send one request, wait for its answer; ``None`` when the worker has ended."""
         try:
-            pickle.dump((rule, args), self.process.stdin)
-            self.process.stdin.flush()
-            return pickle.load(self.process.stdout)
+            pickle.dump((rule, args), self.requests)
+            self.requests.flush()
+            return pickle.load(self.answers)
         except (OSError, EOFError, pickle.UnpicklingError):
-            self.process.kill()
-            self.process.wait()
-            raise WorkerError(f"the process drawing {rule} ended (exit code {self.process.returncode}) before it finished") from None
+            return None
 
     def close(self) -> None:
-        """Close the worker's input (it ends) and wait for it."""
-        try:
-            self.process.stdin.close()
-        except OSError:
-            pass
-        self.process.wait()
+        """Close the request pipe: the worker ends."""
+        for pipe in (self.requests, self.answers):
+            try:
+                pipe.close()
+            except OSError:
+                pass
+
+
+def _start(count: int) -> list[_Worker]:
+    """Start a Python process that serves ``count`` workers (it forks ``count - 1``)."""
+    pipes = [(os.pipe(), os.pipe()) for _ in range(count)]
+    ends = [(requests[0], answers[1]) for requests, answers in pipes]  # the workers' ends
+    package_root = str(Path(__file__).resolve().parents[2])  # the directory that holds rockdec
+    path = os.environ.get("PYTHONPATH")
+    env = {
+        **os.environ,
+        "PYTHONPATH": package_root if not path else os.pathsep.join([package_root, path]),
+        "OMP_NUM_THREADS": "1",  # no BLAS thread pool: the first worker forks, and figures need none
+        "OPENBLAS_NUM_THREADS": "1",
+    }
+    process = subprocess.Popen(
+        [sys.executable, "-c", f"from {__name__} import serve; serve({ends!r})"],
+        pass_fds=[fd for pair in ends for fd in pair], env=env, stdin=subprocess.DEVNULL,
+    )
+    for fd in (fd for pair in ends for fd in pair):
+        os.close(fd)
+    return [
+        _Worker(os.fdopen(requests[1], "wb"), os.fdopen(answers[0], "rb"), process if k == 0 else None)
+        for k, (requests, answers) in enumerate(pipes)
+    ]
 
 
 _started = threading.Lock()
 _workers: list[_Worker] = []
+_processes: list[subprocess.Popen] = []
 _idle: queue.SimpleQueue = queue.SimpleQueue()
 
 
 def draw(rule: str, *args) -> None:
     """Run the :mod:`rockdec.pipeline.steps` function ``rule`` on ``*args`` in a worker
-    process (started with the others at the first call of a process; one that has ended
-    meanwhile is replaced), waiting for it. Raises :class:`rockdec.validate.InputError` with
-    the worker's sentence, or :class:`WorkerError` with its traceback, or when the worker
-    ends before answering (it is then replaced)."""
+    process (the workers start at the first call of a process), waiting for it. Raises
+    :class:`rockdec.validate.InputError` with the worker's sentence, or :class:`WorkerError`
+    with its traceback, or when a worker ended before answering and its replacement did
+    too."""
     with _started:
         if not _workers:
-            _workers.extend(_Worker() for _ in range(PROCESSES))
+            _workers.extend(_start(PROCESSES))
+            _processes.append(_workers[0].process)
             atexit.register(close)
             for worker in _workers:
                 _idle.put(worker)
     worker = _idle.get()
-    if worker.process.poll() is not None:
+    answer = worker.run(rule, args)
+    if answer is None:  # ended: a new worker, and the request once more
         worker = _replaced(worker)
-    try:
-        status, payload = worker.run(rule, args)
-    except WorkerError:
-        _idle.put(_replaced(worker))
-        raise
+        answer = worker.run(rule, args)
+        if answer is None:
+            worker = _replaced(worker)
+            _idle.put(worker)
+            raise WorkerError(f"the process drawing {rule} ended before it finished, twice")
     _idle.put(worker)
+    status, payload = answer
     if status == "input":
         raise InputError(payload)
     if status == "error":
@@ -112,11 +134,12 @@ def draw(rule: str, *args) -> None:
 
 
 def _replaced(worker: _Worker) -> _Worker:
-    """A new worker in the place of ``worker``, which has ended."""
-    worker.process.wait()
-    replacement = _Worker()
+    """A newly started worker in the place of ``worker``, which has ended."""
+    worker.close()
+    (replacement,) = _start(1)
     with _started:
         _workers[_workers.index(worker)] = replacement
+        _processes.append(replacement.process)
     return replacement
 
 
@@ -125,7 +148,10 @@ def close() -> None:
     with _started:
         for worker in _workers:
             worker.close()
+        for process in _processes:
+            process.wait()
         _workers.clear()
+        _processes.clear()
         while not _idle.empty():
             _idle.get()
 
@@ -149,28 +175,47 @@ def _warm() -> None:
         fig.savefig(io.BytesIO(), format=fmt, dpi=150)
 
 
-def serve() -> None:
-    """A worker's loop (module docstring): requests from standard input until it closes."""
+def serve(ends: list[tuple[int, int]]) -> None:
+    """The workers of one process (module docstring): ``ends`` holds the file descriptors
+    ``(requests, answers)`` of each; this process serves the first and forks one process
+    for each of the others, once :func:`_warm` has loaded what they draw with."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    os.dup2(sys.stderr.fileno(), sys.stdout.fileno())  # what the drawing prints goes to standard error
+    _warm()
+    forked = []
+    for k in range(1, len(ends)):
+        pid = os.fork()
+        if pid == 0:
+            for fd in (fd for j, pair in enumerate(ends) if j != k for fd in pair):
+                os.close(fd)
+            _serve_one(*ends[k])
+            os._exit(0)
+        forked.append(pid)
+    for fd in (fd for pair in ends[1:] for fd in pair):
+        os.close(fd)
+    _serve_one(*ends[0])
+    for pid in forked:
+        os.waitpid(pid, 0)
+
+
+def _serve_one(requests_fd: int, answers_fd: int) -> None:
+    """Answer the requests of one pipe until it closes."""
     import traceback
 
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    answers = os.fdopen(os.dup(sys.stdout.fileno()), "wb")
-    os.dup2(sys.stderr.fileno(), sys.stdout.fileno())  # what the drawing prints goes to standard error
-    requests = sys.stdin.buffer
-    _warm()
     from rockdec.pipeline import steps
 
-    while True:
-        try:
-            rule, args = pickle.load(requests)
-        except EOFError:
-            return
-        try:
-            getattr(steps, rule)(*args)
-            answer = ("done", None)
-        except InputError as exc:
-            answer = ("input", str(exc))
-        except Exception:
-            answer = ("error", traceback.format_exc())
-        pickle.dump(answer, answers)
-        answers.flush()
+    with os.fdopen(requests_fd, "rb") as requests, os.fdopen(answers_fd, "wb") as answers:
+        while True:
+            try:
+                rule, args = pickle.load(requests)
+            except EOFError:
+                return
+            try:
+                getattr(steps, rule)(*args)
+                answer = ("done", None)
+            except InputError as exc:
+                answer = ("input", str(exc))
+            except Exception:
+                answer = ("error", traceback.format_exc())
+            pickle.dump(answer, answers)
+            answers.flush()

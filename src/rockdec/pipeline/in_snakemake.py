@@ -121,7 +121,7 @@ def signatures(rule: str, log: str, inputs, outputs, records: dict, settings: di
     the scene's cube (``outputs.cube``) and every compared reading's window curves
     (``outputs.readings``), under ``settings`` (:func:`rockdec.pipeline.replicates.scene_cubes`
     on ``threads`` Dask threads, the readings not written as sums only, then
-    :func:`rockdec.pipeline.replicates.reading_curves`). The
+    :func:`rockdec.pipeline.replicates.reading_curves` on as many threads). The
     series are simulated from their seeds under ``inputs.run`` or read from ``inputs.series``;
     a scene split into jobs (``inputs.cubes``, ``inputs.curves``) is gathered instead
     (:func:`rockdec.pipeline.replicates.gathered`). ``first_replicate`` numbers a part's
@@ -159,7 +159,7 @@ def signatures(rule: str, log: str, inputs, outputs, records: dict, settings: di
                     threads=threads, first_replicate=first_replicate, sums_only=settings["readings"][1:],
                 )
             cube = cubes[settings["readings"][0]]
-            curves = replicates.reading_curves(cubes, settings["fit_points"])
+            curves = replicates.reading_curves(cubes, settings["fit_points"], threads)
         cube.attrs.update(io.provenance(rule, settings["signatures"], inputs=inputs))
         curves.attrs.update(io.provenance("readings", settings, inputs=inputs))
         _check_stop()
