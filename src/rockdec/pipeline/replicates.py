@@ -145,7 +145,10 @@ def variant_cubes(run: Run, records: dict, variants, readings, series_files=(), 
     graph, so each series is simulated (or read) once for all of them."""
     seeds = scene_seeds(records)
     unit_of_seed, groups = pass_units(seeds, list(readings))
-    used = unit_of_seed >= 0
+    # the series unit after unit (each unit's in seed order): each block of series then holds
+    # units in label order, which the cube keeps, instead of the units' parts to be sorted by label
+    used = np.flatnonzero(unit_of_seed >= 0)
+    used = used[np.argsort(unit_of_seed[used], kind="stable")]
     chunk_seeds = records["chunk_seeds"]
     if len(series_files):
         theta = series.stored_theta(series_files, seeds.ravel()[used], chunk_seeds)
