@@ -3,7 +3,7 @@ import sys
 from importlib.util import find_spec
 
 from rockdec.pipeline import config as rockdec_config
-from rockdec.pipeline import in_snakemake, layout
+from rockdec.pipeline import figure_workers, in_snakemake, layout
 from rockdec.sources import package_sources
 
 # Values given with --config arrive as text: read them as YAML values. An error names where
@@ -118,6 +118,13 @@ STEPS_CODE = package_sources("rockdec.pipeline.in_snakemake")
 # series' signature and fig. 2 wait for the pass's end.) A job sent elsewhere (a cluster) asks
 # for one.
 IN_PROCESS_THREADS = 0 if workflow.local_exec else 1
+
+# The figure workers (rockdec.pipeline.figure_workers): two, one under --cores 1, so that two
+# figures drawing at once stay within the cores given.
+try:
+    figure_workers.PROCESSES = max(1, min(figure_workers.PROCESSES, int(workflow.cores)))
+except Exception:  # no --cores (a cluster run with --jobs): Snakemake's WorkflowError; keep two
+    pass
 
 # `calibrate` runs there too, but reaches only the run contract's modules: editing a table or a
 # figure never recalibrates (and so never reruns the signature pass).

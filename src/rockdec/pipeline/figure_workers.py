@@ -36,7 +36,8 @@ from pathlib import Path
 
 from rockdec.validate import InputError
 
-#: Worker processes: two cores draw the figures that wait for the signature pass.
+#: Worker processes: two cores draw the figures that wait for the signature pass (the
+#: workflow sets one under ``--cores 1``, workflow/rules/common.smk).
 PROCESSES = 2
 
 #: What the first worker loads before it forks the others.
