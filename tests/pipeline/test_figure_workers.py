@@ -66,8 +66,10 @@ def answered() -> bool:
     return True
 
 
-def test_another_error_in_a_worker_brings_its_traceback():
-    assert answered()
+def test_another_error_in_a_worker_brings_its_traceback_from_the_rockdec_this_process_runs():
+    with pytest.raises(figure_workers.WorkerError) as err:
+        figure_workers.draw("no_such_step")
+    assert f'File "{figure_workers.__file__}"' in str(err.value)  # the worker's module path is this process's
 
 
 class _Exit:

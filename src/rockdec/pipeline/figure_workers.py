@@ -32,7 +32,6 @@ import signal
 import subprocess
 import sys
 import threading
-from pathlib import Path
 
 from rockdec.validate import InputError
 
@@ -78,17 +77,11 @@ def _start(count: int) -> list[_Worker]:
     """Start a Python process that serves ``count`` workers (it forks ``count - 1``)."""
     pipes = [(os.pipe(), os.pipe()) for _ in range(count)]
     ends = [(requests[0], answers[1]) for requests, answers in pipes]  # the workers' ends
-    package_root = str(Path(__file__).resolve().parents[2])  # the directory that holds rockdec
-    path = os.environ.get("PYTHONPATH")
-    env = {
-        **os.environ,
-        "PYTHONPATH": package_root if not path else os.pathsep.join([package_root, path]),
-        "OMP_NUM_THREADS": "1",  # no BLAS thread pool: the first worker forks, and figures need none
-        "OPENBLAS_NUM_THREADS": "1",
-    }
+    # this process's module path, so that the worker imports the rockdec this process runs
+    code = f"import sys; sys.path[:] = {sys.path!r}; from {__name__} import serve; serve({ends!r})"
+    env = {**os.environ, "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}  # no BLAS threads: the first worker forks
     process = subprocess.Popen(
-        [sys.executable, "-c", f"from {__name__} import serve; serve({ends!r})"],
-        pass_fds=[fd for pair in ends for fd in pair], env=env, stdin=subprocess.DEVNULL,
+        [sys.executable, "-c", code], pass_fds=[fd for pair in ends for fd in pair], env=env, stdin=subprocess.DEVNULL,
     )
     for fd in (fd for pair in ends for fd in pair):
         os.close(fd)

@@ -161,18 +161,18 @@ def variant_cubes(run: Run, records: dict, variants, readings, series_files=(), 
         ]
         for settings in variants
     ]
-    out = []
-    for units in engine.compute(*lazy, threads=threads):
 
-        def reading_cube(reading):
-            group_of_unit, replicate_of_group = groups[reading]
-            cube = signatures.pool(units, "group", by=group_of_unit, finish=reading not in sums_only)
-            cube = cube.assign_coords(replicate=("group", replicate_of_group + first_replicate, {"long_name": "replicate of the group"}))
-            cube.attrs.update({**run.to_attrs(), "reading": reading})
-            return cube
+    def reading_cube(units, reading):
+        group_of_unit, replicate_of_group = groups[reading]
+        cube = signatures.pool(units, "group", by=group_of_unit, finish=reading not in sums_only)
+        cube = cube.assign_coords(replicate=("group", replicate_of_group + first_replicate, {"long_name": "replicate of the group"}))
+        cube.attrs.update({**run.to_attrs(), "reading": reading})
+        return cube
 
-        out.append(dict(zip(groups, _each(reading_cube, list(groups), threads))))
-    return out
+    return [
+        dict(zip(groups, _each(lambda reading, units=units: reading_cube(units, reading), list(groups), threads)))
+        for units in engine.compute(*lazy, threads=threads)
+    ]
 
 
 def _each(func, items: list, threads: int) -> list:
