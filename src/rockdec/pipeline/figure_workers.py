@@ -32,6 +32,7 @@ import signal
 import subprocess
 import sys
 import threading
+from pathlib import Path
 
 from rockdec.validate import InputError
 
@@ -151,15 +152,29 @@ def close() -> None:
 
 
 def _warm() -> None:
-    """Load :data:`LOADS`, then render a figure with text and mathematics as PNG and PDF into
-    memory: the fonts, mathtext's parser and both backends load before the first figure."""
+    """Load :data:`LOADS`; write, read and reduce a small NetCDF file as a figure step reads
+    its products (xarray loads its NetCDF backend, Dask and SciPy at its first such use);
+    render a figure with text and mathematics as PNG and PDF into memory (the fonts,
+    mathtext's parser, both backends). All of it before the first figure, and before the
+    first worker forks the others."""
     import importlib
     import io
+    import tempfile
 
     for name in LOADS:
         importlib.import_module(name)
+    import numpy as np
+    import xarray as xr
     from matplotlib.figure import Figure
 
+    from rockdec import io as rockdec_io
+
+    with tempfile.TemporaryDirectory(prefix="rockdec-figure-worker-") as folder:
+        path = Path(folder) / "warm.nc"
+        rockdec_io.write_netcdf(xr.Dataset({"x": (("replicate", "window"), np.ones((2, 2)))}, coords={"window": [0.5, 1.0]}), path)
+        with rockdec_io.open_dataset(path) as ds:
+            x = ds.load()["x"].sel(window=1.0)
+            (x.std("replicate", ddof=1, skipna=True) / x.notnull().sum("replicate")).values
     fig = Figure(figsize=(2.0, 2.0), layout="constrained")
     ax = fig.subplots()
     ax.plot([0.0, 1.0], [0.0, 1.0], label=r"$\hat e_v$, τ")
