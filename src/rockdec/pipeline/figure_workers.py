@@ -6,10 +6,11 @@ signature pass and the tables. So the figure rules (:func:`rockdec.pipeline.in_s
 hand their :mod:`rockdec.pipeline.steps` function to one of :data:`PROCESSES` worker
 processes, started at the first figure of a run (fig. 1b, which needs no data, starts with
 the run). One Python process starts, loads matplotlib, xarray, netCDF4 and the figures'
-code (:data:`LOADS`), renders a figure with text and mathematics once (the fonts and
-mathtext's parser), then forks the other workers, which find all of it loaded: the loading
-costs one process's CPU, on the core ``calibrate`` leaves free. After the signature pass
-the figures that read its products are drawn two at once.
+code (:data:`LOADS`), reads a small NetCDF file as a figure step reads its products and
+renders a figure with text and mathematics once (:func:`_warm`), then forks the other
+workers, which find all of it loaded: the loading costs one process's CPU, on the core
+``calibrate`` leaves free. After the signature pass the figures that read its products
+are drawn two at once.
 
 A worker reads ``(rule, args)`` requests from a pipe and answers each on another
 (pickles): ``("done", None)``, ``("input", sentence)`` for a
