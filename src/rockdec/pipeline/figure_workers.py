@@ -17,9 +17,9 @@ A worker reads ``(rule, args)`` requests from a pipe and answers each on another
 :class:`rockdec.validate.InputError` (raised again as one in the Snakemake process) or
 ``("error", traceback)``. Anything the drawing prints goes to standard error. A worker
 ignores SIGINT, so a Ctrl-C lets a figure finish, as the light steps do; it ends when its
-request pipe closes: :func:`close`, which the process that started the workers calls as it
-exits (it waits for them, so their CPU counts as its children's), or that process ending
-however it ends. A worker that ends before answering (killed, crashed) is replaced by a
+request pipe closes (at once, without tearing down its interpreter): :func:`close`, which
+the process that started the workers calls as it exits (it waits for them, so their CPU
+counts as its children's), or that process ending however it ends. A worker that ends before answering (killed, crashed) is replaced by a
 newly started one, which gets the request once more.
 """
 
@@ -199,13 +199,22 @@ def serve(ends: list[tuple[int, int]]) -> None:
             for fd in (fd for j, pair in enumerate(ends) if j != k for fd in pair):
                 os.close(fd)
             _serve_one(*ends[k])
-            os._exit(0)
+            _exit()
         forked.append(pid)
     for fd in (fd for pair in ends[1:] for fd in pair):
         os.close(fd)
     _serve_one(*ends[0])
     for pid in forked:
         os.waitpid(pid, 0)
+    _exit()
+
+
+def _exit() -> None:
+    """End a worker at once: its figures are written and closed, its answers flushed, and
+    tearing down its interpreter (matplotlib, xarray, Dask) would only keep :func:`close`,
+    and the run, waiting."""
+    sys.stderr.flush()
+    os._exit(0)
 
 
 def _serve_one(requests_fd: int, answers_fd: int) -> None:
