@@ -75,6 +75,19 @@ def stop_on_signals() -> None:
         signal.signal(number, handler)
 
 
+def end_of_run() -> None:
+    """Cancel the re-evaluation timers Snakemake's scheduler left running (the Snakefile's
+    ``onsuccess`` and ``onerror``, once the scheduler has stopped). Its job rate limiter
+    (``--max-jobs-per-timespan``, 100 a second by default) starts a non-daemon
+    :class:`threading.Timer` of its timespan at each round of scheduling; the last one
+    would keep the process alive for up to that second after the last job. Other timers
+    are left alone."""
+    for thread in threading.enumerate():
+        function = getattr(thread, "function", None)
+        if isinstance(thread, threading.Timer) and "_schedule_reevalutation" in getattr(function, "__qualname__", ""):
+            thread.cancel()
+
+
 def _check_stop(*_) -> None:
     """Raise :class:`Stopped` once :data:`_STOP` is set."""
     if _STOP.is_set():
