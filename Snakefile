@@ -51,6 +51,16 @@ onstart:
     in_snakemake.stop_on_signals()
 
 
+# The scheduler's last re-evaluation timer would keep the process alive for up to a second
+# after the last job (rockdec.pipeline.in_snakemake.end_of_run).
+onsuccess:
+    in_snakemake.end_of_run()
+
+
+onerror:
+    in_snakemake.end_of_run()
+
+
 rule all:
     default_target: True
     input:

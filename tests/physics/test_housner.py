@@ -384,6 +384,15 @@ def test_two_steps_equal_one():
 # ---------------------------------------------------------------- model choice
 
 
+@pytest.mark.parametrize("tolerance", [1e-6, 0.02, 0.05, 0.5, 10.0])
+def test_the_amplitude_limit_is_the_root_of_the_period_mismatch_to_adjacent_floats(tolerance):
+    limit = models.amplitude_limit(tolerance)
+    assert models.period_mismatch(np.nextafter(limit, 0.0)) < tolerance <= models.period_mismatch(limit)
+    if 0.01 < tolerance < 1.0:  # a mismatch well above its rounding, and a root inside brentq's bracket
+        assert limit == pytest.approx(brentq(lambda x: models.period_mismatch(x) - tolerance, 1e-9, 1.0 - 1e-12, xtol=1e-15),
+                                      rel=1e-13)
+
+
 def test_choose_model_and_amplitude_limit():
     limit = models.amplitude_limit(0.02)
     t3 = models.period_housner(limit, 1.0, 1.0)

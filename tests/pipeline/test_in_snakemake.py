@@ -182,3 +182,25 @@ def test_outside_the_main_thread_no_handler_is_set():
     worker.start()
     worker.join()
     assert (signal.getsignal(signal.SIGTERM), signal.getsignal(signal.SIGINT)) == before
+
+
+class _Scheduler:
+    """Starts a timer as Snakemake's job scheduler does after each round of scheduling."""
+
+    def _schedule_reevalutation(self, delay):
+        timer = threading.Timer(delay, lambda: None)
+        timer.start()
+        return timer
+
+
+def test_the_end_of_a_run_cancels_the_schedulers_timers_and_no_other():
+    scheduler_timer = _Scheduler()._schedule_reevalutation(60.0)
+    other = threading.Timer(60.0, lambda: None)
+    other.start()
+    try:
+        in_snakemake.end_of_run()
+        scheduler_timer.join(10.0)
+        assert not scheduler_timer.is_alive() and other.is_alive()
+    finally:
+        other.cancel()
+        scheduler_timer.cancel()

@@ -212,14 +212,15 @@ def test_the_tiny_scene_on_worker_processes_gives_the_products_of_threads(workfl
 
 @pytest.mark.slow
 def test_editing_a_figures_rule_code_reruns_only_that_figure(workflow):
-    """A figure rule runs its code in the Snakemake process (``run:``); the code rerun
-    trigger (profiles/default) redraws that figure alone when its code changes."""
+    """A figure rule's code is its ``run:`` block (handing the figure to a figure worker,
+    rockdec.pipeline.in_snakemake.draw); the code rerun trigger (profiles/default) redraws
+    that figure alone when its code changes."""
     root = workflow["root"]
     code, out = snakemake(root, "-n")
     assert code == 0 and job_stats(out) == {}, out
     rules = root / "workflow" / "rules" / "figures.smk"
     before = rules.read_text()
-    call = "in_snakemake.step(rule, log[0], input.est, [output.png, output.pdf])"
+    call = "in_snakemake.draw(rule, log[0], input.est, [output.png, output.pdf])"
     at = before.index(call, before.index("rule fig3:"))
     rules.write_text(before[:at] + call.replace("png, output.pdf", "pdf, output.png") + before[at + len(call):])
     try:

@@ -268,6 +268,18 @@ def test_save_writes_png_at_150_dpi_and_pdf_reproducibly(tmp_path):
     assert (png.read_bytes(), pdf.read_bytes()) == first
 
 
+def test_save_lays_the_figure_out_once_for_both_formats_and_keeps_its_layout_engine(tmp_path, monkeypatch):
+    fig = figures.fig1b()
+    engine = fig.get_layout_engine()
+    laid_out = []
+    execute = type(engine).execute
+    monkeypatch.setattr(type(engine), "execute", lambda self, f: (laid_out.append(f), execute(self, f))[1])
+    figures.save(fig, [tmp_path / "f.png", tmp_path / "f.pdf"])
+    assert laid_out == [fig] and fig.get_layout_engine() is engine
+    figures.save(fig, [tmp_path / "f.pdf"])
+    assert laid_out == [fig, fig]
+
+
 # --- the studies' figures --------------------------------------------------------------
 
 

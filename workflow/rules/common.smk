@@ -3,7 +3,7 @@ import sys
 from importlib.util import find_spec
 
 from rockdec.pipeline import config as rockdec_config
-from rockdec.pipeline import in_snakemake, layout
+from rockdec.pipeline import figure_workers, in_snakemake, layout
 from rockdec.sources import package_sources
 
 # Values given with --config arrive as text: read them as YAML values. An error names where
@@ -102,19 +102,29 @@ def default_products():
 
 FIGURES_CODE = find_spec("rockdec.report.figures").origin
 
-# The stored series, the tables and the figures run inside the Snakemake process (`run:` with
+# The stored series and the tables run inside the Snakemake process (`run:` with
 # rockdec.pipeline.in_snakemake.step, in threads: profiles/default), so their libraries load once
 # a run; their code input is what that module reaches (rockdec.pipeline.steps and the modules it runs).
+# The figures are `run:` rules too, each waiting in a thread for one of the two figure workers
+# (rockdec.pipeline.in_snakemake.draw).
 STEPS_CODE = package_sources("rockdec.pipeline.in_snakemake")
 
 # Those light steps (the stored series and their signature, the tables, the figures) ask for
-# no core of --cores when Snakemake runs the jobs itself: they are a thread of Snakemake's own
-# process, a second or less each, one at a time (rockdec.pipeline.in_snakemake.step). So the
-# stored series start with the signature pass instead of after it, and the tables and figures
-# all start as soon as it ends. (Snakemake starts no job, not even one of no core, while every
-# core is taken: the stored series' signature and fig. 2 wait for the pass's end.) A job
-# sent elsewhere (a cluster) asks for one.
+# no core of --cores when Snakemake runs the jobs itself: a second or less each, one at a time in
+# a thread of Snakemake's own process (rockdec.pipeline.in_snakemake.step), or two at a time in
+# the figure workers. So the stored series start with the signature pass instead of after it,
+# fig. 1b with `calibrate`, and the tables and figures all start as soon as the pass ends.
+# (Snakemake starts no job, not even one of no core, while every core is taken: the stored
+# series' signature and fig. 2 wait for the pass's end.) A job sent elsewhere (a cluster) asks
+# for one.
 IN_PROCESS_THREADS = 0 if workflow.local_exec else 1
+
+# The figure workers (rockdec.pipeline.figure_workers): two, one under --cores 1, so that two
+# figures drawing at once stay within the cores given.
+try:
+    figure_workers.PROCESSES = max(1, min(figure_workers.PROCESSES, int(workflow.cores)))
+except Exception:  # no --cores (a cluster run with --jobs): Snakemake's WorkflowError; keep two
+    pass
 
 # `calibrate` runs there too, but reaches only the run contract's modules: editing a table or a
 # figure never recalibrates (and so never reruns the signature pass).

@@ -1,8 +1,10 @@
 # Figures: the signature of the stored series (paper fig. 2c) and one plot rule per figure.
 # Plot rules only read NetCDF products, so changing a plot never reruns a simulation; each
-# also lists the plotting module, so editing it redraws every figure. All of them run inside
-# the Snakemake process (run: with rockdec.pipeline.in_snakemake.step, common.smk): matplotlib
-# and xarray load once for all of them.
+# also lists the plotting module, so editing it redraws every figure. The stored series'
+# signature runs inside the Snakemake process (run: with rockdec.pipeline.in_snakemake.step,
+# common.smk); each figure rule hands its figure to one of two worker processes started with
+# the run's first figure (rockdec.pipeline.in_snakemake.draw), so matplotlib loads once for
+# all of them and two figures draw at once.
 rule stored_signature:
     """Signature cube of the stored series pooled into one group (the estimate of fig. 2c)."""
     input:
@@ -33,7 +35,7 @@ rule fig1b:
         "results/{scene}/benchmarks/fig1b.tsv"
     threads: IN_PROCESS_THREADS
     run:
-        in_snakemake.step(rule, log[0], [output.png, output.pdf])
+        in_snakemake.draw(rule, log[0], [output.png, output.pdf])
 
 
 rule fig2:
@@ -50,7 +52,7 @@ rule fig2:
         "results/{scene}/benchmarks/fig2.tsv"
     threads: IN_PROCESS_THREADS
     run:
-        in_snakemake.step(rule, log[0], input.sim, input.sig, [output.png, output.pdf])
+        in_snakemake.draw(rule, log[0], input.sim, input.sig, [output.png, output.pdf])
 
 
 rule fig3:
@@ -66,7 +68,7 @@ rule fig3:
         "results/{scene}/benchmarks/fig3.tsv"
     threads: IN_PROCESS_THREADS
     run:
-        in_snakemake.step(rule, log[0], input.est, [output.png, output.pdf])
+        in_snakemake.draw(rule, log[0], input.est, [output.png, output.pdf])
 
 
 rule fig4:
@@ -82,7 +84,7 @@ rule fig4:
         "results/{scene}/benchmarks/fig4.tsv"
     threads: IN_PROCESS_THREADS
     run:
-        in_snakemake.step(rule, log[0], input.est, [output.png, output.pdf])
+        in_snakemake.draw(rule, log[0], input.est, [output.png, output.pdf])
 
 
 rule fig_ev:
@@ -99,4 +101,4 @@ rule fig_ev:
         "results/{scene}/benchmarks/fig_ev.tsv"
     threads: IN_PROCESS_THREADS
     run:
-        in_snakemake.step(rule, log[0], input.sig, input.est, [output.png, output.pdf])
+        in_snakemake.draw(rule, log[0], input.sig, input.est, [output.png, output.pdf])

@@ -2,15 +2,17 @@
 signature pass, the stored series and their signature, the tables and the figures.
 
 ``calibrate`` (a second of pilot simulations), ``stored_series``, ``stored_signature``,
-``estimates``, ``table_readings`` and the paper's figure rules take a fraction of a second
-to a few seconds each once NumPy, numba, xarray and matplotlib are loaded, so they are
-``run:`` rules calling :func:`calibrate` and :func:`step` (the workflow's default profile
-runs those in threads of the Snakemake process, ``force-use-threads``) and load those
-libraries once a run instead of starting Python for each. The signature pass
-(:func:`signatures`, rules ``signatures`` and ``signature_part``) runs there too, on the
-Dask threads of its rule's ``threads``: it finds the simulator's kernels and the pass's
-modules loaded by :func:`calibrate`, where a script would start Python and load them again
-on the run's longest path. The other compute rules stay scripts (:mod:`rockdec.pipeline.job`).
+``estimates`` and ``table_readings`` take a fraction of a second to a few seconds each once
+NumPy, numba and xarray are loaded, so they are ``run:`` rules calling :func:`calibrate`
+and :func:`step` (the workflow's default profile runs those in threads of the Snakemake
+process, ``force-use-threads``) and load those libraries once a run instead of starting
+Python for each. The signature pass (:func:`signatures`, rules ``signatures`` and
+``signature_part``) runs there too, on the Dask threads of its rule's ``threads``: it finds
+the simulator's kernels and the pass's modules loaded by :func:`calibrate`, where a script
+would start Python and load them again on the run's longest path. The paper's figure rules
+are ``run:`` rules too, calling :func:`draw`, which hands each figure to one of two worker
+processes that load matplotlib once a run (:mod:`rockdec.pipeline.figure_workers`). The
+other compute rules stay scripts (:mod:`rockdec.pipeline.job`).
 A rule's code input names the modules its function reaches (:func:`rockdec.sources.package_sources`
 of those modules, beside this file), not this module's, so that editing a figure never
 reruns the pass.
@@ -37,7 +39,7 @@ from rockdec.validate import InputError
 #: does: the tables' code, xarray's groupby engine (flox, numpy_groupies) and the
 #: p-values' scipy.stats. :func:`calibrate` imports them in a thread of their own once the
 #: run contract is written, while the signature pass starts Python (one core idle), instead
-#: of on the path after the pass, where the tables and figures run one at a time.
+#: of on the path after the pass, where the tables run one at a time.
 PRELOAD = ("rockdec.pipeline.replicates", "rockdec.report.tables", "flox", "scipy.stats")
 
 #: Set by SIGTERM or SIGINT once :func:`stop_on_signals` ran: the signature pass stops.
@@ -73,14 +75,27 @@ def stop_on_signals() -> None:
         signal.signal(number, handler)
 
 
+def end_of_run() -> None:
+    """Cancel the re-evaluation timers Snakemake's scheduler left running (the Snakefile's
+    ``onsuccess`` and ``onerror``, once the scheduler has stopped). Its job rate limiter
+    (``--max-jobs-per-timespan``, 100 a second by default) starts a non-daemon
+    :class:`threading.Timer` of its timespan at each round of scheduling; the last one
+    would keep the process alive for up to that second after the last job. Other timers
+    are left alone."""
+    for thread in threading.enumerate():
+        function = getattr(thread, "function", None)
+        if isinstance(thread, threading.Timer) and "_schedule_reevalutation" in getattr(function, "__qualname__", ""):
+            thread.cancel()
+
+
 def _check_stop(*_) -> None:
     """Raise :class:`Stopped` once :data:`_STOP` is set."""
     if _STOP.is_set():
         raise Stopped("stopped by a signal before the pass ended; nothing written")
 
 
-#: One :func:`step` at a time in a process: matplotlib (its fonts) and the HDF5 library
-#: under netCDF4 are not safe to use from two threads at once.
+#: One :func:`step` at a time in a process: the HDF5 library under netCDF4 is not safe to
+#: use from two threads at once.
 _STEP_LOCK = threading.Lock()
 
 
@@ -104,12 +119,22 @@ def step(rule: str, log: str, *args) -> None:
         _logged(rule, log, work)
 
 
+def draw(rule: str, log: str, *args) -> None:
+    """Run figure rule ``rule`` as the :mod:`rockdec.pipeline.steps` function of that name, on
+    ``*args``, in a worker process (:mod:`rockdec.pipeline.figure_workers`): the figure's
+    Python holds no GIL of the Snakemake process, and two figures draw at once. Logged as
+    :func:`step` logs; it takes no :data:`_STEP_LOCK`."""
+    from rockdec.pipeline import figure_workers
+
+    _logged(rule, log, lambda: figure_workers.draw(rule, *args))
+
+
 def signatures(rule: str, log: str, inputs, outputs, records: dict, settings: dict, first_replicate: int, threads: int) -> None:
     """Rules ``signatures`` and ``signature_part``: one pass over the series of ``records``,
     the scene's cube (``outputs.cube``) and every compared reading's window curves
     (``outputs.readings``), under ``settings`` (:func:`rockdec.pipeline.replicates.scene_cubes`
     on ``threads`` Dask threads, the readings not written as sums only, then
-    :func:`rockdec.pipeline.replicates.reading_curves`). The
+    :func:`rockdec.pipeline.replicates.reading_curves` on as many threads). The
     series are simulated from their seeds under ``inputs.run`` or read from ``inputs.series``;
     a scene split into jobs (``inputs.cubes``, ``inputs.curves``) is gathered instead
     (:func:`rockdec.pipeline.replicates.gathered`). ``first_replicate`` numbers a part's
@@ -147,7 +172,7 @@ def signatures(rule: str, log: str, inputs, outputs, records: dict, settings: di
                     threads=threads, first_replicate=first_replicate, sums_only=settings["readings"][1:],
                 )
             cube = cubes[settings["readings"][0]]
-            curves = replicates.reading_curves(cubes, settings["fit_points"])
+            curves = replicates.reading_curves(cubes, settings["fit_points"], threads)
         cube.attrs.update(io.provenance(rule, settings["signatures"], inputs=inputs))
         curves.attrs.update(io.provenance("readings", settings, inputs=inputs))
         _check_stop()
@@ -163,8 +188,7 @@ def calibrate(log: str, physics: dict, output: str) -> None:
     and ``excitation`` sections; :func:`rockdec.physics.run.calibrate`) written to ``output``
     (``run.json``), logged as :func:`step` logs, with the contract on a line of its own.
 
-    Pilot simulations and a JSON file: neither matplotlib nor HDF5, so it takes no
-    :data:`_STEP_LOCK` and a figure that needs no data (fig. 1b) draws meanwhile. Then the
+    Pilot simulations and a JSON file: no HDF5, so it takes no :data:`_STEP_LOCK`. Then the
     modules of :data:`PRELOAD` load beside the signature pass.
     """
 

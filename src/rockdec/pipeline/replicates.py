@@ -128,7 +128,8 @@ def scene_cubes(run: Run, records: dict, settings: dict, readings, series_files=
     (:func:`rockdec.pipeline.series.as_recorded`), so both give the same cubes bit for bit. The
     series are reduced at once to the sums of the pass's units (:func:`pass_units`), which
     add up to each reading's groups. Computed on the engine of :mod:`rockdec.pipeline.engine`
-    (``threads`` threads by default). Each cube's attributes hold the run
+    (``threads`` threads by default; the readings are then pooled on as many threads).
+    Each cube's attributes hold the run
     (:meth:`rockdec.physics.run.Run.to_attrs`) and its ``reading``. ``first_replicate`` numbers
     the replicates of a part of a scene (:func:`rockdec.pipeline.layout.part_records`) as the
     whole scene does. The cubes of the readings in ``sums_only`` hold the sums and counts
@@ -144,7 +145,10 @@ def variant_cubes(run: Run, records: dict, variants, readings, series_files=(), 
     graph, so each series is simulated (or read) once for all of them."""
     seeds = scene_seeds(records)
     unit_of_seed, groups = pass_units(seeds, list(readings))
-    used = unit_of_seed >= 0
+    # the series unit after unit (each unit's in seed order): each block of series then holds
+    # units in label order, which the cube keeps, instead of the units' parts to be sorted by label
+    used = np.flatnonzero(unit_of_seed >= 0)
+    used = used[np.argsort(unit_of_seed[used], kind="stable")]
     chunk_seeds = records["chunk_seeds"]
     if len(series_files):
         theta = series.stored_theta(series_files, seeds.ravel()[used], chunk_seeds)
@@ -157,16 +161,30 @@ def variant_cubes(run: Run, records: dict, variants, readings, series_files=(), 
         ]
         for settings in variants
     ]
-    out = []
-    for units in engine.compute(*lazy, threads=threads):
-        cubes = {}
-        for reading, (group_of_unit, replicate_of_group) in groups.items():
-            cube = signatures.pool(units, "group", by=group_of_unit, finish=reading not in sums_only)
-            cube = cube.assign_coords(replicate=("group", replicate_of_group + first_replicate, {"long_name": "replicate of the group"}))
-            cube.attrs.update({**run.to_attrs(), "reading": reading})
-            cubes[reading] = cube
-        out.append(cubes)
-    return out
+
+    def reading_cube(units, reading):
+        group_of_unit, replicate_of_group = groups[reading]
+        cube = signatures.pool(units, "group", by=group_of_unit, finish=reading not in sums_only)
+        cube = cube.assign_coords(replicate=("group", replicate_of_group + first_replicate, {"long_name": "replicate of the group"}))
+        cube.attrs.update({**run.to_attrs(), "reading": reading})
+        return cube
+
+    return [
+        dict(zip(groups, _each(lambda reading, units=units: reading_cube(units, reading), list(groups), threads)))
+        for units in engine.compute(*lazy, threads=threads)
+    ]
+
+
+def _each(func, items: list, threads: int) -> list:
+    """``[func(item) for item in items]``, on ``threads`` threads when there are several items
+    (each reading's NumPy work on the pass's cores: most of it releases the GIL). The items
+    are independent, so the results do not depend on the threads."""
+    if threads <= 1 or len(items) <= 1:
+        return [func(item) for item in items]
+    from concurrent.futures import ThreadPoolExecutor
+
+    with ThreadPoolExecutor(min(threads, len(items)), thread_name_prefix="rockdec-reading") as pool:
+        return list(pool.map(func, items))
 
 
 def gathered(cubes: list[xr.Dataset], curves: list[xr.Dataset]) -> tuple[xr.Dataset, xr.Dataset]:
@@ -234,11 +252,13 @@ def scene_estimates(cube: xr.Dataset, options: dict) -> tuple[xr.Dataset, pd.Dat
     return est, tables.with_alternative(table, alternative["e_hat0"], f"{other_weights}_weights", e_target)
 
 
-def reading_curves(cubes: dict, fit_points: int) -> xr.Dataset:
+def reading_curves(cubes: dict, fit_points: int, threads: int = 1) -> xr.Dataset:
     """The window curves (:func:`replicate_curves`) of every reading's cube, along ``reading``
-    in the order of :data:`READINGS`; ``e_target`` from the run."""
+    in the order of :data:`READINGS`, on ``threads`` threads (a reading each); ``e_target``
+    from the run."""
     names = [r for r in READINGS if r in cubes]
-    curves = xr.concat([replicate_curves(cubes[r], fit_points=fit_points) for r in names], dim=pd.Index(names, name="reading"))
+    each = _each(lambda r: replicate_curves(cubes[r], fit_points=fit_points), names, threads)
+    curves = xr.concat(each, dim=pd.Index(names, name="reading"))
     curves.attrs["e_target"] = float(next(iter(cubes.values())).attrs["e"])
     return curves
 

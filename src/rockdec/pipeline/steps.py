@@ -1,9 +1,10 @@
 """The workflow's light steps, one function each: files in, files out.
 
 The workflow's rules of the same names (``stored_series``, ``stored_signature``,
-``estimates``, ``table_readings``, ``fig1b``, ``fig2``, ``fig3``, ``fig4``, ``fig_ev``:
-``run:`` through :func:`rockdec.pipeline.in_snakemake.step`, inside the Snakemake process)
-and ``rockdec verify --rebuild``
+``estimates``, ``table_readings``: ``run:`` through :func:`rockdec.pipeline.in_snakemake.step`,
+inside the Snakemake process; ``fig1b``, ``fig2``, ``fig3``, ``fig4``, ``fig_ev``: through
+:func:`rockdec.pipeline.in_snakemake.draw`, in a worker process of
+:mod:`rockdec.pipeline.figure_workers`) and ``rockdec verify --rebuild``
 (:func:`rockdec.pipeline.archive.rebuild`) call these functions, so a product rebuilt from an
 archive is made by the code that made it in the workflow. Figures import matplotlib, and
 the estimates the estimators' kernels, only when they run.

@@ -115,16 +115,23 @@ def save(fig: Figure, paths: str | Path | Iterable[str | Path]) -> list[Path]:
     """Write ``fig`` to each path, in the format its suffix names (PNG at 150 dpi, PDF).
 
     Metadata that would change from run to run (creation date, software version) is left
-    out, so the same figure gives the same bytes.
+    out, so the same figure gives the same bytes. The figure is laid out once, as the first
+    path is drawn (its layout engine, constrained for the figures here); the other formats
+    keep those positions, and the engine is set back after the last.
     """
     if isinstance(paths, (str, Path)):
         paths = [paths]
+    engine = fig.get_layout_engine()
     written = []
-    for path in map(Path, paths):
-        fmt = path.suffix.lstrip(".").lower()
-        metadata = {"CreationDate": None, "Producer": None} if fmt == "pdf" else {"Software": None}
-        fig.savefig(path, format=fmt, dpi=150, metadata=metadata)
-        written.append(path)
+    try:
+        for path in map(Path, paths):
+            fmt = path.suffix.lstrip(".").lower()
+            metadata = {"CreationDate": None, "Producer": None} if fmt == "pdf" else {"Software": None}
+            fig.savefig(path, format=fmt, dpi=150, metadata=metadata)
+            fig.set_layout_engine("none")
+            written.append(path)
+    finally:
+        fig.set_layout_engine(engine)
     return written
 
 
