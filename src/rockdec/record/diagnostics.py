@@ -211,7 +211,9 @@ def impact_level(y: np.ndarray, centre: float, sd: float, guard: float) -> float
     ``-g dt^2`` above it (eq. 4), so a triple placed on the wrong side lowers the
     difference: it is largest at the impact level, whatever the ``g`` of each side. The
     guard leaves out the triples near the level (the impacts and the chatter of a block near
-    rest, whose second differences are about 0). ``centre`` when no level qualifies."""
+    rest, whose second differences are about 0). Levels between the same samples part the
+    triples alike: the middle of the run of steps with the largest difference is taken, so
+    the mirrored record's level is the mirror image. ``centre`` when no level qualifies."""
     step = guard / LEVEL_STEPS
     half = int(min(math.ceil(LEVEL_RANGE * sd / step), 2**16))
     counts, totals = np.zeros(2 * half + 1), np.zeros(2 * half + 1)
@@ -224,7 +226,11 @@ def impact_level(y: np.ndarray, centre: float, sd: float, guard: float) -> float
     if not ok.any():
         return centre
     gap = np.where(ok, t[below] / np.where(ok, n_low, 1.0) - (t[-1] - t[above]) / np.where(ok, n_high, 1.0), -np.inf)
-    return centre + float(i[np.argmax(gap)] - half) * step
+    best = int(np.argmax(gap))
+    other = np.flatnonzero(gap != gap[best])  # the levels between the same samples share the largest gap: take their middle
+    first = int(other[other < best].max()) + 1 if (other < best).any() else 0
+    last = int(other[other > best].min()) - 1 if (other > best).any() else gap.size - 1
+    return centre + (0.5 * (i[first] + i[last]) - half) * step
 
 
 def sums(records) -> Sums:
