@@ -27,7 +27,8 @@ statistics are scale-free (the calibration has ``g = sigma_p = 1``) and read the
 noise of the record's model as the calibration simulates it: each is a ratio, a z score or
 a count, and none grows with the noise level (the calibration simulates the noise on bins
 10 % wide). One compiled pass over each record (:func:`sums`) and one quantile of its
-distances off the neighbours' line (:func:`spikes`) give what they read.
+distances off the neighbours' line (:func:`spikes`) give what they read, and the record's
+median, a histogram of levels and two passes over its sides the asymmetry (:func:`_sides`).
 
 ``coarse_sampling`` is the exception: the calibration copies the record's sampling, so its
 records say nothing about whether the sampling is too coarse; its threshold is the
@@ -156,9 +157,10 @@ class Sums(NamedTuple):
     each of at least :data:`BLOCK_MIN` samples, fewer for short records, none below 4),
     with ``block_record`` the record of each; ``side_count``, ``side_sum`` the count and sum
     of the second differences of triples beyond a guard on each side of each record's
-    impact level (``[0]`` below, ``[1]`` above, :func:`asymmetry`); ``off``: over records, the largest ratio of a record's largest
-    distance of a sample from the line through its neighbours to its
-    :data:`SPIKE_REFERENCE` quantile of those distances (:func:`_spike_ratio`)."""
+    impact level (``[0]`` below, ``[1]`` above, :func:`_sides`); ``off``: over records, the
+    largest ratio of a record's largest distance of a sample from the line through its
+    neighbours to its :data:`SPIKE_REFERENCE` quantile of those distances
+    (:func:`_spike_ratio`)."""
 
     count: int
     block_mean: np.ndarray
@@ -227,7 +229,7 @@ def impact_level(y: np.ndarray, centre: float, sd: float, guard: float) -> float
         return centre
     gap = np.where(ok, t[below] / np.where(ok, n_low, 1.0) - (t[-1] - t[above]) / np.where(ok, n_high, 1.0), -np.inf)
     best = int(np.argmax(gap))
-    other = np.flatnonzero(gap != gap[best])  # the levels between the same samples share the largest gap: take their middle
+    other = np.flatnonzero(gap != gap[best])  # levels between the same samples share the largest gap
     first = int(other[other < best].max()) + 1 if (other < best).any() else 0
     last = int(other[other > best].min()) - 1 if (other > best).any() else gap.size - 1
     return centre + (0.5 * (i[first] + i[last]) - half) * step
@@ -330,21 +332,21 @@ def asymmetry(s: Sums, analysis) -> float:
     """``|g_+ - g_-| / (g_+ + g_-)``: between impacts the block moves on parabolas (eq. 4), so
     the mean second difference of triples on one side is ``-g dt^2`` there and ``+g dt^2``
     on the other; a block leaning on one side (or a load pushing one way) falls back with
-    a different ``g`` on each (the asymmetry of :mod:`rockdec.record.record_measure`, without its
-    guard samples). Scale-free, free of an offset, the same for the mirrored record, and 0
-    for a symmetric block.
+    a different ``g`` on each (the asymmetry of :mod:`rockdec.record.record_measure` reads
+    the same about the record's mean, beyond its guard samples' margin). Scale-free, free
+    of an offset, the same for the mirrored record, and 0 for a symmetric block.
 
-    The sides are split at the record's median, the level that halves the samples: a
-    symmetric block's impacts are at its middle, and the median finds the middle to within
-    the spacing of the samples there, which is smallest where they crowd. Under a low-pass
-    load at 3 rocking frequencies a tenth of the triples chatter near rest within 0.5 % of
-    ``sigma_Y`` of the impact level, their second differences about 0 instead of ``-+g
-    dt^2``; the mean, which the rare wide swings move, misses that level by 0.1-1 % of
-    ``sigma_Y``, so one side takes the chatter and its ``g`` reads up to 10 % low. Split at
-    the mean, clean records under that load read 0.09 (median of 100 at ``e = 0.9``),
-    steeply varying with the load's pole and the step that the calibration bins; split at
-    the median, 0.0006. A lean of 3 % at ``e = 0.98`` (white load) reads 0.022 split at the
-    median against 0.017 at the mean, clean records 0.001 either way (docs/method.md §10)."""
+    The sides are the triples beyond a guard of :data:`GUARD_G` ``g dt^2`` below and above
+    the record's impact level (:func:`impact_level`, :func:`_sides`), so a lean of ``b``
+    reads ``b`` (3 % reads 0.030, 60 % reads 0.600 at ``e = 0.98``, white or low-pass
+    load). The guard leaves out the chatter near rest: under a low-pass load at 3 rocking
+    frequencies a tenth of the triples lie within 0.5 % of ``sigma_Y`` of the impact level,
+    their second differences about 0 instead of ``-+g dt^2``. Split at the record's mean
+    (0.1-1 % of ``sigma_Y`` off the level, moved by the rare wide swings) one side takes
+    them and reads its ``g`` up to 10 % low: clean records under that load read 0.09
+    (median of 100 at ``e = 0.9``), a value that moves steeply with the load's pole and the
+    step the calibration bins; read as here, 0.002. Split at the median, a lean moves the
+    split into the weak side and cancels itself (30 % reads 0.05) (docs/method.md §10)."""
     if not (s.side_count > 0).all():
         return np.nan
     g_minus, g_plus = s.side_sum[0] / s.side_count[0], -s.side_sum[1] / s.side_count[1]
