@@ -71,8 +71,11 @@ E_VALUES = (0.6, 0.8, 0.95, 0.98)
 NOISE_LEVELS = (0.0, 0.01, 0.03, 0.05)
 
 #: Loads of the records: the corner of a first-order low-pass load in rocking frequencies
-#: ``1/T(sigma_Y)`` (eq. 5), 0 for white impulses (the table's ``corner`` column).
-CORNERS = (0.0, 3.0)
+#: ``1/T(sigma_Y)`` (eq. 5), 0 for white impulses (the table's ``corner`` column). Clean
+#: records go under every load, defective ones under a coloured load only for the defects
+#: of ``COLOURED_DEFECTS`` (each coloured cell asks for calibrations of its own, several
+#: times a white one's cost).
+CORNERS, COLOURED_DEFECTS = (0.0, 3.0), ("asymmetry",)
 
 #: Records per cell and their length (``coarse_sampling`` uses :data:`COARSE_POINTS`).
 RECORDS, N_POINTS, COARSE_POINTS = 40, 100_000, 50_000
@@ -200,13 +203,14 @@ def _step(e: float, corner: float, points_per_cycle: float, n: int, seed0: int) 
 
 def run(
     e_values=E_VALUES, defects=DEFECTS, n_records: int = RECORDS, n_points: int = N_POINTS, cache_dir=None, noise_levels=NOISE_LEVELS,
-    corners=CORNERS,
+    corners=CORNERS, coloured_defects=COLOURED_DEFECTS,
 ) -> pd.DataFrame:
     """One row per record and cell (``e``, sensor ``noise``, load ``corner``, ``defect``,
     ``size``; ``defect`` ``"clean"`` for the records without one): the corrected ``e`` and
     interval ``rockdec estimate`` gives (:func:`rockdec.calibrate.inference.estimate`, the
     record model measured off the record), and per check its statistic, threshold and
-    whether it fired. Calibrations are stored in ``cache_dir`` and built before the records
+    whether it fired; under a coloured load (``corners`` other than 0) the defects of
+    ``coloured_defects`` only. Calibrations are stored in ``cache_dir`` and built before the records
     are estimated. The result's attributes ``statistics_s`` and ``simulate_analyse_s`` hold
     the seconds spent on the checks' statistics and on simulating and analysing the records
     (their ratio is the checks' share of a calibration's work), ``calibrations`` how many
@@ -218,6 +222,8 @@ def run(
             for noise in noise_levels:
                 cells.append((e, noise, corner, "clean", 0.0, seeds, n_points, POINTS_PER_CYCLE))
                 for defect, sizes in defects.items():
+                    if corner != 0.0 and defect not in coloured_defects:
+                        continue
                     for size in sizes:
                         if defect == "coarse_sampling":
                             cells.append((e, noise, corner, defect, size, seeds, COARSE_POINTS, size))
