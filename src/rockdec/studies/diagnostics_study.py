@@ -7,7 +7,8 @@ from :data:`STUDY_SEED_OFFSET`), with or without one defect of a given size
 of the clean record's rms, as the calibration simulates it) and under every load of
 :data:`CORNERS` (white impulses, or low-pass filtered with the corner at a given number of
 rocking frequencies: the step and pole of :func:`rockdec.studies.coverage.stage`, which
-places the records' own samples per cycle and the corner), and each goes through
+places the records' own samples per cycle and the corner; under it, the noise levels of
+:data:`COLOURED_NOISE` and the defects of :data:`COLOURED_DEFECTS`), and each goes through
 ``rockdec estimate`` itself (:func:`rockdec.calibrate.inference.estimate`): the record model
 measured off the record (:mod:`rockdec.record.record_measure`), the calibration for that
 model, its length and its sampling (:mod:`rockdec.calibrate.calibration`, shared by records
@@ -72,10 +73,11 @@ NOISE_LEVELS = (0.0, 0.01, 0.03, 0.05)
 
 #: Loads of the records: the corner of a first-order low-pass load in rocking frequencies
 #: ``1/T(sigma_Y)`` (eq. 5), 0 for white impulses (the table's ``corner`` column). Clean
-#: records go under every load, defective ones under a coloured load only for the defects
-#: of ``COLOURED_DEFECTS`` (each coloured cell asks for calibrations of its own, several
-#: times a white one's cost).
-CORNERS, COLOURED_DEFECTS = (0.0, 3.0), ("asymmetry",)
+#: records go under every load; under a coloured load only at the noise levels of
+#: ``COLOURED_NOISE`` and with the defects of ``COLOURED_DEFECTS``: each coloured cell asks
+#: for calibrations of its own, each several times a white one's cost (a noisy coloured one
+#: about 2 minutes on two busy cores).
+CORNERS, COLOURED_NOISE, COLOURED_DEFECTS = (0.0, 3.0), (0.0,), ("asymmetry",)
 
 #: Records per cell and their length (``coarse_sampling`` uses :data:`COARSE_POINTS`).
 RECORDS, N_POINTS, COARSE_POINTS = 40, 100_000, 50_000
@@ -203,14 +205,14 @@ def _step(e: float, corner: float, points_per_cycle: float, n: int, seed0: int) 
 
 def run(
     e_values=E_VALUES, defects=DEFECTS, n_records: int = RECORDS, n_points: int = N_POINTS, cache_dir=None, noise_levels=NOISE_LEVELS,
-    corners=CORNERS, coloured_defects=COLOURED_DEFECTS,
+    corners=CORNERS, coloured_noise=COLOURED_NOISE, coloured_defects=COLOURED_DEFECTS,
 ) -> pd.DataFrame:
     """One row per record and cell (``e``, sensor ``noise``, load ``corner``, ``defect``,
     ``size``; ``defect`` ``"clean"`` for the records without one): the corrected ``e`` and
     interval ``rockdec estimate`` gives (:func:`rockdec.calibrate.inference.estimate`, the
     record model measured off the record), and per check its statistic, threshold and
-    whether it fired; under a coloured load (``corners`` other than 0) the defects of
-    ``coloured_defects`` only. Calibrations are stored in ``cache_dir`` and built before the records
+    whether it fired; under a coloured load (``corners`` other than 0) at the noise levels
+    of ``coloured_noise`` and with the defects of ``coloured_defects`` only. Calibrations are stored in ``cache_dir`` and built before the records
     are estimated. The result's attributes ``statistics_s`` and ``simulate_analyse_s`` hold
     the seconds spent on the checks' statistics and on simulating and analysing the records
     (their ratio is the checks' share of a calibration's work), ``calibrations`` how many
@@ -219,7 +221,7 @@ def run(
     for i, e in enumerate(e_values):
         seeds = STUDY_SEED_OFFSET + i * 10**6 + np.arange(n_records)
         for corner in corners:
-            for noise in noise_levels:
+            for noise in noise_levels if corner == 0.0 else [x for x in noise_levels if x in coloured_noise]:
                 cells.append((e, noise, corner, "clean", 0.0, seeds, n_points, POINTS_PER_CYCLE))
                 for defect, sizes in defects.items():
                     if corner != 0.0 and defect not in coloured_defects:
