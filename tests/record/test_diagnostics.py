@@ -195,6 +195,58 @@ def test_the_spikes_statistic_leaves_out_nan_and_needs_a_spread():
     assert np.isnan(diagnostics.sums([np.arange(50.0)]).off)
 
 
+def _leaning(b: float, pole: float, dt: float, burn_in: int, seed: int = 21) -> np.ndarray:
+    """A record at e = 0.9 (g = sigma_p = 1) whose impulses carry the mean ``b g dt``: the
+    block falls back with ``g (1 - b)`` on one side and ``g (1 + b)`` on the other (eq. 4);
+    the load low-pass filtered with ``pole`` per sample (0: white)."""
+    from rockdec.physics.loading import draw_impulses, series_rng
+    from rockdec.physics.simulate import integrate
+
+    impulses = np.empty(burn_in + N - 1)
+    draw_impulses(series_rng(seed), impulses, 1.0, pole)
+    impulses += b * dt
+    theta, omega = np.empty(N), np.empty(N)
+    integrate(impulses, dt, 1.0, E, 0.0, 0.0, burn_in, theta, omega)
+    return theta
+
+
+@pytest.mark.parametrize("pole", [0.0, 0.78])
+def test_the_asymmetry_reads_the_lean_itself_under_a_white_or_a_coloured_load(clean, pole):
+    """Each side's g is read about the record's impact level, beyond a guard: a lean of b
+    (g (1 - b) on one side, g (1 + b) on the other) reads b within 0.01 from b = 0.03 to
+    0.6, and a clean record reads under 0.01 also under a low-pass load (pole 0.78 per
+    sample), where a block chatters near rest and the sides split at the record's mean read
+    0.05-0.1. An offset of the record (a sensor's zero) changes nothing."""
+    _, dt, _ = clean
+    step = calibrate_dt(e=E, g=1.0, sigma_p=1.0, points_per_cycle=75)
+    asymmetry = (lambda y: diagnostics.asymmetry(diagnostics.sums([y]), None))
+    clean_value = asymmetry(_leaning(0.0, pole, step["dt"], step["burn_in"]))
+    assert clean_value < 0.01
+    for b in (0.03, 0.1, 0.3, 0.6):
+        y = _leaning(b, pole, step["dt"], step["burn_in"])
+        assert asymmetry(y) == pytest.approx(b, abs=0.01)
+        assert asymmetry(y + 5.0 * np.std(y)) == pytest.approx(asymmetry(y), rel=1e-6)
+
+
+def test_the_impact_level_is_where_the_sides_part():
+    """Parabolic flights (eq. 4) of g = 2 about a level 3: the second differences are
+    +g dt^2 below it and -g dt^2 above it, so from any centre within the search range the
+    level found lies within the samples' spacing at the impacts (0.02), the sides read
+    about it are exactly +-g dt^2, and the mirrored record's sides are their mirror image."""
+    dt = 0.01
+    t = (np.arange(20_000) + 0.5) * dt  # no sample on an impact
+    phase = np.mod(t, 2.0)
+    y = 3.0 + np.where(np.mod(t, 4.0) < 2.0, 1.0, -1.0) * phase * (2.0 - phase)
+    guard = 8 * 2.0 * dt**2
+    for centre in (2.9, 3.0, 3.05):
+        level = diagnostics.impact_level(y, centre, float(np.std(y)), guard)
+        assert abs(level - 3.0) < 0.02
+        n0, n1, s0, s1 = diagnostics._side_sums(y, level, guard)
+        assert s0 / n0 == pytest.approx(2.0 * dt**2, rel=1e-6) and s1 / n1 == pytest.approx(-2.0 * dt**2, rel=1e-6)
+        mirrored = diagnostics._side_sums(-y, diagnostics.impact_level(-y, -centre, float(np.std(y)), guard), guard)
+        assert mirrored == pytest.approx((n1, n0, -s1, -s0), rel=1e-9)
+
+
 def test_a_mirrored_record_gives_the_same_statistics(clean):
     """A block leaning left or right is the same defect: mirroring the record (``-y``) swaps
     the sides' g and leaves the asymmetry's magnitude, and every other statistic, unchanged."""

@@ -9,7 +9,7 @@ import pytest
 
 from rockdec.record import diagnostics
 from rockdec.studies import diagnostics_study as ds
-from rockdec.physics.simulate import calibrate_dt
+from rockdec.physics.simulate import calibrate_dt, simulate_block
 
 E, N = 0.9, 20_000
 
@@ -26,6 +26,20 @@ def test_a_noisy_record_is_the_clean_one_plus_noise_of_its_share_of_the_rms(step
     assert np.std(noisy - clean) / np.sqrt(np.mean(clean**2)) == pytest.approx(0.03, rel=0.03)
 
 
+def test_a_coloured_record_is_the_kernels_with_the_same_pole_and_a_lean_pushes_it_one_way(step):
+    """Under a low-pass load the clean record equals the compiled kernel's of the same seed and
+    pole (drawn apart, rockdec.physics.simulate.simulate_block); a lean of b = 0.3 moves the
+    record's median towards the side it weakens and reads as asymmetry."""
+    pole = 0.78
+    clean = ds.record(E, 13, N, step["dt"], step["burn_in"], None, 0.0, 0.0, pole)
+    kernel, _ = simulate_block([13], N, dt=step["dt"], g=1.0, e=E, sigma_p=1.0, burn_in=step["burn_in"], pole=pole)
+    np.testing.assert_array_equal(clean, kernel[0])
+    leaning = ds.record(E, 13, N, step["dt"], step["burn_in"], "asymmetry", 0.3, 0.0, pole)
+    assert np.median(leaning) > np.median(clean)
+    asymmetry = (lambda y: diagnostics.asymmetry(diagnostics.sums([y]), None))
+    assert asymmetry(leaning) > 0.1 > asymmetry(clean)
+
+
 def test_a_defect_rides_on_the_same_noise_as_its_clean_record(step):
     """Pairing: the drifting record less the clean one, both at 5 % noise, is the trend alone."""
     clean = ds.record(E, 12, N, step["dt"], step["burn_in"], None, 0.0, 0.05)
@@ -38,7 +52,7 @@ def test_the_summary_reads_false_alarms_and_detections_per_noise_level():
     rows = []
     for noise, fires in ((0.0, (True, False, False, False)), (0.05, (False, False, False, False))):
         for seed, fired in enumerate(fires):
-            row = {"e_true": E, "noise": noise, "defect": "clean", "size": 0.0, "seed": seed, "e_hat": E, "low": E - 0.02, "high": E + 0.02}
+            row = {"e_true": E, "noise": noise, "corner": 0.0, "defect": "clean", "size": 0.0, "seed": seed, "e_hat": E, "low": E - 0.02, "high": E + 0.02}
             row.update({f"{c}_fired": fired and c == "drift" for c in diagnostics.CHECKS})
             rows.append(row)
             defective = dict(row, defect="drift", size=1.0, e_hat=E + 0.05 * (noise == 0.0))

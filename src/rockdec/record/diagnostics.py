@@ -27,7 +27,8 @@ statistics are scale-free (the calibration has ``g = sigma_p = 1``) and read the
 noise of the record's model as the calibration simulates it: each is a ratio, a z score or
 a count, and none grows with the noise level (the calibration simulates the noise on bins
 10 % wide). One compiled pass over each record (:func:`sums`) and one quantile of its
-distances off the neighbours' line (:func:`spikes`) give what they read.
+distances off the neighbours' line (:func:`spikes`) give what they read, and the record's
+median, a histogram of levels and two passes over its sides the asymmetry (:func:`_sides`).
 
 ``coarse_sampling`` is the exception: the calibration copies the record's sampling, so its
 records say nothing about whether the sampling is too coarse; its threshold is the
@@ -39,6 +40,7 @@ calibration, are measured by :mod:`rockdec.studies.diagnostics_study` (docs/meth
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Callable, NamedTuple
 
@@ -66,6 +68,13 @@ BLOCKS, BLOCK_MIN = 20, 1000
 #: than about 0.3 % of the samples (1 % of the triples) leave it where it is.
 SPIKE_REFERENCE = 0.99
 
+#: :func:`asymmetry` reads each side's ``g`` off the triples beyond ``GUARD_G g dt^2`` of the
+#: record's impact level (``g dt^2`` read off the sides split at the record's median), the
+#: level searched on steps of ``1/LEVEL_STEPS`` of that guard, up to ``LEVEL_RANGE``
+#: standard deviations of the record from its median and with at least ``LEVEL_SHARE`` of
+#: the triples on each side (:func:`impact_level`).
+GUARD_G, LEVEL_STEPS, LEVEL_RANGE, LEVEL_SHARE = 8.0, 8, 1.0, 0.05
+
 #: ``e`` at which the structural floor of ``coarse_sampling`` is taken when the record gives
 #: no corrected ``e`` (the floor is highest for small ``e``; 0.95 is the paper's middle).
 FLOOR_E = 0.95
@@ -76,13 +85,10 @@ def _record_sums(y, n_blocks, distance):
     """One record's sums in two passes. First, per block of ``n_blocks`` consecutive equal
     blocks (by sample index), the count of non-NaN samples and the sums of ``d`` and ``d^2``,
     ``d = y - c`` with ``c`` the first non-NaN sample (a shift that keeps the variances
-    accurate). Then, about the record's mean ``m``, over triples ``y[k-1], y[k], y[k+1]``
-    all above ``m`` (side 1) or all below (side 0), the count and the sum of the second
-    difference ``y[k+1] - 2 y[k] + y[k-1]``, and the largest ``|y[k] - (y[k-1] + y[k+1])/2|``
-    over non-NaN triples; the finite ``|y[k+1] - 2 y[k] + y[k-1]|`` go to the front of
-    ``distance`` (``n - 2`` floats, scratch). Returns ``(c, block counts, block sums
-    (2, n_blocks), side counts, side sums, largest, number of distances written)``, the side
-    counts and sums as pairs (side 0, side 1)."""
+    accurate). Then, over triples ``y[k-1], y[k], y[k+1]``, the largest ``|y[k] - (y[k-1] +
+    y[k+1])/2|`` over non-NaN triples; the finite ``|y[k+1] - 2 y[k] + y[k-1]|`` go to the
+    front of ``distance`` (``n - 2`` floats, scratch). Returns ``(c, block counts, block
+    sums (2, n_blocks), largest, number of distances written)``."""
     n = y.size
     c = 0.0
     for k in range(n):
@@ -90,7 +96,6 @@ def _record_sums(y, n_blocks, distance):
             c = y[k]
             break
     counts, blocks = np.empty(n_blocks), np.empty((2, n_blocks))
-    total, shift = 0.0, 0.0  # sums of the counts and of the blocks' sums of d, in block order
     for j in range(n_blocks):
         q, t1, t2 = 0, 0.0, 0.0
         for k in range(j * n // n_blocks, (j + 1) * n // n_blocks):
@@ -100,10 +105,7 @@ def _record_sums(y, n_blocks, distance):
                 t1 += d
                 t2 += d * d
         counts[j], blocks[0, j], blocks[1, j] = q, t1, t2
-        total += q
-        shift += t1
-    m = c + shift / total if total else c
-    worst, n0, n1, s0, s1 = 0.0, 0.0, 0.0, 0.0, 0.0  # scalars: array elements here cost 6 times more
+    worst = 0.0
     written = 0
     for k in range(1, n - 1):
         a, b, e = y[k - 1], y[k], y[k + 1]
@@ -113,13 +115,40 @@ def _record_sums(y, n_blocks, distance):
         if abs(d2) < np.inf:  # finite: NaN compares False
             distance[written] = abs(d2)
             written += 1
-        if a > m and b > m and e > m:
+    return c, counts, blocks, 0.5 * worst, written
+
+
+@njit(nogil=True, cache=True)
+def _side_sums(y, level, guard):
+    """Count and sum of the second differences ``y[k+1] - 2 y[k] + y[k-1]`` of the triples
+    all below ``level - guard`` (side 0) and all above ``level + guard`` (side 1), as
+    ``(n0, n1, s0, s1)``; a triple touching a NaN is left out (NaN compares False)."""
+    low, high = level - guard, level + guard
+    n0, n1, s0, s1 = 0.0, 0.0, 0.0, 0.0  # scalars: array elements here cost 6 times more
+    for k in range(1, y.size - 1):
+        a, b, e = y[k - 1], y[k], y[k + 1]
+        if a > high and b > high and e > high:
             n1 += 1.0
-            s1 += d2
-        elif a < m and b < m and e < m:
+            s1 += e - 2.0 * b + a
+        elif a < low and b < low and e < low:
             n0 += 1.0
-            s0 += d2
-    return c, counts, blocks, (n0, n1), (s0, s1), 0.5 * worst, written
+            s0 += e - 2.0 * b + a
+    return n0, n1, s0, s1
+
+
+@njit(nogil=True, cache=True)
+def _level_histogram(y, centre, step, counts, totals):
+    """Add the count and the sum of the finite second differences of ``y``'s triples to
+    ``counts`` and ``totals`` (``2 h + 1`` bins) at the bin ``h + round((y[k] - centre) /
+    step)`` of their middle sample, clipped to the end bins."""
+    half = (counts.size - 1) // 2
+    for k in range(1, y.size - 1):
+        d2 = y[k + 1] - 2.0 * y[k] + y[k - 1]
+        if abs(d2) < np.inf:  # finite: NaN compares False
+            j = min(max((y[k] - centre) / step, -half), half)
+            i = int(np.floor(j + 0.5)) + half
+            counts[i] += 1.0
+            totals[i] += d2
 
 
 class Sums(NamedTuple):
@@ -127,10 +156,11 @@ class Sums(NamedTuple):
     finite samples; ``block_mean``, ``block_var`` per block of each record (:data:`BLOCKS`,
     each of at least :data:`BLOCK_MIN` samples, fewer for short records, none below 4),
     with ``block_record`` the record of each; ``side_count``, ``side_sum`` the count and sum
-    of the second differences of triples on one side of each record's mean (``[0]``
-    below, ``[1]`` above); ``off``: over records, the largest ratio of a record's largest
-    distance of a sample from the line through its neighbours to its
-    :data:`SPIKE_REFERENCE` quantile of those distances (:func:`_spike_ratio`)."""
+    of the second differences of triples beyond a guard on each side of each record's
+    impact level (``[0]`` below, ``[1]`` above, :func:`_sides`); ``off``: over records, the
+    largest ratio of a record's largest distance of a sample from the line through its
+    neighbours to its :data:`SPIKE_REFERENCE` quantile of those distances
+    (:func:`_spike_ratio`)."""
 
     count: int
     block_mean: np.ndarray
@@ -152,9 +182,63 @@ def _spike_ratio(distance: np.ndarray, largest: float) -> float:
     return largest / reference if reference > 0.0 else np.nan
 
 
+def _median(y: np.ndarray) -> float:
+    """The median of the non-NaN samples of ``y`` (NaN when there is none)."""
+    finite = y[~np.isnan(y)]
+    return float(np.median(finite, overwrite_input=True)) if finite.size else np.nan
+
+
+def _sides(y: np.ndarray, count: float, sum1: float, sum2: float) -> tuple:
+    """``(n0, n1, s0, s1)`` of :func:`_side_sums` of ``y`` about its :func:`impact_level`
+    with a guard of :data:`GUARD_G` ``g dt^2``, ``g dt^2`` read off the sides split at the
+    median (no guard); ``count``, ``sum1``, ``sum2``: the non-NaN samples and the sums of
+    their deviations from any one value and of their squares (the record's spread). All 0
+    when the median's sides give no positive ``g``."""
+    centre = _median(y)
+    n0, n1, s0, s1 = _side_sums(y, centre, 0.0)
+    g_dt2 = 0.5 * (s0 / n0 - s1 / n1) if n0 > 0.0 and n1 > 0.0 else np.nan
+    var = sum2 / count - (sum1 / count) ** 2 if count > 0 else np.nan
+    if not (g_dt2 > 0.0 and var > 0.0):
+        return 0.0, 0.0, 0.0, 0.0
+    guard = GUARD_G * g_dt2
+    return _side_sums(y, impact_level(y, centre, math.sqrt(var), guard), guard)
+
+
+def impact_level(y: np.ndarray, centre: float, sd: float, guard: float) -> float:
+    """The level of ``y``'s impacts: the level ``L``, within :data:`LEVEL_RANGE` ``sd`` of
+    ``centre`` on steps of ``guard / LEVEL_STEPS``, at which the mean second difference of
+    the triples whose middle sample lies below ``L - guard`` less that of those above
+    ``L + guard`` is largest, with at least :data:`LEVEL_SHARE` of the triples on each side.
+    Between impacts the block moves on parabolas, ``+g dt^2`` below the impact level and
+    ``-g dt^2`` above it (eq. 4), so a triple placed on the wrong side lowers the
+    difference: it is largest at the impact level, whatever the ``g`` of each side. The
+    guard leaves out the triples near the level (the impacts and the chatter of a block near
+    rest, whose second differences are about 0). Levels between the same samples part the
+    triples alike: the middle of the run of steps with the largest difference is taken, so
+    the mirrored record's level is the mirror image. ``centre`` when no level qualifies."""
+    step = guard / LEVEL_STEPS
+    half = int(min(math.ceil(LEVEL_RANGE * sd / step), 2**16))
+    counts, totals = np.zeros(2 * half + 1), np.zeros(2 * half + 1)
+    _level_histogram(y, centre, step, counts, totals)
+    n, t = np.cumsum(counts), np.cumsum(totals)
+    i = np.arange(LEVEL_STEPS + 1, 2 * half - LEVEL_STEPS)  # level bins with a full guard inside the range
+    below, above = i - LEVEL_STEPS - 1, i + LEVEL_STEPS  # last bin below L - guard; last bin not above L + guard
+    n_low, n_high = n[below], n[-1] - n[above]
+    ok = (n_low >= LEVEL_SHARE * n[-1]) & (n_high >= LEVEL_SHARE * n[-1])
+    if not ok.any():
+        return centre
+    gap = np.where(ok, t[below] / np.where(ok, n_low, 1.0) - (t[-1] - t[above]) / np.where(ok, n_high, 1.0), -np.inf)
+    best = int(np.argmax(gap))
+    other = np.flatnonzero(gap != gap[best])  # levels between the same samples share the largest gap
+    first = int(other[other < best].max()) + 1 if (other < best).any() else 0
+    last = int(other[other > best].min()) - 1 if (other > best).any() else gap.size - 1
+    return centre + (0.5 * (i[first] + i[last]) - half) * step
+
+
 def sums(records) -> Sums:
     """:class:`Sums` of ``records`` (1-D arrays, NaN allowed): one compiled pass per record
-    (:func:`_record_sums`) and the quantile of :func:`_spike_ratio`."""
+    (:func:`_record_sums`), the quantile of :func:`_spike_ratio`, and the sides of
+    :func:`asymmetry` (:func:`_sides`)."""
     count, off = 0, np.nan
     side_n, side_s = np.zeros(2), np.zeros(2)
     means, variances, owners = [], [], []
@@ -162,9 +246,10 @@ def sums(records) -> Sums:
         y = np.ascontiguousarray(y, dtype=np.float64)
         b = min(BLOCKS, y.size // BLOCK_MIN)
         distance = np.empty(max(y.size - 2, 0))  # allocated here: the kernel then compiles no np.empty
-        _, bn, (b1, b2), rn, rs, worst, written = _record_sums(y, max(b, 1), distance)
+        _, bn, (b1, b2), worst, written = _record_sums(y, max(b, 1), distance)
         count, off = count + int(bn.sum()), np.fmax(off, _spike_ratio(distance[:written], worst))
-        side_n, side_s = side_n + rn, side_s + rs
+        n0, n1, s0, s1 = _sides(y, float(bn.sum()), float(b1.sum()), float(b2.sum()))
+        side_n, side_s = side_n + (n0, n1), side_s + (s0, s1)
         if b >= 4 and (bn > 1).all():
             means.append(b1 / bn)
             variances.append(b2 / bn - (b1 / bn) ** 2)
@@ -247,8 +332,21 @@ def asymmetry(s: Sums, analysis) -> float:
     """``|g_+ - g_-| / (g_+ + g_-)``: between impacts the block moves on parabolas (eq. 4), so
     the mean second difference of triples on one side is ``-g dt^2`` there and ``+g dt^2``
     on the other; a block leaning on one side (or a load pushing one way) falls back with
-    a different ``g`` on each (the asymmetry of :mod:`rockdec.record.record_measure`, without its
-    guard samples). Scale-free and 0 for a symmetric block."""
+    a different ``g`` on each (the asymmetry of :mod:`rockdec.record.record_measure` reads
+    the same about the record's mean, beyond its guard samples' margin). Scale-free, free
+    of an offset, the same for the mirrored record, and 0 for a symmetric block.
+
+    The sides are the triples beyond a guard of :data:`GUARD_G` ``g dt^2`` below and above
+    the record's impact level (:func:`impact_level`, :func:`_sides`), so a lean of ``b``
+    reads ``b`` (3 % reads 0.030, 60 % reads 0.600 at ``e = 0.98``, white or low-pass
+    load). The guard leaves out the chatter near rest: under a low-pass load at 3 rocking
+    frequencies a tenth of the triples lie within 0.5 % of ``sigma_Y`` of the impact level,
+    their second differences about 0 instead of ``-+g dt^2``. Split at the record's mean
+    (0.1-1 % of ``sigma_Y`` off the level, moved by the rare wide swings) one side takes
+    them and reads its ``g`` up to 10 % low: clean records under that load read 0.09
+    (median of 100 at ``e = 0.9``), a value that moves steeply with the load's pole and the
+    step the calibration bins; read as here, 0.002. Split at the median, a lean moves the
+    split into the weak side and cancels itself (30 % reads 0.05) (docs/method.md §10)."""
     if not (s.side_count > 0).all():
         return np.nan
     g_minus, g_plus = s.side_sum[0] / s.side_count[0], -s.side_sum[1] / s.side_count[1]

@@ -4,7 +4,11 @@ Records of known ``e`` are simulated apart from any calibration (``g = sigma_p =
 step calibrated to :data:`POINTS_PER_CYCLE` samples per cycle at ``sigma_Y``, eq. 5; seeds
 from :data:`STUDY_SEED_OFFSET`), with or without one defect of a given size
 (:data:`DEFECTS`), each at every sensor noise level of :data:`NOISE_LEVELS` (white, a share
-of the clean record's rms, as the calibration simulates it), and each goes through
+of the clean record's rms, as the calibration simulates it) and under every load of
+:data:`CORNERS` (white impulses, or low-pass filtered with the corner at a given number of
+rocking frequencies: the step and pole of :func:`rockdec.studies.coverage.stage`, which
+places the records' own samples per cycle and the corner; under it, the noise levels of
+:data:`COLOURED_NOISE` and the defects of :data:`COLOURED_DEFECTS`), and each goes through
 ``rockdec estimate`` itself (:func:`rockdec.calibrate.inference.estimate`): the record model
 measured off the record (:mod:`rockdec.record.record_measure`), the calibration for that
 model, its length and its sampling (:mod:`rockdec.calibrate.calibration`, shared by records
@@ -19,15 +23,16 @@ of ``e`` is read record by record:
   ``1 + m`` along the record (``m`` the size);
 * ``drift``: a linear trend from ``-D/2`` to ``+D/2`` added (``D`` in ``sigma_Y``);
 * ``spikes``: one sample in :data:`SPIKE_EVERY` replaced by ``+-k sigma_Y`` (``k`` the size);
-* ``asymmetry``: impulses with mean ``b g dt`` per step, a constant push that leaves the
-  block ``g (1 - b)`` on one side and ``g (1 + b)`` on the other (a leaning block);
+* ``asymmetry``: impulses with mean ``b g dt`` per step (added to the filtered load under
+  a coloured one), a constant push that leaves the block ``g (1 - b)`` on one side and
+  ``g (1 + b)`` on the other (a leaning block);
 * ``few_triggers``: a share of the record lost in gaps (NaN) of :data:`GAP` samples;
 * ``coarse_sampling``: the records sampled at fewer samples per cycle (their own
   calibration; no pairing, the shift is read against the clean records' mean).
 
 A defect *matters* at a size when it moves the corrected ``e`` by more than half the
 median 95 % interval (median over records of the paired shift). :func:`summary` gives per
-check, ``e`` and noise level the false-alarm rate on the clean records and, per size, the shift, half
+check, ``e``, noise level and load the false-alarm rate on the clean records and, per size, the shift, half
 the interval, and the detection rate (the share of defective records on which the
 check fires).
 """
@@ -52,8 +57,9 @@ from rockdec.record.records import Record
 from rockdec.validate import InputError
 
 #: Seeds of the study's records start here (apart from scenes, pilots, calibrations and
-#: the other studies).
-STUDY_SEED_OFFSET = 5 * 2**60
+#: the other studies); the pilots that place a coloured load's records (:func:`_step`)
+#: start ``PILOT_SEEDS`` further on, beyond every cell's records.
+STUDY_SEED_OFFSET, PILOT_SEEDS = 5 * 2**60, 9 * 10**8
 
 #: Samples per cycle at ``sigma_Y`` of the clean records (the paper's sampling).
 POINTS_PER_CYCLE = 75.0
@@ -64,6 +70,14 @@ E_VALUES = (0.6, 0.8, 0.95, 0.98)
 #: Sensor noise of the records, in units of each clean record's rms (white, as the
 #: calibration simulates it once the record's own noise is measured).
 NOISE_LEVELS = (0.0, 0.01, 0.03, 0.05)
+
+#: Loads of the records: the corner of a first-order low-pass load in rocking frequencies
+#: ``1/T(sigma_Y)`` (eq. 5), 0 for white impulses (the table's ``corner`` column). Clean
+#: records go under every load; under a coloured load only at the noise levels of
+#: ``COLOURED_NOISE`` and with the defects of ``COLOURED_DEFECTS``: each coloured cell asks
+#: for calibrations of its own, each several times a white one's cost (a noisy coloured one
+#: about 2 minutes on two busy cores).
+CORNERS, COLOURED_NOISE, COLOURED_DEFECTS = (0.0, 3.0), (0.0,), ("asymmetry",)
 
 #: Records per cell and their length (``coarse_sampling`` uses :data:`COARSE_POINTS`).
 RECORDS, N_POINTS, COARSE_POINTS = 40, 100_000, 50_000
@@ -82,13 +96,14 @@ DEFECTS = {
 }
 
 
-def simulate(e: float, seed: int, n: int, dt: float, burn_in: int, defect: str | None = None, size: float = 0.0) -> np.ndarray:
-    """One record of ``n`` samples at ``e`` (``g = sigma_p = 1``) from ``seed``, with the
-    simulated ``defect`` (``nonstationary`` or ``asymmetry``) of ``size``; any other defect
-    is added afterwards (:func:`add_defect`). Clean, it equals
-    :func:`rockdec.physics.simulate.simulate_block` of the same seed."""
+def simulate(e: float, seed: int, n: int, dt: float, burn_in: int, defect: str | None = None, size: float = 0.0, pole: float = 0.0) -> np.ndarray:
+    """One record of ``n`` samples at ``e`` (``g = sigma_p = 1``) from ``seed``, the load
+    low-pass filtered with ``pole`` per sample (0: white), with the simulated ``defect``
+    (``nonstationary`` or ``asymmetry``) of ``size``; any other defect is added afterwards
+    (:func:`add_defect`). Clean, it equals :func:`rockdec.physics.simulate.simulate_block`
+    of the same seed and pole."""
     impulses = np.empty(burn_in + n - 1)
-    draw_impulses(series_rng(seed), impulses, 1.0)
+    draw_impulses(series_rng(seed), impulses, 1.0, pole)
     if defect == "nonstationary":
         impulses[burn_in:] *= 1.0 + size * np.linspace(-1.0, 1.0, n - 1)
         impulses[:burn_in] *= 1.0 - size
@@ -118,16 +133,17 @@ def add_defect(theta: np.ndarray, defect: str | None, size: float, seed: int) ->
     return y
 
 
-def record(e: float, seed: int, n: int, dt: float, burn_in: int, defect: str | None, size: float, noise: float) -> np.ndarray:
-    """The study's record: :func:`simulate`, :func:`add_defect`, then white sensor noise of
-    ``noise`` times the clean record's rms (:func:`rockdec.physics.loading.add_sensor_noise`,
-    as the calibration and the coverage study add it)."""
-    theta = simulate(e, seed, n, dt, burn_in, defect, size)
+def record(e: float, seed: int, n: int, dt: float, burn_in: int, defect: str | None, size: float, noise: float, pole: float = 0.0) -> np.ndarray:
+    """The study's record: :func:`simulate` (load pole ``pole``), :func:`add_defect`, then
+    white sensor noise of ``noise`` times the clean record's rms
+    (:func:`rockdec.physics.loading.add_sensor_noise`, as the calibration and the coverage
+    study add it)."""
+    theta = simulate(e, seed, n, dt, burn_in, defect, size, pole)
     y = add_defect(theta, defect, size, seed)
     return add_sensor_noise(y[None], [seed], noise * float(np.sqrt(np.mean(theta**2))))[0]
 
 
-def _cell(e: float, defect: str | None, size: float, noise: float, seeds, n: int, dt: float, burn_in: int) -> list:
+def _cell(e: float, defect: str | None, size: float, noise: float, seeds, n: int, dt: float, burn_in: int, pole: float) -> list:
     """``(calibration settings, seconds to simulate and analyse, seconds for the
     statistics)`` per seed of one cell: the settings ``rockdec estimate`` calibrates the record
     with (its measured record model, :func:`rockdec.calibrate.inference.record_model`); ``None``
@@ -137,7 +153,7 @@ def _cell(e: float, defect: str | None, size: float, noise: float, seeds, n: int
         warnings.simplefilter("ignore")
         for seed in seeds:
             tick = time.perf_counter()
-            y = record(e, int(seed), n, dt, burn_in, defect, size, noise)
+            y = record(e, int(seed), n, dt, burn_in, defect, size, noise, pole)
             try:
                 analysis = measured.analyse([y], dt)
             except ValueError:
@@ -152,7 +168,7 @@ def _cell(e: float, defect: str | None, size: float, noise: float, seeds, n: int
     return out
 
 
-def _estimates(e: float, defect: str | None, size: float, noise: float, seeds, n: int, dt: float, burn_in: int, cache_dir) -> list:
+def _estimates(e: float, defect: str | None, size: float, noise: float, seeds, n: int, dt: float, burn_in: int, pole: float, cache_dir) -> list:
     """Per seed of one cell, what :func:`rockdec.calibrate.inference.estimate` gives the record
     (its calibration stored in ``cache_dir``): ``e`` (``None`` when it gives none), the
     interval, the calibration's file name, and per check its statistic, threshold and whether it fired; ``None`` for a
@@ -161,7 +177,7 @@ def _estimates(e: float, defect: str | None, size: float, noise: float, seeds, n
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         for seed in seeds:
-            y = record(e, int(seed), n, dt, burn_in, defect, size, noise)
+            y = record(e, int(seed), n, dt, burn_in, defect, size, noise, pole)
             try:
                 got = inference.estimate([Record(y, dt, f"record {seed}")], cache_dir=cache_dir)
             except InputError:
@@ -175,41 +191,59 @@ def _estimates(e: float, defect: str | None, size: float, noise: float, seeds, n
     return out
 
 
+def _step(e: float, corner: float, points_per_cycle: float, n: int, seed0: int) -> dict:
+    """``dt``, ``burn_in`` and the load's ``pole`` of records of ``n`` samples at ``e`` and
+    ``points_per_cycle``: :func:`rockdec.physics.simulate.calibrate_dt` for a white load
+    (``corner`` 0), :func:`rockdec.studies.coverage.stage` (pilot seeds from ``seed0``) for
+    a low-pass load of ``corner`` rocking frequencies."""
+    if corner == 0.0:
+        return {**calibrate_dt(e=e, g=1.0, sigma_p=1.0, points_per_cycle=points_per_cycle), "pole": 0.0}
+    from rockdec.studies.coverage import stage
+
+    return stage(e, n, corner, seed0, points_per_cycle)
+
+
 def run(
     e_values=E_VALUES, defects=DEFECTS, n_records: int = RECORDS, n_points: int = N_POINTS, cache_dir=None, noise_levels=NOISE_LEVELS,
+    corners=CORNERS, coloured_noise=COLOURED_NOISE, coloured_defects=COLOURED_DEFECTS,
 ) -> pd.DataFrame:
-    """One row per record and cell (``e``, sensor ``noise``, ``defect``, ``size``; ``defect``
-    ``"clean"`` for the records without one): the corrected ``e`` and interval
-    ``rockdec estimate`` gives (:func:`rockdec.calibrate.inference.estimate`, the record model
-    measured off the record), and per check its statistic, threshold and whether it fired.
-    Calibrations are stored in ``cache_dir`` and built before the records are estimated. The
-    result's attributes ``statistics_s`` and ``simulate_analyse_s`` hold the seconds spent on
-    the checks' statistics and on simulating and analysing the records (their ratio is the
-    checks' share of a calibration's work), ``calibrations`` how many calibrations the
-    records used."""
+    """One row per record and cell (``e``, sensor ``noise``, load ``corner``, ``defect``,
+    ``size``; ``defect`` ``"clean"`` for the records without one): the corrected ``e`` and
+    interval ``rockdec estimate`` gives (:func:`rockdec.calibrate.inference.estimate`, the
+    record model measured off the record), and per check its statistic, threshold and
+    whether it fired; under a coloured load (``corners`` other than 0) at the noise levels
+    of ``coloured_noise`` and with the defects of ``coloured_defects`` only. Calibrations are stored in ``cache_dir`` and built before the records
+    are estimated. The result's attributes ``statistics_s`` and ``simulate_analyse_s`` hold
+    the seconds spent on the checks' statistics and on simulating and analysing the records
+    (their ratio is the checks' share of a calibration's work), ``calibrations`` how many
+    calibrations the records used."""
     cells = []
     for i, e in enumerate(e_values):
         seeds = STUDY_SEED_OFFSET + i * 10**6 + np.arange(n_records)
-        for noise in noise_levels:
-            cells.append((e, noise, "clean", 0.0, seeds, n_points, POINTS_PER_CYCLE))
-            for defect, sizes in defects.items():
-                for size in sizes:
-                    if defect == "coarse_sampling":
-                        cells.append((e, noise, defect, size, seeds, COARSE_POINTS, size))
-                    else:
-                        cells.append((e, noise, defect, size, seeds, n_points, POINTS_PER_CYCLE))
+        for corner in corners:
+            for noise in noise_levels if corner == 0.0 else [x for x in noise_levels if x in coloured_noise]:
+                cells.append((e, noise, corner, "clean", 0.0, seeds, n_points, POINTS_PER_CYCLE))
+                for defect, sizes in defects.items():
+                    if corner != 0.0 and defect not in coloured_defects:
+                        continue
+                    for size in sizes:
+                        if defect == "coarse_sampling":
+                            cells.append((e, noise, corner, defect, size, seeds, COARSE_POINTS, size))
+                        else:
+                            cells.append((e, noise, corner, defect, size, seeds, n_points, POINTS_PER_CYCLE))
     steps = {}
-    for e, _, _, _, _, _, ppc in cells:
-        if (e, ppc) not in steps:
-            steps[e, ppc] = calibrate_dt(e=e, g=1.0, sigma_p=1.0, points_per_cycle=ppc)
+    for e, _, corner, _, _, _, n, ppc in cells:
+        if (e, corner, ppc) not in steps:
+            steps[e, corner, ppc] = _step(e, corner, ppc, n, STUDY_SEED_OFFSET + PILOT_SEEDS)
 
-    def simulated(e, defect, size, ppc):
-        return None if defect in ("clean", "coarse_sampling") else defect, size, steps[e, ppc]["dt"], steps[e, ppc]["burn_in"]
+    def simulated(e, corner, defect, size, ppc):
+        step = steps[e, corner, ppc]
+        return None if defect in ("clean", "coarse_sampling") else defect, size, step["dt"], step["burn_in"], step["pole"]
 
     staged = []
-    for e, noise, defect, size, seeds, n, ppc in cells:
-        d, size, dt, burn_in = simulated(e, defect, size, ppc)
-        staged.append(dask.delayed(_cell)(e, d, size, noise, seeds, n, dt, burn_in))
+    for e, noise, corner, defect, size, seeds, n, ppc in cells:
+        d, size, dt, burn_in, pole = simulated(e, corner, defect, size, ppc)
+        staged.append(dask.delayed(_cell)(e, d, size, noise, seeds, n, dt, burn_in, pole))
     settings = engine.compute(*staged)
     keys = {calibration.settings_hash(s): s for records in settings for s, _, _ in records if s is not None}
     print(f"diagnostics study: {len(cells)} cells of {n_records} records simulated and analysed; {len(keys)} calibrations",
@@ -217,23 +251,24 @@ def run(
     for key in keys.values():
         calibration.load_or_build(key, cache_dir)
     tasks = []
-    for e, noise, defect, size, seeds, n, ppc in cells:
-        d, size, dt, burn_in = simulated(e, defect, size, ppc)
-        tasks.append(dask.delayed(_estimates)(e, d, size, noise, seeds, n, dt, burn_in, cache_dir))
+    for e, noise, corner, defect, size, seeds, n, ppc in cells:
+        d, size, dt, burn_in, pole = simulated(e, corner, defect, size, ppc)
+        tasks.append(dask.delayed(_estimates)(e, d, size, noise, seeds, n, dt, burn_in, pole, cache_dir))
     results = engine.compute(*tasks)
     rows = []
     cost = np.zeros(2)
-    for (e, noise, defect, size, seeds, n, _), staged_cell, got in zip(cells, settings, results):
+    for (e, noise, corner, defect, size, seeds, n, _), staged_cell, got in zip(cells, settings, results):
         for seed, (_, work_s, statistics_s), estimated in zip(seeds, staged_cell, got):
             cost += (work_s, statistics_s)
-            rows.append({"e_true": e, "noise": noise, "defect": defect, "size": size, "seed": int(seed), "n_points": n, **(estimated or {})})
+            rows.append({"e_true": e, "noise": noise, "corner": corner, "defect": defect, "size": size, "seed": int(seed), "n_points": n,
+                         **(estimated or {})})
     table = pd.DataFrame(rows)
     table.attrs.update(simulate_analyse_s=float(cost[0]), statistics_s=float(cost[1]), calibrations=len(keys))
     return table
 
 
 def summary(table: pd.DataFrame) -> pd.DataFrame:
-    """Per check, ``e``, sensor noise and size: records analysed; the median shift of the corrected ``e``
+    """Per check, ``e``, sensor noise, load corner and size: records analysed; the median shift of the corrected ``e``
     from the same seeds' clean records (``coarse_sampling``: from their mean) over the
     records that keep an ``e``; the share of records that lose the ``e`` their clean record
     had (``lost_pct``); half the median 95 % interval of the clean records; whether the
@@ -241,12 +276,12 @@ def summary(table: pd.DataFrame) -> pd.DataFrame:
     ``e``); and the share of records on which the check fires (on the clean records, size
     0: the false-alarm rate)."""
     rows = []
-    for (e, noise), at_e in table.groupby(["e_true", "noise"]):
+    for (e, noise, corner), at_e in table.groupby(["e_true", "noise", "corner"]):
         clean = at_e[at_e["defect"] == "clean"].set_index("seed")
         half = 0.5 * float(np.nanmedian(clean["high"] - clean["low"]))
         for check in diagnostics.CHECKS:
             fired = clean[f"{check}_fired"].dropna().astype(bool)
-            rows.append({"check": check, "e_true": e, "noise": noise, "size": 0.0, "records": int(fired.size), "e_shift": 0.0, "lost_pct": 0.0,
+            rows.append({"check": check, "e_true": e, "noise": noise, "corner": corner, "size": 0.0, "records": int(fired.size), "e_shift": 0.0, "lost_pct": 0.0,
                          "half_interval": half, "matters": False, "fired_pct": 100.0 * float(fired.mean())})
             for size, cell in at_e[at_e["defect"] == check].groupby("size"):
                 cell = cell.set_index("seed")
@@ -257,7 +292,7 @@ def summary(table: pd.DataFrame) -> pd.DataFrame:
                     shift = float(np.nanmedian(cell["e_hat"] - base)) if (cell["e_hat"] - base).notna().any() else np.nan
                 lost = float(np.mean(cell["e_hat"].isna() & base.notna()))
                 fired = cell[f"{check}_fired"].dropna().astype(bool)
-                rows.append({"check": check, "e_true": e, "noise": noise, "size": size, "records": int(fired.size), "e_shift": shift,
+                rows.append({"check": check, "e_true": e, "noise": noise, "corner": corner, "size": size, "records": int(fired.size), "e_shift": shift,
                              "lost_pct": 100.0 * lost, "half_interval": half, "matters": bool(abs(shift) > half or lost >= 0.5),
                              "fired_pct": 100.0 * float(fired.mean()) if fired.size else np.nan})
     return pd.DataFrame(rows)
