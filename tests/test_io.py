@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import os
+import threading
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -117,8 +120,6 @@ def test_coordinates_are_written_without_fill_values(tmp_path):
 def test_a_lock_is_never_seen_without_its_owner_while_runs_claim_it(tmp_path):
     """Another run that reads the lock at any moment finds a live owner in it, never an empty
     file it would take for a stale lock and take over."""
-    import threading
-
     path = tmp_path / "out.nc"
     lock = path.with_name(f".{path.name}.lock")
     seen, done = [], threading.Event()
@@ -140,5 +141,5 @@ def test_a_lock_is_never_seen_without_its_owner_while_runs_claim_it(tmp_path):
         done.set()
         reader.join()
     assert seen, "the reader never saw the lock"
-    assert set(seen) == {f"{__import__('os').getpid()}\n"}
+    assert set(seen) == {f"{os.getpid()}\n"}
     assert sorted(p.name for p in tmp_path.iterdir()) == [], "a claim left a file behind"
