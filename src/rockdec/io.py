@@ -216,10 +216,8 @@ def _place(mine: Path, lock: Path, owner: str) -> None:
     :class:`FileExistsError` if ``lock`` exists."""
     try:
         os.link(mine, lock)
-    except FileExistsError:
-        raise
     except OSError as exc:
-        if exc.errno not in _NO_HARD_LINKS:
+        if exc.errno not in _NO_HARD_LINKS:  # FileExistsError among them
             raise
         fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
         os.write(fd, owner.encode())
