@@ -113,14 +113,14 @@ def draw(rule: str, *args) -> None:
             for worker in _workers:
                 _idle.put(worker)
     worker = _idle.get()
-    answer = worker.run(rule, args)
-    if answer is None:  # ended: a new worker, and the request once more
-        worker = _replaced(worker)
+    for _ in range(2):
         answer = worker.run(rule, args)
-        if answer is None:
-            worker = _replaced(worker)
-            _idle.put(worker)
-            raise WorkerError(f"the process drawing {rule} ended before it finished, twice")
+        if answer is not None:
+            break
+        worker = _replaced(worker)  # ended: a new worker, and the request once more
+    else:
+        _idle.put(worker)
+        raise WorkerError(f"the process drawing {rule} ended before it finished, twice")
     _idle.put(worker)
     status, payload = answer
     if status == "input":
