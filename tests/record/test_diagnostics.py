@@ -241,9 +241,9 @@ def test_the_impact_level_is_where_the_sides_part():
     for centre in (2.9, 3.0, 3.05):
         level = diagnostics.impact_level(y, centre, float(np.std(y)), guard)
         assert abs(level - 3.0) < 0.02
-        n0, n1, s0, s1 = diagnostics._side_sums(y, level, guard)
+        n0, n1, s0, s1 = diagnostics.side_sums(y, level, guard)
         assert s0 / n0 == pytest.approx(2.0 * dt**2, rel=1e-6) and s1 / n1 == pytest.approx(-2.0 * dt**2, rel=1e-6)
-        mirrored = diagnostics._side_sums(-y, diagnostics.impact_level(-y, -centre, float(np.std(y)), guard), guard)
+        mirrored = diagnostics.side_sums(-y, diagnostics.impact_level(-y, -centre, float(np.std(y)), guard), guard)
         assert mirrored == pytest.approx((n1, n0, -s1, -s0), rel=1e-9)
 
 

@@ -119,7 +119,7 @@ def _record_sums(y, n_blocks, distance):
 
 
 @njit(nogil=True, cache=True)
-def _side_sums(y, level, guard):
+def side_sums(y, level, guard):
     """Count and sum of the second differences ``y[k+1] - 2 y[k] + y[k-1]`` of the triples
     all below ``level - guard`` (side 0) and all above ``level + guard`` (side 1), as
     ``(n0, n1, s0, s1)``; a triple touching a NaN is left out (NaN compares False)."""
@@ -188,20 +188,28 @@ def _median(y: np.ndarray) -> float:
     return float(np.median(finite, overwrite_input=True)) if finite.size else np.nan
 
 
-def _sides(y: np.ndarray, count: float, sum1: float, sum2: float) -> tuple:
-    """``(n0, n1, s0, s1)`` of :func:`_side_sums` of ``y`` about its :func:`impact_level`
-    with a guard of :data:`GUARD_G` ``g dt^2``, ``g dt^2`` read off the sides split at the
-    median (no guard); ``count``, ``sum1``, ``sum2``: the non-NaN samples and the sums of
-    their deviations from any one value and of their squares (the record's spread). All 0
-    when the median's sides give no positive ``g``."""
+def impact_sides(y: np.ndarray, var: float) -> tuple[float, float]:
+    """``(level, guard)`` about which the asymmetry reads ``y``'s sides (:func:`side_sums`):
+    its :func:`impact_level` and a guard of :data:`GUARD_G` ``g dt^2``, ``g dt^2`` read off
+    the sides split at the median (no guard); ``var``: the variance of ``y`` (its spread,
+    which bounds the level's search). ``(NaN, NaN)`` when the median's sides give no
+    positive ``g`` or ``var`` is not positive. :mod:`rockdec.record.record_measure` reads
+    the asymmetry it reports about the same level."""
     centre = _median(y)
-    n0, n1, s0, s1 = _side_sums(y, centre, 0.0)
+    n0, n1, s0, s1 = side_sums(y, centre, 0.0)
     g_dt2 = 0.5 * (s0 / n0 - s1 / n1) if n0 > 0.0 and n1 > 0.0 else np.nan
-    var = sum2 / count - (sum1 / count) ** 2 if count > 0 else np.nan
     if not (g_dt2 > 0.0 and var > 0.0):
-        return 0.0, 0.0, 0.0, 0.0
+        return np.nan, np.nan
     guard = GUARD_G * g_dt2
-    return _side_sums(y, impact_level(y, centre, math.sqrt(var), guard), guard)
+    return impact_level(y, centre, math.sqrt(var), guard), guard
+
+
+def _sides(y: np.ndarray, count: float, sum1: float, sum2: float) -> tuple:
+    """``(n0, n1, s0, s1)`` of :func:`side_sums` of ``y`` about :func:`impact_sides`;
+    ``count``, ``sum1``, ``sum2``: the non-NaN samples and the sums of their deviations from
+    any one value and of their squares (the record's spread). All 0 when it has no level."""
+    level, guard = impact_sides(y, sum2 / count - (sum1 / count) ** 2 if count > 0 else np.nan)
+    return side_sums(y, level, guard) if np.isfinite(level) else (0.0, 0.0, 0.0, 0.0)
 
 
 def impact_level(y: np.ndarray, centre: float, sd: float, guard: float) -> float:
