@@ -62,3 +62,18 @@ def test_the_summary_reads_false_alarms_and_detections_per_noise_level():
     assert s.loc[("drift", 0.0, 0.0), "fired_pct"] == 25.0 and s.loc[("drift", 0.05, 0.0), "fired_pct"] == 0.0
     assert s.loc[("drift", 0.0, 1.0), "fired_pct"] == 75.0 and s.loc[("drift", 0.0, 1.0), "matters"]
     assert not s.loc[("drift", 0.05, 1.0), "matters"]  # at 5 % noise the defect does not move e here
+
+
+def test_a_record_that_rockdec_estimate_declines_asks_for_no_calibration(step):
+    """A record under a low-pass load with its corner at the rocking frequency (below the
+    floor at which a calibration tells the colour apart from e) is declined by ``rockdec
+    estimate``, so the study builds no calibration for it; a white one gets its settings."""
+    from rockdec.calibrate import inference
+    from rockdec.physics.record_model import Load
+
+    pole = Load("lowpass", 1.0).pole(ds.POINTS_PER_CYCLE)
+    coloured = ds._cell(E, None, 0.0, 0.0, [14], N, 2.513, 4362, pole)  # the step of 75 samples per cycle under that load
+    white = ds._cell(E, None, 0.0, 0.0, [14], N, step["dt"], step["burn_in"], 0.0)
+    assert coloured[0][0] is None and white[0][0] is not None
+    y = ds.record(E, 14, N, 2.513, 4362, None, 0.0, 0.0, pole)
+    assert inference.estimate([ds.Record(y, 2.513, "coloured")], cache_dir=None)["reason"]  # declined, with its reason
