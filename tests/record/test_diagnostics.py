@@ -91,6 +91,36 @@ def test_with_an_e_its_neighbours_are_pooled_and_without_one_the_strictest_grid_
             assert unplaced[check.name] < pooled  # pooling every e would let the widest null rule
 
 
+def test_a_record_without_a_reported_e_is_checked_where_its_estimators_place_it():
+    """No estimator reported: the checks read the null at the median of the candidates'
+    corrected values, a raw value beyond the calibrated range counted at the end it lies
+    beyond (a record at e = 0.98 whose estimators all read above the top of the grid is
+    checked at the top, not at the grid point whose null is narrowest); none at all leaves
+    the strictest grid point. A reported e is used as it is."""
+    from rockdec.calibrate.inference import checks_place
+    from rockdec.rdd import registry
+
+    top, bottom = calibration.E_GRID[-1], calibration.E_GRID[0]
+    span = [bottom, top]
+
+    def per(*entries):
+        return {name: {"e": e, "beyond": side, "calibrated_range": span} for name, (e, side) in zip(registry.CANDIDATES, entries)}
+
+    none = {"e": None, "interval": [None, None]}
+    assert len(registry.CANDIDATES) == 3
+    assert checks_place(per((None, "above"), (None, "above"), (None, "above")), none) == (top, None)
+    assert checks_place(per((None, "above"), (0.97, None), (None, "above")), none) == (top, None)
+    assert checks_place(per((None, "below"), (0.5, None), (0.6, None)), none) == (0.5, None)
+    assert checks_place(per((None, "unreached"), (None, None), (None, None)), none) == (None, None)
+    assert checks_place(per(*[(None, "above")] * 3), {"e": 0.9, "interval": [0.85, 0.95]}) == (0.9, [0.85, 0.95])
+    grid = np.asarray(calibration.E_GRID)
+    rising = np.linspace(0.0, 3.0, grid.size)[:, None, None]  # the statistic grows with e (the nonstationary z does)
+    cal = _calibration(rising + np.random.default_rng(8).standard_normal((grid.size, 30, len(diagnostics.CHECKS))), calibration.E_GRID)
+    at_top = diagnostics.thresholds(cal, top, None, LEVEL)["nonstationary"]
+    assert at_top > diagnostics.thresholds(cal, None, None, LEVEL)["nonstationary"] + 2.0
+    assert np.mean(cal["diagnostic"].values[-1, :, 0] > at_top) < 0.1
+
+
 def test_every_statistic_is_scale_free(clean):
     """The calibration has g = sigma_p = 1: a record's statistics must not depend on its units."""
     theta, dt, _ = clean
