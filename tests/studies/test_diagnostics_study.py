@@ -62,6 +62,10 @@ def test_the_summary_reads_false_alarms_and_detections_per_noise_level():
     assert s.loc[("drift", 0.0, 0.0), "fired_pct"] == 25.0 and s.loc[("drift", 0.05, 0.0), "fired_pct"] == 0.0
     assert s.loc[("drift", 0.0, 1.0), "fired_pct"] == 75.0 and s.loc[("drift", 0.0, 1.0), "matters"]
     assert not s.loc[("drift", 0.05, 1.0), "matters"]  # at 5 % noise the defect does not move e here
+    declined = pd.DataFrame([{"e_true": E, "noise": 0.02, "corner": 1.0, "defect": "clean", "size": 0.0, "seed": k, "e_hat": np.nan,
+                              "low": np.nan, "high": np.nan, "calibration": np.nan} for k in range(3)])
+    empty = ds.summary(declined)  # every record declined: no checks, no rates
+    assert list(empty["check"]) == list(diagnostics.CHECKS) and (empty["records"] == 0).all() and empty["fired_pct"].isna().all()
 
 
 def test_a_record_that_rockdec_estimate_declines_asks_for_no_calibration(step):
