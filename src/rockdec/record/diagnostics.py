@@ -20,9 +20,14 @@ sets alone fired on more than 5 % of the clean records in 6 of the diagnostics s
 cells (check x ``e`` x noise level, 200 records a cell; up to 8 %); the null's 98.5 %
 quantile fired on at most 5.0 % in every cell, while finding the defects that move ``e``
 (docs/method.md §10). Pooling over the interval takes the widest null of
-the ``e`` the record allows. A record the calibration cannot place (no corrected ``e``)
-gets the strictest threshold of any grid point: pooling every ``e`` would give it the
-widest null (that of ``e = 0.4``) and let the records a defect has damaged most pass. The
+the ``e`` the record allows. A record ``rockdec estimate`` reports no ``e`` for is checked
+where its estimators place it (:func:`rockdec.calibrate.inference.checks_place`: the median
+of the candidates' corrected values, the end of the calibrated range for a raw value beyond
+it, without an interval): at ``e = 0.98`` the raw values of some records lie above the
+range, and the strictest grid point (``e`` of 0.4-0.7 for the nonstationary z, which grows
+with ``e``) fired that check on 22 of the study's 42 such clean records. A record that no
+estimator places gets the strictest threshold of any grid point: pooling every ``e`` would
+give it the widest null and let the records a defect has damaged most pass. The
 statistics are scale-free (the calibration has ``g = sigma_p = 1``) and read the sensor
 noise of the record's model as the calibration simulates it: each is a ratio, a z score or
 a count, and none grows with the noise level (the calibration simulates the noise on bins
@@ -496,8 +501,9 @@ def thresholds(cal, e: float | None, interval, level: float, length_ratio: float
     """Each check's threshold for a record of corrected ``e`` and 95 % ``interval``, from the
     calibration ``cal``'s ``diagnostic(e_true, set, check)`` (module docstring): the
     :data:`QUANTILE` quantile (``1 - QUANTILE`` for a ``"low"`` check) of the :func:`null`
-    of the grid points pooled about ``e``. A record without an ``e`` (``None`` or NaN: the
-    calibration cannot place it) gets the strictest grid point's threshold, each grid point's
+    of the grid points pooled about ``e`` (where the record's estimators place it,
+    :func:`rockdec.calibrate.inference.checks_place`). A record without an ``e`` (``None`` or
+    NaN: no estimator places it) gets the strictest grid point's threshold, each grid point's
     null apart. ``level``: the trigger level in ``sigma_Y`` (for the structural floor). NaN
     for a check the calibration's records never gave a value. ``length_ratio``: the records'
     length over the calibration's records' (above 1 for records longer than
