@@ -659,7 +659,7 @@ def _asymmetry(records, n_blocks: int) -> Quantity:
     under a low-pass load at 3 rocking frequencies a lean of 3 % at ``e = 0.9`` read
     -0.023 +- 0.034 (median and sd of 12 records of 100,000 samples), one of 30 % at
     ``e = 0.98`` +0.301 +- 0.070; about the level, -0.031 +- 0.006 and -0.300 +- 0.002
-    (docs/method.md §10)."""
+    (docs/method.md §11)."""
     total = sum(y.size for y in records)
     sums = np.zeros((n_blocks, 4))  # n0, n1, s0, s1 per block
     offset = 0

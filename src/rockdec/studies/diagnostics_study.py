@@ -150,9 +150,9 @@ def _cell(e: float, defect: str | None, size: float, noise: float, seeds, n: int
     with (its measured record model, :func:`rockdec.calibrate.inference.record_model`); ``None``
     when the record cannot be analysed or ``rockdec estimate`` declines it (its model cannot
     be measured, or its measured colour is not shown to lie above the corner's floor,
-    :func:`rockdec.calibrate.inference.colour_decline`): it builds no calibration for it, and
-    neither does the study (at corner 3 and 3 % noise 21 of the 58 calibrations of 400 records
-    served only declined records)."""
+    :func:`rockdec.calibrate.inference.colour_decline`): ``rockdec estimate`` builds no
+    calibration for such a record, and neither does the study (at corner 3 and 3 % noise, 21
+    of the 58 calibrations of 400 records would serve declined records only)."""
     out = []
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
