@@ -42,7 +42,7 @@ import xarray as xr
 from rockdec.physics.fixed_step import step as grid_step
 from rockdec.physics.housner import simulate_block_housner
 from rockdec import validate as checks
-from rockdec.physics.loading import add_sensor_noise, draw_impulses, series_rng
+from rockdec.physics.loading import add_sensor_noise, check_load, draw_impulses, draw_series, series_rng
 from rockdec.physics.models import SCALE_CONSTANT_GUESS, check_finite_series, check_run, period_from_g, scale_constant, step_for_density
 
 #: Largest number of correction steps when the closed-form flight count is off by rounding.
@@ -204,8 +204,18 @@ def _integrate(impulses, dt, g, e, theta0, omega0, burn_in, theta_out, omega_out
             omega_out[j] = omega
 
 
+@numba.njit(nogil=True, cache=True)
+def _simulate_seeds(seeds, sigma_p, pole, dt, g, e, theta0, omega0, burn_in, theta_out, omega_out, impulses, grid):
+    """:func:`simulate_block`'s loop for a white or low-pass load: each seed's impulses
+    (:func:`rockdec.physics.loading.draw_series`, into the scratch ``impulses``) and their
+    integration (:func:`_integrate`) into its rows, with no Python between series."""
+    for row in range(seeds.size):
+        draw_series(seeds[row], impulses, sigma_p, pole)
+        _integrate(impulses, dt, g, e, theta0, omega0, burn_in, theta_out[row], omega_out[row], grid)
+
+
 def simulate_block(seeds, n_points, *, dt, g, e, sigma_p, theta0=0.0, theta_dot0=0.0, burn_in=0, grid_impacts=False, pole=0.0,
-                   spectrum=None):
+                   spectrum=None, out=None):
     """Simulate one series per seed; returns ``(theta, theta_dot)``, each ``(len(seeds), n_points)``.
 
     Kernel entry point (NumPy in, NumPy out). ``sigma_p`` is the standard deviation of the
@@ -214,20 +224,31 @@ def simulate_block(seeds, n_points, *, dt, g, e, sigma_p, theta0=0.0, theta_dot0
     exact one (same load, same seed). ``pole``: low-pass filtered load
     (:func:`rockdec.physics.loading.draw_impulses`), 0 for white noise; ``spectrum``: a load of that
     spectrum instead (:class:`rockdec.physics.loading.ImpulseSpectrum`, cycles per step;
-    :meth:`rockdec.physics.record_model.Load.draw_options` gives either). Inputs outside the model
-    (NaN, infinities, ``e`` outside ``[0, 1]``, ...) and series that overflow raise
-    :class:`rockdec.validate.InputError`.
+    :meth:`rockdec.physics.record_model.Load.draw_options` gives either). A white or low-pass
+    load is drawn and integrated in one numba call over the seeds (:func:`_simulate_seeds`),
+    a spectrum load series by series. ``out``: a float64 array ``(2, len(seeds), n_points)``
+    to write ``theta`` and ``theta_dot`` into (returned as its two halves). Inputs outside the
+    model (NaN, infinities, ``e`` outside ``[0, 1]``, a negative seed, ...) and series that
+    overflow raise :class:`rockdec.validate.InputError`.
     """
     check_run(dt=dt, e=e, sigma_p=sigma_p, theta0=theta0, theta_dot0=theta_dot0, burn_in=burn_in, n_points=n_points)
     checks.positive(g, "g", "give the restoring acceleration nu^2 theta_cr in rad/s^2, > 0")
+    check_load(pole, spectrum)
     seeds = np.atleast_1d(np.asarray(seeds, dtype=np.int64))
+    if seeds.size and seeds.min() < 0:
+        raise checks.InputError(f"seed {seeds.min()} is negative; give seeds >= 0")
     n_steps = burn_in + n_points - 1
-    theta = np.empty((seeds.size, n_points))
-    theta_dot = np.empty((seeds.size, n_points))
+    if out is None:
+        out = np.empty((2, seeds.size, n_points))
+    theta, theta_dot = out[0], out[1]
     impulses = np.empty(n_steps)
-    for row, seed in enumerate(seeds):
-        draw_impulses(series_rng(seed), impulses, sigma_p, pole, spectrum)
-        integrate(impulses, dt, g, e, theta0, theta_dot0, burn_in, theta[row], theta_dot[row], grid_impacts)
+    if spectrum is None:
+        _simulate_seeds(seeds, float(sigma_p), float(pole), float(dt), float(g), float(e), float(theta0), float(theta_dot0),
+                        int(burn_in), theta, theta_dot, impulses, True if grid_impacts else None)
+    else:
+        for row, seed in enumerate(seeds):
+            draw_impulses(series_rng(seed), impulses, sigma_p, pole, spectrum)
+            integrate(impulses, dt, g, e, theta0, theta_dot0, burn_in, theta[row], theta_dot[row], grid_impacts)
     check_finite_series(np.stack([theta[:, -1], theta_dot[:, -1]]), f"the simulation at dt = {dt}, g = {g}, sigma_p = {sigma_p}")
     return theta, theta_dot
 
@@ -384,7 +405,7 @@ def pilot_statistics(theta: np.ndarray, dt: float, g: float | None = None) -> di
 
 
 def simulate_model(model: str, seeds, n_points: int, *, dt, g, e, sigma_p, theta_cr=None, pole=0.0, theta0=0.0, theta_dot0=0.0,
-                   burn_in=0, spectrum=None) -> tuple[np.ndarray, np.ndarray]:
+                   burn_in=0, spectrum=None, out=None) -> tuple[np.ndarray, np.ndarray]:
     """``(theta, theta_dot)`` of one series per seed under ``model``: the one dispatch on a model name.
 
     ``"simplified"`` (eq. 4, :func:`simulate_block`), ``"housner"`` (eq. 2,
@@ -392,17 +413,22 @@ def simulate_model(model: str, seeds, n_points: int, *, dt, g, e, sigma_p, theta
     that overturns is NaN from the fall on) or ``"fixed_step"`` (eq. 4 with the grid-impact
     integrator of :mod:`rockdec.physics.fixed_step`, for the speed/accuracy study). ``pole``,
     ``spectrum``: the load (:meth:`rockdec.physics.record_model.Load.draw_options`; 0, None: white).
+    ``out``: an array ``(2, len(seeds), n_points)`` that receives ``theta`` and ``theta_dot``
+    (:func:`simulate_block`'s), which are then its two halves.
     """
     common = dict(dt=dt, e=e, sigma_p=sigma_p, theta0=theta0, theta_dot0=theta_dot0, burn_in=burn_in, pole=pole, spectrum=spectrum)
     if model == "simplified":
-        return simulate_block(seeds, n_points, g=g, **common)
+        return simulate_block(seeds, n_points, g=g, out=out, **common)
     if model == "fixed_step":  # not a model: the grid-impact integrator of rockdec.physics.fixed_step
-        return simulate_block(seeds, n_points, g=g, grid_impacts=True, **common)
+        return simulate_block(seeds, n_points, g=g, grid_impacts=True, out=out, **common)
     if model == "housner":
         if theta_cr is None:
             raise ValueError("the Housner model needs theta_cr")
         theta, theta_dot, _ = simulate_block_housner(seeds, n_points, nu=math.sqrt(g / theta_cr), theta_cr=theta_cr, **common)
-        return theta, theta_dot
+        if out is None:
+            return theta, theta_dot
+        out[0], out[1] = theta, theta_dot
+        return out[0], out[1]
     raise ValueError(f"unknown model '{model}'; use simplified or housner")
 
 
@@ -446,8 +472,9 @@ def simulation_dataset(
                   spectrum=spectrum)
 
     def block(chunk):
-        theta, theta_dot = simulate_model(model, chunk, n_points, **common)
-        return np.stack((add_sensor_noise(theta, chunk, sensor_std), theta_dot))
+        both = np.empty((2, chunk.size, n_points))  # theta and theta_dot written in place: no stacking copy
+        add_sensor_noise(simulate_model(model, chunk, n_points, out=both, **common)[0], chunk, sensor_std)
+        return both
 
     both = da.map_blocks(
         block, seed_chunks, new_axis=[0, 2], chunks=((2,), seed_chunks.chunks[0], (n_points,)), dtype=np.float64
