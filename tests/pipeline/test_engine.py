@@ -11,6 +11,22 @@ from rockdec.pipeline import config, engine, replicates, series
 from rockdec.physics import run
 
 
+def test_the_threads_engine_computes_without_loading_dask_distributed():
+    """The threads engine names Dask's threaded scheduler by its function: looking up the name
+    "threads" would import dask.distributed (a second of imports) to look for a client."""
+    from conftest import PYTHON_FORKS
+
+    probe = """
+import sys
+import dask.array as da
+from rockdec.pipeline import engine
+print(engine.compute(da.ones(10, chunks=5).sum(), threads=2)[0], "distributed" in sys.modules)
+"""
+    code, out, err = PYTHON_FORKS.script(probe, timeout=120)
+    assert code == 0, err
+    assert out.split() == ["10.0", "False"]
+
+
 def test_the_setting_names_an_engine_or_says_what_is_accepted(monkeypatch):
     monkeypatch.delenv(engine.VARIABLE, raising=False)
     assert engine.setting() == ("threads", None)

@@ -160,12 +160,16 @@ def compute(*collections, threads: int | None = None, scheduler: str | None = No
     On the ``threads`` engine outside a session, the threads are given to the call itself
     instead of to Dask's configuration, which the whole process shares: computations in two
     threads of one process (the workflow's signature pass and a light step inside Snakemake,
-    :mod:`rockdec.pipeline.in_snakemake`) each keep their own number of threads.
+    :mod:`rockdec.pipeline.in_snakemake`) each keep their own number of threads. The call
+    names Dask's threaded scheduler by its function (``dask.threaded.get``), not by the name
+    ``"threads"``, whose lookup imports ``dask.distributed`` to look for a client.
     """
     import dask
 
     if not _active.get() and setting(scheduler)[0] == "threads":
+        from dask import threaded
+
         workers = {} if threads is None else {"num_workers": max(1, int(threads))}
-        return dask.compute(*collections, scheduler="threads", **workers)
+        return dask.compute(*collections, scheduler=threaded.get, **workers)
     with session(threads, scheduler):
         return dask.compute(*collections)
