@@ -16,7 +16,9 @@
 With ``--before OTHER_TREE`` (another checkout of the repository) the run and the no-op
 rerun are timed for both trees, alternating which goes first at each of ``--repeat``
 rounds, with a floor in each round, so that both see the same load on a shared machine;
-the tables and figures of the two are compared byte for byte.
+the tables and figures of the two are compared byte for byte, and the NetCDF products
+number for number: every variable's values bit for bit, every attribute but ``history``
+and ``git_commit`` (which name the run and the tree).
 
 Prints the runs, the floors, the ratios run / floor (the median over the rounds) and a
 markdown table of the rules of the last run of this tree. Numba's cache is whatever the
@@ -118,6 +120,37 @@ def compared(a: Path, b: Path) -> str:
     return f"all {len(names)} identical" if not differ else f"{len(differ)} of {len(names)} differ: {', '.join(differ)}"
 
 
+#: Attributes of a NetCDF product that say when and from which tree it was made.
+RUN_ATTRS = ("history", "git_commit")
+
+
+def compared_data(a: Path, b: Path) -> str:
+    """Which NetCDF products of two scenes' results hold different numbers or attributes
+    (but :data:`RUN_ATTRS`), in words."""
+    import numpy as np
+    import xarray as xr
+
+    def same(x, y) -> bool:
+        u, w = x.values, y.values
+        if u.dtype.kind in "biufc":
+            return u.dtype == w.dtype and u.shape == w.shape and u.tobytes() == w.tobytes()
+        return u.shape == w.shape and all(str(p) == str(q) for p, q in zip(u.ravel(), w.ravel()))
+
+    def attrs(v):
+        return {k: str(x) for k, x in v.attrs.items() if k not in RUN_ATTRS}
+
+    names = sorted(p.relative_to(a) for p in a.rglob("*.nc"))
+    if names != sorted(p.relative_to(b) for p in b.rglob("*.nc")):
+        return "different NetCDF products"
+    differ = []
+    for name in names:
+        with xr.open_dataset(a / name, decode_times=False) as x, xr.open_dataset(b / name, decode_times=False) as y:
+            if (set(x.variables) != set(y.variables) or attrs(x) != attrs(y)
+                    or not all(same(x[v], y[v]) and attrs(x[v]) == attrs(y[v]) for v in x.variables)):
+                differ.append(str(name))
+    return f"all {len(names)} hold the same numbers" if not differ else f"{len(differ)} of {len(names)} differ: {', '.join(differ)}"
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--scene", default="paper")
@@ -141,7 +174,9 @@ def main() -> None:
             floors.append(low)
         results = runs["this tree"][-1]["root"] / "results" / args.scene
         diff = largest_difference(floors[-1]["table"], results / "table.csv")
-        same = compared(results, runs["before"][-1]["root"] / "results" / args.scene) if args.before else None
+        other = runs["before"][-1]["root"] / "results" / args.scene if args.before else None
+        same = compared(results, other) if args.before else None
+        data = compared_data(results, other) if args.before else None
     finally:
         if args.keep:
             print(f"copies kept in {base}")
@@ -168,6 +203,7 @@ def main() -> None:
     print(f"floor's eq. 28 against the run's table.csv: largest |difference| {diff:.3g}")
     if same is not None:
         print(f"tables and figures, this tree against before: {same}")
+        print(f"NetCDF products, this tree against before (numbers bit for bit, attributes but {', '.join(RUN_ATTRS)}): {data}")
 
 
 if __name__ == "__main__":
