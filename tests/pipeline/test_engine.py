@@ -39,6 +39,33 @@ def test_the_setting_names_an_engine_or_says_what_is_accepted(monkeypatch):
             engine.setting(bad)
 
 
+def test_compute_in_place_gives_computes_numbers_in_numpy_arrays(monkeypatch):
+    """Chunks stored into arrays allocated up front: the values (bit for bit), dtypes,
+    coordinates and attributes of dask.compute, NumPy arrays, the lazy input untouched; in a
+    session of another engine, compute itself."""
+    import dask.array as da
+
+    monkeypatch.setenv(engine.VARIABLE, "threads")
+    rng = np.random.default_rng(3)
+    lazy = xr.Dataset(
+        {
+            "x": (("a", "b"), (da.from_array(rng.standard_normal((7, 5)), chunks=(3, 2)) ** 2).cumsum(axis=0), {"units": "m"}),
+            "n": (("a",), da.arange(7, chunks=3, dtype=np.int64) * 3),
+            "plain": (("b",), np.arange(5.0)),
+        },
+        coords={"a": np.arange(7) * 10},
+        attrs={"title": "t"},
+    )
+    (stored,) = engine.compute_in_place(lazy, threads=2)
+    (computed,) = engine.compute(lazy, threads=2)
+    assert stored.identical(computed) and stored["x"].attrs == {"units": "m"}
+    assert all(isinstance(stored[name].data, np.ndarray) for name in stored.variables)
+    assert stored["x"].values.tobytes() == computed["x"].values.tobytes() and stored["n"].dtype == np.int64
+    assert isinstance(lazy["x"].data, da.Array)
+    with engine.session(scheduler="threads"):  # inside a session: the session's engine computes
+        assert engine.compute_in_place(lazy)[0].identical(computed)
+
+
 @pytest.fixture(scope="module")
 def small():
     """Two replicates of 12 series in chunks of 5 seeds (chunks straddle the replicates)."""
