@@ -13,10 +13,13 @@
    threads; no files, no figures, no other readings. Its eq. 28 is compared with the
    run's ``table.csv``.
 
-With ``--before OTHER_TREE`` (another checkout of the repository) the run and the no-op
-rerun are timed for both trees, alternating which goes first at each of ``--repeat``
-rounds, with a floor in each round, so that both see the same load on a shared machine;
-the tables and figures of the two are compared byte for byte.
+With ``--before OTHER_TREE`` (another checkout of the repository; the option may be given
+several times) the run and the no-op rerun are timed for every tree, the order turning by
+one tree at each of ``--repeat`` rounds, with a floor in each round, so that all see the
+same load on a shared machine; the tables and figures of this tree and each other are
+compared byte for byte, and the NetCDF products
+number for number: every variable's values bit for bit, every attribute but ``history``
+and ``git_commit`` (which name the run and the tree).
 
 Prints the runs, the floors, the ratios run / floor (the median over the rounds) and a
 markdown table of the rules of the last run of this tree. Numba's cache is whatever the
@@ -118,22 +121,57 @@ def compared(a: Path, b: Path) -> str:
     return f"all {len(names)} identical" if not differ else f"{len(differ)} of {len(names)} differ: {', '.join(differ)}"
 
 
+#: Attributes of a NetCDF product that say when and from which tree it was made.
+RUN_ATTRS = ("history", "git_commit")
+
+
+def compared_data(a: Path, b: Path) -> str:
+    """Which NetCDF products of two scenes' results hold different numbers or attributes
+    (but :data:`RUN_ATTRS`), in words."""
+    import numpy as np
+    import xarray as xr
+
+    def same(x, y) -> bool:
+        u, w = x.values, y.values
+        if u.dtype.kind in "biufc":
+            return u.dtype == w.dtype and u.shape == w.shape and u.tobytes() == w.tobytes()
+        return u.shape == w.shape and all(str(p) == str(q) for p, q in zip(u.ravel(), w.ravel()))
+
+    def attrs(v):
+        return {k: str(x) for k, x in v.attrs.items() if k not in RUN_ATTRS}
+
+    names = sorted(p.relative_to(a) for p in a.rglob("*.nc"))
+    if names != sorted(p.relative_to(b) for p in b.rglob("*.nc")):
+        return "different NetCDF products"
+    differ = []
+    for name in names:
+        with xr.open_dataset(a / name, decode_times=False) as x, xr.open_dataset(b / name, decode_times=False) as y:
+            if (set(x.variables) != set(y.variables) or attrs(x) != attrs(y)
+                    or not all(same(x[v], y[v]) and attrs(x[v]) == attrs(y[v]) for v in x.variables)):
+                differ.append(str(name))
+    return f"all {len(names)} hold the same numbers" if not differ else f"{len(differ)} of {len(names)} differ: {', '.join(differ)}"
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--scene", default="paper")
     parser.add_argument("--cores", type=int, default=2, help="snakemake --cores (default %(default)s)")
     parser.add_argument("--floor-threads", type=int, default=1, help="threads of the floor (default %(default)s)")
-    parser.add_argument("--before", type=Path, help="another checkout of the repository, timed in the same run")
+    parser.add_argument("--before", type=Path, action="append", default=[],
+                        help="another checkout of the repository, timed in the same run (may be given several times)")
     parser.add_argument("--repeat", type=int, default=1, help="rounds (default %(default)s)")
     parser.add_argument("--keep", action="store_true", help="leave the copies of the workflow and print their path")
     args = parser.parse_args()
-    trees = {"this tree": REPO} | ({"before": args.before.resolve()} if args.before else {})
+    others = [tree.resolve() for tree in args.before]
+    names = ["before"] if len(others) == 1 else [f"before {tree.name}" for tree in others]
+    trees = {"this tree": REPO} | dict(zip(names, others))
     base = Path(tempfile.mkdtemp(prefix="rockdec_bench_paper_"))
     runs = {label: [] for label in trees}
     floors = []
     try:
         for k in range(args.repeat):
-            order = list(trees) if k % 2 == 0 else list(trees)[::-1]
+            turn = k % len(trees)
+            order = list(trees)[turn:] + list(trees)[:turn]
             for label in order:
                 runs[label].append(paper_run(trees[label], base / f"{label.replace(' ', '_')}_{k}", args.cores, args.scene))
                 print(f"round {k + 1}, {label}: {runs[label][-1]['wall']:.1f} s", file=sys.stderr, flush=True)
@@ -141,7 +179,10 @@ def main() -> None:
             floors.append(low)
         results = runs["this tree"][-1]["root"] / "results" / args.scene
         diff = largest_difference(floors[-1]["table"], results / "table.csv")
-        same = compared(results, runs["before"][-1]["root"] / "results" / args.scene) if args.before else None
+        checks = {}
+        for name in names:
+            other = runs[name][-1]["root"] / "results" / args.scene
+            checks[name] = (compared(results, other), compared_data(results, other))
     finally:
         if args.keep:
             print(f"copies kept in {base}")
@@ -166,8 +207,9 @@ def main() -> None:
               f"run / floor (median of {len(rounds)}): {statistics.median(walls):.2f} wall, {statistics.median(cpus):.2f} CPU")
     print(f"floors: {listed(floors, 'wall')} s wall, {listed(floors, 'cpu')} s CPU")
     print(f"floor's eq. 28 against the run's table.csv: largest |difference| {diff:.3g}")
-    if same is not None:
-        print(f"tables and figures, this tree against before: {same}")
+    for name, (same, data) in checks.items():
+        print(f"tables and figures, this tree against {name}: {same}")
+        print(f"NetCDF products, this tree against {name} (numbers bit for bit, attributes but {', '.join(RUN_ATTRS)}): {data}")
 
 
 if __name__ == "__main__":

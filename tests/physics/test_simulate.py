@@ -211,3 +211,16 @@ def test_pilot_statistics_are_the_nan_means_of_the_squares_bit_for_bit(gap):
     assert stats["sigma_y"] == float(np.sqrt(np.nanmean(theta**2)))
     assert stats["sigma_ydot"] == float(np.sqrt(np.nanmean((np.diff(theta, axis=-1) / dt) ** 2)))
     assert math.isfinite(stats["sigma_y"]) and math.isfinite(stats["sigma_ydot"])
+
+
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+def test_pilot_statistics_are_the_plain_expressions_bit_for_bit(dtype):
+    """sqrt(mean(theta**2)) and sqrt(mean((diff(theta)/dt)**2)), NaN left out, whether the
+    arithmetic runs in a scratch array (C-ordered float64) or as written (float32, other orders)."""
+    rng = np.random.default_rng(7)
+    theta = (0.002 * rng.standard_normal((6, 5001))).astype(dtype)
+    for case in (theta, np.asfortranarray(theta), np.where(np.arange(5001) == 17, np.nan, theta).astype(dtype)):
+        stats = simulate.pilot_statistics(case, 0.0034, 1.0)
+        squares, slopes = case**2, (np.diff(case, axis=-1) / 0.0034) ** 2
+        expected = [np.sqrt(np.nanmean(x) if np.isnan(x).any() else np.mean(x)) for x in (squares, slopes)]
+        assert [stats["sigma_y"], stats["sigma_ydot"]] == [float(x) for x in expected]

@@ -11,6 +11,22 @@ from rockdec.pipeline import config, engine, replicates, series
 from rockdec.physics import run
 
 
+def test_the_threads_engine_computes_without_loading_dask_distributed():
+    """The threads engine names Dask's threaded scheduler by its function: looking up the name
+    "threads" would import dask.distributed (a second of imports) to look for a client."""
+    from conftest import PYTHON_FORKS
+
+    probe = """
+import sys
+import dask.array as da
+from rockdec.pipeline import engine
+print(engine.compute(da.ones(10, chunks=5).sum(), threads=2)[0], "distributed" in sys.modules)
+"""
+    code, out, err = PYTHON_FORKS.script(probe, timeout=120)
+    assert code == 0, err
+    assert out.split() == ["10.0", "False"]
+
+
 def test_the_setting_names_an_engine_or_says_what_is_accepted(monkeypatch):
     monkeypatch.delenv(engine.VARIABLE, raising=False)
     assert engine.setting() == ("threads", None)
@@ -21,6 +37,33 @@ def test_the_setting_names_an_engine_or_says_what_is_accepted(monkeypatch):
     for bad in ("thread", "processes:0", "processes:two", "tcp://", "slurm"):
         with pytest.raises(engine.SchedulerError, match="threads.*processes:N.*tcp://"):
             engine.setting(bad)
+
+
+def test_compute_in_place_gives_computes_numbers_in_numpy_arrays(monkeypatch):
+    """Chunks stored into arrays allocated up front: the values (bit for bit), dtypes,
+    coordinates and attributes of dask.compute, NumPy arrays, the lazy input untouched; in a
+    session of another engine, compute itself."""
+    import dask.array as da
+
+    monkeypatch.setenv(engine.VARIABLE, "threads")
+    rng = np.random.default_rng(3)
+    lazy = xr.Dataset(
+        {
+            "x": (("a", "b"), (da.from_array(rng.standard_normal((7, 5)), chunks=(3, 2)) ** 2).cumsum(axis=0), {"units": "m"}),
+            "n": (("a",), da.arange(7, chunks=3, dtype=np.int64) * 3),
+            "plain": (("b",), np.arange(5.0)),
+        },
+        coords={"a": np.arange(7) * 10},
+        attrs={"title": "t"},
+    )
+    (stored,) = engine.compute_in_place(lazy, threads=2)
+    (computed,) = engine.compute(lazy, threads=2)
+    assert stored.identical(computed) and stored["x"].attrs == {"units": "m"}
+    assert all(isinstance(stored[name].data, np.ndarray) for name in stored.variables)
+    assert stored["x"].values.tobytes() == computed["x"].values.tobytes() and stored["n"].dtype == np.int64
+    assert isinstance(lazy["x"].data, da.Array)
+    with engine.session(scheduler="threads"):  # inside a session: the session's engine computes
+        assert engine.compute_in_place(lazy)[0].identical(computed)
 
 
 @pytest.fixture(scope="module")

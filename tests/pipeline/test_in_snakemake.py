@@ -83,14 +83,29 @@ import sys, threading
 from rockdec.pipeline import in_snakemake
 before = [name for name in in_snakemake.PRELOAD if name in sys.modules]
 in_snakemake.calibrate({str(tmp_path / 'c.log')!r}, {PHYSICS!r}, {str(tmp_path / 'run.json')!r})
+starts = sorted(set(in_snakemake.STARTS) - in_snakemake._LOADED)
 for thread in threading.enumerate():
     if thread.name == "rockdec-preload":
         thread.join()
-print(before, [name for name in in_snakemake.PRELOAD if name not in sys.modules])
+print(before, [name for name in in_snakemake.PRELOAD if name not in sys.modules], starts)
 """
     code, out, err = PYTHON_FORKS.script(probe, timeout=120)  # a process whose libraries load none of them
     assert code == 0, err
-    assert out.split() == ["[]", "[]"]  # none loaded before, all loaded after
+    # none loaded before, all loaded after; what the pass and the steps start with, by calibrate's return
+    assert out.split() == ["[]", "[]", "[]"]
+
+
+def test_an_import_under_way_is_waited_for(monkeypatch):
+    """A thread that needs modules another thread is importing (holding the import lock)
+    waits for it to end instead of entering the import."""
+    monkeypatch.setattr(in_snakemake, "_LOADED", set())
+    with in_snakemake._IMPORTS:
+        waiting = threading.Thread(target=in_snakemake._load, args=(["json"],))
+        waiting.start()
+        waiting.join(0.3)
+        assert waiting.is_alive() and "json" not in in_snakemake._LOADED
+    waiting.join(10)
+    assert not waiting.is_alive() and in_snakemake._LOADED == {"json"}
 
 
 class Named(list):

@@ -26,6 +26,15 @@ the constant bin and is joined to the first positive row linearly in ``f``; outs
 
 Every simulator (the simplified model, the Housner model, the fixed-step integrator) draws
 its impulses here, so one seed means one load whatever the model.
+
+The streams are NumPy's: ``SeedSequence(seed)`` seeds a PCG64 generator, whose
+``standard_normal`` draws the numbers (:func:`series_rng`, :func:`sensor_rng`). The same
+streams also run inside numba (:func:`draw_series`, :func:`add_sensor_noise`): NumPy's
+``SeedSequence`` hashing and PCG64 seeding, its PCG64 step (128-bit multiply-add, XSL-RR
+output) and its ziggurat normal sampler with NumPy's tables, operation for operation, so
+the numbers are NumPy's bit for bit (tested on seeds of every width and both streams). A
+kernel then draws and integrates a whole block of series without Python between series:
+no generator objects are built and the GIL stays released.
 """
 
 from __future__ import annotations
@@ -36,6 +45,10 @@ from typing import NamedTuple
 
 import numba
 import numpy as np
+from llvmlite import ir
+from numba.core import types
+from numba.extending import intrinsic
+from numba.np.random._constants import fi_double, ki_double, wi_double, ziggurat_nor_inv_r, ziggurat_nor_r
 
 from rockdec.validate import InputError
 
@@ -57,6 +70,152 @@ def sensor_rng(seed: int) -> np.random.Generator:
     """The random generator of one series' sensor noise: ``SeedSequence(seed)`` spawned once
     (:data:`SENSOR_STREAM`), PCG64; independent of :func:`series_rng` of the same seed."""
     return np.random.Generator(np.random.PCG64(np.random.SeedSequence(int(seed), spawn_key=(SENSOR_STREAM,))))
+
+
+# NumPy's SeedSequence (numpy/random/bit_generator.pyx): pool of 4 words, its hash constants.
+# Held as uint64 so that numba computes in unsigned 64-bit words (the 32-bit ones masked).
+_POOL_SIZE = 4
+_INIT_A, _MULT_A, _INIT_B, _MULT_B = (np.uint64(c) for c in (0x43B0D7E5, 0x931E8875, 0x8B51F9DD, 0x58F38DED))
+_MIX_MULT_L, _MIX_MULT_R = np.uint64(0xCA01F9DD), np.uint64(0x4973F715)
+_WORD = np.uint64(0xFFFFFFFF)
+_ONE, _8, _11, _16, _32, _58, _63, _64 = (np.uint64(n) for n in (1, 8, 11, 16, 32, 58, 63, 64))
+#: PCG64's multiplier (numpy/random/src/pcg64/pcg64.h, PCG_DEFAULT_MULTIPLIER_128).
+_PCG_MULTIPLIER = 0x2360ED051FC65DA44385DF649FCCF645
+
+
+@intrinsic
+def _pcg_step(typingctx, state_hi, state_lo, inc_hi, inc_lo):
+    """PCG64's step ``state * multiplier + inc`` modulo 2**128 on the halves (high, low) of
+    the state and the increment: one 128-bit multiply-add in LLVM. Returns the new halves."""
+    pair = types.UniTuple(types.uint64, 2)
+    signature = pair(types.uint64, types.uint64, types.uint64, types.uint64)
+
+    def codegen(context, builder, sig, args):
+        wide, half = ir.IntType(128), ir.IntType(64)
+
+        def joined(hi, lo):
+            return builder.or_(builder.shl(builder.zext(hi, wide), ir.Constant(wide, 64)), builder.zext(lo, wide))
+
+        state = builder.add(builder.mul(joined(args[0], args[1]), ir.Constant(wide, _PCG_MULTIPLIER)), joined(args[2], args[3]))
+        hi = builder.trunc(builder.lshr(state, ir.Constant(wide, 64)), half)
+        return context.make_tuple(builder, sig.return_type, (hi, builder.trunc(state, half)))
+
+    return signature, codegen
+
+
+@numba.njit(inline="always")
+def _hashmix(value, hash_const):
+    """SeedSequence's ``hashmix`` on 32-bit words held in uint64: the mixed value and the
+    updated hash constant."""
+    value = (value ^ hash_const) & _WORD
+    hash_const = (hash_const * _MULT_A) & _WORD
+    value = (value * hash_const) & _WORD
+    return value ^ (value >> _16), hash_const
+
+
+@numba.njit(inline="always")
+def _mix(x, y):
+    """SeedSequence's ``mix`` of two 32-bit words."""
+    result = (_MIX_MULT_L * x - _MIX_MULT_R * y) & _WORD
+    return result ^ (result >> _16)
+
+
+@numba.njit(inline="always")
+def _seeded_pcg64(seed, spawn, state):
+    """``state`` (uint64 ``[state_hi, state_lo, inc_hi, inc_lo]``) of
+    ``PCG64(SeedSequence(seed, spawn_key=(spawn,)))``, no spawn key for ``spawn < 0``;
+    ``0 <= seed < 2**63``."""
+    entropy = np.zeros(_POOL_SIZE + 1, np.uint64)
+    word = np.uint64(seed)
+    entropy[0] = word & _WORD
+    n_entropy = 1
+    if word >> _32:  # the seed's 32-bit words, least significant first
+        entropy[1] = word >> _32
+        n_entropy = 2
+    if spawn >= 0:  # the run's words padded to the pool, then the spawn key's
+        entropy[_POOL_SIZE] = np.uint64(spawn)
+        n_entropy = _POOL_SIZE + 1
+    pool = np.zeros(_POOL_SIZE, np.uint64)
+    hash_const = _INIT_A
+    for i in range(_POOL_SIZE):
+        pool[i], hash_const = _hashmix(entropy[i], hash_const)
+    for src in range(_POOL_SIZE):
+        for dst in range(_POOL_SIZE):
+            if src != dst:
+                mixed, hash_const = _hashmix(pool[src], hash_const)
+                pool[dst] = _mix(pool[dst], mixed)
+    for src in range(_POOL_SIZE, n_entropy):
+        for dst in range(_POOL_SIZE):
+            mixed, hash_const = _hashmix(entropy[src], hash_const)
+            pool[dst] = _mix(pool[dst], mixed)
+    # generate_state(4, uint64): eight 32-bit words cycling over the pool, paired low word first
+    words = np.zeros(8, np.uint64)
+    hash_const = _INIT_B
+    for i in range(8):
+        value = (pool[i % _POOL_SIZE] ^ hash_const) & _WORD
+        hash_const = (hash_const * _MULT_B) & _WORD
+        value = (value * hash_const) & _WORD
+        words[i] = value ^ (value >> _16)
+    seed_hi, seed_lo = words[0] | (words[1] << _32), words[2] | (words[3] << _32)
+    inc_hi = ((words[4] | (words[5] << _32)) << _ONE) | ((words[6] | (words[7] << _32)) >> _63)
+    inc_lo = ((words[6] | (words[7] << _32)) << _ONE) | _ONE
+    # pcg_setseq_128_srandom_r: state 0, one step (state = inc), add the seed, one step
+    lo = inc_lo + seed_lo
+    hi = inc_hi + seed_hi + (_ONE if lo < inc_lo else np.uint64(0))
+    state[0], state[1] = _pcg_step(hi, lo, inc_hi, inc_lo)
+    state[2], state[3] = inc_hi, inc_lo
+
+
+@numba.njit(inline="always")
+def _next_uint64(state):
+    """PCG64's next 64-bit output: step, then XSL-RR of the new state."""
+    hi, lo = _pcg_step(state[0], state[1], state[2], state[3])
+    state[0], state[1] = hi, lo
+    folded = hi ^ lo
+    turn = hi >> _58
+    return (folded >> turn) | (folded << ((_64 - turn) & _63))
+
+
+@numba.njit(inline="always")
+def _next_double(state):
+    """PCG64's next double in ``[0, 1)``: the top 53 bits of the next output."""
+    return np.float64(_next_uint64(state) >> _11) * (1.0 / 9007199254740992.0)
+
+
+@numba.njit(inline="always")
+def _standard_normal(state):
+    """NumPy's ``random_standard_normal`` (numpy/random/src/distributions): the ziggurat of
+    256 layers on PCG64's outputs, its wedges and its tail."""
+    while True:
+        r = _next_uint64(state)
+        idx = r & np.uint64(0xFF)
+        r >>= _8
+        rabs = (r >> _ONE) & np.uint64(0x000FFFFFFFFFFFFF)
+        x = np.float64(rabs) * wi_double[idx]
+        if r & _ONE:
+            x = -x
+        if rabs < ki_double[idx]:
+            return x
+        if idx == 0:
+            while True:
+                xx = -ziggurat_nor_inv_r * np.log1p(-_next_double(state))
+                yy = -np.log1p(-_next_double(state))
+                if yy + yy > xx * xx:
+                    return -(ziggurat_nor_r + xx) if (rabs >> _8) & _ONE else ziggurat_nor_r + xx
+        elif (fi_double[idx - _ONE] - fi_double[idx]) * _next_double(state) + fi_double[idx] < np.exp(-0.5 * x * x):
+            return x
+
+
+@numba.njit(nogil=True, cache=True)
+def standard_normals(seed, spawn, out):
+    """Fill ``out`` with the standard normal numbers of ``SeedSequence(seed)`` (``spawn < 0``,
+    :func:`series_rng`) or of its spawn ``spawn`` (:data:`SENSOR_STREAM`: :func:`sensor_rng`),
+    as NumPy's ``standard_normal(out=out)`` draws them, bit for bit; ``0 <= seed < 2**63``."""
+    state = np.empty(4, np.uint64)
+    _seeded_pcg64(seed, spawn, state)
+    for i in range(out.size):
+        out[i] = _standard_normal(state)
+    return out
 
 
 @numba.njit(nogil=True, cache=True)
@@ -140,6 +299,30 @@ def _draw_spectrum(rng: np.random.Generator, out: np.ndarray, spectrum: ImpulseS
     out[:] = fft.irfft(fft.rfft(white) * spectral_gain(spectrum, size), n=size)[: out.size]
 
 
+def check_load(pole: float, spectrum: ImpulseSpectrum | None = None) -> None:
+    """Refuse a load pole outside ``[0, 1)`` and a load both low-pass filtered and of a spectrum."""
+    if not 0.0 <= pole < 1.0:
+        raise InputError(f"load pole {pole}: not in [0, 1); give the low-pass filter's pole, or draw a spectrum load with spectrum=")
+    if spectrum is not None and pole > 0.0:
+        raise InputError("a load is either low-pass filtered (pole) or of a given spectrum, not both; give one of them")
+
+
+@numba.njit(nogil=True, cache=True)
+def draw_series(seed, out, sigma_p, pole):
+    """:func:`draw_impulses` of ``series_rng(seed)`` for a white (``pole = 0``) or low-pass
+    load, inside numba (:func:`standard_normals`, :func:`low_pass`): the same impulses bit for
+    bit. ``pole`` as :func:`check_load` accepts it."""
+    if sigma_p > 0.0:
+        standard_normals(seed, -1, out)
+        if pole > 0.0 and out.size:
+            low_pass(out, pole)
+        for i in range(out.size):
+            out[i] *= sigma_p
+    else:
+        out[:] = 0.0
+    return out
+
+
 def draw_impulses(rng: np.random.Generator, out: np.ndarray, sigma_p: float, pole: float = 0.0,
                   spectrum: ImpulseSpectrum | None = None) -> np.ndarray:
     """Fill ``out`` with the next impulses ``p_n ~ N(0, sigma_p^2)`` (rad/s) of ``rng``.
@@ -151,10 +334,7 @@ def draw_impulses(rng: np.random.Generator, out: np.ndarray, sigma_p: float, pol
     ``spectrum``: impulses of that spectrum instead (:class:`ImpulseSpectrum`, circulant
     embedding of the module docstring), ``out`` being the whole series.
     """
-    if not 0.0 <= pole < 1.0:
-        raise InputError(f"load pole {pole}: not in [0, 1); give the low-pass filter's pole, or draw a spectrum load with spectrum=")
-    if spectrum is not None and pole > 0.0:
-        raise InputError("a load is either low-pass filtered (pole) or of a given spectrum, not both; give one of them")
+    check_load(pole, spectrum)
     if sigma_p > 0.0:
         if spectrum is not None:
             if out.size:
@@ -171,8 +351,21 @@ def draw_impulses(rng: np.random.Generator, out: np.ndarray, sigma_p: float, pol
 
 def add_sensor_noise(theta: np.ndarray, seeds, std: float) -> np.ndarray:
     """``theta(seed, time)`` (changed in place) plus white sensor noise of standard deviation
-    ``std`` (rad), each row from :func:`sensor_rng` of its seed; ``std = 0`` draws nothing."""
+    ``std`` (rad), each row from :func:`sensor_rng` of its seed (drawn in numba,
+    :func:`standard_normals`: the same numbers); ``std = 0`` draws nothing."""
     if std > 0.0:
-        for row, seed in zip(theta, np.atleast_1d(seeds)):
-            row += std * sensor_rng(seed).standard_normal(row.size)
+        seeds = np.atleast_1d(np.asarray(seeds, dtype=np.int64))
+        rows = min(len(theta), seeds.size)
+        _add_sensor_noise(theta, seeds[:rows], float(std), np.empty(theta.shape[-1] if rows else 0))
     return theta
+
+
+@numba.njit(nogil=True, cache=True)
+def _add_sensor_noise(theta, seeds, std, noise):
+    """:func:`add_sensor_noise`'s loop: row ``r`` of ``theta`` plus ``std`` times the sensor
+    stream of ``seeds[r]``, drawn into the scratch row ``noise``."""
+    for r in range(seeds.size):
+        standard_normals(seeds[r], SENSOR_STREAM, noise)
+        row = theta[r]
+        for i in range(row.size):
+            row[i] += std * noise[i]

@@ -42,7 +42,7 @@ import xarray as xr
 from rockdec.physics.fixed_step import step as grid_step
 from rockdec.physics.housner import simulate_block_housner
 from rockdec import validate as checks
-from rockdec.physics.loading import add_sensor_noise, draw_impulses, series_rng
+from rockdec.physics.loading import add_sensor_noise, check_load, draw_impulses, draw_series, series_rng
 from rockdec.physics.models import SCALE_CONSTANT_GUESS, check_finite_series, check_run, period_from_g, scale_constant, step_for_density
 
 #: Largest number of correction steps when the closed-form flight count is off by rounding.
@@ -204,8 +204,18 @@ def _integrate(impulses, dt, g, e, theta0, omega0, burn_in, theta_out, omega_out
             omega_out[j] = omega
 
 
+@numba.njit(nogil=True, cache=True)
+def _simulate_seeds(seeds, sigma_p, pole, dt, g, e, theta0, omega0, burn_in, theta_out, omega_out, impulses, grid):
+    """:func:`simulate_block`'s loop for a white or low-pass load: each seed's impulses
+    (:func:`rockdec.physics.loading.draw_series`, into the scratch ``impulses``) and their
+    integration (:func:`_integrate`) into its rows, with no Python between series."""
+    for row in range(seeds.size):
+        draw_series(seeds[row], impulses, sigma_p, pole)
+        _integrate(impulses, dt, g, e, theta0, omega0, burn_in, theta_out[row], omega_out[row], grid)
+
+
 def simulate_block(seeds, n_points, *, dt, g, e, sigma_p, theta0=0.0, theta_dot0=0.0, burn_in=0, grid_impacts=False, pole=0.0,
-                   spectrum=None):
+                   spectrum=None, out=None):
     """Simulate one series per seed; returns ``(theta, theta_dot)``, each ``(len(seeds), n_points)``.
 
     Kernel entry point (NumPy in, NumPy out). ``sigma_p`` is the standard deviation of the
@@ -214,20 +224,31 @@ def simulate_block(seeds, n_points, *, dt, g, e, sigma_p, theta0=0.0, theta_dot0
     exact one (same load, same seed). ``pole``: low-pass filtered load
     (:func:`rockdec.physics.loading.draw_impulses`), 0 for white noise; ``spectrum``: a load of that
     spectrum instead (:class:`rockdec.physics.loading.ImpulseSpectrum`, cycles per step;
-    :meth:`rockdec.physics.record_model.Load.draw_options` gives either). Inputs outside the model
-    (NaN, infinities, ``e`` outside ``[0, 1]``, ...) and series that overflow raise
-    :class:`rockdec.validate.InputError`.
+    :meth:`rockdec.physics.record_model.Load.draw_options` gives either). A white or low-pass
+    load is drawn and integrated in one numba call over the seeds (:func:`_simulate_seeds`),
+    a spectrum load series by series. ``out``: a float64 array ``(2, len(seeds), n_points)``
+    to write ``theta`` and ``theta_dot`` into (returned as its two halves). Inputs outside the
+    model (NaN, infinities, ``e`` outside ``[0, 1]``, a negative seed, ...) and series that
+    overflow raise :class:`rockdec.validate.InputError`.
     """
     check_run(dt=dt, e=e, sigma_p=sigma_p, theta0=theta0, theta_dot0=theta_dot0, burn_in=burn_in, n_points=n_points)
     checks.positive(g, "g", "give the restoring acceleration nu^2 theta_cr in rad/s^2, > 0")
+    check_load(pole, spectrum)
     seeds = np.atleast_1d(np.asarray(seeds, dtype=np.int64))
+    if seeds.size and seeds.min() < 0:
+        raise checks.InputError(f"seed {seeds.min()} is negative; give seeds >= 0")
     n_steps = burn_in + n_points - 1
-    theta = np.empty((seeds.size, n_points))
-    theta_dot = np.empty((seeds.size, n_points))
+    if out is None:
+        out = np.empty((2, seeds.size, n_points))
+    theta, theta_dot = out[0], out[1]
     impulses = np.empty(n_steps)
-    for row, seed in enumerate(seeds):
-        draw_impulses(series_rng(seed), impulses, sigma_p, pole, spectrum)
-        integrate(impulses, dt, g, e, theta0, theta_dot0, burn_in, theta[row], theta_dot[row], grid_impacts)
+    if spectrum is None:
+        _simulate_seeds(seeds, float(sigma_p), float(pole), float(dt), float(g), float(e), float(theta0), float(theta_dot0),
+                        int(burn_in), theta, theta_dot, impulses, True if grid_impacts else None)
+    else:
+        for row, seed in enumerate(seeds):
+            draw_impulses(series_rng(seed), impulses, sigma_p, pole, spectrum)
+            integrate(impulses, dt, g, e, theta0, theta_dot0, burn_in, theta[row], theta_dot[row], grid_impacts)
     check_finite_series(np.stack([theta[:, -1], theta_dot[:, -1]]), f"the simulation at dt = {dt}, g = {g}, sigma_p = {sigma_p}")
     return theta, theta_dot
 
@@ -305,11 +326,12 @@ def calibrate_dt(
     history: list[tuple[float, float]] = []
     coloured = not (pole == 0.0 and spectrum is None)
     closest = None
+    pilot = np.empty((2, seeds.size, pilot_points))  # every pilot's series, in the same memory
     for i in range(iterations):
         if not (0.0 < dt < math.inf and 0.0 < g * dt * dt < math.inf):
             raise outside
         theta, _ = simulate_block(seeds, pilot_points, dt=dt, g=g, e=e, sigma_p=sigma_p, burn_in=burn_in, pole=pole,
-                                  spectrum=spectrum)
+                                  spectrum=spectrum, out=pilot)
         stats = pilot_statistics(theta, dt, g)
         miss = abs(math.log(stats["points_per_cycle"] / points_per_cycle)) if stats["points_per_cycle"] > 0 else math.inf
         if coloured and (closest is None or miss < closest[0]):
@@ -374,9 +396,24 @@ def _finite_mean(x: np.ndarray) -> float:
 def pilot_statistics(theta: np.ndarray, dt: float, g: float | None = None) -> dict:
     """Stationary statistics of series ``theta(seed, time)``: ``sigma_y``, ``sigma_ydot`` (of
     ``diff(theta)/dt``) and, given ``g``, samples per cycle at ``sigma_y`` (eq. 5); NaN
-    samples left out."""
-    sigma_y = float(np.sqrt(_finite_mean(theta**2)))
-    sigma_ydot = float(np.sqrt(_finite_mean((np.diff(theta, axis=-1) / dt) ** 2)))
+    samples left out. For C-ordered float64 series (the simulators') the squares and the slopes share
+    one scratch array, the slopes divided and squared in place: the values of ``theta**2``
+    and ``(diff(theta)/dt)**2``, averaged as contiguous arrays of the same shapes (so the same
+    bits), without a fresh array of the record's size for each step of the arithmetic (a
+    pilot of :func:`calibrate_dt` is 80 MB a step)."""
+    theta = np.asarray(theta)
+    if theta.dtype == np.float64 and theta.flags.c_contiguous:
+        scratch = np.empty(theta.size)
+        squares = np.square(theta, out=scratch.reshape(theta.shape))
+        sigma_y = float(np.sqrt(_finite_mean(squares)))
+        later, earlier = theta[..., 1:], theta[..., :-1]
+        slopes = np.subtract(later, earlier, out=scratch[: later.size].reshape(later.shape))
+        slopes /= dt
+        slopes **= 2
+    else:  # a record in its own arithmetic and memory order (float32 stays float32)
+        sigma_y = float(np.sqrt(_finite_mean(theta**2)))
+        slopes = (np.diff(theta, axis=-1) / dt) ** 2
+    sigma_ydot = float(np.sqrt(_finite_mean(slopes)))
     out = {"sigma_y": sigma_y, "sigma_ydot": sigma_ydot}
     if g is not None:
         out["points_per_cycle"] = float(period_from_g(sigma_y, g) / dt)
@@ -384,7 +421,7 @@ def pilot_statistics(theta: np.ndarray, dt: float, g: float | None = None) -> di
 
 
 def simulate_model(model: str, seeds, n_points: int, *, dt, g, e, sigma_p, theta_cr=None, pole=0.0, theta0=0.0, theta_dot0=0.0,
-                   burn_in=0, spectrum=None) -> tuple[np.ndarray, np.ndarray]:
+                   burn_in=0, spectrum=None, out=None) -> tuple[np.ndarray, np.ndarray]:
     """``(theta, theta_dot)`` of one series per seed under ``model``: the one dispatch on a model name.
 
     ``"simplified"`` (eq. 4, :func:`simulate_block`), ``"housner"`` (eq. 2,
@@ -392,17 +429,22 @@ def simulate_model(model: str, seeds, n_points: int, *, dt, g, e, sigma_p, theta
     that overturns is NaN from the fall on) or ``"fixed_step"`` (eq. 4 with the grid-impact
     integrator of :mod:`rockdec.physics.fixed_step`, for the speed/accuracy study). ``pole``,
     ``spectrum``: the load (:meth:`rockdec.physics.record_model.Load.draw_options`; 0, None: white).
+    ``out``: an array ``(2, len(seeds), n_points)`` that receives ``theta`` and ``theta_dot``
+    (:func:`simulate_block`'s), which are then its two halves.
     """
     common = dict(dt=dt, e=e, sigma_p=sigma_p, theta0=theta0, theta_dot0=theta_dot0, burn_in=burn_in, pole=pole, spectrum=spectrum)
     if model == "simplified":
-        return simulate_block(seeds, n_points, g=g, **common)
+        return simulate_block(seeds, n_points, g=g, out=out, **common)
     if model == "fixed_step":  # not a model: the grid-impact integrator of rockdec.physics.fixed_step
-        return simulate_block(seeds, n_points, g=g, grid_impacts=True, **common)
+        return simulate_block(seeds, n_points, g=g, grid_impacts=True, out=out, **common)
     if model == "housner":
         if theta_cr is None:
             raise ValueError("the Housner model needs theta_cr")
         theta, theta_dot, _ = simulate_block_housner(seeds, n_points, nu=math.sqrt(g / theta_cr), theta_cr=theta_cr, **common)
-        return theta, theta_dot
+        if out is None:
+            return theta, theta_dot
+        out[0], out[1] = theta, theta_dot
+        return out[0], out[1]
     raise ValueError(f"unknown model '{model}'; use simplified or housner")
 
 
@@ -446,8 +488,9 @@ def simulation_dataset(
                   spectrum=spectrum)
 
     def block(chunk):
-        theta, theta_dot = simulate_model(model, chunk, n_points, **common)
-        return np.stack((add_sensor_noise(theta, chunk, sensor_std), theta_dot))
+        both = np.empty((2, chunk.size, n_points))  # theta and theta_dot written in place: no stacking copy
+        add_sensor_noise(simulate_model(model, chunk, n_points, out=both, **common)[0], chunk, sensor_std)
+        return both
 
     both = da.map_blocks(
         block, seed_chunks, new_axis=[0, 2], chunks=((2,), seed_chunks.chunks[0], (n_points,)), dtype=np.float64

@@ -21,6 +21,13 @@ A signal stops the pass as it stops a script job: the Snakefile's ``onstart`` ca
 :func:`stop_on_signals`, so SIGTERM and SIGINT (Ctrl-C) also set :data:`_STOP`, which the
 pass reads before each Dask task and before writing; it then fails, and Snakemake deletes
 its outputs. The light steps take a second or less and finish.
+
+Imports: threads of one process that import a package with circular imports (Dask) at the
+same time, entering it at different modules, can see it half initialized and fail. So the
+libraries the pass and the steps start with are imported by :func:`calibrate` before any
+rule that reads its contract starts (:data:`STARTS`), those of the tables in one thread
+beside the pass (:data:`PRELOAD`), and the pass and the steps wait for that thread before
+they use them (:func:`_load`).
 """
 
 from __future__ import annotations
@@ -35,12 +42,22 @@ import traceback
 
 from rockdec.validate import InputError
 
-#: What the steps after the signature pass load on their first run and nothing before them
-#: does: the tables' code, xarray's groupby engine (flox, numpy_groupies) and the
-#: p-values' scipy.stats. :func:`calibrate` imports them in a thread of their own once the
-#: run contract is written, while the signature pass starts Python (one core idle), instead
-#: of on the path after the pass, where the tables run one at a time.
-PRELOAD = ("rockdec.pipeline.replicates", "rockdec.report.tables", "flox", "scipy.stats")
+#: What the signature pass and the light steps import as they start (Dask, its threaded
+#: scheduler and array, the pass's and the steps' modules): :func:`calibrate` imports them
+#: once the run contract is written, before Snakemake starts any rule that reads the
+#: contract, so that no two threads import them at once (two threads entering Dask's
+#: circular imports at different modules see it half initialized).
+STARTS = ("dask", "dask.array", "dask.threaded", "dask.callbacks", "rockdec.pipeline.replicates", "rockdec.pipeline.steps")
+
+#: What the window curves at the end of the pass and the tables load on their first run and
+#: nothing before them does: the tables' code, xarray's groupby engine (flox,
+#: numpy_groupies) and the p-values' scipy.stats. :func:`calibrate` imports them in a thread
+#: of their own beside the signature pass, instead of on the path after it.
+PRELOAD = ("rockdec.report.tables", "flox", "scipy.stats")
+
+#: Held while a thread of this process imports :data:`STARTS` or :data:`PRELOAD`
+#: (:func:`_load`): the pass and the steps wait for an import under way instead of entering it.
+_IMPORTS = threading.Lock()
 
 #: Set by SIGTERM or SIGINT once :func:`stop_on_signals` ran: the signature pass stops.
 _STOP = threading.Event()
@@ -111,6 +128,7 @@ def step(rule: str, log: str, *args) -> None:
     """
 
     def work():
+        _load(STARTS + PRELOAD)
         from rockdec.pipeline import steps
 
         getattr(steps, rule)(*args)
@@ -151,6 +169,7 @@ def signatures(rule: str, log: str, inputs, outputs, records: dict, settings: di
         label = f"{rule}: {records['replicates']} replicates x {records['series_per_replicate']} series"
 
     def work():
+        _load(STARTS)
         from dask.callbacks import Callback
 
         from rockdec import console, io
@@ -172,6 +191,7 @@ def signatures(rule: str, log: str, inputs, outputs, records: dict, settings: di
                     threads=threads, first_replicate=first_replicate, sums_only=settings["readings"][1:],
                 )
             cube = cubes[settings["readings"][0]]
+            _load(PRELOAD)
             curves = replicates.reading_curves(cubes, settings["fit_points"], threads)
         cube.attrs.update(io.provenance(rule, settings["signatures"], inputs=inputs))
         curves.attrs.update(io.provenance("readings", settings, inputs=inputs))
@@ -189,7 +209,8 @@ def calibrate(log: str, physics: dict, output: str) -> None:
     (``run.json``), logged as :func:`step` logs, with the contract on a line of its own.
 
     Pilot simulations and a JSON file: no HDF5, so it takes no :data:`_STEP_LOCK`. Then the
-    modules of :data:`PRELOAD` load beside the signature pass.
+    modules of :data:`STARTS` load, and those of :data:`PRELOAD` in a thread beside the
+    signature pass (:func:`_load`).
     """
 
     def work():
@@ -200,15 +221,26 @@ def calibrate(log: str, physics: dict, output: str) -> None:
         return f"run: {contract}"
 
     _logged("calibrate", log, work)
-    threading.Thread(target=_preload, name="rockdec-preload", daemon=True).start()
+    _load(STARTS)
+    threading.Thread(target=_load, args=(PRELOAD,), name="rockdec-preload", daemon=True).start()
 
 
-def _preload() -> None:
-    """Import the modules of :data:`PRELOAD`."""
+#: The modules :func:`_load` has imported (a module is in ``sys.modules`` from the start of
+#: its import, so that does not say it is whole).
+_LOADED: set = set()
+
+
+def _load(names) -> None:
+    """Import the modules ``names`` holding :data:`_IMPORTS`; nothing to wait for when
+    :func:`_load` has imported them all."""
     import importlib
 
-    for name in PRELOAD:
-        importlib.import_module(name)
+    if _LOADED.issuperset(names):
+        return
+    with _IMPORTS:
+        for name in names:
+            importlib.import_module(name)
+            _LOADED.add(name)
 
 
 def _logged(label: str, log: str, work) -> None:

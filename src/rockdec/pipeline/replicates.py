@@ -128,7 +128,9 @@ def scene_cubes(run: Run, records: dict, settings: dict, readings, series_files=
     (:func:`rockdec.pipeline.series.as_recorded`), so both give the same cubes bit for bit. The
     series are reduced at once to the sums of the pass's units (:func:`pass_units`), which
     add up to each reading's groups. Computed on the engine of :mod:`rockdec.pipeline.engine`
-    (``threads`` threads by default; the readings are then pooled on as many threads).
+    (``threads`` threads by default, each block's unit sums written into the cube's arrays as
+    it ends, :func:`rockdec.pipeline.engine.compute_in_place`; the readings are then pooled on
+    as many threads).
     Each cube's attributes hold the run
     (:meth:`rockdec.physics.run.Run.to_attrs`) and its ``reading``. ``first_replicate`` numbers
     the replicates of a part of a scene (:func:`rockdec.pipeline.layout.part_records`) as the
@@ -171,7 +173,7 @@ def variant_cubes(run: Run, records: dict, variants, readings, series_files=(), 
 
     return [
         dict(zip(groups, _each(lambda reading, units=units: reading_cube(units, reading), list(groups), threads)))
-        for units in engine.compute(*lazy, threads=threads)
+        for units in engine.compute_in_place(*lazy, threads=threads)
     ]
 
 
