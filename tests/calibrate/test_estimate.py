@@ -525,6 +525,24 @@ def test_records_up_to_the_length_cap_keep_their_own_calibration():
     assert calibration.settings_hash(calibration.calibration_settings([20_000_000], 75.0)) == calibration.settings_hash(longer)
 
 
+def test_a_noisy_or_coloured_record_is_calibrated_on_more_sets_than_a_clean_white_one():
+    """sets_per_e: the paper's model SETS_PER_E; sensor noise or a low-pass load
+    SETS_PER_E_MODELLED, more; beyond the length cap SETS_PER_E whatever the model. The
+    number is in the settings, so the two calibrations have names (and seeds) of their own."""
+    from rockdec.physics.record_model import RecordModel, SensorNoise
+
+    assert calibration.SETS_PER_E_MODELLED > calibration.SETS_PER_E
+    noisy = RecordModel(sensor=SensorNoise(0.03, "sigma_y"))
+    coloured = RecordModel(load=Load("lowpass", 3.0))
+    clean = calibration.calibration_settings([200_000], 75.0)
+    assert clean["sets_per_e"] == calibration.SETS_PER_E
+    for model in (noisy, coloured):
+        got = calibration.calibration_settings([200_000], 75.0, model=model)
+        assert got["sets_per_e"] == calibration.SETS_PER_E_MODELLED
+        assert calibration.seed_base(got) != calibration.seed_base({**got, "sets_per_e": calibration.SETS_PER_E})
+        assert calibration.calibration_settings([calibration.LENGTH_CAP + 1], 75.0, model=model)["sets_per_e"] == calibration.SETS_PER_E
+
+
 def test_long_records_are_shortened_in_proportion_and_the_spread_scaled_by_the_root_of_the_ratio():
     cap = calibration.LENGTH_CAP
     assert calibration.simulated_lengths([15 * cap, 5 * cap]) == [3 * cap // 4, cap // 4]
