@@ -82,7 +82,7 @@ E_GRID = (0.4, 0.55, 0.7, 0.8, 0.865, 0.92, 0.95, 0.972, 0.985, 0.995)
 #: it corrects (one calibration serves three quarters of the records of one ``e``); with 30
 #: sets it is 0.07-0.16 of a spread (``benchmarks/calibration_mean_error.py``), and under 3 %
 #: sensor noise it left the corrected ``e`` of whole calibrations 0.3-0.4 of a spread off
-#: (README, "Does the interval hold?"); with 60 sets, -0.05 to +0.22. A clean white
+#: (README, "Does the interval hold?"); with 60 sets, -0.14 to +0.22. A clean white
 #: record keeps the cheaper calibration: its cold estimate has the tightest time budget.
 SETS_PER_E, SETS_PER_E_MODELLED = 30, 60
 
