@@ -2,10 +2,11 @@
 
 A plain script (not a test): prints timings and ratios, never asserts them.
 
-    PYTHONPATH=src python benchmarks/bench_estimate.py [--samples 200000] [--repeat 5] [--cold 2] [--before OTHER/src]
+    PYTHONPATH=src python benchmarks/bench_estimate.py [--samples 200000] [--noise 0.03] [--repeat 5] [--cold 2] [--before OTHER/src]
 
 1. A simulated record of ``--samples`` samples at e = 0.85 (as ``tests/calibrate/test_estimate.py``
-   makes them) is written as a CSV file.
+   makes them; with ``--noise``, plus white sensor noise of that fraction of its rms) is
+   written as a CSV file.
 2. **Cold**: ``python -m rockdec estimate record.csv --cache DIR`` in a fresh interpreter with an
    empty cache, ``--cold`` times: it builds the calibration.
 3. **Warm**: the same command with the calibration cached, ``--repeat`` times.
@@ -120,15 +121,18 @@ print(json.dumps({"process": time.process_time() - cpu, "tasks": len(tasks), "th
 """
 
 
-def record(path: Path, n: int) -> Path:
-    """A simulated record at e = 0.85 of ``n`` samples, written as ``time,theta``."""
+def record(path: Path, n: int, noise: float = 0.0) -> Path:
+    """A simulated record at e = 0.85 of ``n`` samples, plus white sensor noise of ``noise``
+    times its rms, written as ``time,theta``."""
     import numpy as np
 
+    from rockdec.physics.loading import add_sensor_noise
     from rockdec.physics.simulate import calibrate_dt, simulate_block
 
     g, sigma_p, e = 1.0, 0.003, 0.85
     cal = calibrate_dt(e=e, g=g, sigma_p=sigma_p, points_per_cycle=75)
     theta, _ = simulate_block([11], n, dt=cal["dt"], g=g, e=e, sigma_p=sigma_p, burn_in=cal["burn_in"])
+    add_sensor_noise(theta, [11], noise * float(np.sqrt(np.mean(theta[0] ** 2))))
     np.savetxt(path, np.c_[np.arange(n) * cal["dt"], theta[0]], delimiter=",", header="time,theta", comments="", fmt="%.10g")
     return path
 
@@ -165,6 +169,7 @@ def median(runs, k: int) -> float:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--samples", type=int, default=200_000, help="samples of the record (default %(default)s)")
+    parser.add_argument("--noise", type=float, default=0.0, help="sensor noise of the record in its rms (default %(default)s)")
     parser.add_argument("--repeat", type=int, default=5, help="warm runs and floors of each tree (default %(default)s)")
     parser.add_argument("--cold", type=int, default=2, help="cold runs of each tree, each in an empty cache (default %(default)s)")
     parser.add_argument("--before", help="a second source tree (its src folder) to time alongside, e.g. a checkout of main")
@@ -175,7 +180,7 @@ def main() -> None:
     runs: dict[str, dict[str, list]] = {t: {k: [] for k in ("cold", "warm", "import", "floor", "inproc")} for t in trees}
     answers = {}
     with tempfile.TemporaryDirectory(prefix="rockdec_bench_estimate_") as folder:
-        csv = record(Path(folder) / "record.csv", args.samples)
+        csv = record(Path(folder) / "record.csv", args.samples, args.noise)
         caches = {t: Path(folder) / f"cache-{t}" for t in trees}
 
         def command(tree, cache):

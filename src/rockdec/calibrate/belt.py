@@ -6,7 +6,8 @@ with a spread ``s(e)`` and a shape of its own; all three come from the calibrati
 of ``e`` (:func:`fit`):
 
 - ``m``: the means of the grid points, smoothed as the bias ``m(e) - e`` by a weighted
-  cubic smoothing spline in ``e`` (weights: sets over spread squared), its smoothing
+  cubic smoothing spline (weights: sets over spread squared) along ``e``, ``log(1 - e)``
+  or ``1/e``, whichever cross-validates best (:data:`MEAN_VARIABLES`), its smoothing
   chosen by generalised cross-validation (:func:`_smooth`): from a straight line to a
   curve through every point, as the points say. A fixed cubic misses the simulated mean
   by about 0.001 near ``e = 0.95``, more than the spread of a long record.
@@ -95,6 +96,15 @@ GCV_GAMMA = 1.4
 #: 20 million samples ``e_v``'s bias bends by 0.003 between ``e`` = 0.8 and 0.92, several
 #: spreads, which :data:`GCV_GAMMA` smooths away by a third).
 GCV_GAMMA_LONG = 1.0
+
+#: Variables along which the mean's offset from ``e`` is smoothed (:func:`fit`), each a
+#: function of ``e`` that increases as ``e`` falls (the order of the grid points); the one
+#: whose smoothing cross-validates best is taken. ``1/e`` stretches low ``e``, where ``e_v``'s
+#: bias bends (clean white records of 200,000 samples at 81 samples per cycle: +0.044 at
+#: ``e`` = 0.4, +0.010 at 0.55, within 0.005 of 0 from 0.6 up): along ``e`` the smoother
+#: cut the bend and lifted the mean at 0.55-0.7 by 0.11-0.17 of a spread, along ``1/e`` by 0.03-0.11
+#: (blocks of 30 sets against a pool of 600 sets per ``e``; docs/method.md, "Confidence belt").
+MEAN_VARIABLES = {"e": np.negative, "log(1 - e)": lambda e: np.log1p(-e), "1/e": np.reciprocal}
 
 #: Smoothing parameters tried by the cross-validation, relative to the weights' scale.
 _LAMBDAS = np.logspace(-6, 8, 57)
@@ -185,8 +195,8 @@ def belt(cal: ncread.Stored | xr.Dataset, name: str, points: int = 4001, scale: 
 def fit(e_grid: np.ndarray, raw: np.ndarray, ratio: bool = False, points: int = 4001, scale: float = 1.0) -> Belt:
     """The belt of raw values ``raw(e, set)`` simulated at the true ``e_grid``, on a dense grid
     of ``points`` values of ``e`` (module docstring): the mean is smoothed as its offset from
-    ``e`` (from 1 for a ``ratio``) along ``e`` or ``u = log(1 - e)``, whichever
-    cross-validates better; the spread along ``u``.
+    ``e`` (from 1 for a ``ratio``) along whichever of :data:`MEAN_VARIABLES` cross-validates
+    best; the spread along ``u = log(1 - e)``.
 
     ``scale``: the belt of records whose spread is ``scale`` times the simulated sets'
     (records longer than the simulated ones:
@@ -216,8 +226,8 @@ def fit(e_grid: np.ndarray, raw: np.ndarray, ratio: bool = False, points: int = 
     s_fit = np.exp(log_s)
     w = counts / s_fit**2
     centre = np.ones_like(x) if ratio else x
-    # the mean along e (as -e: the order of u) or along u, whichever cross-validates better
-    along, (bias, hat, scatter, _) = min(((c, _smooth(c, means[use][order] - centre, w, gamma)) for c in (-x, u)), key=lambda t: t[1][3])
+    # the mean along the variable that cross-validates best
+    along, (bias, hat, scatter, _) = min(((f, _smooth(f(x), means[use][order] - centre, w, gamma)) for f in MEAN_VARIABLES.values()), key=lambda t: t[1][3])
     cov = (hat / w) @ hat.T * max(scatter, 1.0)
     sets = raw[use][order]
     # scatter about each point's own mean (the mean curve's error is var_mean's), in units of the
@@ -230,7 +240,7 @@ def fit(e_grid: np.ndarray, raw: np.ndarray, ratio: bool = False, points: int = 
     ])
     dense = np.linspace(x.min(), x.max(), points)
     ud = np.log1p(-dense)
-    basis = _spline_basis(along, -dense if along is not u else ud)  # (dense, grid): the natural spline through the fitted values
+    basis = _spline_basis(along(x), along(dense))  # (dense, grid): the natural spline through the fitted values
     mean = (1.0 if ratio else dense) + basis @ bias
     var_mean = np.einsum("ij,jk,ik->i", basis, cov, basis)
     basis_s = _spline_basis(u, ud)

@@ -11,7 +11,8 @@ only on ``e`` and one dimensionless step (equivalently the samples per cycle at 
 ``sigma_Y``, eq. 5); a low-pass load adds its pole per sample, sensor noise its level in
 ``sigma_Y``, Housner's model (eq. 2) the ratio ``sigma_Y / theta_cr`` (the record model,
 :func:`binned_model`). So the calibration simulates, for each ``e`` of a grid
-(:data:`E_GRID`), :data:`SETS_PER_E` sets of records with the measured records' lengths
+(:data:`E_GRID`), :data:`SETS_PER_E` sets of records (:data:`SETS_PER_E_MODELLED` under
+sensor noise or a coloured load: :func:`sets_per_e`) with the measured records' lengths
 (records of more than :data:`LENGTH_CAP` samples in all: sets of that many samples on the
 denser grid :data:`E_GRID_LONG`, the belt's spread scaled to the records' length:
 :func:`simulated_lengths`, :func:`spread_scale`), ``g = 1`` and ``sigma_p = 1``
@@ -75,8 +76,15 @@ log = logging.getLogger(__name__)
 #: the simulated samples of 15 points of 40 sets at the same coverage (docs/method.md §10).
 E_GRID = (0.4, 0.55, 0.7, 0.8, 0.865, 0.92, 0.95, 0.972, 0.985, 0.995)
 
-#: Simulated record sets per grid point.
-SETS_PER_E = 30
+#: Simulated record sets per grid point: ``SETS_PER_E`` for records of the paper's model
+#: (white load, no sensor noise), ``SETS_PER_E_MODELLED`` under sensor noise or a coloured
+#: load (:func:`sets_per_e`). The error of a calibration's mean curve is shared by every record
+#: it corrects (one calibration serves three quarters of the records of one ``e``); with 30
+#: sets it is 0.07-0.16 of a spread (``benchmarks/calibration_mean_error.py``), and under 3 %
+#: sensor noise it left the corrected ``e`` of whole calibrations 0.3-0.4 of a spread off
+#: (README, "Does the interval hold?"); with 60 sets, -0.14 to +0.22. A clean white
+#: record keeps the cheaper calibration: its cold estimate has the tightest time budget.
+SETS_PER_E, SETS_PER_E_MODELLED = 30, 60
 
 #: Records longer than this (samples in all) are calibrated on simulated records of this
 #: many samples in all (:func:`simulated_lengths`), their belt's spread scaled to the
@@ -181,6 +189,14 @@ def binned_model(model: RecordModel, points_per_cycle: float, ppc_bin: float = P
     return dataclasses.replace(model, load=load, sensor=sensor)
 
 
+def sets_per_e(model: RecordModel, capped: bool = False) -> int:
+    """Sets per grid point of the calibration of records of ``model``: :data:`SETS_PER_E_MODELLED`
+    under sensor noise or a coloured load, else :data:`SETS_PER_E`; a calibration on shortened
+    records (``capped``, :func:`simulated_lengths`) always :data:`SETS_PER_E`."""
+    modelled = model.sensor.std > 0.0 or model.load.kind != "white"
+    return SETS_PER_E_MODELLED if modelled and not capped else SETS_PER_E
+
+
 def calibration_settings(lengths, points_per_cycle: float, settings: dict | None = None, model: RecordModel = PAPER, theta_cr_ratio: float | None = None) -> dict:
     """Everything a calibration depends on, as a JSON-able dict (hashed for the cache name).
 
@@ -205,7 +221,7 @@ def calibration_settings(lengths, points_per_cycle: float, settings: dict | None
         "record_model": binned_model(model, points_per_cycle, ppc_bin).key(),
         "analysis": {k: (list(v) if isinstance(v, tuple) else v) for k, v in {**measured.DEFAULT_SETTINGS, **(settings or {})}.items()},
         "e_grid": list(E_GRID_LONG if capped else E_GRID),
-        "sets_per_e": SETS_PER_E,
+        "sets_per_e": sets_per_e(model, capped),
         "rockdec_version": __version__,
         "pipeline": pipeline_fingerprint(),
     }

@@ -106,7 +106,10 @@ def stage_seconds(samples: int, csv: bool, g_given: bool, cores: int = 2) -> dic
 
 def calibration_sets(samples: int) -> int:
     """How many records a calibration for records of ``samples`` in all simulates:
-    :data:`rockdec.calibrate.calibration.SETS_PER_E` at each ``e`` of its grid, and beyond
+    :data:`rockdec.calibrate.calibration.SETS_PER_E` at each ``e`` of its grid (the paper's
+    record model; twice as many under sensor noise or a coloured load,
+    :func:`rockdec.calibrate.calibration.sets_per_e`, which is measured after this count is
+    given), and beyond
     :data:`rockdec.calibrate.calibration.LENGTH_CAP` the step search's pilot sets too (as
     long as the sets, :func:`rockdec.calibrate.calibration.step_for`) on the longer grid."""
     if sum(calibration.simulated_lengths([samples])) == samples:
