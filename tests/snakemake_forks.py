@@ -83,6 +83,15 @@ def load_python() -> None:
     import rockdec.physics.simulate  # noqa: F401
 
 
+def stop_forkserver() -> None:
+    """End this process's multiprocessing forkserver (Dask's worker processes are forked by
+    one, tests/conftest.py) if it runs, and wait for it: its CPU and that of the workers it
+    forked then count as this process's children's, as a spawned worker's do."""
+    server = sys.modules.get("multiprocessing.forkserver")
+    if server is not None and server._forkserver._forkserver_pid is not None:
+        server._forkserver._stop()
+
+
 def child(request: dict) -> None:
     """Become ``python -m snakemake ARGS`` in ``cwd`` (``python -c ARGS[0] ARGS[1:]`` for a
     request with ``"python"``); never returns."""
@@ -114,6 +123,7 @@ def child(request: dict) -> None:
 
         traceback.print_exc()
     finally:
+        stop_forkserver()
         for stream in (sys.stdout, sys.stderr):
             try:
                 stream.flush()

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from conftest import fork_dask_workers
 from rockdec.pipeline import config, engine, replicates, series
 from rockdec.physics import run
 
@@ -25,7 +26,9 @@ def test_the_setting_names_an_engine_or_says_what_is_accepted(monkeypatch):
 
 @pytest.fixture(scope="module")
 def small():
-    """Two replicates of 12 series in chunks of 5 seeds (chunks straddle the replicates)."""
+    """Two replicates of 12 series in chunks of 5 seeds (chunks straddle the replicates);
+    Dask's worker processes forked (tests/conftest.py)."""
+    fork_dask_workers()
     scene = config.validate_scene(
         {
             "excitation": {"dt": 0.0034, "burn_in": 2000},
