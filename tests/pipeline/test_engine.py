@@ -7,7 +7,6 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from conftest import fork_dask_workers
 from rockdec.pipeline import config, engine, replicates, series
 from rockdec.physics import run
 
@@ -28,6 +27,8 @@ def test_the_setting_names_an_engine_or_says_what_is_accepted(monkeypatch):
 def small():
     """Two replicates of 12 series in chunks of 5 seeds (chunks straddle the replicates);
     Dask's worker processes forked (tests/conftest.py)."""
+    from conftest import fork_dask_workers
+
     fork_dask_workers()
     scene = config.validate_scene(
         {
