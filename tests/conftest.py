@@ -14,6 +14,7 @@ import os
 import resource
 import select
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
@@ -137,16 +138,22 @@ class Forks:
         return Forked(self, self._ask(self._request(workdir, args, env, os.devnull, os.devnull, background=True), 60.0)["pid"])
 
     def script(self, script: str, *args, timeout: float = 300.0) -> tuple[int, str, str]:
-        """``python -c script *args`` in this process's folder and environment (a server
-        made with ``python``): exit code, standard output and standard error."""
+        """``python -c script *args`` (:meth:`start_script`), waited for: exit code, standard
+        output and standard error. Killed if it runs longer than ``timeout`` s."""
         with tempfile.TemporaryDirectory() as folder:
-            out, err = Path(folder) / "out", Path(folder) / "err"
-            reply = self._ask({**self._request(os.getcwd(), [script, *args], None, out, err, background=False), "python": True}, timeout)
-            return reply["code"], out.read_text(), err.read_text()
+            proc = self.start_script(script, *args, output=Path(folder) / "script")
+            try:
+                out, err = proc.communicate(timeout)
+            except subprocess.TimeoutExpired:
+                os.killpg(proc.pid, signal.SIGKILL)
+                proc.wait(60.0)
+                raise
+            return proc.returncode, out, err
 
     def start_script(self, script: str, *args, output: Path) -> "Forked":
-        """``python -c script *args`` as :meth:`script` does, in the background; its standard
-        output and error in ``output``.out and ``output``.err (:meth:`Forked.communicate`)."""
+        """``python -c script *args`` in this process's folder and environment (a server made
+        with ``python``), in the background, the leader of a process group of its own; its
+        standard output and error in ``output``.out and ``output``.err (:meth:`Forked.communicate`)."""
         out, err = output.with_suffix(".out"), output.with_suffix(".err")
         reply = self._ask({**self._request(os.getcwd(), [script, *args], None, out, err, background=True), "python": True}, 60.0)
         return Forked(self, reply["pid"], out, err)
