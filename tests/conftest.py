@@ -315,23 +315,28 @@ SCRIPT_MODULES = (
 )
 
 #: The modules whose tests cost the most CPU (``--cpu-durations``), costliest first; the
-#: other modules (under 2 s each) follow in their collection order.
+#: other modules (about 1 s or less each) follow in their collection order.
 COSTLIEST_FIRST = (
     *WORKFLOW_MODULES,
     *SCRIPT_MODULES,
     "tests/calibrate/test_estimate.py",
     "tests/studies/test_coverage.py",
+    "tests/pipeline/test_figure_workers.py",
     "tests/test_cli.py",
     "tests/report/test_figures.py",
-    "tests/rdd/test_signatures.py",
-    "tests/physics/test_housner.py",
-    "tests/calibrate/test_estimate_model.py",
-    "tests/physics/test_load_spectrum.py",
-    "tests/pipeline/test_replicates.py",
-    "tests/test_io.py",
-    "tests/physics/test_simulate.py",
-    "tests/physics/test_record_model.py",
     "tests/record/test_diagnostics.py",
+    "tests/rdd/test_signatures.py",
+    "tests/physics/test_load_spectrum.py",
+    "tests/test_io.py",
+    "tests/calibrate/test_estimate_model.py",
+    "tests/physics/test_housner.py",
+    "tests/pipeline/test_replicates.py",
+    "tests/physics/test_record_model.py",
+    "tests/physics/test_simulate.py",
+    "tests/rdd/test_estimators.py",
+    "tests/rdd/test_estimator_checks.py",
+    "tests/studies/test_diagnostics_study.py",
+    "tests/record/test_record_measure.py",
 )
 
 
