@@ -1,7 +1,9 @@
 """What several test modules share: one build of the tiny workflow per test session, the
-Snakemake runs (forked from one process, :class:`Forks`), the hypothesis profile, how
-xdist shares the tests among its workers, and ``--cpu-durations`` (the CPU each test
-costs, with the subprocesses it waited for and its Snakemake runs).
+Snakemake runs (forked from one process, :class:`Forks`), Dask's worker processes (forked
+by a forkserver, :func:`fork_dask_workers`), the steps their records are simulated at
+(:func:`calibrated_step`), the hypothesis profile, how xdist shares the tests among its
+workers, and ``--cpu-durations`` (the CPU each test costs, with the subprocesses it waited
+for and its Snakemake runs).
 
 ``tests/`` is on ``sys.path`` (pytest's rootdir-relative imports), so the test modules also
 import their helpers from one another (``cf_check``, ``test_hostile``).
