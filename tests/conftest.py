@@ -1,7 +1,9 @@
 """What several test modules share: one build of the tiny workflow per test session, the
-Snakemake runs (forked from one process, :class:`Forks`), the hypothesis profile, how
-xdist shares the tests among its workers, and ``--cpu-durations`` (the CPU each test
-costs, with the subprocesses it waited for and its Snakemake runs).
+Snakemake runs (forked from one process, :class:`Forks`), Dask's worker processes (forked
+by a forkserver, :func:`fork_dask_workers`), the steps their records are simulated at
+(:func:`calibrated_step`), the hypothesis profile, how xdist shares the tests among its
+workers, and ``--cpu-durations`` (the CPU each test costs, with the subprocesses it waited
+for and its Snakemake runs).
 
 ``tests/`` is on ``sys.path`` (pytest's rootdir-relative imports), so the test modules also
 import their helpers from one another (``cf_check``, ``test_hostile``).
@@ -9,11 +11,13 @@ import their helpers from one another (``cf_check``, ``test_hostile``).
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 import resource
 import select
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
@@ -22,6 +26,8 @@ from pathlib import Path
 import pytest
 import yaml
 from hypothesis import settings
+
+from snakemake_forks import stop_forkserver
 
 # Property tests draw the same examples on every run (CI included): a failure is reproducible
 # and a passing suite cannot turn red by the luck of a draw. Explore with
@@ -32,8 +38,51 @@ settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "rockdec"))
 
 REPO = Path(__file__).resolve().parents[1]
 
+# Dask's worker processes (the ``processes:N`` engine, :class:`SharedScheduler`, and those of
+# the Snakemake runs, which inherit the variable) are forked by multiprocessing's forkserver,
+# as Dask's own tests have them, instead of each started afresh: :func:`fork_dask_workers`.
+os.environ["DASK_DISTRIBUTED__WORKER__MULTIPROCESSING_METHOD"] = "forkserver"
+
+#: What this process's forkserver imports before it forks Dask's workers, besides Dask's
+#: own list (distributed, NumPy, pandas): the module the workers' tasks run, and so xarray,
+#: numba and rockdec (about 0.8 s of CPU a worker).
+DASK_WORKER_PRELOAD = ("rockdec.pipeline.replicates",)
+
+
+def fork_dask_workers() -> None:
+    """Before this process starts a Dask cluster of worker processes: its forkserver
+    (:data:`DASK_WORKER_PRELOAD` added to what ``distributed`` asks it to load) forks each
+    worker with those imports done, where a worker started afresh pays about 1.3 s of CPU
+    in imports. Stopped with the session (:func:`pytest_sessionfinish`,
+    :func:`snakemake_forks.stop_forkserver`)."""
+    import multiprocessing.forkserver
+
+    from distributed.utils import get_mp_context
+
+    get_mp_context()  # distributed's own preload list, set once
+    server = multiprocessing.forkserver._forkserver
+    missing = [name for name in DASK_WORKER_PRELOAD if name not in server._preload_modules]
+    if missing:
+        server.set_forkserver_preload([*server._preload_modules, *missing])
+
+
 TINY = "tiny"
 """The default scene of the built copy."""
+
+
+def calibrated_step(e: float, g: float, sigma_p: float, points_per_cycle: float = 75.0) -> dict:
+    """:func:`rockdec.physics.simulate.calibrate_dt` with its default pilots (a copy of its
+    result), computed once per test process for each set of arguments: several modules place
+    their records at the same ``e``, ``g``, ``sigma_p`` and samples per cycle, and the pilots
+    (fixed seeds, so the same step every time) cost 0.7-0.9 s of CPU."""
+    return dict(_calibrated_step(e, g, sigma_p, points_per_cycle))
+
+
+@functools.cache
+def _calibrated_step(e: float, g: float, sigma_p: float, points_per_cycle: float) -> dict:
+    from rockdec.physics.simulate import calibrate_dt
+
+    return calibrate_dt(e=e, g=g, sigma_p=sigma_p, points_per_cycle=points_per_cycle)
 
 
 class Forks:
@@ -107,16 +156,22 @@ class Forks:
         return Forked(self, self._ask(self._request(workdir, args, env, os.devnull, os.devnull, background=True), 60.0)["pid"])
 
     def script(self, script: str, *args, timeout: float = 300.0) -> tuple[int, str, str]:
-        """``python -c script *args`` in this process's folder and environment (a server
-        made with ``python``): exit code, standard output and standard error."""
+        """``python -c script *args`` (:meth:`start_script`), waited for: exit code, standard
+        output and standard error. Killed if it runs longer than ``timeout`` s."""
         with tempfile.TemporaryDirectory() as folder:
-            out, err = Path(folder) / "out", Path(folder) / "err"
-            reply = self._ask({**self._request(os.getcwd(), [script, *args], None, out, err, background=False), "python": True}, timeout)
-            return reply["code"], out.read_text(), err.read_text()
+            proc = self.start_script(script, *args, output=Path(folder) / "script")
+            try:
+                out, err = proc.communicate(timeout)
+            except subprocess.TimeoutExpired:
+                os.killpg(proc.pid, signal.SIGKILL)
+                proc.wait(60.0)
+                raise
+            return proc.returncode, out, err
 
     def start_script(self, script: str, *args, output: Path) -> "Forked":
-        """``python -c script *args`` as :meth:`script` does, in the background; its standard
-        output and error in ``output``.out and ``output``.err (:meth:`Forked.communicate`)."""
+        """``python -c script *args`` in this process's folder and environment (a server made
+        with ``python``), in the background, the leader of a process group of its own; its
+        standard output and error in ``output``.out and ``output``.err (:meth:`Forked.communicate`)."""
         out, err = output.with_suffix(".out"), output.with_suffix(".err")
         reply = self._ask({**self._request(os.getcwd(), [script, *args], None, out, err, background=True), "python": True}, 60.0)
         return Forked(self, reply["pid"], out, err)
@@ -169,6 +224,7 @@ def pytest_sessionfinish(session):
     FORKS.close()
     PYTHON_FORKS.close()
     SCHEDULER.close()
+    stop_forkserver()
 
 
 def snakemake(workdir, *args) -> tuple[int, str]:
@@ -221,6 +277,7 @@ class SharedScheduler:
         if self.cluster is None:
             from dask.distributed import LocalCluster
 
+            fork_dask_workers()
             self.cluster = LocalCluster(n_workers=2, threads_per_worker=1, host="127.0.0.1", dashboard_address=None)
         return self.cluster.scheduler_address
 
@@ -276,23 +333,28 @@ SCRIPT_MODULES = (
 )
 
 #: The modules whose tests cost the most CPU (``--cpu-durations``), costliest first; the
-#: other modules (under 2 s each) follow in their collection order.
+#: other modules (about 1 s or less each) follow in their collection order.
 COSTLIEST_FIRST = (
     *WORKFLOW_MODULES,
     *SCRIPT_MODULES,
     "tests/calibrate/test_estimate.py",
     "tests/studies/test_coverage.py",
+    "tests/pipeline/test_figure_workers.py",
     "tests/test_cli.py",
     "tests/report/test_figures.py",
-    "tests/rdd/test_signatures.py",
-    "tests/physics/test_housner.py",
-    "tests/calibrate/test_estimate_model.py",
-    "tests/physics/test_load_spectrum.py",
-    "tests/pipeline/test_replicates.py",
-    "tests/test_io.py",
-    "tests/physics/test_simulate.py",
-    "tests/physics/test_record_model.py",
     "tests/record/test_diagnostics.py",
+    "tests/rdd/test_signatures.py",
+    "tests/physics/test_load_spectrum.py",
+    "tests/test_io.py",
+    "tests/calibrate/test_estimate_model.py",
+    "tests/physics/test_housner.py",
+    "tests/pipeline/test_replicates.py",
+    "tests/physics/test_record_model.py",
+    "tests/physics/test_simulate.py",
+    "tests/rdd/test_estimators.py",
+    "tests/rdd/test_estimator_checks.py",
+    "tests/studies/test_diagnostics_study.py",
+    "tests/record/test_record_measure.py",
 )
 
 
@@ -350,11 +412,26 @@ def pytest_addoption(parser):
     )
 
 
+def _forkserver_cpu() -> float:
+    """User + system CPU of this process's running forkserver (:func:`fork_dask_workers`) and
+    of the Dask workers it forked and reaped, in s (0 when none runs)."""
+    server = sys.modules.get("multiprocessing.forkserver")
+    pid = server and server._forkserver._forkserver_pid
+    if not pid:
+        return 0.0
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            fields = f.read().rsplit(")", 1)[1].split()
+    except OSError:
+        return 0.0
+    return sum(int(x) for x in fields[11:15]) / os.sysconf("SC_CLK_TCK")  # utime, stime, cutime, cstime
+
+
 def _cpu_seconds() -> float:
-    """User + system CPU of this process, of its waited-for children and of its forked runs
-    (:class:`Forks`, with the fork servers' own), in s."""
+    """User + system CPU of this process, of its waited-for children, of its forked runs
+    (:class:`Forks`, with the fork servers' own) and of its forkserver's (Dask's workers), in s."""
     own, children = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
-    return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime + FORKS.cpu + PYTHON_FORKS.cpu
+    return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime + FORKS.cpu + PYTHON_FORKS.cpu + _forkserver_cpu()
 
 
 @pytest.hookimpl(hookwrapper=True)

@@ -28,7 +28,7 @@ from rockdec import io
 from rockdec import validate as checks
 from rockdec.cli import main
 
-from conftest import PYTHON_FORKS
+from conftest import PYTHON_FORKS, calibrated_step
 
 ROOT = Path(__file__).resolve().parents[1]
 #: A fast simulate call: an explicit step and no burn-in skip the calibration.
@@ -497,7 +497,7 @@ def tiny_calibration():
 def rocking(tmp_path_factory):
     """A simulated rocking record (e = 0.85, g = 1 rad/s^2, 20,000 samples) as CSV, and its parts."""
     folder = tmp_path_factory.mktemp("rocking")
-    cal = simulate.calibrate_dt(e=0.85, g=1.0, sigma_p=0.003, points_per_cycle=75)
+    cal = calibrated_step(0.85, 1.0, 0.003)
     theta = simulate.simulate_block([11], 20_000, dt=cal["dt"], g=1.0, e=0.85, sigma_p=0.003, burn_in=cal["burn_in"])[0][0]
     dt = cal["dt"]
     t = np.arange(theta.size) * dt

@@ -119,7 +119,8 @@ def test_coordinates_are_written_without_fill_values(tmp_path):
 
 def test_a_lock_is_never_seen_without_its_owner_while_runs_claim_it(tmp_path):
     """Another run that reads the lock at any moment finds a live owner in it, never an empty
-    file it would take for a stale lock and take over."""
+    file it would take for a stale lock and take over. At least 300 claims, and more until
+    the reader has read the lock (on a loaded machine its thread can miss 300 short claims)."""
     path = tmp_path / "out.nc"
     lock = path.with_name(f".{path.name}.lock")
     seen, done = [], threading.Event()
@@ -134,9 +135,11 @@ def test_a_lock_is_never_seen_without_its_owner_while_runs_claim_it(tmp_path):
     reader = threading.Thread(target=read)
     reader.start()
     try:
-        for _ in range(300):
+        claims = 0
+        while claims < 300 or (not seen and claims < 30_000):
             with io.claimed(path):
                 pass
+            claims += 1
     finally:
         done.set()
         reader.join()

@@ -14,13 +14,14 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from conftest import calibrated_step
 from rockdec.calibrate import belt, calibration
 from rockdec.studies import belt_study
 from rockdec.rdd import measured
 from rockdec.cli import main
 from rockdec.physics.loading import draw_impulses, series_rng
 from rockdec.physics.record_model import Load
-from rockdec.physics.simulate import calibrate_dt, simulate_block
+from rockdec.physics.simulate import simulate_block
 
 G = 1.0  # nu = 2 rad/s, theta_cr = 0.25 rad
 SIGMA_P = 0.003
@@ -33,7 +34,7 @@ def cache(tmp_path_factory):
 
 
 def simulated_record(e: float, n: int, seed: int = 11):
-    cal = calibrate_dt(e=e, g=G, sigma_p=SIGMA_P, points_per_cycle=75)
+    cal = calibrated_step(e, G, SIGMA_P)
     theta, _ = simulate_block([seed], n, dt=cal["dt"], g=G, e=e, sigma_p=SIGMA_P, burn_in=cal["burn_in"])
     return theta[0], cal["dt"]
 

@@ -15,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import xarray as xr
+from conftest import calibrated_step
 from test_estimators import A, G, free_rocking, t1_of, through_impact
 
 from rockdec.rdd import estimators, measured, registry, signatures
@@ -154,7 +155,7 @@ def test_count_weights_are_the_counts_of_each_estimators_trigger():
 
 @pytest.fixture(scope="module")
 def one_record():
-    cal = simulate.calibrate_dt(e=0.9, g=G, sigma_p=0.003, points_per_cycle=75)
+    cal = calibrated_step(0.9, G, 0.003)
     theta, _ = simulate.simulate_block([3], 30_000, dt=cal["dt"], g=G, e=0.9, sigma_p=0.003, burn_in=cal["burn_in"])
     return theta[0], cal["dt"]
 

@@ -11,12 +11,13 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from conftest import calibrated_step
 from rockdec.calibrate import calibration
 from rockdec.record import diagnostics
 from rockdec.rdd import fits, measured
 from rockdec.calibrate.inference import diagnose
 from rockdec.record.records import Record
-from rockdec.physics.simulate import calibrate_dt, simulate_block
+from rockdec.physics.simulate import simulate_block
 
 E, N, SETS = 0.9, 40_000, 30
 LEVEL = measured.DEFAULT_SETTINGS["level"]
@@ -34,7 +35,7 @@ def _calibration(values: np.ndarray, grid=(E,)) -> xr.Dataset:
 def clean():
     """Clean records at e = 0.9 (75 samples per cycle, 40,000 samples): the first is the test
     record, the others the calibration's sets."""
-    cal = calibrate_dt(e=E, g=1.0, sigma_p=0.003, points_per_cycle=75)
+    cal = calibrated_step(E, 1.0, 0.003)
     theta, _ = simulate_block(np.arange(SETS + 1) + 500, N, dt=cal["dt"], g=1.0, e=E, sigma_p=0.003, burn_in=cal["burn_in"])
     dt = cal["dt"]
     values = np.stack([diagnostics.statistics([y], measured.analyse([y], dt)) for y in theta[1:]])
@@ -248,7 +249,7 @@ def test_the_asymmetry_reads_the_lean_itself_under_a_white_or_a_coloured_load(cl
     sample), where a block chatters near rest and the sides split at the record's mean read
     0.05-0.1. An offset of the record (a sensor's zero) changes nothing."""
     _, dt, _ = clean
-    step = calibrate_dt(e=E, g=1.0, sigma_p=1.0, points_per_cycle=75)
+    step = calibrated_step(E, 1.0, 1.0)
     asymmetry = (lambda y: diagnostics.asymmetry(diagnostics.sums([y]), None))
     clean_value = asymmetry(_leaning(0.0, pole, step["dt"], step["burn_in"]))
     assert clean_value < 0.01

@@ -7,16 +7,17 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from conftest import calibrated_step
 from rockdec.record import diagnostics
 from rockdec.studies import diagnostics_study as ds
-from rockdec.physics.simulate import calibrate_dt, simulate_block
+from rockdec.physics.simulate import simulate_block
 
 E, N = 0.9, 20_000
 
 
 @pytest.fixture(scope="module")
 def step():
-    return calibrate_dt(e=E, g=1.0, sigma_p=1.0, points_per_cycle=ds.POINTS_PER_CYCLE)
+    return calibrated_step(E, 1.0, 1.0, ds.POINTS_PER_CYCLE)
 
 
 def test_a_noisy_record_is_the_clean_one_plus_noise_of_its_share_of_the_rms(step):

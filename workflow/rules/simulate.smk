@@ -38,20 +38,21 @@ rule stored_series:
 
 
 rule series:
-    """Every series of one replicate (scenes with `store_series: all`): float32, chunked by seed."""
+    """Every series of one replicate (scenes with `store_series: all`): float32, chunked by seed.
+    Inside the Snakemake process on the rule's threads (rockdec.pipeline.steps.series): the
+    simulator's kernels are loaded there by `calibrate`, where a script would start Python and
+    load them again for each replicate."""
     input:
         "results/{scene}/run.json",
-        code=step_code("series.py"),
+        code=STEPS_CODE,
     output:
         "results/{scene}/series/replicate_{replicate}.nc",
     log:
         "results/{scene}/logs/series_{replicate}.log",
     benchmark:
         "results/{scene}/benchmarks/series_{replicate}.tsv"
-    threads: 1
+    threads: 2
     params:
         records=lambda w: records(w.scene),
-    conda:
-        "../envs/rockdec.yaml"
-    script:
-        "../scripts/series.py"
+    run:
+        in_snakemake.step(rule, log[0], input[0], output[0], params.records, int(wildcards.replicate), threads)

@@ -1,7 +1,8 @@
 """The workflow's rules that run inside the Snakemake process: the run contract, the
-signature pass, the stored series and their signature, the tables and the figures.
+signature pass, the stored series (every series too, under ``store_series: all``) and
+their signature, the tables and the figures.
 
-``calibrate`` (a second of pilot simulations), ``stored_series``, ``stored_signature``,
+``calibrate`` (a second of pilot simulations), ``stored_series``, ``series``, ``stored_signature``,
 ``estimates`` and ``table_readings`` take a fraction of a second to a few seconds each once
 NumPy, numba and xarray are loaded, so they are ``run:`` rules calling :func:`calibrate`
 and :func:`step` (the workflow's default profile runs those in threads of the Snakemake

@@ -1,6 +1,6 @@
 """The workflow's light steps, one function each: files in, files out.
 
-The workflow's rules of the same names (``stored_series``, ``stored_signature``,
+The workflow's rules of the same names (``stored_series``, ``series``, ``stored_signature``,
 ``estimates``, ``table_readings``: ``run:`` through :func:`rockdec.pipeline.in_snakemake.step`,
 inside the Snakemake process; ``fig1b``, ``fig2``, ``fig3``, ``fig4``, ``fig_ev``: through
 :func:`rockdec.pipeline.in_snakemake.draw`, in a worker process of
@@ -33,6 +33,21 @@ def stored_series(run: str | Path, nc: str | Path, records: dict) -> None:
     ds.attrs.update(io.provenance("stored_series", records, inputs=[run]))
     with engine.session(1, scheduler="threads"):
         io.write_netcdf(ds, nc, float32=("theta", "theta_dot"))
+
+
+def series(run: str | Path, nc: str | Path, records: dict, replicate: int, threads: int) -> None:
+    """Rule ``series`` (scenes with ``store_series: all``): every series of replicate
+    ``replicate``, simulated under the run contract ``run`` and written as float32, chunked
+    by seed (:func:`rockdec.pipeline.series.write_replicate`), on ``threads`` threads of
+    Dask's ``threads`` engine whatever ``ROCKDEC_DASK_SCHEDULER`` names (every engine gives
+    the same numbers, :mod:`rockdec.pipeline.engine`), so no worker process starts inside
+    Snakemake's."""
+    from rockdec.pipeline import engine
+    from rockdec.pipeline import series as series_files
+    from rockdec.physics.run import Run
+
+    with engine.session(threads, scheduler="threads"):
+        series_files.write_replicate(Run.read(run), records, replicate, nc)
 
 
 def stored_signature(series: str | Path, nc: str | Path, settings: dict) -> None:
