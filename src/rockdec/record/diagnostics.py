@@ -20,8 +20,14 @@ sets alone fired on more than 5 % of the clean records in 6 of the diagnostics s
 cells (check x ``e`` x noise level, 200 records a cell; up to 8 %); the null's 98.5 %
 quantile fired on at most 5.0 % in every cell, while finding the defects that move ``e``;
 under a low-pass load, where the record model the calibration simulates is measured off
-the record and can miss, two cells exceed it (docs/method.md §10). Pooling over the interval takes the widest null of
-the ``e`` the record allows. A record ``rockdec estimate`` reports no ``e`` for is checked
+the record and can miss, one cell exceeds it (docs/method.md §10). Pooling over the interval takes the widest null of
+the ``e`` the record allows. The asymmetry reads it otherwise (its :class:`Check`'s ``null_model``
+``"widest"``): a clean record's value is about ``|N(0, s(e))|``, whose logarithm has the
+same spread at every ``e`` while ``s`` falls with ``e``, so each grid point about ``e`` gets
+its own null, its location its own and its spread the grid's, and the loosest of their
+thresholds holds; pooled, the 30 sets a point of the coverage study's calibrations of
+200,000 samples fired it on 16 of 200 clean records at ``e = 0.6``, read so on 2
+(docs/method.md §10). A record ``rockdec estimate`` reports no ``e`` for is checked
 where its estimators place it (:func:`rockdec.calibrate.inference.checks_place`: the median
 of the candidates' corrected values, the end of the calibrated range for a raw value beyond
 it, without an interval): at ``e = 0.98`` the raw values of some records lie above the
@@ -391,7 +397,11 @@ class Check:
     the statistic of a clean record goes with its length, for records longer than the
     calibration's (:func:`length_threshold`): ``"free"`` (a z score, a ratio of means),
     ``"count"`` (in proportion), ``"root"`` (as ``1/sqrt(length)``: a difference of means)
-    or ``"max"`` (the largest of the samples').
+    or ``"max"`` (the largest of the samples'); ``null_model``: how :func:`thresholds` reads
+    the null of the grid points about the record's ``e``: ``"pooled"`` (their nulls pooled,
+    each point's location and spread its own) or ``"widest"`` (each point's location its
+    own, one spread for the whole grid, :func:`null`'s ``shared_spread``; the threshold the
+    loosest of the points').
     """
 
     name: str
@@ -401,6 +411,7 @@ class Check:
     threshold: str
     message: str
     length: str = "free"
+    null_model: str = "pooled"
 
 
 REGISTRY = (
@@ -418,7 +429,7 @@ REGISTRY = (
     Check("asymmetry", "a block leaning on one side", asymmetry, "high", "calibrated",
           "the response is asymmetric: the block falls back with a different g on each side (|g+ - g-|/(g+ + g-) "
           "{value:.3f}, calibrated limit {threshold:.3f}); it may lean on one side or the load push one way, and the "
-          "model assumes a symmetric block", "root"),
+          "model assumes a symmetric block", "root", "widest"),
     Check("few_triggers", "gaps or quiet stretches", triggers, "low", "calibrated",
           "{value:.0f} triggers in the largest windows, fewer than records of this length and sampling give "
           "({threshold:.0f}): gaps (NaN) or quiet stretches leave fewer segments than the calibration's records had, so "
@@ -472,12 +483,15 @@ def length_threshold(check: Check, column: np.ndarray, q: float, ratio: float) -
     return float(np.quantile(column, q))
 
 
-def null(values: np.ndarray, group: np.ndarray) -> np.ndarray:
+def null(values: np.ndarray, group: np.ndarray, shared_spread: bool = False) -> np.ndarray:
     """The null of one check for the grid points ``group`` (a mask of the grid) from its
     values ``(e_true, set)`` on the calibration's sets: each grid point's mean plus its
     standard deviation times every standardized value of the calibration (each grid point's
     values less their mean, over their standard deviation, pooled over the grid), the
-    points of ``group`` pooled. The shape of the null's tail is read off every set of the
+    points of ``group`` pooled. ``shared_spread``: one standard deviation for every grid
+    point, the root mean of the usable points' variances (a statistic whose spread, as a
+    logarithm, is the same at every ``e``: :data:`REGISTRY`'s ``"widest"`` nulls), so only
+    the location is read off each point's sets. The shape of the null's tail is read off every set of the
     calibration (some 300), only its location and scale off the sets near the record's
     ``e`` (some 90): a tail quantile of 90 sets rests on their few largest values. Values all positive (counts, ratios, magnitudes) are
     located and scaled as logarithms, so the null stays positive. A grid point with fewer
@@ -492,6 +506,8 @@ def null(values: np.ndarray, group: np.ndarray) -> np.ndarray:
         v = values[j][finite[j]]
         mean[j], sd[j] = v.mean(), v.std(ddof=1)
     usable &= sd > 0.0
+    if shared_spread and usable.any():
+        sd[usable] = np.sqrt(np.mean(sd[usable] ** 2))
     shape = np.concatenate([(values[j][finite[j]] - mean[j]) / sd[j] for j in np.flatnonzero(usable)] or [np.empty(0)])
     parts = [mean[j] + sd[j] * shape if usable[j] else values[j][finite[j]] for j in np.flatnonzero(group)]
     out = np.concatenate(parts) if parts else np.empty(0)
@@ -503,7 +519,8 @@ def thresholds(cal, e: float | None, interval, level: float, length_ratio: float
     calibration ``cal``'s ``diagnostic(e_true, set, check)`` (module docstring): the
     :data:`QUANTILE` quantile (``1 - QUANTILE`` for a ``"low"`` check) of the :func:`null`
     of the grid points pooled about ``e`` (where the record's estimators place it,
-    :func:`rockdec.calibrate.inference.checks_place`). A record without an ``e`` (``None`` or
+    :func:`rockdec.calibrate.inference.checks_place`; for a ``"widest"`` :class:`Check`, the
+    loosest of those points' own). A record without an ``e`` (``None`` or
     NaN: no estimator places it) gets the strictest grid point's threshold, each grid point's
     null apart. ``level``: the trigger level in ``sigma_Y`` (for the structural floor). NaN
     for a check the calibration's records never gave a value. ``length_ratio``: the records'
@@ -521,11 +538,14 @@ def thresholds(cal, e: float | None, interval, level: float, length_ratio: float
             out[check.name] = fits.min_points_per_cycle(e if placed else FLOOR_E, level)
             continue
         q = QUANTILE if check.side == "high" else 1.0 - QUANTILE
+        widest = check.null_model == "widest"
         limits = []
         for group in groups:
-            column = null(values[:, :, j], group)
-            if column.size:
-                limits.append(length_threshold(check, column, q, length_ratio) if length_ratio > 1.0 else float(np.quantile(column, q)))
+            # "widest": each grid point of the group its own null, the loosest of their thresholds
+            columns = [null(values[:, :, j], grid == g, True) for g in grid[group]] if widest else [null(values[:, :, j], group)]
+            own = [length_threshold(check, c, q, length_ratio) if length_ratio > 1.0 else float(np.quantile(c, q)) for c in columns if c.size]
+            if own:
+                limits.append(max(own) if check.side == "high" else min(own))
         out[check.name] = (min(limits) if check.side == "high" else max(limits)) if limits else np.nan
     return out
 
