@@ -78,17 +78,21 @@ _POOL_SIZE = 4
 _INIT_A, _MULT_A, _INIT_B, _MULT_B = (np.uint64(c) for c in (0x43B0D7E5, 0x931E8875, 0x8B51F9DD, 0x58F38DED))
 _MIX_MULT_L, _MIX_MULT_R = np.uint64(0xCA01F9DD), np.uint64(0x4973F715)
 _WORD = np.uint64(0xFFFFFFFF)
-_ONE, _8, _11, _16, _32, _58, _63, _64 = (np.uint64(n) for n in (1, 8, 11, 16, 32, 58, 63, 64))
+_ZERO, _ONE, _8, _11, _16, _32, _63 = (np.uint64(n) for n in (0, 1, 8, 11, 16, 32, 63))
+_BYTE, _MANTISSA = np.uint64(0xFF), np.uint64(0x000FFFFFFFFFFFFF)
 #: PCG64's multiplier (numpy/random/src/pcg64/pcg64.h, PCG_DEFAULT_MULTIPLIER_128).
 _PCG_MULTIPLIER = 0x2360ED051FC65DA44385DF649FCCF645
+#: A PCG64 output's top 53 bits times this: a double in ``[0, 1)``.
+_DOUBLE_UNIT = 1.0 / 9007199254740992.0
 
 
 @intrinsic
-def _pcg_step(typingctx, state_hi, state_lo, inc_hi, inc_lo):
-    """PCG64's step ``state * multiplier + inc`` modulo 2**128 on the halves (high, low) of
-    the state and the increment: one 128-bit multiply-add in LLVM. Returns the new halves."""
-    pair = types.UniTuple(types.uint64, 2)
-    signature = pair(types.uint64, types.uint64, types.uint64, types.uint64)
+def _pcg_next(typingctx, state_hi, state_lo, inc_hi, inc_lo):
+    """PCG64's step and output on the halves (high, low) of the state and the increment: the
+    state ``state * multiplier + inc`` modulo 2**128 (one 128-bit multiply-add in LLVM) and its
+    XSL-RR output, the two halves xor-ed and rotated right by the state's top 6 bits. Returns
+    ``(high, low, output)``."""
+    signature = types.UniTuple(types.uint64, 3)(types.uint64, types.uint64, types.uint64, types.uint64)
 
     def codegen(context, builder, sig, args):
         wide, half = ir.IntType(128), ir.IntType(64)
@@ -97,125 +101,106 @@ def _pcg_step(typingctx, state_hi, state_lo, inc_hi, inc_lo):
             return builder.or_(builder.shl(builder.zext(hi, wide), ir.Constant(wide, 64)), builder.zext(lo, wide))
 
         state = builder.add(builder.mul(joined(args[0], args[1]), ir.Constant(wide, _PCG_MULTIPLIER)), joined(args[2], args[3]))
-        hi = builder.trunc(builder.lshr(state, ir.Constant(wide, 64)), half)
-        return context.make_tuple(builder, sig.return_type, (hi, builder.trunc(state, half)))
+        hi, lo = builder.trunc(builder.lshr(state, ir.Constant(wide, 64)), half), builder.trunc(state, half)
+        folded, turn = builder.xor(hi, lo), builder.lshr(hi, ir.Constant(half, 58))
+        left = builder.and_(builder.sub(ir.Constant(half, 64), turn), ir.Constant(half, 63))
+        output = builder.or_(builder.lshr(folded, turn), builder.shl(folded, left))
+        return context.make_tuple(builder, sig.return_type, (hi, lo, output))
 
     return signature, codegen
 
 
-@numba.njit(inline="always")
-def _hashmix(value, hash_const):
-    """SeedSequence's ``hashmix`` on 32-bit words held in uint64: the mixed value and the
-    updated hash constant."""
-    value = (value ^ hash_const) & _WORD
-    hash_const = (hash_const * _MULT_A) & _WORD
-    value = (value * hash_const) & _WORD
-    return value ^ (value >> _16), hash_const
+def stream_words(seeds, spawn: int = -1) -> np.ndarray:
+    """``SeedSequence(seed).generate_state(4, np.uint64)`` for every seed (``spawn < 0``,
+    :func:`series_rng`) or for its spawn ``spawn`` (:data:`SENSOR_STREAM`: :func:`sensor_rng`):
+    a ``(len(seeds), 4)`` uint64 array, the words that seed PCG64 (:func:`_normals`).
 
-
-@numba.njit(inline="always")
-def _mix(x, y):
-    """SeedSequence's ``mix`` of two 32-bit words."""
-    result = (_MIX_MULT_L * x - _MIX_MULT_R * y) & _WORD
-    return result ^ (result >> _16)
-
-
-@numba.njit(inline="always")
-def _seeded_pcg64(seed, spawn, state):
-    """``state`` (uint64 ``[state_hi, state_lo, inc_hi, inc_lo]``) of
-    ``PCG64(SeedSequence(seed, spawn_key=(spawn,)))``, no spawn key for ``spawn < 0``;
-    ``0 <= seed < 2**63``."""
-    entropy = np.zeros(_POOL_SIZE + 1, np.uint64)
-    word = np.uint64(seed)
-    entropy[0] = word & _WORD
-    n_entropy = 1
-    if word >> _32:  # the seed's 32-bit words, least significant first
-        entropy[1] = word >> _32
-        n_entropy = 2
-    if spawn >= 0:  # the run's words padded to the pool, then the spawn key's
-        entropy[_POOL_SIZE] = np.uint64(spawn)
-        n_entropy = _POOL_SIZE + 1
-    pool = np.zeros(_POOL_SIZE, np.uint64)
+    NumPy's ``SeedSequence`` (numpy/random/bit_generator.pyx) on uint64 arrays of all the seeds
+    at once: the seed's two 32-bit words, least significant first, padded with zeros to the
+    pool of 4 (one word or two hash alike), then the spawn key's word; ``hashmix`` of each into
+    the pool, each pool word and each word beyond the pool mixed into every other pool word,
+    and ``generate_state``'s eight 32-bit words cycling over the pool, paired low word first.
+    ``0 <= seed < 2**64``.
+    """
+    seeds = np.atleast_1d(np.asarray(seeds, dtype=np.uint64))
+    zero = np.zeros_like(seeds)
+    entropy = [seeds & _WORD, seeds >> _32, zero, zero] + ([np.full_like(seeds, spawn)] if spawn >= 0 else [])
     hash_const = _INIT_A
-    for i in range(_POOL_SIZE):
-        pool[i], hash_const = _hashmix(entropy[i], hash_const)
-    for src in range(_POOL_SIZE):
+
+    def hashmix(value):
+        nonlocal hash_const
+        value = (value ^ hash_const) & _WORD
+        hash_const = (hash_const * _MULT_A) & _WORD
+        value = (value * hash_const) & _WORD
+        return value ^ (value >> _16)
+
+    def mix(x, y):
+        result = (_MIX_MULT_L * x - _MIX_MULT_R * y) & _WORD
+        return result ^ (result >> _16)
+
+    pool = [hashmix(entropy[i]) for i in range(_POOL_SIZE)]
+    for src in range(len(entropy)):
         for dst in range(_POOL_SIZE):
             if src != dst:
-                mixed, hash_const = _hashmix(pool[src], hash_const)
-                pool[dst] = _mix(pool[dst], mixed)
-    for src in range(_POOL_SIZE, n_entropy):
-        for dst in range(_POOL_SIZE):
-            mixed, hash_const = _hashmix(entropy[src], hash_const)
-            pool[dst] = _mix(pool[dst], mixed)
-    # generate_state(4, uint64): eight 32-bit words cycling over the pool, paired low word first
-    words = np.zeros(8, np.uint64)
+                pool[dst] = mix(pool[dst], hashmix(pool[src] if src < _POOL_SIZE else entropy[src]))
     hash_const = _INIT_B
+    words = []
     for i in range(8):
         value = (pool[i % _POOL_SIZE] ^ hash_const) & _WORD
         hash_const = (hash_const * _MULT_B) & _WORD
         value = (value * hash_const) & _WORD
-        words[i] = value ^ (value >> _16)
-    seed_hi, seed_lo = words[0] | (words[1] << _32), words[2] | (words[3] << _32)
-    inc_hi = ((words[4] | (words[5] << _32)) << _ONE) | ((words[6] | (words[7] << _32)) >> _63)
-    inc_lo = ((words[6] | (words[7] << _32)) << _ONE) | _ONE
-    # pcg_setseq_128_srandom_r: state 0, one step (state = inc), add the seed, one step
-    lo = inc_lo + seed_lo
-    hi = inc_hi + seed_hi + (_ONE if lo < inc_lo else np.uint64(0))
-    state[0], state[1] = _pcg_step(hi, lo, inc_hi, inc_lo)
-    state[2], state[3] = inc_hi, inc_lo
-
-
-@numba.njit(inline="always")
-def _next_uint64(state):
-    """PCG64's next 64-bit output: step, then XSL-RR of the new state."""
-    hi, lo = _pcg_step(state[0], state[1], state[2], state[3])
-    state[0], state[1] = hi, lo
-    folded = hi ^ lo
-    turn = hi >> _58
-    return (folded >> turn) | (folded << ((_64 - turn) & _63))
-
-
-@numba.njit(inline="always")
-def _next_double(state):
-    """PCG64's next double in ``[0, 1)``: the top 53 bits of the next output."""
-    return np.float64(_next_uint64(state) >> _11) * (1.0 / 9007199254740992.0)
-
-
-@numba.njit(inline="always")
-def _standard_normal(state):
-    """NumPy's ``random_standard_normal`` (numpy/random/src/distributions): the ziggurat of
-    256 layers on PCG64's outputs, its wedges and its tail."""
-    while True:
-        r = _next_uint64(state)
-        idx = r & np.uint64(0xFF)
-        r >>= _8
-        rabs = (r >> _ONE) & np.uint64(0x000FFFFFFFFFFFFF)
-        x = np.float64(rabs) * wi_double[idx]
-        if r & _ONE:
-            x = -x
-        if rabs < ki_double[idx]:
-            return x
-        if idx == 0:
-            while True:
-                xx = -ziggurat_nor_inv_r * np.log1p(-_next_double(state))
-                yy = -np.log1p(-_next_double(state))
-                if yy + yy > xx * xx:
-                    return -(ziggurat_nor_r + xx) if (rabs >> _8) & _ONE else ziggurat_nor_r + xx
-        elif (fi_double[idx - _ONE] - fi_double[idx]) * _next_double(state) + fi_double[idx] < np.exp(-0.5 * x * x):
-            return x
+        words.append(value ^ (value >> _16))
+    return np.stack([words[2 * k] | (words[2 * k + 1] << _32) for k in range(4)], axis=-1)
 
 
 @numba.njit(nogil=True, cache=True)
-def standard_normals(seed, spawn, out):
+def _normals(words, out):
+    """Fill ``out`` with the standard normal numbers of the PCG64 generator that the words
+    ``words`` (a row of :func:`stream_words`) seed, as NumPy's ``standard_normal(out=out)``
+    draws them, bit for bit. PCG64's seeding (``pcg64_set_seed``: seed ``words[0:2]``,
+    increment ``words[2:4]`` shifted left one bit and odd; ``pcg_setseq_128_srandom_r``:
+    state 0, one step, the seed added, one step), then per number NumPy's
+    ``random_standard_normal`` (numpy/random/src/distributions): the ziggurat of 256 layers
+    on PCG64's outputs (:func:`_pcg_next`), its wedges and its tail."""
+    inc_hi = (words[2] << _ONE) | (words[3] >> _63)
+    inc_lo = (words[3] << _ONE) | _ONE
+    lo = inc_lo + words[1]
+    hi = inc_hi + words[0] + (_ONE if lo < inc_lo else _ZERO)
+    hi, lo, r = _pcg_next(hi, lo, inc_hi, inc_lo)
+    for i in range(out.size):
+        while True:
+            hi, lo, r = _pcg_next(hi, lo, inc_hi, inc_lo)
+            idx = r & _BYTE
+            r >>= _8
+            rabs = (r >> _ONE) & _MANTISSA
+            x = np.float64(rabs) * wi_double[idx]
+            if r & _ONE:
+                x = -x
+            if rabs < ki_double[idx]:
+                break
+            if idx == _ZERO:  # the tail
+                while True:
+                    hi, lo, r = _pcg_next(hi, lo, inc_hi, inc_lo)
+                    xx = -ziggurat_nor_inv_r * np.log1p(-(np.float64(r >> _11) * _DOUBLE_UNIT))
+                    hi, lo, r = _pcg_next(hi, lo, inc_hi, inc_lo)
+                    yy = -np.log1p(-(np.float64(r >> _11) * _DOUBLE_UNIT))
+                    if yy + yy > xx * xx:
+                        break
+                x = -(ziggurat_nor_r + xx) if (rabs >> _8) & _ONE else ziggurat_nor_r + xx
+                break
+            hi, lo, r = _pcg_next(hi, lo, inc_hi, inc_lo)  # a wedge
+            if (fi_double[idx - _ONE] - fi_double[idx]) * (np.float64(r >> _11) * _DOUBLE_UNIT) + fi_double[idx] < np.exp(-0.5 * x * x):
+                break
+        out[i] = x
+    return out
+
+
+def standard_normals(seed: int, spawn: int, out: np.ndarray) -> np.ndarray:
     """Fill ``out`` with the standard normal numbers of ``SeedSequence(seed)`` (``spawn < 0``,
     :func:`series_rng`) or of its spawn ``spawn`` (:data:`SENSOR_STREAM`: :func:`sensor_rng`),
-    as NumPy's ``standard_normal(out=out)`` draws them, bit for bit; ``0 <= seed < 2**63``."""
-    state = np.empty(4, np.uint64)
-    _seeded_pcg64(seed, spawn, state)
-    for i in range(out.size):
-        out[i] = _standard_normal(state)
-    return out
+    as NumPy's ``standard_normal(out=out)`` draws them, bit for bit (:func:`stream_words`,
+    :func:`_normals`); ``0 <= seed < 2**64``."""
+    return _normals(stream_words([seed], spawn)[0], out)
 
 
 @numba.njit(nogil=True, cache=True)
@@ -308,12 +293,12 @@ def check_load(pole: float, spectrum: ImpulseSpectrum | None = None) -> None:
 
 
 @numba.njit(nogil=True, cache=True)
-def draw_series(seed, out, sigma_p, pole):
+def draw_series(words, out, sigma_p, pole):
     """:func:`draw_impulses` of ``series_rng(seed)`` for a white (``pole = 0``) or low-pass
-    load, inside numba (:func:`standard_normals`, :func:`low_pass`): the same impulses bit for
-    bit. ``pole`` as :func:`check_load` accepts it."""
+    load, inside numba, ``words`` the seed's row of :func:`stream_words` (:func:`_normals`,
+    :func:`low_pass`): the same impulses bit for bit. ``pole`` as :func:`check_load` accepts it."""
     if sigma_p > 0.0:
-        standard_normals(seed, -1, out)
+        _normals(words, out)
         if pole > 0.0 and out.size:
             low_pass(out, pole)
         for i in range(out.size):
@@ -356,16 +341,17 @@ def add_sensor_noise(theta: np.ndarray, seeds, std: float) -> np.ndarray:
     if std > 0.0:
         seeds = np.atleast_1d(np.asarray(seeds, dtype=np.int64))
         rows = min(len(theta), seeds.size)
-        _add_sensor_noise(theta, seeds[:rows], float(std), np.empty(theta.shape[-1] if rows else 0))
+        _add_sensor_noise(theta, stream_words(seeds[:rows], SENSOR_STREAM), float(std), np.empty(theta.shape[-1] if rows else 0))
     return theta
 
 
 @numba.njit(nogil=True, cache=True)
-def _add_sensor_noise(theta, seeds, std, noise):
-    """:func:`add_sensor_noise`'s loop: row ``r`` of ``theta`` plus ``std`` times the sensor
-    stream of ``seeds[r]``, drawn into the scratch row ``noise``."""
-    for r in range(seeds.size):
-        standard_normals(seeds[r], SENSOR_STREAM, noise)
+def _add_sensor_noise(theta, words, std, noise):
+    """:func:`add_sensor_noise`'s loop: row ``r`` of ``theta`` plus ``std`` times the normal
+    numbers of ``words[r]`` (:func:`stream_words` of the sensor streams, :func:`_normals`),
+    drawn into the scratch row ``noise``."""
+    for r in range(words.shape[0]):
+        _normals(words[r], noise)
         row = theta[r]
         for i in range(row.size):
             row[i] += std * noise[i]

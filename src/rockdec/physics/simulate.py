@@ -42,7 +42,7 @@ import xarray as xr
 from rockdec.physics.fixed_step import step as grid_step
 from rockdec.physics.housner import simulate_block_housner
 from rockdec import validate as checks
-from rockdec.physics.loading import add_sensor_noise, check_load, draw_impulses, draw_series, series_rng
+from rockdec.physics.loading import add_sensor_noise, check_load, draw_impulses, draw_series, series_rng, stream_words
 from rockdec.physics.models import SCALE_CONSTANT_GUESS, check_finite_series, check_run, period_from_g, scale_constant, step_for_density
 
 #: Largest number of correction steps when the closed-form flight count is off by rounding.
@@ -205,12 +205,13 @@ def _integrate(impulses, dt, g, e, theta0, omega0, burn_in, theta_out, omega_out
 
 
 @numba.njit(nogil=True, cache=True)
-def _simulate_seeds(seeds, sigma_p, pole, dt, g, e, theta0, omega0, burn_in, theta_out, omega_out, impulses, grid):
+def _simulate_seeds(words, sigma_p, pole, dt, g, e, theta0, omega0, burn_in, theta_out, omega_out, impulses, grid):
     """:func:`simulate_block`'s loop for a white or low-pass load: each seed's impulses
-    (:func:`rockdec.physics.loading.draw_series`, into the scratch ``impulses``) and their
+    (:func:`rockdec.physics.loading.draw_series` of its row of ``words``, the seeds'
+    :func:`rockdec.physics.loading.stream_words`, into the scratch ``impulses``) and their
     integration (:func:`_integrate`) into its rows, with no Python between series."""
-    for row in range(seeds.size):
-        draw_series(seeds[row], impulses, sigma_p, pole)
+    for row in range(words.shape[0]):
+        draw_series(words[row], impulses, sigma_p, pole)
         _integrate(impulses, dt, g, e, theta0, omega0, burn_in, theta_out[row], omega_out[row], grid)
 
 
@@ -243,7 +244,7 @@ def simulate_block(seeds, n_points, *, dt, g, e, sigma_p, theta0=0.0, theta_dot0
     theta, theta_dot = out[0], out[1]
     impulses = np.empty(n_steps)
     if spectrum is None:
-        _simulate_seeds(seeds, float(sigma_p), float(pole), float(dt), float(g), float(e), float(theta0), float(theta_dot0),
+        _simulate_seeds(stream_words(seeds), float(sigma_p), float(pole), float(dt), float(g), float(e), float(theta0), float(theta_dot0),
                         int(burn_in), theta, theta_dot, impulses, True if grid_impacts else None)
     else:
         for row, seed in enumerate(seeds):
