@@ -153,7 +153,7 @@ def stream_words(seeds, spawn: int = -1) -> np.ndarray:
     return np.stack([words[2 * k] | (words[2 * k + 1] << _32) for k in range(4)], axis=-1)
 
 
-@numba.njit(nogil=True, cache=True)
+@numba.njit(nogil=True, cache=True, inline="always")
 def _normals(words, out):
     """Fill ``out`` with the standard normal numbers of the PCG64 generator that the words
     ``words`` (a row of :func:`stream_words`) seed, as NumPy's ``standard_normal(out=out)``
@@ -292,19 +292,19 @@ def check_load(pole: float, spectrum: ImpulseSpectrum | None = None) -> None:
         raise InputError("a load is either low-pass filtered (pole) or of a given spectrum, not both; give one of them")
 
 
-@numba.njit(nogil=True, cache=True)
+@numba.njit(nogil=True, cache=True, inline="always")
 def draw_series(words, out, sigma_p, pole):
-    """:func:`draw_impulses` of ``series_rng(seed)`` for a white (``pole = 0``) or low-pass
+    """:func:`draw_impulses` of ``series_rng(seed)`` for a white (``pole`` None) or low-pass
     load, inside numba, ``words`` the seed's row of :func:`stream_words` (:func:`_normals`,
-    :func:`low_pass`): the same impulses bit for bit. ``pole`` as :func:`check_load` accepts it."""
+    :func:`low_pass`): the same impulses bit for bit. ``pole`` as :func:`check_load` accepts
+    it; None is a type of its own to numba, which drops the filter before typing it, so a
+    white load compiles no filter."""
     if sigma_p > 0.0:
         _normals(words, out)
-        if pole > 0.0 and out.size:
+        if pole is not None and out.size:
             low_pass(out, pole)
-        for i in range(out.size):
-            out[i] *= sigma_p
-    else:
-        out[:] = 0.0
+    for i in range(out.size):
+        out[i] = out[i] * sigma_p if sigma_p > 0.0 else 0.0
     return out
 
 
