@@ -46,7 +46,7 @@ from typing import NamedTuple
 import numba
 import numpy as np
 from llvmlite import ir
-from numba.core import types
+from numba.core import cgutils, types
 from numba.extending import intrinsic
 from numba.np.random._constants import fi_double, ki_double, wi_double, ziggurat_nor_inv_r, ziggurat_nor_r
 
@@ -73,41 +73,16 @@ def sensor_rng(seed: int) -> np.random.Generator:
 
 
 # NumPy's SeedSequence (numpy/random/bit_generator.pyx): pool of 4 words, its hash constants.
-# Held as uint64 so that numba computes in unsigned 64-bit words (the 32-bit ones masked).
+# Held as uint64 so that NumPy computes in unsigned 64-bit words (the 32-bit ones masked).
 _POOL_SIZE = 4
 _INIT_A, _MULT_A, _INIT_B, _MULT_B = (np.uint64(c) for c in (0x43B0D7E5, 0x931E8875, 0x8B51F9DD, 0x58F38DED))
 _MIX_MULT_L, _MIX_MULT_R = np.uint64(0xCA01F9DD), np.uint64(0x4973F715)
 _WORD = np.uint64(0xFFFFFFFF)
-_ZERO, _ONE, _8, _11, _16, _32, _63 = (np.uint64(n) for n in (0, 1, 8, 11, 16, 32, 63))
-_BYTE, _MANTISSA = np.uint64(0xFF), np.uint64(0x000FFFFFFFFFFFFF)
+_16, _32 = np.uint64(16), np.uint64(32)
 #: PCG64's multiplier (numpy/random/src/pcg64/pcg64.h, PCG_DEFAULT_MULTIPLIER_128).
 _PCG_MULTIPLIER = 0x2360ED051FC65DA44385DF649FCCF645
 #: A PCG64 output's top 53 bits times this: a double in ``[0, 1)``.
 _DOUBLE_UNIT = 1.0 / 9007199254740992.0
-
-
-@intrinsic
-def _pcg_next(typingctx, state_hi, state_lo, inc_hi, inc_lo):
-    """PCG64's step and output on the halves (high, low) of the state and the increment: the
-    state ``state * multiplier + inc`` modulo 2**128 (one 128-bit multiply-add in LLVM) and its
-    XSL-RR output, the two halves xor-ed and rotated right by the state's top 6 bits. Returns
-    ``(high, low, output)``."""
-    signature = types.UniTuple(types.uint64, 3)(types.uint64, types.uint64, types.uint64, types.uint64)
-
-    def codegen(context, builder, sig, args):
-        wide, half = ir.IntType(128), ir.IntType(64)
-
-        def joined(hi, lo):
-            return builder.or_(builder.shl(builder.zext(hi, wide), ir.Constant(wide, 64)), builder.zext(lo, wide))
-
-        state = builder.add(builder.mul(joined(args[0], args[1]), ir.Constant(wide, _PCG_MULTIPLIER)), joined(args[2], args[3]))
-        hi, lo = builder.trunc(builder.lshr(state, ir.Constant(wide, 64)), half), builder.trunc(state, half)
-        folded, turn = builder.xor(hi, lo), builder.lshr(hi, ir.Constant(half, 58))
-        left = builder.and_(builder.sub(ir.Constant(half, 64), turn), ir.Constant(half, 63))
-        output = builder.or_(builder.lshr(folded, turn), builder.shl(folded, left))
-        return context.make_tuple(builder, sig.return_type, (hi, lo, output))
-
-    return signature, codegen
 
 
 def stream_words(seeds, spawn: int = -1) -> np.ndarray:
@@ -153,54 +128,108 @@ def stream_words(seeds, spawn: int = -1) -> np.ndarray:
     return np.stack([words[2 * k] | (words[2 * k + 1] << _32) for k in range(4)], axis=-1)
 
 
-@numba.njit(nogil=True, cache=True, inline="always")
-def _normals(words, out):
-    """Fill ``out`` with the standard normal numbers of the PCG64 generator that the words
-    ``words`` (a row of :func:`stream_words`) seed, as NumPy's ``standard_normal(out=out)``
-    draws them, bit for bit. PCG64's seeding (``pcg64_set_seed``: seed ``words[0:2]``,
-    increment ``words[2:4]`` shifted left one bit and odd; ``pcg_setseq_128_srandom_r``:
-    state 0, one step, the seed added, one step), then per number NumPy's
-    ``random_standard_normal`` (numpy/random/src/distributions): the ziggurat of 256 layers
-    on PCG64's outputs (:func:`_pcg_next`), its wedges and its tail."""
-    inc_hi = (words[2] << _ONE) | (words[3] >> _63)
-    inc_lo = (words[3] << _ONE) | _ONE
-    lo = inc_lo + words[1]
-    hi = inc_hi + words[0] + (_ONE if lo < inc_lo else _ZERO)
-    hi, lo, r = _pcg_next(hi, lo, inc_hi, inc_lo)
-    for i in range(out.size):
-        while True:
-            hi, lo, r = _pcg_next(hi, lo, inc_hi, inc_lo)
-            idx = r & _BYTE
-            r >>= _8
-            rabs = (r >> _ONE) & _MANTISSA
-            x = np.float64(rabs) * wi_double[idx]
-            if r & _ONE:
-                x = -x
-            if rabs < ki_double[idx]:
-                break
-            if idx == _ZERO:  # the tail
-                while True:
-                    hi, lo, r = _pcg_next(hi, lo, inc_hi, inc_lo)
-                    xx = -ziggurat_nor_inv_r * np.log1p(-(np.float64(r >> _11) * _DOUBLE_UNIT))
-                    hi, lo, r = _pcg_next(hi, lo, inc_hi, inc_lo)
-                    yy = -np.log1p(-(np.float64(r >> _11) * _DOUBLE_UNIT))
-                    if yy + yy > xx * xx:
-                        break
-                x = -(ziggurat_nor_r + xx) if (rabs >> _8) & _ONE else ziggurat_nor_r + xx
-                break
-            hi, lo, r = _pcg_next(hi, lo, inc_hi, inc_lo)  # a wedge
-            if (fi_double[idx - _ONE] - fi_double[idx]) * (np.float64(r >> _11) * _DOUBLE_UNIT) + fi_double[idx] < np.exp(-0.5 * x * x):
-                break
-        out[i] = x
-    return out
+@intrinsic
+def _normals(typingctx, words, out):
+    """Fill ``out`` (float64, C-ordered) with the standard normal numbers of the PCG64 generator
+    that ``words`` (uint64, C-ordered: a row of :func:`stream_words`) seeds, as NumPy's
+    ``standard_normal(out=out)`` draws them, bit for bit; written in LLVM, so that numba types
+    and lowers no code of its own for it (a kernel that draws compiles as fast as one that
+    does not, bar LLVM's own work).
+
+    PCG64's seeding (numpy/random/src/pcg64: ``pcg64_set_seed``, ``pcg_setseq_128_srandom_r``):
+    seed ``words[0:2]`` and increment ``(words[2:4] << 1) | 1`` as 128-bit numbers, the state
+    ``(increment + seed) * multiplier + increment``. Each output: the step ``state * multiplier
+    + increment`` modulo 2**128 and the XSL-RR output, the state's halves xor-ed and rotated
+    right by its top 6 bits. Per number NumPy's ``random_standard_normal``
+    (numpy/random/src/distributions): an output's low byte picks one of the ziggurat's 256
+    layers, its bit 8 the sign, its next 52 bits the magnitude, accepted under the layer's
+    ``ki_double``; else layer 0 draws the tail (two doubles ``u`` of an output's top 53 bits each,
+    ``xx = -log1p(-u1) / r``, ``yy = -log1p(-u2)``, until ``2 yy > xx^2``) and another layer its
+    wedge (one double, against ``exp(-x^2 / 2)``), and a rejection starts over.
+    """
+    if not (isinstance(words, types.Array) and words.dtype == types.uint64 and words.ndim == 1 and words.layout == "C"
+            and isinstance(out, types.Array) and out.dtype == types.float64 and out.ndim == 1 and out.layout == "C"):
+        return None
+
+    def codegen(context, builder, sig, args):
+        i64, wide, f64 = ir.IntType(64), ir.IntType(128), ir.DoubleType()
+        module = builder.module
+        word = context.make_array(sig.args[0])(context, builder, args[0])
+        target = context.make_array(sig.args[1])(context, builder, args[1])
+        w = [builder.load(builder.gep(word.data, [ir.Constant(i64, k)])) for k in range(4)]
+
+        def joined(hi, lo):
+            return builder.or_(builder.shl(builder.zext(hi, wide), ir.Constant(wide, 64)), builder.zext(lo, wide))
+
+        def table(name, values, kind):
+            data = ir.Constant(ir.ArrayType(kind, values.size), [ir.Constant(kind, v) for v in values.tolist()])
+            return cgutils.global_constant(module, f"rockdec_ziggurat_{name}", data)
+
+        wi, ki, fi = table("wi", wi_double, f64), table("ki", ki_double, i64), table("fi", fi_double, f64)
+        log1p = cgutils.get_or_insert_function(module, ir.FunctionType(f64, [f64]), "log1p")
+        exp = module.declare_intrinsic("llvm.exp", [f64])
+        multiplier = ir.Constant(wide, _PCG_MULTIPLIER)
+        inc = builder.or_(builder.shl(joined(w[2], w[3]), ir.Constant(wide, 1)), ir.Constant(wide, 1))
+        state = cgutils.alloca_once(builder, wide)
+        builder.store(builder.add(builder.mul(builder.add(inc, joined(w[0], w[1])), multiplier), inc), state)
+
+        def output():
+            now = builder.add(builder.mul(builder.load(state), multiplier), inc)
+            builder.store(now, state)
+            hi = builder.trunc(builder.lshr(now, ir.Constant(wide, 64)), i64)
+            folded, turn = builder.xor(hi, builder.trunc(now, i64)), builder.lshr(hi, ir.Constant(i64, 58))
+            left = builder.and_(builder.sub(ir.Constant(i64, 64), turn), ir.Constant(i64, 63))
+            return builder.or_(builder.lshr(folded, turn), builder.shl(folded, left))
+
+        def double():
+            return builder.fmul(builder.uitofp(builder.lshr(output(), ir.Constant(i64, 11)), f64), ir.Constant(f64, _DOUBLE_UNIT))
+
+        def entry(array, index):
+            return builder.load(builder.gep(array, [ir.Constant(i64, 0), index]))
+
+        x_var = cgutils.alloca_once(builder, f64)
+        with cgutils.for_range(builder, target.nitems) as loop:
+            draw, slow, tail, wedge, done = (builder.append_basic_block(n) for n in ("draw", "slow", "tail", "wedge", "done"))
+            builder.branch(draw)
+            builder.position_at_end(draw)
+            r = output()
+            idx = builder.and_(r, ir.Constant(i64, 0xFF))
+            r = builder.lshr(r, ir.Constant(i64, 8))
+            rabs = builder.and_(builder.lshr(r, ir.Constant(i64, 1)), ir.Constant(i64, 0x000FFFFFFFFFFFFF))
+            x = builder.fmul(builder.uitofp(rabs, f64), entry(wi, idx))
+            negative = builder.trunc(r, ir.IntType(1))
+            x = builder.select(negative, builder.fneg(x), x)
+            builder.store(x, x_var)
+            builder.cbranch(builder.icmp_unsigned("<", rabs, entry(ki, idx)), done, slow)
+            builder.position_at_end(slow)
+            builder.cbranch(builder.icmp_unsigned("==", idx, ir.Constant(i64, 0)), tail, wedge)
+            builder.position_at_end(tail)
+            xx = builder.fmul(ir.Constant(f64, -ziggurat_nor_inv_r), builder.call(log1p, [builder.fneg(double())]))
+            yy = builder.fneg(builder.call(log1p, [builder.fneg(double())]))
+            outside = builder.fcmp_ordered(">", builder.fadd(yy, yy), builder.fmul(xx, xx))
+            at = builder.fadd(ir.Constant(f64, ziggurat_nor_r), xx)
+            upper = builder.trunc(builder.lshr(rabs, ir.Constant(i64, 8)), ir.IntType(1))
+            builder.store(builder.select(upper, builder.fneg(at), at), x_var)
+            builder.cbranch(outside, done, tail)
+            builder.position_at_end(wedge)
+            below = entry(fi, builder.sub(idx, ir.Constant(i64, 1)))
+            level = entry(fi, idx)
+            y = builder.fadd(builder.fmul(builder.fsub(below, level), double()), level)
+            bound = builder.call(exp, [builder.fmul(builder.fmul(ir.Constant(f64, -0.5), x), x)])
+            builder.cbranch(builder.fcmp_ordered("<", y, bound), done, draw)
+            builder.position_at_end(done)
+            builder.store(builder.load(x_var), builder.gep(target.data, [loop.index]))
+        return context.get_dummy_value()
+
+    return types.none(words, out), codegen
 
 
 def standard_normals(seed: int, spawn: int, out: np.ndarray) -> np.ndarray:
     """Fill ``out`` with the standard normal numbers of ``SeedSequence(seed)`` (``spawn < 0``,
     :func:`series_rng`) or of its spawn ``spawn`` (:data:`SENSOR_STREAM`: :func:`sensor_rng`),
     as NumPy's ``standard_normal(out=out)`` draws them, bit for bit (:func:`stream_words`,
-    :func:`_normals`); ``0 <= seed < 2**64``."""
-    return _normals(stream_words([seed], spawn)[0], out)
+    :func:`_normals`, through :func:`draw_series` at ``sigma_p = 1``); ``0 <= seed < 2**64``."""
+    return draw_series(stream_words([seed], spawn)[0], out, 1.0, None)
 
 
 @numba.njit(nogil=True, cache=True)
