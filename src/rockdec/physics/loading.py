@@ -29,12 +29,15 @@ its impulses here, so one seed means one load whatever the model.
 
 The streams are NumPy's: ``SeedSequence(seed)`` seeds a PCG64 generator, whose
 ``standard_normal`` draws the numbers (:func:`series_rng`, :func:`sensor_rng`). The same
-streams also run inside numba (:func:`draw_series`, :func:`add_sensor_noise`): NumPy's
-``SeedSequence`` hashing and PCG64 seeding, its PCG64 step (128-bit multiply-add, XSL-RR
-output) and its ziggurat normal sampler with NumPy's tables, operation for operation, so
-the numbers are NumPy's bit for bit (tested on seeds of every width and both streams). A
-kernel then draws and integrates a whole block of series without Python between series:
-no generator objects are built and the GIL stays released.
+streams also run inside the compiled kernels (:func:`draw_series`, :func:`add_sensor_noise`):
+NumPy's ``SeedSequence`` hashing on uint64 arrays, all the seeds of a block at once
+(:func:`stream_words`), then PCG64's seeding, its step (128-bit multiply-add, XSL-RR output)
+and its ziggurat normal sampler with NumPy's tables in LLVM (:func:`_normals`), operation for
+operation, so the numbers are NumPy's bit for bit (tested on seeds of every width and both
+streams). A kernel then draws and integrates a whole block of series without Python between
+series: no generator objects are built and the GIL stays released. The sampler is LLVM
+rather than numba-typed Python because numba's typing and lowering of it took 0.3-0.5 s of
+CPU on a fresh install, about as much as the integrator's own.
 """
 
 from __future__ import annotations
@@ -95,9 +98,12 @@ def stream_words(seeds, spawn: int = -1) -> np.ndarray:
     pool of 4 (one word or two hash alike), then the spawn key's word; ``hashmix`` of each into
     the pool, each pool word and each word beyond the pool mixed into every other pool word,
     and ``generate_state``'s eight 32-bit words cycling over the pool, paired low word first.
-    ``0 <= seed < 2**64``.
+    ``0 <= seed < 2**63``; a negative seed raises :class:`rockdec.validate.InputError`.
     """
-    seeds = np.atleast_1d(np.asarray(seeds, dtype=np.uint64))
+    seeds = np.atleast_1d(np.asarray(seeds, dtype=np.int64))
+    if seeds.size and seeds.min() < 0:
+        raise InputError(f"seed {seeds.min()} is negative; give seeds >= 0")
+    seeds = seeds.astype(np.uint64)
     zero = np.zeros_like(seeds)
     entropy = [seeds & _WORD, seeds >> _32, zero, zero] + ([np.full_like(seeds, spawn)] if spawn >= 0 else [])
     hash_const = _INIT_A
@@ -228,7 +234,7 @@ def standard_normals(seed: int, spawn: int, out: np.ndarray) -> np.ndarray:
     """Fill ``out`` with the standard normal numbers of ``SeedSequence(seed)`` (``spawn < 0``,
     :func:`series_rng`) or of its spawn ``spawn`` (:data:`SENSOR_STREAM`: :func:`sensor_rng`),
     as NumPy's ``standard_normal(out=out)`` draws them, bit for bit (:func:`stream_words`,
-    :func:`_normals`, through :func:`draw_series` at ``sigma_p = 1``); ``0 <= seed < 2**64``."""
+    :func:`_normals`, through :func:`draw_series` at ``sigma_p = 1``); ``0 <= seed < 2**63``."""
     return draw_series(stream_words([seed], spawn)[0], out, 1.0, None)
 
 
@@ -365,8 +371,8 @@ def draw_impulses(rng: np.random.Generator, out: np.ndarray, sigma_p: float, pol
 
 def add_sensor_noise(theta: np.ndarray, seeds, std: float) -> np.ndarray:
     """``theta(seed, time)`` (changed in place) plus white sensor noise of standard deviation
-    ``std`` (rad), each row from :func:`sensor_rng` of its seed (drawn in numba,
-    :func:`standard_normals`: the same numbers); ``std = 0`` draws nothing."""
+    ``std`` (rad), each row from :func:`sensor_rng` of its seed (drawn in the kernel,
+    :func:`stream_words` and :func:`_normals`: the same numbers); ``std = 0`` draws nothing."""
     if std > 0.0:
         seeds = np.atleast_1d(np.asarray(seeds, dtype=np.int64))
         rows = min(len(theta), seeds.size)
