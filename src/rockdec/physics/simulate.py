@@ -175,8 +175,9 @@ def integrate(impulses, dt, g, e, theta0, omega0, burn_in, theta_out, omega_out,
     steps are discarded, then ``n = len(theta_out)`` samples are written, the first one
     being the state after the burn-in. ``grid_impacts`` swaps the exact flight for the
     fixed-step integrator (:func:`rockdec.physics.fixed_step.step`, what most public rocking
-    codes do). The scalars go to the kernel :func:`_integrate` as float64 and int64, so it
-    compiles once for each of the two steps.
+    codes do). The scalars go to the kernel :func:`_integrate` as float64 and int64 and the
+    series as its one row, with no seeds to draw from, so it compiles once for each of the
+    two steps (:func:`simulate_block`'s calls, which draw, are signatures of their own).
     """
     _integrate(impulses, None, 0.0, None, float(dt), float(g), float(e), float(theta0), float(omega0), int(burn_in), theta_out[None],
                omega_out[None], True if grid_impacts else None)
