@@ -93,13 +93,15 @@ TIME_ATTRS = {
 MAX_RECORD_SECONDS = 9.2e9
 
 
-@numba.njit(nogil=True, cache=True, inline="always")
+@numba.njit(nogil=True, cache=True, forceinline=True)
 def flight(theta, omega, duration, g, e):
     """Advance ``(theta, omega)`` by ``duration`` seconds of free rocking (no load).
 
     Exact for the simplified model (eqs. 4, 6, 22-24), any number of impacts, the rest
     state included. Returns the new ``(theta, omega)``; ``(nan, nan)`` for a state or
-    step that is NaN (the loop is bounded by :data:`_MAX_PASSES`).
+    step that is NaN (the loop is bounded by :data:`_MAX_PASSES`). Numba compiles it once;
+    LLVM inlines it into its callers (``forceinline``), so the integrator's loop runs it
+    without a call and numba never types it a second time inside a caller.
     """
     remaining = duration
     if remaining != remaining:  # a NaN step: NaN, whatever the state (even at rest)
