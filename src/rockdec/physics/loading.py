@@ -139,8 +139,7 @@ def _normals(typingctx, words, out):
     """Fill ``out`` (float64, C-ordered) with the standard normal numbers of the PCG64 generator
     that ``words`` (uint64, C-ordered: a row of :func:`stream_words`) seeds, as NumPy's
     ``standard_normal(out=out)`` draws them, bit for bit; written in LLVM, so that numba types
-    and lowers no code of its own for it (a kernel that draws compiles as fast as one that
-    does not, bar LLVM's own work).
+    and lowers none of it (module docstring).
 
     PCG64's seeding (numpy/random/src/pcg64: ``pcg64_set_seed``, ``pcg_setseq_128_srandom_r``):
     seed ``words[0:2]`` and increment ``(words[2:4] << 1) | 1`` as 128-bit numbers, the state
@@ -150,7 +149,7 @@ def _normals(typingctx, words, out):
     (numpy/random/src/distributions): an output's low byte picks one of the ziggurat's 256
     layers, its bit 8 the sign, its next 52 bits the magnitude, accepted under the layer's
     ``ki_double``; else layer 0 draws the tail (two doubles ``u`` of an output's top 53 bits each,
-    ``xx = -log1p(-u1) / r``, ``yy = -log1p(-u2)``, until ``2 yy > xx^2``) and another layer its
+    ``xx = -(1/r) log1p(-u1)``, ``yy = -log1p(-u2)``, until ``2 yy > xx^2``) and another layer its
     wedge (one double, against ``exp(-x^2 / 2)``), and a rejection starts over.
     """
     if not (isinstance(words, types.Array) and words.dtype == types.uint64 and words.ndim == 1 and words.layout == "C"
