@@ -21,11 +21,14 @@ def bits(x):
 
 @pytest.mark.parametrize("spawn", [-1, loading.SENSOR_STREAM])
 def test_stream_words_are_seedsequences(spawn):
-    """Every seed width, both streams, all seeds in one call: NumPy's own
-    ``SeedSequence(seed[, spawn_key]).generate_state(4, uint64)``."""
+    """Every seed width, both streams, a few seeds (hashed one by one) and a block of them
+    (hashed as arrays): NumPy's own ``SeedSequence(seed[, spawn_key]).generate_state(4, uint64)``."""
     spawn_key = () if spawn < 0 else (spawn,)
-    expected = [np.random.SeedSequence(seed, spawn_key=spawn_key).generate_state(4, np.uint64) for seed in SEEDS]
-    np.testing.assert_array_equal(loading.stream_words(SEEDS, spawn), expected)
+    block = SEEDS + [seed + 1 for seed in SEEDS[:-1]]
+    assert len(SEEDS) <= loading._SEEDS_ONE_BY_ONE < len(block)
+    for seeds in (SEEDS, block):
+        expected = [np.random.SeedSequence(seed, spawn_key=spawn_key).generate_state(4, np.uint64) for seed in seeds]
+        np.testing.assert_array_equal(loading.stream_words(seeds, spawn), expected)
 
 
 @pytest.mark.parametrize("spawn", [-1, loading.SENSOR_STREAM])

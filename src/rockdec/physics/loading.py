@@ -76,12 +76,14 @@ def sensor_rng(seed: int) -> np.random.Generator:
 
 
 # NumPy's SeedSequence (numpy/random/bit_generator.pyx): pool of 4 words, its hash constants.
-# Held as uint64 so that NumPy computes in unsigned 64-bit words (the 32-bit ones masked).
+# Python ints: exact on a seed's Python ints, and uint64 arrays stay uint64 (the 32-bit words masked).
 _POOL_SIZE = 4
-_INIT_A, _MULT_A, _INIT_B, _MULT_B = (np.uint64(c) for c in (0x43B0D7E5, 0x931E8875, 0x8B51F9DD, 0x58F38DED))
-_MIX_MULT_L, _MIX_MULT_R = np.uint64(0xCA01F9DD), np.uint64(0x4973F715)
-_WORD = np.uint64(0xFFFFFFFF)
-_16, _32 = np.uint64(16), np.uint64(32)
+_INIT_A, _MULT_A, _INIT_B, _MULT_B = 0x43B0D7E5, 0x931E8875, 0x8B51F9DD, 0x58F38DED
+_MIX_MULT_L, _MIX_MULT_R = 0xCA01F9DD, 0x4973F715
+_WORD = 0xFFFFFFFF
+#: Up to this many seeds :func:`stream_words` hashes each seed's Python ints (about 15 us a
+#: seed); more share NumPy's array operations (about 0.2 ms a call, whatever the number).
+_SEEDS_ONE_BY_ONE = 16
 #: PCG64's multiplier (numpy/random/src/pcg64/pcg64.h, PCG_DEFAULT_MULTIPLIER_128).
 _PCG_MULTIPLIER = 0x2360ED051FC65DA44385DF649FCCF645
 #: A PCG64 output's top 53 bits times this: a double in ``[0, 1)``.
@@ -94,7 +96,8 @@ def stream_words(seeds, spawn: int = -1) -> np.ndarray:
     a ``(len(seeds), 4)`` uint64 array, the words that seed PCG64 (:func:`_normals`).
 
     NumPy's ``SeedSequence`` (numpy/random/bit_generator.pyx) on uint64 arrays of all the seeds
-    at once: the seed's two 32-bit words, least significant first, padded with zeros to the
+    at once, or on each seed's Python ints for a few (:data:`_SEEDS_ONE_BY_ONE`,
+    :func:`_generate_state`): the seed's two 32-bit words, least significant first, padded with zeros to the
     pool of 4 (one word or two hash alike), then the spawn key's word; ``hashmix`` of each into
     the pool, each pool word and each word beyond the pool mixed into every other pool word,
     and ``generate_state``'s eight 32-bit words cycling over the pool, paired low word first.
@@ -103,9 +106,18 @@ def stream_words(seeds, spawn: int = -1) -> np.ndarray:
     seeds = np.atleast_1d(np.asarray(seeds, dtype=np.int64))
     if seeds.size and seeds.min() < 0:
         raise InputError(f"seed {seeds.min()} is negative; give seeds >= 0")
+    spawn_key = [spawn] if spawn >= 0 else []
+    if seeds.size <= _SEEDS_ONE_BY_ONE:
+        seeds = [int(seed) for seed in seeds]
+        return np.array([_generate_state([seed & _WORD, seed >> 32, 0, 0] + spawn_key) for seed in seeds], dtype=np.uint64).reshape(-1, 4)
     seeds = seeds.astype(np.uint64)
     zero = np.zeros_like(seeds)
-    entropy = [seeds & _WORD, seeds >> _32, zero, zero] + ([np.full_like(seeds, spawn)] if spawn >= 0 else [])
+    return np.stack(_generate_state([seeds & _WORD, seeds >> 32, zero, zero] + [np.full_like(seeds, k) for k in spawn_key]), axis=-1)
+
+
+def _generate_state(entropy: list) -> list:
+    """SeedSequence's mixing of the words ``entropy`` (Python ints below 2**32, or uint64 arrays
+    of them) into the pool and its ``generate_state(4, uint64)``: the four 64-bit words."""
     hash_const = _INIT_A
 
     def hashmix(value):
@@ -113,11 +125,11 @@ def stream_words(seeds, spawn: int = -1) -> np.ndarray:
         value = (value ^ hash_const) & _WORD
         hash_const = (hash_const * _MULT_A) & _WORD
         value = (value * hash_const) & _WORD
-        return value ^ (value >> _16)
+        return value ^ (value >> 16)
 
     def mix(x, y):
         result = (_MIX_MULT_L * x - _MIX_MULT_R * y) & _WORD
-        return result ^ (result >> _16)
+        return result ^ (result >> 16)
 
     pool = [hashmix(entropy[i]) for i in range(_POOL_SIZE)]
     for src in range(len(entropy)):
@@ -130,8 +142,8 @@ def stream_words(seeds, spawn: int = -1) -> np.ndarray:
         value = (pool[i % _POOL_SIZE] ^ hash_const) & _WORD
         hash_const = (hash_const * _MULT_B) & _WORD
         value = (value * hash_const) & _WORD
-        words.append(value ^ (value >> _16))
-    return np.stack([words[2 * k] | (words[2 * k + 1] << _32) for k in range(4)], axis=-1)
+        words.append(value ^ (value >> 16))
+    return [words[2 * k] | (words[2 * k + 1] << 32) for k in range(4)]
 
 
 @intrinsic
