@@ -20,6 +20,18 @@ def bits(x):
 
 
 @pytest.mark.parametrize("spawn", [-1, loading.SENSOR_STREAM])
+def test_stream_words_are_seedsequences(spawn):
+    """Every seed width, both streams, a few seeds (hashed one by one) and a block of them
+    (hashed as arrays): NumPy's own ``SeedSequence(seed[, spawn_key]).generate_state(4, uint64)``."""
+    spawn_key = () if spawn < 0 else (spawn,)
+    block = SEEDS + [seed + 1 for seed in SEEDS[:-1]]
+    assert len(SEEDS) <= loading._SEEDS_ONE_BY_ONE < len(block)
+    for seeds in (SEEDS, block):
+        expected = [np.random.SeedSequence(seed, spawn_key=spawn_key).generate_state(4, np.uint64) for seed in seeds]
+        np.testing.assert_array_equal(loading.stream_words(seeds, spawn), expected)
+
+
+@pytest.mark.parametrize("spawn", [-1, loading.SENSOR_STREAM])
 def test_standard_normals_are_numpys(spawn):
     """Every seed width, both streams: the same 20,000 numbers as NumPy's standard_normal
     (some 400 of them pass the ziggurat's wedges or tail, which draw further outputs)."""
@@ -69,3 +81,8 @@ def test_sensor_noise_is_the_sensor_stream():
 def test_negative_seed_refused():
     with pytest.raises(InputError, match="seed -1 is negative"):
         simulate.simulate_block([3, -1], 100, dt=0.0035, g=1.0, e=0.95, sigma_p=0.003)
+
+
+def test_sensor_noise_negative_seed_refused():
+    with pytest.raises(InputError, match="seed -3 is negative"):
+        loading.add_sensor_noise(np.zeros((2, 10)), [4, -3], 0.1)

@@ -29,12 +29,15 @@ its impulses here, so one seed means one load whatever the model.
 
 The streams are NumPy's: ``SeedSequence(seed)`` seeds a PCG64 generator, whose
 ``standard_normal`` draws the numbers (:func:`series_rng`, :func:`sensor_rng`). The same
-streams also run inside numba (:func:`draw_series`, :func:`add_sensor_noise`): NumPy's
-``SeedSequence`` hashing and PCG64 seeding, its PCG64 step (128-bit multiply-add, XSL-RR
-output) and its ziggurat normal sampler with NumPy's tables, operation for operation, so
-the numbers are NumPy's bit for bit (tested on seeds of every width and both streams). A
-kernel then draws and integrates a whole block of series without Python between series:
-no generator objects are built and the GIL stays released.
+streams also run inside the compiled kernels (:func:`draw_series`, :func:`add_sensor_noise`):
+NumPy's ``SeedSequence`` hashing on uint64 arrays, all the seeds of a block at once
+(:func:`stream_words`), then PCG64's seeding, its step (128-bit multiply-add, XSL-RR output)
+and its ziggurat normal sampler with NumPy's tables in LLVM (:func:`_normals`), operation for
+operation, so the numbers are NumPy's bit for bit (tested on seeds of every width and both
+streams). A kernel then draws and integrates a whole block of series without Python between
+series: no generator objects are built and the GIL stays released. The sampler is LLVM
+rather than numba-typed Python because numba's typing and lowering of it took 0.3-0.5 s of
+CPU on a fresh install, about as much as the integrator's own.
 """
 
 from __future__ import annotations
@@ -46,7 +49,7 @@ from typing import NamedTuple
 import numba
 import numpy as np
 from llvmlite import ir
-from numba.core import types
+from numba.core import cgutils, types
 from numba.extending import intrinsic
 from numba.np.random._constants import fi_double, ki_double, wi_double, ziggurat_nor_inv_r, ziggurat_nor_r
 
@@ -73,149 +76,177 @@ def sensor_rng(seed: int) -> np.random.Generator:
 
 
 # NumPy's SeedSequence (numpy/random/bit_generator.pyx): pool of 4 words, its hash constants.
-# Held as uint64 so that numba computes in unsigned 64-bit words (the 32-bit ones masked).
+# Python ints: exact on a seed's Python ints, and uint64 arrays stay uint64 (the 32-bit words masked).
 _POOL_SIZE = 4
-_INIT_A, _MULT_A, _INIT_B, _MULT_B = (np.uint64(c) for c in (0x43B0D7E5, 0x931E8875, 0x8B51F9DD, 0x58F38DED))
-_MIX_MULT_L, _MIX_MULT_R = np.uint64(0xCA01F9DD), np.uint64(0x4973F715)
-_WORD = np.uint64(0xFFFFFFFF)
-_ONE, _8, _11, _16, _32, _58, _63, _64 = (np.uint64(n) for n in (1, 8, 11, 16, 32, 58, 63, 64))
+_INIT_A, _MULT_A, _INIT_B, _MULT_B = 0x43B0D7E5, 0x931E8875, 0x8B51F9DD, 0x58F38DED
+_MIX_MULT_L, _MIX_MULT_R = 0xCA01F9DD, 0x4973F715
+_WORD = 0xFFFFFFFF
+#: Up to this many seeds :func:`stream_words` hashes each seed's Python ints (about 15 us a
+#: seed); more share NumPy's array operations (about 0.2 ms a call, whatever the number).
+_SEEDS_ONE_BY_ONE = 16
 #: PCG64's multiplier (numpy/random/src/pcg64/pcg64.h, PCG_DEFAULT_MULTIPLIER_128).
 _PCG_MULTIPLIER = 0x2360ED051FC65DA44385DF649FCCF645
+#: A PCG64 output's top 53 bits times this: a double in ``[0, 1)``.
+_DOUBLE_UNIT = 1.0 / 9007199254740992.0
 
 
-@intrinsic
-def _pcg_step(typingctx, state_hi, state_lo, inc_hi, inc_lo):
-    """PCG64's step ``state * multiplier + inc`` modulo 2**128 on the halves (high, low) of
-    the state and the increment: one 128-bit multiply-add in LLVM. Returns the new halves."""
-    pair = types.UniTuple(types.uint64, 2)
-    signature = pair(types.uint64, types.uint64, types.uint64, types.uint64)
+def stream_words(seeds, spawn: int = -1) -> np.ndarray:
+    """``SeedSequence(seed).generate_state(4, np.uint64)`` for every seed (``spawn < 0``,
+    :func:`series_rng`) or for its spawn ``spawn`` (:data:`SENSOR_STREAM`: :func:`sensor_rng`):
+    a ``(len(seeds), 4)`` uint64 array, the words that seed PCG64 (:func:`_normals`).
 
-    def codegen(context, builder, sig, args):
-        wide, half = ir.IntType(128), ir.IntType(64)
-
-        def joined(hi, lo):
-            return builder.or_(builder.shl(builder.zext(hi, wide), ir.Constant(wide, 64)), builder.zext(lo, wide))
-
-        state = builder.add(builder.mul(joined(args[0], args[1]), ir.Constant(wide, _PCG_MULTIPLIER)), joined(args[2], args[3]))
-        hi = builder.trunc(builder.lshr(state, ir.Constant(wide, 64)), half)
-        return context.make_tuple(builder, sig.return_type, (hi, builder.trunc(state, half)))
-
-    return signature, codegen
-
-
-@numba.njit(inline="always")
-def _hashmix(value, hash_const):
-    """SeedSequence's ``hashmix`` on 32-bit words held in uint64: the mixed value and the
-    updated hash constant."""
-    value = (value ^ hash_const) & _WORD
-    hash_const = (hash_const * _MULT_A) & _WORD
-    value = (value * hash_const) & _WORD
-    return value ^ (value >> _16), hash_const
+    NumPy's ``SeedSequence`` (numpy/random/bit_generator.pyx) on uint64 arrays of all the seeds
+    at once, or on each seed's Python ints for a few (:data:`_SEEDS_ONE_BY_ONE`,
+    :func:`_generate_state`): the seed's two 32-bit words, least significant first, padded with zeros to the
+    pool of 4 (one word or two hash alike), then the spawn key's word; ``hashmix`` of each into
+    the pool, each pool word and each word beyond the pool mixed into every other pool word,
+    and ``generate_state``'s eight 32-bit words cycling over the pool, paired low word first.
+    ``0 <= seed < 2**63``; a negative seed raises :class:`rockdec.validate.InputError`.
+    """
+    seeds = np.atleast_1d(np.asarray(seeds, dtype=np.int64))
+    if seeds.size and seeds.min() < 0:
+        raise InputError(f"seed {seeds.min()} is negative; give seeds >= 0")
+    spawn_key = [spawn] if spawn >= 0 else []
+    if seeds.size <= _SEEDS_ONE_BY_ONE:
+        seeds = [int(seed) for seed in seeds]
+        return np.array([_generate_state([seed & _WORD, seed >> 32, 0, 0] + spawn_key) for seed in seeds], dtype=np.uint64).reshape(-1, 4)
+    seeds = seeds.astype(np.uint64)
+    zero = np.zeros_like(seeds)
+    return np.stack(_generate_state([seeds & _WORD, seeds >> 32, zero, zero] + [np.full_like(seeds, k) for k in spawn_key]), axis=-1)
 
 
-@numba.njit(inline="always")
-def _mix(x, y):
-    """SeedSequence's ``mix`` of two 32-bit words."""
-    result = (_MIX_MULT_L * x - _MIX_MULT_R * y) & _WORD
-    return result ^ (result >> _16)
-
-
-@numba.njit(inline="always")
-def _seeded_pcg64(seed, spawn, state):
-    """``state`` (uint64 ``[state_hi, state_lo, inc_hi, inc_lo]``) of
-    ``PCG64(SeedSequence(seed, spawn_key=(spawn,)))``, no spawn key for ``spawn < 0``;
-    ``0 <= seed < 2**63``."""
-    entropy = np.zeros(_POOL_SIZE + 1, np.uint64)
-    word = np.uint64(seed)
-    entropy[0] = word & _WORD
-    n_entropy = 1
-    if word >> _32:  # the seed's 32-bit words, least significant first
-        entropy[1] = word >> _32
-        n_entropy = 2
-    if spawn >= 0:  # the run's words padded to the pool, then the spawn key's
-        entropy[_POOL_SIZE] = np.uint64(spawn)
-        n_entropy = _POOL_SIZE + 1
-    pool = np.zeros(_POOL_SIZE, np.uint64)
+def _generate_state(entropy: list) -> list:
+    """SeedSequence's mixing of the words ``entropy`` (Python ints below 2**32, or uint64 arrays
+    of them) into the pool and its ``generate_state(4, uint64)``: the four 64-bit words."""
     hash_const = _INIT_A
-    for i in range(_POOL_SIZE):
-        pool[i], hash_const = _hashmix(entropy[i], hash_const)
-    for src in range(_POOL_SIZE):
+
+    def hashmix(value):
+        nonlocal hash_const
+        value = (value ^ hash_const) & _WORD
+        hash_const = (hash_const * _MULT_A) & _WORD
+        value = (value * hash_const) & _WORD
+        return value ^ (value >> 16)
+
+    def mix(x, y):
+        result = (_MIX_MULT_L * x - _MIX_MULT_R * y) & _WORD
+        return result ^ (result >> 16)
+
+    pool = [hashmix(entropy[i]) for i in range(_POOL_SIZE)]
+    for src in range(len(entropy)):
         for dst in range(_POOL_SIZE):
             if src != dst:
-                mixed, hash_const = _hashmix(pool[src], hash_const)
-                pool[dst] = _mix(pool[dst], mixed)
-    for src in range(_POOL_SIZE, n_entropy):
-        for dst in range(_POOL_SIZE):
-            mixed, hash_const = _hashmix(entropy[src], hash_const)
-            pool[dst] = _mix(pool[dst], mixed)
-    # generate_state(4, uint64): eight 32-bit words cycling over the pool, paired low word first
-    words = np.zeros(8, np.uint64)
+                pool[dst] = mix(pool[dst], hashmix(pool[src] if src < _POOL_SIZE else entropy[src]))
     hash_const = _INIT_B
+    words = []
     for i in range(8):
         value = (pool[i % _POOL_SIZE] ^ hash_const) & _WORD
         hash_const = (hash_const * _MULT_B) & _WORD
         value = (value * hash_const) & _WORD
-        words[i] = value ^ (value >> _16)
-    seed_hi, seed_lo = words[0] | (words[1] << _32), words[2] | (words[3] << _32)
-    inc_hi = ((words[4] | (words[5] << _32)) << _ONE) | ((words[6] | (words[7] << _32)) >> _63)
-    inc_lo = ((words[6] | (words[7] << _32)) << _ONE) | _ONE
-    # pcg_setseq_128_srandom_r: state 0, one step (state = inc), add the seed, one step
-    lo = inc_lo + seed_lo
-    hi = inc_hi + seed_hi + (_ONE if lo < inc_lo else np.uint64(0))
-    state[0], state[1] = _pcg_step(hi, lo, inc_hi, inc_lo)
-    state[2], state[3] = inc_hi, inc_lo
+        words.append(value ^ (value >> 16))
+    return [words[2 * k] | (words[2 * k + 1] << 32) for k in range(4)]
 
 
-@numba.njit(inline="always")
-def _next_uint64(state):
-    """PCG64's next 64-bit output: step, then XSL-RR of the new state."""
-    hi, lo = _pcg_step(state[0], state[1], state[2], state[3])
-    state[0], state[1] = hi, lo
-    folded = hi ^ lo
-    turn = hi >> _58
-    return (folded >> turn) | (folded << ((_64 - turn) & _63))
+@intrinsic
+def _normals(typingctx, words, out):
+    """Fill ``out`` (float64, C-ordered) with the standard normal numbers of the PCG64 generator
+    that ``words`` (uint64, C-ordered: a row of :func:`stream_words`) seeds, as NumPy's
+    ``standard_normal(out=out)`` draws them, bit for bit; written in LLVM, so that numba types
+    and lowers none of it (module docstring).
+
+    PCG64's seeding (numpy/random/src/pcg64: ``pcg64_set_seed``, ``pcg_setseq_128_srandom_r``):
+    seed ``words[0:2]`` and increment ``(words[2:4] << 1) | 1`` as 128-bit numbers, the state
+    ``(increment + seed) * multiplier + increment``. Each output: the step ``state * multiplier
+    + increment`` modulo 2**128 and the XSL-RR output, the state's halves xor-ed and rotated
+    right by its top 6 bits. Per number NumPy's ``random_standard_normal``
+    (numpy/random/src/distributions): an output's low byte picks one of the ziggurat's 256
+    layers, its bit 8 the sign, its next 52 bits the magnitude, accepted under the layer's
+    ``ki_double``; else layer 0 draws the tail (two doubles ``u`` of an output's top 53 bits each,
+    ``xx = -(1/r) log1p(-u1)``, ``yy = -log1p(-u2)``, until ``2 yy > xx^2``) and another layer its
+    wedge (one double, against ``exp(-x^2 / 2)``), and a rejection starts over.
+    """
+    if not (isinstance(words, types.Array) and words.dtype == types.uint64 and words.ndim == 1 and words.layout == "C"
+            and isinstance(out, types.Array) and out.dtype == types.float64 and out.ndim == 1 and out.layout == "C"):
+        return None
+
+    def codegen(context, builder, sig, args):
+        i64, wide, f64 = ir.IntType(64), ir.IntType(128), ir.DoubleType()
+        module = builder.module
+        word = context.make_array(sig.args[0])(context, builder, args[0])
+        target = context.make_array(sig.args[1])(context, builder, args[1])
+        w = [builder.load(builder.gep(word.data, [ir.Constant(i64, k)])) for k in range(4)]
+
+        def joined(hi, lo):
+            return builder.or_(builder.shl(builder.zext(hi, wide), ir.Constant(wide, 64)), builder.zext(lo, wide))
+
+        def table(name, values, kind):
+            data = ir.Constant(ir.ArrayType(kind, values.size), [ir.Constant(kind, v) for v in values.tolist()])
+            return cgutils.global_constant(module, f"rockdec_ziggurat_{name}", data)
+
+        wi, ki, fi = table("wi", wi_double, f64), table("ki", ki_double, i64), table("fi", fi_double, f64)
+        log1p = cgutils.get_or_insert_function(module, ir.FunctionType(f64, [f64]), "log1p")
+        exp = module.declare_intrinsic("llvm.exp", [f64])
+        multiplier = ir.Constant(wide, _PCG_MULTIPLIER)
+        inc = builder.or_(builder.shl(joined(w[2], w[3]), ir.Constant(wide, 1)), ir.Constant(wide, 1))
+        state = cgutils.alloca_once(builder, wide)
+        builder.store(builder.add(builder.mul(builder.add(inc, joined(w[0], w[1])), multiplier), inc), state)
+
+        def output():
+            now = builder.add(builder.mul(builder.load(state), multiplier), inc)
+            builder.store(now, state)
+            hi = builder.trunc(builder.lshr(now, ir.Constant(wide, 64)), i64)
+            folded, turn = builder.xor(hi, builder.trunc(now, i64)), builder.lshr(hi, ir.Constant(i64, 58))
+            left = builder.and_(builder.sub(ir.Constant(i64, 64), turn), ir.Constant(i64, 63))
+            return builder.or_(builder.lshr(folded, turn), builder.shl(folded, left))
+
+        def double():
+            return builder.fmul(builder.uitofp(builder.lshr(output(), ir.Constant(i64, 11)), f64), ir.Constant(f64, _DOUBLE_UNIT))
+
+        def entry(array, index):
+            return builder.load(builder.gep(array, [ir.Constant(i64, 0), index]))
+
+        x_var = cgutils.alloca_once(builder, f64)
+        with cgutils.for_range(builder, target.nitems) as loop:
+            draw, slow, tail, wedge, done = (builder.append_basic_block(n) for n in ("draw", "slow", "tail", "wedge", "done"))
+            builder.branch(draw)
+            builder.position_at_end(draw)
+            r = output()
+            idx = builder.and_(r, ir.Constant(i64, 0xFF))
+            r = builder.lshr(r, ir.Constant(i64, 8))
+            rabs = builder.and_(builder.lshr(r, ir.Constant(i64, 1)), ir.Constant(i64, 0x000FFFFFFFFFFFFF))
+            x = builder.fmul(builder.uitofp(rabs, f64), entry(wi, idx))
+            negative = builder.trunc(r, ir.IntType(1))
+            x = builder.select(negative, builder.fneg(x), x)
+            builder.store(x, x_var)
+            builder.cbranch(builder.icmp_unsigned("<", rabs, entry(ki, idx)), done, slow)
+            builder.position_at_end(slow)
+            builder.cbranch(builder.icmp_unsigned("==", idx, ir.Constant(i64, 0)), tail, wedge)
+            builder.position_at_end(tail)
+            xx = builder.fmul(ir.Constant(f64, -ziggurat_nor_inv_r), builder.call(log1p, [builder.fneg(double())]))
+            yy = builder.fneg(builder.call(log1p, [builder.fneg(double())]))
+            outside = builder.fcmp_ordered(">", builder.fadd(yy, yy), builder.fmul(xx, xx))
+            at = builder.fadd(ir.Constant(f64, ziggurat_nor_r), xx)
+            upper = builder.trunc(builder.lshr(rabs, ir.Constant(i64, 8)), ir.IntType(1))
+            builder.store(builder.select(upper, builder.fneg(at), at), x_var)
+            builder.cbranch(outside, done, tail)
+            builder.position_at_end(wedge)
+            below = entry(fi, builder.sub(idx, ir.Constant(i64, 1)))
+            level = entry(fi, idx)
+            y = builder.fadd(builder.fmul(builder.fsub(below, level), double()), level)
+            bound = builder.call(exp, [builder.fmul(builder.fmul(ir.Constant(f64, -0.5), x), x)])
+            builder.cbranch(builder.fcmp_ordered("<", y, bound), done, draw)
+            builder.position_at_end(done)
+            builder.store(builder.load(x_var), builder.gep(target.data, [loop.index]))
+        return context.get_dummy_value()
+
+    return types.none(words, out), codegen
 
 
-@numba.njit(inline="always")
-def _next_double(state):
-    """PCG64's next double in ``[0, 1)``: the top 53 bits of the next output."""
-    return np.float64(_next_uint64(state) >> _11) * (1.0 / 9007199254740992.0)
-
-
-@numba.njit(inline="always")
-def _standard_normal(state):
-    """NumPy's ``random_standard_normal`` (numpy/random/src/distributions): the ziggurat of
-    256 layers on PCG64's outputs, its wedges and its tail."""
-    while True:
-        r = _next_uint64(state)
-        idx = r & np.uint64(0xFF)
-        r >>= _8
-        rabs = (r >> _ONE) & np.uint64(0x000FFFFFFFFFFFFF)
-        x = np.float64(rabs) * wi_double[idx]
-        if r & _ONE:
-            x = -x
-        if rabs < ki_double[idx]:
-            return x
-        if idx == 0:
-            while True:
-                xx = -ziggurat_nor_inv_r * np.log1p(-_next_double(state))
-                yy = -np.log1p(-_next_double(state))
-                if yy + yy > xx * xx:
-                    return -(ziggurat_nor_r + xx) if (rabs >> _8) & _ONE else ziggurat_nor_r + xx
-        elif (fi_double[idx - _ONE] - fi_double[idx]) * _next_double(state) + fi_double[idx] < np.exp(-0.5 * x * x):
-            return x
-
-
-@numba.njit(nogil=True, cache=True)
-def standard_normals(seed, spawn, out):
+def standard_normals(seed: int, spawn: int, out: np.ndarray) -> np.ndarray:
     """Fill ``out`` with the standard normal numbers of ``SeedSequence(seed)`` (``spawn < 0``,
     :func:`series_rng`) or of its spawn ``spawn`` (:data:`SENSOR_STREAM`: :func:`sensor_rng`),
-    as NumPy's ``standard_normal(out=out)`` draws them, bit for bit; ``0 <= seed < 2**63``."""
-    state = np.empty(4, np.uint64)
-    _seeded_pcg64(seed, spawn, state)
-    for i in range(out.size):
-        out[i] = _standard_normal(state)
-    return out
+    as NumPy's ``standard_normal(out=out)`` draws them, bit for bit (:func:`stream_words`,
+    :func:`_normals`, through :func:`draw_series` at ``sigma_p = 1``); ``0 <= seed < 2**63``."""
+    return draw_series(stream_words([seed], spawn)[0], out, 1.0, None)
 
 
 @numba.njit(nogil=True, cache=True)
@@ -307,19 +338,19 @@ def check_load(pole: float, spectrum: ImpulseSpectrum | None = None) -> None:
         raise InputError("a load is either low-pass filtered (pole) or of a given spectrum, not both; give one of them")
 
 
-@numba.njit(nogil=True, cache=True)
-def draw_series(seed, out, sigma_p, pole):
-    """:func:`draw_impulses` of ``series_rng(seed)`` for a white (``pole = 0``) or low-pass
-    load, inside numba (:func:`standard_normals`, :func:`low_pass`): the same impulses bit for
-    bit. ``pole`` as :func:`check_load` accepts it."""
+@numba.njit(nogil=True, cache=True, inline="always")
+def draw_series(words, out, sigma_p, pole):
+    """:func:`draw_impulses` of ``series_rng(seed)`` for a white (``pole`` None) or low-pass
+    load, inside numba, ``words`` the seed's row of :func:`stream_words` (:func:`_normals`,
+    :func:`low_pass`): the same impulses bit for bit. ``pole`` as :func:`check_load` accepts
+    it; None is a type of its own to numba, which drops the filter before typing it, so a
+    white load compiles no filter."""
     if sigma_p > 0.0:
-        standard_normals(seed, -1, out)
-        if pole > 0.0 and out.size:
+        _normals(words, out)
+        if pole is not None and out.size:
             low_pass(out, pole)
-        for i in range(out.size):
-            out[i] *= sigma_p
-    else:
-        out[:] = 0.0
+    for i in range(out.size):
+        out[i] = out[i] * sigma_p if sigma_p > 0.0 else 0.0
     return out
 
 
@@ -351,21 +382,22 @@ def draw_impulses(rng: np.random.Generator, out: np.ndarray, sigma_p: float, pol
 
 def add_sensor_noise(theta: np.ndarray, seeds, std: float) -> np.ndarray:
     """``theta(seed, time)`` (changed in place) plus white sensor noise of standard deviation
-    ``std`` (rad), each row from :func:`sensor_rng` of its seed (drawn in numba,
-    :func:`standard_normals`: the same numbers); ``std = 0`` draws nothing."""
+    ``std`` (rad), each row from :func:`sensor_rng` of its seed (drawn in the kernel,
+    :func:`stream_words` and :func:`_normals`: the same numbers); ``std = 0`` draws nothing."""
     if std > 0.0:
         seeds = np.atleast_1d(np.asarray(seeds, dtype=np.int64))
         rows = min(len(theta), seeds.size)
-        _add_sensor_noise(theta, seeds[:rows], float(std), np.empty(theta.shape[-1] if rows else 0))
+        _add_sensor_noise(theta, stream_words(seeds[:rows], SENSOR_STREAM), float(std), np.empty(theta.shape[-1] if rows else 0))
     return theta
 
 
 @numba.njit(nogil=True, cache=True)
-def _add_sensor_noise(theta, seeds, std, noise):
-    """:func:`add_sensor_noise`'s loop: row ``r`` of ``theta`` plus ``std`` times the sensor
-    stream of ``seeds[r]``, drawn into the scratch row ``noise``."""
-    for r in range(seeds.size):
-        standard_normals(seeds[r], SENSOR_STREAM, noise)
+def _add_sensor_noise(theta, words, std, noise):
+    """:func:`add_sensor_noise`'s loop: row ``r`` of ``theta`` plus ``std`` times the normal
+    numbers of ``words[r]`` (:func:`stream_words` of the sensor streams, :func:`_normals`),
+    drawn into the scratch row ``noise``."""
+    for r in range(words.shape[0]):
+        _normals(words[r], noise)
         row = theta[r]
         for i in range(row.size):
             row[i] += std * noise[i]

@@ -42,7 +42,7 @@ import xarray as xr
 from rockdec.physics.fixed_step import step as grid_step
 from rockdec.physics.housner import simulate_block_housner
 from rockdec import validate as checks
-from rockdec.physics.loading import add_sensor_noise, check_load, draw_impulses, draw_series, series_rng
+from rockdec.physics.loading import add_sensor_noise, check_load, draw_impulses, draw_series, series_rng, stream_words
 from rockdec.physics.models import SCALE_CONSTANT_GUESS, check_finite_series, check_run, period_from_g, scale_constant, step_for_density
 
 #: Largest number of correction steps when the closed-form flight count is off by rounding.
@@ -93,13 +93,15 @@ TIME_ATTRS = {
 MAX_RECORD_SECONDS = 9.2e9
 
 
-@numba.njit(nogil=True, cache=True, inline="always")
+@numba.njit(nogil=True, cache=True, forceinline=True)
 def flight(theta, omega, duration, g, e):
     """Advance ``(theta, omega)`` by ``duration`` seconds of free rocking (no load).
 
     Exact for the simplified model (eqs. 4, 6, 22-24), any number of impacts, the rest
     state included. Returns the new ``(theta, omega)``; ``(nan, nan)`` for a state or
-    step that is NaN (the loop is bounded by :data:`_MAX_PASSES`).
+    step that is NaN (the loop is bounded by :data:`_MAX_PASSES`). Numba compiles it once;
+    LLVM inlines it into its callers (``forceinline``), so the integrator's loop runs it
+    without a call and numba never types it a second time inside a caller.
     """
     remaining = duration
     if remaining != remaining:  # a NaN step: NaN, whatever the state (even at rest)
@@ -175,43 +177,43 @@ def integrate(impulses, dt, g, e, theta0, omega0, burn_in, theta_out, omega_out,
     steps are discarded, then ``n = len(theta_out)`` samples are written, the first one
     being the state after the burn-in. ``grid_impacts`` swaps the exact flight for the
     fixed-step integrator (:func:`rockdec.physics.fixed_step.step`, what most public rocking
-    codes do). The scalars go to the kernel :func:`_integrate` as float64 and int64, so it
-    compiles once for each of the two steps.
+    codes do). The scalars go to the kernel :func:`_integrate` as float64 and int64 and the
+    series as its one row, with no seeds to draw from, so it compiles once for each of the
+    two steps (:func:`simulate_block`'s calls, which draw, are signatures of their own).
     """
-    _integrate(impulses, float(dt), float(g), float(e), float(theta0), float(omega0), int(burn_in), theta_out, omega_out,
-               True if grid_impacts else None)
+    _integrate(impulses, None, 0.0, None, float(dt), float(g), float(e), float(theta0), float(omega0), int(burn_in), theta_out[None],
+               omega_out[None], True if grid_impacts else None)
 
 
 @numba.njit(nogil=True, cache=True)
-def _integrate(impulses, dt, g, e, theta0, omega0, burn_in, theta_out, omega_out, grid):
-    """:func:`integrate`'s loop: one unloaded step and the impulse per step. ``grid`` None: the
-    exact :func:`flight`; True: the grid-impact step. None is a type of its own to numba, which
-    drops the other branch before typing it, so each choice compiles only its own step."""
-    theta = theta0
-    omega = omega0
-    if burn_in == 0:
-        theta_out[0] = theta
-        omega_out[0] = omega
-    for i in range(burn_in + theta_out.shape[0] - 1):
-        if grid is None:
-            theta, omega = flight(theta, omega, dt, g, e)
-        else:
-            theta, omega = grid_step(theta, omega, dt, g, e)
-        omega += impulses[i]
-        j = i + 1 - burn_in  # the sample this step reaches; the burn-in's are not written
-        if j >= 0:
-            theta_out[j] = theta
-            omega_out[j] = omega
-
-
-@numba.njit(nogil=True, cache=True)
-def _simulate_seeds(seeds, sigma_p, pole, dt, g, e, theta0, omega0, burn_in, theta_out, omega_out, impulses, grid):
-    """:func:`simulate_block`'s loop for a white or low-pass load: each seed's impulses
-    (:func:`rockdec.physics.loading.draw_series`, into the scratch ``impulses``) and their
-    integration (:func:`_integrate`) into its rows, with no Python between series."""
-    for row in range(seeds.size):
-        draw_series(seeds[row], impulses, sigma_p, pole)
-        _integrate(impulses, dt, g, e, theta0, omega0, burn_in, theta_out[row], omega_out[row], grid)
+def _integrate(impulses, words, sigma_p, pole, dt, g, e, theta0, omega0, burn_in, theta_out, omega_out, grid):
+    """:func:`integrate`'s loop over the rows of ``theta_out`` and ``omega_out``: one unloaded
+    step and the impulse per step. ``words`` None: ``impulses`` as given (one row); else each
+    row's impulses first drawn into the scratch ``impulses`` from its row of ``words`` (the
+    seeds' :func:`rockdec.physics.loading.stream_words`: :func:`rockdec.physics.loading.draw_series`,
+    ``sigma_p``, ``pole`` None for white noise), so that :func:`simulate_block` draws and
+    integrates a block with no Python between series. ``grid`` None: the exact :func:`flight`;
+    True: the grid-impact step. None is a type of its own to numba, which drops the other
+    branch before typing it, so each choice compiles only its own code."""
+    for row in range(theta_out.shape[0]):
+        if words is not None:
+            draw_series(words[row], impulses, sigma_p, pole)
+        thetas, omegas = theta_out[row], omega_out[row]
+        theta = theta0
+        omega = omega0
+        if burn_in == 0:
+            thetas[0] = theta
+            omegas[0] = omega
+        for i in range(burn_in + thetas.shape[0] - 1):
+            if grid is None:
+                theta, omega = flight(theta, omega, dt, g, e)
+            else:
+                theta, omega = grid_step(theta, omega, dt, g, e)
+            omega += impulses[i]
+            j = i + 1 - burn_in  # the sample this step reaches; the burn-in's are not written
+            if j >= 0:
+                thetas[j] = theta
+                omegas[j] = omega
 
 
 def simulate_block(seeds, n_points, *, dt, g, e, sigma_p, theta0=0.0, theta_dot0=0.0, burn_in=0, grid_impacts=False, pole=0.0,
@@ -225,7 +227,7 @@ def simulate_block(seeds, n_points, *, dt, g, e, sigma_p, theta0=0.0, theta_dot0
     (:func:`rockdec.physics.loading.draw_impulses`), 0 for white noise; ``spectrum``: a load of that
     spectrum instead (:class:`rockdec.physics.loading.ImpulseSpectrum`, cycles per step;
     :meth:`rockdec.physics.record_model.Load.draw_options` gives either). A white or low-pass
-    load is drawn and integrated in one numba call over the seeds (:func:`_simulate_seeds`),
+    load is drawn and integrated in one numba call over the seeds (:func:`_integrate`),
     a spectrum load series by series. ``out``: a float64 array ``(2, len(seeds), n_points)``
     to write ``theta`` and ``theta_dot`` into (returned as its two halves). Inputs outside the
     model (NaN, infinities, ``e`` outside ``[0, 1]``, a negative seed, ...) and series that
@@ -243,8 +245,8 @@ def simulate_block(seeds, n_points, *, dt, g, e, sigma_p, theta0=0.0, theta_dot0
     theta, theta_dot = out[0], out[1]
     impulses = np.empty(n_steps)
     if spectrum is None:
-        _simulate_seeds(seeds, float(sigma_p), float(pole), float(dt), float(g), float(e), float(theta0), float(theta_dot0),
-                        int(burn_in), theta, theta_dot, impulses, True if grid_impacts else None)
+        _integrate(impulses, stream_words(seeds), float(sigma_p), float(pole) if pole > 0.0 else None, float(dt), float(g), float(e),
+                   float(theta0), float(theta_dot0), int(burn_in), theta, theta_dot, True if grid_impacts else None)
     else:
         for row, seed in enumerate(seeds):
             draw_impulses(series_rng(seed), impulses, sigma_p, pole, spectrum)
