@@ -166,13 +166,22 @@ def compute(*collections, threads: int | None = None, scheduler: str | None = No
     """
     import dask
 
-    if not _active.get() and setting(scheduler)[0] == "threads":
-        from dask import threaded
-
-        workers = {} if threads is None else {"num_workers": max(1, int(threads))}
-        return dask.compute(*collections, scheduler=threaded.get, **workers)
+    own = _own_threads(threads, scheduler)
+    if own is not None:
+        return dask.compute(*collections, **own)
     with session(threads, scheduler):
         return dask.compute(*collections)
+
+
+def _own_threads(threads: int | None, scheduler: str | None) -> dict | None:
+    """Dask's keywords for a call on threads of its own (the ``threads`` engine outside a
+    session, :func:`compute`): Dask's threaded scheduler by its function and ``threads``
+    workers; None on any other engine or inside a session."""
+    if _active.get() or setting(scheduler)[0] != "threads":
+        return None
+    from dask import threaded
+
+    return {"scheduler": threaded.get, **({} if threads is None else {"num_workers": max(1, int(threads))})}
 
 
 def compute_in_place(*datasets, threads: int | None = None, scheduler: str | None = None) -> tuple:
@@ -183,22 +192,21 @@ def compute_in_place(*datasets, threads: int | None = None, scheduler: str | Non
     that serial copy at the end. On the other engines the results cross processes anyway:
     :func:`compute`.
     """
-    if _active.get() or setting(scheduler)[0] != "threads":
+    own = _own_threads(threads, scheduler)
+    if own is None:
         return compute(*datasets, threads=threads, scheduler=scheduler)
     import dask.array as da
     import numpy as np
-    from dask import threaded
 
     sources, targets, filled = [], [], []
     for ds in datasets:
         out = ds.copy()
-        for name, var in out.variables.items():
+        for var in out.variables.values():
             if isinstance(var.data, da.Array):
                 sources.append(var.data)
                 targets.append(np.empty(var.shape, var.dtype))
                 var.data = targets[-1]
         filled.append(out)
-    workers = {} if threads is None else {"num_workers": max(1, int(threads))}
     if sources:
-        da.store(sources, targets, lock=False, scheduler=threaded.get, **workers)  # chunks write disjoint regions
+        da.store(sources, targets, lock=False, **own)  # chunks write disjoint regions
     return tuple(filled)
