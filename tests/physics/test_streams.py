@@ -32,11 +32,11 @@ def test_stream_words_are_seedsequences(spawn):
 
 
 @pytest.mark.parametrize("spawn", [-1, loading.SENSOR_STREAM])
-def test_standard_normals_are_numpys(spawn):
+def test_drawn_normals_are_numpys(spawn):
     """Every seed width, both streams: the same 20,000 numbers as NumPy's standard_normal
     (some 400 of them pass the ziggurat's wedges or tail, which draw further outputs)."""
     for seed in SEEDS:
-        ours = loading.standard_normals(seed, spawn, np.empty(20_000))
+        ours = loading.draw_series(loading.stream_words([seed], spawn)[0], np.empty(20_000), 1.0, None)
         rng = loading.series_rng(seed) if spawn < 0 else loading.sensor_rng(seed)
         np.testing.assert_array_equal(bits(ours), bits(rng.standard_normal(20_000)), err_msg=f"seed {seed}")
 

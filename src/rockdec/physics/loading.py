@@ -90,6 +90,14 @@ _PCG_MULTIPLIER = 0x2360ED051FC65DA44385DF649FCCF645
 _DOUBLE_UNIT = 1.0 / 9007199254740992.0
 
 
+def check_seeds(seeds) -> np.ndarray:
+    """``seeds`` as a 1-d int64 array; a negative seed raises :class:`rockdec.validate.InputError`."""
+    seeds = np.atleast_1d(np.asarray(seeds, dtype=np.int64))
+    if seeds.size and seeds.min() < 0:
+        raise InputError(f"seed {seeds.min()} is negative; give seeds >= 0")
+    return seeds
+
+
 def stream_words(seeds, spawn: int = -1) -> np.ndarray:
     """``SeedSequence(seed).generate_state(4, np.uint64)`` for every seed (``spawn < 0``,
     :func:`series_rng`) or for its spawn ``spawn`` (:data:`SENSOR_STREAM`: :func:`sensor_rng`):
@@ -103,9 +111,7 @@ def stream_words(seeds, spawn: int = -1) -> np.ndarray:
     and ``generate_state``'s eight 32-bit words cycling over the pool, paired low word first.
     ``0 <= seed < 2**63``; a negative seed raises :class:`rockdec.validate.InputError`.
     """
-    seeds = np.atleast_1d(np.asarray(seeds, dtype=np.int64))
-    if seeds.size and seeds.min() < 0:
-        raise InputError(f"seed {seeds.min()} is negative; give seeds >= 0")
+    seeds = check_seeds(seeds)
     spawn_key = [spawn] if spawn >= 0 else []
     if seeds.size <= _SEEDS_ONE_BY_ONE:
         seeds = [int(seed) for seed in seeds]
@@ -239,14 +245,6 @@ def _normals(typingctx, words, out):
         return context.get_dummy_value()
 
     return types.none(words, out), codegen
-
-
-def standard_normals(seed: int, spawn: int, out: np.ndarray) -> np.ndarray:
-    """Fill ``out`` with the standard normal numbers of ``SeedSequence(seed)`` (``spawn < 0``,
-    :func:`series_rng`) or of its spawn ``spawn`` (:data:`SENSOR_STREAM`: :func:`sensor_rng`),
-    as NumPy's ``standard_normal(out=out)`` draws them, bit for bit (:func:`stream_words`,
-    :func:`_normals`, through :func:`draw_series` at ``sigma_p = 1``); ``0 <= seed < 2**63``."""
-    return draw_series(stream_words([seed], spawn)[0], out, 1.0, None)
 
 
 @numba.njit(nogil=True, cache=True)

@@ -42,7 +42,7 @@ import xarray as xr
 from rockdec.physics.fixed_step import step as grid_step
 from rockdec.physics.housner import simulate_block_housner
 from rockdec import validate as checks
-from rockdec.physics.loading import add_sensor_noise, check_load, draw_impulses, draw_series, series_rng, stream_words
+from rockdec.physics.loading import add_sensor_noise, check_load, check_seeds, draw_impulses, draw_series, series_rng, stream_words
 from rockdec.physics.models import SCALE_CONSTANT_GUESS, check_finite_series, check_run, period_from_g, scale_constant, step_for_density
 
 #: Largest number of correction steps when the closed-form flight count is off by rounding.
@@ -236,9 +236,7 @@ def simulate_block(seeds, n_points, *, dt, g, e, sigma_p, theta0=0.0, theta_dot0
     check_run(dt=dt, e=e, sigma_p=sigma_p, theta0=theta0, theta_dot0=theta_dot0, burn_in=burn_in, n_points=n_points)
     checks.positive(g, "g", "give the restoring acceleration nu^2 theta_cr in rad/s^2, > 0")
     check_load(pole, spectrum)
-    seeds = np.atleast_1d(np.asarray(seeds, dtype=np.int64))
-    if seeds.size and seeds.min() < 0:
-        raise checks.InputError(f"seed {seeds.min()} is negative; give seeds >= 0")
+    seeds = check_seeds(seeds)
     n_steps = burn_in + n_points - 1
     if out is None:
         out = np.empty((2, seeds.size, n_points))
