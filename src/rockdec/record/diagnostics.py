@@ -352,9 +352,9 @@ def asymmetry(s: Sums, analysis) -> float:
     """``|g_+ - g_-| / (g_+ + g_-)``: between impacts the block moves on parabolas (eq. 4), so
     the mean second difference of triples on one side is ``-g dt^2`` there and ``+g dt^2``
     on the other; a block leaning on one side (or a load pushing one way) falls back with
-    a different ``g`` on each (the asymmetry of :mod:`rockdec.record.record_measure` reads
-    the same about the record's mean, beyond its guard samples' margin). Scale-free, free
-    of an offset, the same for the mirrored record, and 0 for a symmetric block.
+    a different ``g`` on each (:mod:`rockdec.record.record_measure` reports it signed, read
+    about the same level, :func:`impact_sides`). Scale-free, free of an offset, the same for
+    the mirrored record, and 0 for a symmetric block.
 
     The sides are the triples beyond a guard of :data:`GUARD_G` ``g dt^2`` below and above
     the record's impact level (:func:`impact_level`, :func:`_sides`), so a lean of ``b``
