@@ -9,19 +9,22 @@ from __future__ import annotations
 
 import json
 import math
+import warnings
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 import pytest
 import xarray as xr
 
 from conftest import calibrated_step
-from rockdec.calibrate import belt, calibration
+from rockdec.calibrate import belt, calibration, inference
 from rockdec.studies import belt_study
-from rockdec.rdd import measured
+from rockdec.rdd import measured, signatures
 from rockdec.cli import main
 from rockdec.physics.loading import draw_impulses, series_rng
 from rockdec.physics.record_model import Load
 from rockdec.physics.simulate import simulate_block
+from rockdec.record.records import Record
 
 G = 1.0  # nu = 2 rad/s, theta_cr = 0.25 rad
 SIGMA_P = 0.003
@@ -156,6 +159,33 @@ def test_nan_gaps_are_skipped_and_counted(short_record):
     res = measured.analyse([gappy], dt)
     assert res.nan_samples == 100
     assert np.isfinite(res.raw["e_v"])
+
+
+def test_analysis_in_threads_warns_nothing_while_a_direct_signature_names_its_empty_windows(short_record, monkeypatch):
+    """Records analysed in threads (Dask's, in the coverage study and ``rockdec estimate``)
+    with windows that hold no trigger: no warning reaches the caller, and the analysis
+    enters no ``warnings.catch_warnings``, whose filters are the process's (a thread leaving
+    one restores them under another thread's analysis, which then warns). The counts report
+    the empty windows; ``mean_signature`` called directly still names them."""
+    theta, dt = short_record
+    settings = {"windows": [0.001, 0.002, 0.5, 1.0]}  # the two narrowest windows hold no trigger
+    analyse = (lambda _: inference._analyse([Record(theta, dt, "record")], dt, settings, None))
+    analyse(0)  # numba compiles its kernels for these windows once, under catch_warnings of its own
+    entered = []
+    catch = warnings.catch_warnings
+    monkeypatch.setattr(warnings, "catch_warnings", lambda *a, **k: entered.append(a) or catch(*a, **k))
+    with catch(record=True) as got:
+        warnings.simplefilter("always")
+        with ThreadPoolExecutor(4) as pool:
+            done = list(pool.map(analyse, range(40)))
+    assert [str(w.message) for w in got] == [] and entered == []
+    assert all(a.count["a"][0] == 0 for a in done) and np.isfinite(done[0].raw["e_v"])
+    assert all(np.array_equal(a.count["v"], done[0].count["v"]) for a in done)
+    sums, counts = np.zeros((2, 4, 5)), np.array([[0, 0, 3, 5], [0, 1, 4, 9]])
+    with pytest.warns(signatures.NoTriggerWarning) as named:
+        signatures.mean_signature(sums, counts, windows=settings["windows"])
+    assert sorted(str(w.message).split(":")[0] for w in named) == [
+        "no D_a (extremum) trigger in window 0.001", "no D_a (extremum) trigger in window 0.002", "no D_v (zero crossing) trigger in window 0.001"]
 
 
 def test_coloured_load_keeps_sigma_p_and_sets_the_pole():

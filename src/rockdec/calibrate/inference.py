@@ -26,7 +26,6 @@ from __future__ import annotations
 import logging
 import math
 import time
-import warnings
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -177,12 +176,10 @@ def _analyse(records: list[Record], dt: float, settings: dict, g: float | None) 
     """:func:`rockdec.rdd.measured.analyse`, its refusals as :class:`RecordError` naming the
     records (a spike, when there is one, is named as the cause)."""
     names = ", ".join(r.source for r in records)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # empty windows are reported through the trigger counts
-        try:
-            analysis = measured.analyse([r.theta for r in records], dt, settings, g=g)
-        except ValueError as exc:
-            raise RecordError(f"{names}: {_spike(records) or exc}.") from None
+    try:
+        analysis = measured.analyse([r.theta for r in records], dt, settings, g=g)
+    except ValueError as exc:
+        raise RecordError(f"{names}: {_spike(records) or exc}.") from None
     n_a, n_v = int(analysis.count["a"][-1]), int(analysis.count["v"][-1])
     if n_v < 3 or n_a < 3:
         spike = _spike(records)

@@ -39,7 +39,6 @@ Units: ``r`` and ``d`` in rad, ``dt`` and the fitted times in s, slopes in rad/s
 from __future__ import annotations
 
 import math
-import warnings
 from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
@@ -50,7 +49,7 @@ from rockdec.rdd import registry
 from rockdec import validate as checks
 from rockdec.rdd.fits import DEFAULT_FIT_POINTS, MIN_FIT_POINTS
 from rockdec.rdd.registry import ESTIMATORS
-from rockdec.rdd.signatures import TRIGGERS, NoTriggerWarning, free_response, mean_signature
+from rockdec.rdd.signatures import TRIGGERS, free_response, mean_signature
 
 if TYPE_CHECKING:  # annotations only: xarray loads where a function needs it
     import xarray as xr
@@ -610,9 +609,7 @@ def window_estimates(sums, counts, dt: float, fit_points: int = DEFAULT_FIT_POIN
     estimators of ``e`` (eqs. 25-27, 6; dimensionless) and ``g`` (rad/s^2, eq. 4).
     """
     dt, points = _check_options(dt, fit_points, with_dv=True)
-    with warnings.catch_warnings():  # empty windows are reported through ``counts``
-        warnings.simplefilter("ignore", NoTriggerWarning)
-        signature = mean_signature(sums, counts)
+    signature = mean_signature(sums, counts, warn=False)  # empty windows are reported through ``counts``
     values = _estimate_block(free_response(signature[..., 0, :, :]), signature[..., 1, :, :], dt, points)
     return np.swapaxes(values, -1, -2)
 

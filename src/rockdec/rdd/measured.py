@@ -31,7 +31,6 @@ From the pooled sums and counts on, the analysis is the workflow's: the one core
 
 from __future__ import annotations
 
-import warnings
 from typing import NamedTuple
 
 import numpy as np
@@ -102,9 +101,7 @@ def _pooled(records, sums):
 def _largest_window_response(sums: np.ndarray, counts: np.ndarray) -> np.ndarray:
     """The free-response estimate (eq. 20) of the ``D_a`` sums ``sums[window, lag]`` at the
     largest window; NaN when it holds no trigger (the counts say so)."""
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", signatures.NoTriggerWarning)
-        return signatures.free_response(signatures.mean_signature(sums[None, -1:], counts[None, -1:], triggers=("a",))[0, 0])
+    return signatures.free_response(signatures.mean_signature(sums[None, -1:], counts[None, -1:], triggers=("a",), warn=False)[0, 0])
 
 
 def _sampled_crossing_g(r: np.ndarray, dt: float) -> float:

@@ -394,19 +394,22 @@ def free_response(signature):
     return 0.5 * (signature[..., n_lag:] + signature[..., n_lag::-1])
 
 
-def mean_signature(sums, counts, *, triggers=TRIGGERS, windows=None):
+def mean_signature(sums, counts, *, triggers=TRIGGERS, windows=None, warn=True):
     """Signature ``sum / count`` (eq. 8); NaN where the count is 0.
 
     ``sums (..., trigger, window, lag)`` and ``counts (..., trigger, window)``. A
     :class:`NoTriggerWarning` names every (trigger, window) that holds no trigger in any
-    of the series given (so a cube warns only for windows that are empty everywhere).
+    of the series given (so a cube warns only for windows that are empty everywhere);
+    ``warn=False``: none, for a caller that reads the empty windows off ``counts`` (the
+    analysis, which runs in threads, where a ``warnings.catch_warnings`` is not safe: its
+    filters are the process's).
     """
     sums = np.asarray(sums, dtype=np.float64)
     counts = np.asarray(counts)
     with np.errstate(invalid="ignore", divide="ignore"):
         out = sums / counts[..., None]
     out[counts == 0] = np.nan
-    if counts.size:
+    if warn and counts.size:
         empty = np.all(counts.reshape(-1, *counts.shape[-2:]) == 0, axis=0)
         windows = np.arange(counts.shape[-1]) if windows is None else np.asarray(windows)
         for t, w in zip(*np.nonzero(empty)):
