@@ -69,9 +69,11 @@ def test_a_doctored_calibration_moves_the_thresholds_and_the_structural_one_stay
     doubled = diagnostics.thresholds(_calibration(3.0 * values, calibration.E_GRID), 0.85, (0.8, 0.9), LEVEL)
     for check in diagnostics.REGISTRY:
         if check.threshold == "structural":
-            assert doubled[check.name] == base[check.name] == fits.min_points_per_cycle(0.85, LEVEL)
+            assert doubled[check.name] == base[check.name] == check.floor(0.85, LEVEL)
         else:
             assert doubled[check.name] == pytest.approx(3.0 * base[check.name], rel=1e-12)
+    assert base["coarse_sampling"] == fits.min_points_per_cycle(0.85, LEVEL)
+    assert base["few_triggers"] == diagnostics.MIN_SEGMENTS
 
 
 def test_with_an_e_its_neighbours_are_pooled_and_without_one_the_strictest_grid_point_rules():
@@ -156,7 +158,7 @@ def test_warnings_name_what_looks_wrong(clean):
     ("drift", "zero drifts"),
     ("spikes", "holds spikes"),
     ("asymmetry", "lean on one side"),
-    ("few_triggers", "fewer than records of this length"),
+    ("few_triggers", "cut the record into pieces without gaps"),
     ("coarse_sampling", "too coarse"),
 ])
 def test_a_gross_defect_fires_its_check_and_names_it(clean, defect, words):
@@ -178,6 +180,53 @@ def test_a_gross_defect_fires_its_check_and_names_it(clean, defect, words):
         y, step = theta[::4], 4 * dt  # about 19 samples per cycle
     fired, notes = _fired(y, step, cal)
     assert defect in fired and words in notes
+
+
+class _Lag:
+    """What :func:`rockdec.record.diagnostics.segments` reads of an analysis: its ``n_lag``."""
+
+    def __init__(self, n_lag):
+        self.n_lag = n_lag
+
+
+def test_the_segments_share_counts_the_positions_gaps_cost():
+    """Positions L .. n - L - 1 hold a whole segment of 2 L + 1 samples; a gap of G samples
+    costs G + 2 L of them (less at a record's ends), overlapping costs once; pooled over
+    records, position-weighted; 1 without NaN, NaN when no segment fits."""
+    n, lag = 10_000, 100
+    y = np.random.default_rng(4).normal(size=n)
+    share = (lambda *records, L=lag: diagnostics.segments(diagnostics.sums(records), _Lag(L)))
+    assert share(y) == 1.0
+    gap = y.copy()
+    gap[5000:5500] = np.nan
+    assert share(gap) == pytest.approx(1 - 700 / 9800, rel=1e-12)
+    gap[:50], gap[9990:] = np.nan, np.nan  # at the ends: positions 100..149 and 9890..9899
+    assert share(gap) == pytest.approx(1 - 760 / 9800, rel=1e-12)
+    gap[5600:5650] = np.nan  # its reach [5500, 5750) overlaps the first gap's [4900, 5600)
+    assert share(gap) == pytest.approx(1 - 910 / 9800, rel=1e-12)
+    assert share(gap, y) == pytest.approx(1 - 910 / 19_600, rel=1e-12)
+    assert share(gap[::-1]) == share(gap)  # the mirrored record
+    every = y.copy()
+    every[::150] = np.nan  # every segment of 201 samples holds one
+    assert share(every) == 0.0
+    assert np.isnan(share(y[:200]))
+
+
+def test_the_trigger_count_falls_as_the_segments_share(clean):
+    """The study's gaps (2000 samples each, diagnostics_study.add_defect) in the test record:
+    the triggers of the largest window fall to the share of positions they leave (triggers
+    fall on the lost positions as on the kept ones), within 4 % of the clean count."""
+    from rockdec.studies.diagnostics_study import add_defect
+
+    theta, dt, _ = clean
+    whole = measured.analyse([theta], dt, g=1.0)
+    count = (lambda a: float(a.count["a"][-1] + a.count["v"][-1]))
+    for size in (0.1, 0.3):
+        y = add_defect(theta, "few_triggers", size, 1)
+        analysis = measured.analyse([y], dt, g=1.0)  # the same lag range as the whole record's
+        share = diagnostics.segments(diagnostics.sums([y]), analysis)
+        assert share < 1.0 - size
+        assert count(analysis) / count(whole) == pytest.approx(share, abs=0.04)
 
 
 def test_the_trend_statistic_is_the_least_squares_slopes_t():

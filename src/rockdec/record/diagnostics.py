@@ -18,9 +18,9 @@ each side of its corrected ``e``: each point's own location and scale, the shape
 tail read off every set of the calibration. The 97.5 % quantile of the near points' 60-120
 sets alone fired on more than 5 % of the clean records in 6 of the diagnostics study's 80
 cells (check x ``e`` x noise level, 200 records a cell; up to 8 %); the null's 98.5 %
-quantile fired on at most 5.0 % in every cell, while finding the defects that move ``e``;
-under a low-pass load, where the record model the calibration simulates is measured off
-the record and can miss, one cell exceeds it (docs/method.md §10). Pooling over the interval takes the widest null of
+quantile fired on at most 5.0 % in every cell, while finding the defects that move ``e``,
+and on at most 4.8 % under a low-pass load, where the record model the calibration
+simulates is measured off the record and can miss (docs/method.md §10). Pooling over the interval takes the widest null of
 the ``e`` the record allows. The asymmetry reads it otherwise (its :class:`Check`'s ``null_model``
 ``"widest"``): a clean record's value is about ``|N(0, s(e))|``, whose logarithm has the
 same spread at every ``e`` while ``s`` falls with ``e``, so each grid point about ``e`` gets
@@ -37,14 +37,24 @@ estimator places gets the strictest threshold of any grid point: pooling every `
 give it the widest null and let the records a defect has damaged most pass. The
 statistics are scale-free (the calibration has ``g = sigma_p = 1``) and read the sensor
 noise of the record's model as the calibration simulates it: each is a ratio, a z score or
-a count, and none grows with the noise level (the calibration simulates the noise on bins
+a share, and none grows with the noise level (the calibration simulates the noise on bins
 10 % wide). One compiled pass over each record (:func:`sums`) and one quantile of its
 distances off the neighbours' line (:func:`spikes`) give what they read, and the record's
 median, a histogram of levels and two passes over its sides the asymmetry (:func:`_sides`).
 
-``coarse_sampling`` is the exception: the calibration copies the record's sampling, so its
-records say nothing about whether the sampling is too coarse; its threshold is the
-structural floor of the local fits of eq. 27 (:func:`rockdec.rdd.fits.min_points_per_cycle`).
+Two checks are the exception, their thresholds structural (:class:`Check`'s ``floor``): the
+calibration's records say nothing about them. ``coarse_sampling``: the calibration copies
+the record's sampling; its threshold is the floor of the local fits of eq. 27
+(:func:`rockdec.rdd.fits.min_points_per_cycle`). ``few_triggers``: the calibration's records
+have the records' lengths and no gaps, so gaps (NaN) leave the record fewer triggers than
+they had, and its signatures a wider spread than the interval allows for. The statistic is
+the share of the trigger positions whose segment the gaps leave whole (:func:`segments`):
+1 for every record without NaN, so it fires on no clean record whatever its load, noise or
+``e``, and it fires below :data:`MIN_SEGMENTS`. A count of the triggers against the
+calibration's sets would read gaps too, but the count of a clean record follows its
+samples per cycle and its load's corner, which the calibration reads off the record: under
+a low-pass load at ``e = 0.98`` the records that share a calibration gave 0.6-1.5 times its
+sets' count, and such a check fired on 6.4 % of clean records (docs/method.md §10).
 
 The false-alarm and detection rates of each check, on records simulated apart from any
 calibration, are measured by :mod:`rockdec.studies.diagnostics_study` (docs/method.md §10).
@@ -90,6 +100,11 @@ GUARD_G, LEVEL_STEPS, LEVEL_RANGE, LEVEL_SHARE = 8.0, 8, 1.0, 0.05
 #: ``e`` at which the structural floor of ``coarse_sampling`` is taken when the record gives
 #: no corrected ``e`` (the floor is highest for small ``e``; 0.95 is the paper's middle).
 FLOOR_E = 0.95
+
+#: Fewest of the records' trigger positions whose segment holds no NaN (:func:`segments`)
+#: before ``few_triggers`` fires: the calibration's records have none, so gaps costing more
+#: than a tenth of the triggers leave the interval too narrow (docs/method.md §10).
+MIN_SEGMENTS = 0.9
 
 
 @njit(nogil=True, cache=True)
@@ -172,7 +187,8 @@ class Sums(NamedTuple):
     impact level (``[0]`` below, ``[1]`` above, :func:`_sides`); ``off``: over records, the
     largest ratio of a record's largest distance of a sample from the line through its
     neighbours to its :data:`SPIKE_REFERENCE` quantile of those distances
-    (:func:`_spike_ratio`)."""
+    (:func:`_spike_ratio`); ``gaps``: per record, its length and the starts and ends
+    (exclusive) of its runs of NaN (:func:`_nan_runs`)."""
 
     count: int
     block_mean: np.ndarray
@@ -181,6 +197,7 @@ class Sums(NamedTuple):
     side_count: np.ndarray
     side_sum: np.ndarray
     off: float
+    gaps: tuple
 
 
 def _spike_ratio(distance: np.ndarray, largest: float) -> float:
@@ -257,11 +274,11 @@ def impact_level(y: np.ndarray, centre: float, sd: float, guard: float) -> float
 
 def sums(records) -> Sums:
     """:class:`Sums` of ``records`` (1-D arrays, NaN allowed): one compiled pass per record
-    (:func:`_record_sums`), the quantile of :func:`_spike_ratio`, and the sides of
-    :func:`asymmetry` (:func:`_sides`)."""
+    (:func:`_record_sums`), the quantile of :func:`_spike_ratio`, the sides of
+    :func:`asymmetry` (:func:`_sides`) and the runs of NaN (:func:`_nan_runs`)."""
     count, off = 0, np.nan
     side_n, side_s = np.zeros(2), np.zeros(2)
-    means, variances, owners = [], [], []
+    means, variances, owners, gaps = [], [], [], []
     for i, y in enumerate(records):
         y = np.ascontiguousarray(y, dtype=np.float64)
         b = min(BLOCKS, y.size // BLOCK_MIN)
@@ -270,12 +287,19 @@ def sums(records) -> Sums:
         count, off = count + int(bn.sum()), np.fmax(off, _spike_ratio(distance[:written], worst))
         n0, n1, s0, s1 = _sides(y, float(bn.sum()), float(b1.sum()), float(b2.sum()))
         side_n, side_s = side_n + (n0, n1), side_s + (s0, s1)
+        gaps.append((y.size, *_nan_runs(y)))
         if b >= 4 and (bn > 1).all():
             means.append(b1 / bn)
             variances.append(b2 / bn - (b1 / bn) ** 2)
             owners.append(np.full(b, i))
     stack = (lambda parts: np.concatenate(parts) if parts else np.empty(0))
-    return Sums(count, stack(means), stack(variances), stack(owners), side_n, side_s, float(off))
+    return Sums(count, stack(means), stack(variances), stack(owners), side_n, side_s, float(off), tuple(gaps))
+
+
+def _nan_runs(y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Starts and ends (exclusive) of the runs of NaN in ``y``, in order."""
+    edges = np.diff(np.isnan(y).astype(np.int8), prepend=0, append=0)
+    return np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
 
 
 def _von_neumann_z(values: np.ndarray, owners: np.ndarray) -> float:
@@ -373,9 +397,29 @@ def asymmetry(s: Sums, analysis) -> float:
     return abs(g_plus - g_minus) / (g_plus + g_minus) if g_plus + g_minus > 0.0 else np.nan
 
 
-def triggers(s: Sums, analysis) -> float:
-    """Triggers of both signatures (``D_a`` and ``D_v``) in the largest window."""
-    return float(analysis.count["a"][-1] + analysis.count["v"][-1])
+def segments(s: Sums, analysis) -> float:
+    """Share of the trigger positions of the records whose segment holds no NaN: a trigger
+    at sample ``k`` adds the segment ``y[k - L .. k + L]`` to its signature (eq. 8, ``L``
+    the analysis's ``n_lag``) and is skipped when the segment holds a NaN, so a gap of
+    ``G`` samples costs every trigger of ``G + 2 L`` positions. Positions ``L .. n - L - 1``
+    of each record of ``n`` samples (where a segment fits), pooled over records; 1 for
+    records without NaN, whatever their load, noise or ``e``, and NaN when no segment fits.
+    Triggers fall on the kept positions as on the lost ones (a gap does not choose where
+    the block swings), so the share is the ratio of the records' trigger count to that of
+    the same records without gaps (the study's gaps: within 0.01 in the median), and the
+    spread of the estimates grows about as its inverse square root (docs/method.md §10)."""
+    lag = int(analysis.n_lag)
+    positions = lost = 0
+    for n, starts, ends in s.gaps:
+        if n <= 2 * lag:
+            continue
+        positions += n - 2 * lag
+        low, high = np.clip(starts - lag, lag, n - lag), np.clip(ends + lag, lag, n - lag)
+        # runs in order, each widened by L on both sides: ends in order too, so each run
+        # adds what lies beyond the end of the one before it
+        before = np.concatenate([[lag], high[:-1]])
+        lost += int(np.maximum(high - np.maximum(low, before), 0).sum())
+    return (positions - lost) / positions if positions else np.nan
 
 
 def sampling(s: Sums, analysis) -> float:
@@ -392,11 +436,14 @@ class Check:
     words; ``statistic``: ``f(sums, analysis) -> float`` (dimensionless; :func:`sums` of the
     records, their :class:`rockdec.rdd.measured.Analysis`); ``side``:
     ``"high"`` fires above the threshold, ``"low"`` below; ``threshold``: ``"calibrated"``
-    (:func:`thresholds`) or ``"structural"`` (``coarse_sampling``, module docstring);
-    ``message``: the warning, formatted with ``value`` and ``threshold``; ``length``: how
+    (:func:`thresholds`) or ``"structural"`` (``few_triggers``, ``coarse_sampling``: module
+    docstring);
+    ``message``: the warning, formatted with ``value`` and ``threshold``; ``floor``: a
+    structural check's threshold, ``f(e, level)`` (``e`` the record's corrected ``e``,
+    :data:`FLOOR_E` without one; ``level`` the trigger level in ``sigma_Y``); ``length``: how
     the statistic of a clean record goes with its length, for records longer than the
-    calibration's (:func:`length_threshold`): ``"free"`` (a z score, a ratio of means),
-    ``"count"`` (in proportion), ``"root"`` (as ``1/sqrt(length)``: a difference of means)
+    calibration's (:func:`length_threshold`): ``"free"`` (a z score, a ratio of means, a
+    share), ``"root"`` (as ``1/sqrt(length)``: a difference of means)
     or ``"max"`` (the largest of the samples'); ``null_model``: how :func:`thresholds` reads
     the null of the grid points about the record's ``e``: ``"pooled"`` (their nulls pooled,
     each point's location and spread its own) or ``"widest"`` (each point's location its
@@ -412,6 +459,7 @@ class Check:
     message: str
     length: str = "free"
     null_model: str = "pooled"
+    floor: Callable | None = None
 
 
 REGISTRY = (
@@ -430,13 +478,13 @@ REGISTRY = (
           "the response is asymmetric: the block falls back with a different g on each side (|g+ - g-|/(g+ + g-) "
           "{value:.3f}, calibrated limit {threshold:.3f}); it may lean on one side or the load push one way, and the "
           "model assumes a symmetric block", "root", "widest"),
-    Check("few_triggers", "gaps or quiet stretches", triggers, "low", "calibrated",
-          "{value:.0f} triggers in the largest windows, fewer than records of this length and sampling give "
-          "({threshold:.0f}): gaps (NaN) or quiet stretches leave fewer segments than the calibration's records had, so "
-          "the interval may be too narrow; cut the record into pieces without them", "count"),
+    Check("few_triggers", "gaps (NaN) that cost triggers", segments, "low", "structural",
+          "gaps (NaN) leave {value:.0%} of the record's trigger positions a whole segment (below {threshold:.0%}): the "
+          "record gives that share of the triggers of the calibration's records, which have no gaps, so its interval is "
+          "too narrow by about 1/sqrt({value:.2f}); cut the record into pieces without gaps", floor=lambda e, level: MIN_SEGMENTS),
     Check("coarse_sampling", "too few samples per cycle for e1..e4", sampling, "low", "structural",
           "{value:.1f} samples per cycle at sigma_Y is below {threshold:.1f}, too coarse for the local fits of e1..e4 "
-          "(eq. 27); sample faster"),
+          "(eq. 27); sample faster", floor=fits.min_points_per_cycle),
 )
 """Every check, in the order of the ``check`` coordinate."""
 
@@ -467,13 +515,9 @@ def _near(e_grid: np.ndarray, e: float, interval, side: int = 1) -> np.ndarray:
 def length_threshold(check: Check, column: np.ndarray, q: float, ratio: float) -> float:
     """The ``q`` quantile of ``check``'s statistic on records ``ratio`` (> 1) times as long as
     the calibration's, from its values ``column`` on the calibration's records: by the
-    check's ``length`` law, the quantile of ``column`` times ``ratio`` (``"count"``: a low
-    quantile scaled so is lower than the longer records', a margin against false alarms) or
-    ``1/sqrt(ratio)`` (``"root"``); for ``"max"`` the largest of ``ratio`` records like the
+    check's ``length`` law, the quantile of ``column`` over ``sqrt(ratio)`` (``"root"``); for ``"max"`` the largest of ``ratio`` records like the
     calibration's, the values taken as Gumbel (moments: scale ``beta = sd sqrt(6) / pi``), whose
     ``q`` quantile is ``mu + beta (ln ratio - ln(-ln q))``; ``"free"``: the quantile itself."""
-    if check.length == "count":
-        return float(np.quantile(column, q)) * ratio
     if check.length == "root":
         return float(np.quantile(column, q)) / np.sqrt(ratio)
     if check.length == "max" and column.size > 1:
@@ -535,7 +579,7 @@ def thresholds(cal, e: float | None, interval, level: float, length_ratio: float
     out = {}
     for j, check in enumerate(REGISTRY):
         if check.threshold == "structural":
-            out[check.name] = fits.min_points_per_cycle(e if placed else FLOOR_E, level)
+            out[check.name] = float(check.floor(e if placed else FLOOR_E, level))
             continue
         q = QUANTILE if check.side == "high" else 1.0 - QUANTILE
         widest = check.null_model == "widest"
