@@ -41,7 +41,6 @@ from __future__ import annotations
 
 import sys
 import time
-import warnings
 
 import dask
 import numpy as np
@@ -154,23 +153,21 @@ def _cell(e: float, defect: str | None, size: float, noise: float, seeds, n: int
     calibration for such a record, and neither does the study (at corner 3 and 3 % noise, 21
     of the 58 calibrations of 400 records would serve declined records only)."""
     out = []
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        for seed in seeds:
-            tick = time.perf_counter()
-            y = record(e, int(seed), n, dt, burn_in, defect, size, noise, pole)
-            try:
-                analysis = measured.analyse([y], dt)
-            except ValueError:
-                out.append((None, 0.0, 0.0))
-                continue
-            tock = time.perf_counter()
-            diagnostics.statistics([y], analysis)
-            spent = time.perf_counter() - tock
-            measurement, _ = inference.measure_model([Record(y, dt, "study")], dt)
-            model, sources = inference.record_model(measurement, analysis)
-            declined = measurement is None or inference.colour_decline(model, sources, measurement, analysis.points_per_cycle)
-            out.append((None if declined else calibration.calibration_settings([n], analysis.points_per_cycle, None, model), tock - tick, spent))
+    for seed in seeds:
+        tick = time.perf_counter()
+        y = record(e, int(seed), n, dt, burn_in, defect, size, noise, pole)
+        try:
+            analysis = measured.analyse([y], dt)
+        except ValueError:
+            out.append((None, 0.0, 0.0))
+            continue
+        tock = time.perf_counter()
+        diagnostics.statistics([y], analysis)
+        spent = time.perf_counter() - tock
+        measurement, _ = inference.measure_model([Record(y, dt, "study")], dt)
+        model, sources = inference.record_model(measurement, analysis)
+        declined = measurement is None or inference.colour_decline(model, sources, measurement, analysis.points_per_cycle)
+        out.append((None if declined else calibration.calibration_settings([n], analysis.points_per_cycle, None, model), tock - tick, spent))
     return out
 
 
@@ -180,20 +177,18 @@ def _estimates(e: float, defect: str | None, size: float, noise: float, seeds, n
     interval, the calibration's file name, and per check its statistic, threshold and whether it fired; ``None`` for a
     record it refuses."""
     out = []
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        for seed in seeds:
-            y = record(e, int(seed), n, dt, burn_in, defect, size, noise, pole)
-            try:
-                got = inference.estimate([Record(y, dt, f"record {seed}")], cache_dir=cache_dir)
-            except InputError:
-                out.append(None)
-                continue
-            row = {"e_hat": got["e"], "low": got["interval"][0] if got["e"] is not None else np.nan,
-                   "high": got["interval"][1] if got["e"] is not None else np.nan, "calibration": got["calibration"]["file"]}
-            for name, c in got["diagnostics"].items():
-                row[f"{name}_statistic"], row[f"{name}_threshold"], row[f"{name}_fired"] = c["statistic"], c["threshold"], c["fired"]
-            out.append(row)
+    for seed in seeds:
+        y = record(e, int(seed), n, dt, burn_in, defect, size, noise, pole)
+        try:
+            got = inference.estimate([Record(y, dt, f"record {seed}")], cache_dir=cache_dir)
+        except InputError:
+            out.append(None)
+            continue
+        row = {"e_hat": got["e"], "low": got["interval"][0] if got["e"] is not None else np.nan,
+               "high": got["interval"][1] if got["e"] is not None else np.nan, "calibration": got["calibration"]["file"]}
+        for name, c in got["diagnostics"].items():
+            row[f"{name}_statistic"], row[f"{name}_threshold"], row[f"{name}_fired"] = c["statistic"], c["threshold"], c["fired"]
+        out.append(row)
     return out
 
 
