@@ -106,13 +106,15 @@ def _largest_window_response(sums: np.ndarray, counts: np.ndarray) -> np.ndarray
 
 def _sampled_crossing_g(r: np.ndarray, dt: float) -> float:
     """``g = 2 r[0] / t1^2`` with ``t1`` the first sign change of ``r``, linearly
-    interpolated: the rough ``g`` that sizes the lag range; NaN when ``r`` never crosses."""
+    interpolated: the rough ``g`` that sizes the lag range; NaN when ``r`` never crosses.
+    A step so large that ``t1^2`` overflows gives 0, which :func:`analyse` refuses."""
     below = np.flatnonzero(r <= 0.0)
     if not (r.size and r[0] > 0.0 and below.size):
         return np.nan
     k = below[0]
     t1 = (k - 1 + r[k - 1] / (r[k - 1] - r[k])) * dt
-    return 2.0 * r[0] / t1**2
+    with np.errstate(over="ignore"):  # thread-local, unlike a warnings filter: the analysis runs in threads
+        return float(2.0 * r[0] / np.float64(t1) ** 2)
 
 
 def _nanmean(x) -> float:
