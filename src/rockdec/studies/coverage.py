@@ -158,7 +158,7 @@ def estimate_record(theta: np.ndarray, dt: float, source: str, cache_dir, model)
         "warnings": list(out["warnings"]),
         "points_per_cycle": _num(out["points_per_cycle"]),
         "calibration": out["calibration"]["file"] or "",
-        "per": {name: (_num(v["e"]), *((_num(x) for x in v["interval"]) if v["e"] is not None else (math.nan, math.nan)))
+        "per": {name: (_num(v["e"]), *((_num(x) for x in v["interval"]) if v["e"] is not None else (math.nan, math.nan)), _num(v["raw"]))
                 for name, v in out["estimators"].items()},
         **_model_read(out.get("record_model")),
     }
@@ -187,7 +187,9 @@ def run_cell(cell: str, n_records: int, n_points: int, cache_dir, *, simulate=ke
     them and stored in ``cache_dir`` (shared by every cell). Returns per record (and
     estimator): the reported ``e_hat``, ``low``, ``high``, ``reason`` (empty unless ``e`` is
     null), ``reported_by`` (the estimator), ``warnings`` (joined by `` | ``), the tool's samples per cycle,
-    the calibration file, each estimator's ``est_e``/``est_low``/``est_high``, the paper
+    the calibration file, each estimator's ``est_e``/``est_low``/``est_high`` and its raw value
+    ``est_raw`` (a belt variant is judged offline by inverting ``est_raw`` through the stored
+    calibration), the paper
     model's ``paper_e``/``paper_low``/``paper_high``/``paper_reason``, and the record's
     true samples per cycle and corner.
     """
@@ -208,7 +210,7 @@ def run_cell(cell: str, n_records: int, n_points: int, cache_dir, *, simulate=ke
     ppc = np.array([r[0] for r in rows])
     got = [r[1] for r in rows]
     paper = [r[2] for r in rows]
-    per = np.array([[g["per"].get(name, (math.nan,) * 3) for name in names] for g in got]).reshape(n_records, len(names), 3)
+    per = np.array([[g["per"].get(name, (math.nan,) * 4) for name in names] for g in got]).reshape(n_records, len(names), 4)
     rec, rest = ("record",), ("record", "estimator")
 
     def strings(values):
@@ -234,6 +236,7 @@ def run_cell(cell: str, n_records: int, n_points: int, cache_dir, *, simulate=ke
             "est_e": (rest, per[..., 0], {"units": "1", "long_name": "corrected e of each estimator (NaN: none)"}),
             "est_low": (rest, per[..., 1], {"units": "1", "long_name": "lower end of each estimator's 95 % interval"}),
             "est_high": (rest, per[..., 2], {"units": "1", "long_name": "upper end of each estimator's 95 % interval"}),
+            "est_raw": (rest, per[..., 3], {"units": "1", "long_name": "raw value of each estimator, before the belt (NaN: none)"}),
             "paper_e": (rec, [p["e"] for p in paper], {"units": "1", "long_name": "reported e under the paper's model"}),
             "paper_low": (rec, [p["low"] for p in paper], {"units": "1", "long_name": "lower end under the paper's model"}),
             "paper_high": (rec, [p["high"] for p in paper], {"units": "1", "long_name": "upper end under the paper's model"}),
