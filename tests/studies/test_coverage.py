@@ -140,3 +140,27 @@ def test_reduced_coverage_holds(calibrations):
     row = coverage.summary(ds)
     assert row["coverage_e_v"] >= 0.85
     assert np.isfinite(ds["est_e"].sel(estimator="e_v").values).all()
+
+
+def test_a_cell_read_again_offline_gives_back_its_intervals(tmp_path):
+    """:func:`rockdec.studies.coverage.recorrect`: the stored raw values inverted through the
+    stored calibrations by the belt that ran the cell give back every reported ``e`` and
+    interval (the offline reading of a belt variant starts from the cell as it ran); a
+    belt twice as wide gives intervals that hold the stored ones."""
+    from rockdec.calibrate import belt, calibration
+
+    with pytest.MonkeyPatch.context() as monkeypatch:
+        monkeypatch.setattr(calibration, "_grid_point", fake_calibration.grid_point)
+        ds = coverage.run_cell("kernel_noise3_e0.9", 3, 20_000, tmp_path)
+    answered = np.isfinite(ds["e_hat"].values)
+    assert answered.any()
+    assert np.isfinite(ds["est_raw"].sel(estimator=ds["reported_by"].values[answered][0]).values).all()
+    again = coverage.recorrect(ds, tmp_path)
+    for name in ("e_hat", "low", "high"):
+        np.testing.assert_allclose(again[name].values, ds[name].values, rtol=0, atol=1e-12, equal_nan=True)
+    fit = belt.fit
+    with pytest.MonkeyPatch.context() as monkeypatch:
+        monkeypatch.setattr(belt, "fit", lambda *a, **k: (lambda b: b._replace(spread=2.0 * b.spread))(fit(*a, **k)))
+        wide = coverage.recorrect(ds, tmp_path)
+    ok = answered & np.isfinite(wide["low"].values)
+    assert np.all(wide["low"].values[ok] <= ds["low"].values[ok]) and np.all(wide["high"].values[ok] >= ds["high"].values[ok])

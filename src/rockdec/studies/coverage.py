@@ -257,6 +257,44 @@ def run_cell(cell: str, n_records: int, n_points: int, cache_dir, *, simulate=ke
     return ds
 
 
+def recorrect(ds: xr.Dataset, cache_dir) -> xr.Dataset:
+    """The cell ``ds`` (:func:`run_cell`) read again offline: each record's raw value of the
+    estimator the tool reported (``est_raw``) inverted through the belt of the calibration
+    file it used (in ``cache_dir``), by :mod:`rockdec.calibrate.belt` as it is, its spread
+    scaled to the record's length (:func:`rockdec.calibrate.calibration.spread_scale`).
+
+    A belt variant is judged on the study's records this way without simulating them again:
+    with the belt that ran the cell, ``e_hat``, ``low`` and ``high`` come back unchanged.
+    The estimator reported stays the one the cell stored (a variant that would change the
+    choice needs the cell run again); a record with a null ``e`` stays null, and a raw value
+    beyond the belt's mean curve gives a null (:func:`rockdec.calibrate.inference.beyond`).
+    Returns a copy of ``ds`` with ``e_hat``, ``low`` and ``high`` replaced.
+    """
+    import json
+    from pathlib import Path
+
+    from rockdec.calibrate import belt, calibration, ncread
+
+    if "est_raw" not in ds:
+        raise ValueError(f"cell {ds.attrs.get('cell', '?')} stores no raw values (est_raw): run it again to read it offline")
+    belts: dict[str, dict] = {}
+    out = ds.copy(deep=True)
+    for k in range(ds.sizes["record"]):
+        name, file = str(ds["reported_by"].values[k]), str(ds["calibration"].values[k])
+        if not (name and file and np.isfinite(ds["e_hat"].values[k])):
+            continue
+        if file not in belts:
+            cal = ncread.read(Path(cache_dir) / file)
+            scale = calibration.spread_scale(json.loads(cal.attrs["settings"]), int(ds.attrs["n_points"]))
+            belts[file] = belt.belts(cal, scale)
+        b = belts[file][name]
+        raw = float(ds["est_raw"].sel(estimator=name).values[k])
+        c = belt.correct(b, raw)
+        null = inference.beyond(b, raw, c) is not None or not np.isfinite(c.value)
+        out["e_hat"].values[k], out["low"].values[k], out["high"].values[k] = (math.nan,) * 3 if null else (c.value, c.low, c.high)
+    return out
+
+
 _NUMBER = re.compile(r"[-+]?\d[\d.,]*(?:e[-+]?\d+)?")
 
 
