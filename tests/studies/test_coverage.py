@@ -164,3 +164,29 @@ def test_a_cell_read_again_offline_gives_back_its_intervals(tmp_path):
         wide = coverage.recorrect(ds, tmp_path)
     ok = answered & np.isfinite(wide["low"].values)
     assert np.all(wide["low"].values[ok] <= ds["low"].values[ok]) and np.all(wide["high"].values[ok] >= ds["high"].values[ok])
+
+
+def test_fresh_records_of_a_cell_read_like_its_own(tmp_path):
+    """:func:`rockdec.studies.coverage.fresh_coverage` with the cell's own seeds: the same raw
+    values as the cell stored (the tool's analysis of the same records), each inverted
+    through the calibration its bin used, giving back the cell's intervals where the bin has
+    one calibration; other seeds give other records."""
+    from rockdec.calibrate import calibration
+
+    with pytest.MonkeyPatch.context() as monkeypatch:
+        monkeypatch.setattr(calibration, "_grid_point", fake_calibration.grid_point)
+        ds = coverage.run_cell("kernel_clean_e0.9", 3, 20_000, tmp_path)
+    own = coverage.fresh_coverage(ds, tmp_path, 3, seed0=ds.attrs["first_seed"])
+    same = 0
+    for k, row in own.iterrows():
+        name = str(ds["reported_by"].values[k])
+        if not name:
+            continue
+        assert row["raw"] == ds["est_raw"].sel(estimator=name).values[k]
+        assert row["ppc_read"] == ds["ppc_read"].values[k]
+        if row["calibration"] == ds["calibration"].values[k] and row["estimator"] == name:
+            np.testing.assert_allclose([row["e"], row["low"], row["high"]], [ds[v].values[k] for v in ("e_hat", "low", "high")], atol=1e-12)
+            same += 1
+    assert same >= 1
+    other = coverage.fresh_coverage(ds, tmp_path, 3)
+    assert not np.array_equal(other["raw"].values, own["raw"].values)

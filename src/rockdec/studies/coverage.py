@@ -45,6 +45,10 @@ from rockdec.record.records import Record, RecordError
 #: Seeds of the study's records start here (apart from calibration and pilot seeds).
 STUDY_SEED_OFFSET = 2**60
 
+#: Seeds of the fresh records of :func:`fresh_coverage` start here: apart from the study's
+#: records (:data:`STUDY_SEED_OFFSET`), the calibration's and the scenes'.
+FRESH_SEED_OFFSET = 2**59
+
 #: Seeds of one cell: records at ``offset + cell * CELL_SEEDS``, its pilots
 #: :data:`PILOT_SEEDS` further on.
 CELL_SEEDS, PILOT_SEEDS = 10**7, 9 * 10**6
@@ -293,6 +297,78 @@ def recorrect(ds: xr.Dataset, cache_dir) -> xr.Dataset:
         null = inference.beyond(b, raw, c) is not None or not np.isfinite(c.value)
         out["e_hat"].values[k], out["low"].values[k], out["high"].values[k] = (math.nan,) * 3 if null else (c.value, c.low, c.high)
     return out
+
+
+def _fresh_raw(simulate, seeds, attrs: dict) -> list[tuple]:
+    """Records ``seeds`` of the route of a cell of attributes ``attrs`` (:func:`run_cell`),
+    each analysed as :func:`rockdec.calibrate.inference.estimate` analyses it: the samples
+    per cycle read and every estimator's raw value."""
+    from rockdec.rdd import measured
+
+    theta = simulate(seeds, int(attrs["n_points"]), dt=attrs["dt"], e=attrs["e_true"], burn_in=int(attrs["burn_in"]), pole=attrs["pole"],
+                     noise=attrs["noise"])
+    out = []
+    for row in theta:
+        try:
+            analysis = measured.analyse([row], attrs["dt"], dict(measured.DEFAULT_SETTINGS))
+        except ValueError:
+            out.append((math.nan, {}))
+            continue
+        out.append((analysis.points_per_cycle, dict(analysis.raw)))
+    return out
+
+
+def fresh_coverage(ds: xr.Dataset, cache_dir, n_records: int, *, seed0: int | None = None, simulate=kernel_records,
+                   batch: int = 20) -> pd.DataFrame:
+    """The calibrations of the cell ``ds`` (:func:`run_cell`) judged on ``n_records`` fresh
+    records of its route: its step, burn-in, load and sensor noise, seeds from ``seed0``
+    (default: :data:`FRESH_SEED_OFFSET` plus the cell's place times :data:`CELL_SEEDS`).
+
+    A cell's coverage mixes what its calibrations give and the sample of its own records;
+    fresh records separate the two. Each fresh record is analysed as the tool analyses it
+    (same raw values: with the cell's own seeds they are its ``est_raw``), and its raw value
+    is inverted (:func:`rockdec.calibrate.belt.correct`) through the calibration file and
+    estimator that the cell's own records of its samples-per-cycle bin
+    (:func:`rockdec.calibrate.calibration.ppc_key`) used most; the record model is not
+    measured again, so a calibration of another noise bin that some of the cell's records
+    of that bin used is stood in for by the commonest. A fresh record in a bin none of the
+    cell's records read has no calibration (empty ``calibration``, NaN ends).
+
+    One row per fresh record: ``ppc_read``, ``bin``, ``calibration``, ``estimator``,
+    ``raw``, corrected ``e``, ``low``, ``high`` and ``covered``.
+    """
+    import json
+    from pathlib import Path
+
+    import dask
+
+    from rockdec.calibrate import belt, calibration, ncread
+
+    attrs = dict(ds.attrs)
+    if seed0 is None:
+        seed0 = FRESH_SEED_OFFSET + list(COVERAGE_CASES).index(attrs["cell"]) * CELL_SEEDS
+    used: dict[float, Counter] = {}
+    for k in range(ds.sizes["record"]):
+        name, file, ppc = str(ds["reported_by"].values[k]), str(ds["calibration"].values[k]), float(ds["ppc_read"].values[k])
+        if name and file and np.isfinite(ppc):
+            used.setdefault(calibration.ppc_key(ppc), Counter())[(file, name)] += 1
+    seeds = seed0 + np.arange(n_records)
+    tasks = [dask.delayed(_fresh_raw)(simulate, seeds[i:i + batch], attrs) for i in range(0, n_records, batch)]
+    rows, belts = [], {}
+    for ppc, raw in (r for part in engine.compute(*tasks) for r in part):
+        key = calibration.ppc_key(ppc) if np.isfinite(ppc) else math.nan
+        file, name = used[key].most_common(1)[0][0] if key in used else ("", "")
+        value = low = high = math.nan
+        if file:
+            if file not in belts:
+                cal = ncread.read(Path(cache_dir) / file)
+                belts[file] = belt.belts(cal, calibration.spread_scale(json.loads(cal.attrs["settings"]), int(attrs["n_points"])))
+            c = belt.correct(belts[file][name], raw[name])
+            if inference.beyond(belts[file][name], raw[name], c) is None and np.isfinite(c.value):
+                value, low, high = c.value, c.low, c.high
+        rows.append({"ppc_read": ppc, "bin": key, "calibration": file, "estimator": name, "raw": raw.get(name, math.nan),
+                     "e": value, "low": low, "high": high, "covered": bool(low <= attrs["e_true"] <= high)})
+    return pd.DataFrame(rows)
 
 
 _NUMBER = re.compile(r"[-+]?\d[\d.,]*(?:e[-+]?\d+)?")
