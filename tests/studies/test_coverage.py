@@ -5,6 +5,7 @@ import functools
 import math
 
 import numpy as np
+import pandas as pd
 import pytest
 
 import fake_calibration
@@ -190,3 +191,10 @@ def test_fresh_records_of_a_cell_read_like_its_own(tmp_path):
     assert same >= 1
     other = coverage.fresh_coverage(ds, tmp_path, 3)
     assert not np.array_equal(other["raw"].values, own["raw"].values)
+    row = coverage.fresh_summary(ds, own)
+    assert row["fresh"] == 3 and row["fresh_answered"] == np.isfinite(own["low"]).sum()
+    if row["fresh_answered"]:
+        assert row["fresh_coverage"] * row["fresh_answered"] == pytest.approx(row["fresh_coverage_all"] * row["fresh"])
+        assert row["fresh_coverage"] == pytest.approx(row["main_share"] * row["main_coverage"]
+                                                      + (1 - row["main_share"]) * np.nan_to_num(row["other_coverage"]))
+    assert "kernel_clean_e0.9" in coverage.fresh_markdown(pd.DataFrame([row]))

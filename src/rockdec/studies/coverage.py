@@ -371,6 +371,67 @@ def fresh_coverage(ds: xr.Dataset, cache_dir, n_records: int, *, seed0: int | No
     return pd.DataFrame(rows)
 
 
+def fresh_summary(ds: xr.Dataset, fresh: pd.DataFrame) -> dict:
+    """One row of the fresh-records table: the cell ``ds``'s coverage on its own records
+    (:func:`summary`: of the answered) beside its calibrations' on the fresh records
+    ``fresh`` (:func:`fresh_coverage`): of the answered, its binomial standard error, and of
+    every fresh record (a null or a bin without calibration counted as not covered); the
+    share of fresh records declined or without a calibration; the corrected sd of both; and
+    the coverage of the answered fresh records in the bin most of them read and in the others."""
+    own = summary(ds)
+    answered = fresh[np.isfinite(fresh["low"]) & np.isfinite(fresh["high"])]
+    n = len(answered)
+    cov = float(answered["covered"].mean()) if n else math.nan
+    main = answered["bin"].mode().iloc[0] if n else math.nan
+    in_main = answered["bin"] == main
+    return {
+        "cell": ds.attrs["cell"], "e_true": ds.attrs["e_true"], "records": own["answered"], "coverage": own["answered_coverage"],
+        "sd": own["sd"], "fresh": len(fresh), "fresh_answered": n, "fresh_coverage": cov,
+        "fresh_coverage_se": math.sqrt(cov * (1.0 - cov) / n) if n else math.nan,
+        "fresh_coverage_all": float(fresh["covered"].mean()) if len(fresh) else math.nan,
+        "fresh_declined": 1.0 - n / len(fresh) if len(fresh) else math.nan,
+        "fresh_sd": float(np.std(answered["e"], ddof=1)) if n > 1 else math.nan,
+        "main_bin": float(main), "main_coverage": float(answered[in_main]["covered"].mean()) if in_main.any() else math.nan,
+        "main_share": float(in_main.mean()) if n else math.nan,
+        "other_coverage": float(answered[~in_main]["covered"].mean()) if (~in_main).any() else math.nan,
+    }
+
+
+def fresh_markdown(rows: pd.DataFrame) -> str:
+    """The fresh-records table (:func:`fresh_summary` rows) as Markdown; coverages outside
+    :data:`COVERAGE_BAND` in bold."""
+    lines = ["| cell | own records: coverage (n) | fresh: coverage ± se (answered / n) | fresh: every record | fresh declined | "
+             "sd own, fresh | fresh: main bin (share) | fresh: other bins |",
+             "| --- | --- | --- | --- | --- | --- | --- | --- |"]
+
+    def pct(x, bold=True):
+        if not np.isfinite(x):
+            return "-"
+        flag = "**" if bold and not COVERAGE_BAND[0] <= x <= COVERAGE_BAND[1] else ""
+        return f"{flag}{100 * x:.1f} %{flag}"
+
+    for r in rows.itertuples():
+        lines.append(f"| {r.cell} | {pct(r.coverage)} ({r.records}) | {pct(r.fresh_coverage)} ± {100 * r.fresh_coverage_se:.1f} "
+                     f"({r.fresh_answered} / {r.fresh}) | {pct(r.fresh_coverage_all, False)} | {100 * r.fresh_declined:.1f} % | "
+                     f"{r.sd:.4f}, {r.fresh_sd:.4f} | {pct(r.main_coverage, False)} ({100 * r.main_share:.0f} %) | {pct(r.other_coverage, False)} |")
+    return "\n".join(lines) + "\n"
+
+
+def simulator_of(cell: str, reference_dir=None):
+    """The simulator of the cell ``cell``: :func:`kernel_records`, or the reference
+    simulator (``rocking_vectorised.simulate_records`` in ``reference_dir``, the checkout's
+    tests/) at ``g = sigma_p = 1``."""
+    if COVERAGE_CASES[cell][0] == "kernel":
+        return kernel_records
+    import functools
+
+    if str(reference_dir) not in sys.path:
+        sys.path.insert(0, str(reference_dir))
+    import rocking_vectorised
+
+    return functools.partial(rocking_vectorised.simulate_records, g=1.0, sigma_p=1.0)
+
+
 _NUMBER = re.compile(r"[-+]?\d[\d.,]*(?:e[-+]?\d+)?")
 
 
