@@ -19,7 +19,12 @@ true ``g``) is within :data:`STAGE_TOLERANCE` of the target, so that ``N`` and t
 are both what the cell states; the records' achieved medians are reported per cell
 (:func:`summary`), beside the samples per cycle the tool reads off them.
 
-Seeds: the study's records and pilots start at :data:`STUDY_SEED_OFFSET`, apart from the
+A cell's coverage is its calibrations' and its records' sample together: :func:`fresh_coverage`
+reads the cell's calibrations with fresh records of its route, :func:`recorrect` reads the
+cell again through the belt as it is from the raw values it stores.
+
+Seeds: the study's records and pilots start at :data:`STUDY_SEED_OFFSET` (fresh records at
+:data:`FRESH_SEED_OFFSET`), apart from the
 calibration's (:data:`rockdec.calibrate.calibration.CALIBRATION_SEED_OFFSET`) and the scenes'.
 """
 
