@@ -75,14 +75,6 @@ rule coverage:
         rules.fig_coverage.output,
 
 
-def coverage_fresh_inputs(wildcards):
-    """A cell's fresh records: the cell, the modules the script runs, the reference simulator for its cells."""
-    inputs = {"cell": f"results/studies/coverage/cells/{wildcards.case}.nc", "code": step_code("coverage_fresh.py")}
-    if CASES[wildcards.case][0] == "reference":
-        inputs["reference"] = "tests/rocking_vectorised.py"
-    return inputs
-
-
 rule coverage_fresh:
     """A cell's calibrations judged on fresh records of its route (rockdec.studies.coverage.fresh_coverage)."""
     input:
