@@ -91,7 +91,8 @@ class Forks:
     costs what Snakemake does, not its ~1 s of imports; a shell's ``snakemake`` commands
     too (:meth:`shell`). With ``python``, the ``python -c`` scripts of this process instead
     (:meth:`script`, :meth:`start_script`), forked by one that has imported the rockdec
-    command's libraries. ``cpu``: the CPU seconds of every run so far and of the server
+    command's libraries (the Snakemake server forks them too: a worker that runs no
+    :data:`SCRIPT_MODULES` starts no second server for one script). ``cpu``: the CPU seconds of every run so far and of the server
     itself (start-up, preloads; the children are the fork server's, not this process's)."""
 
     SERVER = Path(__file__).with_name("snakemake_forks.py")
@@ -169,9 +170,11 @@ class Forks:
             return proc.returncode, out, err
 
     def start_script(self, script: str, *args, output: Path) -> "Forked":
-        """``python -c script *args`` in this process's folder and environment (a server made
-        with ``python``), in the background, the leader of a process group of its own; its
-        standard output and error in ``output``.out and ``output``.err (:meth:`Forked.communicate`)."""
+        """``python -c script *args`` in this process's folder and environment, in the
+        background, the leader of a process group of its own; its standard output and error
+        in ``output``.out and ``output``.err (:meth:`Forked.communicate`). Forked with the
+        server's imports done: a server made with ``python``, the rockdec command's libraries;
+        the Snakemake server, Snakemake's (and, after a run of rules, the rules' libraries)."""
         out, err = output.with_suffix(".out"), output.with_suffix(".err")
         reply = self._ask({**self._request(os.getcwd(), [script, *args], None, out, err, background=True), "python": True}, 60.0)
         return Forked(self, reply["pid"], out, err)

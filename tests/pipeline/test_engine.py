@@ -13,8 +13,11 @@ from rockdec.physics import run
 
 def test_the_threads_engine_computes_without_loading_dask_distributed():
     """The threads engine names Dask's threaded scheduler by its function: looking up the name
-    "threads" would import dask.distributed (a second of imports) to look for a client."""
-    from conftest import PYTHON_FORKS
+    "threads" would import dask.distributed (a second of imports) to look for a client. The
+    probe is a ``python -c`` child of the Snakemake fork server, which this module's worker
+    runs anyway (tests/conftest.py, :data:`conftest.WORKFLOW_MODULES`) and which has not
+    imported dask.distributed (were it loaded there, the probe would fail, not pass)."""
+    from conftest import FORKS
 
     probe = """
 import sys
@@ -22,7 +25,7 @@ import dask.array as da
 from rockdec.pipeline import engine
 print(engine.compute(da.ones(10, chunks=5).sum(), threads=2)[0], "distributed" in sys.modules)
 """
-    code, out, err = PYTHON_FORKS.script(probe, timeout=120)
+    code, out, err = FORKS.script(probe, timeout=120)
     assert code == 0, err
     assert out.split() == ["10.0", "False"]
 
