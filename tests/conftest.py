@@ -27,7 +27,7 @@ import pytest
 import yaml
 from hypothesis import settings
 
-from snakemake_forks import stop_forkserver
+from snakemake_forks import fork_dask_workers, stop_forkserver
 
 # Property tests draw the same examples on every run (CI included): a failure is reproducible
 # and a passing suite cannot turn red by the luck of a draw. Explore with
@@ -42,29 +42,6 @@ REPO = Path(__file__).resolve().parents[1]
 # the Snakemake runs, which inherit the variable) are forked by multiprocessing's forkserver,
 # as Dask's own tests have them, instead of each started afresh: :func:`fork_dask_workers`.
 os.environ["DASK_DISTRIBUTED__WORKER__MULTIPROCESSING_METHOD"] = "forkserver"
-
-#: What this process's forkserver imports before it forks Dask's workers, besides Dask's
-#: own list (distributed, NumPy, pandas): the module the workers' tasks run, and so xarray,
-#: numba and rockdec (about 0.8 s of CPU a worker).
-DASK_WORKER_PRELOAD = ("rockdec.pipeline.replicates",)
-
-
-def fork_dask_workers() -> None:
-    """Before this process starts a Dask cluster of worker processes: its forkserver
-    (:data:`DASK_WORKER_PRELOAD` added to what ``distributed`` asks it to load) forks each
-    worker with those imports done, where a worker started afresh pays about 1.3 s of CPU
-    in imports. Stopped with the session (:func:`pytest_sessionfinish`,
-    :func:`snakemake_forks.stop_forkserver`)."""
-    import multiprocessing.forkserver
-
-    from distributed.utils import get_mp_context
-
-    get_mp_context()  # distributed's own preload list, set once
-    server = multiprocessing.forkserver._forkserver
-    missing = [name for name in DASK_WORKER_PRELOAD if name not in server._preload_modules]
-    if missing:
-        server.set_forkserver_preload([*server._preload_modules, *missing])
-
 
 TINY = "tiny"
 """The default scene of the built copy."""

@@ -72,8 +72,8 @@ def test_compute_in_place_gives_computes_numbers_in_numpy_arrays(monkeypatch):
 @pytest.fixture(scope="module")
 def small():
     """Two replicates of 12 series in chunks of 5 seeds (chunks straddle the replicates);
-    Dask's worker processes forked (tests/conftest.py)."""
-    from conftest import fork_dask_workers
+    Dask's worker processes forked (tests/snakemake_forks.py)."""
+    from snakemake_forks import fork_dask_workers
 
     fork_dask_workers()
     scene = config.validate_scene(
