@@ -27,7 +27,7 @@ import pytest
 import yaml
 from hypothesis import settings
 
-from snakemake_forks import stop_forkserver
+from snakemake_forks import fork_dask_workers, stop_forkserver
 
 # Property tests draw the same examples on every run (CI included): a failure is reproducible
 # and a passing suite cannot turn red by the luck of a draw. Explore with
@@ -42,29 +42,6 @@ REPO = Path(__file__).resolve().parents[1]
 # the Snakemake runs, which inherit the variable) are forked by multiprocessing's forkserver,
 # as Dask's own tests have them, instead of each started afresh: :func:`fork_dask_workers`.
 os.environ["DASK_DISTRIBUTED__WORKER__MULTIPROCESSING_METHOD"] = "forkserver"
-
-#: What this process's forkserver imports before it forks Dask's workers, besides Dask's
-#: own list (distributed, NumPy, pandas): the module the workers' tasks run, and so xarray,
-#: numba and rockdec (about 0.8 s of CPU a worker).
-DASK_WORKER_PRELOAD = ("rockdec.pipeline.replicates",)
-
-
-def fork_dask_workers() -> None:
-    """Before this process starts a Dask cluster of worker processes: its forkserver
-    (:data:`DASK_WORKER_PRELOAD` added to what ``distributed`` asks it to load) forks each
-    worker with those imports done, where a worker started afresh pays about 1.3 s of CPU
-    in imports. Stopped with the session (:func:`pytest_sessionfinish`,
-    :func:`snakemake_forks.stop_forkserver`)."""
-    import multiprocessing.forkserver
-
-    from distributed.utils import get_mp_context
-
-    get_mp_context()  # distributed's own preload list, set once
-    server = multiprocessing.forkserver._forkserver
-    missing = [name for name in DASK_WORKER_PRELOAD if name not in server._preload_modules]
-    if missing:
-        server.set_forkserver_preload([*server._preload_modules, *missing])
-
 
 TINY = "tiny"
 """The default scene of the built copy."""
@@ -91,7 +68,8 @@ class Forks:
     costs what Snakemake does, not its ~1 s of imports; a shell's ``snakemake`` commands
     too (:meth:`shell`). With ``python``, the ``python -c`` scripts of this process instead
     (:meth:`script`, :meth:`start_script`), forked by one that has imported the rockdec
-    command's libraries. ``cpu``: the CPU seconds of every run so far and of the server
+    command's libraries (the Snakemake server forks them too: a worker that runs no
+    :data:`SCRIPT_MODULES` starts no second server for one script). ``cpu``: the CPU seconds of every run so far and of the server
     itself (start-up, preloads; the children are the fork server's, not this process's)."""
 
     SERVER = Path(__file__).with_name("snakemake_forks.py")
@@ -169,9 +147,11 @@ class Forks:
             return proc.returncode, out, err
 
     def start_script(self, script: str, *args, output: Path) -> "Forked":
-        """``python -c script *args`` in this process's folder and environment (a server made
-        with ``python``), in the background, the leader of a process group of its own; its
-        standard output and error in ``output``.out and ``output``.err (:meth:`Forked.communicate`)."""
+        """``python -c script *args`` in this process's folder and environment, in the
+        background, the leader of a process group of its own; its standard output and error
+        in ``output``.out and ``output``.err (:meth:`Forked.communicate`). Forked with the
+        server's imports done: a server made with ``python``, the rockdec command's libraries;
+        the Snakemake server, Snakemake's (and, after a run of rules, the rules' libraries)."""
         out, err = output.with_suffix(".out"), output.with_suffix(".err")
         reply = self._ask({**self._request(os.getcwd(), [script, *args], None, out, err, background=True), "python": True}, 60.0)
         return Forked(self, reply["pid"], out, err)

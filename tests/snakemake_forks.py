@@ -116,12 +116,42 @@ def load_python() -> None:
     warm_numba()
 
 
+#: What a process's forkserver imports before it forks Dask's workers, besides Dask's own
+#: list (distributed, NumPy, pandas): the module the workers' tasks run, and so xarray, numba
+#: and rockdec (about 0.8 s of CPU a worker).
+DASK_WORKER_PRELOAD = ("rockdec.pipeline.replicates",)
+
+
+def fork_dask_workers() -> None:
+    """Before this process starts a Dask cluster of worker processes (the test process,
+    tests/conftest.py; a Snakemake run on the ``processes:N`` engine, :func:`child`): its
+    forkserver (:data:`DASK_WORKER_PRELOAD` added to what ``distributed`` asks it to load,
+    from this process's ``sys.path``) forks each worker with those imports done, where a
+    worker started afresh pays about 1.3 s of CPU in imports. Stopped with the process
+    (:func:`stop_forkserver`)."""
+    import multiprocessing.forkserver
+
+    from distributed.utils import get_mp_context
+
+    get_mp_context()  # distributed's own preload list, set once
+    server = multiprocessing.forkserver._forkserver
+    missing = [name for name in DASK_WORKER_PRELOAD if name not in server._preload_modules]
+    if missing:
+        server.set_forkserver_preload([*server._preload_modules, *missing])
+
+
 def stop_forkserver() -> None:
     """End this process's multiprocessing forkserver (Dask's worker processes are forked by
     one, tests/conftest.py) if it runs, and wait for it: its CPU and that of the workers it
-    forked then count as this process's children's, as a spawned worker's do."""
+    forked then count as this process's children's, as a spawned worker's do. Called once
+    its workers have ended (their clusters closed): SIGTERM ends it at once, where closing
+    its pipe alone has it tear its interpreter down (distributed, pandas and rockdec loaded:
+    about 0.5 s that the caller would wait for)."""
+    import signal
+
     server = sys.modules.get("multiprocessing.forkserver")
     if server is not None and server._forkserver._forkserver_pid is not None:
+        os.kill(server._forkserver._forkserver_pid, signal.SIGTERM)
         server._forkserver._stop()
 
 
@@ -138,6 +168,8 @@ def child(request: dict) -> None:
             target = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o644)
             os.dup2(target, fd)
             os.close(target)
+        if request["env"].get("ROCKDEC_DASK_SCHEDULER", "").startswith("processes:") and not request.get("python"):
+            fork_dask_workers()  # the run's cluster: its workers forked with rockdec loaded, from the run's sys.path
         try:
             if request.get("python"):
                 script, *args = request["args"]
@@ -266,3 +298,6 @@ if __name__ == "__main__":
         serve(python=True)
     else:
         serve(*sys.argv[1:2])
+    # standard input closed, every answer flushed: end without tearing down the interpreter
+    # (Snakemake, Dask, matplotlib loaded: about a second that conftest.Forks.close waits for)
+    os._exit(0)

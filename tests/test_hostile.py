@@ -1040,6 +1040,7 @@ import json, sys
 from rockdec.calibrate import calibration
 calibration.E_GRID = (0.5, 0.65, 0.75, 0.85, 0.92, 0.97)
 calibration.SETS_PER_E = calibration.SETS_PER_E_MODELLED = 5
+calibration.POLL_S = 0.05  # the waiting process reads the stored file within 0.05 s of its writing, not 1 s
 from rockdec.cli import main
 sys.exit(main(["estimate", sys.argv[1], "--json", "--cache", sys.argv[2]]))
 """

@@ -13,8 +13,11 @@ from rockdec.physics import run
 
 def test_the_threads_engine_computes_without_loading_dask_distributed():
     """The threads engine names Dask's threaded scheduler by its function: looking up the name
-    "threads" would import dask.distributed (a second of imports) to look for a client."""
-    from conftest import PYTHON_FORKS
+    "threads" would import dask.distributed (a second of imports) to look for a client. The
+    probe is a ``python -c`` child of the Snakemake fork server, which this module's worker
+    runs anyway (tests/conftest.py, :data:`conftest.WORKFLOW_MODULES`) and which has not
+    imported dask.distributed (were it loaded there, the probe would fail, not pass)."""
+    from conftest import FORKS
 
     probe = """
 import sys
@@ -22,7 +25,7 @@ import dask.array as da
 from rockdec.pipeline import engine
 print(engine.compute(da.ones(10, chunks=5).sum(), threads=2)[0], "distributed" in sys.modules)
 """
-    code, out, err = PYTHON_FORKS.script(probe, timeout=120)
+    code, out, err = FORKS.script(probe, timeout=120)
     assert code == 0, err
     assert out.split() == ["10.0", "False"]
 
@@ -69,8 +72,8 @@ def test_compute_in_place_gives_computes_numbers_in_numpy_arrays(monkeypatch):
 @pytest.fixture(scope="module")
 def small():
     """Two replicates of 12 series in chunks of 5 seeds (chunks straddle the replicates);
-    Dask's worker processes forked (tests/conftest.py)."""
-    from conftest import fork_dask_workers
+    Dask's worker processes forked (tests/snakemake_forks.py)."""
+    from snakemake_forks import fork_dask_workers
 
     fork_dask_workers()
     scene = config.validate_scene(

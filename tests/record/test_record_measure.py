@@ -274,10 +274,11 @@ def test_the_asymmetry_reads_a_lean_about_the_impact_level(pole):
     ``+b``, and the reading is the asymmetry check's (rockdec.record.diagnostics) within 0.001
     (its blocks leave out the triples across their ends)."""
     from rockdec.physics.loading import draw_impulses
-    from rockdec.physics.simulate import calibrate_dt, integrate
+    from conftest import calibrated_step
+    from rockdec.physics.simulate import integrate
     from rockdec.record import diagnostics
 
-    step = calibrate_dt(e=0.9, g=1.0, sigma_p=1.0, points_per_cycle=75)
+    step = calibrated_step(0.9, 1.0, 1.0, 75.0)
     n = 60_000
     for b in (0.03, 0.3):
         for seed in (31, 32, 33):
