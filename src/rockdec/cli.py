@@ -629,7 +629,8 @@ def _model_lines(report: dict | None) -> list[str]:
         f"({yes(det['sensor_noise'])}); load pole per sample {pm(m['load_pole_per_sample'])}, corner "
         f"{pm(m['load_corner_rocking'])} rocking frequencies (colour {yes(det['colour'])})",
         f"    drift: block means {m['drift_rms_sigma_y']:.2g} sigma_Y, z = {m['drift_z']:.1f} ({yes(det['drift'])}); "
-        f"g from the second differences {pm(m['g'], '{:.4g}')} rad/s^2, asymmetry {pm(m['g_asymmetry'], '{:+.3f}')}",
+        f"g from the second differences {pm(m['g'], '{:.4g}')} rad/s^2 ({'-' if m['g_side_share'] is None else format(m['g_side_share'], '.2f')} of the signature's), "
+        f"asymmetry {pm(m['g_asymmetry'], '{:+.3f}')}",
     ]
     return lines
 

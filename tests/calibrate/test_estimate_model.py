@@ -345,7 +345,12 @@ def test_a_record_at_half_the_rocking_frequency_read_as_a_whiter_corner_gets_no_
     assert corner["value"] - inference.COLOUR_CORNER_Z * corner["se"] > inference.COLOUR_CORNER_FLOOR  # the corner alone passes
     assert res["e"] is None and res["interval"] == [None, None] and res["estimator"] is None
     assert "g read off the side means" in res["reason"] and "--load" in res["reason"]
+    assert res["record_model"]["measured"]["g_side_share"] < inference.SIDE_G_SHARE
+    assert f"is {res['record_model']['measured']['g_side_share']:.2f} of the g" in res["reason"]
     assert not any(cache.glob("calibration-*.nc"))
+    assert main(["estimate", str(path), "--dt", str(dt), "--cache", str(cache)]) == 0
+    text = capsys.readouterr().out
+    assert "e: not estimated: g read off the side means" in text and "of the signature's" in text
 
 
 def test_coloured_calibration_sets_are_moved_to_the_calibrations_samples_per_cycle(monkeypatch):

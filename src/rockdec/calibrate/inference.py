@@ -322,6 +322,7 @@ def model_report(measurement, why_not: str | None, analysis: measured.Analysis, 
             "drift_z": _num(m.drift_z),
             "g": _quantity(m.g),
             "g_asymmetry": _quantity(m.asymmetry),
+            "g_side_share": _num(m.side_g_share(analysis.points_per_cycle)),
             "triples": m.triples,
         }
     return out
