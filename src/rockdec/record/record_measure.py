@@ -128,7 +128,7 @@ variance 10-60 errors above 0 but 1-4e-4 of ``sigma_Y``, beneath :data:`NOISE_FL
 pole of 0.82-0.87 against the true 0.959, leaving ``r(m)`` at lags 8-14 several errors above
 the fit: a corner of 2.5-4.2 rocking frequencies read for a true 0.5-0.8, with an error of
 0.2-0.7. The corner is misread, not its error too small; the share of ``g`` (0.36-0.53 on
-those records, 0.84-1.01 at a corner of 3) tells them apart
+those records, 0.81-1.01 at a corner of 3) tells them apart
 (:data:`rockdec.calibrate.inference.SIDE_G_SHARE`).
 """
 
