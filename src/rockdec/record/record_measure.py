@@ -267,7 +267,7 @@ class MeasuredModel:
         ``points_per_cycle`` samples per cycle at :attr:`sigma_y` (eq. 5; the analysis reads it
         off the signature): ``(N dt / T(sigma_Y, g))^2``; 0 when the side means give no
         positive ``g``. Near 1 under a white load; a load slow enough for the block's side to
-        follow it holds part of each side's mean and lowers it (module docstring, Drift)."""
+        follow it holds part of each side's mean and lowers it (module docstring, "The side means' ``g``")."""
         if not self.g.value > 0.0:
             return 0.0
         return float((points_per_cycle * self.dt / period_from_g(self.sigma_y, self.g.value)) ** 2)
