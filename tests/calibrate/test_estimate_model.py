@@ -333,7 +333,7 @@ def test_a_record_at_half_the_rocking_frequency_read_as_a_whiter_corner_gets_no_
     burn-in; 200,000 samples, e = 0.6, a low-pass load at 0.52 of its own rocking frequency):
     the block's side follows the load, the fit reads the corner at 2.7 +- 0.2, more than 2
     errors above the floor, so the corner alone lets it through (it was answered e = 0.79);
-    the side means read g at 0.36 of the signature's, and `rockdec estimate` declines it."""
+    the side means read g at 0.39 of the signature's, and `rockdec estimate` declines it."""
     dt, pole, burn_in, seed = 1.841449510947132, 0.9589772739360323, 1724, 1152921504806846976 + 4
     y = simulate_block([seed], 200_000, dt=dt, g=1.0, e=0.6, sigma_p=1.0, burn_in=burn_in, pole=pole)[0][0]
     path = tmp_path / "r.npy"
