@@ -84,7 +84,8 @@ COLOUR_CORNER_Z = 2.0
 #: (kernel, 200,000 samples, ``e = 0.6``) those at a corner of 0.5 and 1 rocking frequencies that
 #: the corner let through (read 2.2-4.2 against a true 0.5-0.8 and 1.0-1.2, covered 7 of 17)
 #: had shares of 0.36-0.53; the 200 at a corner of 3, 0.81-1.01 (``e = 0.6``) and 0.98-1.01
-#: (``e = 0.98``); white records 0.99 and above, 1.02 beneath 3 % noise (docs/method.md §11).
+#: (``e = 0.98``); 1,500 white records, clean or beneath 1-5 % noise, 0.98 and above
+#: (docs/method.md §11).
 SIDE_G_SHARE = 0.7
 
 #: Cost model of :func:`cost`: seconds per sample to read a CSV (pandas, on an idle 2-core
