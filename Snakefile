@@ -42,6 +42,7 @@ localrules:
     fig_tradeoff,
     coverage,
     coverage_table,
+    coverage_fresh_table,
     fig_coverage,
 
 

@@ -5,6 +5,7 @@ import functools
 import math
 
 import numpy as np
+import pandas as pd
 import pytest
 
 import fake_calibration
@@ -140,3 +141,60 @@ def test_reduced_coverage_holds(calibrations):
     row = coverage.summary(ds)
     assert row["coverage_e_v"] >= 0.85
     assert np.isfinite(ds["est_e"].sel(estimator="e_v").values).all()
+
+
+def test_a_cell_read_again_offline_gives_back_its_intervals(tmp_path):
+    """:func:`rockdec.studies.coverage.recorrect`: the stored raw values inverted through the
+    stored calibrations by the belt that ran the cell give back every reported ``e`` and
+    interval (the offline reading of a belt variant starts from the cell as it ran); a
+    belt twice as wide gives intervals that hold the stored ones."""
+    from rockdec.calibrate import belt, calibration
+
+    with pytest.MonkeyPatch.context() as monkeypatch:
+        monkeypatch.setattr(calibration, "_grid_point", fake_calibration.grid_point)
+        ds = coverage.run_cell("kernel_noise3_e0.9", 3, 20_000, tmp_path)
+    answered = np.isfinite(ds["e_hat"].values)
+    assert answered.any()
+    assert np.isfinite(ds["est_raw"].sel(estimator=ds["reported_by"].values[answered][0]).values).all()
+    again = coverage.recorrect(ds, tmp_path)
+    for name in ("e_hat", "low", "high"):
+        np.testing.assert_allclose(again[name].values, ds[name].values, rtol=0, atol=1e-12, equal_nan=True)
+    fit = belt.fit
+    with pytest.MonkeyPatch.context() as monkeypatch:
+        monkeypatch.setattr(belt, "fit", lambda *a, **k: (lambda b: b._replace(spread=2.0 * b.spread))(fit(*a, **k)))
+        wide = coverage.recorrect(ds, tmp_path)
+    ok = answered & np.isfinite(wide["low"].values)
+    assert np.all(wide["low"].values[ok] <= ds["low"].values[ok]) and np.all(wide["high"].values[ok] >= ds["high"].values[ok])
+
+
+def test_fresh_records_of_a_cell_read_like_its_own(tmp_path):
+    """:func:`rockdec.studies.coverage.fresh_coverage` with the cell's own seeds: the same raw
+    values as the cell stored (the tool's analysis of the same records), each inverted
+    through the calibration its bin used, giving back the cell's intervals where the bin has
+    one calibration; other seeds give other records."""
+    from rockdec.calibrate import calibration
+
+    with pytest.MonkeyPatch.context() as monkeypatch:
+        monkeypatch.setattr(calibration, "_grid_point", fake_calibration.grid_point)
+        ds = coverage.run_cell("kernel_clean_e0.9", 3, 20_000, tmp_path)
+    own = coverage.fresh_coverage(ds, tmp_path, 3, seed0=ds.attrs["first_seed"])
+    same = 0
+    for k, row in own.iterrows():
+        name = str(ds["reported_by"].values[k])
+        if not name:
+            continue
+        assert row["raw"] == ds["est_raw"].sel(estimator=name).values[k]
+        assert row["ppc_read"] == ds["ppc_read"].values[k]
+        if row["calibration"] == ds["calibration"].values[k] and row["estimator"] == name:
+            np.testing.assert_allclose([row["e"], row["low"], row["high"]], [ds[v].values[k] for v in ("e_hat", "low", "high")], atol=1e-12)
+            same += 1
+    assert same >= 1
+    other = coverage.fresh_coverage(ds, tmp_path, 3)
+    assert not np.array_equal(other["raw"].values, own["raw"].values)
+    row = coverage.fresh_summary(ds, own)
+    assert row["fresh"] == 3 and row["fresh_answered"] == np.isfinite(own["low"]).sum()
+    if row["fresh_answered"]:
+        assert row["fresh_coverage"] * row["fresh_answered"] == pytest.approx(row["fresh_coverage_all"] * row["fresh"])
+        assert row["fresh_coverage"] == pytest.approx(row["main_share"] * row["main_coverage"]
+                                                      + (1 - row["main_share"]) * np.nan_to_num(row["other_coverage"]))
+    assert "kernel_clean_e0.9" in coverage.fresh_markdown(pd.DataFrame([row]))

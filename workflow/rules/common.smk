@@ -180,3 +180,12 @@ def coverage_inputs(wildcards):
     if layout.COVERAGE_CASES[wildcards.case][0] == "reference":
         code["reference"] = "tests/rocking_vectorised.py"
     return code
+
+
+def coverage_fresh_inputs(wildcards):
+    """A cell's fresh records: the cell, the modules the script runs, the reference simulator for its cells."""
+    inputs = {"cell": f"results/studies/coverage/cells/{wildcards.case}.nc", "code": step_code("coverage_fresh.py")}
+    if layout.COVERAGE_CASES[wildcards.case][0] == "reference":
+        inputs["reference"] = "tests/rocking_vectorised.py"
+    return inputs
+

@@ -73,3 +73,48 @@ rule coverage:
     input:
         rules.coverage_table.output,
         rules.fig_coverage.output,
+
+
+rule coverage_fresh:
+    """A cell's calibrations judged on fresh records of its route (rockdec.studies.coverage.fresh_coverage)."""
+    input:
+        unpack(coverage_fresh_inputs),
+    output:
+        "results/studies/coverage/fresh/{case}.csv",
+    log:
+        "results/studies/coverage/logs/fresh_{case}.log",
+    benchmark:
+        "results/studies/coverage/benchmarks/fresh_{case}.tsv"
+    wildcard_constraints:
+        case="|".join(re.escape(c) for c in CASES),
+    threads: 2
+    resources:
+        mem_mb=2000,
+        runtime=60,
+    params:
+        cache="results/studies/coverage/calibration",
+        records=config["coverage"]["fresh_records"],
+    conda:
+        "../envs/rockdec.yaml"
+    script:
+        "../scripts/coverage_fresh.py"
+
+
+rule coverage_fresh_table:
+    """Each cell's coverage on its own records beside its calibrations' on fresh records."""
+    input:
+        cases=expand("results/studies/coverage/cells/{case}.nc", case=CASES),
+        fresh=expand("results/studies/coverage/fresh/{case}.csv", case=CASES),
+        code=step_code("coverage_fresh_table.py"),
+    output:
+        csv="results/studies/coverage/fresh/table.csv",
+        md="results/studies/coverage/fresh/table.md",
+    log:
+        "results/studies/coverage/logs/fresh_table.log",
+    benchmark:
+        "results/studies/coverage/benchmarks/fresh_table.tsv"
+    threads: 1
+    conda:
+        "../envs/rockdec.yaml"
+    script:
+        "../scripts/coverage_fresh_table.py"

@@ -28,8 +28,11 @@ every ``e`` whose band holds ``x``. A belt is inverted at the observed value, so
 the truth as often as the simulated scatter says, whatever the bias; a parametric
 bootstrap would need fresh simulations around each record, where the belt's grid is
 cached and serves every record with the same settings. Whether it holds is measured, not
-assumed: :mod:`rockdec.studies.belt_study` on calibration record sets of other seeds, and
-:mod:`rockdec.studies.coverage` on records of its own route.
+assumed: :mod:`rockdec.studies.belt_study` on calibration record sets of other seeds,
+:mod:`rockdec.studies.coverage` on records of its own route, and
+:func:`rockdec.studies.coverage.fresh_coverage` on many more records through a cell's own
+calibrations (what one calibration's error does to every record it serves, apart from the
+sample of a cell's records).
 
 ``g``: the calibration stores ``g`` over the true ``g`` per set. A record's ``g`` is
 corrected by the mean ratio at its corrected ``e`` (:func:`correct_g`); its 95 % interval

@@ -19,7 +19,12 @@ true ``g``) is within :data:`STAGE_TOLERANCE` of the target, so that ``N`` and t
 are both what the cell states; the records' achieved medians are reported per cell
 (:func:`summary`), beside the samples per cycle the tool reads off them.
 
-Seeds: the study's records and pilots start at :data:`STUDY_SEED_OFFSET`, apart from the
+A cell's coverage is its calibrations' and its records' sample together: :func:`fresh_coverage`
+reads the cell's calibrations with fresh records of its route, :func:`recorrect` reads the
+cell again through the belt as it is from the raw values it stores.
+
+Seeds: the study's records and pilots start at :data:`STUDY_SEED_OFFSET` (fresh records at
+:data:`FRESH_SEED_OFFSET`), apart from the
 calibration's (:data:`rockdec.calibrate.calibration.CALIBRATION_SEED_OFFSET`) and the scenes'.
 """
 
@@ -44,6 +49,10 @@ from rockdec.record.records import Record, RecordError
 
 #: Seeds of the study's records start here (apart from calibration and pilot seeds).
 STUDY_SEED_OFFSET = 2**60
+
+#: Seeds of the fresh records of :func:`fresh_coverage` start here: apart from the study's
+#: records (:data:`STUDY_SEED_OFFSET`), the calibration's and the scenes'.
+FRESH_SEED_OFFSET = 2**59
 
 #: Seeds of one cell: records at ``offset + cell * CELL_SEEDS``, its pilots
 #: :data:`PILOT_SEEDS` further on.
@@ -158,7 +167,7 @@ def estimate_record(theta: np.ndarray, dt: float, source: str, cache_dir, model)
         "warnings": list(out["warnings"]),
         "points_per_cycle": _num(out["points_per_cycle"]),
         "calibration": out["calibration"]["file"] or "",
-        "per": {name: (_num(v["e"]), *((_num(x) for x in v["interval"]) if v["e"] is not None else (math.nan, math.nan)))
+        "per": {name: (_num(v["e"]), *((_num(x) for x in v["interval"]) if v["e"] is not None else (math.nan, math.nan)), _num(v["raw"]))
                 for name, v in out["estimators"].items()},
         **_model_read(out.get("record_model")),
     }
@@ -187,7 +196,9 @@ def run_cell(cell: str, n_records: int, n_points: int, cache_dir, *, simulate=ke
     them and stored in ``cache_dir`` (shared by every cell). Returns per record (and
     estimator): the reported ``e_hat``, ``low``, ``high``, ``reason`` (empty unless ``e`` is
     null), ``reported_by`` (the estimator), ``warnings`` (joined by `` | ``), the tool's samples per cycle,
-    the calibration file, each estimator's ``est_e``/``est_low``/``est_high``, the paper
+    the calibration file, each estimator's ``est_e``/``est_low``/``est_high`` and its raw value
+    ``est_raw`` (a belt variant is judged offline by inverting ``est_raw`` through the stored
+    calibration), the paper
     model's ``paper_e``/``paper_low``/``paper_high``/``paper_reason``, and the record's
     true samples per cycle and corner.
     """
@@ -208,7 +219,7 @@ def run_cell(cell: str, n_records: int, n_points: int, cache_dir, *, simulate=ke
     ppc = np.array([r[0] for r in rows])
     got = [r[1] for r in rows]
     paper = [r[2] for r in rows]
-    per = np.array([[g["per"].get(name, (math.nan,) * 3) for name in names] for g in got]).reshape(n_records, len(names), 3)
+    per = np.array([[g["per"].get(name, (math.nan,) * 4) for name in names] for g in got]).reshape(n_records, len(names), 4)
     rec, rest = ("record",), ("record", "estimator")
 
     def strings(values):
@@ -234,6 +245,7 @@ def run_cell(cell: str, n_records: int, n_points: int, cache_dir, *, simulate=ke
             "est_e": (rest, per[..., 0], {"units": "1", "long_name": "corrected e of each estimator (NaN: none)"}),
             "est_low": (rest, per[..., 1], {"units": "1", "long_name": "lower end of each estimator's 95 % interval"}),
             "est_high": (rest, per[..., 2], {"units": "1", "long_name": "upper end of each estimator's 95 % interval"}),
+            "est_raw": (rest, per[..., 3], {"units": "1", "long_name": "raw value of each estimator, before the belt (NaN: none)"}),
             "paper_e": (rec, [p["e"] for p in paper], {"units": "1", "long_name": "reported e under the paper's model"}),
             "paper_low": (rec, [p["low"] for p in paper], {"units": "1", "long_name": "lower end under the paper's model"}),
             "paper_high": (rec, [p["high"] for p in paper], {"units": "1", "long_name": "upper end under the paper's model"}),
@@ -252,6 +264,177 @@ def run_cell(cell: str, n_records: int, n_points: int, cache_dir, *, simulate=ke
         },
     )
     return ds
+
+
+def recorrect(ds: xr.Dataset, cache_dir) -> xr.Dataset:
+    """The cell ``ds`` (:func:`run_cell`) read again offline: each record's raw value of the
+    estimator the tool reported (``est_raw``) inverted through the belt of the calibration
+    file it used (in ``cache_dir``), by :mod:`rockdec.calibrate.belt` as it is, its spread
+    scaled to the record's length (:func:`rockdec.calibrate.calibration.spread_scale`).
+
+    A belt variant is judged on the study's records this way without simulating them again:
+    with the belt that ran the cell, ``e_hat``, ``low`` and ``high`` come back unchanged.
+    The estimator reported stays the one the cell stored (a variant that would change the
+    choice needs the cell run again); a record with a null ``e`` stays null, and a raw value
+    beyond the belt's mean curve gives a null (:func:`rockdec.calibrate.inference.beyond`).
+    Returns a copy of ``ds`` with ``e_hat``, ``low`` and ``high`` replaced.
+    """
+    import json
+    from pathlib import Path
+
+    from rockdec.calibrate import belt, calibration, ncread
+
+    if "est_raw" not in ds:
+        raise ValueError(f"cell {ds.attrs.get('cell', '?')} stores no raw values (est_raw): run it again to read it offline")
+    belts: dict[str, dict] = {}
+    out = ds.copy(deep=True)
+    for k in range(ds.sizes["record"]):
+        name, file = str(ds["reported_by"].values[k]), str(ds["calibration"].values[k])
+        if not (name and file and np.isfinite(ds["e_hat"].values[k])):
+            continue
+        if file not in belts:
+            cal = ncread.read(Path(cache_dir) / file)
+            scale = calibration.spread_scale(json.loads(cal.attrs["settings"]), int(ds.attrs["n_points"]))
+            belts[file] = belt.belts(cal, scale)
+        b = belts[file][name]
+        raw = float(ds["est_raw"].sel(estimator=name).values[k])
+        c = belt.correct(b, raw)
+        null = inference.beyond(b, raw, c) is not None or not np.isfinite(c.value)
+        out["e_hat"].values[k], out["low"].values[k], out["high"].values[k] = (math.nan,) * 3 if null else (c.value, c.low, c.high)
+    return out
+
+
+def _fresh_raw(simulate, seeds, attrs: dict) -> list[tuple]:
+    """Records ``seeds`` of the route of a cell of attributes ``attrs`` (:func:`run_cell`),
+    each analysed as :func:`rockdec.calibrate.inference.estimate` analyses it: the samples
+    per cycle read and every estimator's raw value."""
+    from rockdec.rdd import measured
+
+    theta = simulate(seeds, int(attrs["n_points"]), dt=attrs["dt"], e=attrs["e_true"], burn_in=int(attrs["burn_in"]), pole=attrs["pole"],
+                     noise=attrs["noise"])
+    out = []
+    for row in theta:
+        try:
+            analysis = measured.analyse([row], attrs["dt"], dict(measured.DEFAULT_SETTINGS))
+        except ValueError:
+            out.append((math.nan, {}))
+            continue
+        out.append((analysis.points_per_cycle, dict(analysis.raw)))
+    return out
+
+
+def fresh_coverage(ds: xr.Dataset, cache_dir, n_records: int, *, seed0: int | None = None, simulate=kernel_records,
+                   batch: int = 20) -> pd.DataFrame:
+    """The calibrations of the cell ``ds`` (:func:`run_cell`) judged on ``n_records`` fresh
+    records of its route: its step, burn-in, load and sensor noise, seeds from ``seed0``
+    (default: :data:`FRESH_SEED_OFFSET` plus the cell's place times :data:`CELL_SEEDS`).
+
+    A cell's coverage mixes what its calibrations give and the sample of its own records;
+    fresh records separate the two. Each fresh record is analysed as the tool analyses it
+    (same raw values: with the cell's own seeds they are its ``est_raw``), and its raw value
+    is inverted (:func:`rockdec.calibrate.belt.correct`) through the calibration file and
+    estimator that the cell's own records of its samples-per-cycle bin
+    (:func:`rockdec.calibrate.calibration.ppc_key`) used most; the record model is not
+    measured again, so a calibration of another noise bin that some of the cell's records
+    of that bin used is stood in for by the commonest. A fresh record in a bin none of the
+    cell's records read has no calibration (empty ``calibration``, NaN ends).
+
+    One row per fresh record: ``ppc_read``, ``bin``, ``calibration``, ``estimator``,
+    ``raw``, corrected ``e``, ``low``, ``high`` and ``covered``.
+    """
+    import json
+    from pathlib import Path
+
+    import dask
+
+    from rockdec.calibrate import belt, calibration, ncread
+
+    attrs = dict(ds.attrs)
+    if seed0 is None:
+        seed0 = FRESH_SEED_OFFSET + list(COVERAGE_CASES).index(attrs["cell"]) * CELL_SEEDS
+    used: dict[float, Counter] = {}
+    for k in range(ds.sizes["record"]):
+        name, file, ppc = str(ds["reported_by"].values[k]), str(ds["calibration"].values[k]), float(ds["ppc_read"].values[k])
+        if name and file and np.isfinite(ppc):
+            used.setdefault(calibration.ppc_key(ppc), Counter())[(file, name)] += 1
+    seeds = seed0 + np.arange(n_records)
+    tasks = [dask.delayed(_fresh_raw)(simulate, seeds[i:i + batch], attrs) for i in range(0, n_records, batch)]
+    rows, belts = [], {}
+    for ppc, raw in (r for part in engine.compute(*tasks) for r in part):
+        key = calibration.ppc_key(ppc) if np.isfinite(ppc) else math.nan
+        file, name = used[key].most_common(1)[0][0] if key in used else ("", "")
+        value = low = high = math.nan
+        if file:
+            if file not in belts:
+                cal = ncread.read(Path(cache_dir) / file)
+                belts[file] = belt.belts(cal, calibration.spread_scale(json.loads(cal.attrs["settings"]), int(attrs["n_points"])))
+            c = belt.correct(belts[file][name], raw[name])
+            if inference.beyond(belts[file][name], raw[name], c) is None and np.isfinite(c.value):
+                value, low, high = c.value, c.low, c.high
+        rows.append({"ppc_read": ppc, "bin": key, "calibration": file, "estimator": name, "raw": raw.get(name, math.nan),
+                     "e": value, "low": low, "high": high, "covered": bool(low <= attrs["e_true"] <= high)})
+    return pd.DataFrame(rows)
+
+
+def fresh_summary(ds: xr.Dataset, fresh: pd.DataFrame) -> dict:
+    """One row of the fresh-records table: the cell ``ds``'s coverage on its own records
+    (:func:`summary`: of the answered) beside its calibrations' on the fresh records
+    ``fresh`` (:func:`fresh_coverage`): of the answered, its binomial standard error, and of
+    every fresh record (a null or a bin without calibration counted as not covered); the
+    share of fresh records declined or without a calibration; the corrected sd of both; and
+    the coverage of the answered fresh records in the bin most of them read and in the others."""
+    own = summary(ds)
+    answered = fresh[np.isfinite(fresh["low"]) & np.isfinite(fresh["high"])]
+    n = len(answered)
+    cov = float(answered["covered"].mean()) if n else math.nan
+    main = answered["bin"].mode().iloc[0] if n else math.nan
+    in_main = answered["bin"] == main
+    return {
+        "cell": ds.attrs["cell"], "e_true": ds.attrs["e_true"], "records": own["answered"], "coverage": own["answered_coverage"],
+        "sd": own["sd"], "fresh": len(fresh), "fresh_answered": n, "fresh_coverage": cov,
+        "fresh_coverage_se": math.sqrt(cov * (1.0 - cov) / n) if n else math.nan,
+        "fresh_coverage_all": float(fresh["covered"].mean()) if len(fresh) else math.nan,
+        "fresh_declined": 1.0 - n / len(fresh) if len(fresh) else math.nan,
+        "fresh_sd": float(np.std(answered["e"], ddof=1)) if n > 1 else math.nan,
+        "main_bin": float(main), "main_coverage": float(answered[in_main]["covered"].mean()) if in_main.any() else math.nan,
+        "main_share": float(in_main.mean()) if n else math.nan,
+        "other_coverage": float(answered[~in_main]["covered"].mean()) if (~in_main).any() else math.nan,
+    }
+
+
+def fresh_markdown(rows: pd.DataFrame) -> str:
+    """The fresh-records table (:func:`fresh_summary` rows) as Markdown; coverages outside
+    :data:`COVERAGE_BAND` in bold."""
+    lines = ["| cell | own records: coverage (n) | fresh: coverage ± se (answered / n) | fresh: every record | fresh declined | "
+             "sd own, fresh | fresh: main bin (share) | fresh: other bins |",
+             "| --- | --- | --- | --- | --- | --- | --- | --- |"]
+
+    def pct(x, bold=True):
+        if not np.isfinite(x):
+            return "-"
+        flag = "**" if bold and not COVERAGE_BAND[0] <= x <= COVERAGE_BAND[1] else ""
+        return f"{flag}{100 * x:.1f} %{flag}"
+
+    for r in rows.itertuples():
+        lines.append(f"| {r.cell} | {pct(r.coverage)} ({r.records}) | {pct(r.fresh_coverage)} ± {100 * r.fresh_coverage_se:.1f} "
+                     f"({r.fresh_answered} / {r.fresh}) | {pct(r.fresh_coverage_all, False)} | {100 * r.fresh_declined:.1f} % | "
+                     f"{r.sd:.4f}, {r.fresh_sd:.4f} | {pct(r.main_coverage, False)} ({100 * r.main_share:.0f} %) | {pct(r.other_coverage, False)} |")
+    return "\n".join(lines) + "\n"
+
+
+def simulator_of(cell: str, reference_dir=None):
+    """The simulator of the cell ``cell``: :func:`kernel_records`, or the reference
+    simulator (``rocking_vectorised.simulate_records`` in ``reference_dir``, the checkout's
+    tests/) at ``g = sigma_p = 1``."""
+    if COVERAGE_CASES[cell][0] == "kernel":
+        return kernel_records
+    import functools
+
+    if str(reference_dir) not in sys.path:
+        sys.path.insert(0, str(reference_dir))
+    import rocking_vectorised
+
+    return functools.partial(rocking_vectorised.simulate_records, g=1.0, sigma_p=1.0)
 
 
 _NUMBER = re.compile(r"[-+]?\d[\d.,]*(?:e[-+]?\d+)?")

@@ -1,0 +1,21 @@
+"""Rule `coverage_fresh`: a cell's calibrations judged on fresh records of its route."""
+
+from pathlib import Path
+
+import xarray as xr
+
+from rockdec.studies import coverage
+from rockdec.pipeline import engine, job
+
+
+def main(smk):
+    ds = xr.load_dataset(smk.input.cell)
+    reference = Path(smk.input.reference).resolve().parent if hasattr(smk.input, "reference") else None
+    with engine.session(smk.threads):
+        fresh = coverage.fresh_coverage(ds, smk.params.cache, smk.params.records, simulate=coverage.simulator_of(smk.wildcards.case, reference))
+    Path(smk.output[0]).parent.mkdir(parents=True, exist_ok=True)
+    fresh.to_csv(smk.output[0], index=False)
+
+
+if __name__ == "__main__":
+    job.run(main, snakemake)
