@@ -7,8 +7,8 @@ A plain script (not a test): prints measurements, never asserts them.
 
 For each cell file (``<folder>/<cell>.nc``, written by :func:`rockdec.studies.coverage.run_cell`)
 the records that were given a number are made again from their seeds (record ``i`` has seed
-``first_seed + i``; the kernel, :func:`rockdec.studies.coverage.kernel_records`, or the reference
-simulator ``tests/rocking_vectorised.py``, with the cell's step, pole, burn-in and noise) and
+``first_seed + i``; the cell's simulator, :func:`rockdec.studies.coverage.simulator_of`, with the
+reference of this checkout's tests/, and the cell's step, pole, burn-in and noise) and
 measured (:func:`rockdec.record.record_measure.measure`); their share
 (:meth:`rockdec.record.record_measure.MeasuredModel.side_g_share`) is read at the samples per
 cycle the cell's run read. The share only adds declines
@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -34,16 +33,6 @@ from rockdec.studies import coverage
 from rockdec.validate import InputError
 
 
-def simulator(kind: str):
-    """The cell's simulator: the kernel or the reference of tests/ (its own random streams)."""
-    if kind == "kernel":
-        return coverage.kernel_records
-    sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
-    import rocking_vectorised
-
-    return lambda seeds, n, **kw: rocking_vectorised.simulate_records(seeds, n, g=1.0, sigma_p=1.0, **kw)
-
-
 def cell_row(path: Path) -> str:
     ds = xr.open_dataset(path)
     a = ds.attrs
@@ -51,7 +40,8 @@ def cell_row(path: Path) -> str:
     covered = (ds["low"].values <= a["e_true"]) & (a["e_true"] <= ds["high"].values)
     shares = []
     if answered.size:
-        theta = simulator(a["simulator"])(int(a["first_seed"]) + answered, int(a["n_points"]), dt=float(a["dt"]), e=float(a["e_true"]),
+        simulate = coverage.simulator_of(str(a["cell"]), Path(__file__).resolve().parent.parent / "tests")
+        theta = simulate(int(a["first_seed"]) + answered, int(a["n_points"]), dt=float(a["dt"]), e=float(a["e_true"]),
                                           burn_in=int(a["burn_in"]), pole=float(a["pole"]), noise=float(a["noise"]))
         for y, i in zip(theta, answered):
             try:
