@@ -624,12 +624,14 @@ def _model_lines(report: dict | None) -> list[str]:
     yes = lambda flag: "detected" if flag else "not detected"  # noqa: E731
     det = m["detected"]
     noise = m["sensor_noise_sigma_y"]
+    share = "-" if m["g_side_share"] is None else f"{m['g_side_share']:.2f}"
     lines += [
         f"  measured off the record: sensor noise {pm({k: None if v is None else 100 * v for k, v in noise.items()})} % of sigma_Y "
         f"({yes(det['sensor_noise'])}); load pole per sample {pm(m['load_pole_per_sample'])}, corner "
         f"{pm(m['load_corner_rocking'])} rocking frequencies (colour {yes(det['colour'])})",
         f"    drift: block means {m['drift_rms_sigma_y']:.2g} sigma_Y, z = {m['drift_z']:.1f} ({yes(det['drift'])}); "
-        f"g from the second differences {pm(m['g'], '{:.4g}')} rad/s^2, asymmetry {pm(m['g_asymmetry'], '{:+.3f}')}",
+        f"g from the second differences {pm(m['g'], '{:.4g}')} rad/s^2 ({share} of the signature's), "
+        f"asymmetry {pm(m['g_asymmetry'], '{:+.3f}')}",
     ]
     return lines
 

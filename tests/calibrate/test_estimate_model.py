@@ -288,7 +288,7 @@ def test_a_load_read_white_beneath_noise_is_declined_unless_its_shape_rules_out_
 
     from rockdec.record.record_measure import MeasuredModel, Quantity
 
-    measurement = SimpleNamespace(noisy=True, shape=Quantity(shape, se))
+    measurement = SimpleNamespace(noisy=True, shape=Quantity(shape, se), side_g_share=lambda n: 1.0)
     measurement.shape_corner_low = lambda n, z: MeasuredModel.shape_corner_low(measurement, n, z)
     reason = inference.colour_decline(RecordModel(), {"load": "measured"}, measurement, 75.0)
     assert (reason is not None) == declined
@@ -304,12 +304,53 @@ def test_a_measured_corner_above_the_floor_must_be_clear_of_it_by_its_errors(rat
     from types import SimpleNamespace
 
     alpha = math.exp(-2 * math.pi * 3.0 / 75.0)
-    measurement = SimpleNamespace(pole=SimpleNamespace(value=alpha, se=rate_se * alpha))  # se of -ln(alpha), relative
+    measurement = SimpleNamespace(pole=SimpleNamespace(value=alpha, se=rate_se * alpha), side_g_share=lambda n: 1.0)  # se of -ln(alpha), relative
     reason = inference.colour_decline(RecordModel(load=Load("lowpass", 3.0)), {"load": "measured"}, measurement, 75.0)
     assert (reason is not None) == declined
     if declined:
         se = 3.0 * rate_se / -math.log(alpha)
         assert f"3.00 +- {se:.2f}" in reason and f"not {inference.COLOUR_CORNER_Z:g} errors above" in reason
+
+
+@pytest.mark.parametrize("share, declined", [(1.0, False), (0.75, False), (0.5, True), (0.0, True)])
+def test_a_measured_load_whose_side_means_hold_part_of_g_is_declined(share, declined):
+    """Side means reading g below SIDE_G_SHARE of the signature's decline a measured load,
+    white or low-pass, and the sentence names the share; a declared load is calibrated."""
+    from types import SimpleNamespace
+
+    alpha = math.exp(-2 * math.pi * 3.0 / 75.0)
+    measurement = SimpleNamespace(pole=SimpleNamespace(value=alpha, se=0.0), noisy=False, side_g_share=lambda n: share)
+    for load in (Load(), Load("lowpass", 3.0)):
+        reason = inference.colour_decline(RecordModel(load=load), {"load": "measured"}, measurement, 75.0)
+        assert (reason is not None) == declined
+        if declined:
+            assert f"is {share:.2f} of the g their signature reads" in reason and "--load" in reason and reason.count(". ") == 0
+        assert inference.colour_decline(RecordModel(load=load), {"load": "declared"}, measurement, 75.0) is None
+
+
+def test_a_record_at_half_the_rocking_frequency_read_as_a_whiter_corner_gets_no_number(tmp_path, capsys):
+    """Record 4 of the coverage study's cell kernel_corner0.5_e0.6 (its seed, step, pole and
+    burn-in; 200,000 samples, e = 0.6, a low-pass load at 0.52 of its own rocking frequency):
+    the block's side follows the load, the fit reads the corner at 2.7 +- 0.2, more than 2
+    errors above the floor, so the corner alone lets it through (it was answered e = 0.79);
+    the side means read g at 0.39 of the signature's, and `rockdec estimate` declines it."""
+    dt, pole, burn_in, seed = 1.841449510947132, 0.9589772739360323, 1724, 1152921504806846976 + 4
+    y = simulate_block([seed], 200_000, dt=dt, g=1.0, e=0.6, sigma_p=1.0, burn_in=burn_in, pole=pole)[0][0]
+    path = tmp_path / "r.npy"
+    np.save(path, y)
+    cache = tmp_path / "cache"
+    assert main(["estimate", str(path), "--dt", str(dt), "--cache", str(cache), "--json"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    corner = res["record_model"]["measured"]["load_corner_rocking"]
+    assert corner["value"] - inference.COLOUR_CORNER_Z * corner["se"] > inference.COLOUR_CORNER_FLOOR  # the corner alone passes
+    assert res["e"] is None and res["interval"] == [None, None] and res["estimator"] is None
+    assert "g read off the side means" in res["reason"] and "--load" in res["reason"]
+    assert res["record_model"]["measured"]["g_side_share"] < inference.SIDE_G_SHARE
+    assert f"is {res['record_model']['measured']['g_side_share']:.2f} of the g" in res["reason"]
+    assert not any(cache.glob("calibration-*.nc"))
+    assert main(["estimate", str(path), "--dt", str(dt), "--cache", str(cache)]) == 0
+    text = capsys.readouterr().out
+    assert "e: not estimated: g read off the side means" in text and "of the signature's" in text
 
 
 def test_coloured_calibration_sets_are_moved_to_the_calibrations_samples_per_cycle(monkeypatch):

@@ -106,6 +106,20 @@ def test_white_load_record_reads_white_with_its_g():
     assert m.noise_ratio.value < 0.002
 
 
+def test_side_g_share_is_one_at_the_side_means_own_samples_per_cycle():
+    """At the samples per cycle eq. 5 gives for the side means' own ``g`` the share is 1; it
+    scales as the square of the samples per cycle; no positive ``g`` gives 0."""
+    import dataclasses
+
+    from rockdec.physics.models import period_from_g
+
+    m = rm.measure(_simulated(11), DT_WHITE)
+    n = period_from_g(m.sigma_y, m.g.value) / DT_WHITE
+    assert m.side_g_share(n) == pytest.approx(1.0, rel=1e-12)
+    assert m.side_g_share(2.0 * n) == pytest.approx(4.0, rel=1e-12)
+    assert dataclasses.replace(m, g=rm.Quantity(-0.1, 0.01)).side_g_share(n) == 0.0
+
+
 @pytest.mark.parametrize("share", [0.01, 0.05])
 def test_sensor_noise_is_measured_in_units_of_sigma_y(share):
     y = _simulated(12)

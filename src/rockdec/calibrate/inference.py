@@ -77,6 +77,17 @@ COLOUR_CORNER_FLOOR = 2.0
 #: 0.03-0.06 (read 2.9-3.6, 19-34 errors above 2).
 COLOUR_CORNER_Z = 2.0
 
+#: A measured load is declined when ``g`` read off the record's side means is less than this
+#: share of the ``g`` its signature reads
+#: (:meth:`~rockdec.record.record_measure.MeasuredModel.side_g_share`): the block's side then
+#: follows the load, which the fitted pole does not describe. On the coverage study's records
+#: (kernel, 200,000 samples, ``e = 0.6``) those at a corner of 0.5 and 1 rocking frequencies that
+#: the corner let through (read 2.2-4.2 against a true 0.5-0.8 and 1.0-1.2, covered 7 of 17)
+#: had shares of 0.36-0.53; the 200 at a corner of 3, 0.81-1.01 (``e = 0.6``) and 0.98-1.01
+#: (``e = 0.98``); 1,500 white records, clean or beneath 1-5 % noise, 0.98 and above
+#: (docs/method.md §11).
+SIDE_G_SHARE = 0.7
+
 #: Cost model of :func:`cost`: seconds per sample to read a CSV (pandas, on an idle 2-core
 #: machine) and to do all but the calibration (read a NetCDF record, analyse it, measure
 #: its model, check it: 22.7 s of CPU on 20 million samples, ``benchmarks/long_record.py``);
@@ -312,6 +323,7 @@ def model_report(measurement, why_not: str | None, analysis: measured.Analysis, 
             "drift_z": _num(m.drift_z),
             "g": _quantity(m.g),
             "g_asymmetry": _quantity(m.asymmetry),
+            "g_side_share": _num(m.side_g_share(analysis.points_per_cycle)),
             "triples": m.triples,
         }
     return out
@@ -320,7 +332,9 @@ def model_report(measurement, why_not: str | None, analysis: measured.Analysis, 
 def colour_decline(model: RecordModel, sources: dict, measurement, points_per_cycle: float) -> str | None:
     """Why ``e`` is declined for a measured load whose corner is not shown to lie above
     :data:`COLOUR_CORNER_FLOOR` rocking frequencies, in one sentence naming the measured
-    corner and what would help; else ``None``. A low-pass load: its corner is below the
+    corner and what would help; else ``None``. Any measured load whose side means read ``g``
+    below :data:`SIDE_G_SHARE` of the signature's
+    (:meth:`~rockdec.record.record_measure.MeasuredModel.side_g_share`). A low-pass load: its corner is below the
     floor, or less than :data:`COLOUR_CORNER_Z` standard errors above it. A load measured
     white beneath sensor noise: its shape ratio
     (:meth:`~rockdec.record.record_measure.MeasuredModel.shape_corner_low`, at the
@@ -329,6 +343,15 @@ def colour_decline(model: RecordModel, sources: dict, measurement, points_per_cy
     (:func:`select`) then judges its belts."""
     if sources.get("load") != "measured":
         return None
+    if measurement is not None and measurement.side_g_share(points_per_cycle) < SIDE_G_SHARE:
+        share = measurement.side_g_share(points_per_cycle)
+        return (
+            f"g read off the side means of these records is {share:.2f} of the g their signature reads (below "
+            f"{SIDE_G_SHARE:g}): the block's side follows the load, a load too slow for the measured model (a first-order "
+            "low-pass corner) to describe, where the coverage study finds the corner read too high and e not covered; if "
+            "the load is known, declare it (--load lowpass:CORNER, spectrum:FILE or base:FILE, a record of the base's "
+            "acceleration) and the calibration simulates it, with its coverage checked"
+        )
     if model.load.kind != "lowpass":
         if measurement is None or not measurement.noisy:
             return None

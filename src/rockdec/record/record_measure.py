@@ -117,6 +117,19 @@ These say the defect is present, not that it moves ``e``; the rates are measured
 record whose ``Q`` is not shown coloured may still leave a low corner possible
 (:meth:`MeasuredModel.shape_corner_low`), which :func:`rockdec.calibrate.inference.colour_decline`
 declines.
+
+The side means' ``g``. Under a load slow against the rocking the block's side follows the load,
+each side's mean second difference holds part of the load and ``g`` read off the side means
+falls below the ``g`` the signature reads (:meth:`MeasuredModel.side_g_share`). There the
+record can sit far from zero nearly all the time (at a corner of 0.5 rocking frequencies and
+``e = 0.6``, 190,000 of 200,000 triples kept, against 30,000 on a record that chatters near
+rest), and the fit splits the second differences into a fast part it books as noise (its
+variance 10-60 errors above 0 but 1-4e-4 of ``sigma_Y``, beneath :data:`NOISE_FLOOR`) and a
+pole of 0.82-0.87 against the true 0.959, leaving ``r(m)`` at lags 8-14 several errors above
+the fit: a corner of 2.5-4.2 rocking frequencies read for a true 0.5-0.8, with an error of
+0.2-0.7. The corner is misread, not its error too small; the share of ``g`` (0.36-0.53 on
+those records, 0.81-1.01 at a corner of 3) tells them apart
+(:data:`rockdec.calibrate.inference.SIDE_G_SHARE`).
 """
 
 from __future__ import annotations
@@ -248,6 +261,16 @@ class MeasuredModel:
             return 0.0
         pole = float(pole_of_shape(self.shape.value + z * self.shape.se))
         return -math.log(pole) * points_per_cycle / (2.0 * math.pi) if pole > 0.0 else math.inf
+
+    def side_g_share(self, points_per_cycle: float) -> float:
+        """``g`` read off the side means over the ``g`` at which a block reads
+        ``points_per_cycle`` samples per cycle at :attr:`sigma_y` (eq. 5; the analysis reads it
+        off the signature): ``(N dt / T(sigma_Y, g))^2``; 0 when the side means give no
+        positive ``g``. Near 1 under a white load; a load slow enough for the block's side to
+        follow it holds part of each side's mean and lowers it (module docstring, "The side means' ``g``")."""
+        if not self.g.value > 0.0:
+            return 0.0
+        return float((points_per_cycle * self.dt / period_from_g(self.sigma_y, self.g.value)) ** 2)
 
     @property
     def coloured(self) -> bool:
