@@ -279,10 +279,11 @@ def _quantity(q, scale: float = 1.0) -> dict:
     return {"value": _num(q.value * scale), "se": _num(q.se * scale)}
 
 
-def model_report(measurement, why_not: str | None, analysis: measured.Analysis, sources: dict, simulated: RecordModel, cal_settings: dict) -> dict:
+def model_report(measurement, why_not: str | None, analysis: measured.Analysis, sources: dict, simulated: RecordModel, cal_settings: dict, own_points_per_cycle: float) -> dict:
     """The ``record_model`` of :func:`estimate`'s JSON: what was measured (each quantity
     with its standard error), what was detected, what the calibration simulated (the
-    binned model, :func:`rockdec.calibrate.calibration.binned_model`) and where each part came from."""
+    binned model, :func:`rockdec.calibrate.calibration.binned_model`) and where each part
+    came from; ``g_side_share`` at ``own_points_per_cycle`` (:func:`colour_decline`)."""
     cal_ppc = cal_settings["points_per_cycle"]
     ratio = cal_settings.get("sigma_y_over_theta_cr")
     out = {
@@ -323,18 +324,21 @@ def model_report(measurement, why_not: str | None, analysis: measured.Analysis, 
             "drift_z": _num(m.drift_z),
             "g": _quantity(m.g),
             "g_asymmetry": _quantity(m.asymmetry),
-            "g_side_share": _num(m.side_g_share(analysis.points_per_cycle)),
+            "g_side_share": _num(m.side_g_share(own_points_per_cycle)),
             "triples": m.triples,
         }
     return out
 
 
-def colour_decline(model: RecordModel, sources: dict, measurement, points_per_cycle: float) -> str | None:
+def colour_decline(model: RecordModel, sources: dict, measurement, points_per_cycle: float, own_points_per_cycle: float | None = None) -> str | None:
     """Why ``e`` is declined for a measured load whose corner is not shown to lie above
     :data:`COLOUR_CORNER_FLOOR` rocking frequencies, in one sentence naming the measured
     corner and what would help; else ``None``. Any measured load whose side means read ``g``
     below :data:`SIDE_G_SHARE` of the signature's
-    (:meth:`~rockdec.record.record_measure.MeasuredModel.side_g_share`). A low-pass load: its corner is below the
+    (:meth:`~rockdec.record.record_measure.MeasuredModel.side_g_share` at
+    ``own_points_per_cycle``, the samples per cycle the analysis reads with the records' own
+    ``g``; ``points_per_cycle`` when not given, NaN when ``g`` could not be read: no share,
+    no decline by it; a ``g`` the user gives is not the records' own). A low-pass load: its corner is below the
     floor, or less than :data:`COLOUR_CORNER_Z` standard errors above it. A load measured
     white beneath sensor noise: its shape ratio
     (:meth:`~rockdec.record.record_measure.MeasuredModel.shape_corner_low`, at the
@@ -343,8 +347,8 @@ def colour_decline(model: RecordModel, sources: dict, measurement, points_per_cy
     (:func:`select`) then judges its belts."""
     if sources.get("load") != "measured":
         return None
-    if measurement is not None and measurement.side_g_share(points_per_cycle) < SIDE_G_SHARE:
-        share = measurement.side_g_share(points_per_cycle)
+    share = np.nan if measurement is None else measurement.side_g_share(points_per_cycle if own_points_per_cycle is None else own_points_per_cycle)
+    if share < SIDE_G_SHARE:
         return (
             f"g read off the side means of these records is {share:.2f} of the g their signature reads (below "
             f"{SIDE_G_SHARE:g}): the block's side follows the load, a load too slow for the measured model (a first-order "
@@ -528,6 +532,7 @@ def estimate(
         analysis = _analyse(records, dt, settings, g)
     else:
         analysis = own
+    own_ppc = own.points_per_cycle if own is not None else math.nan  # the records' own g: the side means' share
     shape = measured.rocking_shape(own if own is not None else analysis)
     if shape:
         raise RecordError(f"{names} does not look like a rocking record: {shape}; rockdec estimate gives e only for rocking records.")
@@ -545,10 +550,10 @@ def estimate(
             "model) to have e estimated under the declared model"
         )
     else:
-        declined = colour_decline(model, sources, measurement, analysis.points_per_cycle)
+        declined = colour_decline(model, sources, measurement, analysis.points_per_cycle, own_ppc)
     if declined:
         simulated = RecordModel.from_key(cal_settings["record_model"])
-        model_json = model_report(measurement, why_not if measuring else None, analysis, sources, simulated, cal_settings)
+        model_json = model_report(measurement, why_not if measuring else None, analysis, sources, simulated, cal_settings, own_ppc)
         model_json["simulated"]["described"] = f"nothing (declined; a calibration would simulate {model_json['simulated']['described']})"
         return _declined(records, analysis, notes, model_json, g, declined)
     scale = calibration.spread_scale(cal_settings, samples)
@@ -638,7 +643,7 @@ def estimate(
         "records": [r.source for r in records],
         "samples": samples,
         "nan_samples": int(analysis.nan_samples),
-        "record_model": model_report(measurement, why_not if measuring else None, analysis, sources, simulated, cal_settings),
+        "record_model": model_report(measurement, why_not if measuring else None, analysis, sources, simulated, cal_settings, own_ppc),
         "estimators": per,
         "warnings": notes + warned,
         "diagnostics": checks,
