@@ -40,7 +40,7 @@ def cell_row(path: Path) -> str:
     covered = (ds["low"].values <= a["e_true"]) & (a["e_true"] <= ds["high"].values)
     shares = []
     if answered.size:
-        simulate = coverage.simulator_of(str(a["cell"]), Path(__file__).resolve().parent.parent / "tests")
+        simulate = coverage.simulator_of(str(a["cell"]), Path(__file__).resolve().parent.parent / "tests" / "rocking_vectorised.py")
         theta = simulate(int(a["first_seed"]) + answered, int(a["n_points"]), dt=float(a["dt"]), e=float(a["e_true"]),
                                           burn_in=int(a["burn_in"]), pole=float(a["pole"]), noise=float(a["noise"]))
         for y, i in zip(theta, answered):

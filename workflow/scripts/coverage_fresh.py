@@ -10,9 +10,8 @@ from rockdec.pipeline import engine, job
 
 def main(smk):
     ds = xr.load_dataset(smk.input.cell)
-    reference = Path(smk.input.reference).resolve().parent if hasattr(smk.input, "reference") else None
     with engine.session(smk.threads):
-        fresh = coverage.fresh_coverage(ds, smk.params.cache, smk.params.records, simulate=coverage.simulator_of(smk.wildcards.case, reference))
+        fresh = coverage.fresh_coverage(ds, smk.params.cache, smk.params.records, simulate=coverage.simulator_of(smk.wildcards.case, getattr(smk.input, "reference", None)))
     Path(smk.output[0]).parent.mkdir(parents=True, exist_ok=True)
     fresh.to_csv(smk.output[0], index=False)
 

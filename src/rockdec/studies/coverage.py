@@ -279,29 +279,44 @@ def recorrect(ds: xr.Dataset, cache_dir) -> xr.Dataset:
     beyond the belt's mean curve gives a null (:func:`rockdec.calibrate.inference.beyond`).
     Returns a copy of ``ds`` with ``e_hat``, ``low`` and ``high`` replaced.
     """
-    import json
-    from pathlib import Path
-
-    from rockdec.calibrate import belt, calibration, ncread
-
     if "est_raw" not in ds:
         raise ValueError(f"cell {ds.attrs.get('cell', '?')} stores no raw values (est_raw): run it again to read it offline")
-    belts: dict[str, dict] = {}
+    invert = _Inverter(cache_dir, int(ds.attrs["n_points"]))
     out = ds.copy(deep=True)
     for k in range(ds.sizes["record"]):
         name, file = str(ds["reported_by"].values[k]), str(ds["calibration"].values[k])
-        if not (name and file and np.isfinite(ds["e_hat"].values[k])):
-            continue
-        if file not in belts:
-            cal = ncread.read(Path(cache_dir) / file)
-            scale = calibration.spread_scale(json.loads(cal.attrs["settings"]), int(ds.attrs["n_points"]))
-            belts[file] = belt.belts(cal, scale)
-        b = belts[file][name]
-        raw = float(ds["est_raw"].sel(estimator=name).values[k])
-        c = belt.correct(b, raw)
-        null = inference.beyond(b, raw, c) is not None or not np.isfinite(c.value)
-        out["e_hat"].values[k], out["low"].values[k], out["high"].values[k] = (math.nan,) * 3 if null else (c.value, c.low, c.high)
+        if name and file and np.isfinite(ds["e_hat"].values[k]):
+            raw = float(ds["est_raw"].sel(estimator=name).values[k])
+            out["e_hat"].values[k], out["low"].values[k], out["high"].values[k] = invert(file, name, raw)
     return out
+
+
+class _Inverter:
+    """Raw values inverted through the belts of stored calibrations (``cache_dir``), as
+    :func:`rockdec.calibrate.inference.estimate` inverts a record's: each calibration's belts
+    read once, their spread scaled to records of ``n_points``
+    (:func:`rockdec.calibrate.calibration.spread_scale`)."""
+
+    def __init__(self, cache_dir, n_points: int):
+        self.cache_dir, self.n_points, self.belts = cache_dir, n_points, {}
+
+    def __call__(self, file: str, name: str, raw: float) -> tuple[float, float, float]:
+        """Corrected ``e``, low and high of ``raw`` of estimator ``name`` through the calibration
+        ``file``; NaN for each when the belt gives no value or the raw value lies beyond its
+        mean curve (:func:`rockdec.calibrate.inference.beyond`)."""
+        import json
+        from pathlib import Path
+
+        from rockdec.calibrate import belt, calibration, ncread
+
+        if file not in self.belts:
+            cal = ncread.read(Path(self.cache_dir) / file)
+            self.belts[file] = belt.belts(cal, calibration.spread_scale(json.loads(cal.attrs["settings"]), self.n_points))
+        b = self.belts[file][name]
+        c = belt.correct(b, raw)
+        if inference.beyond(b, raw, c) is not None or not np.isfinite(c.value):
+            return math.nan, math.nan, math.nan
+        return c.value, c.low, c.high
 
 
 def _fresh_raw(simulate, seeds, attrs: dict) -> list[tuple]:
@@ -342,12 +357,9 @@ def fresh_coverage(ds: xr.Dataset, cache_dir, n_records: int, *, seed0: int | No
     One row per fresh record: ``ppc_read``, ``bin``, ``calibration``, ``estimator``,
     ``raw``, corrected ``e``, ``low``, ``high`` and ``covered``.
     """
-    import json
-    from pathlib import Path
-
     import dask
 
-    from rockdec.calibrate import belt, calibration, ncread
+    from rockdec.calibrate import calibration
 
     attrs = dict(ds.attrs)
     if seed0 is None:
@@ -359,18 +371,12 @@ def fresh_coverage(ds: xr.Dataset, cache_dir, n_records: int, *, seed0: int | No
             used.setdefault(calibration.ppc_key(ppc), Counter())[(file, name)] += 1
     seeds = seed0 + np.arange(n_records)
     tasks = [dask.delayed(_fresh_raw)(simulate, seeds[i:i + batch], attrs) for i in range(0, n_records, batch)]
-    rows, belts = [], {}
+    invert = _Inverter(cache_dir, int(attrs["n_points"]))
+    rows = []
     for ppc, raw in (r for part in engine.compute(*tasks) for r in part):
         key = calibration.ppc_key(ppc) if np.isfinite(ppc) else math.nan
         file, name = used[key].most_common(1)[0][0] if key in used else ("", "")
-        value = low = high = math.nan
-        if file:
-            if file not in belts:
-                cal = ncread.read(Path(cache_dir) / file)
-                belts[file] = belt.belts(cal, calibration.spread_scale(json.loads(cal.attrs["settings"]), int(attrs["n_points"])))
-            c = belt.correct(belts[file][name], raw[name])
-            if inference.beyond(belts[file][name], raw[name], c) is None and np.isfinite(c.value):
-                value, low, high = c.value, c.low, c.high
+        value, low, high = invert(file, name, raw[name]) if file else (math.nan,) * 3
         rows.append({"ppc_read": ppc, "bin": key, "calibration": file, "estimator": name, "raw": raw.get(name, math.nan),
                      "e": value, "low": low, "high": high, "covered": bool(low <= attrs["e_true"] <= high)})
     return pd.DataFrame(rows)
@@ -422,14 +428,16 @@ def fresh_markdown(rows: pd.DataFrame) -> str:
     return "\n".join(lines) + "\n"
 
 
-def simulator_of(cell: str, reference_dir=None):
+def simulator_of(cell: str, reference=None):
     """The simulator of the cell ``cell``: :func:`kernel_records`, or the reference
-    simulator (``rocking_vectorised.simulate_records`` in ``reference_dir``, the checkout's
-    tests/) at ``g = sigma_p = 1``."""
+    simulator (``rocking_vectorised.simulate_records`` of the file ``reference``, the
+    checkout's tests/rocking_vectorised.py) at ``g = sigma_p = 1``."""
     if COVERAGE_CASES[cell][0] == "kernel":
         return kernel_records
     import functools
+    from pathlib import Path
 
+    reference_dir = Path(reference).resolve().parent
     if str(reference_dir) not in sys.path:
         sys.path.insert(0, str(reference_dir))
     import rocking_vectorised
