@@ -435,12 +435,12 @@ class Check:
     key of ``rockdec estimate``'s JSON ``diagnostics``; ``defect``: what it finds, in a few
     words; ``statistic``: ``f(sums, analysis) -> float`` (dimensionless; :func:`sums` of the
     records, their :class:`rockdec.rdd.measured.Analysis`); ``side``:
-    ``"high"`` fires above the threshold, ``"low"`` below; ``threshold``: ``"calibrated"``
-    (:func:`thresholds`) or ``"structural"`` (``few_triggers``, ``coarse_sampling``: module
-    docstring);
-    ``message``: the warning, formatted with ``value`` and ``threshold``; ``floor``: a
-    structural check's threshold, ``f(e, level)`` (``e`` the record's corrected ``e``,
-    :data:`FLOOR_E` without one; ``level`` the trigger level in ``sigma_Y``); ``length``: how
+    ``"high"`` fires above the threshold, ``"low"`` below;
+    ``message``: the warning, formatted with ``value`` and ``threshold``; ``floor``: the
+    threshold of a structural check (``few_triggers``, ``coarse_sampling``: module docstring),
+    ``f(e, level)`` (``e`` the record's corrected ``e``, :data:`FLOOR_E` without one;
+    ``level`` the trigger level in ``sigma_Y``), ``None`` for a check whose threshold the
+    calibration gives (:func:`thresholds`; :attr:`threshold` says which); ``length``: how
     the statistic of a clean record goes with its length, for records longer than the
     calibration's (:func:`length_threshold`): ``"free"`` (a z score, a ratio of means, a
     share), ``"root"`` (as ``1/sqrt(length)``: a difference of means)
@@ -455,34 +455,38 @@ class Check:
     defect: str
     statistic: Callable
     side: str
-    threshold: str
     message: str
     length: str = "free"
     null_model: str = "pooled"
     floor: Callable | None = None
 
+    @property
+    def threshold(self) -> str:
+        """``"structural"`` for a check with a :attr:`floor`, else ``"calibrated"``."""
+        return "calibrated" if self.floor is None else "structural"
+
 
 REGISTRY = (
-    Check("nonstationary", "the load's strength changes along the record", nonstationarity, "high", "calibrated",
+    Check("nonstationary", "the load's strength changes along the record", nonstationarity, "high",
           "the response is not stationary: the rms of its blocks follows a trend more than in stationary records like it "
           "(z {value:.1f}, calibrated limit {threshold:.1f}); the load changes along the record, so estimate stretches "
           "of steady load apart"),
-    Check("drift", "a slow offset of the zero", drift, "high", "calibrated",
+    Check("drift", "a slow offset of the zero", drift, "high",
           "the record's block means wander more than rocking makes them (drift z {value:.1f}, calibrated limit "
           "{threshold:.1f}): the sensor's zero drifts; remove the trend (high-pass well below the rocking frequency)"),
-    Check("spikes", "isolated wrong samples", spikes, "high", "calibrated",
+    Check("spikes", "isolated wrong samples", spikes, "high",
           "a sample stands {value:.1f} times as far off the line through its neighbours as the record's 99th percentile "
           "of that distance, where rocking records like it reach {threshold:.1f}: the record holds spikes; remove them "
           "or mark them as gaps (NaN)", "max"),
-    Check("asymmetry", "a block leaning on one side", asymmetry, "high", "calibrated",
+    Check("asymmetry", "a block leaning on one side", asymmetry, "high",
           "the response is asymmetric: the block falls back with a different g on each side (|g+ - g-|/(g+ + g-) "
           "{value:.3f}, calibrated limit {threshold:.3f}); it may lean on one side or the load push one way, and the "
           "model assumes a symmetric block", "root", "widest"),
-    Check("few_triggers", "gaps (NaN) that cost triggers", segments, "low", "structural",
+    Check("few_triggers", "gaps (NaN) that cost triggers", segments, "low",
           "gaps (NaN) leave {value:.0%} of the record's trigger positions a whole segment (below {threshold:.0%}): the "
           "record gives that share of the triggers of the calibration's records, which have no gaps, so its interval is "
           "too narrow by about 1/sqrt({value:.2f}); cut the record into pieces without gaps", floor=lambda e, level: MIN_SEGMENTS),
-    Check("coarse_sampling", "too few samples per cycle for e1..e4", sampling, "low", "structural",
+    Check("coarse_sampling", "too few samples per cycle for e1..e4", sampling, "low",
           "{value:.1f} samples per cycle at sigma_Y is below {threshold:.1f}, too coarse for the local fits of e1..e4 "
           "(eq. 27); sample faster", floor=fits.min_points_per_cycle),
 )
