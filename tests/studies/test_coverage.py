@@ -198,3 +198,48 @@ def test_fresh_records_of_a_cell_read_like_its_own(tmp_path):
         assert row["fresh_coverage"] == pytest.approx(row["main_share"] * row["main_coverage"]
                                                       + (1 - row["main_share"]) * np.nan_to_num(row["other_coverage"]))
     assert "kernel_clean_e0.9" in coverage.fresh_markdown(pd.DataFrame([row]))
+
+
+def _table_of_counts(answered, covered):
+    """A study table holding only what band_chance reads."""
+    answered, covered = np.asarray(answered), np.asarray(covered)
+    cov = np.where(answered > 0, covered / np.maximum(answered, 1), np.nan)
+    return pd.DataFrame({"answered": answered, "answered_coverage": cov,
+                         "in_band": (cov >= coverage.COVERAGE_BAND[0]) & (cov <= coverage.COVERAGE_BAND[1])})
+
+
+@pytest.mark.parametrize("n", [1, 20, 50, 200])
+def test_band_probability_sums_the_binomial_inside_the_band(n):
+    """Against the binomial summed term by term with exact integers."""
+    inside = [k for k in range(n + 1) if coverage.COVERAGE_BAND[0] <= k / n <= coverage.COVERAGE_BAND[1]]
+    direct = sum(math.comb(n, k) * 0.95**k * 0.05 ** (n - k) for k in inside)
+    assert coverage.band_probability(n) == pytest.approx(direct, rel=1e-9, abs=1e-15)
+
+
+def test_band_chance_of_equal_cells_is_a_binomial_count():
+    """Cells of one size: the number outside the band is binomial over the cells (closed
+    form), and a cell answered on too few records is counted apart."""
+    from scipy import stats
+
+    n, cells = 200, 12
+    answered = [n] * cells + [10, 0]
+    covered = [190] * (cells - 2) + [180, 199] + [10, 0]
+    chance = coverage.band_chance(_table_of_counts(answered, covered))
+    q = 1.0 - coverage.band_probability(n)
+    assert chance["cells"] == cells and chance["outside"] == 2 and chance["few"] == 1 and chance["declined_whole"] == 1
+    assert chance["expected_outside"] == pytest.approx(cells * q)
+    assert chance["p_outside"] == pytest.approx(stats.binom.sf(1, cells, q))
+    assert chance["p_all_inside"] == pytest.approx((1.0 - q) ** cells)
+    assert chance["pooled_coverage"] == pytest.approx((190 * 10 + 180 + 199) / (n * cells))
+
+
+def test_band_chance_tells_a_calibrated_interval_from_an_overdispersed_one():
+    """Counts drawn binomial at 95 % read a dispersion near 1; counts whose cells hold e
+    90 % or 99 % of the time (the same 94.5 % pooled), well above it."""
+    rng = np.random.default_rng(7)
+    n = np.full(400, 200)
+    calibrated = coverage.band_chance(_table_of_counts(n, rng.binomial(n, 0.95)))
+    assert 0.85 < calibrated["chi2_ratio"] < 1.15 and calibrated["p_chi2"] > 0.01
+    assert abs(calibrated["outside"] - calibrated["expected_outside"]) < 4 * math.sqrt(calibrated["expected_outside"])
+    spread = coverage.band_chance(_table_of_counts(n, rng.binomial(n, np.where(np.arange(400) % 2, 0.90, 0.99))))
+    assert spread["chi2_ratio"] > 2.0 and spread["p_chi2"] < 1e-6 and spread["p_outside"] < 1e-6

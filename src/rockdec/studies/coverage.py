@@ -38,6 +38,7 @@ from collections import Counter
 import numpy as np
 import pandas as pd
 import xarray as xr
+from scipy import stats
 
 from rockdec.pipeline import engine
 from rockdec.calibrate import inference
@@ -71,6 +72,13 @@ COVERAGE_BAND = (0.92, 0.98)
 
 #: Largest ``|corrected bias| / sd`` the study accepts.
 BIAS_RATIO = 0.25
+
+#: Nominal coverage of the reported interval.
+NOMINAL = 0.95
+
+#: Fewest answered records for a cell to count in :func:`band_chance` (fewer cannot tell
+#: 92 % from 98 %: the binomial sd at 50 records is 3 points).
+BAND_MIN_ANSWERED = 50
 
 #: The model argument of :func:`rockdec.calibrate.inference.estimate` that measures the record's own model.
 MEASURED = None
@@ -173,8 +181,9 @@ def estimate_record(theta: np.ndarray, dt: float, source: str, cache_dir, model)
     }
 
 
-def _batch(simulate, seeds, n_points, staged, e, noise, cache_dir, model) -> list[tuple]:
-    """Simulate records ``seeds`` and estimate each with ``model`` and with the paper's."""
+def _batch(simulate, seeds, n_points, staged, e, noise, cache_dir, model, done: str = "") -> list[tuple]:
+    """Simulate records ``seeds`` and estimate each with ``model`` and with the paper's;
+    ``done``, when given, is printed to stderr at the end (the cell's progress in its log)."""
     theta = simulate(seeds, n_points, dt=staged["dt"], e=e, burn_in=staged["burn_in"], pole=staged["pole"], noise=noise)
     ppc = true_points_per_cycle(theta, staged["dt"])  # the noise moves it by noise^2 / 2 (0.1 % at 5 %)
     out = []
@@ -183,6 +192,8 @@ def _batch(simulate, seeds, n_points, staged, e, noise, cache_dir, model) -> lis
         # a record whose measured model is the paper's went through the paper's calibration already
         paper = got if got["paper"] else estimate_record(row, staged["dt"], f"record {seed}", cache_dir, PAPER)
         out.append((float(n), got, paper))
+    if done:
+        print(done, file=sys.stderr, flush=True)
     return out
 
 
@@ -212,7 +223,8 @@ def run_cell(cell: str, n_records: int, n_points: int, cache_dir, *, simulate=ke
     print(f"coverage {cell}: dt = {staged['dt']:.4g}, pole = {staged['pole']:.6g}, pilots' median samples per cycle "
           f"{staged['points_per_cycle']:.1f}", file=sys.stderr, flush=True)
     seeds = seed0 + np.arange(n_records)
-    tasks = [dask.delayed(_batch)(simulate, seeds[i:i + batch], n_points, staged, e, noise, cache_dir, model)
+    tasks = [dask.delayed(_batch)(simulate, seeds[i:i + batch], n_points, staged, e, noise, cache_dir, model,
+                                  f"coverage {cell}: records {i + 1}-{min(i + batch, n_records)} of {n_records} done")
              for i in range(0, n_records, batch)]
     rows = [row for part in engine.compute(*tasks) for row in part]
     names = list(registry.ESTIMATORS)
@@ -552,6 +564,43 @@ def table(datasets) -> pd.DataFrame:
     return out.sort_values(["_s", "_c", "e_true"]).drop(columns=["_c", "_s"]).reset_index(drop=True)
 
 
+def band_probability(n: int, p: float = NOMINAL) -> float:
+    """Probability that ``n`` records whose intervals each hold ``e`` with probability ``p``
+    give a coverage inside :data:`COVERAGE_BAND` (binomial)."""
+    low, high = math.ceil(COVERAGE_BAND[0] * n - 1e-9), math.floor(COVERAGE_BAND[1] * n + 1e-9)
+    return float(stats.binom.cdf(high, n, p) - stats.binom.cdf(low - 1, n, p))
+
+
+def band_chance(tab: pd.DataFrame) -> dict:
+    """Whether the cells of ``tab`` (:func:`table`) stray from :data:`NOMINAL` more than
+    chance: over the cells answered on at least :data:`BAND_MIN_ANSWERED` records, the number
+    outside :data:`COVERAGE_BAND`, the number a calibrated interval leaves outside on average
+    (each cell's :func:`band_probability` at its own answered count) and the probability of
+    at least as many (their sum's exact distribution, a Poisson binomial); and the dispersion
+    ``chi2 = sum((k - p n)^2 / (n p (1 - p)))`` of the covered counts ``k`` about ``p n``
+    with its ratio to the cells' number and its upper-tail probability (``chi2`` with one
+    degree of freedom per cell: a calibrated interval gives a ratio near 1)."""
+    used = tab[tab["answered"] >= BAND_MIN_ANSWERED]
+    n = used["answered"].to_numpy(dtype=int)
+    k = np.rint(used["answered_coverage"].to_numpy() * n)
+    inside = np.array([band_probability(int(m)) for m in n])
+    count = np.array([1.0])  # distribution of the number of cells outside the band
+    for q in inside:
+        count = np.convolve(count, [q, 1.0 - q])
+    out = int((~used["in_band"]).sum())
+    chi2 = float(np.sum((k - NOMINAL * n) ** 2 / (n * NOMINAL * (1.0 - NOMINAL))))
+    cells = len(used)
+    return {
+        "cells": cells, "outside": out, "expected_outside": float(np.sum(1.0 - inside)),
+        "p_outside": float(count[out:].sum()), "p_all_inside": float(count[0]),
+        "pooled_coverage": float(k.sum() / n.sum()) if cells else math.nan,
+        "chi2_ratio": chi2 / cells if cells else math.nan,
+        "p_chi2": float(stats.chi2.sf(chi2, cells)) if cells else math.nan,
+        "few": int(((tab["answered"] > 0) & (tab["answered"] < BAND_MIN_ANSWERED)).sum()),
+        "declined_whole": int((tab["answered"] == 0).sum()),
+    }
+
+
 def markdown(tab: pd.DataFrame) -> str:
     """The table as Markdown: the share of records declined (``e`` null), the coverage of
     the reported interval on the records answered (its binomial standard error; bold
@@ -581,4 +630,16 @@ def markdown(tab: pd.DataFrame) -> str:
         )
     notes = [f"- {r.simulator} {r.condition} e = {r.e_true:g}: warnings: {r.warnings or 'none'}"
              + (f"; nulls: {r.null_reasons}" if r.nulls else "") for r in tab.itertuples() if r.warnings or r.nulls]
-    return "\n".join(lines) + "\n\n" + "\n".join(notes) + "\n"
+    return "\n".join(lines) + "\n\n" + band_markdown(band_chance(tab)) + "\n\n" + "\n".join(notes) + "\n"
+
+
+def band_markdown(chance: dict) -> str:
+    """:func:`band_chance` in one paragraph."""
+    return (f"Cells answered on at least {BAND_MIN_ANSWERED} records: {chance['cells']}, pooled coverage "
+            f"{100 * chance['pooled_coverage']:.1f} %; outside {100 * COVERAGE_BAND[0]:.0f}-{100 * COVERAGE_BAND[1]:.0f} %: "
+            f"{chance['outside']}, where an interval that holds e {100 * NOMINAL:.0f} % of the time leaves "
+            f"{chance['expected_outside']:.1f} outside on average, {chance['outside']} or more with probability "
+            f"{chance['p_outside']:.2f}, none with probability {chance['p_all_inside']:.2f}; the covered counts' dispersion "
+            f"about {100 * NOMINAL:.0f} % is {chance['chi2_ratio']:.2f} times the binomial (chi2 upper tail "
+            f"{chance['p_chi2']:.2g}). Cells answered on 1-{BAND_MIN_ANSWERED - 1} records: {chance['few']}; "
+            f"declined whole: {chance['declined_whole']}.")
