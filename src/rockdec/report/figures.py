@@ -617,10 +617,11 @@ def fig_coverage(table) -> Figure:
     :data:`rockdec.studies.coverage.COVERAGE_BAND` shaded, 95 % dashed) with its binomial
     standard error, the share of records declined written beside it (a cell declined
     whole is a triangle on the axis's floor), and open circles for the paper model's
-    interval on every record. Right: corrected bias over its sd (the band
-    ``+-`` :data:`rockdec.studies.coverage.BIAS_RATIO` shaded).
+    interval on every record; below it, how many cells lie outside the band against what a
+    calibrated interval leaves (:func:`rockdec.studies.coverage.band_chance`). Right:
+    corrected bias over its sd (the band ``+-`` :data:`rockdec.studies.coverage.BIAS_RATIO` shaded).
     """
-    from rockdec.studies.coverage import BIAS_RATIO, COVERAGE_BAND
+    from rockdec.studies.coverage import BAND_MIN_ANSWERED, BIAS_RATIO, COVERAGE_BAND, band_chance
     from rockdec.pipeline.layout import COVERAGE_CONDITIONS, COVERAGE_E
 
     conditions = [c for c in COVERAGE_CONDITIONS if c in set(table["condition"])]
@@ -659,6 +660,10 @@ def fig_coverage(table) -> Figure:
     for ax, what in ((cov_ax, "coverage of the reported 95 % interval (answered records)"), (bias_ax, "corrected bias / sd")):
         ax.set_xticks(range(len(conditions)), [c.replace("_", "\n") for c in conditions], fontsize=8)
         ax.set(xlabel="condition", ylabel=what)
+    chance = band_chance(table)
+    cov_ax.set_xlabel(f"condition\n{chance['outside']} of {chance['cells']} cells answered on {BAND_MIN_ANSWERED} or more records "
+                      f"outside the band\n(a calibrated interval leaves {chance['expected_outside']:.1f}); dispersion "
+                      f"{chance['chi2_ratio']:.2f} x binomial", fontsize=8)
     cov_ax.set_ylim(floor, 1.02)
     cov_ax.legend(fontsize=7, loc="lower left", bbox_to_anchor=(0.0, 1.02), ncol=4)  # above: the floor holds the declined cells
     bias_ax.legend(fontsize=7)
