@@ -639,7 +639,7 @@ def band_markdown(chance: dict) -> str:
             f"{100 * chance['pooled_coverage']:.1f} %; outside {100 * COVERAGE_BAND[0]:.0f}-{100 * COVERAGE_BAND[1]:.0f} %: "
             f"{chance['outside']}, where an interval that holds e {100 * NOMINAL:.0f} % of the time leaves "
             f"{chance['expected_outside']:.1f} outside on average, {chance['outside']} or more with probability "
-            f"{chance['p_outside']:.2f}, none with probability {chance['p_all_inside']:.2f}; the covered counts' dispersion "
+            f"{chance['p_outside']:.2g}, none with probability {chance['p_all_inside']:.2f}; the covered counts' dispersion "
             f"about {100 * NOMINAL:.0f} % is {chance['chi2_ratio']:.2f} times the binomial (chi2 upper tail "
             f"{chance['p_chi2']:.2g}). Cells answered on 1-{BAND_MIN_ANSWERED - 1} records: {chance['few']}; "
             f"declined whole: {chance['declined_whole']}.")
