@@ -1081,7 +1081,7 @@ def test_signatures_read_degrees_and_milliseconds_as_rad_and_s(rocking, tmp_path
 def test_a_running_dask_scheduler_passes_the_probe(tmp_path):
     from dask.distributed import LocalCluster
 
-    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, protocol="tcp", dashboard_address=None) as cluster:
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, protocol="tcp", dashboard_address=":0") as cluster:
         argv = ["--dask-scheduler", cluster.scheduler_address, "simulate", "--out", str(tmp_path / "o.nc"), *FAST]
         assert main(argv) == 0
     with xr.open_dataset(tmp_path / "o.nc") as ds:
