@@ -69,10 +69,11 @@ SPIKE_SIGMAS = 15.0
 #: describes them. The coverage study (:mod:`rockdec.studies.coverage`) checks the
 #: threshold: records at corner 3 are read at 2.9-3.1 and covered, those at 0.5 and 1 are
 #: read at 0.5-1.1, where the paper's calibration covers 37-84 %. With the floor at 0
-#: (``benchmarks/corner_floor_cells.py``) the measured load's calibration answers 138, 186 and
-#: 135 of the corner-1 cells' 200 records at ``e = 0.6``, 0.8 and 0.9 and covers 95.7, 99.5
-#: and 100 % of them: at 0.8 and 0.9 with intervals 1.5 times the records' scatter (4-6 times
-#: the paper model's width), a third of the records at 0.9 without a trusted estimator.
+#: (``benchmarks/corner_floor_cells.py``) the measured load's calibration answers 138, 186,
+#: 135 and 77 of the corner-1 cells' 200 records at ``e = 0.6``, 0.8, 0.9 and 0.95 and covers
+#: 95.7, 99.5, 100 and 98.7 % of them: at 0.8 and 0.9 with intervals 1.5 times the records'
+#: scatter (4-6 times the paper model's width), at 0.95 biased by -0.52 sd; a third of the
+#: records at 0.9 and more than half at 0.95 get no trusted estimator.
 COLOUR_CORNER_FLOOR = 2.0
 
 #: A measured corner counts as above :data:`COLOUR_CORNER_FLOOR` only when it lies this many
