@@ -205,7 +205,7 @@ def _table_of_counts(answered, covered):
     answered, covered = np.asarray(answered), np.asarray(covered)
     cov = np.where(answered > 0, covered / np.maximum(answered, 1), np.nan)
     return pd.DataFrame({"answered": answered, "answered_coverage": cov,
-                         "in_band": (cov >= coverage.COVERAGE_BAND[0]) & (cov <= coverage.COVERAGE_BAND[1])})
+                         "in_band": coverage.in_band(cov)})
 
 
 @pytest.mark.parametrize("n", [1, 20, 50, 200])

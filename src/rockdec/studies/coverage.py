@@ -430,7 +430,7 @@ def fresh_markdown(rows: pd.DataFrame) -> str:
     def pct(x, bold=True):
         if not np.isfinite(x):
             return "-"
-        flag = "**" if bold and not COVERAGE_BAND[0] <= x <= COVERAGE_BAND[1] else ""
+        flag = "**" if bold and not in_band(x) else ""
         return f"{flag}{100 * x:.1f} %{flag}"
 
     for r in rows.itertuples():
@@ -549,7 +549,7 @@ def summary(ds: xr.Dataset) -> dict:
         "coloured": float(np.mean(ds["coloured"].values)),
         "calibrations": len({c for c in ds["calibration"].values if c}),
     }
-    row["in_band"] = bool(COVERAGE_BAND[0] <= answered <= COVERAGE_BAND[1])
+    row["in_band"] = bool(in_band(answered))
     row["bias_ok"] = bool(abs(row["bias_over_sd"]) <= BIAS_RATIO)
     return row
 
@@ -564,11 +564,16 @@ def table(datasets) -> pd.DataFrame:
     return out.sort_values(["_s", "_c", "e_true"]).drop(columns=["_c", "_s"]).reset_index(drop=True)
 
 
+def in_band(coverage):
+    """Whether ``coverage`` (a share, or an array of them) lies inside :data:`COVERAGE_BAND`."""
+    return (COVERAGE_BAND[0] <= coverage) & (coverage <= COVERAGE_BAND[1])
+
+
 def band_probability(n: int, p: float = NOMINAL) -> float:
     """Probability that ``n`` records whose intervals each hold ``e`` with probability ``p``
-    give a coverage inside :data:`COVERAGE_BAND` (binomial)."""
-    low, high = math.ceil(COVERAGE_BAND[0] * n - 1e-9), math.floor(COVERAGE_BAND[1] * n + 1e-9)
-    return float(stats.binom.cdf(high, n, p) - stats.binom.cdf(low - 1, n, p))
+    give a coverage :func:`in_band` (binomial)."""
+    covered = np.arange(n + 1)
+    return float(stats.binom.pmf(covered, n, p)[in_band(covered / n)].sum())
 
 
 def band_chance(tab: pd.DataFrame) -> dict:
