@@ -20,7 +20,8 @@ import time
 
 import numpy as np
 
-from rockdec.pipeline import config, engine, layout, replicates
+from rockdec import engine
+from rockdec.pipeline import config, layout, replicates
 from rockdec.physics import run
 
 

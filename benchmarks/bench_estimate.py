@@ -80,7 +80,7 @@ def analysis():
     measured.analyse([r.theta for r in recs], recs[0].dt)
 
 def whole():
-    inference.estimate(records.read_records(sys.argv[1]), cache_dir=sys.argv[2])
+    inference.estimate(records.read_records(sys.argv[1]), cache_dir=sys.argv[2]).document
 
 recs = records.read_records(sys.argv[1])
 

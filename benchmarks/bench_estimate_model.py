@@ -78,7 +78,7 @@ def records_of(condition: str, e: float, n: int, count: int, index: int) -> tupl
 
 def one(theta: np.ndarray, dt: float, cache: str, model) -> dict:
     try:
-        res = inference.estimate([Record(theta, dt, "r")], cache_dir=cache, model=model)
+        res = inference.estimate([Record(theta, dt, "r")], cache_dir=cache, model=model).document
     except ValueError as exc:
         return {"refused": str(exc)}
     rm = res["record_model"]
@@ -95,20 +95,20 @@ def bin_error(theta: np.ndarray, dt: float, cache: str) -> dict:
     adjacent bins of its noise and of its load's pole (module docstring)."""
     import math
 
-    base = inference.estimate([Record(theta, dt, "r")], cache_dir=cache)
+    base = inference.estimate([Record(theta, dt, "r")], cache_dir=cache).document
     sim, ppc = base["record_model"]["simulated"], base["points_per_cycle"]
     name = base["estimator"]
     out = {"e": base["e"], "width": None if base["e"] is None else base["interval"][1] - base["interval"][0], "estimator": name}
     if sim["sensor_noise"]["std"] > 0:
         for step in (-1, 1):
             sensor = SensorNoise(sim["sensor_noise"]["std"] * math.exp(step * calibration.NOISE_BIN))
-            res = inference.estimate([Record(theta, dt, "r")], cache_dir=cache, sensor=sensor)
+            res = inference.estimate([Record(theta, dt, "r")], cache_dir=cache, sensor=sensor).document
             out[f"noise {step:+d}"] = res["estimators"][name]["e"] if name else None
     if sim["load"]["kind"] == "lowpass":
         rate = -math.log(sim["load_pole_per_sample"])
         for step in (-1, 1):
             load = Load("lowpass", rate * math.exp(step * calibration.POLE_BIN) * ppc / (2 * math.pi))
-            res = inference.estimate([Record(theta, dt, "r")], cache_dir=cache, load=load)
+            res = inference.estimate([Record(theta, dt, "r")], cache_dir=cache, load=load).document
             out[f"pole {step:+d}"] = res["estimators"][name]["e"] if name else None
     return out
 
@@ -137,10 +137,10 @@ def timing(e: float, n: int) -> None:
     analysis = time.perf_counter() - start
     with tempfile.TemporaryDirectory() as cache:
         start = time.perf_counter()
-        inference.estimate([Record(theta, dt, "r")], cache_dir=cache)
+        inference.estimate([Record(theta, dt, "r")], cache_dir=cache).document
         cold = time.perf_counter() - start
         start = time.perf_counter()
-        inference.estimate([Record(theta, dt, "r")], cache_dir=cache)
+        inference.estimate([Record(theta, dt, "r")], cache_dir=cache).document
         warm = time.perf_counter() - start
         path = Path(cache) / "r.csv"
         np.savetxt(path, np.c_[np.arange(theta.size) * dt, theta], delimiter=",", header="time,theta", comments="", fmt="%.10g")

@@ -25,7 +25,7 @@ import numpy as np
 
 from rockdec import io
 from rockdec.calibrate import inference
-from rockdec.pipeline import engine
+from rockdec import engine
 from rockdec.pipeline.layout import COVERAGE_CASES
 from rockdec.studies import coverage
 

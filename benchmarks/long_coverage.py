@@ -47,7 +47,7 @@ def test_records(cal_settings: dict, samples: int, e_values, records: int, repli
     settings = {**cal_settings, "lengths": [samples], "e_grid": [float(e) for e in e_values], "sets_per_e": records}
     import dask
 
-    from rockdec.pipeline import engine
+    from rockdec import engine
 
     seed = calibration.CALIBRATION_SEED_OFFSET + replica * belt_study.SEED_STRIDE
     tasks = [dask.delayed(calibration._grid_point)(j, e, settings, seed) for j, e in enumerate(settings["e_grid"])]

@@ -50,7 +50,7 @@ def main() -> None:
         width = {rule: [] for rule in covered}
         for seed in range(args.seed, args.seed + args.records):
             theta = simulate.simulate_block([seed], args.samples, dt=step["dt"], g=1.0, e=e, sigma_p=0.003, burn_in=step["burn_in"])[0][0]
-            res = inference.estimate([Record(theta.astype(float), step["dt"], f"seed {seed}")], cache_dir=args.cache)
+            res = inference.estimate([Record(theta.astype(float), step["dt"], f"seed {seed}")], cache_dir=args.cache).document
             chosen = picks(res)
             for row in res["selection"]:
                 if row["holds"]:

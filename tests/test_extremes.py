@@ -80,7 +80,7 @@ def test_restitution_limits_simulate_at_a_given_step(e):
 def test_calibration_refuses_e_one_and_a_burn_in_too_long_to_run():
     with pytest.raises(ValueError, match="no energy"):
         simulate.calibrate_dt(e=1.0, g=G, sigma_p=SIGMA_P)
-    with pytest.raises(ValueError, match="give --burn-in"):
+    with pytest.raises(ValueError, match="give `burn_in`"):
         simulate.default_burn_in(0.999999, 75.0)
 
 

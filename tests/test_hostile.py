@@ -824,7 +824,7 @@ def test_a_given_g_off_the_records_own_within_the_factor_is_warned(rocking, tiny
     code, res, err = _estimate([rocking["csv"], "--g", g], tmp_path / "cache")
     assert code == 0, err
     assert res["g"] == float(g) and res["g_given"]
-    assert any(w.startswith(f"--g {g}") for w in res["warnings"]), res["warnings"]
+    assert any(w.startswith(f"the given `g` {g}") for w in res["warnings"]), res["warnings"]
 
 
 @hostile("wrong answers", "warned")
@@ -845,7 +845,7 @@ def test_the_text_report_prints_when_g_is_given(rocking, tiny_cache, tmp_path, c
     code = main(["estimate", str(rocking["csv"]), "--g", "1.0", "--cache", str(tiny_cache_copy(tiny_cache, tmp_path))])
     out = capsys.readouterr()
     assert code == 0, out.err
-    assert "g = 1 rad/s^2 (given (--g))" in out.out
+    assert "= 1 rad/s^2 (given;" in out.out
 
 
 # --------------------------------------------------------------------------- the calibration cache

@@ -21,8 +21,11 @@ import traceback
 import warnings
 from pathlib import Path
 
-from rockdec import __version__, console
-from rockdec.pipeline import engine
+from rockdec import console
+from rockdec.cache import default_cache
+from rockdec.report.glossary import GLOSSARY
+from rockdec._version import __version__
+from rockdec import engine
 from rockdec.rdd import fits
 from rockdec import validate as checks
 
@@ -67,6 +70,24 @@ PLOT_FORMATS = (".png", ".pdf")
 
 #: Fewest lags on each side of a signature for the fits of the estimators.
 MIN_LAGS = 8
+
+
+#: The command-line flag of each Python parameter that the library's messages name (in
+#: backquotes, :func:`in_flags`).
+FLAGS = {
+    "dt": "--dt", "fs": "--fs", "g": "--g", "load": "--load", "sensor_noise": "--sensor-noise", "model": "--model",
+    "theta_cr": "--theta-cr", "cache": "--cache", "column": "--column", "variable": "--variable", "out": "--out",
+    "overwrite": "--overwrite", "burn_in": "--burn-in", "theta0": "--theta0", "points_per_cycle": "--points-per-cycle",
+    "e": "--e", "nu": "--nu", "sigma_p": "--sigma-p", "n_points": "--n-points", "theta": "the record",
+}
+
+
+def in_flags(message: str) -> str:
+    """A library message with each parameter it names in backquotes (```dt```) replaced by its
+    flag (:data:`FLAGS`; a name without a flag loses its quotes)."""
+    import re
+
+    return re.sub(r"`([A-Za-z_][A-Za-z0-9_]*)`", lambda m: FLAGS.get(m.group(1), m.group(1)), message)
 
 
 class UsageError(checks.InputError):
@@ -184,19 +205,8 @@ def _check_simulation_size(scene: dict, n_seeds: int, out: Path, yes: bool, burn
     if seconds > MAX_SECONDS and not yes:
         raise UsageError(
             f"{series} of {burn_in} burn-in and {rec['n_points']} recorded steps need about {steps:.2g} simulation "
-            f"steps, ~{_duration(seconds)} on {SIMULATE_THREADS} cores; pass --yes to go on, or give fewer seeds."
+            f"steps, ~{console.duration(seconds)} on {SIMULATE_THREADS} cores; pass --yes to go on, or give fewer seeds."
         )
-
-
-def _duration(seconds: float) -> str:
-    """``seconds`` as a rounded duration: ``"40 s"``, ``"15 min"``, ``"3.2 h"``, ``"12 days"``."""
-    if seconds < 120:
-        return f"{seconds:.0f} s"
-    if seconds < 7200:
-        return f"{seconds / 60:.0f} min"
-    if seconds < 2 * 86400:
-        return f"{seconds / 3600:.2g} h"
-    return f"{seconds / 86400:.2g} days"
 
 
 def _field(scene: dict, sections) -> dict:
@@ -388,266 +398,42 @@ def _check_estimate_size(args) -> float:
     checks.memory(nbytes, what, "give shorter records")
     if seconds > MAX_SECONDS and not args.yes:
         raise UsageError(
-            f"{what} need about {_duration(seconds)} on 2 cores to read, analyse and calibrate (the calibration simulates "
+            f"{what} need about {console.duration(seconds)} on 2 cores to read, analyse and calibrate (the calibration simulates "
             f"{inference.calibration_sets(samples)} records of {sum(inference.calibration.simulated_lengths([samples])):.3g} "
             "samples); pass --yes to go on, or give a shorter record."
         )
     return seconds
 
 
-def parse_sensor_noise(text: str):
-    """The sensor noise of ``--sensor-noise``: ``None`` for ``auto`` (measured off the
-    record), else a :class:`rockdec.physics.record_model.SensorNoise`: ``0`` (none), ``VALUE`` (its
-    standard deviation in rad) or ``N%`` (in per cent of ``sigma_Y``)."""
-    from rockdec.physics.record_model import SensorNoise
-
-    word = str(text).strip().lower()
-    if word == "auto":
-        return None
-    percent = word.endswith("%")
-    try:
-        value = float(word[:-1] if percent else word)
-    except ValueError:
-        value = float("nan")
-    if not (value >= 0.0 and value < float("inf")):
-        raise UsageError(
-            f"--sensor-noise '{text}' is not a noise level; give auto (measured), 0, a standard deviation in rad "
-            "(0.0002) or a share of sigma_Y (2%), >= 0."
-        )
-    return SensorNoise(value / 100.0, "sigma_y") if percent else SensorNoise(value, "rad")
-
-
-def parse_load_option(text: str):
-    """The load of ``--load``: ``None`` for ``auto`` (measured off the record), else
-    :func:`rockdec.physics.record_model.parse_load`'s load; a file (``spectrum:FILE``, ``base:FILE``)
-    is read and checked here, and its text returned, for :func:`rockdec.calibrate.inference.estimate`
-    to place it against the record's rocking frequency (a table in Hz, a base record)."""
-    from rockdec.physics.record_model import parse_load
-
-    if str(text).strip().lower() == "auto":
-        return None
-    try:
-        load = parse_load(text, dt=1.0, points_per_cycle=1.0)  # a file is checked at a stand-in rocking frequency
-    except checks.InputError as exc:
-        raise UsageError(f"{str(exc).rstrip('.')}; or give --load auto (measured off the record).") from None
-    return text if load.kind == "spectrum" else load
-
-
-def _estimate_model_options(args) -> dict:
-    """The record-model keywords of :func:`rockdec.calibrate.inference.estimate` from ``--load``,
-    ``--sensor-noise``, ``--model`` and ``--theta-cr``, each checked (one sentence, exit 2)."""
-    import math
-
-    out = {"load": parse_load_option(args.load), "sensor": parse_sensor_noise(args.sensor_noise), "rocking": args.model}
-    if args.model == "housner":
-        if args.theta_cr is None:
-            raise UsageError("--model housner needs the block's critical angle: give --theta-cr RAD (atan(width/height)).")
-        if not 0.0 < args.theta_cr < math.pi / 2:
-            raise UsageError(f"--theta-cr {checks.show(args.theta_cr)} is not a critical angle; give it in rad, between 0 and pi/2.")
-        out["theta_cr"] = args.theta_cr
-    elif args.theta_cr is not None:
-        raise UsageError("--theta-cr is the Housner model's critical angle; give --model housner with it, or leave it out.")
-    return out
-
-
 def cmd_estimate(args) -> None:
     import contextlib
 
-    from rockdec.calibrate import inference
-    from rockdec import io
-    from rockdec.record import records
+    import rockdec
+    from rockdec import api, io
 
     for path in args.records:
         checks.path_name(path, "record")
-    if args.g is not None:
-        checks.positive(args.g, "--g", "give the restoring acceleration nu^2 theta_cr in rad/s^2, or leave --g out")
-    model_options = _estimate_model_options(args)
-    if Path(args.cache).exists() and not Path(args.cache).is_dir():
-        raise UsageError(f"--cache '{args.cache}' is a file, not a folder; give a folder for the stored calibrations.")
+    api.estimate_options(g=args.g, load=args.load, sensor_noise=args.sensor_noise, model=args.model, theta_cr=args.theta_cr,
+                         cache=args.cache)  # refused before any record is read
     with contextlib.ExitStack() as stack:
         plot = stack.enter_context(io.claimed(_plot_path(args), args.overwrite)) if args.plot else None
         seconds = _check_estimate_size(args)
-        recs = [
-            rec
-            for path in args.records
-            for rec in records.read_records(path, column=args.column, variable=args.variable, dt=args.dt, fs=args.fs)
-        ]
-        log.info(
-            f"estimate: {len(recs)} record(s), {sum(r.theta.size for r in recs)} samples "
-            f"(up to about {_duration(seconds)} when their calibration must be built)"
-        )
+        theta = [rockdec.read_record(path, column=args.column, variable=args.variable, dt=args.dt, fs=args.fs) for path in args.records]
+        log.info(f"estimate: {len(args.records)} file(s) (up to {console.about(seconds)} when their calibration must be built)")
         with console.progress("calibrating"):  # a bar only while a calibration missing from the cache is built
-            result = inference.estimate(recs, cache_dir=args.cache, g=args.g, **model_options)
+            res = rockdec.estimate(theta, g=args.g, load=args.load, sensor_noise=args.sensor_noise, model=args.model,
+                                   theta_cr=args.theta_cr, cache=args.cache)
         if plot is not None:
             from rockdec.report import figures
 
-            fig = figures.fig_record(result)
-            io.write_claimed(plot, lambda tmp: figures.save(fig, tmp), args.overwrite, keep_suffix=True)
-    public = {k: v for k, v in result.items() if not k.startswith("_")}
+            fig = res.plot()
+            written = io.write_claimed(plot, lambda tmp: figures.save(fig, tmp), args.overwrite, keep_suffix=True)
+            log.warning(f"plot written to {written}")
     if args.json:
-        print(json.dumps(public, indent=2))
+        print(json.dumps(res.to_dict(), indent=2))
     else:
-        print(_estimate_text(public))
-
-
-#: The words of ``rockdec estimate``'s report, for its ``--help`` (the README holds the same list).
-GLOSSARY = """glossary:
-  e          coefficient of restitution: the share of its angular velocity the block keeps
-             at each impact (0 to 1)
-  D_a        Random Decrement signature triggered where the angle peaks near the level
-             a = 2 sigma_Y: the average free decay from rest (paper eq. 8)
-  D_v        signature triggered where the angle crosses zero at the speed sigma_Ydot: the
-             average motion through an impact (paper eq. 19)
-  e_v        slope of D_v just after the impact over the slope just before (eq. 6);
-             on clean records the least biased and least scattered
-  e_g        from how fast all the peaks of D_a decay (eqs. 25, 7); the most biased
-  e_0        from the first peak and first trough of D_a (eq. 26)
-  e1 .. e4   from fits to D_a's first half cycle (eq. 27): e1 start and trough values,
-             e2 slopes before and after the impact, e3 trough value and impact time,
-             e4 impact and trough times
-  raw        the estimator on your record, extrapolated to a zero trigger window (biased)
-  corrected  the raw value with the bias removed, read off records simulated at known e
-             with your record's length and sampling (the calibration)
-  95 % interval  every e at which your raw value lies within the central 95 % of the raw
-             values its simulated records give
-  coverage   how often that interval held the true e on the calibration's records
-             (near 95 % means the interval can be trusted)
-  *          the reported e: of e_0, e4 and e_v, those with a value, an interval narrower
-             than the calibrated range, and a coverage that holds (at least 95 % less
-             the binomial error of the calibration's sets: 92.5 % for the 300 of a clean white
-             record, 93.3 % for the 600 of a noisy or coloured one), the one whose
-             calibration gives the narrowest interval at their common e (the median of
-             their values); none: e is not estimated and the report says why
-  record model  what besides e makes the record, and what the calibration simulates:
-             the load (white, or low-pass with its pole per sample and its corner in
-             rocking frequencies), the sensor noise (in % of sigma_Y) and the rocking
-             model; each measured off the record (with its standard error; used when
-             detected) or declared (--load, --sensor-noise, --model); drift and the
-             two sides' g are measured and reported, drift is warned about
-  triggers   stretches of the record averaged into the signature, in the largest
-             trigger window (more: less scatter)
-  below / above the calibrated range (< 0.400, > 0.995)  the raw value lies beyond what
-             any calibrated e (0.4 to 0.995) produces: e is outside that range, not
-             estimated; "none": beyond every calibrated mean, not estimated
-  sigma_Y    the rms angle of the record; g = nu^2 theta_cr, the block's restoring
-             acceleration (rad/s^2)"""
-
-
-def _reads(name: str) -> str:
-    """What estimator ``name`` reads, in words (the registry's ``reads``; blank for a name it lacks)."""
-    from rockdec.rdd import registry
-
-    return registry.spec(name).reads if name in registry.ESTIMATORS else ""
-
-
-def _estimate_text(res: dict) -> str:
-    """The human-readable report of ``rockdec estimate`` (its words: :data:`GLOSSARY`)."""
-    fmt = lambda x: _number(x, ".4f")  # noqa: E731
-    pct = lambda x: "-" if x is None else f"{x:.0%}"  # noqa: E731
-    cal = res["calibration"]
-    lines = [
-        f"records: {', '.join(res['records'])}",
-        f"  {res['samples']} samples at dt = {res['dt']:.6g} s ({res['nan_samples']} NaN skipped); rms angle "
-        f"sigma_Y = {_number(res['sigma_y'], '.4g')} rad, {_number(res['points_per_cycle'], '.1f')} samples per rocking cycle at sigma_Y",
-        _g_line(res),
-        "  calibration: none (the records are declined before calibrating)" if cal["file"] is None else f"  calibration: {cal['file']}, "
-        + ("from the cache" if cal["cached"] else f"built in {cal['seconds']:.1f} s and stored for the next record like these"),
-        *_model_lines(res["record_model"]),
-        "",
-        f"{'estimator':<10} {'reads':<32} {'raw':>7} {'corrected':>10}  {'95 % interval':<18} {'coverage':>9} {'triggers':>9}",
-    ]
-    for name, est in res["estimators"].items():
-        mark = " *" if name == res["estimator"] else ""
-        corrected, why = _corrected(est)
-        interval = "-" if est["interval"][0] is None else f"[{fmt(est['interval'][0])}, {fmt(est['interval'][1])}]"
-        lines.append(
-            f"{name + mark:<10} {_reads(name):<32} {fmt(est['raw']):>7} {corrected:>10}  {interval:<18} "
-            f"{pct(est['coverage']):>9} {est['triggers']:>9}"
-        )
-        lines += [f"{'':>11}note: {note}" for note in ([why] if why else []) + est["notes"]]
-    lines.append("")
-    if res["estimator"] is None:
-        lines.append(f"e: not estimated: {res['reason']}")
-    else:
-        corrected, _ = _corrected(res["estimators"][res["estimator"]])
-        trusted = ", ".join(row["estimator"] for row in res["selection"] if row["holds"])
-        lines += [
-            f"e = {corrected}, 95 % interval [{fmt(res['interval'][0])}, {fmt(res['interval'][1])}] (estimator {res['estimator']}, "
-            f"marked *: of the candidates whose calibrated coverage holds, {trusted}, the narrowest interval at their common e);",
-            f"the interval held the true e on {pct(res['coverage'])} of the calibration's simulated records "
-            "(in-sample; the README's coverage study checks independent records)",
-        ]
-        lines += [f"not chosen: {row['estimator']}: {row['why_not']}" for row in res["selection"] if not row["holds"]]
-    lines += [f"warning: {w}" for w in res["warnings"]]
-    lines.append("(what each word means: rockdec estimate --help)")
-    return "\n".join(lines)
-
-
-def _number(value, spec: str) -> str:
-    """``value`` in the format ``spec``; ``nan`` for a value the report could not determine (``None``)."""
-    return "nan" if value is None else format(value, spec)
-
-
-def _g_line(res: dict) -> str:
-    """The report's line on ``g``: its value and how it was found (given, or read off the
-    record with its raw value and interval), or that it could not be determined."""
-    if res["g"] is None:
-        raw = "" if res.get("g_raw") is None else f" (raw value read off the record {res['g_raw']:.4g}, not corrected)"
-        return f"  restoring acceleration g: not determined{raw}"
-    if res["g_given"]:
-        g_how = "given (--g)"
-    elif res.get("g_raw") is None:
-        g_how = "read off the record"
-    else:
-        g_how = f"read off the record: raw {res['g_raw']:.4g}, corrected for the trigger window's bias"
-        if res.get("g_interval"):
-            held = "" if res.get("g_coverage") is None else f", held the true g on {res['g_coverage']:.0%} of the calibration's records"
-            g_how += f"; 95 % interval [{res['g_interval'][0]:.5g}, {res['g_interval'][1]:.5g}]{held}"
-    return f"  restoring acceleration g = {res['g']:.5g} rad/s^2 ({g_how})"
-
-
-def _model_lines(report: dict | None) -> list[str]:
-    """The record model of ``rockdec estimate``'s report: what was measured (each quantity
-    with its standard error), detected or declared, and what the calibration simulated
-    (none: no lines)."""
-    if report is None:
-        return []
-    src = report["sources"]
-    lines = [f"  calibration simulates: {report['simulated']['described']} (load {src['load']}, sensor noise {src['sensor_noise']}, "
-             f"rocking model {src['rocking']})"]
-    m = report["measured"]
-    if m is None:
-        if report["not_measured"]:
-            lines.append(f"  record model not measured: {report['not_measured']}")
-        return lines
-    pm = lambda q, f="{:.3g}": "-" if q["value"] is None else f.format(q["value"]) + (f" +- {q['se']:.2g}" if q["se"] is not None else "")  # noqa: E731
-    yes = lambda flag: "detected" if flag else "not detected"  # noqa: E731
-    det = m["detected"]
-    noise = m["sensor_noise_sigma_y"]
-    share = "-" if m["g_side_share"] is None else f"{m['g_side_share']:.2f}"
-    lines += [
-        f"  measured off the record: sensor noise {pm({k: None if v is None else 100 * v for k, v in noise.items()})} % of sigma_Y "
-        f"({yes(det['sensor_noise'])}); load pole per sample {pm(m['load_pole_per_sample'])}, corner "
-        f"{pm(m['load_corner_rocking'])} rocking frequencies (colour {yes(det['colour'])})",
-        f"    drift: block means {m['drift_rms_sigma_y']:.2g} sigma_Y, z = {m['drift_z']:.1f} ({yes(det['drift'])}); "
-        f"g from the second differences {pm(m['g'], '{:.4g}')} rad/s^2 ({share} of the signature's), "
-        f"asymmetry {pm(m['g_asymmetry'], '{:+.3f}')}",
-    ]
-    return lines
-
-
-def _corrected(est: dict) -> tuple[str, str]:
-    """The corrected value of one estimator as the report shows it, and why it is not an
-    estimate (``""`` when it is): beyond the calibrated range it is a bound on ``e``."""
-    beyond = est.get("beyond")
-    if beyond is None:
-        return ("nan" if est["e"] is None else f"{est['e']:.4f}"), ""
-    lo, hi = est["calibrated_range"]
-    if beyond == "below":
-        return f"< {lo:.3f}", f"below the calibrated range {lo:.3f}-{hi:.3f}: e is less than {lo:.3f}, not estimated"
-    if beyond == "above":
-        return f"> {hi:.3f}", f"above the calibrated range {lo:.3f}-{hi:.3f}: e is more than {hi:.3f}, not estimated"
-    return "none", "the raw value is beyond what any calibrated e gives on average: not estimated"
+        print(res.summary(verbose=args.verbose > 0))
+        print("(more: rockdec -v estimate ...; what each word means: rockdec estimate --help)")
 
 
 def cmd_verify(args) -> None:
@@ -683,15 +469,6 @@ def _default_config() -> str:
 
     root = workflow_root()
     return DEFAULT_PATH if Path(DEFAULT_PATH).is_file() or root is None else str(root / DEFAULT_PATH)
-
-
-def _default_cache() -> str:
-    """Where calibrations are stored: ``$ROCKDEC_CACHE``, else the user's cache folder."""
-    import os
-
-    import platformdirs
-
-    return os.environ.get("ROCKDEC_CACHE") or str(Path(platformdirs.user_cache_dir("rockdec")) / "calibration")
 
 
 #: What the workflow needs besides the package: the extra that installs it.
@@ -802,7 +579,7 @@ def build_parser() -> argparse.ArgumentParser:
     est1.add_argument("--theta-cr", type=float, help="critical angle in rad, for --model housner (nu^2 = g/theta_cr)")
     est1.add_argument("--json", action="store_true", help="print one JSON object instead of the table")
     est1.add_argument("--plot", help="draw the signature and the calibration curve to this PNG or PDF")
-    est1.add_argument("--cache", default=_default_cache(), help="folder of stored calibrations (default: %(default)s)")
+    est1.add_argument("--cache", default=str(default_cache()), help="folder of stored calibrations (default: %(default)s)")
     est1.add_argument("--overwrite", action="store_true", help="replace --plot if it exists")
     est1.add_argument("--yes", action="store_true", help="go on with records that need more than 10 min")
     est1.set_defaults(func=cmd_estimate)
@@ -899,7 +676,7 @@ def main(argv: list[str] | None = None) -> int:
     except checks.InputError as exc:
         if args.debug:
             raise
-        message = " ".join(str(exc).split())
+        message = in_flags(" ".join(str(exc).split()))
         print(f"rockdec {args.command}: error: {message}{'' if message.endswith('.') else '.'}", file=sys.stderr)
         return 2
     except Exception as exc:  # a bug, not the user's input: one line, the traceback on request

@@ -84,3 +84,19 @@ def progress(label: str, stream=None):
     from dask.diagnostics import ProgressBar
 
     return ProgressBar(out=_Labelled(stream, label), minimum=BAR_AFTER_S)
+
+
+def duration(seconds: float) -> str:
+    """``seconds`` as a rounded duration: ``"40 s"``, ``"15 min"``, ``"3.2 h"``, ``"12 days"``."""
+    if seconds < 120:
+        return f"{seconds:.0f} s"
+    if seconds < 7200:
+        return f"{seconds / 60:.0f} min"
+    if seconds < 2 * 86400:
+        return f"{seconds / 3600:.2g} h"
+    return f"{seconds / 86400:.2g} days"
+
+
+def about(seconds: float) -> str:
+    """An estimated time in words: ``"under a second"``, else ``"about"`` and :func:`duration`."""
+    return "under a second" if seconds < 0.5 else f"about {duration(seconds)}"

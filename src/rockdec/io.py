@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from rockdec import __version__
+from rockdec._version import __version__
 from rockdec.validate import InputError, path_name
 
 if TYPE_CHECKING:  # annotations only: xarray loads where a function needs it
@@ -167,12 +167,12 @@ def check_output(path: str | Path, overwrite: bool = False) -> Path:
     if path.is_dir():
         raise OutputError(f"output '{path}' is a folder; give a file name such as '{path / 'out.nc'}'.")
     if (path.exists() or path.is_symlink()) and not overwrite:
-        raise OutputError(f"output '{path}' exists already; remove it or pass --overwrite.")
+        raise OutputError(f"output '{path}' exists already; remove it or pass `overwrite`.")
     folder = path.parent if str(path.parent) else Path(".")
     if not folder.is_dir():
         raise OutputError(f"output folder '{folder}' does not exist; create it first.")
     if not os.access(folder, os.W_OK):
-        raise OutputError(f"output folder '{folder}' is not writable; choose another --out.")
+        raise OutputError(f"output folder '{folder}' is not writable; choose another `out`.")
     if _live_owner(_lock_path(path)) is not None:
         raise _busy(path)
     return path
@@ -185,7 +185,7 @@ def _lock_path(path: Path) -> Path:
 def _busy(path: Path) -> OutputError:
     return OutputError(
         f"output '{path}' is being written by another run (lock '{_lock_path(path)}'); "
-        "wait for it to finish or choose another --out."
+        "wait for it to finish or choose another `out`."
     )
 
 
@@ -298,7 +298,7 @@ def _write_failure(exc: BaseException, path: Path) -> BaseException:
     if code == errno.EFBIG:
         return OutputError(f"'{path}' grew beyond the largest file its disk stores; write a smaller output.")
     if code in (errno.ENOSPC, errno.EDQUOT) or shutil.disk_usage(path.parent).free < DISK_FULL_BYTES:
-        return OutputError(f"no space left on the disk of '{path}' while writing it; free some space or choose another --out.")
+        return OutputError(f"no space left on the disk of '{path}' while writing it; free some space or choose another `out`.")
     return exc
 
 
@@ -337,7 +337,7 @@ def _place_new(tmp: Path, path: Path) -> None:
     """Give the complete file ``tmp`` the name ``path`` unless something holds that name:
     a hard link fails on an existing name in one step, so a file made meanwhile by a writer
     that takes no lock is never replaced; file systems without hard links check, then rename."""
-    appeared = OutputError(f"output '{path}' appeared while this run wrote it; remove it or pass --overwrite.")
+    appeared = OutputError(f"output '{path}' appeared while this run wrote it; remove it or pass `overwrite`.")
     try:
         os.link(tmp, path, follow_symlinks=False)
     except FileExistsError:

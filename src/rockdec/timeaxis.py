@@ -50,6 +50,7 @@ def sampling_step(time, source: str, min_samples: int = 2) -> float:
 
 #: ``units`` of an angle variable and their factor to rad (CF/UDUNITS spellings).
 ANGLE_UNITS = {"rad": 1.0, "radian": 1.0, "radians": 1.0, "1": 1.0,
+               "mrad": 1e-3, "milliradian": 1e-3, "milliradians": 1e-3,
                "degree": np.pi / 180, "degrees": np.pi / 180, "deg": np.pi / 180}
 
 #: ``units`` of a time coordinate (without a reference date) and their factor to s.
@@ -71,7 +72,7 @@ def _factor(units, table: dict, source: str, what: str, fix: str) -> float:
 
 def angle_factor(units, source: str, variable: str) -> float:
     """The factor from an angle in ``units`` (a NetCDF ``units`` attribute, ``None``: rad) to rad."""
-    return _factor(units, ANGLE_UNITS, source, f"'{variable}'", "store the angle in rad or degrees")
+    return _factor(units, ANGLE_UNITS, source, f"'{variable}'", "store the angle in rad, mrad or degrees")
 
 
 def time_factor(units, source: str, name: str) -> float:

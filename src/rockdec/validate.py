@@ -2,8 +2,8 @@
 
 Each check returns the value it accepts, converted (``float``, ``int``, ``str``), or raises
 :class:`InputError` with one sentence that names the value by the name the user wrote
-(a flag such as ``--dt``, a config key, a keyword argument) and says how to fix it:
-``"--dt nan: not a finite number; give a time step > 0 in s."``
+(a keyword argument written in backquotes, ```dt```, which the command line shows as its flag; a config key) and says how to fix it:
+``"`dt` nan: not a finite number; give a time step > 0 in s."``
 
 NaN never passes: every comparison with NaN is false, so each range test is written as
 ``not (lo <= x <= hi)``, and finiteness is tested first.
@@ -139,7 +139,7 @@ def available_memory() -> int:
 def memory(nbytes: float, what: str, fix: str) -> None:
     """Refuse a request that needs more than the available memory, before any work.
 
-    ``what`` names the request by the values the user wrote (``"--burn-in 400000000"``).
+    ``what`` names the request by the values the user wrote (``"`burn_in` 400000000"``).
     """
     available = available_memory()
     if not nbytes <= available:

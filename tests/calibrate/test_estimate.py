@@ -653,9 +653,9 @@ def test_a_long_record_says_each_stage_and_the_time_left(monkeypatch, caplog, tm
     monkeypatch.setattr(calibration, "_grid_point", fake_calibration.grid_point)
     theta, dt = simulated_record(0.85, 20_000)
     with caplog.at_level(logging.INFO, logger="rockdec"):
-        res = inference.estimate([Record(theta, dt, "long")], cache_dir=tmp_path)
+        res = inference.estimate([Record(theta, dt, "long")], cache_dir=tmp_path).document
     text = "\n".join(r.getMessage() for r in caplog.records)
-    assert "analysing 20000 samples: about" in text and "s left in all" in text
+    assert "analysing 20000 samples: " in text and " in all when the calibration must be built" in text
     assert "calibrated on simulated records of 10000 samples" in text and "sqrt(10000 / 20000) = 0.707" in text
     assert f"of {len(calibration.E_GRID_LONG)} values of e done, about" in text and " s left" in text
     assert f"{len(calibration.E_GRID_LONG)} values of e done in" in text
@@ -665,10 +665,10 @@ def test_a_long_record_says_each_stage_and_the_time_left(monkeypatch, caplog, tm
     # twice the simulated length is within inference.LONG_RATIO (20): no warning; 25 times is beyond it
     assert not any("times the calibration's simulated records" in w for w in res["warnings"])
     monkeypatch.setattr(calibration, "LENGTH_CAP", 800)
-    res = inference.estimate([Record(theta, dt, "long")], cache_dir=tmp_path)
+    res = inference.estimate([Record(theta, dt, "long")], cache_dir=tmp_path).document
     assert any("20000 samples are 25 times the calibration's simulated records" in w for w in res["warnings"])
     monkeypatch.setattr(calibration, "LENGTH_CAP", 1_000)  # exactly LONG_RATIO times: measured, no warning
-    res = inference.estimate([Record(theta, dt, "long")], cache_dir=tmp_path)
+    res = inference.estimate([Record(theta, dt, "long")], cache_dir=tmp_path).document
     assert res["calibration"]["simulated_samples"] == 1_000
     assert not any("times the calibration's simulated records" in w for w in res["warnings"])
 

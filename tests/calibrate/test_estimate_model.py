@@ -13,7 +13,8 @@ import pytest
 from rockdec.calibrate import belt, calibration, inference
 from rockdec.rdd import measured
 from rockdec.record import record_measure
-from rockdec.cli import main, parse_sensor_noise
+from rockdec.api import estimate_options
+from rockdec.cli import main
 from rockdec.physics.loading import series_rng
 from rockdec.physics.record_model import PAPER, Load, RecordModel, SensorNoise
 from rockdec.physics.simulate import secant_step, simulate_block
@@ -121,7 +122,7 @@ def test_noisy_record_json_names_the_noise_and_its_calibration_simulates_it(tmp_
 @pytest.mark.parametrize("text, expected", [("auto", None), ("0", SensorNoise(0.0, "rad")), ("3%", SensorNoise(0.03)),
                                             ("2e-4", SensorNoise(2e-4, "rad")), (" 0.5 % ", SensorNoise(0.005))])
 def test_sensor_noise_option_reads_its_forms(text, expected):
-    assert parse_sensor_noise(text) == expected
+    assert estimate_options(sensor_noise=text)[0]["sensor"] == expected
 
 
 @pytest.mark.parametrize("args, names", [
@@ -183,7 +184,7 @@ def test_a_record_interval_cut_short_at_the_range_end_does_not_win_the_selection
 
 
 def test_no_trusted_candidate_gives_null_with_a_one_sentence_reason():
-    from rockdec.cli import _estimate_text
+    from rockdec.report.summary import text as _estimate_text
 
     per = {"e_0": _entry(None, None, None, 0.95, beyond="above"), "e4": _entry(0.9, 0.8, 0.99, 0.5),
            "e_v": _entry(None, None, None, None, notes=["no raw estimate"])}
@@ -260,10 +261,10 @@ def test_a_measured_corner_below_the_floor_is_declined_with_its_corner_and_no_ca
     corner = res["record_model"]["measured"]["load_corner_rocking"]["value"]
     assert res["record_model"]["measured"]["detected"]["colour"] and corner < inference.COLOUR_CORNER_FLOOR
     assert res["e"] is None and res["interval"] == [None, None] and res["estimator"] is None
-    assert f"corner at {corner:.2f} +- " in res["reason"] and "--load" in res["reason"] and res["reason"].count(". ") == 0
+    assert f"corner at {corner:.2f} +- " in res["reason"] and "`load`" in res["reason"] and res["reason"].count(". ") == 0
     assert not any(cache.glob("calibration-*.nc")) and res["calibration"]["file"] is None
     assert all(est["raw"] is not None or name not in ("e_0", "e_v") for name, est in res["estimators"].items())
-    assert main(["estimate", str(path), "--dt", str(DT_CORNER_1), "--cache", str(cache)]) == 0
+    assert main(["-v", "estimate", str(path), "--dt", str(DT_CORNER_1), "--cache", str(cache)]) == 0
     text = capsys.readouterr().out
     assert "e: not estimated: the load measured on these records is low-pass" in text and "calibration: none" in text
 
@@ -324,7 +325,7 @@ def test_a_measured_load_whose_side_means_hold_part_of_g_is_declined(share, decl
         reason = inference.colour_decline(RecordModel(load=load), {"load": "measured"}, measurement, 75.0)
         assert (reason is not None) == declined
         if declined:
-            assert f"is {share:.2f} of the g their signature reads" in reason and "--load" in reason and reason.count(". ") == 0
+            assert f"is {share:.2f} of the g their signature reads" in reason and "`load`" in reason and reason.count(". ") == 0
         assert inference.colour_decline(RecordModel(load=load), {"load": "declared"}, measurement, 75.0) is None
 
 
@@ -344,11 +345,11 @@ def test_a_record_at_half_the_rocking_frequency_read_as_a_whiter_corner_gets_no_
     corner = res["record_model"]["measured"]["load_corner_rocking"]
     assert corner["value"] - inference.COLOUR_CORNER_Z * corner["se"] > inference.COLOUR_CORNER_FLOOR  # the corner alone passes
     assert res["e"] is None and res["interval"] == [None, None] and res["estimator"] is None
-    assert "g read off the side means" in res["reason"] and "--load" in res["reason"]
+    assert "g read off the side means" in res["reason"] and "`load`" in res["reason"]
     assert res["record_model"]["measured"]["g_side_share"] < inference.SIDE_G_SHARE
     assert f"is {res['record_model']['measured']['g_side_share']:.2f} of the g" in res["reason"]
     assert not any(cache.glob("calibration-*.nc"))
-    assert main(["estimate", str(path), "--dt", str(dt), "--cache", str(cache)]) == 0
+    assert main(["-v", "estimate", str(path), "--dt", str(dt), "--cache", str(cache)]) == 0
     text = capsys.readouterr().out
     assert "e: not estimated: g read off the side means" in text and "of the signature's" in text
 
@@ -395,7 +396,7 @@ def test_a_record_whose_model_cannot_be_measured_is_declined_unless_the_model_is
     res = json.loads(capsys.readouterr().out)
     assert res["e"] is None and res["estimator"] is None and res["calibration"]["file"] is None
     assert res["reason"].startswith("the record model could not be measured (the records hold ")
-    assert "--load white --sensor-noise 0" in res["reason"] and "\n" not in res["reason"]
+    assert "`load` white with `sensor_noise` 0" in res["reason"] and "\n" not in res["reason"]
     assert not any(cache.glob("calibration-*.nc"))
     assert main([*args, "--load", "white", "--sensor-noise", "0"]) == 0
     res = json.loads(capsys.readouterr().out)

@@ -4,7 +4,8 @@ import netCDF4
 import numpy as np
 import pytest
 
-from rockdec.pipeline import config, engine, layout, replicates, series
+from rockdec import engine
+from rockdec.pipeline import config, layout, replicates, series
 from rockdec.physics import run, simulate
 
 READINGS = replicates.READINGS

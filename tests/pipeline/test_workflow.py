@@ -19,6 +19,7 @@ import yaml
 from cf_check import NO_FINDINGS, cf_findings
 from conftest import snakemake
 from rockdec.report import figures
+from rockdec.pipeline import layout
 from rockdec.physics import run
 
 REPO = Path(__file__).resolve().parents[2]
@@ -26,7 +27,7 @@ REPO = Path(__file__).resolve().parents[2]
 # --- the workflow, end to end ---------------------------------------------------------
 
 SCENE = "tiny"
-FIGURE_FILES = [f"figures/{name}.{fmt}" for name in figures.FIGURES for fmt in ("png", "pdf")]
+FIGURE_FILES = [f"figures/{name}.{fmt}" for name in layout.FIGURES for fmt in ("png", "pdf")]
 PRODUCTS = [
     "run.json",
     "stored_series.nc",
@@ -49,7 +50,7 @@ JOBS = {
     "estimates": 1,
     "table_readings": 1,
     "stored_signature": 1,
-    **{name: 1 for name in figures.FIGURES},
+    **{name: 1 for name in layout.FIGURES},
     "all": 1,
 }
 
@@ -108,7 +109,7 @@ def test_every_rule_writes_its_benchmark_and_its_log_those_in_the_snakemake_proc
         with open(results / "benchmarks" / f"{name}.tsv") as f:
             header, row = f.read().splitlines()[:2]
         assert header.split("\t")[0] == "s" and float(row.split("\t")[0]) >= 0, name
-    in_process = ["calibrate", "stored_series", "stored_signature", "estimates", "table_readings", *figures.FIGURES]
+    in_process = ["calibrate", "stored_series", "stored_signature", "estimates", "table_readings", *layout.FIGURES]
     logs = {**{name: name for name in in_process}, "series_0": "series", "series_1": "series"}
     for name, rule in logs.items():  # rockdec.pipeline.in_snakemake: a start line, an end line
         lines = (results / "logs" / f"{name}.log").read_text().splitlines()
@@ -148,7 +149,7 @@ def declared_localrules() -> set[str]:
 
 def test_figure_table_and_archive_rules_run_on_the_submitting_node_and_compute_rules_do_not():
     local = declared_localrules()
-    assert {"estimates", "table_readings", *figures.FIGURES, "fig_amplitude", "fig_tradeoff", "fig_coverage",
+    assert {"estimates", "table_readings", *layout.FIGURES, "fig_amplitude", "fig_tradeoff", "fig_coverage",
             "coverage_table", "archive_scene", "all"} <= local
     assert not local & {"calibrate", "stored_series", "series", "signatures", "signature_part", "stored_signature",
                         "choices", "amplitude", "tradeoff", "coverage_case"}

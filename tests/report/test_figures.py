@@ -19,6 +19,8 @@ import xarray as xr  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
 from rockdec.report import figures
+from rockdec.pipeline import layout
+from rockdec.studies import figures as study_figures
 from rockdec.physics import models, simulate
 from rockdec.pipeline import replicates
 from rockdec.rdd import signatures  # noqa: E402
@@ -132,7 +134,7 @@ def assert_labelled(fig):
         assert any(s.get_xlabel().strip() for s in siblings), f"axes '{ax.get_title()}' has no x label"
 
 
-@pytest.mark.parametrize("name", figures.FIGURES)
+@pytest.mark.parametrize("name", layout.FIGURES)
 def test_every_figure_has_labelled_axes_and_a_legend(name, products):
     fig = draw(name, products)
     assert isinstance(fig, Figure)
@@ -142,7 +144,7 @@ def test_every_figure_has_labelled_axes_and_a_legend(name, products):
 
 def test_figures_leave_no_pyplot_state(products):
     plt.close("all")
-    for name in figures.FIGURES:
+    for name in layout.FIGURES:
         draw(name, products)
     assert plt.get_fignums() == []
 
@@ -188,7 +190,7 @@ def rendered(products) -> dict[str, Figure]:
     return {name: drawn(draw(name, products)) for name in ("fig3", "fig4", "fig_ev")}
 
 
-@pytest.mark.parametrize("name", figures.FIGURES)
+@pytest.mark.parametrize("name", layout.FIGURES)
 def test_no_figure_carries_a_title_naming_the_papers_figure(name, products):
     fig = draw(name, products)
     titles = [ax.get_title() for ax in fig.axes] + [fig._suptitle.get_text() if fig._suptitle else ""]
@@ -304,7 +306,7 @@ def test_pareto_figure_labels_the_front_and_marks_the_base():
     # the settings that tell configurations apart (one marker each)
     table = table.assign(kind="exact", points_per_cycle=75.0, n_points=table["value"], series_per_replicate=200,
                          n_windows=10, level=2.0, n_periods=2.5)
-    fig = figures.pareto_figure(table)
+    fig = study_figures.pareto_figure(table)
     shown = [ax for ax in fig.axes if ax.get_visible()]
     assert [ax.get_title().split(":")[0] for ax in shown] == ["e4", "e_v"]
     for ax in shown:

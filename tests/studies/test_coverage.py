@@ -100,7 +100,7 @@ def test_tiny_study_counts_declined_records_apart(tiny_table):
     """Coverage of the answered records times their number is the coverage of every record
     (a null not covered) times theirs; the declined share is the nulls' share; the table
     shows it and the figure draws a cell of any kind."""
-    from rockdec.report import figures
+    from rockdec.studies import figures
 
     datasets, table = tiny_table
     for ds in datasets:

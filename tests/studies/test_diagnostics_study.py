@@ -81,4 +81,4 @@ def test_a_record_that_rockdec_estimate_declines_asks_for_no_calibration(step):
     white = ds._cell(E, None, 0.0, 0.0, [14], N, step["dt"], step["burn_in"], 0.0)
     assert coloured[0][0] is None and white[0][0] is not None
     y = ds.record(E, 14, N, 2.513, 4362, None, 0.0, 0.0, pole)
-    assert inference.estimate([ds.Record(y, 2.513, "coloured")], cache_dir=None)["reason"]  # declined, with its reason
+    assert inference.estimate([ds.Record(y, 2.513, "coloured")], cache_dir=None).document["reason"]  # declined, with its reason

@@ -7,6 +7,7 @@ import pytest
 from rockdec.pipeline import config
 from rockdec.report import figures, tables
 from rockdec import io
+from rockdec.studies import figures as study_figures
 from rockdec.studies import tradeoff
 
 
@@ -112,5 +113,5 @@ def test_tiny_study_end_to_end(scene, tmp_path):
     recommendations = {criterion: tradeoff.recommend(table, criterion=criterion) for criterion in tradeoff.CRITERIA}
     markdown = tables.tradeoff_markdown(table, recommendations)
     assert markdown.count("## Cheapest configuration") == 2 and "Target e = 0.95" in markdown
-    fig = figures.pareto_figure(table)
+    fig = study_figures.pareto_figure(table)
     assert len([ax for ax in fig.axes if ax.get_visible()]) == 4

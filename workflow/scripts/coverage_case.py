@@ -1,7 +1,8 @@
 """Rule `coverage_case`: one cell of the coverage study."""
 
 from rockdec.studies import coverage
-from rockdec.pipeline import engine, job, layout
+from rockdec import engine
+from rockdec.pipeline import job, layout
 from rockdec import io
 
 

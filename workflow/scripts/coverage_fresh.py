@@ -5,7 +5,8 @@ from pathlib import Path
 import xarray as xr
 
 from rockdec.studies import coverage
-from rockdec.pipeline import engine, job
+from rockdec import engine
+from rockdec.pipeline import job
 
 
 def main(smk):

@@ -3,7 +3,8 @@
 import sys
 
 from rockdec.studies import diagnostics_study
-from rockdec.pipeline import engine, job
+from rockdec import engine
+from rockdec.pipeline import job
 
 
 def main(smk):

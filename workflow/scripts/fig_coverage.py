@@ -3,11 +3,12 @@
 import pandas as pd
 
 from rockdec.report import figures
+from rockdec.studies.figures import fig_coverage
 from rockdec.pipeline import job
 
 
 def main(smk):
-    figures.save(figures.fig_coverage(pd.read_csv(smk.input[0])), [smk.output.png, smk.output.pdf])
+    figures.save(fig_coverage(pd.read_csv(smk.input[0])), [smk.output.png, smk.output.pdf])
 
 
 if __name__ == "__main__":

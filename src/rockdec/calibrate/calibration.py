@@ -56,9 +56,10 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from rockdec import __version__, io
+from rockdec import io
+from rockdec._version import __version__
 from rockdec.record import diagnostics
-from rockdec.pipeline import engine
+from rockdec import engine
 from rockdec.rdd import measured, registry
 from rockdec.calibrate import ncread
 from rockdec.physics.models import SCALE_CONSTANT_GUESS, step_for_density
@@ -494,7 +495,7 @@ def build(cal_settings: dict) -> xr.Dataset:
     """Simulate and analyse the calibration records; ``raw(e_true, set, name)`` and
     ``diagnostic(e_true, set, check)``.
 
-    Grid points run as Dask tasks on the engine of :mod:`rockdec.pipeline.engine` (threads by
+    Grid points run as Dask tasks on the engine of :mod:`rockdec.engine` (threads by
     default); the simulation and signature kernels release the GIL.
     """
     import xarray as xr
@@ -607,7 +608,7 @@ def load_or_build(cal_settings: dict, cache_dir: str | Path, notes: list | None 
     notes = [] if notes is None else notes
     folder = Path(cache_dir)
     if folder.exists() and not folder.is_dir():
-        raise InputError(f"--cache '{folder}' is a file, not a folder; give a folder for the stored calibrations.")
+        raise InputError(f"`cache` '{folder}' is a file, not a folder; give a folder for the stored calibrations.")
     expected = settings_hash(cal_settings)
     path = folder / f"calibration-{expected}.nc"
     lock = path.with_suffix(".building")

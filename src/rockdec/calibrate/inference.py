@@ -26,11 +26,12 @@ from __future__ import annotations
 import logging
 import math
 import time
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
-from rockdec import __version__
+from rockdec import console
+from rockdec._version import __version__
 from rockdec.calibrate import belt, calibration
 from rockdec.record import diagnostics
 from rockdec.rdd import measured, registry
@@ -162,14 +163,14 @@ def checks_place(per: dict, shown: dict) -> tuple[float | None, list | None]:
 
 def diagnose(
     records: list[Record], analysis: measured.Analysis, settings: dict, cal, e: float | None, interval, length_ratio: float = 1.0,
-) -> tuple[list[str], dict]:
+) -> tuple[list, dict]:
     """The checks of :mod:`rockdec.record.diagnostics` on the records, against thresholds from the
     calibration ``cal`` near ``e`` and its 95 % ``interval`` (:func:`checks_place`;
-    ``length_ratio``: the records' length over the calibration's records'): the warnings of
-    the checks that fired, and per check ``{"statistic", "threshold", "fired"}`` (JSON-able)."""
+    ``length_ratio``: the records' length over the calibration's records'): a :class:`Note`
+    (its code the check's name) for each check that fired, and per check ``{"statistic", "threshold", "fired"}`` (JSON-able)."""
     level = settings.get("level", measured.DEFAULT_SETTINGS["level"])
     outcomes = diagnostics.evaluate([r.theta for r in records], analysis, cal, e, interval, level, length_ratio)
-    notes = [o.message for o in outcomes.values() if o.fired]
+    notes = [Note(name, o.message) for name, o in outcomes.items() if o.fired]
     return notes, {name: {"statistic": _num(o.statistic), "threshold": _num(o.threshold), "fired": o.fired} for name, o in outcomes.items()}
 
 
@@ -215,8 +216,8 @@ def _check_given_g(g: float, own: measured.Analysis | None, names: str) -> None:
     ratio = g / own.raw[measured.G_NAME]
     if not 1.0 / G_FACTOR <= ratio <= G_FACTOR:
         raise RecordError(
-            f"--g {g:g} is {ratio:.3g} times the g the records show ({own.raw[measured.G_NAME]:.3g} rad/s^2, read off the "
-            f"free response of {names}); give g = nu^2 theta_cr in rad/s^2 (theta_cr in rad, not degrees), or leave --g out."
+            f"`g` {g:g} is {ratio:.3g} times the g the records show ({own.raw[measured.G_NAME]:.3g} rad/s^2, read off the "
+            f"free response of {names}); give `g` = nu^2 theta_cr in rad/s^2 (theta_cr in rad, not degrees), or leave it out."
         )
 
 
@@ -249,7 +250,7 @@ def record_model(
     ``N``, simulates that pole; measured sensor noise (detected,
     :attr:`~rockdec.record.record_measure.MeasuredModel.noisy`) in units of ``sigma_Y``. A
     declared noise in rad is expressed in the records' ``sigma_Y``; a declared load given as
-    text (``--load``, :func:`rockdec.physics.record_model.parse_load`) is read with the records'
+    text (:func:`rockdec.physics.record_model.parse_load`) is read with the records'
     ``dt`` and samples per cycle, which place a spectrum table in Hz and a base record
     against their rocking frequency ``1/(dt N)``. Returns
     ``(model, sources)``, ``sources`` naming ``load``, ``sensor_noise`` and ``rocking`` as
@@ -358,7 +359,7 @@ def colour_decline(model: RecordModel, sources: dict, measurement, points_per_cy
             f"g read off the side means of these records is {share:.2f} of the g their signature reads (below "
             f"{SIDE_G_SHARE:g}): the block's side follows the load, a load too slow for the measured model (a first-order "
             "low-pass corner) to describe, where the coverage study finds the corner read too high and e not covered; if "
-            "the load is known, declare it (--load lowpass:CORNER, spectrum:FILE or base:FILE, a record of the base's "
+            "the load is known, declare it (`load` lowpass:CORNER, spectrum:FILE or base:FILE, a record of the base's "
             "acceleration) and the calibration simulates it, with its coverage checked"
         )
     if model.load.kind != "lowpass":
@@ -371,7 +372,7 @@ def colour_decline(model: RecordModel, sources: dict, measurement, points_per_cy
             f"beneath the sensor noise measured on these records the load's colour is not ruled out: its shape allows a "
             f"low-pass corner down to {low:.2f} times the rocking frequency ({COLOUR_CORNER_Z:g} errors), below "
             f"{COLOUR_CORNER_FLOOR:g}, where the coverage study finds that no calibration tells such a load apart from e; if "
-            "the load is known, declare it (--load white, lowpass:CORNER, spectrum:FILE or base:FILE) and the calibration "
+            "the load is known, declare it (`load` white, lowpass:CORNER, spectrum:FILE or base:FILE) and the calibration "
             "simulates it, with its coverage checked"
         )
     corner, se = model.load.corner, 0.0
@@ -384,35 +385,9 @@ def colour_decline(model: RecordModel, sources: dict, measurement, points_per_cy
         f"the load measured on these records is low-pass with its corner at {corner:.2f}"
         + (f" +- {se:.2f}" if se > 0.0 else "")
         + f" times the rocking frequency, {where}, where the coverage study finds that no calibration tells such a load "
-        "apart from e; if the load is known, declare it (--load lowpass:CORNER, spectrum:FILE or base:FILE, a record of "
+        "apart from e; if the load is known, declare it (`load` lowpass:CORNER, spectrum:FILE or base:FILE, a record of "
         "the base's acceleration) and the calibration simulates it, with its coverage checked"
     )
-
-
-def _declined(records: list[Record], analysis: measured.Analysis, notes: list, model_json: dict, g: float | None, reason: str) -> dict:
-    """:func:`estimate`'s answer to records declined before any calibration
-    (:func:`colour_decline`, or a record model left to measure that could not be): every estimator's raw value, no corrected value or interval,
-    ``e`` null with ``reason``; ``g`` as given, else not corrected (``None``)."""
-    why = "not calibrated: the records are declined (see the reason)"
-    per = {
-        name: {
-            "raw": _num(analysis.raw[name]), "e": None, "beyond": None, "calibrated_range": None, "interval": [None, None],
-            "coverage": None, "triggers": int(analysis.count[registry.trigger(name)][-1]), "notes": [],
-        }
-        for name in registry.ESTIMATORS
-    }
-    return {
-        "e": None, "interval": [None, None], "reason": reason, "estimator": None,
-        "selection": [{"estimator": name, "width": None, "width_at_common_e": None, "coverage": None, "holds": False, "why_not": why} for name in registry.CANDIDATES],
-        "coverage": None, "raw": None, "g": None if g is None else _num(g), "g_given": g is not None,
-        "g_raw": _num(analysis.raw[measured.G_NAME]), "g_interval": None, "g_coverage": None,
-        "g_interval_note": "as given (--g)" if g is not None else "no interval: no e was estimated, and g is corrected at the corrected e",
-        "points_per_cycle": _num(analysis.points_per_cycle), "sigma_y": _num(analysis.sigma_y), "dt": analysis.dt,
-        "records": [r.source for r in records], "samples": int(sum(r.theta.size for r in records)),
-        "nan_samples": int(analysis.nan_samples), "record_model": model_json, "estimators": per, "warnings": notes,
-        "diagnostics": {}, "rockdec_version": __version__, "calibration": {"file": None, "cached": False, "seconds": 0.0},
-        "_analysis": analysis, "_belts": {},
-    }
 
 
 def coverage_floor(n_sets: int) -> float:
@@ -466,119 +441,199 @@ def select(per: dict, n_sets: int, belts: dict[str, belt.Belt]) -> tuple[str | N
     return None, rows, reason
 
 
-def estimate(
-    records: list[Record], *, cache_dir, g: float | None = None, settings: dict | None = None, model: RecordModel | None = None,
-    load: Load | str | None = None, sensor: SensorNoise | None = None, rocking: str | None = None, theta_cr: float | None = None,
-) -> dict:
-    """Calibrated estimates of ``e`` from ``records`` of one block (pooled).
+class Note(NamedTuple):
+    """A warning of :func:`estimate`: a stable ``code`` (the name of a check of
+    :mod:`rockdec.record.diagnostics`, or one of :data:`NOTE_CODES`) and its sentence."""
 
-    ``model``: the record model the calibration simulates, declared whole
-    (:mod:`rockdec.physics.record_model`; :data:`rockdec.physics.record_model.PAPER` is the paper's white
-    load and perfect sensor); ``None`` measures it off the records
-    (:func:`rockdec.record.record_measure.measure`, :func:`record_model`), except the parts
-    ``load`` (a :class:`~rockdec.physics.record_model.Load`, or the text of ``--load``:
-    :func:`record_model`), ``sensor`` and ``rocking`` declare. A sensor noise in rad is
-    expressed in the records' ``sigma_Y``. Housner's model (eq. 2) needs the block's ``theta_cr`` (rad): its
-    calibration simulates the records' ``sigma_Y / theta_cr``. The calibration simulates
-    that model binned (:func:`rockdec.calibrate.calibration.binned_model`).
+    code: str
+    message: str
 
-    Returns a JSON-able dict: ``e``, ``interval`` (95 %), ``reason`` (why ``e`` is null,
-    else ``None``), ``estimator`` (the candidate reported, :func:`select`; ``None`` when
-    none can be trusted), ``selection`` (the candidates' widths and coverages),
-    ``coverage`` (the share of the calibration's simulated record sets whose interval held
-    their true ``e``, :func:`rockdec.calibrate.belt.calibration_coverage`), ``raw`` (of the reported
-    estimator), ``g`` (rad/s^2: corrected, or as given), ``g_raw``,
-    ``points_per_cycle``, ``sigma_y``, ``dt``, ``samples``, ``nan_samples``,
-    ``record_model`` (:func:`model_report`),
-    ``estimators`` (per estimator: ``raw``, ``e``, ``interval``, ``coverage``, ``triggers``,
-    ``notes``, ``calibrated_range`` and ``beyond``: ``"below"``, ``"above"`` or
-    ``"unreached"`` when the raw value lies beyond what any calibrated ``e`` produces on
-    average, and ``e`` is then ``None``, :func:`beyond`),
-    ``g_interval`` (95 %, rad/s^2, :func:`rockdec.calibrate.belt.g_interval`; ``None`` when ``g`` is
-    given, or when there is no corrected ``e`` or its interval reaches an end of the
-    calibrated range; ``g_interval_note`` says which), ``g_coverage`` (the
-    share of the calibration's simulated record sets whose ``g`` interval held their true
-    ``g``, :func:`rockdec.calibrate.belt.g_calibration_coverage`), ``rockdec_version``,
-    ``warnings``, ``diagnostics`` (per check of :mod:`rockdec.record.diagnostics`: ``statistic``,
-    ``threshold``, ``fired``), ``calibration`` (file, whether it came from the cache, the
-    samples of its simulated record sets and the factor on its spread,
-    :func:`rockdec.calibrate.calibration.spread_scale`: records longer than
-    :data:`rockdec.calibrate.calibration.LENGTH_CAP` get ``e``'s belt scaled to their length,
-    ``g``'s interval at the simulated length), and, under
-    keys starting with ``_``, the analysis and belts for plots.
 
-    Refuses (:class:`RecordError`) records given twice, records that do not look like
-    rocking (:func:`rockdec.rdd.measured.rocking_shape`), and a ``g`` off the records' own by
-    more than :data:`G_FACTOR`; a ``g`` outside the calibrated 95 % interval of the
-    records' own is warned about, and so is a ``g`` the calibration gives no such interval
-    to check against. Drift is one of the checks of :func:`diagnose` (the
-    calibration simulates a stationary record).
+#: Codes of the warnings :func:`estimate` gives besides the checks of
+#: :mod:`rockdec.record.diagnostics`, with what each says.
+NOTE_CODES = {
+    "g_unreadable": "g cannot be read off the records, so a given g is not checked against them",
+    "g_outside": "a given g lies outside the calibrated interval of the records' own g",
+    "g_unchecked": "a given g is checked against the records' own only to within a factor",
+    "long_record": "the records are far longer than the calibration's, beyond the lengths whose coverage was measured",
+    "calibration": "the stored calibration was rebuilt, or a stopped run's lock was taken over",
+}
+
+
+class Analysed(NamedTuple):
+    """The records and their analysis (stage 1 of :func:`estimate`).
+
+    ``own``: the analysis with the records' own ``g`` (``None`` when it cannot be read and
+    ``g`` is given); ``analysis``: the one the estimates come from (with the given ``g``,
+    else ``own``); ``g``: as given (rad/s^2) or ``None``; ``notes``: :class:`Note` s so far."""
+
+    records: tuple
+    dt: float
+    samples: int
+    settings: dict
+    own: measured.Analysis | None
+    analysis: measured.Analysis
+    g: float | None
+    notes: tuple
+
+    @property
+    def names(self) -> str:
+        """The records' sources, for messages."""
+        return ", ".join(r.source for r in self.records)
+
+    @property
+    def own_points_per_cycle(self) -> float:
+        """Samples per cycle the analysis reads with the records' own ``g`` (NaN when unread)."""
+        return self.own.points_per_cycle if self.own is not None else math.nan
+
+
+def analyse(records: list[Record], *, g: float | None = None, settings: dict | None = None) -> Analysed:
+    """Stage 1 of :func:`estimate`: check the records and analyse them (signatures, every
+    estimator extrapolated to a zero window, :func:`rockdec.rdd.measured.analyse`).
+
+    Refuses (:class:`RecordError`) records given twice, records at different steps, records
+    the analysis cannot read, records that do not look like rocking
+    (:func:`rockdec.rdd.measured.rocking_shape`) and a given ``g`` off the records' own by
+    more than :data:`G_FACTOR`.
     """
     settings = {**measured.DEFAULT_SETTINGS, **(settings or {})}
     records = distinct(records)
     dt = same_step(records)
     names = ", ".join(r.source for r in records)
-    notes = []
     samples = int(sum(r.theta.size for r in records))
     stages = stage_seconds(samples, False, g is not None)
     log.info(
-        f"analysing {samples} samples: about {stages['analysing']:.0f} s "
-        f"(about {stages['analysing'] + stages['calibrating']:.0f} s left in all when the calibration must be built)"
+        f"analysing {samples} samples: {console.about(stages['analysing'])} "
+        f"({console.about(stages['analysing'] + stages['calibrating'])} in all when the calibration must be built)"
     )
+    notes = []
     try:
         own = _analyse(records, dt, settings, None)
     except RecordError:
         if g is None:
             raise
         own = None
-        notes.append("g cannot be read off the records, so --g could not be checked against them")
+        notes.append(Note("g_unreadable", "g cannot be read off the records, so the given `g` could not be checked against them"))
     if g is not None:
         _check_given_g(g, own, names)
-        analysis = _analyse(records, dt, settings, g)
-    else:
-        analysis = own
-    own_ppc = own.points_per_cycle if own is not None else math.nan  # the records' own g: the side means' share
+    analysis = _analyse(records, dt, settings, g) if g is not None else own
     shape = measured.rocking_shape(own if own is not None else analysis)
     if shape:
-        raise RecordError(f"{names} does not look like a rocking record: {shape}; rockdec estimate gives e only for rocking records.")
-    measuring = model is None and (load is None or sensor is None)  # a part is to be measured
-    measurement, why_not = measure_model(records, dt) if model is None else (None, "declared")
-    model, sources = record_model(measurement, analysis, model=model, load=load, sensor=sensor, rocking=rocking)
+        raise RecordError(f"{names} does not look like a rocking record: {shape}; e is estimated only for rocking records.")
+    return Analysed(tuple(records), dt, samples, settings, own, analysis, g, tuple(notes))
+
+
+class ModelChoice(NamedTuple):
+    """The record model the calibration simulates and where each part came from (stage 2
+    of :func:`estimate`, :func:`choose_model`).
+
+    ``measurement``: :func:`rockdec.record.record_measure.measure` of the records (``None``
+    when declared whole or not measurable, ``why_not`` then says why); ``measuring``:
+    whether a part was left to measure; ``model`` and ``sources``: :func:`record_model`;
+    ``cal_settings``: the calibration's settings
+    (:func:`rockdec.calibrate.calibration.calibration_settings`); ``declined``: why no
+    calibration fits these records (one sentence), else ``None``."""
+
+    measurement: object
+    why_not: str | None
+    measuring: bool
+    model: RecordModel
+    sources: dict
+    cal_settings: dict
+    declined: str | None
+
+    def report(self, analysed: Analysed) -> dict:
+        """The ``record_model`` of the JSON document (:func:`model_report`)."""
+        simulated = RecordModel.from_key(self.cal_settings["record_model"])
+        out = model_report(self.measurement, self.why_not if self.measuring else None, analysed.analysis, self.sources, simulated,
+                           self.cal_settings, analysed.own_points_per_cycle)
+        if self.declined:
+            out["simulated"]["described"] = f"nothing (declined; a calibration would simulate {out['simulated']['described']})"
+        return out
+
+
+def choose_model(
+    analysed: Analysed, *, model: RecordModel | None = None, load: Load | str | None = None, sensor: SensorNoise | None = None,
+    rocking: str | None = None, theta_cr: float | None = None,
+) -> ModelChoice:
+    """Stage 2 of :func:`estimate`: measure the records' model (sensor noise, load colour,
+    drift) unless declared, choose what the calibration simulates (:func:`record_model`)
+    and whether the records must be declined (:func:`colour_decline`, or a part left to
+    measure that cannot be). Housner's model (eq. 2) needs ``theta_cr``, and only it."""
+    measuring = model is None and (load is None or sensor is None)
+    measurement, why_not = measure_model(list(analysed.records), analysed.dt) if model is None else (None, "declared")
+    model, sources = record_model(measurement, analysed.analysis, model=model, load=load, sensor=sensor, rocking=rocking)
     if (model.rocking == "housner") != (theta_cr is not None):
-        raise InputError("Housner's model (eq. 2) needs the block's critical angle theta_cr, and only it; give both or neither.")
-    ratio = analysis.sigma_y / theta_cr if theta_cr is not None else None
-    cal_settings = calibration.calibration_settings([r.theta.size for r in records], analysis.points_per_cycle, settings, model, ratio)
+        raise InputError("Housner's model (eq. 2) needs the block's critical angle `theta_cr`, and only it; give both or neither.")
+    ratio = analysed.analysis.sigma_y / theta_cr if theta_cr is not None else None
+    cal_settings = calibration.calibration_settings(
+        [r.theta.size for r in analysed.records], analysed.analysis.points_per_cycle, analysed.settings, model, ratio,
+    )
     if measuring and measurement is None:  # a part left to measure cannot be: no calibration is known to fit
         declined = (
             f"the record model could not be measured ({why_not}), so whether sensor noise or a coloured load moves e "
-            "here is not known; declare them (--load and --sensor-noise; --load white --sensor-noise 0 is the paper's "
+            "here is not known; declare them (`load` and `sensor_noise`; `load` white with `sensor_noise` 0 is the paper's "
             "model) to have e estimated under the declared model"
         )
     else:
-        declined = colour_decline(model, sources, measurement, analysis.points_per_cycle, own_ppc)
-    if declined:
-        simulated = RecordModel.from_key(cal_settings["record_model"])
-        model_json = model_report(measurement, why_not if measuring else None, analysis, sources, simulated, cal_settings, own_ppc)
-        model_json["simulated"]["described"] = f"nothing (declined; a calibration would simulate {model_json['simulated']['described']})"
-        return _declined(records, analysis, notes, model_json, g, declined)
-    scale = calibration.spread_scale(cal_settings, samples)
+        declined = colour_decline(model, sources, measurement, analysed.analysis.points_per_cycle, analysed.own_points_per_cycle)
+    return ModelChoice(measurement, why_not, measuring, model, sources, cal_settings, declined)
+
+
+class Calibrated(NamedTuple):
+    """The calibration of the records (stage 3 of :func:`estimate`): ``cal`` (the stored
+    simulated sets), whether it came from the cache, the seconds it took, the factor on
+    its spread (:func:`rockdec.calibrate.calibration.spread_scale`), ``belts`` at the
+    records' length and ``simulated_belts`` at the simulated one, ``notes`` (:class:`Note`)."""
+
+    cal: object
+    cached: bool
+    seconds: float
+    scale: float
+    belts: dict
+    simulated_belts: dict
+    notes: tuple
+
+    @property
+    def n_sets(self) -> int:
+        """Simulated record sets in the calibration."""
+        return int(self.cal["raw"].sizes["e_true"] * self.cal["raw"].sizes["set"])
+
+
+def calibrate(analysed: Analysed, choice: ModelChoice, cache_dir) -> Calibrated:
+    """Stage 3 of :func:`estimate`: get the calibration of ``choice`` from ``cache_dir``
+    or build and store it (:func:`rockdec.calibrate.calibration.load_or_build`), and its
+    belts."""
+    cal_settings = choice.cal_settings
+    scale = calibration.spread_scale(cal_settings, analysed.samples)
+    simulated = sum(cal_settings["lengths"])
     shortened = (
-        f"; the records' {samples} samples are calibrated on simulated records of {sum(cal_settings['lengths'])} samples, "
-        f"the spread scaled by sqrt({sum(cal_settings['lengths'])} / {samples}) = {scale:.3g}" if scale != 1.0 else ""
+        f"; the records' {analysed.samples} samples are calibrated on simulated records of {simulated} samples, "
+        f"the spread scaled by sqrt({simulated} / {analysed.samples}) = {scale:.3g}" if scale != 1.0 else ""
     )
+    stages = stage_seconds(analysed.samples, False, analysed.g is not None)
     log.info(
-        f"calibration {calibration.settings_hash(cal_settings)}: about {stages['calibrating']:.0f} s to build when it is not stored"
+        f"calibration {calibration.settings_hash(cal_settings)}: {console.about(stages['calibrating'])} to build when it is not stored"
         f"{shortened}"
     )
     started = time.perf_counter()
-    cal, cached = calibration.load_or_build(cal_settings, cache_dir, notes)
-    built_s = time.perf_counter() - started
-    per = {}
+    messages: list[str] = []
+    cal, cached = calibration.load_or_build(cal_settings, cache_dir, messages)
+    seconds = time.perf_counter() - started
     belts = belt.belts(cal, scale)  # e's belts at the records' length
     simulated_belts = belts if scale == 1.0 else belt.belts(cal)  # at the simulated length: coverage on the sets, g's interval
+    return Calibrated(cal, cached, seconds, scale, belts, simulated_belts, tuple(Note("calibration", m) for m in messages))
+
+
+def correct(analysed: Analysed, calibrated: Calibrated) -> dict:
+    """Stage 4 of :func:`estimate`: every estimator's raw value corrected for its bias and
+    its 95 % interval, by inverting its belt (:func:`rockdec.calibrate.belt.correct`), with
+    its calibrated coverage; a raw value beyond the belt's mean curve gives no value
+    (:func:`beyond`). Returns the ``estimators`` of the JSON document."""
+    analysis, belts = analysed.analysis, calibrated.belts
+    per = {}
     for name in registry.ESTIMATORS:
         c = belt.correct(belts[name], analysis.raw[name])
-        trigger = registry.trigger(name)
         side = beyond(belts[name], analysis.raw[name], c)
         per[name] = {
             "raw": _num(analysis.raw[name]),
@@ -586,80 +641,185 @@ def estimate(
             "beyond": side,
             "calibrated_range": [_num(belts[name].e[0]), _num(belts[name].e[-1])] if belts[name].e.size else None,
             "interval": [_num(c.low), _num(c.high)],
-            "coverage": _num(belt.calibration_coverage(cal, name, simulated_belts[name])),
-            "triggers": int(analysis.count[trigger][-1]),
+            "coverage": _num(belt.calibration_coverage(calibrated.cal, name, calibrated.simulated_belts[name])),
+            "triggers": int(analysis.count[registry.trigger(name)][-1]),
             "notes": [note for note in c.notes if not (side and "nearest point" in note)],  # no value is shown
         }
-    chosen, selection, reason = select(per, int(cal["raw"].sizes["e_true"] * cal["raw"].sizes["set"]), belts)
-    shown = per[chosen] if chosen else {"e": None, "interval": [None, None], "coverage": None, "raw": None}
-    e_chosen = math.nan if shown["e"] is None else shown["e"]
-    g_belt = simulated_belts[measured.G_NAME]
+    return per
+
+
+class GReading(NamedTuple):
+    """``g`` as the report gives it (stage 6 of :func:`estimate`): its value (rad/s^2, as
+    given or corrected), 95 % interval and its calibrated coverage (``None`` when there is
+    none), the note on how it was found, and :class:`Note` s on a given ``g``."""
+
+    value: float | None
+    interval: list | None
+    coverage: float | None
+    note: str
+    notes: tuple
+
+
+def read_g(analysed: Analysed, choice: ModelChoice, calibrated: Calibrated, chosen: str | None, e_chosen: float) -> GReading:
+    """Stage 6 of :func:`estimate`: ``g`` corrected at the reported ``e`` with its 95 %
+    interval (:func:`rockdec.calibrate.belt.g_interval`), or as given, checked against the
+    records' own."""
+    g, own, analysis = analysed.g, analysed.own, analysed.analysis
+    g_belt = calibrated.simulated_belts[measured.G_NAME]
     e_name = chosen or DEFAULT_ESTIMATOR  # the estimator whose corrected e corrects g
-    e_belt = simulated_belts[e_name]
-    g_band = belt.g_band(cal, e_name, e_belt, g_belt)
-    g_value = g if g is not None else belt.correct_g(g_belt, analysis.raw[measured.G_NAME], e_chosen)
+    e_belt = calibrated.simulated_belts[e_name]
+    g_band = belt.g_band(calibrated.cal, e_name, e_belt, g_belt)
+    value = g if g is not None else belt.correct_g(g_belt, analysis.raw[measured.G_NAME], e_chosen)
     no_interval = g is not None or chosen is None
-    g_low, g_high = (math.nan, math.nan) if no_interval else belt.g_interval(g_band, e_belt, g_belt, analysis.raw[e_name], analysis.raw[measured.G_NAME])
+    low, high = (math.nan, math.nan) if no_interval else belt.g_interval(g_band, e_belt, g_belt, analysis.raw[e_name], analysis.raw[measured.G_NAME])
+    notes = []
     if g is not None and own is not None:
-        low, high = belt.g_interval(g_band, e_belt, g_belt, own.raw[e_name], own.raw[measured.G_NAME])
-        if np.isfinite(low) and not low <= g <= high:
-            notes.append(
-                f"--g {g:g} lies outside the records' own g, {low:.4g}-{high:.4g} rad/s^2 (calibrated 95 % interval): "
-                "the estimate rests on the given g"
-            )
-        elif not np.isfinite(low):
-            notes.append(
-                f"--g {g:g} was checked against the records' own g only to within a factor {G_FACTOR:g} "
+        own_low, own_high = belt.g_interval(g_band, e_belt, g_belt, own.raw[e_name], own.raw[measured.G_NAME])
+        if np.isfinite(own_low) and not own_low <= g <= own_high:
+            notes.append(Note("g_outside", (
+                f"the given `g` {g:g} lies outside the records' own g, {own_low:.4g}-{own_high:.4g} rad/s^2 (calibrated 95 % "
+                "interval): the estimate rests on the given g"
+            )))
+        elif not np.isfinite(own_low):
+            notes.append(Note("g_unchecked", (
+                f"the given `g` {g:g} was checked against the records' own g only to within a factor {G_FACTOR:g} "
                 f"({own.raw[measured.G_NAME]:.4g} rad/s^2 read off them, not corrected): this calibration gives their g no "
                 "interval; the estimate rests on the given g"
-            )
-    if samples > LONG_RATIO * sum(cal_settings["lengths"]):
-        notes.append(
-            f"{samples} samples are {samples / sum(cal_settings['lengths']):.0f} times the calibration's simulated records, beyond the "
-            f"{LONG_RATIO:.0f} times at which the interval's coverage was measured: the narrower the interval, the more "
-            "the calibration's own error of the bias counts"
-        )
-    simulated = RecordModel.from_key(cal_settings["record_model"])
-    warned, checks = diagnose(records, analysis, settings, cal, *checks_place(per, shown), 1.0 / scale**2)
-    return {
-        "e": shown["e"],
-        "interval": shown["interval"],
-        "reason": reason,
-        "estimator": chosen,
-        "selection": selection,
-        "coverage": shown["coverage"],
-        "raw": shown["raw"],
-        "g": _num(g_value),
-        "g_given": g is not None,
-        "g_raw": _num(analysis.raw[measured.G_NAME]),
-        "g_interval": None if g is not None or not np.isfinite(g_low) else [_num(g_low), _num(g_high)],
-        "g_coverage": None if no_interval else _num(belt.g_calibration_coverage(cal, e_name, e_belt, g_belt, g_band)),
-        "g_interval_note": "as given (--g)" if g is not None else (
+            )))
+    return GReading(
+        _num(value),
+        None if g is not None or not np.isfinite(low) else [_num(low), _num(high)],
+        None if no_interval else _num(belt.g_calibration_coverage(calibrated.cal, e_name, e_belt, g_belt, g_band)),
+        _g_note(g is not None, bool(np.isfinite(low)), chosen is not None, calibrated.scale, sum(choice.cal_settings["lengths"])),
+        tuple(notes),
+    )
+
+
+def _g_note(given: bool, has_interval: bool, has_e: bool, scale: float, simulated: int) -> str:
+    """How the report's ``g`` was found (the JSON's ``g_interval_note``)."""
+    if given:
+        return "as given"
+    if has_interval:
+        return (
             "95 % interval: the corrected g over the scatter of the corrected g about the true g on the calibration's "
             "simulated records (the error of the corrected e included)"
-            + (f", as long as those records ({sum(cal_settings['lengths'])} samples): wider than the records' own" if scale != 1.0 else "")
-            if np.isfinite(g_low) else
-            "no interval: no e was estimated, and g is corrected at the corrected e" if chosen is None else
-            "no interval: g's interval needs a corrected e whose interval lies inside the calibrated range"
-        ),
-        "points_per_cycle": _num(analysis.points_per_cycle),
-        "sigma_y": _num(analysis.sigma_y),
-        "dt": dt,
-        "records": [r.source for r in records],
-        "samples": samples,
-        "nan_samples": int(analysis.nan_samples),
-        "record_model": model_report(measurement, why_not if measuring else None, analysis, sources, simulated, cal_settings, own_ppc),
-        "estimators": per,
-        "warnings": notes + warned,
-        "diagnostics": checks,
-        "rockdec_version": __version__,
-        "calibration": {
-            "file": f"calibration-{calibration.settings_hash(cal_settings)}.nc", "cached": cached, "seconds": round(built_s, 2),
-            "simulated_samples": sum(cal_settings["lengths"]), "spread_scale": scale,
-        },
-        "_analysis": analysis,
-        "_belts": belts,
+            + (f", as long as those records ({simulated} samples): wider than the records' own" if scale != 1.0 else "")
+        )
+    if not has_e:
+        return "no interval: no e was estimated, and g is corrected at the corrected e"
+    return "no interval: g's interval needs a corrected e whose interval lies inside the calibrated range"
+
+
+def long_record_note(analysed: Analysed, choice: ModelChoice) -> tuple:
+    """A :class:`Note` when the records are more than :data:`LONG_RATIO` times as long as
+    the calibration's simulated records (an empty tuple otherwise)."""
+    simulated = sum(choice.cal_settings["lengths"])
+    if analysed.samples <= LONG_RATIO * simulated:
+        return ()
+    return (Note("long_record", (
+        f"{analysed.samples} samples are {analysed.samples / simulated:.0f} times the calibration's simulated records, beyond the "
+        f"{LONG_RATIO:.0f} times at which the interval's coverage was measured: the narrower the interval, the more "
+        "the calibration's own error of the bias counts"
+    )),)
+
+
+class Outcome(NamedTuple):
+    """What :func:`estimate` gives: the JSON ``document`` (:func:`document`), and for plots
+    the ``analysis`` (:class:`rockdec.rdd.measured.Analysis`) and the ``belts`` of every
+    estimator at the records' length (empty when the records were declined)."""
+
+    document: dict
+    analysis: measured.Analysis
+    belts: dict
+
+
+def document(analysed: Analysed, choice: ModelChoice, calibrated: Calibrated | None, per: dict, selection: tuple,
+             g_reading: GReading | None, notes: list, checks: dict) -> dict:
+    """The report stage of :func:`estimate`: its JSON document (keys in
+    :func:`estimate`'s docstring). ``calibrated``, ``g_reading`` ``None``: the records were
+    declined before any calibration (``choice.declined``)."""
+    chosen, rows, reason = selection
+    shown = per[chosen] if chosen else {"e": None, "interval": [None, None], "coverage": None, "raw": None}
+    analysis, g = analysed.analysis, analysed.g
+    if calibrated is None:
+        g_reading = GReading(None if g is None else _num(g), None, None, _g_note(g is not None, False, False, 1.0, 0), ())
+        cal = {"file": None, "cached": False, "seconds": 0.0}
+    else:
+        cal = {
+            "file": f"calibration-{calibration.settings_hash(choice.cal_settings)}.nc", "cached": calibrated.cached,
+            "seconds": round(calibrated.seconds, 2), "simulated_samples": sum(choice.cal_settings["lengths"]),
+            "spread_scale": calibrated.scale,
+        }
+    return {
+        "e": shown["e"], "interval": shown["interval"], "reason": reason, "estimator": chosen, "selection": rows,
+        "coverage": shown["coverage"], "raw": shown["raw"], "g": g_reading.value, "g_given": g is not None,
+        "g_raw": _num(analysis.raw[measured.G_NAME]), "g_interval": g_reading.interval, "g_coverage": g_reading.coverage,
+        "g_interval_note": g_reading.note, "points_per_cycle": _num(analysis.points_per_cycle), "sigma_y": _num(analysis.sigma_y),
+        "dt": analysed.dt, "records": [r.source for r in analysed.records], "samples": analysed.samples,
+        "nan_samples": int(analysis.nan_samples), "record_model": choice.report(analysed), "estimators": per,
+        "warnings": [n.message for n in notes], "warning_codes": [n.code for n in notes], "diagnostics": checks,
+        "rockdec_version": __version__, "calibration": cal,
     }
+
+
+def declined_rows(analysed: Analysed) -> tuple[dict, tuple]:
+    """The ``estimators`` and the selection of records declined before any calibration:
+    every estimator's raw value, no corrected value or interval."""
+    analysis = analysed.analysis
+    per = {
+        name: {
+            "raw": _num(analysis.raw[name]), "e": None, "beyond": None, "calibrated_range": None, "interval": [None, None],
+            "coverage": None, "triggers": int(analysis.count[registry.trigger(name)][-1]), "notes": [],
+        }
+        for name in registry.ESTIMATORS
+    }
+    why = "not calibrated: the records are declined (see the reason)"
+    rows = [{"estimator": name, "width": None, "width_at_common_e": None, "coverage": None, "holds": False, "why_not": why}
+            for name in registry.CANDIDATES]
+    return per, (None, rows, None)
+
+
+def estimate(
+    records: list[Record], *, cache_dir, g: float | None = None, settings: dict | None = None, model: RecordModel | None = None,
+    load: Load | str | None = None, sensor: SensorNoise | None = None, rocking: str | None = None, theta_cr: float | None = None,
+) -> Outcome:
+    """Calibrated estimates of ``e`` from ``records`` of one block (pooled), in named stages.
+
+    :func:`analyse` (check and analyse) → :func:`choose_model` (measure the record model,
+    or take the declared one; decline when no calibration fits) → :func:`calibrate` (get or
+    build the calibration) → :func:`correct` (correct every estimator and invert its belt)
+    → :func:`select` (the reported estimator) → :func:`read_g` → :func:`diagnose` (the
+    checks, thresholds from the calibration) → :func:`document` (the report).
+
+    ``model`` declares the whole record model (:mod:`rockdec.physics.record_model`); else
+    ``load``, ``sensor`` and ``rocking`` declare their parts and the rest is measured.
+    Housner's model (eq. 2) needs the block's ``theta_cr`` (rad). Returns an
+    :class:`Outcome` whose ``document`` holds ``e``, ``interval`` (95 %), ``reason`` (why
+    ``e`` is null), ``estimator``, ``selection``, ``coverage``, ``raw``, ``g`` (rad/s^2),
+    ``g_given``, ``g_raw``, ``g_interval``, ``g_coverage``, ``g_interval_note``,
+    ``points_per_cycle``, ``sigma_y``, ``dt``, ``records``, ``samples``, ``nan_samples``,
+    ``record_model`` (:func:`model_report`), ``estimators`` (per estimator: ``raw``,
+    ``e``, ``interval``, ``coverage``, ``triggers``, ``notes``, ``calibrated_range``,
+    ``beyond``), ``warnings`` and ``warning_codes`` (:class:`Note`), ``diagnostics``,
+    ``rockdec_version`` and ``calibration``.
+    """
+    analysed = analyse(records, g=g, settings=settings)
+    choice = choose_model(analysed, model=model, load=load, sensor=sensor, rocking=rocking, theta_cr=theta_cr)
+    if choice.declined:
+        per, selection = declined_rows(analysed)
+        doc = document(analysed, choice, None, per, (None, selection[1], choice.declined), None, list(analysed.notes), {})
+        return Outcome(doc, analysed.analysis, {})
+    calibrated = calibrate(analysed, choice, cache_dir)
+    per = correct(analysed, calibrated)
+    selection = select(per, calibrated.n_sets, calibrated.belts)
+    chosen = selection[0]
+    shown = per[chosen] if chosen else {"e": None, "interval": [None, None]}
+    g_reading = read_g(analysed, choice, calibrated, chosen, math.nan if shown["e"] is None else shown["e"])
+    notes = [*analysed.notes, *calibrated.notes, *g_reading.notes, *long_record_note(analysed, choice)]
+    fired, checks = diagnose(list(analysed.records), analysed.analysis, analysed.settings, calibrated.cal,
+                             *checks_place(per, shown), 1.0 / calibrated.scale**2)
+    doc = document(analysed, choice, calibrated, per, selection, g_reading, notes + fired, checks)
+    return Outcome(doc, analysed.analysis, calibrated.belts)
 
 
 def beyond(b: belt.Belt, raw: float, c: belt.Corrected) -> str | None:

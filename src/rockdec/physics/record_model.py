@@ -354,14 +354,14 @@ def parse_load(text: str, *, dt: float | None = None, points_per_cycle: float | 
         try:
             corner = float(arg)
         except ValueError:
-            raise checks.InputError(f"--load {text!r}: the corner '{arg}' is not a number; give lowpass:CORNER with CORNER in rocking frequencies, > 0") from None
+            raise checks.InputError(f"`load` {text!r}: the corner '{arg}' is not a number; give lowpass:CORNER with CORNER in rocking frequencies, > 0") from None
         return Load("lowpass", corner)
     if kind in ("spectrum", "base") and arg:
         f_rock = None
         if dt is not None and points_per_cycle is not None:
             f_rock = 1.0 / (checks.positive(dt, "dt") * checks.positive(points_per_cycle, "points_per_cycle"))
         return (read_base_record if kind == "base" else read_spectrum_table)(arg, f_rock)
-    raise checks.InputError(f"--load {text!r} is not a load; give one of {LOAD_FORMS}")
+    raise checks.InputError(f"`load` {text!r} is not a load; give one of {LOAD_FORMS}")
 
 
 @dataclasses.dataclass(frozen=True)

@@ -179,7 +179,7 @@ def calibrate(scene: dict, amplitude: float = 0.0, theta0: float = 0.0, theta_do
     draw = load.draw_options(exc["points_per_cycle"])
     if sigma_p == 0.0:
         if exc["dt"] is None and amplitude <= 0.0:
-            raise checks.InputError("a free response (sigma_p = 0) needs --theta0 > 0 to set the step, or --dt")
+            raise checks.InputError("a free response (sigma_p = 0) needs `theta0` > 0 to set the step, or `dt`")
         dt = exc["dt"] if exc["dt"] is not None else float(period_from_g(abs(amplitude), g)) / exc["points_per_cycle"]
         nan = math.nan
         cal = {"dt": dt, "burn_in": 0, "sigma_y": nan, "sigma_ydot": nan, "points_per_cycle": nan}

@@ -264,12 +264,12 @@ def default_burn_in(e: float, points_per_cycle: float, relaxations: float = 20.0
     checks.positive(points_per_cycle, "points_per_cycle")
     loss = 1.0 - e**4
     if loss <= 0.0:
-        raise checks.InputError("e = 1 dissipates no energy, so no stationary state exists: give --burn-in explicitly")
+        raise checks.InputError("e = 1 dissipates no energy, so no stationary state exists: give `burn_in` explicitly")
     steps = relaxations * points_per_cycle / loss
     if steps > MAX_DEFAULT_BURN_IN:
         raise checks.InputError(
             f"e = {e} loses only {loss:.2g} of the energy per cycle, so reaching the stationary state "
-            f"takes about {steps:.3g} steps; give --burn-in (and --dt) explicitly"
+            f"takes about {steps:.3g} steps; give `burn_in` (and `dt`) explicitly"
         )
     return int(math.ceil(steps))
 
@@ -311,17 +311,17 @@ def calibrate_dt(
     if e >= 1.0:
         raise checks.InputError(
             "e = 1 dissipates no energy, so the response never becomes stationary and "
-            "sigma_Y does not exist: give the time step explicitly (--dt) instead of "
-            "--points-per-cycle"
+            "sigma_Y does not exist: give the time step explicitly (`dt`) instead of "
+            "`points_per_cycle`"
         )
     if sigma_p <= 0.0:
-        raise checks.InputError("time-step calibration needs noise: sigma_p must be > 0 (or give --dt)")
+        raise checks.InputError("time-step calibration needs noise: sigma_p must be > 0 (or give `dt`)")
     burn_in = default_burn_in(e, points_per_cycle)
     seeds = np.arange(pilot_seeds) + PILOT_SEED_OFFSET
     dt = step_for_density(SCALE_CONSTANT_GUESS, sigma_p, g, points_per_cycle)
     outside = checks.InputError(
         f"the time-step calibration at g = {g}, sigma_p = {sigma_p} leaves the floating-point range; "
-        "give the time step explicitly (--dt)"
+        "give the time step explicitly (`dt`)"
     )
     history: list[tuple[float, float]] = []
     coloured = not (pole == 0.0 and spectrum is None)

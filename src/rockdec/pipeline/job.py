@@ -3,7 +3,7 @@
 A workflow script (``workflow/scripts/*.py``) is a thin adapter: its work sits in a
 function of the ``snakemake`` object, called as ``job.run(main, snakemake)`` under an
 ``if __name__ == "__main__":`` guard. The guard matters for the ``processes:N`` engine
-(:mod:`rockdec.pipeline.engine`): Dask's worker processes are spawned, and a spawned process
+(:mod:`rockdec.engine`): Dask's worker processes are spawned, and a spawned process
 re-runs the script file as a module named ``__mp_main__``, without the ``snakemake``
 object Snakemake's preamble defines; guarded, the re-run defines the function and does
 nothing.

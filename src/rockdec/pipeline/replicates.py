@@ -28,7 +28,8 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from rockdec.pipeline import engine, series
+from rockdec import engine
+from rockdec.pipeline import series
 from rockdec.rdd import estimators, signatures
 from rockdec.report import tables
 from rockdec.pipeline.layout import READINGS, scene_seeds
@@ -127,9 +128,9 @@ def scene_cubes(run: Run, records: dict, settings: dict, readings, series_files=
     ``store_series: all``), read back; either way it is analysed as float32 stores it
     (:func:`rockdec.pipeline.series.as_recorded`), so both give the same cubes bit for bit. The
     series are reduced at once to the sums of the pass's units (:func:`pass_units`), which
-    add up to each reading's groups. Computed on the engine of :mod:`rockdec.pipeline.engine`
+    add up to each reading's groups. Computed on the engine of :mod:`rockdec.engine`
     (``threads`` threads by default, each block's unit sums written into the cube's arrays as
-    it ends, :func:`rockdec.pipeline.engine.compute_in_place`; the readings are then pooled on
+    it ends, :func:`rockdec.engine.compute_in_place`; the readings are then pooled on
     as many threads).
     Each cube's attributes hold the run
     (:meth:`rockdec.physics.run.Run.to_attrs`) and its ``reading``. ``first_replicate`` numbers

@@ -25,8 +25,9 @@ def stored_series(run: str | Path, nc: str | Path, records: dict) -> None:
     :func:`rockdec.pipeline.layout.simulation_seeds`), simulated under the run contract ``run``
     (``run.json``) and written as float32. A handful of series: on one thread of Dask's
     ``threads`` engine whatever ``ROCKDEC_DASK_SCHEDULER`` names (every engine gives the same
-    numbers, :mod:`rockdec.pipeline.engine`), so no worker process starts inside Snakemake's."""
-    from rockdec.pipeline import engine, layout
+    numbers, :mod:`rockdec.engine`), so no worker process starts inside Snakemake's."""
+    from rockdec import engine
+    from rockdec.pipeline import layout
     from rockdec.physics.run import Run
 
     ds = Run.read(run).dataset(layout.simulation_seeds(records), records["n_points"], records["chunk_seeds"])
@@ -40,9 +41,9 @@ def series(run: str | Path, nc: str | Path, records: dict, replicate: int, threa
     ``replicate``, simulated under the run contract ``run`` and written as float32, chunked
     by seed (:func:`rockdec.pipeline.series.write_replicate`), on ``threads`` threads of
     Dask's ``threads`` engine whatever ``ROCKDEC_DASK_SCHEDULER`` names (every engine gives
-    the same numbers, :mod:`rockdec.pipeline.engine`), so no worker process starts inside
+    the same numbers, :mod:`rockdec.engine`), so no worker process starts inside
     Snakemake's."""
-    from rockdec.pipeline import engine
+    from rockdec import engine
     from rockdec.pipeline import series as series_files
     from rockdec.physics.run import Run
 

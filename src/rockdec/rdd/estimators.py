@@ -44,7 +44,7 @@ from typing import TYPE_CHECKING, NamedTuple
 import numpy as np
 from numba import njit
 
-from rockdec import __version__
+from rockdec._version import __version__
 from rockdec.rdd import registry
 from rockdec import validate as checks
 from rockdec.rdd.fits import DEFAULT_FIT_POINTS, MIN_FIT_POINTS

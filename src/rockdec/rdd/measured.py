@@ -74,7 +74,8 @@ class Analysis(NamedTuple):
     window; ``count``: triggers per window, ``{"a": ..., "v": ...}``; ``sigma_y`` (rad),
     ``points_per_cycle`` (samples per cycle at amplitude ``sigma_y`` with the measured
     ``g``, eq. 5), ``dt`` (s), ``n_lag``; ``free_response`` (largest window,
-    ``tau >= 0``) for plots; ``nan_samples``: NaN samples in the records.
+    ``tau >= 0``) and ``velocity_signature`` (``D_v`` at the largest window, two-sided,
+    ``tau`` from ``-n_lag dt`` to ``n_lag dt``) for plots; ``nan_samples``: NaN samples in the records.
     """
 
     raw: dict
@@ -85,6 +86,7 @@ class Analysis(NamedTuple):
     dt: float
     n_lag: int
     free_response: np.ndarray
+    velocity_signature: np.ndarray
     nan_samples: int
 
 
@@ -220,7 +222,7 @@ def analyse(records, dt: float, settings: dict | None = None, g: float | None = 
         if not np.isfinite(g_first):
             raise ValueError(
                 "the free-response estimate never crosses zero inside the record, so g cannot be read off it; "
-                "give g (--g), or a longer record"
+                "give `g`, or a longer record"
             )
     lag_g = g if g is not None else g_first
     n_lag = signatures.lag_samples(opts["n_periods"], a, lag_g, dt)
@@ -244,5 +246,6 @@ def analyse(records, dt: float, settings: dict | None = None, g: float | None = 
         dt=float(dt),
         n_lag=int(n_lag),
         free_response=_largest_window_response(sums[0], counts[0]),
+        velocity_signature=signatures.mean_signature(sums[1][None, -1:], counts[1][None, -1:], triggers=("v",), warn=False)[0, 0],
         nan_samples=nan_samples,
     )

@@ -69,7 +69,7 @@ from typing import TYPE_CHECKING, NamedTuple
 import numpy as np
 from numba import njit
 
-from rockdec import __version__
+from rockdec._version import __version__
 from rockdec import validate as checks
 from rockdec.physics.models import period_from_g
 from rockdec.timeaxis import sampling_step

@@ -424,7 +424,7 @@ def fit_structures(gammas: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarr
     if not np.isfinite(rss).any(axis=1).all():  # a structure function with no spread: nothing to fit a model to
         raise checks.InputError(
             "the second differences of the records have no usable spread (a record at rest, or one that chatters at zero "
-            "almost all the time), so their model cannot be measured; declare it (--load, --sensor-noise)"
+            "almost all the time), so their model cannot be measured; declare it (`load`, `sensor_noise`)"
         )
     best = np.nanargmin(rss, axis=1)
     lo, hi = POLE_GRID[np.maximum(best - 1, 0)], POLE_GRID[np.minimum(best + 1, POLE_GRID.size - 1)]

@@ -49,13 +49,13 @@ def sampling_step(time, source: str) -> float:
 
 def _step_from_options(dt, fs, source: str) -> float | None:
     if dt is not None and fs is not None:
-        raise RecordError(f"{source}: give the sampling as --dt or --fs, not both.")
+        raise RecordError(f"{source}: give the sampling as `dt` or `fs`, not both.")
     if fs is not None:
         if not (np.isfinite(fs) and fs > 0 and np.isfinite(1.0 / fs) and 1.0 / fs > 0):
-            raise RecordError(f"--fs {show(fs)}: not a positive, finite sampling rate with a finite step 1/fs; give the rate in Hz, > 0.")
+            raise RecordError(f"`fs` {show(fs)}: not a positive, finite sampling rate with a finite step 1/fs; give the rate in Hz, > 0.")
         return 1.0 / fs
     if dt is not None and not (np.isfinite(dt) and dt > 0):
-        raise RecordError(f"--dt {show(dt)}: not a positive, finite number of seconds; give the sampling step in s, > 0.")
+        raise RecordError(f"`dt` {show(dt)}: not a positive, finite number of seconds; give the sampling step in s, > 0.")
     return dt
 
 
@@ -104,10 +104,10 @@ def _read_csv(path: Path, column: str, step: float | None) -> tuple[np.ndarray, 
     values, time = (plain[column], plain.get("time")) if plain is not None else _pandas_columns(path, sep, column)
     if time is not None:
         if step is not None:
-            raise RecordError(f"{path}: the file has a time column, so --dt/--fs would contradict it; drop the option.")
+            raise RecordError(f"{path}: the file has a time column, so `dt`/`fs` would contradict it; drop the option.")
         step = sampling_step(time if isinstance(time, np.ndarray) else _numeric(time, path, "time"), str(path))
     elif step is None:
-        raise RecordError(f"{path}: no 'time' column; give the sampling step with --dt SECONDS or --fs HZ.")
+        raise RecordError(f"{path}: no 'time' column; give the sampling step as `dt` (s) or `fs` (Hz).")
     return values, step
 
 
@@ -120,7 +120,7 @@ def _pandas_columns(path: Path, sep: str, column: str):
     try:
         table = pd.read_csv(path, **options)
     except pd.errors.EmptyDataError:
-        raise RecordError(f"{path}: the file is empty; give a CSV with a 'time,{column}' header or one column and --dt.") from None
+        raise RecordError(f"{path}: the file is empty; give a CSV with a 'time,{column}' header or one column and `dt`.") from None
     except (pd.errors.ParserError, UnicodeDecodeError) as exc:
         raise RecordError(f"{path}: not a readable CSV file ({str(exc).splitlines()[0]}).") from None
     if table.shape[1] == 1 and table.columns[0] not in ("time", column):
@@ -128,7 +128,7 @@ def _pandas_columns(path: Path, sep: str, column: str):
         table = pd.read_csv(path, header=None, names=[column], **options)
     table.columns = [str(c).strip() for c in table.columns]
     if column not in table.columns:
-        raise RecordError(f"{path}: no column '{column}' (columns: {', '.join(table.columns)}); name it with --column.")
+        raise RecordError(f"{path}: no column '{column}' (columns: {', '.join(table.columns)}); name it with `column`.")
     return _numeric(table[column], path, column), table["time"] if "time" in table.columns else None
 
 
@@ -154,7 +154,7 @@ def _read_netcdf(path: Path, variable: str, step: float | None) -> tuple[np.ndar
         raise RecordError(f"{path}: not a readable NetCDF file ({exc}).") from None
     with ds:
         if variable not in ds:
-            raise RecordError(f"{path}: no variable '{variable}' (variables: {', '.join(map(str, ds.data_vars))}); name it with --variable.")
+            raise RecordError(f"{path}: no variable '{variable}' (variables: {', '.join(map(str, ds.data_vars))}); name it with `variable`.")
         var = ds[variable]
         if var.ndim == 2 and "time" in var.dims:
             var = var.transpose(..., "time")  # one record per row, e.g. theta(seed, time) of `rockdec simulate`
@@ -171,9 +171,9 @@ def _read_netcdf(path: Path, variable: str, step: float | None) -> tuple[np.ndar
                 try:
                     (step,) = np.asarray(text, dtype=np.float64).ravel()
                 except (TypeError, ValueError):
-                    raise RecordError(f"{path}: its attribute dt {text!r} is not a number of seconds; fix it or give --dt SECONDS.") from None
+                    raise RecordError(f"{path}: its attribute dt {text!r} is not a number of seconds; fix it or give `dt` (s).") from None
             else:
-                raise RecordError(f"{path}: '{variable}' has no time coordinate and no 'dt' attribute; give --dt SECONDS or --fs HZ.")
+                raise RecordError(f"{path}: '{variable}' has no time coordinate and no 'dt' attribute; give `dt` (s) or `fs` (Hz).")
     return values, step
 
 
@@ -200,6 +200,12 @@ def read_records(path, *, column: str = "theta", variable: str = "theta", dt: fl
         values, step = _read_csv(path, column, step)
     elif suffix in (".nc", ".nc4", ".netcdf"):
         values, step = _read_netcdf(path, variable, step)
+    elif suffix == ".mat":
+        from rockdec.record.matlab import read_mat
+
+        values, step = read_mat(path, variable, step)
+        if step is None:
+            raise RecordError(f"{path}: the .mat file has no time vector (time or t) and no dt or fs; give `dt` (s) or `fs` (Hz).")
     elif suffix == ".npy":
         try:
             values = np.load(path, allow_pickle=False)
@@ -208,10 +214,10 @@ def read_records(path, *, column: str = "theta", variable: str = "theta", dt: fl
         if values.ndim != 1 or values.dtype.kind not in "fiu":
             raise RecordError(f"{path}: holds a {values.dtype} array of shape {values.shape}; give a 1-D array of angles in rad.")
         if step is None:
-            raise RecordError(f"{path}: a .npy record has no time axis; give --dt SECONDS or --fs HZ.")
+            raise RecordError(f"{path}: a .npy record has no time axis; give `dt` (s) or `fs` (Hz).")
         values = values.astype(np.float64)
     else:
-        raise RecordError(f"{path}: unknown record format '{suffix}'; give a .csv, .nc or .npy file.")
+        raise RecordError(f"{path}: unknown record format '{suffix}'; give a .csv, .nc, .npy or .mat file.")
     if values.ndim == 2:
         return [check_values(row, step, f"{source}[{i}]") for i, row in enumerate(values)]
     return [check_values(values, step, source)]
@@ -221,7 +227,7 @@ def check_values(theta, dt: float, source: str) -> Record:
     """Check the samples of a record (finite step, no inf, few NaN, not constant, long enough)."""
     theta = np.asarray(theta, dtype=np.float64)
     if not (np.isfinite(dt) and dt > 0):
-        raise RecordError(f"{source}: the sampling step {dt} is not a positive, finite number of seconds; give --dt.")
+        raise RecordError(f"{source}: the sampling step {dt} is not a positive, finite number of seconds; give `dt` in s.")
     if not np.isfinite(dt * theta.size) or dt < np.finfo(np.float64).tiny:
         raise RecordError(
             f"{source}: a sampling step of {dt:g} s over {theta.size} samples is beyond the range of a float "

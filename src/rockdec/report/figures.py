@@ -38,15 +38,14 @@ from matplotlib.figure import Figure  # noqa: E402
 
 from rockdec.physics import models
 from rockdec.rdd import registry  # noqa: E402
-from rockdec.pipeline.layout import FIGURES  # noqa: E402  (the workflow's file names, drawn here)
 from rockdec.physics.models import period_from_g  # noqa: E402
 
 # rockdec.rdd.signatures (numba, dask), rockdec.report.tables (scipy.stats), rockdec.studies.tradeoff (numba,
 # dask) and scipy.optimize are imported where they are used: a study's plot rule and
-# `rockdec estimate --plot` are fresh processes, and these imports would double their
+# a record's plot are fresh processes, and these imports would double their
 # start-up time for the figures that do not need them.
 
-__all__ = ["FIGURES", "fig1b", "fig2", "fig3", "fig4", "fig_ev", "fig_record", "free_rocking", "save"]
+__all__ = ["fig1b", "fig2", "fig3", "fig4", "fig_ev", "fig_record", "free_rocking", "save"]
 
 WINDOW_LABEL = r"relative window size $\Delta a/\Delta a_{max}$"
 TARGET_STYLE = {"color": "k", "ls": "--", "lw": 1.0}
@@ -57,22 +56,6 @@ OURS_STYLE = {"marker": "o", "ms": 5, "ls": "none", "zorder": 6}
 SPREAD_ALPHA = 0.18
 """Shading of the spread across replicates (mean +- 1 std), told apart from the error bars
 of the mean (+- 1 standard error)."""
-
-PARETO_ESTIMATORS = registry.BY_RANK[:4]
-"""Estimators drawn by :func:`pareto_figure` by default: the first four of the studies' order."""
-
-KNOB_LABELS = {
-    "points_per_cycle": "ppc",
-    "n_points": "points",
-    "series_per_replicate": "series",
-    "n_windows": "windows",
-    "level": "level",
-    "n_periods": "lag periods",
-    "simulator": "",
-    "fixed_step_points_per_cycle": "fixed-step ppc",
-}
-"""Short knob names (:data:`rockdec.studies.tradeoff.KNOBS`) for the labels of the Pareto front."""
-
 
 # --------------------------------------------------------------------------- helpers
 
@@ -514,157 +497,77 @@ def fig_amplitude(ds: xr.Dataset, estimators=registry.CANDIDATES) -> Figure:
     return fig
 
 
-def pareto_figure(table, estimators_shown=PARETO_ESTIMATORS) -> Figure:
-    """The speed/accuracy study: CPU seconds per replicate (log) against RMSE (log), one
-    panel per estimator.
+def fig_record(res, axes=None) -> Figure:
+    """A measured record's estimate (:meth:`rockdec.RestitutionEstimate.plot`): the
+    reported estimator's signature beside its calibration.
 
-    ``table``: :func:`rockdec.studies.tradeoff.study_table`. One marker per configuration, coloured
-    by the knob moved (the base scene a black star); the Pareto front
-    (:func:`rockdec.studies.tradeoff.pareto_front`) as a step line with its points labelled; grey
-    lines at the RMSE of the accuracy classes.
+    Left: for ``e_v``, the zero-crossing signature ``D_v`` (largest window) through the
+    impact at lag 0, with the straight slopes before and after it whose ratio is ``e``
+    (eq. 6); for the other estimators, the free-response estimate (even part of ``D_a``)
+    beside the free rocking of eqs. 4 and 6 from ``(c1, 0)`` at the corrected ``e`` and
+    ``g``: the two part after the first half cycle because a trigger window mixes
+    amplitudes, and so periods (eq. 5), which damps the average beyond what ``e`` does
+    (paper §5); that bias is what the calibration corrects. Right: the calibration belt
+    of the reported estimator (mean raw estimate against the true ``e``, and its 95 %
+    band) with the observed raw value and the corrected ``e`` and interval read off it;
+    a note instead when the records were declined before calibrating.
+
+    ``res``: a :class:`rockdec.RestitutionEstimate` made from a record (it carries the
+    analysis and belts); ``axes``: two axes to draw in, or ``None`` for a new figure.
     """
-    from rockdec.studies import tradeoff
-
-    shown = [name for name in estimators_shown if name in set(table["estimator"])]
-    n_col = 2 if len(shown) > 1 else 1
-    n_row = math.ceil(len(shown) / n_col)
-    fig = _new_figure(6.0 * n_col, 4.6 * n_row)
-    axes = np.atleast_1d(fig.subplots(n_row, n_col, sharex=True, sharey=True)).ravel()
-    knobs = list(table.loc[~table["base"], "knob"].unique())
-    colors = {k: matplotlib.colormaps["tab10"](i % 10) for i, k in enumerate(knobs)}
-    handles = {}
-    for ax, name in zip(axes, shown):
-        # one marker per distinct configuration (the base and the fixed-step run at the
-        # base density are listed under two knobs each)
-        points = table[table["estimator"] == name].drop_duplicates(tradeoff.SETTING_COLUMNS)
-        for knob in knobs:
-            sel = points[(points["knob"] == knob) & ~points["base"]]
-            handles[knob] = ax.scatter(sel["cpu_s_per_replicate"], sel["rmse"], s=28, color=colors[knob],
-                                       label=knob.replace("_", " "), zorder=3)
-        base = points[points["base"]]
-        if not base.empty:
-            handles["base"] = ax.scatter(base["cpu_s_per_replicate"], base["rmse"], s=110, marker="*", color="k",
-                                         label="base scene", zorder=4)
-        front = points.iloc[tradeoff.pareto_front(points["cpu_s_per_replicate"], points["rmse"])]
-        ax.step(front["cpu_s_per_replicate"], front["rmse"], where="post", color="0.3", lw=1.2, zorder=2)
-        for k, (_, row) in enumerate(front.iterrows()):
-            text = "base" if row["base"] else f"{KNOB_LABELS.get(row['knob'], row['knob'])} {row['value']}".strip()
-            ax.annotate(text, (row["cpu_s_per_replicate"], row["rmse"]), textcoords="offset points",
-                        xytext=(4, 4) if k % 2 == 0 else (-4, -11), ha="left" if k % 2 == 0 else "right",
-                        fontsize=6.5, color="0.25")
-        for tol in tradeoff.ACCURACY_CLASSES:
-            ax.axhline(tol, color="0.75", lw=0.7, ls=":", zorder=1)
-        ax.set_xscale("log")
-        ax.set_yscale("log")
-        ax.set_title(f"{name}: Pareto front of cost and RMSE", fontsize="medium")
-        ax.grid(True, which="major", lw=0.3, alpha=0.5)
-    for ax in axes[len(shown):]:
-        ax.set_visible(False)
-    for ax in axes[-n_col:]:
-        ax.set_xlabel("CPU seconds per replicate")
-    for ax in axes[::n_col]:
-        ax.set_ylabel("RMSE of the estimate of e")
-    fig.legend(handles=list(handles.values()), loc="outside lower center", ncol=min(5, len(handles)), fontsize="small")
-    return fig
-
-
-def fig_record(result: dict) -> Figure:
-    """A measured record's estimate (``rockdec estimate --plot``): signature and calibration.
-
-    Left: the free-response estimate of the record (even part of ``D_a``, largest window)
-    beside the free rocking of eqs. 4 and 6 from ``(c1, 0)`` with the corrected ``e`` and
-    ``g``. Right: the calibration belt of the reported estimator (mean of the raw estimate
-    against the true ``e``, and its 95 % band) with the observed raw value and the
-    corrected ``e`` and interval read off it. ``result`` is
-    :func:`rockdec.calibrate.inference.estimate`'s output.
-    """
-    name = result["estimator"] or registry.DEFAULT_ESTIMATOR  # none trusted: the default's belt, without a value
-    analysis, belt = result["_analysis"], result["_belts"][name]
-    fig = _new_figure(10.0, 4.0)
-    left, right = fig.subplots(1, 2)
-    r = analysis.free_response
-    tau = np.arange(r.size) * analysis.dt
-    left.plot(tau, r, color="tab:blue", lw=1.2, label="free-response estimate (even part of $D_a$)")
-    if result["e"] is not None and result["g"] is not None:
-        left.plot(tau, free_rocking(tau, float(r[0]), 0.0, result["g"], result["e"]), "k--", lw=1.0,
-                  label=f"free rocking, e = {result['e']:.3f}, g = {result['g']:.3g} rad/s$^2$ (eqs. 4, 6)")
+    doc = res.document
+    name = doc["estimator"] or registry.DEFAULT_ESTIMATOR  # none trusted: the default's belt, without a value
+    analysis, belt = res.analysis, (res.belts or {}).get(name)
+    if axes is None:
+        fig = _new_figure(10.0, 4.0)
+        left, right = fig.subplots(1, 2)
+    else:
+        left, right = axes
+        fig = left.figure
+    e, g = doc["e"], doc["g"]
+    if registry.trigger(name) == "v":
+        d = analysis.velocity_signature
+        tau = (np.arange(d.size) - d.size // 2) * analysis.dt
+        left.plot(tau, d, color="tab:blue", lw=1.2, label="$D_v$: average motion through an impact")
+        raw = doc["estimators"][name]["raw"]
+        if raw is not None and np.isfinite(d).any():
+            k = max(2, d.size // 16)
+            before = np.polyfit(tau[d.size // 2 - k:d.size // 2 + 1], d[d.size // 2 - k:d.size // 2 + 1], 1)[0]
+            span = tau[d.size // 2 - k:d.size // 2 + k + 1]
+            left.plot(span[span <= 0], before * span[span <= 0], "k--", lw=1.0, label="slope before the impact")
+            left.plot(span[span >= 0], raw * before * span[span >= 0], "r--", lw=1.0, label=f"slope after = {raw:.3f} x before (raw e_v)")
+        left.axvline(0.0, color="0.6", lw=0.6)
+        title = "zero-crossing signature of the record"
+    else:
+        r = analysis.free_response
+        tau = np.arange(r.size) * analysis.dt
+        left.plot(tau, r, color="tab:blue", lw=1.2, label="free-response estimate (even part of $D_a$)")
+        if e is not None and g is not None:
+            left.plot(tau, free_rocking(tau, float(r[0]), 0.0, g, e), "k--", lw=1.0,
+                      label=f"free rocking, e = {e:.3f}, g = {g:.3g} rad/s$^2$ (eqs. 4, 6)")
+            left.text(0.98, 0.04, "after the first half cycle the two part: the triggers mix\namplitudes, and so periods "
+                      "(the bias the calibration corrects)", transform=left.transAxes, ha="right", va="bottom", fontsize=7)
+        title = "signature of the record"
     left.axhline(0.0, color="0.6", lw=0.6)
-    left.set(xlabel=r"lag $\tau$ (s)", ylabel="angle (rad)", title="signature of the record")
+    left.set(xlabel=r"lag $\tau$ (s)", ylabel="angle (rad)", title=title)
     left.legend(fontsize=8, loc="upper right")
+    if belt is None:
+        right.text(0.5, 0.5, "no calibration: the records were declined\n(see the reason in the report)", ha="center", va="center",
+                   transform=right.transAxes)
+        right.set(title="calibration (simulated records)", xticks=[], yticks=[])
+        return fig
     from rockdec.calibrate.belt import Z95
 
     right.fill_between(belt.e, belt.mean - Z95 * belt.spread, belt.mean + Z95 * belt.spread, color="tab:blue", alpha=0.25, label="95 % of simulated estimates")
     right.plot(belt.e, belt.mean, color="tab:blue", label="mean raw estimate")
     right.plot(belt.e, belt.e, **TARGET_STYLE, label="no bias")
-    raw = result["raw"]
+    raw = doc["estimators"][name]["raw"]
     if raw is not None:
         right.axhline(raw, color="tab:red", lw=1.0, label=f"observed {name} = {raw:.4f}")
-    if result["e"] is not None:
-        low, high = result["interval"]
-        right.axvspan(low, high, color="tab:red", alpha=0.15, label=f"e = {result['e']:.4f}, 95 %: [{low:.4f}, {high:.4f}]")
-        right.axvline(result["e"], color="tab:red", lw=1.0)
+    if e is not None:
+        low, high = doc["interval"]
+        right.axvspan(low, high, color="tab:red", alpha=0.15, label=f"e = {e:.4f}, 95 %: [{low:.4f}, {high:.4f}]")
+        right.axvline(e, color="tab:red", lw=1.0)
     right.set(xlabel="true e", ylabel=f"raw {name} at zero window", title="calibration (simulated records)")
     right.legend(fontsize=8, loc="upper left")
-    return fig
-
-
-def fig_coverage(table) -> Figure:
-    """Coverage of the reported 95 % interval and corrected bias, per condition and true ``e``.
-
-    ``table``: :func:`rockdec.studies.coverage.table` (one row per cell). x axis: the conditions,
-    the true ``e`` side by side within each; filled circles the kernel's records, crosses
-    the reference simulator's. Left: coverage on the records the tool answered (the band
-    :data:`rockdec.studies.coverage.COVERAGE_BAND` shaded, 95 % dashed) with its binomial
-    standard error, the share of records declined written beside it (a cell declined
-    whole is a triangle on the axis's floor), and open circles for the paper model's
-    interval on every record; below it, how many cells lie outside the band against what a
-    calibrated interval leaves (:func:`rockdec.studies.coverage.band_chance`). Right:
-    corrected bias over its sd (the band ``+-`` :data:`rockdec.studies.coverage.BIAS_RATIO` shaded).
-    """
-    from rockdec.studies.coverage import BAND_MIN_ANSWERED, BIAS_RATIO, COVERAGE_BAND, band_chance
-    from rockdec.pipeline.layout import COVERAGE_CONDITIONS, COVERAGE_E
-
-    conditions = [c for c in COVERAGE_CONDITIONS if c in set(table["condition"])]
-    es = sorted(set(COVERAGE_E) | set(table["e_true"]))
-    colours = matplotlib.colormaps["viridis"](np.linspace(0.0, 0.9, len(es)))
-    fig = _new_figure(13.0, 4.5)
-    cov_ax, bias_ax = fig.subplots(1, 2)
-    width = 0.8 / len(es)
-    shown = np.concatenate([table["answered_coverage"].to_numpy(float), table["paper_coverage"].to_numpy(float)])
-    floor = min(0.5, float(np.nanmin(shown)) - 0.05) if np.isfinite(shown).any() else 0.5
-    for row in table.itertuples():
-        x = conditions.index(row.condition) + (es.index(row.e_true) - (len(es) - 1) / 2) * width
-        colour = colours[es.index(row.e_true)]
-        kernel = row.simulator == "kernel"
-        x += 0.0 if kernel else width / 3
-        marker = "o" if kernel else "x"
-        if row.answered:
-            cov_ax.errorbar(x, row.answered_coverage, yerr=row.answered_coverage_se, color=colour, marker=marker, ms=5, lw=0.8, ls="none")
-        else:
-            cov_ax.plot(x, floor + 0.01, marker="v", color=colour, ms=6, ls="none")
-        if row.declined > 0:
-            y = row.answered_coverage if row.answered else floor + 0.01
-            cov_ax.annotate(f"{row.declined:.0%}", (x, y), xytext=(0, 7), textcoords="offset points", ha="center", fontsize=6, color=colour)
-        if kernel:
-            cov_ax.plot(x, row.paper_coverage, marker="o", mfc="none", color=colour, ms=5, ls="none")
-        bias_ax.plot(x, row.bias_over_sd, color=colour, marker=marker, ms=5, ls="none")
-    cov_ax.axhspan(*COVERAGE_BAND, color="tab:green", alpha=0.15, label=f"{COVERAGE_BAND[0]:.0%}-{COVERAGE_BAND[1]:.0%}")
-    cov_ax.axhline(0.95, **TARGET_STYLE)
-    bias_ax.axhspan(-BIAS_RATIO, BIAS_RATIO, color="tab:green", alpha=0.15, label=f"|bias| <= {BIAS_RATIO:g} sd")
-    bias_ax.axhline(0.0, **TARGET_STYLE)
-    for e, colour in zip(es, colours):
-        cov_ax.plot([], [], marker="o", color=colour, ls="none", label=f"e = {e:g}")
-    cov_ax.plot([], [], marker="o", mfc="none", color="0.4", ls="none", label="paper model's interval")
-    cov_ax.plot([], [], marker="x", color="0.4", ls="none", label="reference simulator")
-    cov_ax.plot([], [], marker="v", color="0.4", ls="none", label="every record declined (% beside: share declined)")
-    for ax, what in ((cov_ax, "coverage of the reported 95 % interval (answered records)"), (bias_ax, "corrected bias / sd")):
-        ax.set_xticks(range(len(conditions)), [c.replace("_", "\n") for c in conditions], fontsize=8)
-        ax.set(xlabel="condition", ylabel=what)
-    chance = band_chance(table)
-    cov_ax.set_xlabel(f"condition\n{chance['outside']} of {chance['cells']} cells answered on {BAND_MIN_ANSWERED} or more records "
-                      f"outside the band\n(a calibrated interval leaves {chance['expected_outside']:.1f}); dispersion "
-                      f"{chance['chi2_ratio']:.2f} x binomial", fontsize=8)
-    cov_ax.set_ylim(floor, 1.02)
-    cov_ax.legend(fontsize=7, loc="lower left", bbox_to_anchor=(0.0, 1.02), ncol=4)  # above: the floor holds the declined cells
-    bias_ax.legend(fontsize=7)
     return fig

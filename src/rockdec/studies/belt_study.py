@@ -19,7 +19,7 @@ import pandas as pd
 import xarray as xr
 
 from rockdec.calibrate import belt, calibration
-from rockdec.pipeline import engine
+from rockdec import engine
 from rockdec.rdd import measured, registry
 
 #: Seed bases of the test bed: the calibration's, moved by multiples of this (far apart

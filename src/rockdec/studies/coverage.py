@@ -40,7 +40,7 @@ import pandas as pd
 import xarray as xr
 from scipy import stats
 
-from rockdec.pipeline import engine
+from rockdec import engine
 from rockdec.calibrate import inference
 from rockdec.rdd import registry
 from rockdec.pipeline.layout import COVERAGE_CASES, COVERAGE_CONDITIONS, COVERAGE_SIMULATORS
@@ -161,7 +161,7 @@ def estimate_record(theta: np.ndarray, dt: float, source: str, cache_dir, model)
     """:func:`rockdec.calibrate.inference.estimate` of one record, flattened; a refusal
     (:class:`rockdec.record.records.RecordError`) is a null ``e`` with the refusal as its reason."""
     try:
-        out = inference.estimate([Record(theta, dt, source)], cache_dir=cache_dir, model=model)
+        out = inference.estimate([Record(theta, dt, source)], cache_dir=cache_dir, model=model).document
     except RecordError as exc:
         return {"e": math.nan, "low": math.nan, "high": math.nan, "reason": f"refused: {exc}", "estimator": "", "warnings": [],
                 "points_per_cycle": math.nan, "calibration": "", "per": {}, **_model_read(None)}

@@ -48,7 +48,7 @@ import pandas as pd
 
 from rockdec.calibrate import calibration, inference
 from rockdec.record import diagnostics
-from rockdec.pipeline import engine
+from rockdec import engine
 from rockdec.rdd import measured
 from rockdec.physics.loading import add_sensor_noise, draw_impulses, series_rng
 from rockdec.physics.simulate import calibrate_dt, integrate
@@ -180,7 +180,7 @@ def _estimates(e: float, defect: str | None, size: float, noise: float, seeds, n
     for seed in seeds:
         y = record(e, int(seed), n, dt, burn_in, defect, size, noise, pole)
         try:
-            got = inference.estimate([Record(y, dt, f"record {seed}")], cache_dir=cache_dir)
+            got = inference.estimate([Record(y, dt, f"record {seed}")], cache_dir=cache_dir).document
         except InputError:
             out.append(None)
             continue

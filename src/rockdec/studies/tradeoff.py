@@ -17,7 +17,7 @@ replicate of the scene) and measured twice:
   the true ``e`` in about 95 % of the cases (normal errors).
 
 The Markdown of the study is :func:`rockdec.report.tables.tradeoff_markdown`, its Pareto plot
-:func:`rockdec.report.figures.pareto_figure`; this module runs the study and reduces it to data.
+:func:`rockdec.studies.figures.pareto_figure`; this module runs the study and reduces it to data.
 
 Choices written down here (the issue leaves them open):
 
@@ -63,7 +63,8 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from rockdec.pipeline import engine, replicates
+from rockdec import engine
+from rockdec.pipeline import replicates
 from rockdec.physics import fixed_step, run
 from rockdec.report import tables
 from rockdec.physics.run import Run
@@ -217,7 +218,7 @@ def configuration_estimates(scene: dict, settings: dict, contract: Run, threads:
 
     ``contract`` is the run of :func:`calibrations` for its density and simulator. Timed:
     graph construction, simulation, signatures (Dask threads: the cost is CPU seconds of
-    this process, so the study stays on threads whatever :mod:`rockdec.pipeline.engine` says),
+    this process, so the study stays on threads whatever :mod:`rockdec.engine` says),
     estimates and extrapolation.
     """
     start_cpu, start_wall = time.process_time(), time.perf_counter()

@@ -1,4 +1,4 @@
-"""The Dask engine (rockdec.pipeline.engine): one setting, and the same numbers on every engine."""
+"""The Dask engine (rockdec.engine): one setting, and the same numbers on every engine."""
 
 import tempfile
 from pathlib import Path
@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from rockdec.pipeline import config, engine, replicates, series
+from rockdec import engine
+from rockdec.pipeline import config, replicates, series
 from rockdec.physics import run
 
 
@@ -22,7 +23,7 @@ def test_the_threads_engine_computes_without_loading_dask_distributed():
     probe = """
 import sys
 import dask.array as da
-from rockdec.pipeline import engine
+from rockdec import engine
 print(engine.compute(da.ones(10, chunks=5).sum(), threads=2)[0], "distributed" in sys.modules)
 """
     code, out, err = FORKS.script(probe, timeout=120)

@@ -1,0 +1,361 @@
+"""The public functions of rockdec: estimate ``e`` from a record, read a record, simulate one.
+
+:func:`estimate` takes the record in the forms a notebook holds it (a NumPy array with its
+step, an ``xarray.DataArray`` or a ``pandas.Series`` with a time axis, or a list of them:
+records of one block, pooled), checks it, and runs the estimate's stages
+(:func:`rockdec.calibrate.inference.estimate`) into a :class:`rockdec.RestitutionEstimate`.
+:func:`read_record` reads the files laboratories write; :func:`simulate` makes a record of
+known ``e`` with the simulator of ``rockdec simulate``. Errors name the Python parameter
+(``dt``, ``load``): :class:`rockdec.InputError`, :class:`rockdec.RecordError` for a record.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from rockdec.cache import default_cache
+from rockdec.calibrate import inference
+from rockdec.physics.record_model import SensorNoise, parse_load
+from rockdec.record import records as records_mod
+from rockdec.report.result import RestitutionEstimate
+from rockdec.timeaxis import RecordError, angle_factor
+from rockdec.validate import InputError, positive, show
+
+if TYPE_CHECKING:
+    import xarray as xr
+
+__all__ = ["estimate", "estimate_options", "read_record", "simulate"]
+
+#: Rocking models :func:`estimate` calibrates with.
+MODELS = ("simplified", "housner")
+
+
+def _series_records(theta, dt: float | None, source: str) -> list[records_mod.Record]:
+    """The records of one of :func:`estimate`'s inputs (checked)."""
+    import pandas as pd
+    import xarray as xr
+
+    if isinstance(theta, pd.Series):
+        index = theta.index
+        if isinstance(index, pd.DatetimeIndex | pd.TimedeltaIndex):
+            time = np.asarray((index - index[0]) / pd.Timedelta(seconds=1), dtype=np.float64)
+        elif pd.api.types.is_numeric_dtype(index) and not isinstance(index, pd.RangeIndex):
+            time = np.asarray(index, dtype=np.float64)
+        else:
+            time = None
+        theta = xr.DataArray(theta.to_numpy(dtype=np.float64), dims="time", coords=None if time is None else {"time": time},
+                             name=theta.name)
+    if isinstance(theta, xr.DataArray):
+        return _data_array_records(theta, dt, source)
+    values = np.asarray(theta)
+    if values.dtype.kind not in "fiu":
+        raise InputError(f"`theta` ({source}) holds {values.dtype} values; give the angles as numbers in rad.")
+    if values.ndim != 1:
+        raise InputError(f"`theta` ({source}) has shape {values.shape}; give a 1-D record, or a list of 1-D records of one block.")
+    if dt is None:
+        raise InputError(f"`theta` ({source}) is an array without a time axis; give its sampling step `dt` in s.")
+    return [records_mod.check_values(values, _step(dt), source)]
+
+
+def _step(dt) -> float:
+    try:
+        step = float(dt)
+    except (TypeError, ValueError):
+        raise InputError(f"`dt` {dt!r} is not a number; give the sampling step in s, > 0.") from None
+    if not (math.isfinite(step) and step > 0):
+        raise InputError(f"`dt` {show(step)}: not a positive, finite number of seconds; give the sampling step in s, > 0.")
+    return step
+
+
+def _data_array_records(da: xr.DataArray, dt: float | None, source: str) -> list[records_mod.Record]:
+    """Records of a DataArray: 1-D along its time dimension, or 2-D (one record per row)."""
+    source = str(da.attrs.get("source", da.name if da.name is not None else source))
+    if da.ndim not in (1, 2):
+        raise InputError(f"`theta` ({source}) has dimensions {da.dims}; give (time) or (record, time).")
+    dim = "time" if "time" in da.dims else da.dims[-1]
+    da = da.transpose(..., dim)
+    values = np.asarray(da.values, dtype=np.float64) * angle_factor(da.attrs.get("units"), source, str(da.name or "theta"))
+    step = None
+    if dim in da.coords:
+        step = records_mod.sampling_step(da[dim].values, source)
+        if "dt" in da.attrs:
+            stated = _step(da.attrs["dt"])
+            if abs(stated - step) > 1e-6 * step:
+                raise RecordError(f"{source}: its attribute dt {stated:g} s disagrees with its time axis ({step:g} s); fix one.")
+            step = stated
+    elif "dt" in da.attrs:
+        step = _step(da.attrs["dt"])
+    if dt is not None:
+        given = _step(dt)
+        if step is not None and abs(given - step) > 1e-6 * step:
+            raise InputError(f"`dt` {given:g} s disagrees with the time axis of {source} ({step:g} s); leave `dt` out.")
+        step = given
+    if step is None:
+        raise InputError(f"`theta` ({source}) has no time coordinate; give its sampling step `dt` in s.")
+    if values.ndim == 1:
+        return [records_mod.check_values(values, step, source)]
+    names = da.attrs.get("sources")
+    rows = names.split("\n") if isinstance(names, str) and len(names.split("\n")) == values.shape[0] else None
+    return [records_mod.check_values(row, step, rows[i] if rows else f"{source}[{i}]") for i, row in enumerate(values)]
+
+
+def _records(theta, dt) -> list[records_mod.Record]:
+    """Every record of :func:`estimate`'s ``theta``."""
+    if isinstance(theta, list | tuple):
+        if not theta:
+            raise InputError("`theta` is an empty list; give at least one record.")
+        return [r for i, item in enumerate(theta) for r in _series_records(item, dt, f"record {i}")]
+    return _series_records(theta, dt, "record")
+
+
+def _sensor_noise(value) -> SensorNoise | None:
+    """:func:`estimate`'s ``sensor_noise``: ``"auto"`` (``None``), a :class:`SensorNoise`, a
+    number (its standard deviation in rad) or ``"N%"`` (per cent of ``sigma_Y``)."""
+    if isinstance(value, SensorNoise):
+        return value
+    word = str(value).strip().lower()
+    if word == "auto":
+        return None
+    percent = word.endswith("%")
+    try:
+        number = float(word[:-1] if percent else word)
+    except ValueError:
+        number = math.nan
+    if not (number >= 0.0 and number < math.inf):
+        raise InputError(
+            f"`sensor_noise` {value!r} is not a noise level; give auto (measured), 0, a standard deviation in rad "
+            "(0.0002) or a share of sigma_Y (2%), >= 0."
+        )
+    return SensorNoise(number / 100.0, "sigma_y") if percent else SensorNoise(number, "rad")
+
+
+def _load(value):
+    """:func:`estimate`'s ``load``: ``"auto"`` (``None``), a Load, or its text, checked here;
+    a spectrum's text is returned for the estimate to place against the record's rocking
+    frequency."""
+    if not isinstance(value, str):
+        return value
+    if value.strip().lower() == "auto":
+        return None
+    load = parse_load(value, dt=1.0, points_per_cycle=1.0)  # a file is checked at a stand-in rocking frequency
+    return value if load.kind == "spectrum" else load
+
+
+def _cache(cache) -> Path:
+    folder = default_cache() if cache is None else Path(cache)
+    if folder.exists() and not folder.is_dir():
+        raise InputError(f"`cache` '{folder}' is a file, not a folder; give a folder for the stored calibrations.")
+    return folder
+
+
+def estimate(theta, dt: float | None = None, *, g: float | None = None, load="auto", sensor_noise="auto",
+             model: str = "simplified", theta_cr: float | None = None, cache=None) -> RestitutionEstimate:
+    """Estimate the coefficient of restitution ``e`` of a rocking block from its random response.
+
+    The record's Random Decrement signatures (paper eqs. 8, 19) give every estimator of
+    ``e`` (eqs. 25-27 and ``e_v``); records simulated at known ``e`` with the record's
+    length, sampling and model (the calibration, built once and stored in ``cache``)
+    correct their bias and give each a 95 % interval; the trusted estimator with the
+    narrowest interval is reported.
+
+    Parameters
+    ----------
+    theta : array_like, xarray.DataArray, pandas.Series, or list of them
+        The rocking angle. A 1-D array needs ``dt``. A DataArray gives its step by its
+        time coordinate (or a ``dt`` attribute, s) and its ``units`` (``rad``, ``mrad`` or
+        ``degree``; any other is refused); a 2-D DataArray holds one record per row. A
+        Series gives its step by a numeric (s), datetime or timedelta index. A list holds
+        records of one block, pooled (one step for all).
+    dt : float, optional
+        Sampling step in s, for arrays without a time axis.
+    g : float, optional
+        The block's restoring acceleration ``nu^2 theta_cr`` in rad/s^2 (eq. 4), if known;
+        read off the record otherwise.
+    load : str or Load, optional
+        The load the calibration simulates: ``"auto"`` (measured off the record: white, or
+        low-pass when its colour is detected), ``"white"``, ``"lowpass:CORNER"`` (corner in
+        rocking frequencies, eq. 5), ``"spectrum:FILE"`` or ``"base:FILE"``.
+    sensor_noise : str, float or SensorNoise, optional
+        ``"auto"`` (measured), ``0``, a standard deviation in rad, or ``"N%"`` of sigma_Y.
+    model : {"simplified", "housner"}
+        The rocking model of the calibration: eq. 4, or Housner's eq. 2 (needs ``theta_cr``).
+    theta_cr : float, optional
+        The block's critical angle in rad, for ``model="housner"``.
+    cache : str or path, optional
+        Folder of stored calibrations; ``None``: :func:`rockdec.cache.default_cache` (shared with
+        the command line).
+
+    Returns
+    -------
+    RestitutionEstimate
+
+    Raises
+    ------
+    InputError
+        A parameter the function cannot use; the message names it and the fix.
+    RecordError
+        A record that cannot be analysed (too short, constant, not rocking, ...).
+
+    Examples
+    --------
+    >>> import rockdec
+    >>> theta = rockdec.simulate(0.85, 20_000, seed=1)
+    >>> res = rockdec.estimate(theta)
+    >>> res.confidence_interval.low < 0.85 < res.confidence_interval.high
+    True
+    """
+    declared, folder = estimate_options(g=g, load=load, sensor_noise=sensor_noise, model=model, theta_cr=theta_cr, cache=cache)
+    outcome = inference.estimate(_records(theta, dt), cache_dir=folder, g=g, rocking=model, theta_cr=theta_cr, **declared)
+    return RestitutionEstimate.from_dict(outcome.document, analysis=outcome.analysis, belts=outcome.belts)
+
+
+def estimate_options(*, g=None, load="auto", sensor_noise="auto", model="simplified", theta_cr=None, cache=None) -> tuple[dict, Path]:
+    """Check :func:`estimate`'s options before any record is read: the declared record
+    model (``load``, ``sensor``) as :func:`rockdec.calibrate.inference.estimate` takes it,
+    and the calibration folder.
+
+    Raises
+    ------
+    InputError
+        An option :func:`estimate` cannot use, named with its fix.
+
+    Examples
+    --------
+    >>> from rockdec.api import estimate_options
+    >>> declared, folder = estimate_options(load="white", sensor_noise="2%")
+    >>> declared["sensor"].std
+    0.02
+    """
+    if model not in MODELS:
+        raise InputError(f"`model` {model!r} is not a rocking model; give one of {', '.join(MODELS)}.")
+    if model == "housner":
+        if theta_cr is None:
+            raise InputError("`model` housner needs the block's critical angle: give `theta_cr` in rad (atan(width/height)).")
+        if not (isinstance(theta_cr, int | float) and 0.0 < theta_cr < math.pi / 2):
+            raise InputError(f"`theta_cr` {show(theta_cr)} is not a critical angle; give it in rad, between 0 and pi/2.")
+    elif theta_cr is not None:
+        raise InputError("`theta_cr` is the Housner model's critical angle; give `model` housner with it, or leave it out.")
+    if g is not None:
+        positive(g, "`g`", "give the restoring acceleration nu^2 theta_cr in rad/s^2, or leave it out")
+    return {"load": _load(load), "sensor": _sensor_noise(sensor_noise)}, _cache(cache)
+
+
+def read_record(path, *, variable: str = "theta", column: str = "theta", dt: float | None = None,
+                fs: float | None = None) -> xr.DataArray:
+    """Read a measured record: CSV or text, ``.npy``, NetCDF or MATLAB ``.mat``.
+
+    Parameters
+    ----------
+    path : str or path
+        ``.csv``/``.txt``: a header with ``time`` and ``column``, or one column of angles
+        (then ``dt`` or ``fs``); ``.nc``: ``variable`` as ``(time)`` or ``(record, time)``;
+        ``.npy``: a 1-D array (with ``dt`` or ``fs``); ``.mat``: ``variable`` and a time
+        vector ``time`` or ``t`` (or ``dt``/``fs``). Angles in rad (a NetCDF ``units`` of
+        degrees is converted).
+    variable, column : str
+        The angle's name in a NetCDF or MATLAB file, and its column in a CSV.
+    dt, fs : float, optional
+        Sampling step (s) or rate (Hz), for files without a time axis.
+
+    Returns
+    -------
+    xarray.DataArray
+        ``theta(time)``, or ``theta(record, time)`` for several records, in rad, with its
+        time coordinate in s and its sampling step as the attribute ``dt``.
+
+    Raises
+    ------
+    RecordError
+        A file that cannot be read as a record; the message names the file and the fix.
+
+    Examples
+    --------
+    >>> import numpy as np, rockdec
+    >>> np.save(tmp / "record.npy", np.sin(np.arange(2000) * 0.1))
+    >>> rockdec.read_record(tmp / "record.npy", dt=0.01).sizes["time"]
+    2000
+    """
+    import xarray as xr
+
+    recs = records_mod.read_records(path, column=column, variable=variable, dt=dt, fs=fs)
+    step = recs[0].dt
+    time = xr.DataArray(np.arange(recs[0].theta.size) * step, dims="time", attrs={"units": "s", "long_name": "time", "standard_name": "time"})
+    attrs = {"units": "rad", "long_name": "rocking angle", "source": str(path), "dt": step}
+    if len(recs) == 1:
+        return xr.DataArray(recs[0].theta, dims="time", coords={"time": time}, name="theta", attrs={**attrs, "source": recs[0].source})
+    attrs["sources"] = "\n".join(r.source for r in recs)
+    return xr.DataArray(np.stack([r.theta for r in recs]), dims=("record", "time"), coords={"time": time}, name="theta", attrs=attrs)
+
+
+def simulate(e: float, n_points: int, *, seed=0, model: str = "simplified", points_per_cycle: float = 75.0,
+             dt: float | None = None, nu: float | None = None, theta_cr: float | None = None, sigma_p: float | None = None,
+             burn_in: int | None = None, theta0: float = 0.0, theta_dot0: float = 0.0) -> xr.DataArray:
+    """Simulate the rocking angle of a block under white-noise impulses, exactly (eqs. 21-24).
+
+    The simulator of ``rockdec simulate``: between impulses the block flies on the
+    closed-form arcs of its model and loses the share ``1 - e`` of its angular velocity at
+    each impact (eq. 6); the step is found so that a cycle at the amplitude ``sigma_Y``
+    holds ``points_per_cycle`` samples (eq. 5); the burn-in is discarded.
+
+    Parameters
+    ----------
+    e : float
+        Coefficient of restitution, 0 to 1.
+    n_points : int
+        Samples per series.
+    seed : int or sequence of int
+        The seed of the series (several: one series each, along ``seed``).
+    model : {"simplified", "housner", "auto"}
+        Rocking model: eq. 4, Housner's eq. 2, or chosen by the amplitude.
+    points_per_cycle : float
+        Samples per rocking cycle at ``sigma_Y``, which set the step (unless ``dt``).
+    dt : float, optional
+        Time step in s.
+    nu, theta_cr, sigma_p : float, optional
+        Frequency parameter (rad/s), critical angle (rad), std of the velocity impulses
+        (rad/s; 0: a free response from ``theta0``); the scenes' defaults otherwise.
+    burn_in : int, optional
+        Steps discarded before recording (default: 20 energy relaxation times).
+    theta0, theta_dot0 : float
+        Initial angle (rad) and angular velocity (rad/s).
+
+    Returns
+    -------
+    xarray.DataArray
+        ``theta(time)`` (``theta(seed, time)`` for several seeds) in rad, with CF
+        attributes and the run's settings (``e``, ``dt``, ``sigma_y``, ...) as attributes.
+
+    Examples
+    --------
+    >>> import rockdec
+    >>> theta = rockdec.simulate(0.85, 5_000, seed=3)
+    >>> theta.sizes["time"], theta.attrs["e"]
+    (5000, 0.85)
+    """
+    from rockdec.physics import run
+    from rockdec.pipeline import config
+
+    fields = {
+        "model": model,
+        "system": {k: v for k, v in {"e": e, "nu": nu, "theta_cr": theta_cr}.items() if v is not None},
+        "excitation": {k: v for k, v in {"sigma_p": sigma_p, "points_per_cycle": points_per_cycle, "dt": dt, "burn_in": burn_in}.items()
+                       if v is not None},
+        "records": {"n_points": n_points},
+    }
+    try:
+        scene = config.validate_scene(fields)
+    except config.ConfigError as exc:
+        if exc.field is None:
+            raise
+        parameter = exc.field.rsplit(".", 1)[-1]
+        raise InputError(f"`{parameter}`: {exc.problem}.") from None
+    seeds = np.atleast_1d(np.asarray(seed, dtype=np.int64))
+    contract = run.calibrate(scene, amplitude=abs(theta0), theta0=theta0, theta_dot0=theta_dot0)
+    ds = contract.dataset(seeds, n_points, chunk_seeds=scene["records"]["chunk_seeds"]).load()
+    theta = ds["theta"]
+    theta.attrs = {**ds.attrs, **theta.attrs, "units": "rad", "dt": contract.dt}
+    return theta.isel(seed=0, drop=True) if np.ndim(seed) == 0 else theta

@@ -1,0 +1,359 @@
+"""The result of an estimate of ``e``: one frozen object for people, machines and xarray.
+
+:class:`RestitutionEstimate` holds the numbers as fields (``e``, its
+``confidence_interval``, the ``coverage`` measured on the calibration's records, ...) and
+the JSON document it was made from. ``summary()`` is the report an engineer reads,
+``to_dict()``/``from_dict()`` the JSON document the command line prints (its schema,
+:data:`SCHEMA_PATH`, ships with the package), ``to_dataset()`` a CF-1.10 dataset and
+``plot()`` the figure of the reported estimator's signature and calibration.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import html
+import json
+import math
+from importlib import resources
+from typing import TYPE_CHECKING, Any, NamedTuple
+
+from rockdec.rdd import registry
+from rockdec.validate import InputError
+
+if TYPE_CHECKING:
+    import pandas as pd
+    import xarray as xr
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+
+__all__ = ["ConfidenceInterval", "EstimateWarning", "RestitutionEstimate", "SCHEMA_VERSION", "schema"]
+
+#: Version of the JSON document (:meth:`RestitutionEstimate.to_dict`); a change of its keys
+#: or their meaning raises it.
+SCHEMA_VERSION = "1.0"
+
+#: The JSON schema of the document, shipped in the package.
+SCHEMA_PATH = "estimate.schema.json"
+
+#: The confidence level of every interval rockdec reports.
+CONFIDENCE_LEVEL = 0.95
+
+#: Keys of the document that :meth:`RestitutionEstimate.to_dict` adds to the one
+#: :func:`rockdec.calibrate.inference.estimate` writes.
+ADDED_KEYS = ("schema_version", "test", "confidence_level")
+
+
+class ConfidenceInterval(NamedTuple):
+    """A 95 % confidence interval: ``low`` and ``high`` (``None`` when there is none)."""
+
+    low: float | None
+    high: float | None
+
+
+class EstimateWarning(NamedTuple):
+    """A warning on an estimate: a stable ``code`` (a check's name, such as ``drift``) and its sentence."""
+
+    code: str
+    message: str
+
+
+def schema() -> dict:
+    """The JSON schema of :meth:`RestitutionEstimate.to_dict`'s document.
+
+    Returns
+    -------
+    dict
+        The schema (draft 2020-12).
+
+    Examples
+    --------
+    >>> from rockdec.report.result import schema
+    >>> schema()["properties"]["schema_version"]["const"]
+    '1.0'
+    """
+    return json.loads(resources.files("rockdec").joinpath(SCHEMA_PATH).read_text(encoding="utf-8"))
+
+
+def _interval(pair) -> ConfidenceInterval | None:
+    return None if pair is None else ConfidenceInterval(*pair)
+
+
+@dataclasses.dataclass(frozen=True, repr=False, eq=False)
+class RestitutionEstimate:
+    """The coefficient of restitution of a rocking block estimated from its records.
+
+    Made by :func:`rockdec.estimate`; read back from its JSON document by :meth:`from_dict`.
+The examples use ``res = rockdec.estimate(rockdec.simulate(0.85, 20_000, seed=1))``.
+
+    Attributes
+    ----------
+    e : float or None
+        The reported estimate of ``e`` (the share of its angular velocity the block keeps
+        at each impact, eq. 6), corrected for the bias of its estimator; ``None`` when no
+        estimate can be trusted (``reason`` says why).
+    confidence_interval : ConfidenceInterval
+        Its 95 % interval (``low``, ``high``), by inverting the calibration's belt.
+    confidence_level : float
+        0.95.
+    coverage : float or None
+        Share of the calibration's simulated records whose interval held their true ``e``.
+    estimator : str or None
+        The estimator reported (``e_v``, ``e_0`` or ``e4``).
+    reason : str or None
+        Why ``e`` is ``None``.
+    g : float or None
+        The block's restoring acceleration ``nu^2 theta_cr`` (rad/s^2, eq. 4): read off the
+        record and corrected, or as given. Not gravity.
+    g_interval : ConfidenceInterval or None
+        Its 95 % interval, when the calibration gives one.
+    record_model : dict
+        What besides ``e`` makes the record (load, sensor noise, rocking model): measured,
+        declared, and what the calibration simulated.
+    warnings : tuple of EstimateWarning
+        What looks wrong with the record, each with a stable code.
+    diagnostics : dict
+        Each check's statistic, threshold and whether it fired.
+    rockdec_version : str
+        The version that made the estimate.
+    test : str
+        ``"random"``: the random-response test (Random Decrement).
+
+    Examples
+    --------
+    >>> res.e is None or res.confidence_interval.low <= res.e <= res.confidence_interval.high
+    True
+    >>> res.to_dict()["estimator"] == res.estimator
+    True
+    """
+
+    e: float | None
+    confidence_interval: ConfidenceInterval
+    confidence_level: float
+    coverage: float | None
+    estimator: str | None
+    reason: str | None
+    g: float | None
+    g_interval: ConfidenceInterval | None
+    record_model: dict
+    warnings: tuple
+    diagnostics: dict
+    rockdec_version: str
+    test: str
+    document: dict = dataclasses.field(repr=False)
+    analysis: Any = dataclasses.field(default=None, repr=False)
+    belts: Any = dataclasses.field(default=None, repr=False)
+
+    @classmethod
+    def from_dict(cls, doc: dict, *, analysis=None, belts=None) -> RestitutionEstimate:
+        """The estimate of a JSON document (:meth:`to_dict`, as the command line prints it).
+
+        Parameters
+        ----------
+        doc : dict
+            The document.
+        analysis, belts : optional
+            The signatures and calibration belts :meth:`plot` draws (not in the document).
+
+        Returns
+        -------
+        RestitutionEstimate
+
+        Raises
+        ------
+        InputError
+            When ``doc`` is not such a document.
+
+        Examples
+        --------
+        >>> import json, rockdec
+        >>> back = rockdec.RestitutionEstimate.from_dict(json.loads(json.dumps(res.to_dict())))
+        >>> back.e == res.e and back.to_dict() == res.to_dict()
+        True
+        """
+        missing = [key for key in ("e", "interval", "estimators", "warnings") if key not in doc]
+        if missing:
+            raise InputError(f"`doc` lacks {', '.join(missing)}: it is not an estimate's JSON document (RestitutionEstimate.to_dict).")
+        doc = {key: copy.deepcopy(value) for key, value in doc.items() if key not in ADDED_KEYS}
+        codes = doc.get("warning_codes") or ["warning"] * len(doc["warnings"])
+        return cls(
+            e=doc["e"],
+            confidence_interval=ConfidenceInterval(*(doc["interval"] or [None, None])),
+            confidence_level=CONFIDENCE_LEVEL,
+            coverage=doc.get("coverage"),
+            estimator=doc.get("estimator"),
+            reason=doc.get("reason"),
+            g=doc.get("g"),
+            g_interval=_interval(doc.get("g_interval")),
+            record_model=doc.get("record_model") or {},
+            warnings=tuple(EstimateWarning(c, m) for c, m in zip(codes, doc["warnings"])),
+            diagnostics=doc.get("diagnostics") or {},
+            rockdec_version=doc.get("rockdec_version", ""),
+            test="random",
+            document=doc,
+            analysis=analysis,
+            belts=belts,
+        )
+
+    def to_dict(self) -> dict:
+        """The JSON document of the estimate, exactly what the command line prints as JSON.
+
+        Returns
+        -------
+        dict
+            JSON-able (numbers, strings, lists, ``None``), with ``schema_version``; it
+            validates against :func:`schema`.
+
+        Examples
+        --------
+        >>> doc = res.to_dict()
+        >>> doc["schema_version"], doc["e"] == res.e
+        ('1.0', True)
+        """
+        return {"schema_version": SCHEMA_VERSION, "test": self.test, "confidence_level": self.confidence_level,
+                **copy.deepcopy(self.document)}
+
+    @property
+    def estimators(self) -> pd.DataFrame:
+        """Every estimator of ``e`` on the record: one row each, with its ``raw`` value,
+        ``corrected`` value, 95 % interval (``low``, ``high``), calibrated ``coverage``,
+        ``triggers``, whether it is a ``candidate`` for the report, and ``notes``.
+
+        Examples
+        --------
+        >>> list(res.estimators.columns)[:4]
+        ['reads', 'raw', 'corrected', 'low']
+        """
+        import pandas as pd
+
+        rows = []
+        for name, est in self.document["estimators"].items():
+            shown = est["e"] is not None
+            rows.append({
+                "estimator": name, "reads": _reads(name), "raw": est["raw"], "corrected": est["e"],
+                "low": est["interval"][0] if shown else None, "high": est["interval"][1] if shown else None,
+                "coverage": est["coverage"], "triggers": est["triggers"], "candidate": name in registry.CANDIDATES,
+                "reported": name == self.estimator, "notes": "; ".join(([_beyond_note(est)] if est.get("beyond") else []) + est["notes"]),
+            })
+        return pd.DataFrame(rows).set_index("estimator")
+
+    def __repr__(self) -> str:
+        if self.e is None:
+            return f"RestitutionEstimate(e=None, reason={_short(self.reason)!r})"
+        low, high = self.confidence_interval
+        return (f"RestitutionEstimate(e={self.e:.4f}, 95% CI=[{low:.4f}, {high:.4f}], estimator={self.estimator!r}, "
+                f"warnings={len(self.warnings)})")
+
+    def _repr_html_(self) -> str:
+        rows = "".join(f"<tr><td>{html.escape(k)}</td><td>{html.escape(v)}</td></tr>" for k, v in self._headline())
+        warn = "".join(f"<li><code>{html.escape(w.code)}</code>: {html.escape(w.message)}</li>" for w in self.warnings)
+        return (f"<div><strong>RestitutionEstimate</strong><table>{rows}</table>"
+                + (f"<p>warnings:</p><ul>{warn}</ul>" if warn else "") + "</div>")
+
+    def _headline(self) -> list[tuple[str, str]]:
+        """(label, text) pairs of the main numbers, for the HTML view."""
+        if self.e is None:
+            return [("e", "not estimated"), ("reason", self.reason or "")]
+        low, high = self.confidence_interval
+        out = [("e", f"{self.e:.4f}"), ("95 % interval", f"[{low:.4f}, {high:.4f}]"), ("estimator", str(self.estimator)),
+               ("coverage on the calibration's records", _pct(self.coverage))]
+        if self.g is not None:
+            out.append(("restoring acceleration g (rad/s²)", f"{self.g:.5g}"))
+        return out
+
+    def summary(self, verbose: bool = False) -> str:
+        """The report of the estimate, in words an engineer reads without the paper at hand.
+
+        Parameters
+        ----------
+        verbose : bool
+            Also list every estimator with its notes, the record model as measured, the
+            calibration and the checks.
+
+        Returns
+        -------
+        str
+
+        Examples
+        --------
+        >>> print(res.summary().splitlines()[0])  # doctest: +ELLIPSIS
+        e = ... (95 % interval [..., ...]; estimator ...)
+        """
+        from rockdec.report.summary import text
+
+        return text(self.document, verbose)
+
+    def to_dataset(self) -> xr.Dataset:
+        """The estimate as a CF-1.10 dataset: the reported ``e`` with its interval bounds
+        (``e_low``, ``e_high``, linked by ``ancillary_variables``), each estimator's raw
+        and corrected value and interval along an ``estimator`` dimension, ``g`` and its
+        interval; the JSON document in the attribute ``rockdec_estimate``.
+
+        Returns
+        -------
+        xarray.Dataset
+
+        Examples
+        --------
+        >>> ds = res.to_dataset()
+        >>> float(ds["e"]) == res.e, ds["e"].attrs["units"]
+        (True, '1')
+        """
+        from rockdec.report.result_dataset import dataset
+
+        return dataset(self)
+
+    def plot(self, ax: Axes | None = None) -> Figure:
+        """The signature of the reported estimator beside its calibration belt.
+
+        Parameters
+        ----------
+        ax : matplotlib Axes, optional
+            Two axes to draw in (a sequence), or ``None`` for a new figure.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+
+        Raises
+        ------
+        InputError
+            For an estimate read back from its document, which carries no signatures.
+
+        Examples
+        --------
+        >>> fig = res.plot()
+        >>> len(fig.axes)
+        2
+        """
+        if self.analysis is None:
+            raise InputError(
+                "this estimate was read back from its document, which carries no signatures to plot; "
+                "estimate the record again (rockdec.estimate) to plot it."
+            )
+        from rockdec.report.figures import fig_record
+
+        return fig_record(self, ax)
+
+
+def _pct(x) -> str:
+    return "-" if x is None else f"{x:.1%}"
+
+
+def _short(text: str | None, n: int = 80) -> str | None:
+    return text if text is None or len(text) <= n else text[: n - 1] + "…"
+
+
+def _reads(name: str) -> str:
+    """What estimator ``name`` reads, in words (the registry's ``reads``; blank for a name it lacks)."""
+    return registry.spec(name).reads if name in registry.ESTIMATORS else ""
+
+
+def _beyond_note(est: dict) -> str:
+    """Why an estimator's raw value gives no corrected value: it lies beyond its calibration."""
+    lo, hi = est["calibrated_range"] or (math.nan, math.nan)
+    if est["beyond"] == "below":
+        return f"below the calibrated range {lo:.3f}-{hi:.3f}: e is less than {lo:.3f}, not estimated"
+    if est["beyond"] == "above":
+        return f"above the calibrated range {lo:.3f}-{hi:.3f}: e is more than {hi:.3f}, not estimated"
+    return "the raw value is beyond what any calibrated e gives on average: not estimated"

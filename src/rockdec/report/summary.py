@@ -1,0 +1,159 @@
+"""The text report of an estimate (:meth:`rockdec.RestitutionEstimate.summary`).
+
+The reported ``e`` and its interval come first, then the candidates it was chosen from,
+then the record in a few words and the warnings; ``verbose`` adds every estimator with its
+notes, the record model as measured, the calibration and the checks. The words are
+those of :data:`GLOSSARY`.
+"""
+
+from __future__ import annotations
+
+from rockdec.rdd import registry
+from rockdec.report.glossary import GLOSSARY
+
+__all__ = ["GLOSSARY", "text"]
+
+def _f(x, spec: str = ".4f") -> str:
+    return "-" if x is None else format(x, spec)
+
+
+def _pct(x) -> str:
+    return "-" if x is None else f"{x:.1%}"
+
+
+def _interval(est: dict) -> str:
+    """An estimator's interval as the report shows it: none when it gives no value."""
+    if est["e"] is None or est["interval"][0] is None:
+        return "-"
+    return f"[{est['interval'][0]:.4f}, {est['interval'][1]:.4f}]"
+
+
+def _corrected(est: dict) -> str:
+    beyond = est.get("beyond")
+    if beyond == "below":
+        return f"< {est['calibrated_range'][0]:.3f}"
+    if beyond == "above":
+        return f"> {est['calibrated_range'][1]:.3f}"
+    return "none" if est["e"] is None else f"{est['e']:.4f}"
+
+
+def _table(doc: dict, names) -> list[str]:
+    reads = {name: registry.spec(name).reads if name in registry.ESTIMATORS else "" for name in names}
+    width = max([len(r) for r in reads.values()] + [5])
+    lines = [f"  {'estimator':<10} {'reads':<{width}} {'raw':>7} {'corrected':>10}  {'95 % interval':<18} {'coverage':>8} {'triggers':>8}"]
+    for name in [n for n in names if n in doc["estimators"]]:
+        est = doc["estimators"][name]
+        mark = " *" if name == doc["estimator"] else ""
+        lines.append(
+            f"  {name + mark:<10} {reads[name]:<{width}} {_f(est['raw']):>7} {_corrected(est):>10}  {_interval(est):<18} "
+            f"{_pct(est['coverage']):>8} {est['triggers']:>8}"
+        )
+    return lines
+
+
+def _headline(doc: dict) -> list[str]:
+    if doc["e"] is None:
+        return [f"e: not estimated: {doc.get('reason') or 'no estimator gave a value'}"]
+    low, high = doc["interval"]
+    return [
+        f"e = {doc['e']:.4f} (95 % interval [{low:.4f}, {high:.4f}]; estimator {doc['estimator']}, "
+        f"{registry.spec(doc['estimator']).reads})",
+        f"  the interval held the true e on {_pct(doc['coverage'])} of the calibration's simulated records",
+    ]
+
+
+def _g(doc: dict) -> str:
+    raw = doc.get("g_raw")
+    if doc["g"] is None:
+        read = "" if raw is None else f" (raw value read off the record {raw:.4g}, not corrected)"
+        return f"block's restoring acceleration g = nu^2 theta_cr: not determined{read}"
+    if doc["g_given"]:
+        how = "given"
+    else:
+        how = "read off the record" + ("" if raw is None else f" (raw {raw:.4g}) and corrected")
+    if doc.get("g_interval"):
+        held = "" if doc.get("g_coverage") is None else f", held the true g on {doc['g_coverage']:.0%} of the calibration's records"
+        how += f"; 95 % interval [{doc['g_interval'][0]:.5g}, {doc['g_interval'][1]:.5g}]{held}"
+    return f"block's restoring acceleration g = nu^2 theta_cr = {doc['g']:.5g} rad/s^2 ({how}; not gravity)"
+
+
+def _model(doc: dict) -> str:
+    report = doc.get("record_model")
+    if not report:
+        return "record model: not determined"
+    src = report["sources"]
+    return (f"record model the calibration simulates: {report['simulated']['described']} "
+            f"(load {src['load']}, sensor noise {src['sensor_noise']}, rocking model {src['rocking']})")
+
+
+def _measured(report: dict | None) -> list[str]:
+    """The record model as measured, in words (verbose)."""
+    if not report:
+        return []
+    m = report.get("measured")
+    if m is None:
+        return [f"  record model not measured: {report['not_measured']}"] if report.get("not_measured") else []
+
+    def pm(q, scale=1.0, spec=".3g"):
+        if q["value"] is None:
+            return "not measurable"
+        return format(q["value"] * scale, spec) + ("" if q["se"] is None else f" +- {q['se'] * scale:.2g}")
+
+    det = m["detected"]
+    noise = f"{pm(m['sensor_noise_sigma_y'], 100.0)} % of sigma_Y ({'detected' if det['sensor_noise'] else 'not detected'})"
+    if det["colour"]:
+        load = f"low-pass, corner at {pm(m['load_corner_rocking'])} rocking frequencies"
+    else:
+        load = "white (no colour detected)"
+    drift = f"{m['drift_rms_sigma_y']:.2g} sigma_Y in the block means ({'detected' if det['drift'] else 'not detected'})"
+    share = "" if m["g_side_share"] is None else f", {m['g_side_share']:.2f} of the signature's"
+    return [
+        "  measured off the record:",
+        f"    sensor noise {noise}",
+        f"    load {load}",
+        f"    drift {drift}",
+        f"    g from the second differences {pm(m['g'], spec='.4g')} rad/s^2{share}; the two sides differ by {pm(m['g_asymmetry'], spec='+.3f')}",
+    ]
+
+
+def _record(doc: dict) -> list[str]:
+    nan = f", {doc['nan_samples']} NaN skipped" if doc["nan_samples"] else ""
+    ppc = "-" if doc["points_per_cycle"] is None else f"{doc['points_per_cycle']:.1f}"
+    return [
+        f"record: {', '.join(doc['records'])}",
+        f"  {doc['samples']} samples at a step of {doc['dt']:.6g} s{nan}; rms angle sigma_Y = {_f(doc['sigma_y'], '.4g')} rad, "
+        f"{ppc} samples per rocking cycle at sigma_Y",
+        f"  {_g(doc)}",
+        f"  {_model(doc)}",
+    ]
+
+
+def _calibration(doc: dict) -> str:
+    cal = doc["calibration"]
+    if cal["file"] is None:
+        return "calibration: none (the records were declined before calibrating)"
+    how = "from the cache" if cal["cached"] else f"built in {cal['seconds']:.1f} s and stored for the next record like these"
+    return f"calibration: {cal['file']}, {how}"
+
+
+def text(doc: dict, verbose: bool = False) -> str:
+    """The report of the JSON document ``doc`` of an estimate (:meth:`rockdec.RestitutionEstimate.summary`)."""
+    lines = _headline(doc)
+    lines += ["", "candidates (* reported):", *_table(doc, registry.CANDIDATES)]
+    if verbose:
+        lines += [f"  not chosen: {row['estimator']}: {row['why_not']}" for row in doc["selection"] if not row["holds"]]
+    lines += ["", *_record(doc)]
+    if doc["warnings"]:
+        lines += ["", *[f"warning: {w}" for w in doc["warnings"]]]
+    if verbose:
+        others = [name for name in doc["estimators"] if name not in registry.CANDIDATES]
+        lines += ["", "other estimators:", *_table(doc, others), "", "notes on the estimators:"]
+        for name, est in doc["estimators"].items():
+            notes = est["notes"] + ([f"{est['beyond']} the calibrated range"] if est.get("beyond") else [])
+            lines += [f"  {name}: {note}" for note in notes]
+        lines += ["", *_measured(doc.get("record_model")), _calibration(doc)]
+        if doc.get("diagnostics"):
+            lines.append("checks (statistic / threshold):")
+            for name, c in doc["diagnostics"].items():
+                lines.append(f"  {name}: {_f(c['statistic'], '.3g')} / {_f(c['threshold'], '.3g')}{'  FIRED' if c['fired'] else ''}")
+    return "\n".join(lines)
