@@ -18,7 +18,6 @@ import logging
 import os
 import sys
 import traceback
-import warnings
 from pathlib import Path
 
 from rockdec import console
@@ -68,10 +67,6 @@ MAX_SECONDS = 600.0
 #: Formats ``--plot`` draws (by the file's suffix).
 PLOT_FORMATS = (".png", ".pdf")
 
-#: Fewest lags on each side of a signature for the fits of the estimators.
-MIN_LAGS = 8
-
-
 #: The command-line flag of each Python parameter that the library's messages name (in
 #: backquotes, :func:`in_flags`).
 FLAGS = {
@@ -79,6 +74,7 @@ FLAGS = {
     "theta_cr": "--theta-cr", "cache": "--cache", "column": "--column", "variable": "--variable", "out": "--out",
     "overwrite": "--overwrite", "burn_in": "--burn-in", "theta0": "--theta0", "points_per_cycle": "--points-per-cycle",
     "e": "--e", "nu": "--nu", "sigma_p": "--sigma-p", "n_points": "--n-points", "theta": "the record",
+    "group_size": "--group-size", "n_periods": "--n-periods", "fit_points": "--fit-points", "weights": "--weights",
 }
 
 
@@ -256,112 +252,22 @@ def cmd_simulate(args) -> None:
 
 
 def cmd_signatures(args) -> None:
-    import numpy as np
-
     from rockdec import io
-    from rockdec.record import records
-    from rockdec.pipeline import replicates
-    from rockdec.rdd import signatures
-    from rockdec.physics import simulate
+    from rockdec.pipeline import signature_files
 
     out = io.check_output(args.out, args.overwrite)
-    with io.open_dataset(args.input) as src:
-        if args.variable not in src:
-            raise UsageError(f"{args.input} has no variable '{args.variable}'; name it with --variable.")
-        theta = src[args.variable].load()
-        attrs = dict(src.attrs)
-    if theta.ndim == 1:
-        theta = theta.expand_dims(seed=[0])
-    if set(theta.dims) != {"seed", "time"}:
-        raise UsageError(f"'{args.variable}' must have dimensions (seed, time) or (time); it has {theta.dims}.")
-    theta = theta.transpose("seed", "time").astype(float)
-    theta = theta.copy(data=theta.values * records.angle_factor(theta.attrs.get("units"), args.input, args.variable))
-    if "dt" in attrs:
-        try:
-            (step,) = np.asarray(attrs["dt"], dtype=np.float64).ravel()
-        except (TypeError, ValueError):
-            raise UsageError(f"{args.input}: its attribute dt {attrs['dt']!r} is not a number of seconds; fix it.") from None
-        theta.attrs["dt"] = checks.positive(step, f"the attribute dt of {args.input}", "fix it (the sampling step in s)")
-    elif "time" in theta.coords:
-        theta.attrs["dt"] = records.sampling_step(theta["time"].values, f"{args.input}: '{args.variable}'") * records.time_factor(
-            theta["time"].attrs.get("units"), args.input, "time"
-        )
-    else:
-        raise UsageError(f"{args.input}: '{args.variable}' has no time coordinate and the file no 'dt' attribute; add either.")
-    if np.isinf(theta.values).any():
-        raise UsageError(f"{args.input}: '{args.variable}' holds infinite values; remove them or mark them as gaps (NaN).")
-    with np.errstate(invalid="ignore"), warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)  # an all-NaN series is refused just below
-        still = ~(np.nanmax(theta.values, axis=1) > np.nanmin(theta.values, axis=1))
-    if still.any():
-        k = int(np.flatnonzero(still)[0])
-        raise UsageError(f"{args.input}: series {k} of '{args.variable}' is constant (or all NaN), so it has no trigger; a rocking record must move.")
-    scales = {name: attrs.get(name) for name in ("sigma_y", "sigma_ydot")}
-    missing = [name for name, value in scales.items() if value is None or not np.isfinite(value)]
-    if missing:  # the file's stationary statistics, else measured (one pass over the record)
-        measured = simulate.pilot_statistics(theta.values, theta.attrs["dt"])
-        scales.update({name: measured[name] for name in missing})
-    stats = {
-        **{name: float(value) for name, value in scales.items()},
-        "g": args.g if args.g is not None else attrs.get("g"),
-    }
-    if stats["g"] is None:
-        raise UsageError(f"{args.input} does not say g (rad/s^2): give --g to size the lag range in rocking periods.")
-    g_name = "--g" if args.g is not None else f"the attribute g of {args.input}"
-    stats["g"] = checks.positive(stats["g"], g_name, "give --g, the restoring acceleration nu^2 theta_cr in rad/s^2")
     scene = _validated(_with_options({}, args, SIGNATURE_OPTIONS), SIGNATURE_OPTIONS)
-    if args.group_size is not None:
-        checks.integer(args.group_size, "--group-size", 1, "give at least 1 series per signature (or leave it out: all)")
-        if args.group_size > theta.sizes["seed"]:
-            raise UsageError(
-                f"--group-size {args.group_size}: more than the {theta.sizes['seed']} series in {args.input}; "
-                f"give at most {theta.sizes['seed']} (or leave it out: all)."
-            )
-    size = args.group_size or theta.sizes["seed"]
-    sig = scene["signatures"]
-    n_lag = signatures.lag_samples(sig["n_periods"], sig["level"] * stats["sigma_y"], stats["g"], theta.attrs["dt"])
-    if n_lag < MIN_LAGS:
-        raise UsageError(
-            f"{g_name} {checks.show(stats['g'])} with --n-periods {checks.show(sig['n_periods'])} gives a lag range of {n_lag} "
-            f"samples, fewer than the {MIN_LAGS} the fits need; give the right g, or --n-periods near 2.5 (the default)."
-        )
-    signatures.check_lag_range(
-        n_lag, theta.sizes["time"], theta.sizes["seed"], len(sig["windows"]),
-        f"{g_name} {checks.show(stats['g'])} with --n-periods {checks.show(sig['n_periods'])}",
-        "raise --g or lower --n-periods (or pool fewer series with --group-size)",
-    )
-    if size == 1:  # one signature per series: the cube keeps the seed dimension
-        cube = replicates.scene_signatures(theta, sig, **stats, group=None, replicate_of_group=np.zeros(theta.sizes["seed"], dtype=int))
-    else:
-        group = np.arange(theta.sizes["seed"]) // size
-        cube = replicates.scene_signatures(theta, sig, **stats, group=group, replicate_of_group=np.arange(group.max() + 1))
-    cube.attrs.update(io.provenance("signatures", scene["signatures"], inputs=[args.input]))
-    io.write_netcdf(cube, out, overwrite=args.overwrite)
-    counts = cube["count"].sum(replicates.series_dim(cube))
-    log.info(f"triggers per window: D_a {counts.sel(trigger='a').values}, D_v {counts.sel(trigger='v').values}")
+    counts = signature_files.signature_file(args.input, out, scene["signatures"], variable=args.variable, g=args.g,
+                                            group_size=args.group_size, overwrite=args.overwrite)
+    log.info(f"triggers per window: D_a {counts['a']}, D_v {counts['v']}")
 
 
 def cmd_estimates(args) -> None:
-    import numpy as np
-
     from rockdec import io
-    from rockdec.pipeline import replicates
+    from rockdec.pipeline import signature_files
 
     out = io.check_output(args.out, args.overwrite)
-    checks.integer(args.fit_points, "--fit-points", 3, "give at least 3 points per side (a parabola needs 3)")
-    with io.open_dataset(args.input) as src:
-        if "signature_sum" not in src or not {"group", "seed"} & set(src.dims) or "count" not in src or "dt" not in src.attrs:
-            raise UsageError(f"{args.input} is not a signature file; make one with 'rockdec signatures'.")
-        cube = src.load()
-    lags = cube.sizes["lag"] // 2
-    if args.fit_points > lags:
-        raise UsageError(f"--fit-points {args.fit_points}: more than the {lags} lags of the signatures in {args.input}; give at most {lags}.")
-    if "replicate" not in cube.coords:
-        dim = replicates.series_dim(cube)
-        cube = cube.assign_coords(replicate=(dim, np.zeros(cube.sizes[dim], dtype=int)))
-    est = replicates.replicate_estimates(cube, fit_points=args.fit_points, weights=args.weights)
-    est.attrs.update(io.provenance("estimates", {"fit_points": args.fit_points, "weights": args.weights}, inputs=[args.input]))
-    io.write_netcdf(est, out, overwrite=args.overwrite)
+    est = signature_files.estimate_file(args.input, out, fit_points=args.fit_points, weights=args.weights, overwrite=args.overwrite)
     for name in est["estimator"].values:
         value = est["e_hat0"].sel(estimator=name).values
         err = est["e_hat0_stderr"].sel(estimator=name).values
