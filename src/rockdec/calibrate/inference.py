@@ -47,8 +47,8 @@ if TYPE_CHECKING:
 log = logging.getLogger(__name__)
 
 #: Records more than this many times as long as the calibration's simulated records are warned
-#: that their interval's coverage was not measured at their length: it was at 4 and 20
-#: times (4 and 20 million samples; README, "Long records").
+#: that their interval's coverage was not measured at their length (evidence:
+#: docs/explanation/constants.md, from ``benchmarks/long_coverage.py``).
 LONG_RATIO = 20.0
 
 #: A given ``g`` off the records' own by more than this factor is refused before any
@@ -61,45 +61,26 @@ SPIKE_SIGMAS = 15.0
 
 #: A load measured as low-pass with its corner below this many rocking frequencies
 #: ``1/T(sigma_Y)`` (eq. 5) at the samples per cycle the analysis reads is declined before
-#: any calibration (:func:`colour_decline`). Measured on the calibration's own record sets
-#: (200,000 samples, 30 sets at one step, ``e`` = 0.8, 0.9, 0.95; README "Your own
-#: record"): the samples per cycle read off them spread by a factor (90th over 10th
-#: percentile) of 1.1-1.3 at corner 3, 1.2-1.6 at corner 2, 1.3-2.3 at 1.5, 1.4-8.7 at 1
-#: and 2-35 at 0.5: below 2 the block swings between rocking and hardly leaving rest, so
-#: records read at one sampling are no longer alike and no calibration at one sampling
-#: describes them. The coverage study (:mod:`rockdec.studies.coverage`) checks the
-#: threshold: records at corner 3 are read at 2.9-3.1 and covered, those at 0.5 and 1 are
-#: read at 0.5-1.1, where the paper's calibration covers 37-84 %. With the floor at 0
-#: (``benchmarks/corner_floor_cells.py``) the measured load's calibration answers 138, 186,
-#: 135 and 77 of the corner-1 cells' 200 records at ``e = 0.6``, 0.8, 0.9 and 0.95 and covers
-#: 95.7, 99.5, 100 and 98.7 % of them: at 0.8 and 0.9 with intervals 1.5 times the records'
-#: scatter (4-6 times the paper model's width), at 0.95 biased by -0.52 sd; a third of the
-#: records at 0.9 and more than half at 0.95 get no trusted estimator.
+#: any calibration (:func:`colour_decline`): below it records read at one sampling are no
+#: longer alike. Evidence: docs/explanation/constants.md (``benchmarks/colour_calibration.py``,
+#: ``benchmarks/corner_floor_cells.py``, the coverage study).
 COLOUR_CORNER_FLOOR = 2.0
 
 #: A measured corner counts as above :data:`COLOUR_CORNER_FLOOR` only when it lies this many
-#: standard errors above it: records of the coverage study whose corner (0.5 or 1) was read
-#: above 2 had errors of 0.65-1.7 (read 2.15 and 3.19), those at corner 3 errors of
-#: 0.03-0.06 (read 2.9-3.6, 19-34 errors above 2).
+#: standard errors above it (evidence: docs/explanation/constants.md, the coverage study).
 COLOUR_CORNER_Z = 2.0
 
 #: A measured load is declined when ``g`` read off the record's side means is less than this
 #: share of the ``g`` its signature reads
 #: (:meth:`~rockdec.record.record_measure.MeasuredModel.side_g_share`): the block's side then
-#: follows the load, which the fitted pole does not describe. On the coverage study's records
-#: (kernel, 200,000 samples, ``e = 0.6``) those at a corner of 0.5 and 1 rocking frequencies that
-#: the corner let through (read 2.2-4.2 against a true 0.5-0.8 and 1.0-1.2, covered 7 of 17)
-#: had shares of 0.36-0.53; the 200 at a corner of 3, 0.81-1.01 (``e = 0.6``) and 0.98-1.01
-#: (``e = 0.98``); 1,500 white records, clean or beneath 1-5 % noise, 0.98 and above
-#: (docs/method.md §11).
+#: follows the load, which the fitted pole does not describe (evidence:
+#: docs/explanation/constants.md, the coverage study's coloured cells).
 SIDE_G_SHARE = 0.7
 
-#: Cost model of :func:`cost`: seconds per sample to read a CSV (pandas, on an idle 2-core
-#: machine) and to do all but the calibration (read a NetCDF record, analyse it, measure
-#: its model, check it: 22.7 s of CPU on 20 million samples, ``benchmarks/long_record.py``);
-#: seconds per simulated and analysed calibration sample on one core (idle machine); bytes
-#: held per sample while reading and analysing (a bound: 82 at the peak on 20 million
-#: samples of a NetCDF record, more than 120 on 200 million of a ``.npy``).
+#: Cost model of :func:`cost`: seconds per sample to read a CSV and to do all but the
+#: calibration, seconds per simulated and analysed calibration sample on one core, and
+#: bytes held per sample while reading and analysing (measured by
+#: ``benchmarks/long_record.py``; docs/explanation/constants.md).
 CSV_SECONDS, ANALYSIS_SECONDS, CALIBRATION_SECONDS, BYTES_PER_SAMPLE = 5e-7, 1.0e-6, 1.3e-7, 160.0
 
 
@@ -147,8 +128,7 @@ def checks_place(per: dict, shown: dict) -> tuple[float | None, list | None]:
     reported corrected ``e`` and its interval (``shown``); when none is reported, the median
     of the candidates' corrected values (``per``, :func:`estimate`), a raw value beyond what
     any calibrated ``e`` gives taken at the end of the calibrated range it lies beyond (the
-    record's ``e`` lies there: at ``e = 0.98`` with 3 % sensor noise, 17 of 196 records lie above
-    the top of the range), without an interval; ``(None, None)`` when no candidate gives one."""
+    record's ``e`` lies there, as at high ``e`` under sensor noise), without an interval; ``(None, None)`` when no candidate gives one."""
     if shown["e"] is not None:
         return shown["e"], shown["interval"]
     values = []
@@ -406,8 +386,7 @@ def select(per: dict, n_sets: int, belts: dict[str, belt.Belt]) -> tuple[str | N
     (:func:`rockdec.calibrate.belt.width_at`). Each record's own intervals are not compared: an
     estimator whose scatter put its interval against an end of the calibrated range, where
     the interval is cut short, would be picked for that scatter, and the picked interval
-    would then miss more often than each candidate's own (on 20,000-sample records at
-    ``e = 0.85``: 89 % against 93-96 %). Returns ``(name or None, selection, reason)``:
+    would then miss more often than each candidate's own (``benchmarks/selection_rule.py``). Returns ``(name or None, selection, reason)``:
     ``selection`` lists each candidate's width, its width at the common ``e``, coverage,
     whether it holds and why not; ``reason`` is one sentence when none can be trusted."""
     floor = coverage_floor(n_sets)

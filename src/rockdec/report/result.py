@@ -45,14 +45,27 @@ ADDED_KEYS = ("schema_version", "test", "confidence_level")
 
 
 class ConfidenceInterval(NamedTuple):
-    """A 95 % confidence interval: ``low`` and ``high`` (``None`` when there is none)."""
+    """A 95 % confidence interval: ``low`` and ``high`` (``None`` when there is none).
+
+    Examples
+    --------
+    >>> low, high = res.confidence_interval
+    >>> low <= high
+    True
+    """
 
     low: float | None
     high: float | None
 
 
 class EstimateWarning(NamedTuple):
-    """A warning on an estimate: a stable ``code`` (a check's name, such as ``drift``) and its sentence."""
+    """A warning on an estimate: a stable ``code`` (a check's name, such as ``drift``) and its sentence.
+
+    Examples
+    --------
+    >>> [w.code for w in res.warnings if w.code == "drift"]  # the record of the examples does not drift
+    []
+    """
 
     code: str
     message: str
