@@ -23,13 +23,39 @@ class InputError(ValueError):
     """Input a user can fix; the message names the value and the fix (exit code 2 in the CLI)."""
 
 
+#: The most digits :func:`show` writes out for a whole number: 20 hold every 64-bit integer.
+SHOWN_DIGITS = 20
+
+
 def show(value) -> str:
-    """``value`` as the user would have written it: ``nan``, ``6000.0``, ``12``, ``'a/b'``."""
+    """``value`` as the user would have written it: ``nan``, ``6000.0``, ``12``, ``'a/b'``;
+    a whole number of more than :data:`SHOWN_DIGITS` digits in the short form ``1.84e+19``.
+
+    Examples
+    --------
+    >>> show(6000), show(6000.0), show(float("nan")), show(10**150)
+    ('6000', '6000.0', 'nan', '1e+150')
+    """
     if is_whole(value):
-        return str(int(value))
+        value = int(value)
+        if value.bit_length() * math.log10(2) < SHOWN_DIGITS:
+            return str(value)
+        return _short_whole(value)
     if is_number(value):
         return repr(float(value))
     return repr(value)
+
+
+def _short_whole(value: int) -> str:
+    """A whole number of any size as ``m.mme+XX`` (three significant digits), without writing
+    out its digits (Python refuses ``str`` of an integer beyond 4300 digits)."""
+    drop = max(value.bit_length() - 60, 0)
+    exponent = math.log10(abs(value >> drop)) + drop * math.log10(2)
+    power = math.floor(exponent)
+    mantissa = 10 ** (exponent - power)
+    if round(mantissa, 2) >= 10:
+        mantissa, power = mantissa / 10, power + 1
+    return f"{'-' if value < 0 else ''}{mantissa:.3g}e+{power:02d}"
 
 
 def _fail(name, value, problem: str, fix: str) -> InputError:

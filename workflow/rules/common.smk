@@ -6,11 +6,13 @@ from rockdec.pipeline import config as rockdec_config
 from rockdec.pipeline import figure_workers, in_snakemake, layout
 from rockdec.sources import package_sources
 
-# Values given with --config arrive as text: read them as YAML values. An error names where
+# Values given with --config arrive as text: read them as YAML 1.2 values. An error names where
 # the bad field was set (--config, or the file the user passed with --configfile); one
 # sentence, exit code 2, before any job (so `snakemake -n` refuses too).
 try:
     overrides = dict(workflow.config_settings.config)  # --config KEY=VALUE alone (overwrite_config adds --configfile)
+    for path in workflow.configfiles:  # Snakemake reads them as YAML 1.1: refuse what YAML 1.2 reads otherwise
+        rockdec_config.check_yaml11(path)
     rockdec_config.validate(
         rockdec_config.apply_overrides(config, overrides),
         source=", ".join(map(str, workflow.overwrite_configfiles)) or rockdec_config.DEFAULT_PATH,

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import copy
 import functools
+import math
+import re
 import shutil
 from importlib import resources
 from pathlib import Path
@@ -19,6 +21,7 @@ import yaml
 from rockdec.pipeline import layout
 from rockdec import validate as checks
 from rockdec.rdd.fits import DEFAULT_FIT_POINTS, min_points_per_cycle
+from rockdec.physics.models import SCALE_CONSTANT_GUESS, restoring_acceleration, step_for_density
 from rockdec.physics.record_model import Load
 
 #: The config file the workflow reads unless told otherwise.
@@ -36,6 +39,19 @@ MAX_SAMPLES = 10**12
 SAMPLES_PER_CPU_SECOND = 2.3e7
 
 
+#: Most nodes a config may hold once its aliases are expanded: the shipped config holds
+#: about 300; a YAML "alias bomb" (anchors of anchors) expands to billions and is refused
+#: before anything walks it.
+MAX_NODES = 100_000
+
+#: Largest seed a scene may use: the seeds are 64-bit signed integers (``layout.scene_seeds``).
+MAX_SEED = 2**63 - 1
+
+#: The range every scale of a simulation (g, sigma_p, the step, sigma_Y) must lie in: its
+#: square, which the pilot statistics take, is then a normal float (neither 0 nor inf).
+SCALE_RANGE = (math.sqrt(2.3e-308), math.sqrt(1.7e308))
+
+
 class ConfigError(checks.InputError):
     """A configuration the user can fix; the message names the field, the file and the fix.
 
@@ -50,6 +66,201 @@ class ConfigError(checks.InputError):
 
 def _field_error(where: str, problem: str, fix: str) -> ConfigError:
     return ConfigError(f"config field '{where}': {problem}. {fix}", field=where, problem=problem)
+
+
+_BaseLoader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+
+
+class _Yaml12Loader(_BaseLoader):
+    """PyYAML's safe loader with the YAML 1.2 core schema's scalars: ``06000`` is 6000 (not
+    the octal 3072 of YAML 1.1), ``0o17`` is octal, ``1e5`` a number, ``yes``, ``on`` and
+    ``1:30`` are text, only ``true``/``false`` are booleans."""
+
+
+_DROPPED = {f"tag:yaml.org,2002:{t}" for t in ("bool", "int", "float", "timestamp")}
+_Yaml12Loader.yaml_implicit_resolvers = {
+    first: [(tag, rx) for tag, rx in resolvers if tag not in _DROPPED]
+    for first, resolvers in yaml.SafeLoader.yaml_implicit_resolvers.items()
+}
+_Yaml12Loader.add_implicit_resolver(
+    "tag:yaml.org,2002:bool", re.compile(r"^(?:true|True|TRUE|false|False|FALSE)$"), list("tTfF")
+)
+_Yaml12Loader.add_implicit_resolver(
+    "tag:yaml.org,2002:int", re.compile(r"^(?:[-+]?[0-9]+|0o[0-7]+|0x[0-9a-fA-F]+)$"), list("-+0123456789")
+)
+_Yaml12Loader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(r"^(?:[-+]?(?:\.[0-9]+|[0-9]+(?:\.[0-9]*)?)(?:[eE][-+]?[0-9]+)?|[-+]?\.(?:inf|Inf|INF)|\.(?:nan|NaN|NAN))$"),
+    list("-+.0123456789"),
+)
+
+
+def _construct_int(loader, node):
+    text = loader.construct_scalar(node)
+    try:
+        if text[:2] in ("0o", "0x"):
+            return int(text[2:], 8 if text[1] == "o" else 16)
+        return int(text, 10)
+    except ValueError:
+        what = f"a whole number of {len(text)} digits, more than a setting can hold" if text.isdigit() else f"{text!r} is not a whole number"
+        raise yaml.constructor.ConstructorError(None, None, what, node.start_mark) from None
+
+
+_Yaml12Loader.add_constructor("tag:yaml.org,2002:int", _construct_int)
+
+
+def _expanded_nodes(node, seen: dict) -> int:
+    """How many nodes ``node`` holds once every alias is expanded (each shared node counted
+    as often as it is referenced, each computed once)."""
+    if id(node) in seen:
+        return seen[id(node)]
+    count = 1
+    if isinstance(node, yaml.SequenceNode):
+        count += sum(_expanded_nodes(item, seen) for item in node.value)
+    elif isinstance(node, yaml.MappingNode):
+        count += sum(_expanded_nodes(k, seen) + _expanded_nodes(v, seen) for k, v in node.value)
+    seen[id(node)] = count
+    return count
+
+
+def _expanded_count(value, seen: dict) -> int:
+    """:func:`_expanded_nodes` of a value already read (lists and dicts shared by aliases)."""
+    if id(value) in seen:
+        return seen[id(value)]
+    count = 1
+    if isinstance(value, list):
+        count += sum(_expanded_count(item, seen) for item in value)
+    elif isinstance(value, dict):
+        count += sum(1 + _expanded_count(item, seen) for item in value.values())
+    seen[id(value)] = count
+    return count
+
+
+def _too_many_nodes(count: int, source) -> ConfigError:
+    return ConfigError(
+        f"{source} holds {checks.show(count)} values once its YAML aliases (*name) are expanded, more than the "
+        f"{MAX_NODES:,} a configuration may hold; write the settings out without nested aliases."
+    )
+
+
+def read_yaml(text: str, source) -> object:
+    r"""``text`` (the YAML of ``source``, a file name or :data:`OVERRIDE_SOURCE`) read as YAML 1.2.
+
+    Numbers follow the YAML 1.2 core schema (``06000`` is 6000, ``1e5`` a number, ``yes`` is
+    text), and a text whose aliases expand to more than :data:`MAX_NODES` values (an alias
+    bomb) is refused before it is built.
+
+    Parameters
+    ----------
+    text : str
+        The YAML text.
+    source : str or Path
+        Where it came from, for the error message.
+
+    Returns
+    -------
+    object
+        The value (None for an empty text).
+
+    Raises
+    ------
+    ConfigError
+        Not valid YAML, nested too deep, or too many values once expanded.
+
+    Examples
+    --------
+    >>> read_yaml("n_points: 06000\nboth: yes\nbig: 1e5", "x.yaml")
+    {'n_points': 6000, 'both': 'yes', 'big': 100000.0}
+    """
+    loader = _Yaml12Loader(text)
+    try:
+        node = loader.get_single_node()
+        if node is None:
+            return None
+        count = _expanded_nodes(node, {})
+        if count > MAX_NODES:
+            raise _too_many_nodes(count, source)
+        return loader.construct_document(node)
+    except yaml.YAMLError as exc:
+        raise ConfigError(f"{source} is not valid YAML: {' '.join(str(exc).split())}") from None
+    except RecursionError:
+        raise ConfigError(f"{source} nests its settings too deeply to be a configuration; flatten it.") from None
+    finally:
+        loader.dispose()
+
+
+def check_yaml11(path) -> None:
+    r"""Refuse a config file (read by Snakemake, whose reader is YAML 1.1) holding a plain
+    value that YAML 1.1 and YAML 1.2 read differently (``06000``: 3072 or 6000; ``yes``: true
+    or text; ``1e5``: text or a number), and an alias bomb (:func:`read_yaml`).
+
+    Parameters
+    ----------
+    path : str or Path
+        The config file.
+
+    Raises
+    ------
+    ConfigError
+        Naming the line, the value, both readings and how to write it.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "c.yaml"
+    >>> _ = path.write_text("scenes: {s: {records: {n_points: 06000}}}\n")
+    >>> check_yaml11(path)
+    Traceback (most recent call last):
+    ...
+    rockdec.pipeline.config.ConfigError: config file ...c.yaml, line 1: 06000 reads as 3072 in YAML 1.1 (Snakemake's reader) and as 6000 in YAML 1.2; write 6000 (or the value meant, unambiguously).
+    """
+    try:
+        text = Path(path).read_text()
+    except OSError:
+        return  # Snakemake read it; a file gone since is Snakemake's to report
+    read_yaml(text, f"config file {path}")
+    loader = _Yaml12Loader(text)
+    try:
+        root = loader.get_single_node()
+    finally:
+        loader.dispose()
+    stack, seen = [root] if root is not None else [], set()
+    while stack:
+        node = stack.pop()
+        if id(node) in seen:
+            continue
+        seen.add(id(node))
+        if isinstance(node, yaml.ScalarNode):
+            if not node.style:  # a plain scalar (style None, or "" from libyaml): quoted ones are text in both
+                _compare_readings(node, path)
+        elif isinstance(node, yaml.SequenceNode):
+            stack.extend(node.value)
+        elif isinstance(node, yaml.MappingNode):
+            stack.extend(v for pair in node.value for v in pair)
+
+
+def _compare_readings(node, path) -> None:
+    """Refuse the plain scalar ``node`` of ``path`` if YAML 1.1 and 1.2 read it differently."""
+    try:
+        old = yaml.load(node.value, Loader=_BaseLoader)
+        new = yaml.load(node.value, Loader=_Yaml12Loader)
+    except yaml.YAMLError:
+        return  # not a value on its own (Snakemake read the file as a whole)
+    if type(old) is type(new) and (old == new or old != old and new != new):  # NaN: the same reading
+        return
+
+    def described(value):
+        if isinstance(value, str):
+            return f"the text {value!r}"
+        return str(value).lower() if isinstance(value, bool) else checks.show(value)
+
+    raise ConfigError(
+        f"config file {path}, line {node.start_mark.line + 1}: {node.value} reads as {described(old)} in YAML 1.1 "
+        f"(Snakemake's reader) and as {described(new)} in YAML 1.2; write "
+        + (f"{checks.show(new)}" if checks.is_whole(new) else "true or false" if isinstance(old, bool) else
+           f"{float(new)!r}" if checks.is_number(new) else repr(node.value))
+        + " (or the value meant, unambiguously)."
+    )
 
 
 @functools.lru_cache(maxsize=1)
@@ -96,8 +307,20 @@ def _problem(err: jsonschema.ValidationError) -> str:
         if not checks.is_finite_number(value):
             return f"{checks.show(value)} is not a finite number; {_allowed(err.schema)}"
         if "integer" in err.validator_value and float(value).is_integer():
-            return f"{checks.show(value)} is written as a decimal: write {int(value)}"
+            if abs(value) < 2**53:  # a decimal that holds its whole number exactly
+                return f"{checks.show(value)} is written as a decimal: write {int(value)}"
+            return f"{checks.show(value)} is written as a decimal beyond any count; {_allowed(err.schema)}"
+    if checks.is_number(value) and err.validator in ("minimum", "maximum", "exclusiveMinimum", "exclusiveMaximum"):
+        return f"{checks.show(value)} is out of range; {_allowed(err.schema)}"
+    if err.validator == "type":
+        return f"{_shown(value)} is not {_allowed(err.schema)[4:]}"
     return f"{err.message}; {_allowed(err.schema)}"
+
+
+def _shown(value) -> str:
+    """``value`` for a message, at most 60 characters of it."""
+    text = checks.show(value) if checks.is_number(value) else repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
 
 
 def _allowed(prop: dict) -> str:
@@ -130,29 +353,38 @@ def canonical(value):
 
 
 def apply_overrides(config: dict, overrides: dict) -> dict:
-    """Read the values of ``overrides`` (Snakemake's ``--config KEY=VALUE``) as YAML values.
+    """Read the values of ``overrides`` (Snakemake's ``--config KEY=VALUE``) as YAML 1.2 values.
 
     Snakemake reads a nested ``--config`` value (``scenes='{tiny: {records: {replicates: 3}}}'``)
-    with every leaf a string; each such string of ``overrides`` is read again as a YAML
-    scalar (``3`` an integer, ``0.5`` a number, ``true`` a boolean, ``1e12`` a number) and
-    put in its place in ``config`` (changed in place; returned).
+    with every leaf a string, lists included (``signatures: {windows: [0.25, 0.5]}``); each
+    such string of ``overrides`` is read again as a YAML 1.2 scalar (:func:`read_yaml`:
+    ``3`` and ``06000`` integers, ``0.5`` and ``1e12`` numbers, ``true`` a boolean) and put in
+    its place in ``config`` (changed in place; returned). Overrides whose aliases expand
+    beyond :data:`MAX_NODES` values are refused.
     """
+    count = _expanded_count(overrides or {}, {})
+    if count > MAX_NODES:
+        raise _too_many_nodes(count, OVERRIDE_SOURCE)
 
-    def read(text: str):
-        value = yaml.safe_load(text) if text.strip() else text
-        if isinstance(value, str):
-            try:
-                value = float(text)  # YAML 1.1 reads 1e12 as text
-            except ValueError:
-                return text
-        return value
+    def read(value, key=None):
+        if isinstance(value, dict):
+            return {k: read(v, k) for k, v in value.items()}
+        if isinstance(value, list):
+            return [read(item) for item in value]
+        if not isinstance(value, str) or key == "description" or not value.strip():
+            return value
+        try:
+            parsed = read_yaml(value, OVERRIDE_SOURCE)
+        except ConfigError:
+            return value
+        return parsed if isinstance(parsed, (str, int, float, bool)) else value
 
     def walk(target: dict, given: dict):
         for key, value in given.items():
             if isinstance(value, dict) and isinstance(target.get(key), dict):
                 walk(target[key], value)
-            elif isinstance(value, str) and key != "description":
-                target[key] = read(value)
+            else:
+                target[key] = read(value, key)
 
     walk(config, overrides or {})
     return config
@@ -189,8 +421,16 @@ def validate(config: dict, source: str | Path = DEFAULT_PATH, overrides: dict | 
     errors = sorted(validator.iter_errors(config), key=lambda err: (list(map(str, err.absolute_path)), err.validator != "type"))
     if errors:
         err = errors[0]
-        where = ".".join(str(p) for p in err.absolute_path) or "(top level)"
-        raise _field_error(where, _problem(err), fix(where))
+        path = [str(p) for p in err.absolute_path]
+        problem = _problem(err)
+        if err.validator == "additionalProperties" and isinstance(err.instance, dict):
+            extra = sorted(set(map(str, err.instance)) - set(err.schema.get("properties", {})))
+            if extra:  # name the misspelt key itself, and where it was set
+                path.append(extra[0])
+                known = ", ".join(sorted(err.schema.get("properties", {})))
+                problem = f"'{extra[0]}' is not a setting here; " + (f"use one of {known}" if known else "remove it")
+        where = ".".join(path) or "(top level)"
+        raise _field_error(where, problem, fix(where))
     for name, scene in config["scenes"].items():
         try:
             checks.identifier(name, "scene name")
@@ -218,14 +458,26 @@ def validate(config: dict, source: str | Path = DEFAULT_PATH, overrides: dict | 
             raise _field_error(f"scenes.{name}.excitation.load", str(err).rstrip("."), fix(f"scenes.{name}.excitation.load")) from None
         floor = min_points_per_cycle(scene["system"]["e"], scene["signatures"]["level"])
         if exc["dt"] is None and exc["points_per_cycle"] < floor:
-            where = f"scenes.{name}.excitation.points_per_cycle"
-            raise _field_error(
-                where,
-                f"{exc['points_per_cycle']} is below {floor:.1f}, the fewest samples per cycle that leave the local "
-                f"fits of eq. 27 three points each at e = {scene['system']['e']} and level "
-                f"{scene['signatures']['level']}; raise it",
-                fix(where),
-            )
+            level = scene["signatures"]["level"]
+            default_level = schema()["$defs"]["scene"]["properties"]["signatures"]["properties"]["level"]["default"]
+            if exc["points_per_cycle"] >= min_points_per_cycle(scene["system"]["e"], default_level):
+                # enough samples per cycle at the default level: the level raised the floor
+                where = f"scenes.{name}.signatures.level"
+                problem = (
+                    f"{checks.show(level)} needs at least {floor:.3g} samples per cycle to leave the local fits of eq. 27 "
+                    f"three points each at e = {checks.show(scene['system']['e'])}, more than points_per_cycle "
+                    f"{checks.show(exc['points_per_cycle'])}; raise the level (the trigger in units of sigma_Y, 2 by default)"
+                )
+            else:
+                where = f"scenes.{name}.excitation.points_per_cycle"
+                problem = (
+                    f"{checks.show(exc['points_per_cycle'])} is below {floor:.3g}, the fewest samples per cycle that leave "
+                    f"the local fits of eq. 27 three points each at e = {checks.show(scene['system']['e'])} and level "
+                    f"{checks.show(level)}; raise it"
+                )
+            raise _field_error(where, problem, fix(where))
+        _check_seeds(name, scene, fix)
+        _check_scales(name, scene, fix)
         _check_readings(name, scene, fix)
         if sizes:
             _check_size(name, scene, fix)
@@ -235,6 +487,72 @@ def validate(config: dict, source: str | Path = DEFAULT_PATH, overrides: dict | 
             f"{sorted(config['scenes'])}. {fix('default_scene')}"
         )
     return config
+
+
+def _check_seeds(name: str, scene: dict, fix) -> None:
+    """The scene's seeds (``first_seed`` on, one per series) must be 64-bit integers."""
+    rec = scene["records"]
+    count = rec["replicates"] * rec["series_per_replicate"]
+    last = rec["first_seed"] + count - 1
+    if count > MAX_SEED:
+        where = f"scenes.{name}.records"
+        raise _field_error(
+            where,
+            f"the scene asks for {checks.show(count)} series (replicates x series_per_replicate), more than the "
+            f"{checks.show(MAX_SEED)} 64-bit seeds; lower replicates or series_per_replicate",
+            fix(where),
+        )
+    if last > MAX_SEED:
+        where = f"scenes.{name}.records.first_seed"
+        raise _field_error(
+            where,
+            f"{checks.show(rec['first_seed'])} makes the scene's seeds run to {checks.show(last)}, beyond "
+            f"{checks.show(MAX_SEED)}, the largest 64-bit seed; lower it",
+            fix(where),
+        )
+
+
+def _check_scales(name: str, scene: dict, fix) -> None:
+    """Refuse a system whose scales leave the floating-point range of the simulation before
+    any job runs (rule ``calibrate`` would otherwise fail): ``g = nu^2 theta_cr``, ``sigma_p``,
+    the step (given, or the first step of the step search at
+    :data:`rockdec.physics.models.SCALE_CONSTANT_GUESS`) and the amplitude ``sigma_Y`` of the
+    scale law (:func:`rockdec.physics.models.scale_constant`) must each lie in
+    :data:`SCALE_RANGE`."""
+    system, exc = scene["system"], scene["excitation"]
+    lo, hi = SCALE_RANGE
+    inside = f"outside [{lo:.2g}, {hi:.2g}], the range whose squares the simulation can take"
+    g = restoring_acceleration(system["nu"], system["theta_cr"])
+    if not lo <= g <= hi:
+        # blamed: the factor of g further from 1 on a log scale
+        nu_off = abs(math.log(system["nu"] ** 2)) if system["nu"] < 1e154 else math.inf
+        key, other = ("nu", "theta_cr") if nu_off >= abs(math.log(system["theta_cr"])) else ("theta_cr", "nu")
+        where = f"scenes.{name}.system.{key}"
+        raise _field_error(
+            where,
+            f"{checks.show(system[key])} with {other} {checks.show(system[other])} gives g = nu^2 theta_cr = "
+            f"{g:.3g} rad/s^2, {inside}; choose nu and theta_cr for a g in that range",
+            fix(where),
+        )
+    sigma_p = exc["sigma_p"]
+    if sigma_p == 0.0:
+        return  # a free response: its step comes from its amplitude
+    if not lo <= sigma_p <= hi:
+        where = f"scenes.{name}.excitation.sigma_p"
+        raise _field_error(where, f"{checks.show(sigma_p)} is {inside}; give the impulse std in rad/s in that range", fix(where))
+    given_dt = exc["dt"] is not None
+    dt = exc["dt"] if given_dt else step_for_density(SCALE_CONSTANT_GUESS, sigma_p, g, exc["points_per_cycle"])
+    log_sigma_y = math.log(SCALE_CONSTANT_GUESS) + 4 * math.log(sigma_p) - 2 * math.log(dt) - 3 * math.log(g)
+    for what, value in (("the step", dt), ("the amplitude sigma_Y", math.exp(min(log_sigma_y, 709.0)))):
+        if not lo <= value <= hi:
+            where = f"scenes.{name}.excitation.{'dt' if given_dt else 'sigma_p'}"
+            raise _field_error(
+                where,
+                f"{checks.show(dt if given_dt else sigma_p)} with g = {g:.3g} rad/s^2 makes {what} about {value:.2g}, "
+                f"{inside}; choose sigma_p{' and dt' if given_dt else ''} on the scale of g (g = 1 rad/s^2 with "
+                "sigma_p = 0.003 rad/s gives sigma_Y about 0.002 rad)",
+                fix(where),
+            )
 
 
 def _check_readings(name: str, scene: dict, fix) -> None:
@@ -333,10 +651,7 @@ def load(path: str | Path = DEFAULT_PATH) -> dict:
         text = path.read_text()
     except OSError as exc:
         raise ConfigError(f"cannot read the config file '{path}': {exc.strerror}; pass --config PATH.") from None
-    try:
-        config = yaml.safe_load(text) or {}
-    except yaml.YAMLError as exc:
-        raise ConfigError(f"config file '{path}' is not valid YAML: {exc}") from None
+    config = read_yaml(text, f"config file '{path}'") or {}
     if not isinstance(config, dict):
         raise ConfigError(f"config file '{path}' is not a mapping of settings; start it with 'scenes:'.")
     return validate(config, source=path)
