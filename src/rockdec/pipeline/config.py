@@ -521,7 +521,7 @@ def _check_scales(name: str, scene: dict, fix) -> None:
     :data:`SCALE_RANGE`."""
     system, exc = scene["system"], scene["excitation"]
     lo, hi = SCALE_RANGE
-    inside = f"outside [{lo:.2g}, {hi:.2g}], the range whose squares the simulation can take"
+    inside = f"outside [{lo:.2g}, {hi:.2g}], the finite range whose squares the simulation can take"
     g = restoring_acceleration(system["nu"], system["theta_cr"])
     if not lo <= g <= hi:
         # blamed: the factor of g further from 1 on a log scale
