@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from rockdec._version import __version__
-from rockdec.validate import InputError, path_name
+from rockdec.validate import InputError, file_kind, path_name
 
 if TYPE_CHECKING:  # annotations only: xarray loads where a function needs it
     import xarray as xr
@@ -403,6 +403,9 @@ def open_dataset(path: str | Path, **kwargs) -> xr.Dataset:
     import xarray as xr
 
     path = Path(path)
+    kind = file_kind(path)
+    if kind is not None:
+        raise OutputError(f"input '{path}' is {kind}, not a NetCDF file; give the file.")
     if not path.is_file():
         raise OutputError(f"input '{path}' does not exist; run the step that makes it first.")
     try:

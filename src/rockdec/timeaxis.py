@@ -53,10 +53,15 @@ ANGLE_UNITS = {"rad": 1.0, "radian": 1.0, "radians": 1.0, "1": 1.0,
                "mrad": 1e-3, "milliradian": 1e-3, "milliradians": 1e-3,
                "degree": np.pi / 180, "degrees": np.pi / 180, "deg": np.pi / 180}
 
-#: ``units`` of a time coordinate (without a reference date) and their factor to s.
+#: ``units`` of a time coordinate and their factor to s (CF/UDUNITS spellings; a reference
+#: date, ``"nanoseconds since 2020-01-01"`` as xarray writes datetimes, only shifts the origin).
 TIME_UNITS = {"s": 1.0, "sec": 1.0, "second": 1.0, "seconds": 1.0,
               "ms": 1e-3, "millisecond": 1e-3, "milliseconds": 1e-3,
-              "us": 1e-6, "microsecond": 1e-6, "microseconds": 1e-6, "min": 60.0, "minute": 60.0, "minutes": 60.0}
+              "us": 1e-6, "microsecond": 1e-6, "microseconds": 1e-6,
+              "ns": 1e-9, "nanosecond": 1e-9, "nanoseconds": 1e-9,
+              "min": 60.0, "minute": 60.0, "minutes": 60.0,
+              "h": 3600.0, "hr": 3600.0, "hour": 3600.0, "hours": 3600.0,
+              "d": 86400.0, "day": 86400.0, "days": 86400.0}
 
 
 def _factor(units, table: dict, source: str, what: str, fix: str) -> float:
@@ -77,4 +82,4 @@ def angle_factor(units, source: str, variable: str) -> float:
 
 def time_factor(units, source: str, name: str) -> float:
     """The factor from a time coordinate in ``units`` (``None``: s) to s."""
-    return _factor(units, TIME_UNITS, source, f"the time coordinate '{name}'", "store it in s or ms")
+    return _factor(units, TIME_UNITS, source, f"the time coordinate '{name}'", "store it in s, ms or another unit of time")

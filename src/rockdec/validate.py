@@ -155,6 +155,39 @@ def path_name(path, what: str):
     return Path(text)
 
 
+#: The range of magnitudes whose squares are normal floats (neither 0 nor inf): scales the
+#: simulation and the analysis square (g, sigma_p, a step, an angle's amplitude) must lie in it.
+SQUARE_RANGE = (math.sqrt(2.2250738585072014e-308), math.sqrt(1.7976931348623157e308))
+
+
+def file_kind(path) -> str | None:
+    """What ``path`` is when it exists and is not a regular file (``"a FIFO (named pipe)"``,
+    ``"a folder"``, ...), else ``None``; found by ``stat``, which never blocks, so a FIFO is
+    named before an ``open()`` would wait for a writer.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> folder = tempfile.mkdtemp()
+    >>> file_kind(folder), file_kind(os.path.join(folder, "none"))
+    ('a folder', None)
+    >>> os.mkfifo(os.path.join(folder, "pipe")); file_kind(os.path.join(folder, "pipe"))
+    'a FIFO (named pipe)'
+    """
+    import os
+    import stat
+
+    try:
+        mode = os.stat(path).st_mode
+    except (OSError, ValueError):
+        return None
+    for test, name in ((stat.S_ISREG, None), (stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a FIFO (named pipe)"),
+                       (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket")):
+        if test(mode):
+            return name
+    return "not a regular file"
+
+
 def available_memory() -> int:
     """Bytes of memory the machine can give this process now (``psutil``)."""
     import psutil

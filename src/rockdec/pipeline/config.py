@@ -49,7 +49,7 @@ MAX_SEED = 2**63 - 1
 
 #: The range every scale of a simulation (g, sigma_p, the step, sigma_Y) must lie in: its
 #: square, which the pilot statistics take, is then a normal float (neither 0 nor inf).
-SCALE_RANGE = (math.sqrt(2.3e-308), math.sqrt(1.7e308))
+SCALE_RANGE = checks.SQUARE_RANGE
 
 
 class ConfigError(checks.InputError):

@@ -19,7 +19,7 @@ import numpy as np
 
 from rockdec import timeaxis
 from rockdec.timeaxis import RecordError, angle_factor, time_factor
-from rockdec.validate import path_name, show
+from rockdec.validate import SQUARE_RANGE, file_kind, path_name, show
 
 #: Largest fraction of NaN samples a record may hold.
 MAX_NAN_FRACTION = 0.1
@@ -83,7 +83,7 @@ def _plain_columns(path: Path, sep: str, column: str) -> dict[str, np.ndarray] |
     other line a finite number under each. ``None`` for any other file, which pandas reads
     (:func:`_read_csv`, with its messages for what is wrong)."""
     try:
-        with open(path, encoding="utf-8") as f:
+        with open(path, encoding="utf-8-sig") as f:  # a byte-order mark is not part of the first name
             header = next((line for line in f if line.strip() and not line.lstrip().startswith("#")), "")
             names = [n.strip() for n in (header.split() if sep == r"\s+" else header.split(sep))]
             if column not in names or "" in names or len(set(names)) < len(names):
@@ -116,7 +116,7 @@ def _pandas_columns(path: Path, sep: str, column: str):
     read (``None`` when it has none); one sentence for what makes it unreadable."""
     import pandas as pd
 
-    options = {"comment": "#", "sep": sep, "skipinitialspace": sep != r"\s+"}
+    options = {"comment": "#", "sep": sep, "skipinitialspace": sep != r"\s+", "encoding": "utf-8-sig"}
     try:
         table = pd.read_csv(path, **options)
     except pd.errors.EmptyDataError:
@@ -177,6 +177,33 @@ def _read_netcdf(path: Path, variable: str, step: float | None) -> tuple[np.ndar
     return values, step
 
 
+#: The first bytes of a ``.npy`` file (:mod:`numpy.lib.format`) and of a zip archive (``.npz``).
+NPY_MAGIC, ZIP_MAGIC = b"\x93NUMPY", b"PK\x03\x04"
+
+
+def _check_npy(path: Path) -> None:
+    """Refuse a ``.npy`` file that is not one: a ``.npz`` archive (a zip) or another format,
+    named by its first bytes before NumPy reads it."""
+    with open(path, "rb") as f:
+        head = f.read(len(NPY_MAGIC))
+    if head.startswith(ZIP_MAGIC):
+        raise RecordError(
+            f"{path}: a .npz archive (zip) named .npy; save the record's array alone with numpy.save, or give a .csv or .nc file."
+        )
+    if head != NPY_MAGIC:
+        raise RecordError(f"{path}: does not start as a .npy file does; save the record with numpy.save, or give a .csv or .nc file.")
+
+
+def check_regular(path: Path) -> None:
+    """Refuse a record path that exists but is not a regular file (a folder, a FIFO, a
+    device), found without opening it: an ``open()`` of a FIFO waits for a writer."""
+    kind = file_kind(path)
+    if kind == "a folder":
+        raise RecordError(f"{path}: a folder, not a record file; give the file.")
+    if kind is not None:
+        raise RecordError(f"{path}: {kind}, not a regular file; save the record to a file and give that.")
+
+
 def read_records(path, *, column: str = "theta", variable: str = "theta", dt: float | None = None, fs: float | None = None) -> list[Record]:
     """Read and check the records of one file.
 
@@ -189,8 +216,7 @@ def read_records(path, *, column: str = "theta", variable: str = "theta", dt: fl
     path = path_name(path, "record")
     source = str(path)
     step = _step_from_options(dt, fs, source)
-    if path.is_dir():
-        raise RecordError(f"{path}: a folder, not a record file; give the file.")
+    check_regular(path)
     if not path.is_file():
         raise RecordError(f"{path}: no such file; check the path.")
     if path.stat().st_size == 0:
@@ -207,6 +233,7 @@ def read_records(path, *, column: str = "theta", variable: str = "theta", dt: fl
         if step is None:
             raise RecordError(f"{path}: the .mat file has no time vector (time or t) and no dt or fs; give `dt` (s) or `fs` (Hz).")
     elif suffix == ".npy":
+        _check_npy(path)
         try:
             values = np.load(path, allow_pickle=False)
         except (OSError, ValueError) as exc:
@@ -246,6 +273,12 @@ def check_values(theta, dt: float, source: str) -> Record:
     finite = theta[np.isfinite(theta)]
     if finite.size == 0 or np.ptp(finite) == 0:
         raise RecordError(f"{source}: the record is constant ({finite[0] if finite.size else 'all NaN'}); a rocking record must move.")
+    peak = float(np.max(np.abs(finite)))
+    if not SQUARE_RANGE[0] <= peak <= SQUARE_RANGE[1]:
+        raise RecordError(
+            f"{source}: the record's largest angle is {peak:.3g} rad, outside [{SQUARE_RANGE[0]:.2g}, {SQUARE_RANGE[1]:.2g}] rad, "
+            "where its squares stay finite, nonzero floats; give the angles in rad (or rescale them)."
+        )
     return Record(theta, float(dt), source)
 
 
@@ -254,19 +287,22 @@ def record_size(path, variable: str = "theta") -> int:
     from its size and first lines (``.csv``), without reading the samples; 0 when the file
     cannot tell (it is then refused when read)."""
     path = Path(path)
+    if file_kind(path) is not None:
+        return 0  # not a regular file: refused when read, without opening it here
     try:
         suffix = path.suffix.lower()
         if suffix in (".csv", ".txt"):
             _, line_bytes = _sniff_csv(path)
             return int(path.stat().st_size / line_bytes) if line_bytes else 0
         if suffix == ".npy":
+            _check_npy(path)
             return int(np.load(path, mmap_mode="r", allow_pickle=False).size)  # the header only
         if suffix in (".nc", ".nc4", ".netcdf"):
             import xarray as xr
 
             with xr.open_dataset(path, decode_times=False, decode_timedelta=False) as ds:
                 return int(ds[variable].size) if variable in ds else 0
-    except (OSError, ValueError, KeyError):
+    except (OSError, ValueError, KeyError):  # RecordError included: refused when read
         return 0
     return 0
 
