@@ -35,18 +35,22 @@ exclusively, holding host name, process id and start time) and touches it every
 :data:`HEARTBEAT_S` seconds; another run on the same settings waits for the file instead
 of building it too. A lock not touched for :data:`STALE_S` seconds belongs to a run that
 died (on any node of a shared disk: the rule reads the file's mtime, not the process
-table) and is taken over.
+table) and is taken over; so is a lock whose time stamp has not changed over
+:data:`STALE_S` seconds of waiting (a stamp in the future), and at once a lock of a
+process of this host that has ended. A SIGTERM or Ctrl-C during the build removes the lock.
 """
 
 from __future__ import annotations
 
 import contextlib
 import dataclasses
+import errno
 import hashlib
 import json
 import logging
 import math
 import os
+import signal
 import socket
 import sys
 import threading
@@ -574,27 +578,119 @@ def _heartbeat(lock: Path):
         thread.join()
 
 
-def _take_lock(lock: Path, notes: list) -> bool:
-    """Create ``lock`` exclusively; ``False`` while a live run (fresh mtime) holds it.
+def _pid_alive(pid: int) -> bool:
+    """Whether process ``pid`` runs on this host (``os.kill(pid, 0)``: a process of another
+    user counts as running)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (PermissionError, OverflowError, ValueError):
+        return pid > 0
+    return True
 
-    A lock older than :data:`STALE_S` seconds is removed (with a note) and taken.
+
+def _ended_here(holder: str) -> bool:
+    """Whether the lock text ``holder`` (``host H pid P started ...``) names a process of this
+    host that has ended: its lock is stale at once, whatever its time stamp."""
+    words = holder.split()
+    try:
+        host, pid = words[words.index("host") + 1], int(words[words.index("pid") + 1])
+    except (ValueError, IndexError):
+        return False
+    return host == socket.gethostname() and not _pid_alive(pid)
+
+
+def _cache_error(folder: Path, exc: OSError) -> InputError:
+    """One sentence for a cache folder the calibration cannot be written to, naming ``cache``."""
+    why = {
+        errno.EROFS: "lies on a read-only file system",
+        errno.EACCES: "is not writable by this user",
+        errno.EPERM: "is not writable by this user",
+        errno.ENOTDIR: "lies under a file, not a folder",
+        errno.EEXIST: "lies under a file, not a folder",
+        errno.ENOSPC: "lies on a full disk",
+        errno.ENAMETOOLONG: "has a name too long for the file system",
+    }.get(exc.errno, f"cannot be written ({exc.strerror})")
+    return InputError(f"cache '{folder}' {why}; give a writable folder for the stored calibrations as cache.")
+
+
+def _take_lock(lock: Path, notes: list, watch: dict | None = None) -> bool:
+    """Create ``lock`` exclusively; ``False`` while a live run holds it.
+
+    A lock is stale, removed (with a note) and then taken on the next call, when its mtime is
+    older than :data:`STALE_S` seconds, when it names a process of this host that has ended
+    (a run killed before it could remove it), or, with ``watch`` (a dict kept by the caller
+    between calls), when its mtime has not changed for :data:`STALE_S` seconds of waiting: a
+    live holder touches it every :data:`HEARTBEAT_S` seconds, so a lock stamped in the future
+    (a clock set wrong) does not hold a run forever. An empty folder in its place (no run
+    makes one) is removed; a folder with content is refused (:class:`InputError`).
     """
     try:
         fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
     except FileExistsError:
         try:
-            age = time.time() - lock.stat().st_mtime
+            stamp = lock.stat().st_mtime
         except FileNotFoundError:  # released meanwhile
             return False
-        if age < STALE_S:
+        if lock.is_dir():
+            try:
+                lock.rmdir()
+            except OSError:
+                raise InputError(
+                    f"cache '{lock.parent}' holds a folder {lock.name} where a calibration's lock file goes; "
+                    "remove it, or give another folder as cache."
+                ) from None
+            notes.append(f"removed the empty folder {lock.name} that stood where the calibration's lock goes")
             return False
-        holder = lock.read_text(errors="replace").strip() if lock.exists() else ""
-        notes.append(f"took over the calibration lock {lock.name} of a run that stopped {age:.0f} s ago ({holder})")
+        now = time.time()
+        holder = lock.read_text(errors="replace").strip() if lock.is_file() else ""
+        age = now - stamp
+        if watch is not None and watch.get("stamp") != stamp:
+            watch.update(stamp=stamp, since=now)
+        unchanged = now - watch["since"] if watch is not None else 0.0
+        if _ended_here(holder):
+            why = "whose process has ended"
+        elif age >= STALE_S:
+            why = f"that stopped {age:.0f} s ago"
+        elif unchanged >= STALE_S:
+            why = f"untouched for {unchanged:.0f} s though stamped {-age:.0f} s in the future"
+        else:
+            return False
+        notes.append(f"took over the calibration lock {lock.name} of a run {why} ({holder})")
         lock.unlink(missing_ok=True)
         return False
+    except OSError as exc:
+        raise _cache_error(lock.parent, exc) from None
     with os.fdopen(fd, "w") as f:
         f.write(f"host {socket.gethostname()} pid {os.getpid()} started {time.strftime('%Y-%m-%dT%H:%M:%SZ', time.gmtime())}\n")
     return True
+
+
+@contextlib.contextmanager
+def _removed_on_sigterm(lock: Path):
+    """While the block runs in the main thread, a SIGTERM first removes ``lock`` (and then
+    does what it did before: the previous handler, or ends the process as by default), so a
+    killed build leaves no lock for the next run to wait on. Ctrl-C (KeyboardInterrupt)
+    unwinds through the caller's ``finally``, which removes it."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.getsignal(signal.SIGTERM)
+
+    def terminated(signum, frame):
+        lock.unlink(missing_ok=True)
+        if callable(previous):
+            previous(signum, frame)
+        elif previous != signal.SIG_IGN:
+            signal.signal(signal.SIGTERM, signal.SIG_DFL)
+            os.kill(os.getpid(), signal.SIGTERM)
+
+    signal.signal(signal.SIGTERM, terminated)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 def load_or_build(cal_settings: dict, cache_dir: str | Path, notes: list | None = None) -> tuple[ncread.Stored, bool]:
@@ -612,8 +708,11 @@ def load_or_build(cal_settings: dict, cache_dir: str | Path, notes: list | None 
     expected = settings_hash(cal_settings)
     path = folder / f"calibration-{expected}.nc"
     lock = path.with_suffix(".building")
-    folder.mkdir(parents=True, exist_ok=True)
-    waited = False
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise _cache_error(folder, exc) from None
+    waited, watch = False, {}
     while True:
         if path.is_file():
             ds, problem = _read_checked(path, expected)
@@ -621,14 +720,14 @@ def load_or_build(cal_settings: dict, cache_dir: str | Path, notes: list | None 
                 return ds, True
             if not waited:
                 notes.append(f"the stored calibration {path.name} was rebuilt: {problem}")
-        if _take_lock(lock, notes):
+        if _take_lock(lock, notes, watch):
             break
         if not waited:
             print(f"waiting for another run that builds {path.name} (lock {lock})", file=sys.stderr)
             waited = True
         time.sleep(POLL_S)
     try:
-        with _heartbeat(lock):
+        with _removed_on_sigterm(lock), _heartbeat(lock):
             if path.is_file() and _read_checked(path, expected)[0] is not None:  # stored while we took the lock
                 return _read_checked(path, expected)[0], True
             ds = build(cal_settings)
