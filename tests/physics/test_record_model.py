@@ -163,3 +163,40 @@ def test_parse_load_reads_the_command_line_forms_and_refuses_others():
     for text in ("pink", "white:3", "lowpass:", "lowpass:x", "lowpass:-1", ""):
         with pytest.raises(InputError):
             parse_load(text)
+
+
+# --------------------------------------------------------------------------- issue 38: corners whose pole degenerates
+
+from rockdec.physics.record_model import POLE_RATE_RANGE, parse_load  # noqa: E402
+
+
+@pytest.mark.hostile("numbers", "refused")
+@pytest.mark.parametrize("corner, words", [
+    ("1e5", ["is white", "give load white"]), ("1e8", ["is white"]), ("1e300", ["is white"]),
+    ("1e-300", ["never becomes stationary", "above"]), ("1e-17", ["never becomes stationary"]),
+])
+@pytest.mark.parametrize("points_per_cycle", [35.0, 75.0, 2000.0])
+def test_a_corner_whose_pole_rounds_to_0_or_1_is_refused_naming_load(corner, words, points_per_cycle):
+    load = parse_load(f"lowpass:{corner}")
+    if POLE_RATE_RANGE[0] <= 2 * math.pi * float(corner) / points_per_cycle < POLE_RATE_RANGE[1]:
+        assert 0.0 < load.pole(points_per_cycle) < 1.0  # coloured at this finer sampling
+        return
+    with pytest.raises(InputError) as info:
+        load.pole(points_per_cycle)
+    text = str(info.value)
+    assert text.startswith(f"load lowpass:{float(corner):g} at ") and "\n" not in text and text.count(". ") == 0
+    for word in words:
+        assert word in text
+    with pytest.raises(InputError):  # the calibration's model key takes -log(pole): refused, not a math domain error
+        calibration.binned_model(RecordModel("simplified", load, SensorNoise()), points_per_cycle)
+
+
+@pytest.mark.hostile("numbers", "answered")
+@pytest.mark.parametrize("points_per_cycle", [35.0, 75.0, 2000.0])
+def test_corners_inside_the_range_give_a_pole_whose_log_returns_the_corner(points_per_cycle):
+    """At the range's edges (just inside) the pole is a float in (0, 1) and ``-log(pole) N / 2 pi`` is the corner."""
+    for rate in (POLE_RATE_RANGE[0] * 1.01, 1.0, POLE_RATE_RANGE[1] * 0.999):
+        corner = rate * points_per_cycle / (2 * math.pi)
+        pole = Load("lowpass", corner).pole(points_per_cycle)
+        assert 0.0 < pole < 1.0
+        assert -math.log(pole) * points_per_cycle / (2 * math.pi) == pytest.approx(corner, rel=0.02)

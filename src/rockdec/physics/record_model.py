@@ -46,6 +46,12 @@ from pathlib import Path
 from rockdec import validate as checks
 
 LOAD_KINDS = ("white", "lowpass", "spectrum")
+
+#: The range of ``2 pi corner / points_per_cycle`` (the low-pass pole's ``-log``) in which the
+#: pole ``exp(-rate)`` is a float strictly between 0 and 1 that its ``log`` recovers: above
+#: ``-log`` of the smallest normal float the pole underflows to 0 (a white load), below
+#: the float spacing at 1 it rounds to 1 (a random walk).
+POLE_RATE_RANGE = (2.0**-52, -math.log(2.2250738585072014e-308))
 """The loads a record model can state."""
 
 SCENE_LOAD_KINDS = (*LOAD_KINDS, "base")
@@ -119,7 +125,20 @@ class Load:
         if self.kind == "spectrum":
             return math.nan
         checks.positive(points_per_cycle, "points_per_cycle", "a low-pass load needs the samples per cycle that place its corner")
-        return float(math.exp(-2.0 * math.pi * self.corner / points_per_cycle))
+        rate = 2.0 * math.pi * self.corner / points_per_cycle
+        pole = math.exp(-rate) if rate < POLE_RATE_RANGE[1] else 0.0
+        if not (POLE_RATE_RANGE[0] <= rate < POLE_RATE_RANGE[1]):
+            n = f"{points_per_cycle:.4g}"
+            lo, hi = (r * points_per_cycle / (2.0 * math.pi) for r in POLE_RATE_RANGE)
+            what = (
+                "0: the load is white at this sampling; give load white, or a corner below " if pole == 0.0 or rate >= POLE_RATE_RANGE[1]
+                else "1 to the last digit: a load that never becomes stationary; give a corner above "
+            )
+            raise checks.InputError(
+                f"load lowpass:{self.corner:g} at {n} samples per rocking cycle puts its filter's pole "
+                f"exp(-2 pi corner / {n}) at {what}{hi if 'below' in what else lo:.3g} rocking frequencies"
+            )
+        return float(pole)
 
     def draw_options(self, points_per_cycle: float) -> dict:
         """The load as the simulators' keyword arguments at ``points_per_cycle`` samples per
