@@ -18,6 +18,7 @@ with the workflow's own step functions (:mod:`rockdec.pipeline.steps`), and no s
 from __future__ import annotations
 
 import copy
+import errno
 import hashlib
 import json
 import os
@@ -33,7 +34,7 @@ import jsonschema
 
 from rockdec import io
 from rockdec.pipeline import layout
-from rockdec.validate import InputError
+from rockdec.validate import MAX_NAME_BYTES, InputError
 
 MANIFEST = "manifest.json"
 CRATE = "ro-crate-metadata.json"
@@ -73,6 +74,11 @@ MANIFEST_SCHEMA = {
     },
 }
 """What a manifest holds; :func:`check_manifest` refuses anything else in one sentence."""
+
+
+#: Longest path (bytes) the system's calls take (Linux ``PATH_MAX`` less its NUL); a
+#: manifest name longer than this cannot be a file of any folder.
+MAX_PATH_BYTES = 4095
 
 
 class ArchiveError(InputError):
@@ -173,6 +179,11 @@ def _name_problem(name: str) -> str | None:
         return "is not a plain relative path (no backslash, NUL, '.', '//' or trailing '/')"
     if name in (MANIFEST, CRATE):
         return "is the manifest's or the crate's own name"
+    longest = max(len(os.fsencode(part)) for part in path.parts)
+    if longest > MAX_NAME_BYTES:
+        return f"has a component of {longest} bytes, longer than the {MAX_NAME_BYTES} a file system stores"
+    if len(os.fsencode(name)) > MAX_PATH_BYTES:
+        return f"is {len(os.fsencode(name))} bytes long, longer than the {MAX_PATH_BYTES} a path may be"
     return None
 
 
@@ -243,14 +254,19 @@ def _file_problem(folder: Path, entry: dict) -> str | None:
         path = path / part
         try:
             mode = os.lstat(path).st_mode
-        except FileNotFoundError:
+        except (FileNotFoundError, NotADirectoryError):
             return f"missing: {name}"
+        except OSError as exc:
+            return f"unreadable: {name} ({exc.strerror})"
         if stat.S_ISLNK(mode):
             return f"not a plain file: {name} ('{path.relative_to(folder).as_posix()}' is a symbolic link; an archive holds no links)"
     if not stat.S_ISREG(mode):
         return f"not a plain file: {name} (a folder or a device; an archive holds regular files)"
     try:
-        if os.lstat(path).st_size != entry["size"] or io.sha256(path) != entry["sha256"]:
+        size = os.lstat(path).st_size
+        if size != entry["size"]:
+            return f"changed: {name} (its size is {size} bytes, the manifest says {entry['size']})"
+        if io.sha256(path) != entry["sha256"]:
             return f"changed: {name} (SHA-256 differs from the manifest)"
     except OSError as exc:
         return f"unreadable: {name} ({exc.strerror})"
@@ -325,6 +341,70 @@ def _scene(manifest: dict, folder: Path) -> dict:
         raise ArchiveError(f"the settings in '{folder / MANIFEST}' are not a scene rockdec can run ({exc})") from None
 
 
+def check_rebuild_target(folder: str | Path, out: str | Path, manifest: dict | None = None) -> Path:
+    """``out`` as a :class:`~pathlib.Path` if :func:`rebuild` may make it: a new name (not an
+    existing file, folder or symbolic link, a dangling one included) in an existing folder,
+    outside the archive ``folder`` (a rebuild written into the archive would change what it
+    verifies); given the ``manifest``, with room on its disk for the rebuilt files (their
+    archived sizes). Else :class:`rockdec.io.OutputError` in one sentence naming ``out``.
+
+    Parameters
+    ----------
+    folder : str or Path
+        The archive folder.
+    out : str or Path
+        The folder the rebuild would make.
+    manifest : dict, optional
+        The archive's checked manifest (:func:`read_manifest`), for the space check.
+
+    Returns
+    -------
+    Path
+        ``out``.
+
+    Raises
+    ------
+    rockdec.io.OutputError
+        ``out`` exists, is a link, lies in a missing folder or inside the archive, or its
+        disk has too little room.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> base = Path(tempfile.mkdtemp())
+    >>> (base / "archive").mkdir()
+    >>> check_rebuild_target(base / "archive", base / "rebuilt") == base / "rebuilt"
+    True
+    >>> check_rebuild_target(base / "archive", base / "archive" / "rebuilt")
+    Traceback (most recent call last):
+    ...
+    rockdec.io.OutputError: out '...rebuilt' lies inside the archive '...archive' it rebuilds from; choose a folder outside it.
+    """
+    folder, out = Path(folder), Path(out)
+    if os.path.islink(out):
+        target = os.readlink(out)
+        state = "which does not exist" if not out.exists() else "which exists"
+        raise io.OutputError(f"out '{out}' is a symbolic link (to '{target}', {state}); give a new folder name for the rebuild.")
+    if out.exists():
+        raise io.OutputError(f"out '{out}' exists already; remove it or choose another folder.")
+    if not out.parent.is_dir():
+        raise io.OutputError(f"out '{out}': its folder '{out.parent}' does not exist; create it first.")
+    inside = out.parent.resolve() / out.name
+    home = folder.resolve()
+    if inside == home or home in inside.parents:
+        raise io.OutputError(f"out '{out}' lies inside the archive '{folder}' it rebuilds from; choose a folder outside it.")
+    if manifest is not None:
+        rebuilt = {"estimates.nc", "table.csv", "table.md", "estimates_readings.nc", "table_readings.csv", "table_readings.md"}
+        need = sum(e["size"] for e in manifest["files"] if e["name"] in rebuilt or e["name"].startswith("figures/"))
+        free = shutil.disk_usage(out.parent).free
+        if need > free:
+            raise io.OutputError(
+                f"out '{out}': the rebuild writes about {need / 1e6:.3g} MB, more than the {free / 1e6:.3g} MB free in "
+                f"'{out.parent}'; free some space or choose another folder."
+            )
+    return out
+
+
 def rebuild(folder: str | Path, out: str | Path) -> dict[str, bool]:
     """Remake the tables and figures of an archive in the new folder ``out``.
 
@@ -339,7 +419,9 @@ def rebuild(folder: str | Path, out: str | Path) -> dict[str, bool]:
     from rockdec.pipeline import steps
 
     folder, out = Path(folder), Path(out)
+    check_rebuild_target(folder, out)
     manifest = read_manifest(folder)
+    check_rebuild_target(folder, out, manifest)
     scene = _scene(manifest, folder)
     names = {entry["name"] for entry in manifest["files"]}
     for needed in ("signatures.nc", "readings.nc") if "estimates_readings.nc" in names else ("signatures.nc",):
@@ -369,9 +451,16 @@ def rebuild(folder: str | Path, out: str | Path) -> dict[str, bool]:
         if {"stored_series.nc", "stored_signature.nc"} <= names:
             steps.fig2(folder / "stored_series.nc", folder / "stored_signature.nc", outputs("fig2"))
         same = {name: name in names and _same(work / name, folder / name) for name in rebuilt}
-        if out.exists():
+        if os.path.lexists(out):
             raise io.OutputError(f"--rebuild '{out}' appeared while rebuilding; remove it or choose another folder.")
         os.rename(work, out)
+    except OSError as exc:
+        shutil.rmtree(work, ignore_errors=True)
+        full = exc.errno in (errno.ENOSPC, errno.EDQUOT)
+        raise io.OutputError(
+            f"out '{out}': " + ("the disk filled while rebuilding" if full else f"the rebuild could not write ({exc.strerror})")
+            + "; free some space or choose another folder."
+        ) from None
     except BaseException:
         shutil.rmtree(work, ignore_errors=True)
         raise
