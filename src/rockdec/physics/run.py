@@ -249,3 +249,132 @@ def model_for(requested: str, sigma_y: float, theta_cr: float) -> tuple[str, str
         warnings.warn(f"the simplified model is outside its validity region: {why}", RuntimeWarning, stacklevel=3)
         return requested, f"requested; outside its validity: {why}"
     return requested, "requested"
+
+
+#: Largest relative miss of the achieved samples per cycle at ``sigma_Y`` (eq. 5) from the
+#: requested ones that :func:`simulation_report` lets pass unsaid: the width of the bins in
+#: which the analysis treats samples per cycle as one (``rockdec.calibrate.calibration.PPC_BIN``).
+PPC_TOLERANCE = 0.1
+
+
+@dataclasses.dataclass(frozen=True)
+class Overturned:
+    """Series of a simulation that overturned (Housner's model, eq. 2: NaN from the fall on).
+
+    ``count`` of ``series``; ``worst``: the largest fraction of one series that is NaN;
+    ``seeds``: the seeds of the overturned series (their indices when none are given).
+    """
+
+    count: int
+    series: int
+    worst: float
+    seeds: tuple
+
+
+def overturned(theta, seeds=None) -> Overturned:
+    """Count the series of ``theta(seed, time)`` that hold NaN: under Housner's model (eq. 2)
+    the block overturns and its series is NaN from the fall on; the other models give none.
+
+    Parameters
+    ----------
+    theta : array_like, xarray.DataArray or Dask array
+        Series by rows (a 1-D array is one series). A lazy array is computed: pass the values
+        already computed (or read back from their file) to avoid simulating them again.
+    seeds : array_like, optional
+        The seed of each row (default: the ``seed`` coordinate of a DataArray, else the row index).
+
+    Returns
+    -------
+    Overturned
+
+    Examples
+    --------
+    >>> theta = np.array([[0.1, -0.1, 0.1, 0.2], [0.1, 0.2, np.nan, np.nan]])
+    >>> overturned(theta, seeds=[7, 8])
+    Overturned(count=1, series=2, worst=0.5, seeds=(8,))
+    """
+    if seeds is None and hasattr(theta, "coords") and "seed" in theta.coords:
+        seeds = theta["seed"].values
+    data = getattr(theta, "data", theta)
+    data = data if hasattr(data, "compute") else np.asarray(data)
+    if data.ndim == 1:
+        data = data[None, :]
+    fraction = np.isnan(data).mean(axis=-1)
+    if hasattr(fraction, "compute"):
+        fraction = fraction.compute()
+    fraction = np.asarray(fraction, dtype=np.float64)
+    fallen = np.flatnonzero(fraction > 0)
+    seeds = np.arange(fraction.size) if seeds is None else np.asarray(seeds).ravel()
+    return Overturned(int(fallen.size), int(fraction.size), float(fraction.max(initial=0.0)), tuple(int(s) for s in seeds[fallen]))
+
+
+def points_per_cycle_shortfall(contract: Run) -> str | None:
+    """A sentence when the samples per cycle at ``sigma_Y`` (eq. 5) the run's pilot achieved
+    miss the requested ones by more than :data:`PPC_TOLERANCE` (relative), else ``None``: a
+    step set by ``dt``, or a step search that could not reach the target (a Housner scene
+    under a low-pass load, whose period and load both move with the step).
+
+    Parameters
+    ----------
+    contract : Run
+        The run (:func:`calibrate`).
+
+    Returns
+    -------
+    str or None
+
+    Examples
+    --------
+    >>> r = Run(model="housner", e=0.85, nu=2.0, theta_cr=0.25, sigma_p=0.003, dt=0.01, burn_in=0, sigma_y=0.01,
+    ...         sigma_ydot=0.1, points_per_cycle=25.9, points_per_cycle_target=75.0)
+    >>> points_per_cycle_shortfall(r)
+    'the series have about 25.9 samples per rocking cycle at sigma_Y (eq. 5), not the 75 requested (65% fewer; the housner model at dt = 0.01 s): give dt for the sampling you need, or read the series at the sampling they have'
+    """
+    got, want = contract.points_per_cycle, contract.points_per_cycle_target
+    if not (np.isfinite(got) and np.isfinite(want) and want > 0) or abs(got / want - 1.0) <= PPC_TOLERANCE:
+        return None
+    side = f"{1 - got / want:.0%} fewer" if got < want else f"{got / want - 1:.0%} more"
+    return (
+        f"the series have about {got:.3g} samples per rocking cycle at sigma_Y (eq. 5), not the {want:g} requested ({side}; "
+        f"the {contract.model} model at dt = {contract.dt:.4g} s): give dt for the sampling you need, or read the series "
+        "at the sampling they have"
+    )
+
+
+def simulation_report(theta, contract: Run, seeds=None) -> list[str]:
+    """What a simulation made that its caller should tell (or refuse): series that overturned
+    (:func:`overturned`) and samples per cycle that miss the requested ones
+    (:func:`points_per_cycle_shortfall`); one sentence each, none when all went as asked.
+
+    Parameters
+    ----------
+    theta : array_like, xarray.DataArray or Dask array
+        The simulated angles ``theta(seed, time)`` (computed values: a lazy array is simulated again).
+    contract : Run
+        The run that made them.
+    seeds : array_like, optional
+        Their seeds (default: the DataArray's ``seed`` coordinate, else row indices).
+
+    Returns
+    -------
+    list of str
+
+    Examples
+    --------
+    >>> r = Run(model="housner", e=0.85, nu=2.0, theta_cr=0.25, sigma_p=0.003, dt=0.01, burn_in=0, sigma_y=0.01,
+    ...         sigma_ydot=0.1, points_per_cycle=74.0, points_per_cycle_target=75.0)
+    >>> simulation_report(np.array([[0.1, 0.2], [0.3, np.nan]]), r, seeds=[13, 14])
+    ['1 of 2 series overturned (the housner model, eq. 2) and are NaN from the fall on (up to 50% of a series; seeds 14): lower sigma_p, or use them only up to the fall']
+    """
+    out = []
+    fell = overturned(theta, seeds)
+    if fell.count:
+        listed = ", ".join(map(str, fell.seeds[:10])) + (", ..." if fell.count > 10 else "")
+        out.append(
+            f"{fell.count} of {fell.series} series overturned (the {contract.model} model, eq. 2) and are NaN from the fall on "
+            f"(up to {fell.worst:.0%} of a series; seeds {listed}): lower sigma_p, or use them only up to the fall"
+        )
+    shortfall = points_per_cycle_shortfall(contract)
+    if shortfall:
+        out.append(shortfall)
+    return out
