@@ -1,11 +1,17 @@
-"""The hostile matrix (issue 21): every test marked ``@pytest.mark.hostile(kind, outcome)``,
+"""The hostile matrix (issues 21, 38): every test marked ``@pytest.mark.hostile(kind, outcome)``,
 counted by kind and by what the tool does.
 
-``kind`` is what the user got wrong: numbers (option values and numeric fields of files),
-record files, units, output paths, configs, archive (tampered archives given to ``verify``),
-concurrency, kills, limits (memory, disk, file size), sizes (runs too long to finish), cache,
-engines (Dask schedulers), wrong answers (records and options that once gave a confident wrong
-``e``) and report (what the report prints). ``outcome`` is what the case asserts the tool does:
+``kind`` is what the user got wrong: numbers (option values and numeric fields of files,
+records scaled beyond the floats' square range, low-pass corners whose pole rounds to 0 or 1),
+record files (FIFOs and devices, a ``.npz`` named ``.npy``, byte-order marks), units (NetCDF
+times in any unit of time, with a reference date), output paths (rebuilds onto links or into
+their archive), configs (YAML 1.1 against 1.2, ``--config`` lists, misspelt keys and the
+source named), archive (tampered archives given to ``verify``), concurrency, kills (SIGTERM,
+Ctrl-C, locks stamped in the future or left by ended processes), limits (memory, disk, file
+size, YAML alias bombs), sizes (runs too long to finish), cache (caches that cannot be
+written), engines (Dask schedulers), wrong answers (records and options that once gave a
+confident wrong ``e``; the same data given twice in disguise; simulations that overturn or
+miss their sampling) and report (what the report prints). ``outcome`` is what the case asserts the tool does:
 refused (one sentence, exit 2, or ``verify`` naming the fault), answered (the correct result),
 warned (the result with the warning that qualifies it), or refused or answered (generated
 values, each draw one or the other).

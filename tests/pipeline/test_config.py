@@ -220,8 +220,10 @@ def test_a_yaml_alias_bomb_is_refused_at_once(tmp_path, capsys):
 @pytest.mark.hostile("configs", "refused")
 @pytest.mark.parametrize(
     "value, words",
-    [("06000", ["3072", "6000"]), ("yes", ["true", "'yes'"]), ("1e5", ["'1e5'", "100000.0"]), ("1:30", ["90", "'1:30'"])],
-    ids=["octal", "yes", "exponent without a point", "sexagesimal"],
+    [("06000", ["3072", "6000"]), ("yes", ["true", "'yes'"]), ("1e5", ["'1e5'", "100000.0"]), ("1:30", ["90", "'1:30'"]),
+     ("off", ["false", "'off'"]), ("0b101", ["5", "'0b101'"]), ("1_000", ["1000", "'1_000'"]), ("2001-12-14", ["'2001-12-14'"]),
+     ("-017", ["-15", "-17"])],
+    ids=["octal", "yes", "exponent without a point", "sexagesimal", "off", "binary", "underscore", "date", "negative octal"],
 )
 def test_a_file_snakemake_reads_is_refused_where_yaml_11_and_12_differ(tmp_path, value, words):
     path = config_file(tmp_path, f"scenes:\n  s:\n    records: {{n_points: {value}}}\n")
