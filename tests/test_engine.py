@@ -146,3 +146,11 @@ def test_a_session_inside_a_session_starts_no_second_engine(monkeypatch):
         assert dask.config.get("num_workers") == 2
         with engine.session(1):  # the inner request is served by the outer engine
             assert dask.config.get("num_workers") == 2
+
+
+@pytest.mark.hostile("engines", "refused")
+@pytest.mark.parametrize("bad", ["processes:²", "processes:٣", "processes:½", "processes: 2", "processes:-1", "processes:2.0"])
+def test_a_worker_count_not_written_in_ascii_digits_is_refused(bad):
+    """Issue 38: ``'²'.isdigit()`` is true but ``int('²')`` fails: an internal error before."""
+    with pytest.raises(engine.SchedulerError, match="threads.*processes:N.*tcp://"):
+        engine.setting(bad)

@@ -51,7 +51,7 @@ def setting(scheduler: str | None = None) -> tuple[str, int | str | None]:
         return "threads", None
     if text.startswith("processes:"):
         count = text.split(":", 1)[1]
-        if count.isdigit() and int(count) >= 1:
+        if count.isascii() and count.isdigit() and int(count) >= 1:  # ASCII: '²' is a digit to str.isdigit, not to int
             return "processes", int(count)
     elif text.startswith("tcp://") and len(text) > len("tcp://"):
         return "address", text
