@@ -82,4 +82,4 @@ def angle_factor(units, source: str, variable: str) -> float:
 
 def time_factor(units, source: str, name: str) -> float:
     """The factor from a time coordinate in ``units`` (``None``: s) to s."""
-    return _factor(units, TIME_UNITS, source, f"the time coordinate '{name}'", "store it in s, ms or another unit of time")
+    return _factor(units, TIME_UNITS, source, f"the time coordinate '{name}'", "store it in s or ms")

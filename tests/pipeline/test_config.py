@@ -250,3 +250,37 @@ def test_workflow_refuses_an_octal_looking_value_and_names_the_option(tmp_path):
     assert code == 2 and "06000 reads as 3072 in YAML 1.1" in err and "Traceback" not in err, err
     code, _, err = FORKS.run(ROOT, ["-n", "--cores", "1", "--config", "scenes={tiny: {records: {n_pionts: 3}}}"], timeout=120)
     assert code == 2 and "scenes.tiny.records.n_pionts" in err and config.OVERRIDE_SOURCE in err, err
+
+
+@pytest.mark.hostile("numbers", "refused")
+@pytest.mark.parametrize("field, value", [("nu", 5e-324), ("nu", 1e-160), ("theta_cr", 5e-324), ("nu", 1.7976931348623157e308),
+                                          ("theta_cr", 1e300)])
+def test_a_g_that_under_or_overflows_blames_its_factor(field, value):
+    with pytest.raises(config.ConfigError) as info:
+        config.validate_scene({"system": {field: value}})
+    assert info.value.field == f"scenes.cli.system.{field}" and "g = nu^2 theta_cr" in str(info.value)
+
+
+from hypothesis import given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+
+from test_hostile import ANY_FLOAT  # noqa: E402
+
+NUMERIC_FIELDS = [("system", "e"), ("system", "nu"), ("system", "theta_cr"), ("excitation", "sigma_p"),
+                  ("excitation", "points_per_cycle"), ("excitation", "dt"), ("signatures", "level"), ("signatures", "n_periods"),
+                  ("signatures", "window_max"), ("signatures", "v_level"), ("records", "n_points"), ("records", "first_seed")]
+
+
+@pytest.mark.hostile("numbers", "refused or answered")
+@settings(max_examples=80, deadline=None)
+@given(where=st.sampled_from(NUMERIC_FIELDS), value=st.one_of(ANY_FLOAT, st.integers(-(2**70), 2**70)))
+def test_any_number_in_any_field_validates_or_is_one_sentence_naming_a_field(where, value):
+    """No number in a scene's numeric fields raises anything but a ConfigError that names a
+    field of the scene, in one sentence without a number of more than 20 digits."""
+    section, key = where
+    try:
+        config.validate_scene({section: {key: value}}, sizes=True)
+    except config.ConfigError as exc:
+        text = str(exc)
+        assert exc.field is None or exc.field.startswith("scenes.cli"), text
+        assert "\n" not in text and not re.search(r"\d{21}", text), text

@@ -525,7 +525,7 @@ def _check_scales(name: str, scene: dict, fix) -> None:
     g = restoring_acceleration(system["nu"], system["theta_cr"])
     if not lo <= g <= hi:
         # blamed: the factor of g further from 1 on a log scale
-        nu_off = abs(math.log(system["nu"] ** 2)) if system["nu"] < 1e154 else math.inf
+        nu_off = abs(2.0 * math.log(system["nu"]))  # nu, theta_cr > 0 (the schema): log(nu^2) without its under- or overflow
         key, other = ("nu", "theta_cr") if nu_off >= abs(math.log(system["theta_cr"])) else ("theta_cr", "nu")
         where = f"scenes.{name}.system.{key}"
         raise _field_error(
