@@ -85,7 +85,7 @@ def test_estimate_refuses_a_record_scaled_beyond_the_square_range(record, tmp_pa
 @pytest.mark.parametrize("corner", ["1e5", "1e8", "1e300", "1e-300"])
 def test_estimate_refuses_a_lowpass_corner_whose_pole_rounds_away(record, tmp_path, capsys, corner):
     refused(["estimate", str(record["npy"]), "--dt", str(record["dt"]), "--load", f"lowpass:{corner}", "--cache",
-             str(tmp_path / "c")], tmp_path, capsys, [f"load lowpass:{float(corner):g}", "pole"])
+             str(tmp_path / "c")], tmp_path, capsys, [f"--load lowpass:{float(corner):g}", "pole"])
 
 
 @hostile("cache", "refused")

@@ -117,7 +117,7 @@ def test_a_cache_that_is_or_lies_under_a_file_is_refused_naming_cache(tmp_path, 
     with pytest.raises(InputError) as info:
         calibration.load_or_build(quick, cache)
     text = str(info.value)
-    assert text.startswith(f"cache '{cache}'") and "file" in text and text.endswith("as cache.")
+    assert text.startswith(f"`cache` '{cache}'") and "file" in text and text.endswith("stored calibrations.")
     assert blocker.read_text() == "x"
 
 
@@ -145,7 +145,7 @@ def test_a_cache_that_cannot_be_written_is_refused_naming_cache(tmp_path, quick,
     with pytest.raises(InputError) as info:
         calibration.load_or_build(quick, cache)
     text = str(info.value)
-    assert text.startswith(f"cache '{cache}' ") and words in text and text.endswith("as cache.") and "\n" not in text
+    assert text.startswith(f"`cache` '{cache}' ") and words in text and text.endswith("stored calibrations.") and "\n" not in text
 
 
 @hostile("kills", "answered")

@@ -172,7 +172,7 @@ from rockdec.physics.record_model import POLE_RATE_RANGE, parse_load  # noqa: E4
 
 @pytest.mark.hostile("numbers", "refused")
 @pytest.mark.parametrize("corner, words", [
-    ("1e5", ["is white", "give load white"]), ("1e8", ["is white"]), ("1e300", ["is white"]),
+    ("1e5", ["is white", "give `load` white"]), ("1e8", ["is white"]), ("1e300", ["is white"]),
     ("1e-300", ["never becomes stationary", "above"]), ("1e-17", ["never becomes stationary"]),
 ])
 @pytest.mark.parametrize("points_per_cycle", [35.0, 75.0, 2000.0])
@@ -184,7 +184,7 @@ def test_a_corner_whose_pole_rounds_to_0_or_1_is_refused_naming_load(corner, wor
     with pytest.raises(InputError) as info:
         load.pole(points_per_cycle)
     text = str(info.value)
-    assert text.startswith(f"load lowpass:{float(corner):g} at ") and "\n" not in text and text.count(". ") == 0
+    assert text.startswith(f"`load` lowpass:{float(corner):g} at ") and "\n" not in text and text.count(". ") == 0
     for word in words:
         assert word in text
     with pytest.raises(InputError):  # the calibration's model key takes -log(pole): refused, not a math domain error

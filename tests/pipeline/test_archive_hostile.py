@@ -120,7 +120,7 @@ def test_a_rebuild_onto_a_symbolic_link_is_refused_before_any_work(small, tmp_pa
     out.symlink_to(pointed)
     with pytest.raises(io.OutputError) as info:
         archive.rebuild(folder, out)
-    assert str(info.value).startswith(f"out '{out}' is a symbolic link") and "\n" not in str(info.value)
+    assert str(info.value).startswith(f"the rebuild folder '{out}' is a symbolic link") and "\n" not in str(info.value)
     assert out.is_symlink() and sorted(p.name for p in tmp_path.iterdir()) == sorted(["archive", "rebuilt", *(["pointed"] if target != "missing" else [])])
 
 
@@ -151,6 +151,6 @@ def test_a_disk_that_fills_during_the_rebuild_is_one_sentence_and_leaves_nothing
     with pytest.raises(io.OutputError) as info:
         archive.rebuild(folder, tmp_path / "rebuilt")
     text = str(info.value)
-    assert text.startswith(f"out '{tmp_path / 'rebuilt'}': ") and text.endswith("choose another folder.")
+    assert text.startswith(f"the rebuild folder '{tmp_path / 'rebuilt'}': ") and text.endswith("choose another folder.")
     assert ("disk filled" in text) == (code != errno.EIO)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["archive"]

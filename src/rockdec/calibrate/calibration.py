@@ -612,7 +612,7 @@ def _cache_error(folder: Path, exc: OSError) -> InputError:
         errno.ENOSPC: "lies on a full disk",
         errno.ENAMETOOLONG: "has a name too long for the file system",
     }.get(exc.errno, f"cannot be written ({exc.strerror})")
-    return InputError(f"cache '{folder}' {why}; give a writable folder for the stored calibrations as cache.")
+    return InputError(f"`cache` '{folder}' {why}; give a writable folder for the stored calibrations.")
 
 
 def _take_lock(lock: Path, notes: list, watch: dict | None = None) -> bool:
@@ -638,8 +638,8 @@ def _take_lock(lock: Path, notes: list, watch: dict | None = None) -> bool:
                 lock.rmdir()
             except OSError:
                 raise InputError(
-                    f"cache '{lock.parent}' holds a folder {lock.name} where a calibration's lock file goes; "
-                    "remove it, or give another folder as cache."
+                    f"`cache` '{lock.parent}' holds a folder {lock.name} where a calibration's lock file goes; "
+                    "remove it, or give another folder."
                 ) from None
             notes.append(f"removed the empty folder {lock.name} that stood where the calibration's lock goes")
             return False

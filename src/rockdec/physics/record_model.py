@@ -131,11 +131,11 @@ class Load:
             n = f"{points_per_cycle:.4g}"
             lo, hi = (r * points_per_cycle / (2.0 * math.pi) for r in POLE_RATE_RANGE)
             what = (
-                "0: the load is white at this sampling; give load white, or a corner below " if pole == 0.0 or rate >= POLE_RATE_RANGE[1]
+                "0: the load is white at this sampling; give `load` white, or a corner below " if pole == 0.0 or rate >= POLE_RATE_RANGE[1]
                 else "1 to the last digit: a load that never becomes stationary; give a corner above "
             )
             raise checks.InputError(
-                f"load lowpass:{self.corner:g} at {n} samples per rocking cycle puts its filter's pole "
+                f"`load` lowpass:{self.corner:g} at {n} samples per rocking cycle puts its filter's pole "
                 f"exp(-2 pi corner / {n}) at {what}{hi if 'below' in what else lo:.3g} rocking frequencies"
             )
         return float(pole)

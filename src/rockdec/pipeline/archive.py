@@ -346,7 +346,8 @@ def check_rebuild_target(folder: str | Path, out: str | Path, manifest: dict | N
     existing file, folder or symbolic link, a dangling one included) in an existing folder,
     outside the archive ``folder`` (a rebuild written into the archive would change what it
     verifies); given the ``manifest``, with room on its disk for the rebuilt files (their
-    archived sizes). Else :class:`rockdec.io.OutputError` in one sentence naming ``out``.
+    archived sizes). Else :class:`rockdec.io.OutputError` in one sentence naming the rebuild
+    folder (not by a parameter: the command line gives it as ``verify --rebuild``).
 
     Parameters
     ----------
@@ -378,28 +379,28 @@ def check_rebuild_target(folder: str | Path, out: str | Path, manifest: dict | N
     >>> check_rebuild_target(base / "archive", base / "archive" / "rebuilt")
     Traceback (most recent call last):
     ...
-    rockdec.io.OutputError: out '...rebuilt' lies inside the archive '...archive' it rebuilds from; choose a folder outside it.
+    rockdec.io.OutputError: the rebuild folder '...rebuilt' lies inside the archive '...archive' it rebuilds from; choose a folder outside it.
     """
     folder, out = Path(folder), Path(out)
     if os.path.islink(out):
         target = os.readlink(out)
         state = "which does not exist" if not out.exists() else "which exists"
-        raise io.OutputError(f"out '{out}' is a symbolic link (to '{target}', {state}); give a new folder name for the rebuild.")
+        raise io.OutputError(f"the rebuild folder '{out}' is a symbolic link (to '{target}', {state}); give a new folder name for the rebuild.")
     if out.exists():
-        raise io.OutputError(f"out '{out}' exists already; remove it or choose another folder.")
+        raise io.OutputError(f"the rebuild folder '{out}' exists already; remove it or choose another folder.")
     if not out.parent.is_dir():
-        raise io.OutputError(f"out '{out}': its folder '{out.parent}' does not exist; create it first.")
+        raise io.OutputError(f"the rebuild folder '{out}': its folder '{out.parent}' does not exist; create it first.")
     inside = out.parent.resolve() / out.name
     home = folder.resolve()
     if inside == home or home in inside.parents:
-        raise io.OutputError(f"out '{out}' lies inside the archive '{folder}' it rebuilds from; choose a folder outside it.")
+        raise io.OutputError(f"the rebuild folder '{out}' lies inside the archive '{folder}' it rebuilds from; choose a folder outside it.")
     if manifest is not None:
         rebuilt = {"estimates.nc", "table.csv", "table.md", "estimates_readings.nc", "table_readings.csv", "table_readings.md"}
         need = sum(e["size"] for e in manifest["files"] if e["name"] in rebuilt or e["name"].startswith("figures/"))
         free = shutil.disk_usage(out.parent).free
         if need > free:
             raise io.OutputError(
-                f"out '{out}': the rebuild writes about {need / 1e6:.3g} MB, more than the {free / 1e6:.3g} MB free in "
+                f"the rebuild folder '{out}': the rebuild writes about {need / 1e6:.3g} MB, more than the {free / 1e6:.3g} MB free in "
                 f"'{out.parent}'; free some space or choose another folder."
             )
     return out
@@ -458,7 +459,7 @@ def rebuild(folder: str | Path, out: str | Path) -> dict[str, bool]:
         shutil.rmtree(work, ignore_errors=True)
         full = exc.errno in (errno.ENOSPC, errno.EDQUOT)
         raise io.OutputError(
-            f"out '{out}': " + ("the disk filled while rebuilding" if full else f"the rebuild could not write ({exc.strerror})")
+            f"the rebuild folder '{out}': " + ("the disk filled while rebuilding" if full else f"the rebuild could not write ({exc.strerror})")
             + "; free some space or choose another folder."
         ) from None
     except BaseException:
