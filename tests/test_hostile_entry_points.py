@@ -154,3 +154,48 @@ def test_verify_names_a_size_change_by_its_size(tmp_path, capsys):
     code = _in_time(["verify", str(folder)])
     out = capsys.readouterr().out
     assert code == 1 and "changed: table.csv (its size is" in out and "SHA-256" not in out, out
+
+
+# --------------------------------------------------------------------------- the Python API
+
+
+@hostile("record files", "refused")
+def test_read_record_refuses_a_fifo_without_blocking(tmp_path):
+    import rockdec
+
+    fifo = tmp_path / "pipe.csv"
+    os.mkfifo(fifo)
+    out = {}
+
+    def read():
+        try:
+            rockdec.read_record(fifo)
+        except rockdec.RecordError as exc:
+            out["error"] = str(exc)
+
+    thread = threading.Thread(target=read, daemon=True)
+    thread.start()
+    thread.join(30)
+    assert not thread.is_alive() and "FIFO" in out["error"]
+
+
+@hostile("record files", "answered")
+def test_read_record_reads_a_csv_with_a_byte_order_mark(record, tmp_path):
+    import rockdec
+
+    theta, dt = record["theta"][:3000], record["dt"]
+    text = "time,theta\n" + "".join(f"{i * dt:.8f},{v:.10g}\n" for i, v in enumerate(theta))
+    (tmp_path / "bom.csv").write_bytes(b"\xef\xbb\xbf" + text.encode())
+    got = rockdec.read_record(tmp_path / "bom.csv")
+    assert got.attrs["dt"] == pytest.approx(dt, rel=1e-6)
+    np.testing.assert_allclose(got.values, theta, rtol=1e-9)
+
+
+@hostile("numbers", "refused")
+@pytest.mark.parametrize("scale", [1e-160, 1e160])
+def test_estimate_of_an_array_scaled_beyond_the_square_range_is_refused(record, tmp_path, scale):
+    import rockdec
+
+    with pytest.raises(rockdec.RecordError, match="largest angle"):
+        rockdec.estimate(record["theta"] * scale, record["dt"], cache=tmp_path / "c")
+    assert not (tmp_path / "c").exists()
