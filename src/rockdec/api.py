@@ -12,13 +12,14 @@ known ``e`` with the simulator of ``rockdec simulate``. Errors name the Python p
 from __future__ import annotations
 
 import math
+import warnings
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from rockdec.cache import default_cache
-from rockdec.calibrate import inference
+from rockdec.calibrate import calibration, inference
 from rockdec.physics.record_model import SensorNoise, parse_load
 from rockdec.record import records as records_mod
 from rockdec.report.result import RestitutionEstimate
@@ -29,6 +30,11 @@ if TYPE_CHECKING:
     import xarray as xr
 
 __all__ = ["estimate", "estimate_options", "read_record", "simulate"]
+
+class SimulationWarning(UserWarning):
+    """A simulation that did not make what was asked: series that overturned, or a sampling
+    off the requested samples per cycle (:func:`rockdec.physics.run.simulation_report`)."""
+
 
 #: Rocking models :func:`estimate` calibrates with.
 MODELS = ("simplified", "housner")
@@ -146,10 +152,7 @@ def _load(value):
 
 
 def _cache(cache) -> Path:
-    folder = default_cache() if cache is None else Path(cache)
-    if folder.exists() and not folder.is_dir():
-        raise InputError(f"`cache` '{folder}' is a file, not a folder; give a folder for the stored calibrations.")
-    return folder
+    return calibration.cache_folder(default_cache() if cache is None else cache)
 
 
 def estimate(theta, dt: float | None = None, *, g: float | None = None, load="auto", sensor_noise="auto",
@@ -329,6 +332,11 @@ def simulate(e: float, n_points: int, *, seed=0, model: str = "simplified", poin
         ``theta(time)`` (``theta(seed, time)`` for several seeds) in rad, with CF
         attributes and the run's settings (``e``, ``dt``, ``sigma_y``, ...) as attributes.
 
+    Warns
+    -----
+    SimulationWarning
+        Series that overturned (Housner's model), or samples per cycle off the request.
+
     Examples
     --------
     >>> import rockdec
@@ -357,5 +365,7 @@ def simulate(e: float, n_points: int, *, seed=0, model: str = "simplified", poin
     contract = run.calibrate(scene, amplitude=abs(theta0), theta0=theta0, theta_dot0=theta_dot0)
     ds = contract.dataset(seeds, n_points, chunk_seeds=scene["records"]["chunk_seeds"]).load()
     theta = ds["theta"]
+    for line in run.simulation_report(theta, contract, step_given=dt is not None):
+        warnings.warn(line, SimulationWarning, stacklevel=2)
     theta.attrs = {**ds.attrs, **theta.attrs, "units": "rad", "dt": contract.dt}
     return theta.isel(seed=0, drop=True) if np.ndim(seed) == 0 else theta

@@ -249,6 +249,9 @@ def cmd_simulate(args) -> None:
     )
     with console.progress("simulating"):
         io.write_netcdf(ds, out, float32=("theta", "theta_dot"), overwrite=args.overwrite)
+    with io.open_dataset(out, chunks={}) as written:  # read back by its stored chunks
+        for line in run.simulation_report(written["theta"], contract, step_given=scene["excitation"]["dt"] is not None):
+            log.warning(f"warning: {line}")
 
 
 def cmd_signatures(args) -> None:
@@ -345,11 +348,7 @@ def cmd_estimate(args) -> None:
 def cmd_verify(args) -> None:
     from rockdec.pipeline import archive
 
-    out = Path(args.rebuild) if args.rebuild else None
-    if out is not None and out.exists():
-        raise UsageError(f"--rebuild '{out}' exists already; remove it or choose another folder.")
-    if out is not None and not out.parent.is_dir():
-        raise UsageError(f"--rebuild '{out}': its folder '{out.parent}' does not exist; create it first.")
+    out = archive.check_rebuild_target(args.folder, args.rebuild) if args.rebuild else None
     problems = archive.verify(args.folder)
     for line in problems:
         print(line)
@@ -579,6 +578,9 @@ def main(argv: list[str] | None = None) -> int:
     try:
         with console.configured(args.verbose - args.quiet), engine.session(scheduler=args.dask_scheduler):
             args.func(args)
+    except KeyboardInterrupt:
+        print(f"rockdec {args.command}: interrupted.", file=sys.stderr)
+        return 130
     except checks.InputError as exc:
         if args.debug:
             raise

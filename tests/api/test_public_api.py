@@ -197,3 +197,31 @@ def test_the_command_line_maps_parameters_to_flags(tmp_path, capsys):
     assert main(["estimate", str(tmp_path / "r.npy")]) == 2
     err = capsys.readouterr().err
     assert "--dt" in err and "`" not in err
+
+
+def test_a_record_given_again_in_disguise_is_refused(record, cache):
+    """The record and a copy offset by 1e-4 rad (issue 38) would count its triggers twice."""
+    with pytest.raises(rockdec.RecordError, match="same data"):
+        rockdec.estimate([record, record + 1e-4], cache=cache)
+
+
+def test_a_simulation_that_misses_its_request_says_so(monkeypatch, tmp_path, capsys):
+    from rockdec.api import SimulationWarning
+    from rockdec.physics import run
+
+    monkeypatch.setattr(run, "simulation_report", lambda theta, contract, seeds=None, step_given=False: ["2 of 4 series overturned"])
+    with pytest.warns(SimulationWarning, match="overturned"):
+        rockdec.simulate(0.85, 2_000, seed=1)
+    assert main(["simulate", "--out", str(tmp_path / "s.nc"), "--e", "0.85", "--seeds", "1", "--n-points", "2000"]) == 0
+    assert "warning: 2 of 4 series overturned" in capsys.readouterr().err
+
+
+def test_ctrl_c_ends_the_command_in_one_line(monkeypatch, capsys):
+    import rockdec.cli as cli
+
+    def interrupted(args):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(cli, "cmd_verify", interrupted)
+    assert cli.main(["verify", "x"]) == 130
+    assert capsys.readouterr().err.strip() == "rockdec verify: interrupted."

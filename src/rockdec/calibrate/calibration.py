@@ -693,6 +693,15 @@ def _removed_on_sigterm(lock: Path):
         signal.signal(signal.SIGTERM, previous)
 
 
+def cache_folder(cache_dir: str | Path) -> Path:
+    """``cache_dir`` as a folder of stored calibrations, refused in one sentence naming
+    ``cache`` when it is a file."""
+    folder = Path(cache_dir)
+    if folder.exists() and not folder.is_dir():
+        raise InputError(f"`cache` '{folder}' is a file, not a folder; give a folder for the stored calibrations.")
+    return folder
+
+
 def load_or_build(cal_settings: dict, cache_dir: str | Path, notes: list | None = None) -> tuple[ncread.Stored, bool]:
     """The calibration for ``cal_settings`` from ``cache_dir``, built and stored when absent
     or damaged (module docstring; ``notes`` receives a sentence on each rebuild, wait or
@@ -702,9 +711,7 @@ def load_or_build(cal_settings: dict, cache_dir: str | Path, notes: list | None 
     (:func:`rockdec.calibrate.ncread.read`) whether it was stored or built.
     """
     notes = [] if notes is None else notes
-    folder = Path(cache_dir)
-    if folder.exists() and not folder.is_dir():
-        raise InputError(f"`cache` '{folder}' is a file, not a folder; give a folder for the stored calibrations.")
+    folder = cache_folder(cache_dir)
     expected = settings_hash(cal_settings)
     path = folder / f"calibration-{expected}.nc"
     lock = path.with_suffix(".building")

@@ -37,6 +37,7 @@ from rockdec.record import diagnostics
 from rockdec.rdd import measured, registry
 from rockdec.physics.record_model import NO_NOISE, WHITE, Load, RecordModel, SensorNoise, parse_load
 from rockdec.record.records import Record, RecordError, distinct, same_step
+from rockdec.record.sameness import same_data
 from rockdec.validate import InputError
 
 from rockdec.rdd.registry import DEFAULT_ESTIMATOR
@@ -470,7 +471,8 @@ def analyse(records: list[Record], *, g: float | None = None, settings: dict | N
     """Stage 1 of :func:`estimate`: check the records and analyse them (signatures, every
     estimator extrapolated to a zero window, :func:`rockdec.rdd.measured.analyse`).
 
-    Refuses (:class:`RecordError`) records given twice, records at different steps, records
+    Refuses (:class:`RecordError`) records given twice (also in disguise: an offset, a sign, a
+    scale or an overlap, :func:`rockdec.record.sameness.same_data`), records at different steps, records
     the analysis cannot read, records that do not look like rocking
     (:func:`rockdec.rdd.measured.rocking_shape`) and a given ``g`` off the records' own by
     more than :data:`G_FACTOR`.
@@ -478,6 +480,9 @@ def analyse(records: list[Record], *, g: float | None = None, settings: dict | N
     settings = {**measured.DEFAULT_SETTINGS, **(settings or {})}
     records = distinct(records)
     dt = same_step(records)
+    copied = same_data(records)
+    if copied:
+        raise RecordError(copied)
     names = ", ".join(r.source for r in records)
     samples = int(sum(r.theta.size for r in records))
     stages = stage_seconds(samples, False, g is not None)

@@ -341,7 +341,7 @@ def points_per_cycle_shortfall(contract: Run) -> str | None:
     )
 
 
-def simulation_report(theta, contract: Run, seeds=None) -> list[str]:
+def simulation_report(theta, contract: Run, seeds=None, *, step_given: bool = False) -> list[str]:
     """What a simulation made that its caller should tell (or refuse): series that overturned
     (:func:`overturned`) and samples per cycle that miss the requested ones
     (:func:`points_per_cycle_shortfall`); one sentence each, none when all went as asked.
@@ -354,6 +354,8 @@ def simulation_report(theta, contract: Run, seeds=None) -> list[str]:
         The run that made them.
     seeds : array_like, optional
         Their seeds (default: the DataArray's ``seed`` coordinate, else row indices).
+    step_given : bool
+        The caller set the step itself (``dt``): no samples per cycle were requested.
 
     Returns
     -------
@@ -374,7 +376,7 @@ def simulation_report(theta, contract: Run, seeds=None) -> list[str]:
             f"{fell.count} of {fell.series} series overturned (the {contract.model} model, eq. 2) and are NaN from the fall on "
             f"(up to {fell.worst:.0%} of a series; seeds {listed}): lower sigma_p, or use them only up to the fall"
         )
-    shortfall = points_per_cycle_shortfall(contract)
+    shortfall = None if step_given else points_per_cycle_shortfall(contract)
     if shortfall:
         out.append(shortfall)
     return out
