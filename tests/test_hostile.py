@@ -225,7 +225,7 @@ def test_disk_full_is_one_sentence_and_leaves_nothing(tmp_path, capsys, monkeypa
         raise OSError(errno.ENOSPC, "No space left on device")
 
     monkeypatch.setattr(xr.Dataset, "to_netcdf", full)
-    refused(["simulate", "--out", str(tmp_path / "o.nc"), *FAST], tmp_path, capsys, ["no space left", "o.nc", "--out"])
+    refused(["simulate", "--out", str(tmp_path / "o.nc"), *FAST], tmp_path, capsys, ["no space left", "o.nc", "another output file"])
 
 
 # --------------------------------------------------------------------------- concurrent writes

@@ -172,7 +172,7 @@ def check_output(path: str | Path, overwrite: bool = False) -> Path:
     if not folder.is_dir():
         raise OutputError(f"output folder '{folder}' does not exist; create it first.")
     if not os.access(folder, os.W_OK):
-        raise OutputError(f"output folder '{folder}' is not writable; choose another `out`.")
+        raise OutputError(f"output folder '{folder}' is not writable; choose another output file.")
     if _live_owner(_lock_path(path)) is not None:
         raise _busy(path)
     return path
@@ -185,7 +185,7 @@ def _lock_path(path: Path) -> Path:
 def _busy(path: Path) -> OutputError:
     return OutputError(
         f"output '{path}' is being written by another run (lock '{_lock_path(path)}'); "
-        "wait for it to finish or choose another `out`."
+        "wait for it to finish or choose another output file."
     )
 
 
@@ -298,7 +298,7 @@ def _write_failure(exc: BaseException, path: Path) -> BaseException:
     if code == errno.EFBIG:
         return OutputError(f"'{path}' grew beyond the largest file its disk stores; write a smaller output.")
     if code in (errno.ENOSPC, errno.EDQUOT) or shutil.disk_usage(path.parent).free < DISK_FULL_BYTES:
-        return OutputError(f"no space left on the disk of '{path}' while writing it; free some space or choose another `out`.")
+        return OutputError(f"no space left on the disk of '{path}' while writing it; free some space or choose another output file.")
     return exc
 
 
