@@ -302,7 +302,7 @@ def _check_estimate_size(args) -> float:
 
     samples = sum(records.record_size(path, args.variable) for path in args.records)
     csv = any(Path(path).suffix.lower() in (".csv", ".txt") for path in args.records)
-    seconds, nbytes = inference.cost(samples, csv, args.g is not None)
+    seconds, nbytes = inference.cost(samples, csv, args.g is not None, records=len(args.records))
     what = f"records of about {samples:.3g} samples"
     checks.memory(nbytes, what, "give shorter records")
     if seconds > MAX_SECONDS and not args.yes:
@@ -399,6 +399,8 @@ def cmd_workflow(args) -> None:
         raise UsageError("this installation of rockdec carries no workflow (no Snakefile); reinstall it from a wheel or a checkout.")
     if importlib.util.find_spec("snakemake") is None:
         raise UsageError(f"the workflow needs Snakemake, which is not installed; install it with pip install '{WORKFLOW_EXTRA}'.")
+    if Path("results").exists() and not Path("results").is_dir():
+        raise UsageError("./results is a file, and the workflow writes its products into the folder results/ here; move the file, or run from another folder.")
     extra = [a for a in args.snakemake_args if a != "--"]
     command = [sys.executable, "-m", "snakemake", "--snakefile", str(root / "Snakefile")]
     if not any(a == "--configfile" or a.startswith("--configfile=") for a in extra):

@@ -225,3 +225,11 @@ def test_ctrl_c_ends_the_command_in_one_line(monkeypatch, capsys):
     monkeypatch.setattr(cli, "cmd_verify", interrupted)
     assert cli.main(["verify", "x"]) == 130
     assert capsys.readouterr().err.strip() == "rockdec verify: interrupted."
+
+
+def test_the_workflow_refuses_a_results_file_in_one_sentence(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "results").write_text("not a folder")
+    assert main(["workflow", "--scene", "tiny", "-n"]) == 2
+    err = capsys.readouterr().err
+    assert "./results is a file" in err and err.count("\n") == 1

@@ -698,3 +698,14 @@ def test_the_test_beds_pool_holds_the_raw_values_of_calibration_sets():
     assert pool["raw"].shape == (1, 2, len(calibration.NAMES))
     e_v = pool["raw"].sel(name="e_v").values
     assert np.all(np.abs(e_v - 0.9) < 0.2), e_v
+
+
+def test_the_up_front_cost_counts_each_pooled_record():
+    """Issue 38: 300 records of 2,000 samples were estimated at 12 s and took 221 s. The cost
+    model adds each record's own pass in every simulated set and each pair's check for
+    copies: many short records cost more than one record of as many samples."""
+    one = inference.cost(600_000, False, False)[0]
+    many = inference.cost(600_000, False, False, records=300)[0]
+    sets = inference.calibration_sets(600_000)
+    assert many - one == pytest.approx(299 * sets * inference.RECORD_SECONDS + 300 * 299 / 2 * inference.PAIR_SECONDS)
+    assert many > 2 * one

@@ -84,21 +84,30 @@ SIDE_G_SHARE = 0.7
 #: ``benchmarks/long_record.py``; docs/explanation/constants.md).
 CSV_SECONDS, ANALYSIS_SECONDS, CALIBRATION_SECONDS, BYTES_PER_SAMPLE = 5e-7, 1.0e-6, 1.3e-7, 160.0
 
+#: Seconds each record of a pooled set adds besides its samples, on one core (its own pass
+#: of signatures and checks in every simulated set of the calibration), and each pair of
+#: records the check for copies in disguise compares (:mod:`rockdec.record.sameness`):
+#: measured by ``benchmarks/pooled_cost.py`` (many short records against one long record
+#: of as many samples, in one run).
+RECORD_SECONDS, PAIR_SECONDS = 4e-4, 7e-5
 
-def stage_seconds(samples: int, csv: bool, g_given: bool, cores: int = 2) -> dict[str, float]:
-    """Seconds each stage of :func:`estimate` takes on records of ``samples`` in all:
+
+def stage_seconds(samples: int, csv: bool, g_given: bool, cores: int = 2, records: int = 1) -> dict[str, float]:
+    """Seconds each stage of :func:`estimate` takes on ``records`` records of ``samples`` in all:
     ``reading`` (a CSV), ``analysing`` (twice with a given ``g``) and ``calibrating``
     (building the calibration: :data:`rockdec.calibrate.calibration.SETS_PER_E` sets at each
     ``e`` of its grid, of the records' length up to
     :data:`rockdec.calibrate.calibration.LENGTH_CAP` in all,
     :func:`rockdec.calibrate.calibration.simulated_lengths`, and beyond it the step search's
     pilot sets of that length), from :data:`CSV_SECONDS` and the other constants of the
-    model."""
+    model; each record beyond the first adds :data:`RECORD_SECONDS` in every simulated set
+    and each pair of records :data:`PAIR_SECONDS`."""
     simulated = sum(calibration.simulated_lengths([samples]))
+    sets = calibration_sets(samples)
     return {
         "reading": samples * CSV_SECONDS * csv,
-        "analysing": samples * ANALYSIS_SECONDS * (1 + g_given),
-        "calibrating": simulated * calibration_sets(samples) * CALIBRATION_SECONDS / cores,
+        "analysing": samples * ANALYSIS_SECONDS * (1 + g_given) + records * (records - 1) / 2 * PAIR_SECONDS,
+        "calibrating": simulated * sets * CALIBRATION_SECONDS / cores + (records - 1) * sets * RECORD_SECONDS,
     }
 
 
@@ -118,10 +127,10 @@ def calibration_sets(samples: int) -> int:
     return len(calibration.E_GRID_LONG) * sets
 
 
-def cost(samples: int, csv: bool, g_given: bool, cores: int = 2) -> tuple[float, float]:
-    """``(seconds, bytes)`` that :func:`estimate` needs for records of ``samples`` in all,
-    calibration included (:func:`stage_seconds`)."""
-    return sum(stage_seconds(samples, csv, g_given, cores).values()), samples * BYTES_PER_SAMPLE
+def cost(samples: int, csv: bool, g_given: bool, cores: int = 2, records: int = 1) -> tuple[float, float]:
+    """``(seconds, bytes)`` that :func:`estimate` needs for ``records`` records of ``samples``
+    in all, calibration included (:func:`stage_seconds`)."""
+    return sum(stage_seconds(samples, csv, g_given, cores, records).values()), samples * BYTES_PER_SAMPLE
 
 
 def checks_place(per: dict, shown: dict) -> tuple[float | None, list | None]:
@@ -485,7 +494,7 @@ def analyse(records: list[Record], *, g: float | None = None, settings: dict | N
         raise RecordError(copied)
     names = ", ".join(r.source for r in records)
     samples = int(sum(r.theta.size for r in records))
-    stages = stage_seconds(samples, False, g is not None)
+    stages = stage_seconds(samples, False, g is not None, records=len(records))
     log.info(
         f"analysing {samples} samples: {console.about(stages['analysing'])} "
         f"({console.about(stages['analysing'] + stages['calibrating'])} in all when the calibration must be built)"
@@ -595,7 +604,7 @@ def calibrate(analysed: Analysed, choice: ModelChoice, cache_dir) -> Calibrated:
         f"; the records' {analysed.samples} samples are calibrated on simulated records of {simulated} samples, "
         f"the spread scaled by sqrt({simulated} / {analysed.samples}) = {scale:.3g}" if scale != 1.0 else ""
     )
-    stages = stage_seconds(analysed.samples, False, analysed.g is not None)
+    stages = stage_seconds(analysed.samples, False, analysed.g is not None, records=len(analysed.records))
     log.info(
         f"calibration {calibration.settings_hash(cal_settings)}: {console.about(stages['calibrating'])} to build when it is not stored"
         f"{shortened}"
