@@ -154,7 +154,7 @@ def _model(t, times, q, side, model, theta_cr):
     return sign * f, lo, sign * d_lo, hi, sign * d_hi, sign * f_q
 
 
-def fit_sequence(t, y, *, side: int, times0, q0: float, model: str, theta_cr: float | None) -> SequenceFit:
+def fit_sequence(t, y, *, side: int, times0, q0: float, model: str, theta_cr: float | None, floor: float = 0.0) -> SequenceFit:
     """Least-squares fit of one release sequence (eqs. 2, 4) to the samples ``y`` at ``t``.
 
     Parameters
@@ -172,12 +172,17 @@ def fit_sequence(t, y, *, side: int, times0, q0: float, model: str, theta_cr: fl
         ``"simplified"`` or ``"housner"``.
     theta_cr : float or None
         The critical angle (rad), for ``"housner"``.
+    floor : float
+        Smallest standard deviation (rad) the samples' scatter is taken to have: the
+        precision of the record's numbers, so that a noise-free record's covariance
+        reflects its rounding rather than a residual that happens to be smaller.
 
     Returns
     -------
     SequenceFit
-        The fitted times and constant, their covariance (the samples' scatter about the fit
-        times the inverse of the Gauss-Newton matrix) and the residual standard deviation.
+        The fitted times and constant, their covariance (the samples' scatter about the fit,
+        at least ``floor``, times the inverse of the Gauss-Newton matrix) and the residual
+        standard deviation.
 
     Raises
     ------
@@ -196,17 +201,23 @@ def fit_sequence(t, y, *, side: int, times0, q0: float, model: str, theta_cr: fl
     if model not in MODELS:
         raise ValueError(f"unknown model '{model}'; use {' or '.join(MODELS)}")
     t, y = np.asarray(t, dtype=float), np.asarray(y, dtype=float)
-    x0 = np.concatenate([np.asarray(times0, dtype=float), [float(q0)]])
-    p = x0.size
+    p = len(times0) + 1
     if t.size <= p:
         raise ValueError(f"{t.size} samples for {p} parameters")
+    # Fitted in units of the sampling step and the largest angle, from the first sample, so
+    # that the same record at any angle and time scale takes the same steps to the same point.
+    t_ref, t_unit, y_unit = t[0], t[1] - t[0], float(np.max(np.abs(y)))
+    q_unit = y_unit / t_unit**2 if model == "simplified" else 1.0 / t_unit
+    cr = None if theta_cr is None else theta_cr / y_unit
+    ts, ys = (t - t_ref) / t_unit, y / y_unit
+    x0 = np.concatenate([(np.asarray(times0, dtype=float) - t_ref) / t_unit, [float(q0) / q_unit]])
     rows = np.arange(t.size)
 
     def residual(x):
-        return _model(t, x[:-1], x[-1], side, model, theta_cr)[0] - y
+        return _model(ts, x[:-1], x[-1], side, model, cr)[0] - ys
 
     def jacobian(x):
-        _, lo, d_lo, hi, d_hi, d_q = _model(t, x[:-1], x[-1], side, model, theta_cr)
+        _, lo, d_lo, hi, d_hi, d_q = _model(ts, x[:-1], x[-1], side, model, cr)
         jac = np.zeros((t.size, p))
         jac[rows, lo] += d_lo
         jac[rows, hi] += d_hi
@@ -215,11 +226,12 @@ def fit_sequence(t, y, *, side: int, times0, q0: float, model: str, theta_cr: fl
 
     result = optimize.least_squares(residual, x0, jac=jacobian, method="lm", x_scale="jac", ftol=FIT_TOLERANCE,
                                     xtol=FIT_TOLERANCE, gtol=FIT_TOLERANCE, max_nfev=200 * p)
-    x = result.x
-    jac = jacobian(x)
-    sse = float(np.sum(residual(x) ** 2))
-    variance = sse / (t.size - p)
-    covariance = variance * np.linalg.pinv(jac.T @ jac)
+    jac = jacobian(result.x)
+    variance = float(np.sum(residual(result.x) ** 2)) / (t.size - p)
+    units = np.concatenate([np.full(p - 1, t_unit), [q_unit]])
+    covariance = max(variance, (floor / y_unit) ** 2) * np.linalg.pinv(jac.T @ jac) * np.outer(units, units)
+    x = np.concatenate([t_ref + t_unit * result.x[:-1], [q_unit * result.x[-1]]])
+    variance *= y_unit**2
     return SequenceFit(x[:-1], float(x[-1]), covariance, float(np.sqrt(variance)), int(t.size), int(side), model, theta_cr)
 
 

@@ -32,17 +32,29 @@ CROSSING_BAND_SIGMAS = 4.0
 #: Lowest apex of an arc the analysis fits, in sensor-noise standard deviations: lower arcs
 #: are not told from noise by the crossing detector (:data:`CROSSING_BAND_SIGMAS`). The
 #: per-impact bias and the interval's coverage at this floor: benchmarks/free_coverage.py.
-MIN_HEIGHT_SIGMAS = 10.0
+MIN_HEIGHT_SIGMAS = 5.0
 
 #: Growth of a segment's peak over the previous one that is still noise or sampling, not a
-#: release: a relative part (a sampled apex misses the true one by up to 1/N^2 of the arc at
-#: N samples per arc) and a part in sensor-noise standard deviations (the largest of a few
-#: hundred noisy samples exceeds the true apex by up to about 3 of them).
+#: release: a relative part (beside the sampled apex's miss, up to ``1/(N - 1)^2`` of the arc
+#: at ``N`` samples, added where it is used) and a part in sensor-noise standard deviations
+#: (the largest of a few hundred noisy samples exceeds the true apex by up to about 3 of them).
 GROWTH_RELATIVE, GROWTH_SIGMAS = 0.02, 6.0
 
 #: Level below the peak, in sensor-noise standard deviations, that still counts as the held
 #: block before a release (the noisy hold scatters about 3 of them either way of its level).
 HOLD_SIGMAS = 6.0
+
+#: How far past the end of an arc, as a share of its duration, the next crossing may lie and
+#: still close it: a flight is symmetric about its apex (eqs. 2, 4), so a crossing much later
+#: than the mirror image of the arc's start belongs to a later arc that the detector missed
+#: (lower than its band), and the arc is closed at the mirror image instead.
+ARC_END_TOLERANCE = 0.25
+
+#: Samples before a release inside a record, in its segment, at least this multiple of the
+#: samples of its fall: the block rests, is tilted and held before it is let go, where the
+#: rise and fall of a flight last the same (eqs. 2, 4). Growth without such a lead is a forced
+#: response.
+RELEASE_LEAD = 2.0
 
 #: Fewest samples of the fall from the release to the first impact.
 MIN_FALL_SAMPLES = 2
@@ -206,26 +218,41 @@ def find_sequences(theta: np.ndarray, noise: float, min_arc_samples: int) -> lis
     min_height = MIN_HEIGHT_SIGMAS * noise
     sequences: list[Sequence] = []
     current: dict | None = None
-    previous_peak = np.inf
+    previous_peak, previous_samples = np.inf, 2
     for k, (lo, hi, side, peak) in enumerate(segments):
-        grew = peak > previous_peak * (1.0 + GROWTH_RELATIVE) + GROWTH_SIGMAS * noise
+        # a sampled apex of an arc of n samples misses the true one by up to 1/(n - 1)^2 of it
+        missed = 1.0 / max(previous_samples - 1, 1) ** 2
+        grew = peak > previous_peak * (1.0 + GROWTH_RELATIVE + missed) + GROWTH_SIGMAS * noise
         last = k == len(segments) - 1
-        if current is not None:
-            if grew and not last:
+        if grew and not last and k > 0:
+            release = _release(theta, lo, hi, side, peak, noise, crossings.position[k])
+            if release is None or release["lead"] < RELEASE_LEAD * release["fall"]:
                 raise RecordError(
-                    f"the amplitude grows at sample {lo} while the block is still rocking, so this is a forced (random) "
-                    "response, not free rocking; give a record of a released block, or analyse it with rockdec.estimate."
+                    f"the amplitude grows at sample {lo} with no hold before it, so this is a forced (random) response, "
+                    "not free rocking; give a record of a released block, or analyse it with rockdec.estimate."
                 )
+            if current is not None:
+                sequences.append(Sequence(current["side"], current["start"], current["release"], np.asarray(current["crossings"]),
+                                          np.asarray(current["peaks"]), "the block is tilted and released again after the impact at {time}",
+                                          float(lo)))
+            current = release if peak >= min_height else None
+        elif current is not None:
+            end = _symmetric_end(theta, lo, hi, side, peak, crossings.position[k - 1])
+            open_arc = last or crossings.position[k] - end > max(ARC_END_TOLERANCE * (end - crossings.position[k - 1]), 2.0)
             stop = None
-            if last and np.all(np.abs(theta[max(hi - min_arc_samples, lo):hi]) <= CROSSING_BAND_SIGMAS * noise):
-                stop = "the block comes to rest after the impact at {time}"
-            elif last:
-                stop = "the record ends while the block still rocks"
-            elif peak < min_height or peak <= 0.0:
+            if peak < min_height or peak <= 0.0:
                 stop = (f"the arc after the impact at {{time}} rises only {peak / noise if noise > 0 else 0.0:.3g} noise "
                         f"standard deviations (fewer than {MIN_HEIGHT_SIGMAS:g})")
-            elif hi - lo < min_arc_samples:
-                stop = f"the arc after the impact at {{time}} has {hi - lo} samples (fewer than min_arc_samples = {min_arc_samples})"
+            elif min(hi, int(np.floor(end)) + 1) - lo < min_arc_samples:
+                stop = f"the arc after the impact at {{time}} has {min(hi, int(np.floor(end)) + 1) - lo} samples (fewer than min_arc_samples = {min_arc_samples})"
+            elif open_arc and np.isfinite(end) and end < theta.size - 1:
+                current["crossings"].append(end)
+                current["peaks"].append(peak)
+                stop = (f"the arc after the impact at {{time}} does not pass {CROSSING_BAND_SIGMAS:g} noise standard deviations, "
+                        "so the block comes to rest")
+                lo = int(np.floor(end)) + 1
+            elif open_arc:
+                stop = "the record ends while the block still rocks"
             if stop is None:
                 current["crossings"].append(crossings.position[k])
                 current["peaks"].append(peak)
@@ -233,10 +260,28 @@ def find_sequences(theta: np.ndarray, noise: float, min_arc_samples: int) -> lis
                 sequences.append(Sequence(current["side"], current["start"], current["release"], np.asarray(current["crossings"]),
                                           np.asarray(current["peaks"]), stop, float(lo)))
                 current = None
-        elif not last and peak > 0.0 and peak >= min_height and (k == 0 or grew):
+        elif k == 0 and not last and peak > 0.0 and peak >= min_height:
             current = _release(theta, lo, hi, side, peak, noise, crossings.position[k])
-        previous_peak = peak
+        previous_peak, previous_samples = peak, hi - lo
     return sequences
+
+
+def _symmetric_end(theta, lo, hi, side, peak, start) -> float:
+    """The end of the arc that starts at ``start`` and fills ``[lo, hi)``: the mirror image of
+    the start about the centroid of the part above half its peak (a flight is symmetric about
+    its apex, eqs. 2, 4); NaN without such a part."""
+    seg = side * theta[lo:hi] - 0.5 * peak
+    top = np.flatnonzero(seg > 0.0)
+    if top.size == 0:
+        return np.nan
+    # The run above half the peak that holds the peak: other runs belong to later arcs or to noise.
+    breaks = np.flatnonzero(np.diff(top) > 1)
+    first, last = np.concatenate([[0], breaks + 1]), np.concatenate([breaks, [top.size - 1]])
+    at = int(np.argmax(seg))
+    which = int(np.flatnonzero((top[first] <= at) & (at <= top[last]))[0])
+    run = top[first[which] : last[which] + 1]
+    centre = lo + float(np.sum(run * seg[run]) / np.sum(seg[run]))
+    return 2.0 * centre - start
 
 
 def _release(theta, lo, hi, side, peak, noise, crossing) -> dict | None:
@@ -253,4 +298,5 @@ def _release(theta, lo, hi, side, peak, noise, crossing) -> dict | None:
     start = release
     while start > lo and release - start < fall and side * theta[start - 1] >= level:
         start -= 1
-    return {"side": side, "start": start, "release": float(release), "crossings": [crossing], "peaks": [peak]}
+    return {"side": side, "start": start, "release": float(release), "crossings": [crossing], "peaks": [peak], "lead": release - lo,
+            "fall": fall}

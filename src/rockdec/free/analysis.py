@@ -1,0 +1,486 @@
+"""``e`` from free-rocking records: the one entry point :func:`analyse_free_rocking`.
+
+Per impact (eq. 6): ``e_i = |omega_after| / |omega_before|``, the speeds of the fitted arcs
+either side of the impact (:mod:`rockdec.free.arcs`), with the standard error of the fit.
+
+Pooled over the impacts: both models lose the same fraction of speed at every impact and
+none in flight, so the log of each arc's impact speed falls on a straight line in the arc's
+number, ``log S_k = a + k log e`` (one intercept ``a`` per release). The line is fitted by
+generalised least squares with the arcs' covariance from the fit (neighbouring arcs share an
+impact time, so their speeds are correlated); this is the efficient combination of the
+impacts, where a plain mean of ``log e_i`` would telescope to the first and last arc only.
+The standard error of the slope is widened by the Birge ratio ``sqrt(chi^2/dof)`` of the
+line when it exceeds 1 (the impacts scatter more than their fit errors say: a block whose
+``e`` varies from impact to impact, or a model that misses), and the 95 % interval is
+``exp(slope +- z se)`` with ``z`` the Student quantile at the line's degrees of freedom
+(:data:`CONFIDENCE`). Its coverage and the per-impact bias are measured by
+:mod:`rockdec.studies.free_coverage` (benchmarks/free_coverage.py).
+
+A valid record that gives no ``e`` (fewer than :data:`MIN_IMPACTS` impacts) returns a result
+whose ``e`` is NaN and whose ``reason`` says why; a record that is not a free-rocking record
+raises :class:`rockdec.timeaxis.RecordError` in one sentence.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, fields
+
+import numpy as np
+from scipy import stats
+
+from rockdec import validate as checks
+from rockdec.free import arcs
+from rockdec.free.impacts import CROSSING_BAND_SIGMAS, find_crossings, find_sequences, noise_std
+from rockdec.physics.models import MODELS
+from rockdec.timeaxis import RecordError, sampling_step
+
+#: Confidence level of the intervals.
+CONFIDENCE = 0.95
+
+#: Fewest impacts that give a pooled ``e``. With one, the interval rests on the fit alone
+#: (no degree of freedom is left to measure the impacts' scatter, the Birge ratio); a note
+#: says so.
+MIN_IMPACTS = 1
+
+#: Default fewest samples of a fitted arc between impacts (each arc has two parameters, its
+#: impact times, shared with its neighbours). Per-impact bias and coverage at this floor:
+#: benchmarks/free_coverage.py.
+MIN_ARC_SAMPLES = 4
+
+#: Fewest samples of a record.
+MIN_SAMPLES = 8
+
+#: Samples in a row, equal to the record's largest or smallest value inside a flight, that
+#: mark a clipped sensor (a free flight has one apex, never a flat top).
+CLIP_RUN = 3
+
+#: A record that ends while the block still rocks above this fraction of its release angle
+#: has not shown the block coming to rest (about ``1 - 0.5^2`` of the energy left).
+REST_FRACTION = 0.5
+
+#: A record that ends beyond this multiple of its largest release angle, having risen there
+#: after its last impact, shows a block that fell over.
+OVERTURN_FACTOR = 2.0
+
+#: Relative precision of a record's numbers (to its largest angle) below which its samples'
+#: scatter is never taken to be: arithmetic of a simulated record drifts by about this over
+#: thousands of steps. Float32 records are held to their own rounding (``eps/sqrt(12)``).
+SAMPLE_PRECISION = 1e-12
+
+#: Residual scatter about the arcs, in units of the sensor noise, above which a note says
+#: the arcs do not follow the model's free flight.
+MISFIT_RATIO = 2.0
+
+
+def _nan_to_none(value):
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+def _plain(value):
+    """``value`` as JSON-ready Python: lists of floats, ``None`` for NaN."""
+    if isinstance(value, np.ndarray):
+        return [_plain(v) for v in value.tolist()]
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if isinstance(value, (np.floating, float)):
+        return _nan_to_none(float(value))
+    if isinstance(value, np.integer):
+        return int(value)
+    return value
+
+
+@dataclass(frozen=True)
+class FreeRockingFit:
+    """What a free-rocking analysis found (:func:`analyse_free_rocking`).
+
+    Pooled: ``e`` with its ``e_interval`` (low, high) at ``confidence_level``, the standard
+    error of ``log e`` (``log_e_se``, widened by ``scatter_ratio`` when that exceeds 1) and
+    the degrees of freedom of the line of log speeds (``dof``); ``g`` (rad/s^2) and ``nu``
+    (rad/s, NaN without ``theta_cr``) read from the arcs with their intervals; ``reason``:
+    why there is no ``e`` (``None`` when there is one).
+
+    Per impact (arrays of equal length): ``impact_time`` (s, on the record's time axis),
+    ``impact_record``, ``impact_release`` (index of the release among all), the apex of the
+    arc before (``amplitude_before``, rad), the signed angular velocities just before and
+    after (rad/s) with their standard errors, ``e_impact`` and ``e_impact_se``.
+
+    Per release: ``release_time`` (s), ``release_angle`` (rad, signed), ``release_record``,
+    ``release_g`` (the fitted ``g`` of that release), ``stop_time`` (s, where the analysis
+    stopped) and ``stop_reason`` (a sentence), ``residual_std`` (rad); the fitted impact
+    times ``fitted_times`` (release time first) and ``fitted_q`` (``g`` or ``nu``) from which
+    :meth:`curve` redraws the arcs. Per record: ``noise_std`` (rad). ``notes``: sentences for
+    the reader.
+    """
+
+    model: str
+    theta_cr: float | None
+    e: float
+    e_interval: tuple[float, float]
+    confidence_level: float
+    log_e_se: float
+    scatter_ratio: float
+    dof: int
+    g: float
+    g_interval: tuple[float, float]
+    nu: float
+    nu_interval: tuple[float, float]
+    reason: str | None
+    impact_time: np.ndarray
+    impact_record: np.ndarray
+    impact_release: np.ndarray
+    amplitude_before: np.ndarray
+    omega_before: np.ndarray
+    omega_before_se: np.ndarray
+    omega_after: np.ndarray
+    omega_after_se: np.ndarray
+    e_impact: np.ndarray
+    e_impact_se: np.ndarray
+    release_time: np.ndarray
+    release_angle: np.ndarray
+    release_record: np.ndarray
+    release_g: np.ndarray
+    stop_time: np.ndarray
+    stop_reason: tuple[str, ...]
+    residual_std: np.ndarray
+    fitted_times: tuple[np.ndarray, ...]
+    fitted_q: np.ndarray
+    noise_std: np.ndarray
+    notes: tuple[str, ...] = field(default=())
+
+    @property
+    def n_impacts(self) -> int:
+        """Impacts with an ``e`` each."""
+        return int(self.e_impact.size)
+
+    def curve(self, release: int, t) -> np.ndarray:
+        """The fitted angle (rad) of release ``release`` at times ``t`` (s), held angle before
+        the release, flights up to its last fitted impact (eqs. 2, 4)."""
+        side = int(np.sign(self.release_angle[release]))
+        fit = arcs.SequenceFit(self.fitted_times[release], float(self.fitted_q[release]), np.empty((0, 0)), 0.0, 0, side,
+                               self.model, self.theta_cr)
+        return fit.curve(t)
+
+    def to_dict(self) -> dict:
+        """Every field as plain Python (floats, ints, strings, lists; ``None`` for NaN)."""
+        return {f.name: _plain(getattr(self, f.name)) for f in fields(self)}
+
+
+def _records(theta, dt) -> list[tuple[np.ndarray, float, float, float]]:
+    """``(angles, step, first time, precision)`` of each record, checked."""
+    many = isinstance(theta, (list, tuple)) and len(theta) > 0 and all(np.ndim(r) >= 1 for r in theta)
+    records = list(theta) if many else [theta]
+    if many and isinstance(dt, (list, tuple)) and len(dt) > 0 and all(np.ndim(d) >= 1 or checks.is_number(d) for d in dt):
+        if len(dt) != len(records):
+            raise RecordError(f"dt has {len(dt)} entries for {len(records)} records; give one step (or time axis) per record, or one step for all.")
+        steps = list(dt)
+    else:
+        steps = [dt] * len(records)
+    out = []
+    for n, (record, step) in enumerate(zip(records, steps)):
+        name = f"theta[{n}]" if many else "theta"
+        out.append(_checked_record(record, step, name))
+    return out
+
+
+def _checked_record(record, step, name: str) -> tuple[np.ndarray, float, float, float]:
+    try:
+        raw = np.asarray(record)
+        y = raw.astype(float)
+    except (TypeError, ValueError):
+        raise RecordError(f"{name}: not an array of numbers; give the rocking angle in rad as a 1-D array.") from None
+    if y.ndim != 1:
+        raise RecordError(f"{name}: an array of shape {y.shape}, not one record; give a 1-D array (or a list of 1-D arrays).")
+    if y.size < MIN_SAMPLES:
+        raise RecordError(f"{name}: {y.size} samples, too short for a free-rocking analysis; give at least {MIN_SAMPLES} samples from the release to rest.")
+    bad = np.flatnonzero(~np.isfinite(y))
+    if bad.size:
+        raise RecordError(f"{name}: sample {bad[0]} is {y[bad[0]]}; cut the record to its finite part or fill the gap before the analysis.")
+    if np.ptp(y) == 0.0:
+        raise RecordError(f"{name}: every sample is {y[0]:g}, a constant record with no rocking; give the record of a released block.")
+    if np.ndim(step) == 0:
+        t0, dt = 0.0, checks.positive(step, "dt", "give the sampling step in s, > 0")
+    else:
+        times = np.asarray(step)
+        if times.shape != y.shape:
+            raise RecordError(f"{name}: {y.size} samples but {times.size} time stamps; give one time stamp per sample.")
+        dt = sampling_step(times, name, MIN_SAMPLES)
+        t0 = float(np.asarray(times, dtype=float)[0]) if not np.issubdtype(times.dtype, np.datetime64) else 0.0
+    relative = max(SAMPLE_PRECISION, np.finfo(raw.dtype).eps / math.sqrt(12.0)) if raw.dtype.kind == "f" else SAMPLE_PRECISION
+    return y, dt, t0, relative * float(np.max(np.abs(y)))
+
+
+def _check_overturn(y, noise, sequences, theta_cr, name):
+    """Refuse a block that reaches ``theta_cr``, or that rises after its last impact to
+    :data:`OVERTURN_FACTOR` times its largest release angle and stays there."""
+    if theta_cr is not None and np.max(np.abs(y)) >= theta_cr:
+        k = int(np.flatnonzero(np.abs(y) >= theta_cr)[0])
+        raise RecordError(f"{name}: the angle reaches theta_cr = {theta_cr:g} rad at sample {k}, so the block overturns; "
+                          "give the record of a block that rocks down to rest.")
+    crossings = find_crossings(y, CROSSING_BAND_SIGMAS * noise)
+    if not sequences or crossings.position.size == 0:
+        return
+    released = max(s.peaks[0] for s in sequences)
+    tail = np.abs(y[int(np.floor(crossings.position[-1])) + 1 :])
+    if tail.size and tail.max() > OVERTURN_FACTOR * released and tail[-1] > released:
+        raise RecordError(f"{name}: after its last impact the angle rises to {tail.max():.3g} rad, beyond {OVERTURN_FACTOR:g} times the "
+                          f"release angle ({released:.3g} rad), so the block overturns; give the record of a block that rocks down to rest.")
+
+
+def _check_clipping(y, sequences, name):
+    """Refuse a flat top at the record's extreme inside a flight (a clipped sensor)."""
+    for value in (y.max(), y.min()):
+        at = np.concatenate([[False], y == value, [False]]).astype(np.int8)
+        starts, stops = np.flatnonzero(np.diff(at) == 1), np.flatnonzero(np.diff(at) == -1)
+        for a, b in zip(starts, stops):
+            inside = any(s.crossings[0] < a and b - 1 < s.crossings[-1] for s in sequences)
+            if b - a >= CLIP_RUN and inside:
+                raise RecordError(f"{name}: samples {a}-{b - 1} sit flat at {value:g} rad inside a flight, a clipped sensor; "
+                                  "record with a range wider than the release angle.")
+
+
+def _check_rest(y, sequences, name):
+    """Refuse a record whose last release still rocks at its end above :data:`REST_FRACTION`."""
+    last = sequences[-1]
+    if last.stop.startswith("the record ends") and last.peaks[-1] > REST_FRACTION * last.peaks[0]:
+        raise RecordError(f"{name}: the record ends while the block still rocks at {last.peaks[-1] / last.peaks[0]:.0%} of its "
+                          "release angle, so it never comes to rest; record until the block is at rest.")
+
+
+def _first_q(sequence, dt, model, theta_cr) -> float:
+    """A first guess of ``g`` (or ``nu``) from the sampled apexes and impact times: ``8 h/D^2``
+    of each flight (``2 h/D^2`` of the fall), their median."""
+    c = sequence.crossings * dt
+    fall = sequence.crossings[0] - sequence.release
+    guesses = [2.0 * sequence.peaks[0] / (fall * dt) ** 2] if fall > 0 else []
+    guesses += [8.0 * h / d**2 for h, d in zip(sequence.peaks[1:], np.diff(c))]
+    g = float(np.median(guesses))
+    return g if model == "simplified" else math.sqrt(g / theta_cr)
+
+
+def _interval(centre, se, dof, log=False):
+    if not (math.isfinite(centre) and math.isfinite(se)):
+        return (math.nan, math.nan)
+    z = stats.t.ppf(0.5 + CONFIDENCE / 2, dof) if dof and dof < math.inf else stats.norm.ppf(0.5 + CONFIDENCE / 2)
+    lo, hi = centre - z * se, centre + z * se
+    return (math.exp(lo), math.exp(hi)) if log else (lo, hi)
+
+
+def _pooled_mean(values, ses):
+    """Weighted mean of ``values`` and its standard error, widened by the Birge ratio."""
+    values, ses = np.asarray(values), np.asarray(ses)
+    ok = np.isfinite(values) & np.isfinite(ses) & (ses > 0)
+    if not ok.any():
+        return (float(values[0]), math.nan) if values.size else (math.nan, math.nan)
+    w = 1.0 / ses[ok] ** 2
+    mean = float(np.sum(w * values[ok]) / np.sum(w))
+    se = float(1.0 / math.sqrt(np.sum(w)))
+    if ok.sum() > 1:
+        birge = math.sqrt(float(np.sum(w * (values[ok] - mean) ** 2)) / (ok.sum() - 1))
+        se *= max(1.0, birge)
+    return mean, se
+
+
+def analyse_free_rocking(theta, dt, *, model: str = "simplified", theta_cr: float | None = None,
+                         min_arc_samples: int = MIN_ARC_SAMPLES) -> FreeRockingFit:
+    """The coefficient of restitution from free-rocking records (paper §2: eqs. 2, 4, 6).
+
+    Finds each release and each impact (zero crossing) of the record, fits the flight
+    arcs between them with the model's closed-form free flight, and reads ``e`` per impact
+    (eq. 6, the speeds of the arcs either side) and pooled over all impacts of all releases
+    (the line of log speeds, :mod:`rockdec.free.analysis`), with 95 % intervals, and ``g``
+    (or ``nu``) from the arcs. A release's analysis stops at the first arc with fewer than
+    ``min_arc_samples`` samples, or too low to tell from the sensor noise; the result says
+    where and why.
+
+    Parameters
+    ----------
+    theta : array_like or list of array_like
+        The rocking angle (rad), 1-D; or several records of one block (pooled). A record may
+        hold several releases, each after the block came to rest.
+    dt : float, array_like or list
+        The sampling step (s); or the time stamps of the record (uniform, s); or one of
+        either per record.
+    model : {"simplified", "housner"}
+        The flight between impacts: a parabola (eq. 4) or the linearised Housner solution
+        (eq. 2, needs ``theta_cr``).
+    theta_cr : float, optional
+        The critical (overturning) angle (rad). Required by ``"housner"``; with either
+        model it also gives ``nu = sqrt(g/theta_cr)`` and refuses a record that reaches it.
+    min_arc_samples : int
+        Fewest samples of a fitted arc between two impacts (>= 3).
+
+    Returns
+    -------
+    FreeRockingFit
+        Per-impact table, pooled ``e`` with its interval, ``g``/``nu``, releases and where
+        each analysis stopped; ``e`` NaN with ``reason`` set when fewer than
+        :data:`MIN_IMPACTS` impacts can be fitted.
+
+    Raises
+    ------
+    rockdec.validate.InputError
+        For an unknown ``model``, a missing or invalid ``theta_cr``, ``dt`` or
+        ``min_arc_samples``.
+    rockdec.timeaxis.RecordError
+        For a record that is not a free-rocking record: NaN or infinite samples, too short,
+        constant, non-uniform time stamps, no release, a forced (random) response, a block
+        that never comes to rest or overturns, a clipped sensor.
+
+    Examples
+    --------
+    >>> from rockdec.physics.simulate import simulate_model
+    >>> theta = simulate_model("simplified", [0], 600, dt=0.005, g=1.0, e=0.9, sigma_p=0.0, theta0=0.01)[0][0]
+    >>> fit = analyse_free_rocking(theta, 0.005)
+    >>> round(fit.e, 6), round(fit.g, 6), fit.n_impacts > 5
+    (0.9, 1.0, True)
+    """
+    if model not in MODELS:
+        raise checks.InputError(f"model {model!r}: not a rocking model; use {' or '.join(repr(m) for m in MODELS)}.")
+    if theta_cr is not None:
+        theta_cr = checks.positive(theta_cr, "theta_cr", "give the critical angle in rad, > 0")
+    elif model == "housner":
+        raise checks.InputError("model 'housner' needs theta_cr; give the critical angle in rad, or use model='simplified'.")
+    min_arc_samples = checks.integer(min_arc_samples, "min_arc_samples", 3)
+    records = _records(theta, dt)
+    many = len(records) > 1
+
+    fits, seq_meta, notes, noises = [], [], [], []
+    for r, (y, step, t0, precision) in enumerate(records):
+        name = f"theta[{r}]" if many else "theta"
+        noise = noise_std(y)
+        noises.append(noise)
+        if theta_cr is not None:
+            _check_overturn(y, noise, [], theta_cr, name)
+        if find_crossings(y, CROSSING_BAND_SIGMAS * noise).position.size == 0:
+            raise RecordError(f"{name}: no release found, the angle never crosses zero; give a record of a block released from a tilt.")
+        sequences = find_sequences(y, noise, min_arc_samples)
+        if not sequences:
+            raise RecordError(f"{name}: no release found, no fall from a held angle ends in an impact; give a record of a block released from a tilt.")
+        _check_overturn(y, noise, sequences, None, name)
+        _check_clipping(y, sequences, name)
+        _check_rest(y, sequences, name)
+        for seq in sequences:
+            stop_time = t0 + seq.stop_position * step
+            impact = seq.crossings[-1]
+            reason = seq.stop.replace("{time}", f"{t0 + impact * step:.6g} s")
+            last = int(np.floor(impact))
+            t = t0 + step * np.arange(seq.start, last + 1)
+            times0 = t0 + step * np.concatenate([[seq.release], seq.crossings])
+            try:
+                fit = arcs.fit_sequence(t, y[seq.start : last + 1], side=seq.side, times0=times0,
+                                        q0=_first_q(seq, step, model, theta_cr), model=model, theta_cr=theta_cr,
+                                        floor=precision)
+            except ValueError:
+                notes.append(f"{name}: the release at {times0[0]:.6g} s has too few samples to fit; left out.")
+                continue
+            if not (np.all(np.diff(fit.times) > 0) and fit.q > 0 and np.all(np.isfinite(fit.covariance))):
+                notes.append(f"{name}: the fit of the release at {times0[0]:.6g} s did not converge; left out.")
+                continue
+            if noise > 0 and fit.residual_std > MISFIT_RATIO * noise:
+                notes.append(f"{name}: the arcs after the release at {fit.times[0]:.6g} s scatter {fit.residual_std / noise:.3g} times the "
+                             f"sensor noise about the {model} model's free flight; the interval is widened by the impacts' scatter"
+                             + ("; model='housner' may fit better." if model == "simplified" else "."))
+            fits.append(fit)
+            seq_meta.append((r, stop_time, reason))
+    return _result(fits, seq_meta, notes, noises, model, theta_cr)
+
+
+def _result(fits, seq_meta, notes, noises, model, theta_cr) -> FreeRockingFit:
+    """Per-impact table and the pooled estimates of the fitted releases."""
+    cols = {k: [] for k in ("time", "record", "release", "amp", "wb", "wb_se", "wa", "wa_se", "e", "e_se")}
+    blocks, ys, index, owner = [], [], [], []
+    for s, (fit, (r, _, _)) in enumerate(zip(fits, seq_meta)):
+        logs, cov = arcs.log_speeds(fit)
+        H = fit.half_durations
+        amp = arcs.shape(0.0, H, fit.q, model, theta_cr)[0]
+        speeds = np.exp(logs)
+        sd = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+        for i in range(1, logs.size):
+            var = cov[i, i] + cov[i - 1, i - 1] - 2.0 * cov[i, i - 1]
+            before_sign = -fit.side * (1.0 if (i - 1) % 2 == 0 else -1.0)
+            e_i = float(np.exp(logs[i] - logs[i - 1]))
+            cols["time"].append(fit.times[i])
+            cols["record"].append(r)
+            cols["release"].append(s)
+            cols["amp"].append(amp[i - 1])
+            cols["wb"].append(before_sign * speeds[i - 1])
+            cols["wb_se"].append(speeds[i - 1] * sd[i - 1])
+            cols["wa"].append(before_sign * speeds[i])
+            cols["wa_se"].append(speeds[i] * sd[i])
+            cols["e"].append(e_i)
+            cols["e_se"].append(e_i * math.sqrt(max(var, 0.0)))
+        blocks.append(cov)
+        ys.append(logs)
+        index.append(np.arange(logs.size))
+        owner.append(np.full(logs.size, s))
+    n_impacts = len(cols["e"])
+    e, log_se, birge, dof, interval, reason = math.nan, math.nan, math.nan, 0, (math.nan, math.nan), None
+    if n_impacts < MIN_IMPACTS:
+        reason = (f"only {n_impacts} impact{'s' if n_impacts != 1 else ''} could be fitted, fewer than the {MIN_IMPACTS} a pooled e "
+                  "with an interval needs; record more samples per cycle, a larger release angle or more releases.")
+    else:
+        slope, log_se, birge, dof = _line_of_log_speeds(ys, index, owner, blocks)
+        e = math.exp(slope)
+        log_se *= max(1.0, birge) if dof > 0 else 1.0
+        interval = _interval(slope, log_se, math.inf, log=True)
+        if dof == 0:
+            notes.append("one impact only: its interval rests on the fit alone, with no check of the impacts' scatter.")
+    q = np.array([f.q for f in fits])
+    q_se = np.array([math.sqrt(max(f.covariance[-1, -1], 0.0)) for f in fits])
+    q_mean, q_mean_se = _pooled_mean(q, q_se) if fits else (math.nan, math.nan)
+    q_interval = _interval(q_mean, q_mean_se, math.inf)
+    if model == "simplified":
+        g, g_interval = q_mean, q_interval
+        root = (lambda v: math.sqrt(v / theta_cr) if v > 0 else 0.0) if theta_cr else (lambda v: math.nan)
+        nu, nu_interval = root(g) if math.isfinite(g) else math.nan, tuple(root(v) if math.isfinite(v) else math.nan for v in g_interval)
+        release_g = q
+    else:
+        nu, nu_interval = q_mean, q_interval
+        g = nu**2 * theta_cr
+        g_interval = tuple(max(v, 0.0) ** 2 * theta_cr for v in nu_interval)
+        release_g = q**2 * theta_cr
+    return FreeRockingFit(
+        model=model, theta_cr=theta_cr, e=e, e_interval=interval, confidence_level=CONFIDENCE, log_e_se=log_se,
+        scatter_ratio=birge, dof=dof, g=g, g_interval=tuple(g_interval), nu=nu, nu_interval=tuple(nu_interval), reason=reason,
+        impact_time=np.array(cols["time"]), impact_record=np.array(cols["record"], dtype=int),
+        impact_release=np.array(cols["release"], dtype=int), amplitude_before=np.array(cols["amp"]),
+        omega_before=np.array(cols["wb"]), omega_before_se=np.array(cols["wb_se"]), omega_after=np.array(cols["wa"]),
+        omega_after_se=np.array(cols["wa_se"]), e_impact=np.array(cols["e"]), e_impact_se=np.array(cols["e_se"]),
+        release_time=np.array([f.times[0] for f in fits]),
+        release_angle=np.array([f.side * arcs.shape(0.0, f.half_durations[0], f.q, model, theta_cr)[0] for f in fits]),
+        release_record=np.array([m[0] for m in seq_meta], dtype=int), release_g=np.asarray(release_g, dtype=float),
+        stop_time=np.array([m[1] for m in seq_meta]), stop_reason=tuple(m[2] for m in seq_meta),
+        residual_std=np.array([f.residual_std for f in fits]), fitted_times=tuple(f.times for f in fits), fitted_q=q,
+        noise_std=np.array(noises), notes=tuple(notes),
+    )
+
+
+def _line_of_log_speeds(ys, index, owner, blocks):
+    """GLS slope of ``log S`` on the arc number, one intercept per release; returns the
+    slope, its standard error, the Birge ratio and the degrees of freedom."""
+    y = np.concatenate(ys)
+    k = np.concatenate(index).astype(float)
+    s = np.concatenate(owner)
+    n_rel = len(ys)
+    X = np.zeros((y.size, n_rel + 1))
+    X[np.arange(y.size), s] = 1.0
+    X[:, -1] = k
+    V = np.zeros((y.size, y.size))
+    at = 0
+    for b in blocks:
+        V[at : at + b.shape[0], at : at + b.shape[0]] = b
+        at += b.shape[0]
+    # Whiten by the eigen-decomposition (V may be near-singular for a noise-free record).
+    w, U = np.linalg.eigh(V)
+    floor = max(w.max(), np.finfo(float).tiny) * 1e-14
+    scale = 1.0 / np.sqrt(np.maximum(w, floor))
+    Xw, yw = scale[:, None] * (U.T @ X), scale * (U.T @ y)
+    beta, *_ = np.linalg.lstsq(Xw, yw, rcond=None)
+    cov = np.linalg.pinv(Xw.T @ Xw)
+    dof = y.size - n_rel - 1
+    chi2 = float(np.sum((yw - Xw @ beta) ** 2))
+    birge = math.sqrt(chi2 / dof) if dof > 0 else math.nan
+    return float(beta[-1]), float(math.sqrt(max(cov[-1, -1], 0.0))), birge, int(dof)
