@@ -18,6 +18,7 @@ with ``seed`` the cell's first seed, so a record is regenerable from its seed al
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass
 
 import numpy as np
@@ -171,11 +172,11 @@ def run_cell(e: float, *, model: str = "simplified", noise: float = 0.0, samples
         try:
             fit = analyse_free_rocking(theta, dt, model=model, theta_cr=theta_cr, **analysis)
         except RecordError as err:
-            key = str(err).split(",")[0]
+            key = _kind(str(err))
             failures[key] = failures.get(key, 0) + 1
             continue
         if fit.reason is not None:
-            failures[fit.reason.split(",")[0]] = failures.get(fit.reason.split(",")[0], 0) + 1
+            failures[_kind(fit.reason)] = failures.get(_kind(fit.reason), 0) + 1
             continue
         answered += 1
         covered += fit.e_interval[0] <= e <= fit.e_interval[1]
@@ -187,6 +188,11 @@ def run_cell(e: float, *, model: str = "simplified", noise: float = 0.0, samples
     return Cell(e, model, noise, samples_per_cycle, n_records, answered, covered, impacts,
                 float(z.mean()) if z.size else math.nan, float(z.std()) if z.size else math.nan,
                 float(np.median(widths)) if widths else math.nan, failures)
+
+
+def _kind(sentence: str) -> str:
+    """A refusal or decline without its numbers: its first clause, numbers as ``#``."""
+    return re.sub(r"\d+(\.\d+)?", "#", sentence.split(",")[0])
 
 
 def markdown(cells: list[Cell]) -> str:
