@@ -229,7 +229,13 @@ def fit_sequence(t, y, *, side: int, times0, q0: float, model: str, theta_cr: fl
     jac = jacobian(result.x)
     variance = float(np.sum(residual(result.x) ** 2)) / (t.size - p)
     units = np.concatenate([np.full(p - 1, t_unit), [q_unit]])
-    covariance = max(variance, (floor / y_unit) ** 2) * np.linalg.pinv(jac.T @ jac) * np.outer(units, units)
+    # Columns scaled to unit norm before the inversion: a late, low arc's impact times have
+    # small columns, whose directions a plain pseudo-inverse would drop as rounding.
+    norms = np.linalg.norm(jac, axis=0)
+    norms[norms == 0.0] = 1.0
+    scaled = jac / norms
+    inverse = np.linalg.pinv(scaled.T @ scaled, hermitian=True) / np.outer(norms, norms)
+    covariance = max(variance, (floor / y_unit) ** 2) * inverse * np.outer(units, units)
     x = np.concatenate([t_ref + t_unit * result.x[:-1], [q_unit * result.x[-1]]])
     variance *= y_unit**2
     return SequenceFit(x[:-1], float(x[-1]), covariance, float(np.sqrt(variance)), int(t.size), int(side), model, theta_cr)

@@ -5,10 +5,11 @@ A crossing is found with hysteresis: the side of the block changes only once the
 gone :data:`CROSSING_BAND_SIGMAS` sensor-noise standard deviations past zero, so noise near an
 impact gives one crossing, not several; its position is the zero of the straight line
 between the samples around it (the arc fits of :mod:`rockdec.free.arcs` then refine it).
-The record splits into segments between crossings. A segment that rises above the one before
-(more than noise and sampling allow, :data:`GROWTH_RELATIVE`, :data:`GROWTH_SIGMAS`) holds a
-release: free rocking only loses energy, so the amplitude can grow only where a hand lifts
-the block. A release's sequence runs on, arc by arc, while each arc has at least
+The record splits into segments between crossings. A segment that rises above the last
+fitted arc (more than noise and sampling allow, :data:`GROWTH_RELATIVE`, :data:`GROWTH_SIGMAS`)
+holds a release, or else the record is a forced response: free rocking only loses energy, so
+the amplitude can grow only where a hand lifts the block, after holding it
+(:data:`RELEASE_LEAD`). A release's sequence runs on, arc by arc, while each arc has at least
 ``min_arc_samples`` samples and rises :data:`MIN_HEIGHT_SIGMAS` noise standard deviations
 above zero; the first arc that does not ends it, with the reason.
 
@@ -34,9 +35,8 @@ CROSSING_BAND_SIGMAS = 4.0
 #: per-impact bias and the interval's coverage at this floor: benchmarks/free_coverage.py.
 MIN_HEIGHT_SIGMAS = 5.0
 
-#: Growth of a segment's peak over the previous one that is still noise or sampling, not a
-#: release: a relative part (beside the sampled apex's miss, up to ``1/(N - 1)^2`` of the arc
-#: at ``N`` samples, added where it is used) and a part in sensor-noise standard deviations
+#: Growth of a segment's peak over the last fitted arc that is still noise or sampling, not a
+#: release: a relative part (beside the sampled apex's miss, :func:`_sampled_share`) and a part in sensor-noise standard deviations
 #: (the largest of a few hundred noisy samples exceeds the true apex by up to about 3 of them).
 GROWTH_RELATIVE, GROWTH_SIGMAS = 0.02, 6.0
 
@@ -218,11 +218,9 @@ def find_sequences(theta: np.ndarray, noise: float, min_arc_samples: int) -> lis
     min_height = MIN_HEIGHT_SIGMAS * noise
     sequences: list[Sequence] = []
     current: dict | None = None
-    previous_peak, previous_samples = np.inf, 2
+    reference = np.inf  # the highest apex any later free flight can have: that of the last fitted arc
     for k, (lo, hi, side, peak) in enumerate(segments):
-        # a sampled apex of an arc of n samples misses the true one by up to 1/(n - 1)^2 of it
-        missed = 1.0 / max(previous_samples - 1, 1) ** 2
-        grew = peak > previous_peak * (1.0 + GROWTH_RELATIVE + missed) + GROWTH_SIGMAS * noise
+        grew = peak > reference * (1.0 + GROWTH_RELATIVE) + GROWTH_SIGMAS * noise
         last = k == len(segments) - 1
         if grew and not last and k > 0:
             release = _release(theta, lo, hi, side, peak, noise, crossings.position[k])
@@ -236,6 +234,7 @@ def find_sequences(theta: np.ndarray, noise: float, min_arc_samples: int) -> lis
                                           np.asarray(current["peaks"]), "the block is tilted and released again after the impact at {time}",
                                           float(lo)))
             current = release if peak >= min_height else None
+            reference = peak
         elif current is not None:
             end = _symmetric_end(theta, lo, hi, side, peak, crossings.position[k - 1])
             open_arc = last or crossings.position[k] - end > max(ARC_END_TOLERANCE * (end - crossings.position[k - 1]), 2.0)
@@ -256,14 +255,22 @@ def find_sequences(theta: np.ndarray, noise: float, min_arc_samples: int) -> lis
             if stop is None:
                 current["crossings"].append(crossings.position[k])
                 current["peaks"].append(peak)
+                reference = peak / _sampled_share(hi - lo)
             else:
                 sequences.append(Sequence(current["side"], current["start"], current["release"], np.asarray(current["crossings"]),
                                           np.asarray(current["peaks"]), stop, float(lo)))
                 current = None
         elif k == 0 and not last and peak > 0.0 and peak >= min_height:
             current = _release(theta, lo, hi, side, peak, noise, crossings.position[k])
-        previous_peak, previous_samples = peak, hi - lo
+            reference = peak
     return sequences
+
+
+def _sampled_share(n: int) -> float:
+    """Least share of its apex that the largest of ``n >= 3`` samples of a flight reaches:
+    the sample nearest the apex is within half a step of it, and the flight lasts more than
+    ``n - 1`` steps, so the parabola (eq. 4) keeps ``1 - 1/(n - 1)^2`` of its height there."""
+    return 1.0 - 1.0 / (n - 1) ** 2
 
 
 def _symmetric_end(theta, lo, hi, side, peak, start) -> float:
