@@ -12,8 +12,9 @@ impacts, where a plain mean of ``log e_i`` would telescope to the first and last
 The standard error of the slope is widened by the Birge ratio ``sqrt(chi^2/dof)`` of the
 line when it exceeds 1 (the impacts scatter more than their fit errors say: a block whose
 ``e`` varies from impact to impact, or a model that misses), and the 95 % interval is
-``exp(slope +- z se)`` with ``z`` the Student quantile at the line's degrees of freedom
-(:data:`CONFIDENCE`). Its coverage and the per-impact bias are measured by
+``exp(slope +- z se)`` with ``z`` the normal quantile (:data:`CONFIDENCE`): the fit's scale
+rests on every sample of the arcs, so its own uncertainty is negligible, and widening by the
+Birge ratio only where it exceeds 1 already errs on the wide side. Its coverage and the per-impact bias are measured by
 :mod:`rockdec.studies.free_coverage` (benchmarks/free_coverage.py).
 
 A valid record that gives no ``e`` (fewer than :data:`MIN_IMPACTS` impacts) returns a result
@@ -64,8 +65,10 @@ REST_FRACTION = 0.5
 OVERTURN_FACTOR = 2.0
 
 #: Relative precision of a record's numbers (to its largest angle) below which its samples'
-#: scatter is never taken to be: arithmetic of a simulated record drifts by about this over
-#: thousands of steps. Float32 records are held to their own rounding (``eps/sqrt(12)``).
+#: scatter is never taken to be, and the relative standard error of ``e`` is never taken to
+#: be: a simulated record's arithmetic drifts by about this over thousands of steps, and a
+#: noise-free record's interval would otherwise be a few units of the last place of ``e``.
+#: Float32 records are held to their own rounding (``eps/sqrt(12)``).
 SAMPLE_PRECISION = 1e-12
 
 #: Residual scatter about the arcs, in units of the sensor noise, above which a note says
@@ -260,10 +263,11 @@ def _first_q(sequence, dt, model, theta_cr) -> float:
     return g if model == "simplified" else math.sqrt(g / theta_cr)
 
 
-def _interval(centre, se, dof, log=False):
+def _interval(centre, se, log=False):
+    """The :data:`CONFIDENCE` interval ``centre +- z se`` (normal ``z``), exponentiated if ``log``."""
     if not (math.isfinite(centre) and math.isfinite(se)):
         return (math.nan, math.nan)
-    z = stats.t.ppf(0.5 + CONFIDENCE / 2, dof) if dof and dof < math.inf else stats.norm.ppf(0.5 + CONFIDENCE / 2)
+    z = stats.norm.ppf(0.5 + CONFIDENCE / 2)
     lo, hi = centre - z * se, centre + z * se
     return (math.exp(lo), math.exp(hi)) if log else (lo, hi)
 
@@ -355,8 +359,13 @@ def analyse_free_rocking(theta, dt, *, model: str = "simplified", theta_cr: floa
         if theta_cr is not None:
             _check_overturn(y, noise, [], theta_cr, name)
         if find_crossings(y, CROSSING_BAND_SIGMAS * noise).position.size == 0:
-            raise RecordError(f"{name}: no release found, the angle never crosses zero; give a record of a block released from a tilt.")
-        sequences = find_sequences(y, noise, min_arc_samples)
+            raise RecordError(f"{name}: no release found, the angle never swings past the noise band (+-{CROSSING_BAND_SIGMAS * noise:.3g} rad, "
+                              f"{CROSSING_BAND_SIGMAS:g} noise standard deviations) on both sides of zero; give a record of a block "
+                              "released from a tilt, sampled finely enough to show it rock.")
+        try:
+            sequences = find_sequences(y, noise, min_arc_samples)
+        except RecordError as err:
+            raise RecordError(f"{name}: {err}") from None
         if not sequences:
             raise RecordError(f"{name}: no release found, no fall from a held angle ends in an impact; give a record of a block released from a tilt.")
         _check_overturn(y, noise, sequences, None, name)
@@ -424,14 +433,14 @@ def _result(fits, seq_meta, notes, noises, model, theta_cr) -> FreeRockingFit:
     else:
         slope, log_se, birge, dof = _line_of_log_speeds(ys, index, owner, blocks)
         e = math.exp(slope)
-        log_se *= max(1.0, birge) if dof > 0 else 1.0
-        interval = _interval(slope, log_se, math.inf, log=True)
+        log_se = max(log_se * (max(1.0, birge) if dof > 0 else 1.0), SAMPLE_PRECISION)
+        interval = _interval(slope, log_se, log=True)
         if dof == 0:
             notes.append("one impact only: its interval rests on the fit alone, with no check of the impacts' scatter.")
     q = np.array([f.q for f in fits])
     q_se = np.array([math.sqrt(max(f.covariance[-1, -1], 0.0)) for f in fits])
     q_mean, q_mean_se = _pooled_mean(q, q_se) if fits else (math.nan, math.nan)
-    q_interval = _interval(q_mean, q_mean_se, math.inf)
+    q_interval = _interval(q_mean, q_mean_se)
     if model == "simplified":
         g, g_interval = q_mean, q_interval
         root = (lambda v: math.sqrt(v / theta_cr) if v > 0 else 0.0) if theta_cr else (lambda v: math.nan)

@@ -260,9 +260,10 @@ def find_sequences(theta: np.ndarray, noise: float, min_arc_samples: int) -> lis
                 sequences.append(Sequence(current["side"], current["start"], current["release"], np.asarray(current["crossings"]),
                                           np.asarray(current["peaks"]), stop, float(lo)))
                 current = None
-        elif k == 0 and not last and peak > 0.0 and peak >= min_height:
-            current = _release(theta, lo, hi, side, peak, noise, crossings.position[k])
+        elif k == 0:
             reference = peak
+            if not last and peak > 0.0 and peak >= min_height:
+                current = _release(theta, lo, hi, side, peak, noise, crossings.position[k])
     return sequences
 
 

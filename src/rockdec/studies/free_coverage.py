@@ -32,6 +32,14 @@ from rockdec.timeaxis import RecordError
 #: 13 %, so the parabola would not do.
 HOUSNER_RATIO = 0.3
 
+#: The grid of cells of the study (issue 37): true ``e``, sensor noise in units of the release
+#: angle, models, records per cell, and the range of samples per cycle the records draw from.
+GRID_E = (0.6, 0.8, 0.9, 0.95, 0.98)
+GRID_NOISE = (0.0, 0.01, 0.03, 0.05)
+GRID_MODELS = ("simplified", "housner")
+GRID_RECORDS = 50
+GRID_DENSITY = (20.0, 500.0)
+
 #: Samples the block is held at its release angle before it is let go.
 HOLD_SAMPLES = 20
 
@@ -188,6 +196,25 @@ def run_cell(e: float, *, model: str = "simplified", noise: float = 0.0, samples
     return Cell(e, model, noise, samples_per_cycle, n_records, answered, covered, impacts,
                 float(z.mean()) if z.size else math.nan, float(z.std()) if z.size else math.nan,
                 float(np.median(widths)) if widths else math.nan, failures)
+
+
+def run_grid(e=GRID_E, noise=GRID_NOISE, models=GRID_MODELS, n_records: int = GRID_RECORDS, samples_per_cycle=GRID_DENSITY,
+             seed: int = 0) -> list[Cell]:
+    """Every cell of the grid (:func:`run_cell`), models outermost; cell ``c`` seeds its
+    records from ``seed + 1000 c``.
+
+    Examples
+    --------
+    >>> [c.answered for c in run_grid(e=(0.9,), noise=(0.01,), models=("simplified",), n_records=2)]
+    [2]
+    """
+    cells = []
+    for model in models:
+        for e_true in e:
+            for sigma in noise:
+                cells.append(run_cell(e_true, model=model, noise=sigma, samples_per_cycle=samples_per_cycle, n_records=n_records,
+                                      seed=seed + 1000 * len(cells)))
+    return cells
 
 
 def _kind(sentence: str) -> str:
