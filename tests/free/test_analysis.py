@@ -18,12 +18,15 @@ G, THETA0 = 1.0, 0.02
 
 def closed_form_record(e, g, theta0, dt, release, n_points):
     """Held at ``theta0`` until ``release`` (s), then parabolas (eq. 4) whose flight times
-    shrink by ``e`` at each impact (eq. 6): built from the impact times, not a simulator."""
+    shrink by ``e`` at each impact (eq. 6): built from the impact times, not a simulator.
+    ``e`` may be a function of the apex before the impact."""
     t = np.arange(n_points) * dt
     fall = math.sqrt(2.0 * theta0 / g)
-    bounds = [release, release + fall]
+    bounds, half, apex = [release, release + fall], fall, theta0
     while bounds[-1] - bounds[-2] > 1e-3 * dt and bounds[-1] < t[-1]:
-        bounds.append(bounds[-1] + 2.0 * fall * e ** (len(bounds) - 1))
+        half *= e(apex) if callable(e) else e
+        apex = 0.5 * g * half**2
+        bounds.append(bounds[-1] + 2.0 * half)
     y = np.full(n_points, theta0)
     y[t >= release] = theta0 - 0.5 * g * (t[t >= release] - release) ** 2
     for k in range(1, len(bounds) - 1):
@@ -49,6 +52,18 @@ def test_noise_free_parabolas_give_e_and_g_exactly(e):
     assert abs(fit.release_angle[0] - THETA0) < 1e-9
 
 
+def test_a_trend_of_e_with_amplitude_is_measured_and_noted():
+    dt = 0.002
+    y, _ = closed_form_record(lambda apex: 0.8 + 5.0 * apex, G, THETA0, dt, release=0.05, n_points=3000)
+    y = y + np.random.default_rng(0).normal(0.0, 0.002 * THETA0, y.size)
+    fit = analyse_free_rocking(y, dt)
+    assert abs(math.log(fit.e_impact[0]) - math.log(0.9)) < 4 * fit.e_impact_se[0] / fit.e_impact[0]
+    assert fit.e_trend > 3 * fit.e_trend_se and any("changes with amplitude" in n for n in fit.notes)
+    constant, _ = closed_form_record(0.85, G, THETA0, dt, release=0.05, n_points=3000)
+    steady = analyse_free_rocking(constant + np.random.default_rng(0).normal(0.0, 0.002 * THETA0, y.size), dt)
+    assert abs(steady.e_trend) < 3 * steady.e_trend_se and not steady.notes
+
+
 def test_independent_reference_simulator_agrees():
     e, dt = 0.85, 0.003
     state, y = (THETA0, 0.0), [THETA0]
@@ -65,8 +80,10 @@ def test_housner_record_gives_e_and_nu():
     fit = analyse_free_rocking(theta, dt, model="housner", theta_cr=theta_cr)
     assert abs(fit.e - 0.9) < 1e-6 and abs(fit.nu - math.sqrt(G / theta_cr)) < 1e-6
     assert abs(fit.g - G) < 1e-6
-    # the parabola misses the Housner flight at theta0 = 0.3 theta_cr: e is off by far more
+    # the parabola misses the Housner flight at theta0 = 0.3 theta_cr: e is off by far more,
+    # and given theta_cr the simplified analysis says so
     assert abs(analyse_free_rocking(theta, dt).e - 0.9) > 1e-4
+    assert "model='housner'" in analyse_free_rocking(theta, dt, theta_cr=theta_cr).notes[0]
 
 
 @pytest.mark.parametrize("model", ["simplified", "housner"])

@@ -33,7 +33,7 @@ from scipy import stats
 from rockdec import validate as checks
 from rockdec.free import arcs
 from rockdec.free.impacts import CROSSING_BAND_SIGMAS, find_crossings, find_sequences, noise_std
-from rockdec.physics.models import MODELS
+from rockdec.physics.models import MODEL_TOLERANCE, MODELS, amplitude_limit
 from rockdec.timeaxis import RecordError, sampling_step
 
 #: Confidence level of the intervals.
@@ -70,6 +70,10 @@ OVERTURN_FACTOR = 2.0
 #: noise-free record's interval would otherwise be a few units of the last place of ``e``.
 #: Float32 records are held to their own rounding (``eps/sqrt(12)``).
 SAMPLE_PRECISION = 1e-12
+
+#: A trend of ``e`` with amplitude this many standard errors from zero is noted: both models
+#: hold ``e`` constant, so a trend is the block's own (or a model that misses).
+TREND_Z = 3.0
 
 #: Residual scatter about the arcs, in units of the sensor noise, above which a note says
 #: the arcs do not follow the model's free flight.
@@ -114,8 +118,9 @@ class FreeRockingFit:
     ``release_g`` (the fitted ``g`` of that release), ``stop_time`` (s, where the analysis
     stopped) and ``stop_reason`` (a sentence), ``residual_std`` (rad); the fitted impact
     times ``fitted_times`` (release time first) and ``fitted_q`` (``g`` or ``nu``) from which
-    :meth:`curve` redraws the arcs. Per record: ``noise_std`` (rad). ``notes``: sentences for
-    the reader.
+    :meth:`curve` redraws the arcs. Per record: ``noise_std`` (rad). ``e_trend``: the slope of
+    ``log e_i`` on ``amplitude_before`` (1/rad, both models predict 0) with its standard error
+    ``e_trend_se``. ``notes``: sentences for the reader.
     """
 
     model: str
@@ -151,6 +156,8 @@ class FreeRockingFit:
     fitted_times: tuple[np.ndarray, ...]
     fitted_q: np.ndarray
     noise_std: np.ndarray
+    e_trend: float = math.nan
+    e_trend_se: float = math.nan
     notes: tuple[str, ...] = field(default=())
 
     @property
@@ -350,6 +357,7 @@ def analyse_free_rocking(theta, dt, *, model: str = "simplified", theta_cr: floa
     min_arc_samples = checks.integer(min_arc_samples, "min_arc_samples", 3)
     records = _records(theta, dt)
     many = len(records) > 1
+    limit = amplitude_limit(MODEL_TOLERANCE)
 
     fits, seq_meta, notes, noises = [], [], [], []
     for r, (y, step, t0, precision) in enumerate(records):
@@ -392,6 +400,10 @@ def analyse_free_rocking(theta, dt, *, model: str = "simplified", theta_cr: floa
                 notes.append(f"{name}: the arcs after the release at {fit.times[0]:.6g} s scatter {fit.residual_std / noise:.3g} times the "
                              f"sensor noise about the {model} model's free flight; the interval is widened by the impacts' scatter"
                              + ("; model='housner' may fit better." if model == "simplified" else "."))
+            ratio = seq.peaks[0] / theta_cr if theta_cr else 0.0
+            if model == "simplified" and ratio > limit:
+                notes.append(f"{name}: the release at {fit.times[0]:.6g} s is {ratio:.2g} of theta_cr, where the periods of eqs. 3 and 5 "
+                             f"differ by more than {MODEL_TOLERANCE:.0%}; model='housner' follows the flights there.")
             fits.append(fit)
             seq_meta.append((r, stop_time, reason))
     return _result(fits, seq_meta, notes, noises, model, theta_cr)
@@ -437,6 +449,10 @@ def _result(fits, seq_meta, notes, noises, model, theta_cr) -> FreeRockingFit:
         interval = _interval(slope, log_se, log=True)
         if dof == 0:
             notes.append("one impact only: its interval rests on the fit alone, with no check of the impacts' scatter.")
+    trend, trend_se = _trend(ys, blocks, cols["amp"])
+    if abs(trend) > TREND_Z * trend_se:
+        notes.append(f"e changes with amplitude: log e grows by {trend:.3g} per rad of the apex before the impact "
+                     f"(+-{trend_se:.2g}), where the {model} model holds it constant.")
     q = np.array([f.q for f in fits])
     q_se = np.array([math.sqrt(max(f.covariance[-1, -1], 0.0)) for f in fits])
     q_mean, q_mean_se = _pooled_mean(q, q_se) if fits else (math.nan, math.nan)
@@ -463,33 +479,58 @@ def _result(fits, seq_meta, notes, noises, model, theta_cr) -> FreeRockingFit:
         release_record=np.array([m[0] for m in seq_meta], dtype=int), release_g=np.asarray(release_g, dtype=float),
         stop_time=np.array([m[1] for m in seq_meta]), stop_reason=tuple(m[2] for m in seq_meta),
         residual_std=np.array([f.residual_std for f in fits]), fitted_times=tuple(f.times for f in fits), fitted_q=q,
-        noise_std=np.array(noises), notes=tuple(notes),
+        noise_std=np.array(noises), e_trend=trend, e_trend_se=trend_se, notes=tuple(notes),
     )
+
+
+def _block_diagonal(blocks) -> np.ndarray:
+    """The block-diagonal matrix of square ``blocks``."""
+    size = sum(b.shape[0] for b in blocks)
+    out = np.zeros((size, size))
+    at = 0
+    for b in blocks:
+        out[at : at + b.shape[0], at : at + b.shape[0]] = b
+        at += b.shape[0]
+    return out
+
+
+def _gls(y, X, V):
+    """Generalised least squares of ``y`` on ``X`` with covariance ``V``: the coefficients,
+    their covariance and the chi-square of the residuals. ``V`` is whitened through its
+    eigen-decomposition, with eigenvalues held above ``1e-14`` of the largest (a noise-free
+    record's covariance is near-singular)."""
+    w, U = np.linalg.eigh(V)
+    floor = max(w.max(), np.finfo(float).tiny) * 1e-14
+    scale = 1.0 / np.sqrt(np.maximum(w, floor))
+    Xw, yw = scale[:, None] * (U.T @ X), scale * (U.T @ y)
+    beta, *_ = np.linalg.lstsq(Xw, yw, rcond=None)
+    return beta, np.linalg.pinv(Xw.T @ Xw), float(np.sum((yw - Xw @ beta) ** 2))
 
 
 def _line_of_log_speeds(ys, index, owner, blocks):
     """GLS slope of ``log S`` on the arc number, one intercept per release; returns the
     slope, its standard error, the Birge ratio and the degrees of freedom."""
     y = np.concatenate(ys)
-    k = np.concatenate(index).astype(float)
-    s = np.concatenate(owner)
-    n_rel = len(ys)
-    X = np.zeros((y.size, n_rel + 1))
-    X[np.arange(y.size), s] = 1.0
-    X[:, -1] = k
-    V = np.zeros((y.size, y.size))
-    at = 0
-    for b in blocks:
-        V[at : at + b.shape[0], at : at + b.shape[0]] = b
-        at += b.shape[0]
-    # Whiten by the eigen-decomposition (V may be near-singular for a noise-free record).
-    w, U = np.linalg.eigh(V)
-    floor = max(w.max(), np.finfo(float).tiny) * 1e-14
-    scale = 1.0 / np.sqrt(np.maximum(w, floor))
-    Xw, yw = scale[:, None] * (U.T @ X), scale * (U.T @ y)
-    beta, *_ = np.linalg.lstsq(Xw, yw, rcond=None)
-    cov = np.linalg.pinv(Xw.T @ Xw)
-    dof = y.size - n_rel - 1
-    chi2 = float(np.sum((yw - Xw @ beta) ** 2))
+    X = np.zeros((y.size, len(ys) + 1))
+    X[np.arange(y.size), np.concatenate(owner)] = 1.0
+    X[:, -1] = np.concatenate(index)
+    beta, cov, chi2 = _gls(y, X, _block_diagonal(blocks))
+    dof = y.size - len(ys) - 1
     birge = math.sqrt(chi2 / dof) if dof > 0 else math.nan
     return float(beta[-1]), float(math.sqrt(max(cov[-1, -1], 0.0))), birge, int(dof)
+
+
+def _trend(ys, blocks, amplitudes):
+    """GLS slope of ``log e_i`` on the apex before each impact (1/rad) and its standard error
+    (widened by the Birge ratio above 1); NaN with fewer than three impacts or one amplitude.
+    ``log e_i`` are differences of neighbouring log speeds, so their covariance is
+    ``D C D^T`` of each release's (``D`` the difference matrix): neighbours are correlated."""
+    diffs = [np.diff(y) for y in ys]
+    covs = [np.diff(np.diff(c, axis=0), axis=1) for c in blocks]  # D C D^T
+    y = np.concatenate(diffs) if diffs else np.empty(0)
+    a = np.asarray(amplitudes, dtype=float)
+    if y.size < 3 or np.ptp(a) == 0.0:
+        return math.nan, math.nan
+    beta, cov, chi2 = _gls(y, np.column_stack([np.ones_like(a), a]), _block_diagonal([c for c in covs if c.size]))
+    birge = math.sqrt(chi2 / (y.size - 2))
+    return float(beta[1]), float(math.sqrt(max(cov[1, 1], 0.0)) * max(1.0, birge))
