@@ -193,3 +193,12 @@ def test_log_speed_covariance_matches_finite_differences():
         moved = arcs.SequenceFit(x[:-1], x[-1], cov, 0.0, 10, 1, "housner", 0.2)
         grad[:, j] = (arcs.log_speeds(moved)[0] - logs) / eps
     assert np.allclose(c, grad @ cov @ grad.T, rtol=1e-5)
+
+
+@pytest.mark.parametrize("e", [0.6, 0.98])
+def test_a_float32_record_gets_an_interval_as_wide_as_its_rounding(e):
+    theta, dt, _ = free_record(e, samples_per_cycle=100)
+    fit = analyse_free_rocking(theta.astype(np.float32), dt)
+    assert fit.e_interval[0] <= e <= fit.e_interval[1]
+    assert fit.e_interval[1] - fit.e_interval[0] < 1e-6  # float32 rounding, not more
+    assert analyse_free_rocking(theta, dt).e_interval[1] - analyse_free_rocking(theta, dt).e_interval[0] < 1e-10

@@ -127,7 +127,20 @@ class Cell:
 
 def record_density(samples_per_cycle, seed: int) -> float:
     """Samples per cycle of record ``seed``: ``samples_per_cycle`` itself, or for a range
-    ``(low, high)`` a draw log-uniform in it from ``numpy.random.default_rng(seed)``.
+    ``(low, high)`` a draw log-uniform in it from ``numpy.random.default_rng([seed, 1])``
+    (apart from the record's noise stream).
+
+    Parameters
+    ----------
+    samples_per_cycle : float or tuple of float
+        A density, or a range ``(low, high)``.
+    seed : int
+        The record's seed.
+
+    Returns
+    -------
+    float
+        The record's samples per cycle at its release angle.
 
     Examples
     --------
@@ -203,6 +216,22 @@ def run_grid(e=GRID_E, noise=GRID_NOISE, models=GRID_MODELS, n_records: int = GR
     """Every cell of the grid (:func:`run_cell`), models outermost; cell ``c`` seeds its
     records from ``seed + 1000 c``.
 
+    Parameters
+    ----------
+    e, noise, models : sequence
+        True ``e``, sensor noise (in units of the release angle) and models of the cells.
+    n_records : int
+        Records per cell.
+    samples_per_cycle : float or tuple of float
+        Density, or the range each record draws its own from (:func:`record_density`).
+    seed : int
+        Seed of the first cell's first record.
+
+    Returns
+    -------
+    list of Cell
+        One tally per cell.
+
     Examples
     --------
     >>> [c.answered for c in run_grid(e=(0.9,), noise=(0.01,), models=("simplified",), n_records=2)]
@@ -224,6 +253,19 @@ def _kind(sentence: str) -> str:
 
 def markdown(cells: list[Cell]) -> str:
     """A Markdown table of cells, then the pooled coverage over all answered records.
+
+    Parameters
+    ----------
+    cells : list of Cell
+        Tallies of :func:`run_cell`.
+
+    Returns
+    -------
+    str
+        The table (one row per cell: answered records, coverage of the 95 % interval, impacts
+        per record, median width, mean and standard deviation of ``(e_i - e)/se_i``, declines
+        and refusals by kind) and a line with the pooled coverage, the lowest cell and the
+        largest per-impact bias.
 
     Examples
     --------
