@@ -259,15 +259,26 @@ def _check_rest(y, sequences, name):
                           "release angle, so it never comes to rest; record until the block is at rest.")
 
 
-def _first_q(sequence, dt, model, theta_cr) -> float:
-    """A first guess of ``g`` (or ``nu``) from the sampled apexes and impact times: ``8 h/D^2``
-    of each flight (``2 h/D^2`` of the fall), their median."""
-    c = sequence.crossings * dt
-    fall = sequence.crossings[0] - sequence.release
-    guesses = [2.0 * sequence.peaks[0] / (fall * dt) ** 2] if fall > 0 else []
-    guesses += [8.0 * h / d**2 for h, d in zip(sequence.peaks[1:], np.diff(c))]
-    g = float(np.median(guesses))
-    return g if model == "simplified" else math.sqrt(g / theta_cr)
+def _first_guess(sequence, y, dt, t0, model, theta_cr) -> tuple[np.ndarray, float]:
+    """First guesses of the release and impact times (s) and of ``g`` (or ``nu``).
+
+    ``g`` is the median of ``8 h/D^2`` over the flights (eq. 4: apex ``h``, duration ``D``
+    between crossings), or ``2 h/D^2`` of the fall without a flight. The release is placed
+    the model's fall time (eq. 4, or eq. 2 from rest) before the first impact, from the mean
+    of the held samples, which the noise moves far less than the last sample still held.
+    """
+    crossings = t0 + sequence.crossings * dt
+    held = np.abs(y[sequence.start : int(sequence.release) + 1])
+    level = float(held.mean()) if held.size else float(sequence.peaks[0])
+    flights = [8.0 * h / d**2 for h, d in zip(sequence.peaks[1:], np.diff(crossings))]
+    fall = (sequence.crossings[0] - sequence.release) * dt
+    g = float(np.median(flights)) if flights else 2.0 * level / max(fall, dt) ** 2
+    if model == "simplified":
+        q, fall = g, math.sqrt(2.0 * level / g)
+    else:
+        q = math.sqrt(g / theta_cr)
+        fall = math.acosh(theta_cr / (theta_cr - level)) / q if level < theta_cr else fall
+    return np.concatenate([[crossings[0] - fall], crossings]), q
 
 
 def _interval(centre, se, log=False):
@@ -385,11 +396,10 @@ def analyse_free_rocking(theta, dt, *, model: str = "simplified", theta_cr: floa
             reason = seq.stop.replace("{time}", f"{t0 + impact * step:.6g} s")
             last = int(np.floor(impact))
             t = t0 + step * np.arange(seq.start, last + 1)
-            times0 = t0 + step * np.concatenate([[seq.release], seq.crossings])
+            times0, q0 = _first_guess(seq, y, step, t0, model, theta_cr)
             try:
-                fit = arcs.fit_sequence(t, y[seq.start : last + 1], side=seq.side, times0=times0,
-                                        q0=_first_q(seq, step, model, theta_cr), model=model, theta_cr=theta_cr,
-                                        floor=precision)
+                fit = arcs.fit_sequence(t, y[seq.start : last + 1], side=seq.side, times0=times0, q0=q0, model=model,
+                                        theta_cr=theta_cr, floor=precision)
             except ValueError:
                 notes.append(f"{name}: the release at {times0[0]:.6g} s has too few samples to fit; left out.")
                 continue

@@ -19,6 +19,7 @@ times.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -44,10 +45,15 @@ GROWTH_RELATIVE, GROWTH_SIGMAS = 0.02, 6.0
 #: block before a release (the noisy hold scatters about 3 of them either way of its level).
 HOLD_SIGMAS = 6.0
 
-#: How far past the end of an arc, as a share of its duration, the next crossing may lie and
-#: still close it: a flight is symmetric about its apex (eqs. 2, 4), so a crossing much later
-#: than the mirror image of the arc's start belongs to a later arc that the detector missed
-#: (lower than its band), and the arc is closed at the mirror image instead.
+#: Longest a flight may last, in units of the flight before it (plus two samples for the
+#: crossings' own scatter), before its segment is taken to hold later flights that the
+#: crossing detector missed (lower than its band): flights shrink by ``e`` (eq. 6). The
+#: flight is then closed where its duration, scaled from the one before, ends.
+ARC_GROWTH = 1.25
+
+#: How far past the end of the first flight, as a share of its duration, the next crossing
+#: may lie and still close it: a flight is symmetric about its apex (eqs. 2, 4), so a later
+#: crossing belongs to a later flight, and the first is closed at the mirror image of its start.
 ARC_END_TOLERANCE = 0.25
 
 #: Samples before a release inside a record, in its segment, at least this multiple of the
@@ -236,8 +242,14 @@ def find_sequences(theta: np.ndarray, noise: float, min_arc_samples: int) -> lis
             current = release if peak >= min_height else None
             reference = peak
         elif current is not None:
-            end = _symmetric_end(theta, lo, hi, side, peak, crossings.position[k - 1])
-            open_arc = last or crossings.position[k] - end > max(ARC_END_TOLERANCE * (end - crossings.position[k - 1]), 2.0)
+            start, bounds = crossings.position[k - 1], current["crossings"]
+            if len(bounds) >= 2:  # a flight lasts e times the one before it (eq. 6), and D ~ sqrt(h) (eq. 4)
+                previous = bounds[-1] - bounds[-2]
+                end = start + previous * min(1.0, math.sqrt(peak / current["peaks"][-1]))
+                open_arc = last or crossings.position[k] - start > ARC_GROWTH * previous + 2.0
+            else:  # the first flight: the release time is too rough a guess to scale from
+                end = _symmetric_end(theta, lo, hi, side, peak, start)
+                open_arc = last or crossings.position[k] - end > max(ARC_END_TOLERANCE * (end - start), 2.0)
             stop = None
             if peak < min_height or peak <= 0.0:
                 stop = (f"the arc after the impact at {{time}} rises only {peak / noise if noise > 0 else 0.0:.3g} noise "
