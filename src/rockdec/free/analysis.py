@@ -408,7 +408,7 @@ def analyse_free_rocking(theta, dt, *, model: str = "simplified", theta_cr: floa
                 continue
             if noise > 0 and fit.residual_std > MISFIT_RATIO * noise:
                 notes.append(f"{name}: the arcs after the release at {fit.times[0]:.6g} s scatter {fit.residual_std / noise:.3g} times the "
-                             f"sensor noise about the {model} model's free flight; the interval is widened by the impacts' scatter"
+                             f"sensor noise about the {model} model's free flight; the pooled interval widens with the impacts' scatter (scatter_ratio)"
                              + ("; model='housner' may fit better." if model == "simplified" else "."))
             ratio = seq.peaks[0] / theta_cr if theta_cr else 0.0
             if model == "simplified" and ratio > limit:
