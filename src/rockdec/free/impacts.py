@@ -233,7 +233,7 @@ def find_sequences(theta: np.ndarray, noise: float, min_arc_samples: int) -> lis
             if release is None or release["lead"] < RELEASE_LEAD * release["fall"]:
                 raise RecordError(
                     f"the amplitude grows at sample {lo} with no hold before it, so this is a forced (random) response, "
-                    "not free rocking; give a record of a released block, or analyse it with rockdec.estimate."
+                    "not free rocking; give a record of a released block, or estimate e from it as a random response."
                 )
             if current is not None:
                 sequences.append(Sequence(current["side"], current["start"], current["release"], np.asarray(current["crossings"]),
