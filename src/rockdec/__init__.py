@@ -11,6 +11,8 @@ The functions a user calls:
 - :func:`estimate` -- ``e`` of a record (array, DataArray, Series, or several of one
   block), as a :class:`RestitutionEstimate` (``.e``, ``.confidence_interval``,
   ``.summary()``, ``.to_dict()``, ``.to_dataset()``, ``.plot()``);
+- :func:`free_rocking` -- ``e`` from a free-rocking test (the block released from a tilt),
+  the reference beside the random test, as the same result object;
 - :func:`read_record` -- read a record from CSV, ``.npy``, NetCDF or MATLAB ``.mat``;
 - :func:`simulate` -- a record of known ``e``, simulated exactly;
 - :class:`InputError`, :class:`RecordError` -- what is refused, in one sentence naming the
@@ -39,6 +41,7 @@ __all__ = [
     "RestitutionEstimate",
     "__version__",
     "estimate",
+    "free_rocking",
     "read_record",
     "simulate",
 ]
@@ -46,6 +49,7 @@ __all__ = [
 #: Where each public name lives (imported on first use, so ``import rockdec`` stays fast).
 _HOMES = {
     "estimate": "rockdec.api",
+    "free_rocking": "rockdec.api",
     "read_record": "rockdec.api",
     "simulate": "rockdec.api",
     "RestitutionEstimate": "rockdec.report.result",

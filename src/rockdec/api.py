@@ -29,7 +29,7 @@ from rockdec.validate import InputError, positive, show
 if TYPE_CHECKING:
     import xarray as xr
 
-__all__ = ["estimate", "estimate_options", "read_record", "simulate"]
+__all__ = ["estimate", "estimate_options", "free_rocking", "read_record", "simulate"]
 
 class SimulationWarning(UserWarning):
     """A simulation that did not make what was asked: series that overturned, or a sampling
@@ -40,8 +40,9 @@ class SimulationWarning(UserWarning):
 MODELS = ("simplified", "housner")
 
 
-def _series_records(theta, dt: float | None, source: str) -> list[records_mod.Record]:
-    """The records of one of :func:`estimate`'s inputs (checked)."""
+def _series_arrays(theta, dt: float | None, source: str) -> list[tuple[np.ndarray, float | None, str]]:
+    """``(angles in rad, step in s or None, source)`` of each record of one input of
+    :func:`estimate` or :func:`free_rocking` (not yet checked as a record)."""
     import pandas as pd
     import xarray as xr
 
@@ -56,15 +57,13 @@ def _series_records(theta, dt: float | None, source: str) -> list[records_mod.Re
         theta = xr.DataArray(theta.to_numpy(dtype=np.float64), dims="time", coords=None if time is None else {"time": time},
                              name=theta.name)
     if isinstance(theta, xr.DataArray):
-        return _data_array_records(theta, dt, source)
+        return _data_array_arrays(theta, dt, source)
     values = np.asarray(theta)
     if values.dtype.kind not in "fiu":
         raise InputError(f"`theta` ({source}) holds {values.dtype} values; give the angles as numbers in rad.")
     if values.ndim != 1:
         raise InputError(f"`theta` ({source}) has shape {values.shape}; give a 1-D record, or a list of 1-D records of one block.")
-    if dt is None:
-        raise InputError(f"`theta` ({source}) is an array without a time axis; give its sampling step `dt` in s.")
-    return [records_mod.check_values(values, _step(dt), source)]
+    return [(values.astype(np.float64), None if dt is None else _step(dt), source)]
 
 
 def _step(dt) -> float:
@@ -77,8 +76,9 @@ def _step(dt) -> float:
     return step
 
 
-def _data_array_records(da: xr.DataArray, dt: float | None, source: str) -> list[records_mod.Record]:
-    """Records of a DataArray: 1-D along its time dimension, or 2-D (one record per row)."""
+def _data_array_arrays(da: xr.DataArray, dt: float | None, source: str) -> list[tuple[np.ndarray, float | None, str]]:
+    """The records of a DataArray (:func:`_series_arrays`): 1-D along its time dimension, or
+    2-D (one record per row)."""
     source = str(da.attrs.get("source", da.name if da.name is not None else source))
     if da.ndim not in (1, 2):
         raise InputError(f"`theta` ({source}) has dimensions {da.dims}; give (time) or (record, time).")
@@ -100,22 +100,30 @@ def _data_array_records(da: xr.DataArray, dt: float | None, source: str) -> list
         if step is not None and abs(given - step) > 1e-6 * step:
             raise InputError(f"`dt` {given:g} s disagrees with the time axis of {source} ({step:g} s); leave `dt` out.")
         step = given
-    if step is None:
-        raise InputError(f"`theta` ({source}) has no time coordinate; give its sampling step `dt` in s.")
     if values.ndim == 1:
-        return [records_mod.check_values(values, step, source)]
+        return [(values, step, source)]
     names = da.attrs.get("sources")
     rows = names.split("\n") if isinstance(names, str) and len(names.split("\n")) == values.shape[0] else None
-    return [records_mod.check_values(row, step, rows[i] if rows else f"{source}[{i}]") for i, row in enumerate(values)]
+    return [(row, step, rows[i] if rows else f"{source}[{i}]") for i, row in enumerate(values)]
 
 
-def _records(theta, dt) -> list[records_mod.Record]:
-    """Every record of :func:`estimate`'s ``theta``."""
+def _arrays(theta, dt) -> list[tuple[np.ndarray, float, str]]:
+    """``(angles, step, source)`` of every record of ``theta``, each with its step."""
     if isinstance(theta, list | tuple):
         if not theta:
             raise InputError("`theta` is an empty list; give at least one record.")
-        return [r for i, item in enumerate(theta) for r in _series_records(item, dt, f"record {i}")]
-    return _series_records(theta, dt, "record")
+        out = [r for i, item in enumerate(theta) for r in _series_arrays(item, dt, f"record {i}")]
+    else:
+        out = _series_arrays(theta, dt, "record")
+    for _, step, source in out:
+        if step is None:
+            raise InputError(f"`theta` ({source}) has no time axis; give its sampling step `dt` in s.")
+    return out
+
+
+def _records(theta, dt) -> list[records_mod.Record]:
+    """Every record of :func:`estimate`'s ``theta``, checked (:func:`rockdec.record.records.check_values`)."""
+    return [records_mod.check_values(values, step, source) for values, step, source in _arrays(theta, dt)]
 
 
 def _sensor_noise(value) -> SensorNoise | None:
@@ -247,6 +255,59 @@ def estimate_options(*, g=None, load="auto", sensor_noise="auto", model="simplif
     return {"load": _load(load), "sensor": _sensor_noise(sensor_noise)}, _cache(cache)
 
 
+def free_rocking(theta, dt: float | None = None, *, model: str = "simplified", theta_cr: float | None = None) -> RestitutionEstimate:
+    """Estimate ``e`` from a free-rocking test: the block tilted, released, rocking down to rest.
+
+    The reference test laboratories run first. Each release and each impact (zero
+    crossing) is found to sub-sample precision; each flight between impacts is fitted with
+    the model's closed-form free flight (a parabola, eq. 4, or Housner's eq. 2); ``e`` of
+    each impact is the ratio of the angular speeds just after and just before it (eq. 6);
+    one ``e`` with its 95 % interval comes from the line of the log impact speeds over every
+    impact of every release, and ``g`` (or ``nu``) from the arcs. The analysis of a release
+    stops where its arcs become too short to fit, and says where and why.
+
+    Parameters
+    ----------
+    theta : array_like, xarray.DataArray, pandas.Series, or list of them
+        The rocking angle, in the forms :func:`estimate` takes; several records (or several
+        releases in one record) of one block are pooled.
+    dt : float, optional
+        Sampling step in s, for arrays without a time axis.
+    model : {"simplified", "housner"}
+        The free flight between impacts.
+    theta_cr : float, optional
+        The block's critical angle in rad (needed by ``"housner"``; gives ``nu``).
+
+    Returns
+    -------
+    RestitutionEstimate
+        With ``test == "free"``; ``impacts`` holds the table of impacts.
+
+    Raises
+    ------
+    InputError, RecordError
+        A record that is not a free-rocking test (no release, a random response, a block
+        that never comes to rest or overturns, clipping, ...), in one sentence.
+
+    Examples
+    --------
+    >>> import rockdec
+    >>> theta = rockdec.simulate(0.9, 3_000, seed=0, sigma_p=0.0, theta0=0.01)
+    >>> res = rockdec.free_rocking(theta)
+    >>> round(res.e, 6), res.test
+    (0.9, 'free')
+    """
+    from rockdec.free.analysis import analyse_free_rocking
+    from rockdec.report.free_result import free_document
+
+    arrays = _arrays(theta, dt)
+    values, steps = [a[0] for a in arrays], [a[1] for a in arrays]
+    many = len(arrays) > 1
+    fit = analyse_free_rocking(values if many else values[0], steps if many else steps[0], model=model, theta_cr=theta_cr)
+    doc = free_document(fit, [a[2] for a in arrays], steps, [v.size for v in values])
+    return RestitutionEstimate.from_dict(doc, analysis=(fit, values if many else values[0], steps if many else steps[0]))
+
+
 def read_record(path, *, variable: str = "theta", column: str = "theta", dt: float | None = None,
                 fs: float | None = None) -> xr.DataArray:
     """Read a measured record: CSV or text, ``.npy``, NetCDF or MATLAB ``.mat``.
@@ -284,7 +345,7 @@ def read_record(path, *, variable: str = "theta", column: str = "theta", dt: flo
     """
     import xarray as xr
 
-    recs = records_mod.read_records(path, column=column, variable=variable, dt=dt, fs=fs)
+    recs = records_mod.read_records(path, column=column, variable=variable, dt=dt, fs=fs, checked=False)
     step = recs[0].dt
     time = xr.DataArray(np.arange(recs[0].theta.size) * step, dims="time", attrs={"units": "s", "long_name": "time", "standard_name": "time"})
     attrs = {"units": "rad", "long_name": "rocking angle", "source": str(path), "dt": step}

@@ -322,16 +322,26 @@ def cmd_estimate(args) -> None:
 
     for path in args.records:
         checks.path_name(path, "record")
-    api.estimate_options(g=args.g, load=args.load, sensor_noise=args.sensor_noise, model=args.model, theta_cr=args.theta_cr,
-                         cache=args.cache)  # refused before any record is read
+    free = args.test == "free"
+    if free:
+        unused = [flag for flag, given in (("--g", args.g is not None), ("--load", args.load != "auto"),
+                                           ("--sensor-noise", args.sensor_noise != "auto")) if given]
+        if unused:
+            raise UsageError(f"{', '.join(unused)}: the free-rocking test reads g off its arcs and needs no record model; leave them out.")
+    else:
+        api.estimate_options(g=args.g, load=args.load, sensor_noise=args.sensor_noise, model=args.model, theta_cr=args.theta_cr,
+                             cache=args.cache)  # refused before any record is read
     with contextlib.ExitStack() as stack:
         plot = stack.enter_context(io.claimed(_plot_path(args), args.overwrite)) if args.plot else None
-        seconds = _check_estimate_size(args)
+        seconds = 0.0 if free else _check_estimate_size(args)
         theta = [rockdec.read_record(path, column=args.column, variable=args.variable, dt=args.dt, fs=args.fs) for path in args.records]
-        log.info(f"estimate: {len(args.records)} file(s) (up to {console.about(seconds)} when their calibration must be built)")
-        with console.progress("calibrating"):  # a bar only while a calibration missing from the cache is built
-            res = rockdec.estimate(theta, g=args.g, load=args.load, sensor_noise=args.sensor_noise, model=args.model,
-                                   theta_cr=args.theta_cr, cache=args.cache)
+        if free:
+            res = rockdec.free_rocking(theta, model=args.model, theta_cr=args.theta_cr)
+        else:
+            log.info(f"estimate: {len(args.records)} file(s) (up to {console.about(seconds)} when their calibration must be built)")
+            with console.progress("calibrating"):  # a bar only while a calibration missing from the cache is built
+                res = rockdec.estimate(theta, g=args.g, load=args.load, sensor_noise=args.sensor_noise, model=args.model,
+                                       theta_cr=args.theta_cr, cache=args.cache)
         if plot is not None:
             from rockdec.report import figures
 
@@ -484,6 +494,11 @@ def build_parser() -> argparse.ArgumentParser:
         help="rocking model of the calibration: simplified (eq. 4) or housner (eq. 2, needs --theta-cr) (default: %(default)s)",
     )
     est1.add_argument("--theta-cr", type=float, help="critical angle in rad, for --model housner (nu^2 = g/theta_cr)")
+    est1.add_argument(
+        "--test", choices=("random", "free"), default="random",
+        help="random: the block's random response (Random Decrement, calibrated); free: a free-rocking test, the block "
+        "released from a tilt (impacts and fitted flights) (default: %(default)s)",
+    )
     est1.add_argument("--json", action="store_true", help="print one JSON object instead of the table")
     est1.add_argument("--plot", help="draw the signature and the calibration curve to this PNG or PDF")
     est1.add_argument("--cache", default=str(default_cache()), help="folder of stored calibrations (default: %(default)s)")

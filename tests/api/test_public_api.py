@@ -233,3 +233,32 @@ def test_the_workflow_refuses_a_results_file_in_one_sentence(tmp_path, monkeypat
     assert main(["workflow", "--scene", "tiny", "-n"]) == 2
     err = capsys.readouterr().err
     assert "./results is a file" in err and err.count("\n") == 1
+
+
+@pytest.fixture(scope="module")
+def free_test():
+    """A free-rocking record of known e = 0.85 with 1 % sensor noise (of the release angle)."""
+    theta = rockdec.simulate(0.85, 2_500, seed=0, sigma_p=0.0, theta0=0.02)
+    rng = np.random.default_rng(1)
+    return theta + 0.01 * 0.02 * rng.standard_normal(theta.size)
+
+
+def test_the_free_rocking_test_is_the_same_result_object(free_test, tmp_path):
+    res = rockdec.free_rocking(free_test)
+    assert res.test == "free" and res.confidence_interval.low < 0.85 < res.confidence_interval.high
+    doc = json.loads(json.dumps(res.to_dict()))
+    jsonschema.validate(doc, result_mod.schema())
+    assert rockdec.RestitutionEstimate.from_dict(doc).to_dict() == res.to_dict()
+    assert len(res.impacts) == len(doc["impacts"]) > 3 and res.summary().startswith(f"e = {res.e:.4f}")
+    path = io.write_netcdf(res.to_dataset(), tmp_path / "free.nc")
+    assert cf_findings(path) == {"errors": [], "warnings": [], "notes": []}
+    assert len(res.plot().axes) == 2
+
+
+def test_the_command_line_runs_the_free_rocking_test(free_test, tmp_path, capsys):
+    free_test.to_dataset(name="theta").to_netcdf(tmp_path / "free.nc")
+    assert main(["-q", "estimate", str(tmp_path / "free.nc"), "--test", "free", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["test"] == "free" and doc["e"] == rockdec.free_rocking(free_test).e
+    assert main(["estimate", str(tmp_path / "free.nc"), "--test", "free", "--load", "white"]) == 2
+    assert "--load" in capsys.readouterr().err

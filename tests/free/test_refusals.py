@@ -95,7 +95,7 @@ def test_too_few_impacts_is_declined_in_one_sentence():
     "kw, words",
     [
         (dict(model="newton"), "not a rocking model"),
-        (dict(model="housner"), "needs theta_cr"),
+        (dict(model="housner"), "needs `theta_cr`"),
         (dict(theta_cr=-1.0), "theta_cr"),
         (dict(min_arc_samples=2), "min_arc_samples"),
         (dict(min_arc_samples=4.0), "min_arc_samples"),

@@ -184,7 +184,7 @@ def _records(theta, dt) -> list[tuple[np.ndarray, float, float, float]]:
     records = list(theta) if many else [theta]
     if many and isinstance(dt, (list, tuple)) and len(dt) > 0 and all(np.ndim(d) >= 1 or checks.is_number(d) for d in dt):
         if len(dt) != len(records):
-            raise RecordError(f"dt has {len(dt)} entries for {len(records)} records; give one step (or time axis) per record, or one step for all.")
+            raise RecordError(f"`dt` has {len(dt)} entries for {len(records)} records; give one step (or time axis) per record, or one step for all.")
         steps = list(dt)
     else:
         steps = [dt] * len(records)
@@ -360,12 +360,12 @@ def analyse_free_rocking(theta, dt, *, model: str = "simplified", theta_cr: floa
     (0.9, 1.0, True)
     """
     if model not in MODELS:
-        raise checks.InputError(f"model {model!r}: not a rocking model; use {' or '.join(repr(m) for m in MODELS)}.")
+        raise checks.InputError(f"`model` {model!r}: not a rocking model; use {' or '.join(repr(m) for m in MODELS)}.")
     if theta_cr is not None:
-        theta_cr = checks.positive(theta_cr, "theta_cr", "give the critical angle in rad, > 0")
+        theta_cr = checks.positive(theta_cr, "`theta_cr`", "give the critical angle in rad, > 0")
     elif model == "housner":
-        raise checks.InputError("model 'housner' needs theta_cr; give the critical angle in rad, or use model='simplified'.")
-    min_arc_samples = checks.integer(min_arc_samples, "min_arc_samples", 3)
+        raise checks.InputError("`model` 'housner' needs `theta_cr`; give the critical angle in rad, or use the simplified model.")
+    min_arc_samples = checks.integer(min_arc_samples, "`min_arc_samples`", 3)
     records = _records(theta, dt)
     many = len(records) > 1
     limit = amplitude_limit(MODEL_TOLERANCE)

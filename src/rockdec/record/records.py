@@ -204,8 +204,10 @@ def check_regular(path: Path) -> None:
         raise RecordError(f"{path}: {kind}, not a regular file; save the record to a file and give that.")
 
 
-def read_records(path, *, column: str = "theta", variable: str = "theta", dt: float | None = None, fs: float | None = None) -> list[Record]:
-    """Read and check the records of one file.
+def read_records(path, *, column: str = "theta", variable: str = "theta", dt: float | None = None, fs: float | None = None,
+                 checked: bool = True) -> list[Record]:
+    """Read and check the records of one file (``checked=False``: read only, the checks of
+    :func:`check_values` left to the analysis that takes them).
 
     ``.csv``/``.txt``: a header with ``time`` and ``column`` (default ``theta``), or one
     column of angles with ``dt``/``fs``; ``.nc``: ``variable`` as ``(time)`` or, one record
@@ -245,9 +247,8 @@ def read_records(path, *, column: str = "theta", variable: str = "theta", dt: fl
         values = values.astype(np.float64)
     else:
         raise RecordError(f"{path}: unknown record format '{suffix}'; give a .csv, .nc, .npy or .mat file.")
-    if values.ndim == 2:
-        return [check_values(row, step, f"{source}[{i}]") for i, row in enumerate(values)]
-    return [check_values(values, step, source)]
+    rows = [(row, f"{source}[{i}]") for i, row in enumerate(values)] if values.ndim == 2 else [(values, source)]
+    return [check_values(row, step, name) if checked else Record(np.asarray(row, dtype=np.float64), float(step), name) for row, name in rows]
 
 
 def check_values(theta, dt: float, source: str) -> Record:

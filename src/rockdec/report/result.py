@@ -82,7 +82,7 @@ def schema() -> dict:
     Examples
     --------
     >>> from rockdec.report.result import schema
-    >>> schema()["properties"]["schema_version"]["const"]
+    >>> schema()["$defs"]["random"]["properties"]["schema_version"]["const"]
     '1.0'
     """
     return json.loads(resources.files("rockdec").joinpath(SCHEMA_PATH).read_text(encoding="utf-8"))
@@ -130,7 +130,8 @@ The examples use ``res = rockdec.estimate(rockdec.simulate(0.85, 20_000, seed=1)
     rockdec_version : str
         The version that made the estimate.
     test : str
-        ``"random"``: the random-response test (Random Decrement).
+        ``"random"``: the random-response test (Random Decrement, :func:`rockdec.estimate`);
+        ``"free"``: the free-rocking test (:func:`rockdec.free_rocking`).
 
     Examples
     --------
@@ -184,7 +185,8 @@ The examples use ``res = rockdec.estimate(rockdec.simulate(0.85, 20_000, seed=1)
         >>> back.e == res.e and back.to_dict() == res.to_dict()
         True
         """
-        missing = [key for key in ("e", "interval", "estimators", "warnings") if key not in doc]
+        free = "impacts" in doc
+        missing = [key for key in ("e", "interval", "impacts" if free else "estimators", "warnings") if key not in doc]
         if missing:
             raise InputError(f"`doc` lacks {', '.join(missing)}: it is not an estimate's JSON document (RestitutionEstimate.to_dict).")
         doc = {key: copy.deepcopy(value) for key, value in doc.items() if key not in ADDED_KEYS}
@@ -198,11 +200,11 @@ The examples use ``res = rockdec.estimate(rockdec.simulate(0.85, 20_000, seed=1)
             reason=doc.get("reason"),
             g=doc.get("g"),
             g_interval=_interval(doc.get("g_interval")),
-            record_model=doc.get("record_model") or {},
+            record_model=doc.get("record_model") or ({"model": doc["model"], "theta_cr": doc.get("theta_cr")} if free else {}),
             warnings=tuple(EstimateWarning(c, m) for c, m in zip(codes, doc["warnings"])),
             diagnostics=doc.get("diagnostics") or {},
             rockdec_version=doc.get("rockdec_version", ""),
-            test="random",
+            test="free" if free else "random",
             document=doc,
             analysis=analysis,
             belts=belts,
@@ -239,6 +241,12 @@ The examples use ``res = rockdec.estimate(rockdec.simulate(0.85, 20_000, seed=1)
         """
         import pandas as pd
 
+        if self.test == "free":
+            low, high = self.confidence_interval
+            return pd.DataFrame([{"estimator": "impacts", "reads": "line of the log impact speeds of the free-rocking test",
+                                  "raw": None, "corrected": self.e, "low": low, "high": high, "coverage": None,
+                                  "triggers": len(self.document["impacts"]), "candidate": True, "reported": self.e is not None,
+                                  "notes": "; ".join(w.message for w in self.warnings)}]).set_index("estimator")
         rows = []
         for name, est in self.document["estimators"].items():
             shown = est["e"] is not None
@@ -249,6 +257,21 @@ The examples use ``res = rockdec.estimate(rockdec.simulate(0.85, 20_000, seed=1)
                 "reported": name == self.estimator, "notes": "; ".join(([_beyond_note(est)] if est.get("beyond") else []) + est["notes"]),
             })
         return pd.DataFrame(rows).set_index("estimator")
+
+    @property
+    def impacts(self) -> pd.DataFrame:
+        """The impacts of a free-rocking test, one row each: record, release, time (s), apex
+        of the flight before (rad), angular velocities before and after (rad/s) with their
+        standard errors, ``e`` and its standard error (empty for the random test).
+
+        Examples
+        --------
+        >>> res.impacts.empty  # the random test has no impacts
+        True
+        """
+        import pandas as pd
+
+        return pd.DataFrame(self.document.get("impacts", []))
 
     def __repr__(self) -> str:
         if self.e is None:
@@ -292,6 +315,10 @@ The examples use ``res = rockdec.estimate(rockdec.simulate(0.85, 20_000, seed=1)
         >>> print(res.summary().splitlines()[0])  # doctest: +ELLIPSIS
         e = ... (95 % interval [..., ...]; estimator ...)
         """
+        if self.test == "free":
+            from rockdec.report.free_result import free_text
+
+            return free_text(self.document, verbose)
         from rockdec.report.summary import text
 
         return text(self.document, verbose)
@@ -312,12 +339,17 @@ The examples use ``res = rockdec.estimate(rockdec.simulate(0.85, 20_000, seed=1)
         >>> float(ds["e"]) == res.e, ds["e"].attrs["units"]
         (True, '1')
         """
+        if self.test == "free":
+            from rockdec.report.free_result import free_dataset
+
+            return free_dataset(self)
         from rockdec.report.result_dataset import dataset
 
         return dataset(self)
 
     def plot(self, ax: Axes | None = None) -> Figure:
-        """The signature of the reported estimator beside its calibration belt.
+        """The signature of the reported estimator beside its calibration belt (for a
+        free-rocking test: the record with its fitted flights, and ``e`` per impact).
 
         Parameters
         ----------
@@ -344,6 +376,11 @@ The examples use ``res = rockdec.estimate(rockdec.simulate(0.85, 20_000, seed=1)
                 "this estimate was read back from its document, which carries no signatures to plot; "
                 "estimate the record again (rockdec.estimate) to plot it."
             )
+        if self.test == "free":
+            from rockdec.report.free_figures import plot_free_rocking
+
+            fit, theta, dt = self.analysis
+            return plot_free_rocking(fit, theta, dt, ax)
         from rockdec.report.figures import fig_record
 
         return fig_record(self, ax)

@@ -1,0 +1,159 @@
+"""The free-rocking test as an estimate's document, report and dataset
+(:func:`rockdec.free_rocking`, a :class:`rockdec.RestitutionEstimate` with ``test == "free"``).
+
+The document holds the pooled ``e`` and its interval, ``g`` (and ``nu``), one row per impact
+and one per release (where its analysis stopped and why), the trend of ``e`` with
+amplitude and the notes of the analysis (:mod:`rockdec.free.analysis`).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+
+from rockdec._version import __version__
+
+__all__ = ["free_dataset", "free_document", "free_text"]
+
+#: The warning code of every note of the free-rocking analysis.
+NOTE_CODE = "free_rocking"
+
+
+def _num(x) -> float | None:
+    x = float(x)
+    return x if math.isfinite(x) else None
+
+
+def _pair(pair) -> list | None:
+    low, high = (_num(v) for v in pair)
+    return None if low is None or high is None else [low, high]
+
+
+def free_document(fit, sources: list[str], steps: list[float], sizes: list[int]) -> dict:
+    """The JSON document of the free-rocking analysis ``fit``
+    (:class:`rockdec.free.analysis.FreeRockingFit`) of the records ``sources`` sampled at
+    ``steps`` (s) with ``sizes`` samples."""
+    has_e = fit.reason is None and math.isfinite(fit.e)
+    impacts = [
+        {"record": int(fit.impact_record[i]), "release": int(fit.impact_release[i]), "time": _num(fit.impact_time[i]),
+         "amplitude_before": _num(fit.amplitude_before[i]), "omega_before": _num(fit.omega_before[i]),
+         "omega_before_se": _num(fit.omega_before_se[i]), "omega_after": _num(fit.omega_after[i]),
+         "omega_after_se": _num(fit.omega_after_se[i]), "e": _num(fit.e_impact[i]), "e_se": _num(fit.e_impact_se[i])}
+        for i in range(fit.n_impacts)
+    ]
+    releases = [
+        {"record": int(fit.release_record[j]), "time": _num(fit.release_time[j]), "angle": _num(fit.release_angle[j]),
+         "g": _num(fit.release_g[j]), "stop_time": _num(fit.stop_time[j]), "stop_reason": fit.stop_reason[j],
+         "residual_std": _num(fit.residual_std[j])}
+        for j in range(len(fit.release_time))
+    ]
+    return {
+        "e": _num(fit.e) if has_e else None,
+        "interval": _pair(fit.e_interval) if has_e else [None, None],
+        "reason": fit.reason,
+        "estimator": "impacts" if has_e else None,
+        "coverage": None,
+        "g": _num(fit.g),
+        "g_interval": _pair(fit.g_interval),
+        "nu": _num(fit.nu),
+        "nu_interval": _pair(fit.nu_interval),
+        "model": fit.model,
+        "theta_cr": fit.theta_cr,
+        "log_e_se": _num(fit.log_e_se),
+        "scatter_ratio": _num(fit.scatter_ratio),
+        "e_trend": _num(fit.e_trend),
+        "e_trend_se": _num(fit.e_trend_se),
+        "dt": float(steps[0]),
+        "records": list(sources),
+        "samples": int(sum(sizes)),
+        "noise_std": [_num(v) for v in fit.noise_std],
+        "impacts": impacts,
+        "releases": releases,
+        "warnings": list(fit.notes),
+        "warning_codes": [NOTE_CODE] * len(fit.notes),
+        "rockdec_version": __version__,
+    }
+
+
+def free_text(doc: dict, verbose: bool = False) -> str:
+    """The report of a free-rocking document (:meth:`rockdec.RestitutionEstimate.summary`)."""
+    impacts, releases = doc["impacts"], doc["releases"]
+    if doc["e"] is None:
+        lines = [f"e: not estimated: {doc['reason']}"]
+    else:
+        low, high = doc["interval"]
+        lines = [
+            f"e = {doc['e']:.4f} (95 % interval [{low:.4f}, {high:.4f}]; free-rocking test: {len(impacts)} impacts of "
+            f"{len(releases)} release(s), the line of log impact speeds)",
+            "  the interval's coverage is measured by the free-rocking study on simulated records of known e",
+        ]
+    g = "-" if doc["g"] is None else f"{doc['g']:.5g}"
+    inner = f", 95 % interval [{doc['g_interval'][0]:.5g}, {doc['g_interval'][1]:.5g}]" if doc.get("g_interval") else ""
+    lines += [
+        "",
+        f"record: {', '.join(doc['records'])}",
+        f"  {doc['samples']} samples at a step of {doc['dt']:.6g} s; flights fitted with the {doc['model']} model",
+        f"  block's restoring acceleration g = nu^2 theta_cr = {g} rad/s^2 (read off the arcs{inner}; not gravity)",
+    ]
+    if doc.get("e_trend") is not None and doc.get("e_trend_se") is not None:
+        lines.append(f"  trend of log e with the amplitude before the impact: {doc['e_trend']:+.3g} +- {doc['e_trend_se']:.2g} per rad "
+                     "(the models predict none)")
+    lines += [f"  release {j + 1} stops at {r['stop_time']:.6g} s: {r['stop_reason']}" for j, r in enumerate(releases)]
+    if doc["warnings"]:
+        lines += ["", *[f"warning: {w}" for w in doc["warnings"]]]
+    if verbose and impacts:
+        lines += ["", f"  {'release':>7} {'time (s)':>10} {'apex (rad)':>11} {'speed before':>13} {'after':>11} {'e':>7} {'se':>7}"]
+        for row in impacts:
+            lines.append(
+                f"  {row['release'] + 1:>7} {row['time']:>10.5g} {row['amplitude_before']:>11.4g} {row['omega_before']:>13.4g} "
+                f"{row['omega_after']:>11.4g} {row['e']:>7.4f} {row['e_se']:>7.4f}"
+            )
+    return "\n".join(lines)
+
+
+def free_dataset(res):
+    """The CF-1.10 dataset of a free-rocking estimate: ``e`` with ``e_low``/``e_high``,
+    ``g`` with its bounds, and per ``impact`` its time, apex, speeds and ``e``."""
+    import xarray as xr
+
+    doc = res.to_dict()
+    rows = doc["impacts"]
+
+    def column(key):
+        return np.array([math.nan if r[key] is None else r[key] for r in rows], dtype=np.float64)
+
+    low, high = doc["interval"] if doc["e"] is not None else (None, None)
+    g_low, g_high = doc["g_interval"] or (None, None)
+    nan = lambda x: math.nan if x is None else float(x)  # noqa: E731
+    what = "coefficient of restitution"
+    ds = xr.Dataset(
+        {
+            "e": ((), nan(doc["e"]), {"units": "1", "long_name": f"{what}, pooled over the impacts", "ancillary_variables": "e_low e_high"}),
+            "e_low": ((), nan(low), {"units": "1", "long_name": f"{what}, lower end of the 95 % confidence interval"}),
+            "e_high": ((), nan(high), {"units": "1", "long_name": f"{what}, upper end of the 95 % confidence interval"}),
+            "g": ((), nan(doc["g"]), {"units": "rad s-2", "long_name": "restoring acceleration nu^2 theta_cr of the block",
+                                      "ancillary_variables": "g_low g_high"}),
+            "g_low": ((), nan(g_low), {"units": "rad s-2", "long_name": "restoring acceleration, lower end of the 95 % confidence interval"}),
+            "g_high": ((), nan(g_high), {"units": "rad s-2", "long_name": "restoring acceleration, upper end of the 95 % confidence interval"}),
+            "impact_time": ("impact", column("time"), {"units": "s", "long_name": "time of the impact on its record's axis"}),
+            "amplitude_before": ("impact", column("amplitude_before"), {"units": "rad", "long_name": "apex of the flight before the impact"}),
+            "omega_before": ("impact", column("omega_before"), {"units": "rad s-1", "long_name": "angular velocity just before the impact"}),
+            "omega_after": ("impact", column("omega_after"), {"units": "rad s-1", "long_name": "angular velocity just after the impact"}),
+            "e_impact": ("impact", column("e"), {"units": "1", "long_name": f"{what} of the impact (eq. 6)",
+                                                 "ancillary_variables": "e_impact_se"}),
+            "e_impact_se": ("impact", column("e_se"), {"units": "1", "long_name": f"standard error of the {what} of the impact"}),
+        },
+    )
+    ds.attrs = {
+        "Conventions": "CF-1.10",
+        "title": "coefficient of restitution of a rocking block, from a free-rocking test",
+        "source": f"rockdec {doc['rockdec_version']}",
+        "history": f"rockdec {__version__}: free-rocking analysis of {', '.join(doc['records'])}",
+        "reason": doc["reason"] or "",
+        "warnings": json.dumps(doc["warnings"]),
+        "records": json.dumps(doc["records"]),
+        "rockdec_estimate": json.dumps(doc),
+    }
+    return ds
