@@ -28,6 +28,7 @@ extensions = [
 
 # Pages that are only included into others (the generated study tables) are not pages of their own.
 exclude_patterns = ["_build", "generated", "**/_includes", ".venv", "Thumbs.db", ".DS_Store"]
+smartquotes = False  # `--theta-cr` stays two hyphens
 source_suffix = {".rst": "restructuredtext", ".md": "myst-nb", ".ipynb": "myst-nb"}
 
 # MyST: heading anchors so that `page.md#section` links are checked by Sphinx.
@@ -40,7 +41,10 @@ nb_execution_timeout = 300
 nb_execution_raise_on_error = True
 nb_execution_show_tb = True
 nb_merge_streams = True
-os.environ.setdefault("ROCKDEC_CACHE", str(DOCS / "_build" / "rockdec-cache"))
+# The command-line reference prints each option's default as the parser computes it; the
+# calibration cache's is this variable, else the user's cache folder: say so, not this
+# machine's path. The tutorial caches its calibration in docs/_build/rockdec-cache.
+os.environ["ROCKDEC_CACHE"] = "$ROCKDEC_CACHE, else the user cache folder"
 
 # API reference: autosummary pages generated from rockdec.__all__ (docs/reference/api.md).
 autosummary_generate = True
