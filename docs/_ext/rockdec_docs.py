@@ -149,6 +149,7 @@ def api_markdown(names: list[str]) -> str:
     return "```{eval-rst}\n.. currentmodule:: rockdec\n\n.. autosummary::\n   :toctree: api\n\n" + body + "\n```\n"
 
 
+
 def subcommands(parser) -> dict:
     """The subcommands of an ``argparse`` parser: ``{name: subparser}``."""
     import argparse
@@ -173,11 +174,39 @@ def cli_markdown(parser) -> str:
     return "\n".join(out)
 
 
+def api_stub(name: str) -> str:
+    """The reST page of one public name (what ``autosummary_generate`` would write)."""
+    import importlib
+    import inspect
+
+    module, _, attr = f"rockdec.{name}".rpartition(".")
+    obj = getattr(importlib.import_module(module), attr)
+    kind = "autoclass" if inspect.isclass(obj) else "autofunction" if callable(obj) else "autodata"
+    options = "   :members:\n" if kind == "autoclass" else ""
+    title = f"rockdec.{name}"
+    return f"{title}\n{'=' * len(title)}\n\n.. currentmodule:: {module}\n\n.. {kind}:: {attr}\n{options}"
+
+
+def write_api_stubs(names: list[str]) -> None:
+    """One page per public name under ``docs/reference/api/`` (git-ignored)."""
+    folder = DOCS / "reference" / "api"
+    folder.mkdir(parents=True, exist_ok=True)
+    wanted = {f"rockdec.{name}.rst": api_stub(name) for name in names}
+    for path in folder.glob("*.rst"):
+        if path.name not in wanted:
+            path.unlink()
+    for file, text in wanted.items():
+        path = folder / file
+        if not path.exists() or path.read_text() != text:
+            path.write_text(text)
+
+
 def write_includes(app=None) -> None:
     """Write the generated reference sources (``builder-inited``)."""
     import rockdec.cli
 
     INCLUDES.mkdir(parents=True, exist_ok=True)
+    write_api_stubs(api_names())
     pages = {
         "scene-config.md": scene_config_markdown(load_schema()),
         "glossary.md": glossary_markdown(rockdec.cli.GLOSSARY),
