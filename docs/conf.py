@@ -63,7 +63,7 @@ intersphinx_mapping = {}  # no network at build time: external names are not cro
 # The public API's docstrings may name the modules behind it, which the site does not document
 # page by page (their layers: docs/development/layout.md).
 nitpick_ignore_regex = [
-    (r"py:.*", r"rockdec\.(physics|rdd|record|calibrate|report|pipeline|studies|cli|io|console|sources|timeaxis|validate)(\..*)?"),
+    (r"py:.*", r"rockdec\.(physics|rdd|record|calibrate|report|pipeline|studies|cli|io|console|sources|timeaxis|validate|api|cache|engine)(\..*)?"),
     (r"py:.*", r"(numpy|np|xarray|xr|pandas|pd|matplotlib|os|pathlib|collections|typing|dataclasses)\..*"),
     (r"py:class", r"(optional|default.*|array.*|ndarray|float|int|str|bool|dict|list|tuple|None|callable|path-like|.*-like)"),
 ]
