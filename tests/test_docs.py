@@ -72,6 +72,14 @@ def test_the_scene_reference_lists_every_field_of_both_schemas():
             assert f"| `{path}` |" in page, path
 
 
+def test_the_json_reference_lists_every_key_of_an_estimate():
+    schema = rockdec_docs.load_estimate_schema()
+    page = rockdec_docs.estimate_json_markdown(schema)
+    assert "{include} _includes/estimate-json.md" in (DOCS / "reference" / "outputs.md").read_text()
+    for key in schema["properties"]:
+        assert f"| `{key}` |" in page, key
+
+
 def test_every_scene_field_of_the_shipped_config_is_documented():
     """Each key the workflow's own scenes set is a documented field (nothing undeclared)."""
     documented = {path for path, _ in rockdec_docs.schema_fields(rockdec_docs.load_schema())}
@@ -90,9 +98,11 @@ def test_every_scene_field_of_the_shipped_config_is_documented():
 
 
 def test_the_glossary_page_holds_every_word_the_command_prints():
-    entries = rockdec_docs.glossary_entries(cli.GLOSSARY)
+    from rockdec.report.glossary import GLOSSARY
+
+    entries = rockdec_docs.glossary_entries(GLOSSARY)
     assert len(entries) >= 10 and all(word and meaning for word, meaning in entries)
-    page = rockdec_docs.glossary_markdown(cli.GLOSSARY)
+    page = rockdec_docs.glossary_markdown(GLOSSARY)
     for word, _ in entries:
         assert f"`{word}`" in page
 

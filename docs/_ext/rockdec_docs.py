@@ -5,7 +5,9 @@ the reference pages):
 
 - ``scene-config.md``: every field of the scene schema (``rockdec/scene_schema.yaml``, the
   file ``config/schema.yaml`` copies), with its type, default, range and description;
-- ``glossary.md``: the words of ``rockdec estimate``'s report, from ``rockdec.cli.GLOSSARY``;
+- ``glossary.md``: the words of an estimate's report, from ``rockdec.report.glossary.GLOSSARY``;
+- ``estimate-json.md``: every key of ``rockdec estimate --json`` (``RestitutionEstimate.to_dict``),
+  from the JSON schema the package ships (``rockdec/estimate.schema.json``);
 - ``api.md``: an autosummary of the names ``rockdec.__all__`` exports.
 
 The same functions serve ``tests/test_docs.py``, which checks that every field and every
@@ -112,6 +114,24 @@ def scene_config_markdown(schema: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
+def load_estimate_schema() -> dict:
+    """The JSON schema of an estimate's document (``rockdec/estimate.schema.json``)."""
+    return json.loads(importlib.resources.files("rockdec").joinpath("estimate.schema.json").read_text())
+
+
+def estimate_json_markdown(schema: dict) -> str:
+    """Every key of the estimate's JSON document, nested keys by their dotted path."""
+    lines = [
+        f"{schema.get('description', '').strip()}",
+        "",
+        "| key | type | what it holds |",
+        "| --- | --- | --- |",
+    ]
+    for path, node in schema_fields(schema):
+        lines.append(f"| `{path}` | {_cell(_type(node))} | {_cell(node.get('description', ''))} |")
+    return "\n".join(lines) + "\n"
+
+
 def glossary_entries(text: str) -> list[tuple[str, str]]:
     """``(word, meaning)`` pairs of the report's glossary as the command prints it."""
     entries: list[list[str]] = []
@@ -204,14 +224,16 @@ def write_api_stubs(names: list[str]) -> None:
 def write_includes(app=None) -> None:
     """Write the generated reference sources (``builder-inited``)."""
     import rockdec.cli
+    from rockdec.report.glossary import GLOSSARY
 
     INCLUDES.mkdir(parents=True, exist_ok=True)
     write_api_stubs(api_names())
     pages = {
         "scene-config.md": scene_config_markdown(load_schema()),
-        "glossary.md": glossary_markdown(rockdec.cli.GLOSSARY),
+        "glossary.md": glossary_markdown(GLOSSARY),
         "api.md": api_markdown(api_names()),
         "cli.md": cli_markdown(rockdec.cli.build_parser()),
+        "estimate-json.md": estimate_json_markdown(load_estimate_schema()),
     }
     for name, text in pages.items():
         path = INCLUDES / name
