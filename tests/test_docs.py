@@ -132,3 +132,11 @@ def test_every_page_of_the_docs_is_linked_from_a_toctree():
                 if line and not line.startswith(":"):
                     listed.add((Path(page).parent / line.strip()).as_posix().removeprefix("./"))
     assert sorted(pages - listed) == []
+
+
+def test_every_relative_link_of_the_readme_reaches_a_file():
+    """The README is not a page of the site (Sphinx's -n does not check it): its links into
+    the docs and the repository must name files that exist."""
+    readme = (REPO / "README.md").read_text()
+    targets = [t.split("#", 1)[0] for t in re.findall(r"\]\(([^)\s]+)\)", readme) if "://" not in t]
+    assert targets and sorted(t for t in targets if not (REPO / t).exists()) == []
