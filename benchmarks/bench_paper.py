@@ -1,4 +1,4 @@
-"""The paper run against a floor measured in the same run: the README's timing table.
+"""The paper run against a floor measured in the same run: the timing table of docs/development/benchmarks.md.
 
 1. **The run**: ``snakemake --cores N`` from an empty ``results/`` in a temporary copy of the
    workflow (the tree's ``Snakefile``, ``workflow/``, ``config/``, ``profiles/``, its ``src/``

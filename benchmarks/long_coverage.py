@@ -1,5 +1,5 @@
 """Does the interval of a long record hold? Coverage on simulated records of known ``e`` longer
-than :data:`rockdec.calibrate.calibration.LENGTH_CAP` (README, "Long records").
+than :data:`rockdec.calibrate.calibration.LENGTH_CAP` (docs/explanation/estimate.md, "Long records").
 
 The calibration is ``rockdec estimate``'s own for records of ``--samples`` read at
 ``--ppc`` samples per cycle (:func:`rockdec.calibrate.calibration.calibration_settings`: sets of

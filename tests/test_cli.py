@@ -379,14 +379,14 @@ def test_the_text_report_prints_whatever_the_record_could_not_give(missing):
         assert "sigma_Y = - rad, - samples per rocking cycle" in text
 
 
-def test_readme_explains_every_estimator_and_word_of_the_estimate_report():
+def test_the_glossary_explains_every_estimator_and_word_of_the_estimate_report():
     from pathlib import Path
 
     from rockdec.rdd import estimators, registry
 
-    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
-    glossary = readme[readme.index("**The words of its report**"):]
-    glossary = glossary[: glossary.index("\n\n", glossary.index("| word |"))]
+    page = (Path(__file__).resolve().parents[1] / "docs" / "reference" / "glossary.md").read_text()
+    glossary = page[page.index("| word |"):]
+    glossary = glossary[: glossary.index("\n\n")]
     rows = [line.split("|")[1] for line in glossary.splitlines() if line.startswith("| ")]
     assert all(registry.spec(name).reads.strip() for name in estimators.ESTIMATORS)  # the report's "reads" column
     named = " ".join(rows)

@@ -567,6 +567,6 @@ def test_sigkill_then_the_readmes_recovery_command_gives_the_uninterrupted_outpu
 
 
 def recovery_command() -> str:
-    """The one command the README gives under "If a run was killed"."""
-    section = (REPO / "README.md").read_text().split("If a run was killed", 1)[1]
+    """The one command the docs give under "If a run was killed" (docs/how-to/paper.md)."""
+    section = (REPO / "docs" / "how-to" / "paper.md").read_text().split("If a run was killed", 1)[1]
     return section.split("```bash\n", 1)[1].split("\n```", 1)[0].strip()

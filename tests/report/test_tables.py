@@ -138,8 +138,8 @@ def test_markdown_prints_one_precision_per_column(paper_table):
             assert len(decimals) == 1, (heading, decimals)
 
 
-def test_the_readme_names_every_column_of_the_tables_in_words(paper_table):
-    readme = (REPO / "README.md").read_text()
+def test_the_docs_name_every_column_of_the_tables_in_words(paper_table):
+    readme = (REPO / "docs" / "reference" / "tables.md").read_text()
     readings = pd.concat([paper_table.assign(reading=r) for r in ("pooled", "per_series")])
     readings = readings[["reading"] + list(paper_table.columns)]
     for table in (paper_table, readings):

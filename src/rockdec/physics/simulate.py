@@ -56,8 +56,8 @@ _MAX_PASSES = 64
 PILOT_SEED_OFFSET = 2**62
 
 #: Pilot of the step search (:func:`calibrate_dt`): series and points. The response is
-#: heavy-tailed (kurtosis near 15), so the pilot is large: 256 x 40000 points pin ``sigma_Y``
-#: to about 2 %.
+#: heavy-tailed, so the pilot is large (how closely it pins ``sigma_Y``:
+#: docs/explanation/constants.md).
 PILOT_SERIES, PILOT_POINTS = 256, 40_000
 
 #: Updates of the step in :func:`calibrate_dt`, per load kind: under white noise the scale law
@@ -66,8 +66,8 @@ STEP_ITERATIONS = {"white": 3, "lowpass": 12, "spectrum": 12}
 
 #: Pilots whose least-squares slope gives the exponent of :func:`secant_step`, and the range
 #: the exponent is held to: with the corner at the rocking frequency the pilot's samples per
-#: cycle scatter by 20 % and more at one step, and the slope of the last two pilots alone can
-#: send the step far off (measured: 0.4 samples per cycle after 8 updates at e = 0.95).
+#: cycle scatter at one step, and the slope of the last two pilots alone can send the step
+#: far off (docs/explanation/constants.md).
 SECANT_POINTS, SECANT_EXPONENTS = 3, (1.0, 10.0)
 
 #: Series of the pilot that measures the statistics at a given step, or under a model other

@@ -14,7 +14,7 @@ as its one sentence both to the log and to the console Snakemake runs in, and th
 exits with code 2; any other exception leaves its traceback in the log and a line on the
 console that says where it is.
 
-Recovery after ``kill -9`` of Snakemake alone (README, "If a run was killed"): the job
+Recovery after ``kill -9`` of Snakemake alone (docs/how-to/paper.md, "If a run was killed"): the job
 Snakemake had started goes on as an orphan. Each job records its process, and the processes
 between it and Snakemake (Snakemake included), in ``<log>.pid`` while it runs; a rerun of the same rule
 that finds a live job there whose Snakemake is gone stops that orphan (and its worker

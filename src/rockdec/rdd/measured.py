@@ -52,17 +52,17 @@ DEFAULT_SETTINGS = {
     "weights": "window",
 }
 
-#: Fewest samples from lag 0 to the first zero crossing of a rocking free response (white
-#: noise crosses after 1 sample; simulated rocking at 20-90 samples per cycle after 5-30).
+#: Fewest samples from lag 0 to the first zero crossing of a rocking free response: white
+#: noise crosses sooner, simulated rocking later (evidence: docs/explanation/constants.md).
 MIN_HALF_CYCLE_SAMPLES = 3
 
 #: Largest rms misfit, relative to its start value, of the parabola of eq. 4 through the
 #: first half cycle of the free response: three times the largest measured on simulated
-#: rocking (0.043, e = 0.5, 5,000 to 200,000 samples, 55 to 90 samples per cycle).
+#: rocking (docs/explanation/constants.md).
 MAX_PARABOLA_MISFIT = 0.15
 
 #: Largest relative spread (std/mean) of ``g`` fitted at each window: three times the
-#: largest measured on simulated rocking (0.17, e = 0.5, 5,000 samples).
+#: largest measured on simulated rocking (docs/explanation/constants.md).
 MAX_G_SPREAD = 0.5
 
 

@@ -72,8 +72,8 @@ from numba import njit
 from rockdec.rdd import fits
 
 #: Share of the null (:func:`null`, near the record's ``e``) below a ``"high"`` threshold; a
-#: check fires on ``1 - QUANTILE`` of clean records in expectation, and below 5 % on every
-#: calibration of the diagnostics study.
+#: check fires on ``1 - QUANTILE`` of clean records in expectation (its rate on each cell:
+#: the diagnostics study, ``snakemake --cores 2 diagnostics``; docs/explanation/constants.md).
 QUANTILE = 0.985
 
 #: Fewest finite values of a grid point's sets for its mean and spread to place the null's
@@ -86,8 +86,8 @@ BLOCKS, BLOCK_MIN = 20, 1000
 
 #: Quantile of a record's distances of samples from the line through their neighbours that
 #: :func:`spikes` reads its largest distance against: in clean records the top per cent are
-#: impacts (a few per cent of the triples), in noisy ones the noise; isolated spikes in fewer
-#: than about 0.3 % of the samples (1 % of the triples) leave it where it is.
+#: impacts, in noisy ones the noise; isolated spikes leave it where it is unless they are
+#: many (docs/explanation/constants.md).
 SPIKE_REFERENCE = 0.99
 
 #: :func:`asymmetry` reads each side's ``g`` off the triples beyond ``GUARD_G g dt^2`` of the

@@ -162,14 +162,13 @@ DRIFT_BLOCKS, DRIFT_BLOCK_MIN = 20, 1000
 #: Standard errors above zero at which noise (``1 - A``) or colour (``alpha``) is detected.
 DETECT_Z = 4.0
 
-#: Smallest ``sigma_n / sigma_Y`` called noise, whatever its z: a low-pass load leaves a
-#: trace of a few 1e-4 (measured), five times below the smallest noise studied (1 %).
+#: Smallest ``sigma_n / sigma_Y`` called noise, whatever its z: above the trace a low-pass
+#: load leaves, below the smallest noise studied (docs/explanation/constants.md).
 NOISE_FLOOR = 0.002
 
 #: Standard errors by which the shape ratio ``Q`` (:func:`shape_ratio`) must exceed a white
-#: load's to be called colour when noise is detected: on 540 noisy white records of the
-#: coverage study's design (noise 1, 3, 5 % of ``sigma_Y``, ``e`` = 0.8, 0.9, 0.95) its z had
-#: 95th percentiles 0.6-1.8 and a largest value of 4.8 (``benchmarks/colour_detection.py``).
+#: load's to be called colour when noise is detected: above its z on noisy white records of
+#: the coverage study's design (``benchmarks/colour_detection.py``; docs/explanation/constants.md).
 COLOUR_Z_NOISY = 3.0
 
 #: ``drift_z`` above which drift is detected (one-sided).

@@ -97,7 +97,7 @@ class RestitutionEstimate:
     """The coefficient of restitution of a rocking block estimated from its records.
 
     Made by :func:`rockdec.estimate`; read back from its JSON document by :meth:`from_dict`.
-The examples use ``res = rockdec.estimate(rockdec.simulate(0.85, 20_000, seed=1))``.
+    The examples use ``res = rockdec.estimate(rockdec.simulate(0.85, 20_000, seed=1))``.
 
     Attributes
     ----------
@@ -217,7 +217,7 @@ The examples use ``res = rockdec.estimate(rockdec.simulate(0.85, 20_000, seed=1)
         -------
         dict
             JSON-able (numbers, strings, lists, ``None``), with ``schema_version``; it
-            validates against :func:`schema`.
+            validates against :func:`rockdec.report.result.schema`.
 
         Examples
         --------

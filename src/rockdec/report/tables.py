@@ -105,7 +105,7 @@ COLUMN_WORDS = {
     "ci95": "|bias| + 1.96 std",
 }
 """The heading of each column in a table's Markdown (the CSV keeps the short names); each
-is explained in the README ("The tables, column by column")."""
+is explained in docs/reference/tables.md."""
 
 MARKDOWN_ONLY_IN_CSV = ("mean_count_weights", "std_count_weights", "mean_window_weights", "std_window_weights")
 """Columns the Markdown leaves out: the other extrapolation weighting (:func:`with_alternative`),
