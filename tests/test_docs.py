@@ -76,8 +76,11 @@ def test_the_json_reference_lists_every_key_of_an_estimate():
     schema = rockdec_docs.load_estimate_schema()
     page = rockdec_docs.estimate_json_markdown(schema)
     assert "{include} _includes/estimate-json.md" in (DOCS / "reference" / "outputs.md").read_text()
-    for key in schema["properties"]:
-        assert f"| `{key}` |" in page, key
+    kinds = rockdec_docs.estimate_kinds(schema)
+    assert set(kinds) == {"random", "free"}
+    for kind in kinds.values():
+        for key in kind["properties"]:
+            assert f"| `{key}` |" in page, key
 
 
 def test_every_scene_field_of_the_shipped_config_is_documented():

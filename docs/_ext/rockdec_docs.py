@@ -119,17 +119,29 @@ def load_estimate_schema() -> dict:
     return json.loads(importlib.resources.files("rockdec").joinpath("estimate.schema.json").read_text())
 
 
+def estimate_kinds(schema: dict) -> dict[str, dict]:
+    """The documents the estimate's schema allows, by test (``random``, ``free``), each a
+    schema of its own (with the definitions it refers to)."""
+    return {name: {**node, "$defs": schema.get("$defs", {})} for name, node in schema.get("$defs", {}).items()}
+
+
 def estimate_json_markdown(schema: dict) -> str:
-    """Every key of the estimate's JSON document, nested keys by their dotted path."""
-    lines = [
-        f"{schema.get('description', '').strip()}",
-        "",
-        "| key | type | what it holds |",
-        "| --- | --- | --- |",
-    ]
-    for path, node in schema_fields(schema):
-        lines.append(f"| `{path}` | {_cell(_type(node))} | {_cell(node.get('description', ''))} |")
-    return "\n".join(lines) + "\n"
+    """Every key of the estimate's JSON documents (one table per test), nested keys by their
+    dotted path."""
+    lines = [f"{schema.get('description', '').strip()}", ""]
+    for name, kind in estimate_kinds(schema).items():
+        lines += [
+            f"### The {name} test",
+            "",
+            f"{kind.get('description', '').strip()}",
+            "",
+            "| key | type | what it holds |",
+            "| --- | --- | --- |",
+        ]
+        for path, node in schema_fields(kind):
+            lines.append(f"| `{path}` | {_cell(_type(node))} | {_cell(node.get('description', ''))} |")
+        lines.append("")
+    return "\n".join(lines)
 
 
 def glossary_entries(text: str) -> list[tuple[str, str]]:
