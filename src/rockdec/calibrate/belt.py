@@ -103,10 +103,7 @@ GCV_GAMMA_LONG = 1.0
 #: Variables along which the mean's offset from ``e`` is smoothed (:func:`fit`), each a
 #: function of ``e`` that increases as ``e`` falls (the order of the grid points); the one
 #: whose smoothing cross-validates best is taken. ``1/e`` stretches low ``e``, where ``e_v``'s
-#: bias bends (clean white records of 200,000 samples at 81 samples per cycle: +0.044 at
-#: ``e`` = 0.4, +0.010 at 0.55, within 0.005 of 0 from 0.6 up): along ``e`` the smoother
-#: cut the bend and lifted the mean at 0.55-0.7 by 0.11-0.17 of a spread, along ``1/e`` by 0.03-0.11
-#: (blocks of 30 sets against a pool of 600 sets per ``e``; docs/method.md, "Confidence belt").
+#: bias bends (evidence: docs/explanation/constants.md).
 MEAN_VARIABLES = {"e": np.negative, "log(1 - e)": lambda e: np.log1p(-e), "1/e": np.reciprocal}
 
 #: Smoothing parameters tried by the cross-validation, relative to the weights' scale.

@@ -77,18 +77,16 @@ if TYPE_CHECKING:  # annotations only: xarray loads where a function needs it
 log = logging.getLogger(__name__)
 
 #: True ``e`` of the calibration grid: about evenly spaced in ``log(1 - e)``, in which the
-#: spread of the estimators is smooth (:mod:`rockdec.calibrate.belt`); with :data:`SETS_PER_E`, half
-#: the simulated samples of 15 points of 40 sets at the same coverage (docs/method.md §10).
+#: spread of the estimators is smooth (:mod:`rockdec.calibrate.belt`); evidence for its size:
+#: docs/explanation/constants.md.
 E_GRID = (0.4, 0.55, 0.7, 0.8, 0.865, 0.92, 0.95, 0.972, 0.985, 0.995)
 
 #: Simulated record sets per grid point: ``SETS_PER_E`` for records of the paper's model
 #: (white load, no sensor noise), ``SETS_PER_E_MODELLED`` under sensor noise or a coloured
-#: load (:func:`sets_per_e`). The error of a calibration's mean curve is shared by every record
-#: it corrects (one calibration serves three quarters of the records of one ``e``); with 30
-#: sets it is 0.07-0.16 of a spread (``benchmarks/calibration_mean_error.py``), and under 3 %
-#: sensor noise it left the corrected ``e`` of whole calibrations 0.3-0.4 of a spread off
-#: (README, "Does the interval hold?"); with 60 sets, -0.14 to +0.22. A clean white
-#: record keeps the cheaper calibration: its cold estimate has the tightest time budget.
+#: load (:func:`sets_per_e`): the error of a calibration's mean curve is shared by every record
+#: it corrects, and a modelled record needs more sets to keep it small; a clean white record
+#: keeps the cheaper calibration (its cold estimate has the tightest time budget). Evidence:
+#: ``benchmarks/calibration_mean_error.py``, docs/explanation/constants.md.
 SETS_PER_E, SETS_PER_E_MODELLED = 30, 60
 
 #: Records longer than this (samples in all) are calibrated on simulated records of this
@@ -246,7 +244,7 @@ def simulated_lengths(lengths) -> list[int]:
     per cycle, eq. 5), and its spread falls as ``1/sqrt(length)`` (a record's triggers are
     independent beyond a few cycles); so the belt of the shorter records, its spread scaled
     by :func:`spread_scale`, is the belt of the records. Measured, not assumed:
-    ``benchmarks/long_coverage.py`` (README, "Long records").
+    ``benchmarks/long_coverage.py`` (docs/explanation/estimate.md, "Long records").
     """
     lengths = [int(n) for n in lengths]
     total = sum(lengths)

@@ -35,7 +35,7 @@ OVERRIDE_SOURCE = "the --config option of snakemake"
 MAX_SAMPLES = 10**12
 
 #: Samples simulated and reduced to signature sums per CPU-second (burn-in included), as
-#: measured on the paper scene (README, "How long it takes": 2.8e8 steps in 12.3 CPU s).
+#: measured on the paper scene (``benchmarks/bench_paper.py``; docs/development/benchmarks.md).
 SAMPLES_PER_CPU_SECOND = 2.3e7
 
 
