@@ -262,3 +262,12 @@ def test_the_command_line_runs_the_free_rocking_test(free_test, tmp_path, capsys
     assert doc["test"] == "free" and doc["e"] == rockdec.free_rocking(free_test).e
     assert main(["estimate", str(tmp_path / "free.nc"), "--test", "free", "--load", "white"]) == 2
     assert "--load" in capsys.readouterr().err
+
+
+def test_a_record_run_backwards_in_time_is_declined(record, cache):
+    """Issue 38: a time-reversed record has impacts that gain speed (e_v raw about 1/e); no
+    block that loses energy at impacts gives that, so no e is given, with the reason."""
+    backwards = record.copy(data=record.values[::-1].copy())
+    res = rockdec.estimate(backwards, cache=cache)
+    assert res.e is None and "gain speed" in res.reason
+    assert res.document["estimators"]["e_v"]["raw"] > 1.05

@@ -641,6 +641,25 @@ def correct(analysed: Analysed, calibrated: Calibrated) -> dict:
     return per
 
 
+def gains_speed(analysed: Analysed, calibrated: Calibrated) -> str | None:
+    """Why the records cannot be a rocking block's, when their impacts gain speed: ``e_v``
+    (the slope of ``D_v`` after the impact over the slope before, eq. 6) read above 1 by more
+    than the upper end of its belt's 95 % band at the top of the calibrated range, which
+    no block that loses energy at impacts gives (a record that runs backwards in time, or a
+    system that is not a rocking block); else ``None``."""
+    b = calibrated.belts["e_v"]
+    raw = analysed.analysis.raw["e_v"]
+    if b.e.size == 0 or not np.isfinite(raw):
+        return None
+    top = float(b.mean[-1] + np.max(np.atleast_1d(b.q_high)) * b.spread[-1])
+    if not (raw > 1.0 and raw > top):
+        return None
+    return (
+        f"the impacts of these records gain speed (e_v reads {raw:.3f}, above the {top:.3f} that a block losing energy at "
+        "impacts gives at most): the record runs backwards in time, or the system is not a rocking block; e is not estimated"
+    )
+
+
 class GReading(NamedTuple):
     """``g`` as the report gives it (stage 6 of :func:`estimate`): its value (rad/s^2, as
     given or corrected), 95 % interval and its calibrated coverage (``None`` when there is
@@ -781,7 +800,8 @@ def estimate(
     :func:`analyse` (check and analyse) → :func:`choose_model` (measure the record model,
     or take the declared one; decline when no calibration fits) → :func:`calibrate` (get or
     build the calibration) → :func:`correct` (correct every estimator and invert its belt)
-    → :func:`select` (the reported estimator) → :func:`read_g` → :func:`diagnose` (the
+    → :func:`select` (the reported estimator; none when the impacts gain speed,
+    :func:`gains_speed`) → :func:`read_g` → :func:`diagnose` (the
     checks, thresholds from the calibration) → :func:`document` (the report).
 
     ``model`` declares the whole record model (:mod:`rockdec.physics.record_model`); else
@@ -805,6 +825,9 @@ def estimate(
     calibrated = calibrate(analysed, choice, cache_dir)
     per = correct(analysed, calibrated)
     selection = select(per, calibrated.n_sets, calibrated.belts)
+    impossible = gains_speed(analysed, calibrated)
+    if impossible:
+        selection = (None, selection[1], impossible)
     chosen = selection[0]
     shown = per[chosen] if chosen else {"e": None, "interval": [None, None]}
     g_reading = read_g(analysed, choice, calibrated, chosen, math.nan if shown["e"] is None else shown["e"])
