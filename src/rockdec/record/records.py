@@ -248,19 +248,28 @@ def read_records(path, *, column: str = "theta", variable: str = "theta", dt: fl
     else:
         raise RecordError(f"{path}: unknown record format '{suffix}'; give a .csv, .nc, .npy or .mat file.")
     rows = [(row, f"{source}[{i}]") for i, row in enumerate(values)] if values.ndim == 2 else [(values, source)]
-    return [check_values(row, step, name) if checked else Record(np.asarray(row, dtype=np.float64), float(step), name) for row, name in rows]
+    if checked:
+        return [check_values(row, step, name) for row, name in rows]
+    return [Record(np.asarray(row, dtype=np.float64), check_step(step, np.size(row), name), name) for row, name in rows]
+
+
+def check_step(dt: float, samples: int, source: str) -> float:
+    """The sampling step ``dt`` (s) of a record of ``samples``, refused when it is not a
+    positive finite number or its time axis would leave the range of a float."""
+    if not (np.isfinite(dt) and dt > 0):
+        raise RecordError(f"{source}: the sampling step {dt} is not a positive, finite number of seconds; give `dt` in s.")
+    if not np.isfinite(dt * samples) or dt < np.finfo(np.float64).tiny:
+        raise RecordError(
+            f"{source}: a sampling step of {dt:g} s over {samples} samples is beyond the range of a float "
+            "(the record's length or its rocking period would be 0 or inf); give the step in s."
+        )
+    return float(dt)
 
 
 def check_values(theta, dt: float, source: str) -> Record:
     """Check the samples of a record (finite step, no inf, few NaN, not constant, long enough)."""
     theta = np.asarray(theta, dtype=np.float64)
-    if not (np.isfinite(dt) and dt > 0):
-        raise RecordError(f"{source}: the sampling step {dt} is not a positive, finite number of seconds; give `dt` in s.")
-    if not np.isfinite(dt * theta.size) or dt < np.finfo(np.float64).tiny:
-        raise RecordError(
-            f"{source}: a sampling step of {dt:g} s over {theta.size} samples is beyond the range of a float "
-            "(the record's length or its rocking period would be 0 or inf); give the step in s."
-        )
+    check_step(dt, theta.size, source)
     if theta.size < MIN_SAMPLES:
         raise RecordError(f"{source}: the record has {theta.size} samples; the signatures need at least {MIN_SAMPLES} (many rocking cycles).")
     if np.any(np.isinf(theta)):
