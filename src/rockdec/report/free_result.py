@@ -8,7 +8,6 @@ amplitude and the notes of the analysis (:mod:`rockdec.free.analysis`).
 
 from __future__ import annotations
 
-import json
 import math
 
 import numpy as np
@@ -118,6 +117,8 @@ def free_dataset(res):
     ``g`` with its bounds, and per ``impact`` its time, apex, speeds and ``e``."""
     import xarray as xr
 
+    from rockdec.report.result_dataset import global_attrs
+
     doc = res.to_dict()
     rows = doc["impacts"]
 
@@ -146,14 +147,5 @@ def free_dataset(res):
             "e_impact_se": ("impact", column("e_se"), {"units": "1", "long_name": f"standard error of the {what} of the impact"}),
         },
     )
-    ds.attrs = {
-        "Conventions": "CF-1.10",
-        "title": "coefficient of restitution of a rocking block, from a free-rocking test",
-        "source": f"rockdec {doc['rockdec_version']}",
-        "history": f"rockdec {__version__}: free-rocking analysis of {', '.join(doc['records'])}",
-        "reason": doc["reason"] or "",
-        "warnings": json.dumps(doc["warnings"]),
-        "records": json.dumps(doc["records"]),
-        "rockdec_estimate": json.dumps(doc),
-    }
+    ds.attrs = global_attrs(doc, "from a free-rocking test", "free-rocking analysis")
     return ds

@@ -10,7 +10,7 @@ import xarray as xr
 
 from rockdec._version import __version__
 
-__all__ = ["dataset"]
+__all__ = ["dataset", "global_attrs"]
 
 
 def _value(x) -> float:
@@ -64,15 +64,22 @@ def dataset(res) -> xr.Dataset:
         },
         coords={"estimator": ("estimator", names, {"long_name": "estimator of e (paper eqs. 25-27, e_v from D_v)"})},
     )
-    ds.attrs = {
+    ds.attrs = global_attrs(doc, "by the Random Decrement technique", "estimate")
+    return ds
+
+
+def global_attrs(doc: dict, how: str, what: str) -> dict:
+    """The global attributes of an estimate's dataset: CF conventions, a title naming
+    ``how`` ``e`` was found, provenance (``what`` the history line says was done), the
+    reason for a missing ``e``, the warnings, the records and the whole JSON document."""
+    return {
         "Conventions": "CF-1.10",
-        "title": "coefficient of restitution of a rocking block, by the Random Decrement technique",
+        "title": f"coefficient of restitution of a rocking block, {how}",
         "source": f"rockdec {doc['rockdec_version'] or __version__}",
-        "history": f"rockdec {__version__}: estimate of {', '.join(doc['records'])}",
+        "history": f"rockdec {__version__}: {what} of {', '.join(doc['records'])}",
         "estimator": doc["estimator"] or "",
         "reason": doc["reason"] or "",
         "warnings": json.dumps(doc["warnings"]),
         "records": json.dumps(doc["records"]),
         "rockdec_estimate": json.dumps(doc),
     }
-    return ds
