@@ -21,6 +21,7 @@ include: "workflow/rules/studies.smk"
 include: "workflow/rules/tradeoff.smk"
 include: "workflow/rules/coverage.smk"
 include: "workflow/rules/archive.smk"
+include: "workflow/rules/campaign.smk"
 
 
 # Figures, tables and the archive read finished products and take seconds: on a cluster
@@ -44,6 +45,10 @@ localrules:
     coverage_table,
     coverage_fresh_table,
     fig_coverage,
+    campaign,
+    campaign_table,
+    campaign_figures,
+    campaign_archive,
 
 
 # A signal stops the signature pass inside Snakemake's process as it stops a script job

@@ -100,3 +100,43 @@ def package_sources(*roots: str) -> list[str]:
         found[name] = spec.origin
         todo += _rockdec_imports(Path(spec.origin))
     return sorted(found.values())
+
+
+def fingerprint_file(path: str | Path, sources) -> str:
+    """Write ``path``: one line ``<SHA-256> <file>`` per file of ``sources`` (sorted), the one
+    code input of a workflow rule in place of the files themselves. Rewritten only when that
+    text changes (a module edited, added or dropped: its modification time then now, so the
+    rule reruns); written the first time with the newest source's time, so products made
+    after their code stay up to date; a file merely touched reruns nothing. Returns ``path``
+    as given.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> folder = pathlib.Path(tempfile.mkdtemp())
+    >>> module = folder / "m.py"
+    >>> _ = module.write_text("x = 1\\n")
+    >>> text = pathlib.Path(fingerprint_file(folder / "code.sha256", [module])).read_text()
+    >>> text.split()[0] == __import__("hashlib").sha256(b"x = 1\\n").hexdigest()
+    True
+    """
+    import hashlib
+    import os
+
+    files = sorted(str(s) for s in sources)
+    text = "".join(f"{hashlib.sha256(Path(f).read_bytes()).hexdigest()} {f}\n" for f in files)
+    target = Path(path)
+    try:
+        if target.read_text() == text:
+            return str(path)
+        first = False
+    except OSError:
+        first = True
+    target.parent.mkdir(parents=True, exist_ok=True)
+    partial = target.with_name(f".{target.name}.{os.getpid()}.partial")
+    partial.write_text(text)
+    newest = max((Path(f).stat().st_mtime for f in files), default=None)
+    if first and newest is not None:
+        os.utime(partial, (newest, newest))
+    os.replace(partial, target)
+    return str(path)

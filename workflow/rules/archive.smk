@@ -8,7 +8,7 @@ from rockdec.pipeline.layout import workflow_sources
 rule archive:
     """The archive of the default scene: results/<default scene>/archive."""
     input:
-        f"results/{config['default_scene']}/archive",
+        f"results/{config['default_scene']}/archive/manifest.json",
 
 
 rule archive_scene:
@@ -18,11 +18,16 @@ rule archive_scene:
         products=lambda w: [f"results/{w.scene}/{name}" for name in archive_files(w.scene)],
         workflow=[f"{workflow.basedir}/{name}" for name in workflow_sources(workflow.basedir)],
     output:
-        directory("results/{scene}/archive"),
+        # the folder's two files of its own, not the folder: Snakemake would leave in a
+        # directory() output a marker file the manifest does not list
+        manifest="results/{scene}/archive/manifest.json",
+        crate="results/{scene}/archive/ro-crate-metadata.json",
     log:
         "results/{scene}/logs/archive.log",
     threads: 1
     params:
+        name=lambda w: w.scene,
+        kind="scene",
         scene=lambda w: scene(w.scene),
         producers=lambda w: archive_files(w.scene),
         root=lambda w: workflow.basedir,  # the Snakefile's folder; a local rule, so it runs where that folder is

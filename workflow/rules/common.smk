@@ -4,7 +4,7 @@ from importlib.util import find_spec
 
 from rockdec.pipeline import config as rockdec_config
 from rockdec.pipeline import figure_workers, in_snakemake, layout
-from rockdec.sources import package_sources
+from rockdec.sources import fingerprint_file, package_sources
 
 # Values given with --config arrive as text: read them as YAML 1.2 values. An error names where
 # the bad field was set (--config, or the file the user passed with --configfile); one
@@ -104,12 +104,20 @@ def default_products():
 
 FIGURES_CODE = find_spec("rockdec.report.figures").origin
 
+
+def code_fingerprint(name, sources):
+    """The one code input of the rules that run ``sources`` (a file of their SHA-256s,
+    :func:`rockdec.sources.fingerprint_file`), where listing the files themselves would print
+    dozens of paths on each job's lines of the console: a module edited reruns them."""
+    return fingerprint_file(f".snakemake/rockdec-code/{name}.sha256", sources)
+
+
 # The stored series and the tables run inside the Snakemake process (`run:` with
 # rockdec.pipeline.in_snakemake.step, in threads: profiles/default), so their libraries load once
 # a run; their code input is what that module reaches (rockdec.pipeline.steps and the modules it runs).
 # The figures are `run:` rules too, each waiting in a thread for one of the two figure workers
 # (rockdec.pipeline.in_snakemake.draw).
-STEPS_CODE = package_sources("rockdec.pipeline.in_snakemake")
+STEPS_CODE = code_fingerprint("steps", package_sources("rockdec.pipeline.in_snakemake"))
 
 # Those light steps (the stored series and their signature, the tables, the figures) ask for
 # no core of --cores when Snakemake runs the jobs itself: a second or less each, one at a time in
@@ -130,19 +138,21 @@ except Exception:  # no --cores (a cluster run with --jobs): Snakemake's Workflo
 
 # `calibrate` runs there too, but reaches only the run contract's modules: editing a table or a
 # figure never recalibrates (and so never reruns the signature pass).
-CALIBRATE_CODE = [find_spec("rockdec.pipeline.in_snakemake").origin, *package_sources("rockdec.physics.run")]
+CALIBRATE_CODE = code_fingerprint("calibrate", [find_spec("rockdec.pipeline.in_snakemake").origin, *package_sources("rockdec.physics.run")])
 
 
 # The signature pass runs there too (rockdec.pipeline.in_snakemake.signatures), on its rule's
 # threads; its code input is what the pass reaches, so editing a table or a figure never reruns it.
-SIGNATURES_CODE = [find_spec("rockdec.pipeline.in_snakemake").origin, *package_sources("rockdec.pipeline.replicates", "rockdec.console")]
+SIGNATURES_CODE = code_fingerprint(
+    "signatures", [find_spec("rockdec.pipeline.in_snakemake").origin, *package_sources("rockdec.pipeline.replicates", "rockdec.console")]
+)
 
 
 def step_code(script):
-    """Source of every rockdec module workflow script ``script`` runs
-    (:func:`rockdec.sources.package_sources`): a compute rule's code input, so an edit to
-    any of them reruns it."""
-    return package_sources(f"{workflow.basedir}/workflow/scripts/{script}")
+    """The fingerprint (:func:`code_fingerprint`) of every rockdec module workflow script
+    ``script`` runs (:func:`rockdec.sources.package_sources`): a compute rule's code input, so
+    an edit to any of them reruns it."""
+    return code_fingerprint(script.removesuffix(".py"), package_sources(f"{workflow.basedir}/workflow/scripts/{script}"))
 
 
 def figure_outputs(name):

@@ -59,6 +59,7 @@ MANIFEST_SCHEMA = {
     "required": ["scene", "settings", "versions", "git_commit", "git_dirty", "datePublished", "run", "workflow", "files"],
     "properties": {
         "scene": _TEXT,
+        "kind": {"enum": ["scene", "campaign"]},
         "settings": {"type": "object"},
         "versions": {"type": "object", "additionalProperties": {"type": "string"}},
         "git_commit": _TEXT,
@@ -115,19 +116,29 @@ def _write_json(path: Path, data) -> None:
 
 
 def write_archive(
-    folder: str | Path, results: str | Path, producers: dict[str, str], scene_name: str, scene: dict, workflow_root: str | Path
+    folder: str | Path, results: str | Path, producers: dict[str, str], scene_name: str, scene: dict, workflow_root: str | Path,
+    kind: str = "scene",
 ) -> Path:
     """Copy the products ``producers`` names (paths relative to ``results``, each mapped to
     the rule that wrote it) and the workflow's files under ``workflow_root`` into ``folder``,
-    with ``manifest.json`` and the crate derived from it. Returns the manifest's path."""
+    with ``manifest.json`` and the crate derived from it. Returns the manifest's path.
+
+    Whatever ``folder`` held before is removed first, so it holds exactly what its manifest
+    lists (the rules declare the manifest and the crate as their outputs, not the folder,
+    which Snakemake would mark with a file of its own). ``kind``: what ``scene_name`` names, a
+    ``scene`` of the config or a test ``campaign`` (its settings the sheet's rows)."""
     from rockdec.pipeline import crate as crates  # the rocrate library: only when writing or checking a crate
 
     folder, results, workflow_root = Path(folder), Path(results), Path(workflow_root)
+    if folder.is_dir() and not folder.is_symlink():
+        shutil.rmtree(folder)
+    folder.mkdir(parents=True)
     written = [(results / name).stat().st_mtime for name in producers]
     files = [{**_copy(results / name, folder, name), "rule": rule} for name, rule in producers.items()]
     sources = [_copy(workflow_root / name, folder, name) for name in layout.workflow_sources(workflow_root)]
     manifest = {
         "scene": scene_name,
+        "kind": kind,
         "settings": scene,
         "versions": package_versions(),
         "git_commit": io.git_commit(),
@@ -190,7 +201,7 @@ def _name_problem(name: str) -> str | None:
 def check_manifest(manifest, path: str | Path) -> dict:
     """``manifest`` if it is one that :func:`write_archive` writes; else :class:`ArchiveError`
     naming the first bad field of the file ``path``."""
-    fix = "restore the published copy of the archive, or remake it with `snakemake --cores 2 results/<scene>/archive`"
+    fix = "restore the published copy of the archive, or remake it with `snakemake --cores 2 results/<scene>/archive/manifest.json`"
     errors = sorted(jsonschema.Draft202012Validator(MANIFEST_SCHEMA).iter_errors(manifest), key=lambda e: list(map(str, e.absolute_path)))
     if errors:
         err = errors[0]
@@ -273,21 +284,13 @@ def _file_problem(folder: Path, entry: dict) -> str | None:
     return None
 
 
-SNAKEMAKE_MARKER = ".snakemake_timestamp"
-"""The empty file Snakemake leaves in a folder a rule made (``directory()`` outputs)."""
-
-
 def _present(folder: Path) -> set[str]:
-    """Every file, link or other non-folder entry under ``folder``, relative (links not
-    followed), but Snakemake's empty :data:`SNAKEMAKE_MARKER` at the top."""
+    """Every file, link or other non-folder entry under ``folder``, relative (links not followed)."""
     found = set()
     for here, dirs, files in os.walk(folder):
         base = Path(here).relative_to(folder)
         found.update((base / name).as_posix() for name in files)
         found.update((base / name).as_posix() for name in dirs if os.path.islink(os.path.join(here, name)))
-    marker = folder / SNAKEMAKE_MARKER
-    if os.path.lexists(marker) and stat.S_ISREG(os.lstat(marker).st_mode) and os.lstat(marker).st_size == 0:
-        found.discard(SNAKEMAKE_MARKER)
     return found
 
 

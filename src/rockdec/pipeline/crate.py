@@ -116,11 +116,16 @@ def crate_from_manifest(manifest: dict, manifest_entry: dict) -> dict:
     crate.metadata.extra_terms = dict(TERMS)
     scene, run, settings = manifest["scene"], manifest["run"], manifest["settings"]
     root = crate.root_dataset
-    root["name"] = f"rockdec archive of the scene '{scene}'"
+    kind = manifest.get("kind", "scene")
+    root["name"] = f"rockdec archive of the {kind} '{scene}'"
     root["description"] = (
         "The NetCDF files that the tables and figures of one rockdec scene are made from, the tables, "
         "and the Snakemake workflow that made them, with the run's settings and software versions."
         + (f" The scene: {settings['description'].strip()}" if isinstance(settings.get("description"), str) else "")
+        if kind == "scene" else
+        "The estimates of one rockdec test campaign, per record and per block (each as rockdec estimate --json prints it, "
+        "and as CF NetCDF), their table and the NetCDF its figures are drawn from, and the Snakemake workflow that made "
+        "them, with the records sheet's rows as settings and the software versions."
     )
     root["datePublished"] = manifest["datePublished"]
     root["license"] = crate.add(ContextEntity(crate, LICENSE[0], {"@type": "CreativeWork", "name": LICENSE[1]}))
@@ -174,7 +179,7 @@ def crate_from_manifest(manifest: dict, manifest_entry: dict) -> dict:
     action = crate.add_action(
         workflow, identifier=run["id"], object=values, result=products,
         properties={
-            "name": f"Snakemake run of the rockdec workflow for the scene '{scene}'",
+            "name": f"Snakemake run of the rockdec workflow for the {kind} '{scene}'",
             "description": "startTime and endTime: when the first and the last archived product were written.",
             "startTime": run["startTime"],
             "endTime": run["endTime"],

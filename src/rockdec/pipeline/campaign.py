@@ -1,0 +1,665 @@
+"""A test campaign through the workflow: a sheet of measured records in, estimates out.
+
+The sheet (``config/records.tsv``, its path set by the config's ``campaign.sheet``) lists one
+record a row: its id, its file, its block, and the options ``rockdec estimate`` takes for it
+(the columns and their defaults: ``records_schema.yaml`` beside this package, linked from
+``workflow/schemas/records.schema.yaml``). :func:`read_sheet` checks every row before any job
+runs, the files' time axes included, and refuses a bad row in one sentence that names the
+row and the column (:class:`SheetError`).
+
+What each job of ``workflow/rules/campaign.smk`` runs:
+
+* :func:`plan`: the calibration a record's (or a block's pooled) estimate asks for, read off
+  the engine itself (:func:`calibration_request`), so the calibration is a job of its own keyed
+  by its content (:func:`rockdec.calibrate.calibration.settings_hash`);
+* :func:`build_calibration`: that calibration, into the cache ``rockdec estimate`` reads;
+* :func:`estimate_unit`: the estimate of a record or of a block, through :func:`estimate`,
+  the one adapter to the public estimate (its JSON is what ``rockdec estimate --json`` prints
+  for the same file and options);
+* :func:`table` and :func:`markdown`: every record's and block's estimate side by side.
+
+A row whose ``test`` is ``free`` (a free-rocking test) goes to :func:`free_rocking_unit`.
+"""
+
+from __future__ import annotations
+
+import csv
+import functools
+import json
+import math
+import os
+import threading
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+from rockdec import timeaxis
+from rockdec.validate import InputError
+
+#: The columns of a sheet, in the order :func:`read_sheet` returns them (the schema's properties).
+SCHEMA_FILE = "records_schema.yaml"
+
+#: Relative tolerance on a step the sheet gives against the file's own time axis, and between
+#: the records of one block (as :func:`rockdec.record.records.same_step` pools them).
+STEP_RTOL = 1e-6
+
+#: Lines of a CSV file :func:`file_step` reads to find its step (its first rows: the check
+#: before any job reads headers, never whole records).
+STEP_LINES = 2000
+
+#: Options the records of one block must share: their pooled estimate takes one of each.
+BLOCK_OPTIONS = ("load", "sensor_noise", "model", "theta_cr", "g", "test")
+
+#: What the table says of a free-rocking row while rockdec has no free-rocking analysis.
+FREE_UNAVAILABLE = "free-rocking analysis not available"
+
+
+class SheetError(InputError):
+    """A campaign sheet the user can fix; the message names the row and the column."""
+
+
+def default_cache() -> str:
+    """Where ``rockdec estimate`` stores its calibrations: ``$ROCKDEC_CACHE``, else the user's
+    cache folder; the campaign's calibrations go there unless the config's ``campaign.cache``
+    names another folder."""
+    import platformdirs
+
+    return os.environ.get("ROCKDEC_CACHE") or str(Path(platformdirs.user_cache_dir("rockdec")) / "calibration")
+
+
+@functools.lru_cache(maxsize=1)
+def schema() -> dict:
+    """The sheet's JSON Schema (``records_schema.yaml``), parsed once a process."""
+    import yaml
+
+    return yaml.safe_load(resources.files("rockdec").joinpath(SCHEMA_FILE).read_text())
+
+
+def columns() -> list[str]:
+    """Every column a sheet may have, in the schema's order."""
+    return list(schema()["properties"])
+
+
+def _where(sheet: Path, row: int | None, record: str | None, column: str | None) -> str:
+    text = f"records sheet '{sheet}'"
+    if row is not None:
+        text += f", row {row}" + (f" (record '{record}')" if record else "")
+    if column is not None:
+        text += f", column '{column}'"
+    return text
+
+
+def _fail(sheet: Path, row: int | None, record: str | None, column: str | None, problem: str) -> SheetError:
+    return SheetError(f"{_where(sheet, row, record, column)}: {problem}.")
+
+
+def _allowed(prop: dict) -> str:
+    """What a column accepts, in words."""
+    if "enum" in prop:
+        return "give one of " + ", ".join(map(str, prop["enum"]))
+    if "pattern" in prop and prop.get("type") == "string":
+        return prop["description"].split(":", 1)[-1].strip() if ":" in prop["description"] else prop["description"]
+    bounds = [f"{sign} {prop[key]:g}" for key, sign in (("minimum", ">="), ("exclusiveMinimum", ">"), ("maximum", "<="),
+                                                       ("exclusiveMaximum", "<")) if key in prop]
+    return "give a finite number" + (" " + " and ".join(bounds) if bounds else "")
+
+
+def _typed(text: str, prop: dict, fail) -> object:
+    """The cell ``text`` as the schema's type of its column (a number for ``number``)."""
+    if prop.get("type") != "number":
+        return text
+    try:
+        value = float(text)
+    except ValueError:
+        raise fail(f"'{text}' is not a number; {_allowed(prop)}") from None
+    if not math.isfinite(value):
+        raise fail(f"{text} is not a finite number; {_allowed(prop)}")
+    return value
+
+
+def _rows(sheet: Path) -> tuple[list[str], list[tuple[int, list[str]]]]:
+    """The header and the data rows (numbered from 1, comments and blank lines skipped) of a
+    tab-separated sheet."""
+    try:
+        text = sheet.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise SheetError(f"records sheet '{sheet}' does not exist; set campaign.sheet in the config to your sheet's path.") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise SheetError(f"records sheet '{sheet}' cannot be read ({exc}); give a tab-separated text file.") from None
+    lines = [line for line in text.splitlines() if line.strip() and not line.lstrip().startswith("#")]
+    if not lines:
+        raise SheetError(f"records sheet '{sheet}' is empty; give a header line (record, path, ...) and one row per record.")
+    table = list(csv.reader(lines, delimiter="\t"))
+    header = [name.strip() for name in table[0]]
+    return header, list(enumerate(table[1:], start=1))
+
+
+def read_sheet(sheet: str | Path, *, simulated: str | Path = "results/simulated") -> list[dict]:
+    """The rows of the campaign sheet ``sheet``, checked and completed, one dict a record.
+
+    Each row's ``path`` is resolved against the sheet's folder (a row the workflow simulates
+    gets ``<simulated>/<record>.nc``), defaults fill the empty cells (the schema's), ``dt`` is
+    the step of the record (given, ``1/fs``, or read off the file's time axis: :func:`file_step`),
+    and ``block`` is the record's own id when none is given.
+
+    Raises :class:`SheetError` naming the row and the column: an empty sheet, an unknown or
+    missing column, a value the schema refuses (an unknown unit, a negative ``dt``, an unknown
+    load ...), a duplicate id, a missing file, both ``dt`` and ``fs``, a step that disagrees with
+    the file's, no step at all, a block whose records differ in step or in their options.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> folder = pathlib.Path(tempfile.mkdtemp())
+    >>> _ = (folder / "records.tsv").write_text("record\\tblock\\ttrue_e\\tdt\\tsimulate\\na1\\tA\\t0.9\\t0.8\\tseed=1\\n")
+    >>> [(row["record"], row["block"], row["dt"]) for row in read_sheet(folder / "records.tsv", simulated=folder)]
+    [('a1', 'A', 0.8)]
+    >>> _ = (folder / "bad.tsv").write_text("record\\tpath\\tdt\\nb1\\tb1.npy\\t-1\\n")
+    >>> read_sheet(folder / "bad.tsv")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    rockdec.pipeline.campaign.SheetError: records sheet '.../bad.tsv', row 1 (record 'b1'), column 'dt': '-1' is not allowed; give a finite number > 0.
+    """
+    import jsonschema
+
+    sheet = Path(sheet)
+    header, rows = _rows(sheet)
+    props = schema()["properties"]
+    for name in header:
+        if name not in props:
+            raise _fail(sheet, None, None, name, f"no such column; the columns are {', '.join(props)} (workflow/schemas/records.schema.yaml)")
+    if len(set(header)) < len(header):
+        twice = next(name for name in header if header.count(name) > 1)
+        raise _fail(sheet, None, None, twice, "the header names this column twice; keep one")
+    if "record" not in header:
+        raise _fail(sheet, None, None, "record", "the header has no such column; every row needs a record id")
+    if not rows:
+        raise SheetError(f"records sheet '{sheet}' has a header but no record; add one row per record.")
+    validator = jsonschema.Draft202012Validator(schema())
+    out, seen = [], {}
+    for number, cells in rows:
+        if len(cells) > len(header):
+            raise _fail(sheet, number, None, None, f"{len(cells)} cells for {len(header)} columns; separate the cells by tabs, one per column")
+        record = cells[0].strip() if header[0] == "record" and cells else None
+
+        def fail(column, problem, number=number):
+            return _fail(sheet, number, record, column, problem)
+
+        row, raw = {}, {}
+        for name, text in zip(header, cells):
+            text = text.strip()
+            if text:
+                raw[name] = text
+                row[name] = _typed(text, props[name], lambda problem, name=name: fail(name, problem))
+        record = row.get("record")
+        errors = sorted(validator.iter_errors(row), key=lambda err: (header.index(err.path[0]) if err.path else -1))
+        if errors:
+            err = errors[0]
+            column = err.path[0] if err.path else "record"
+            value = err.instance
+            if err.validator == "required":
+                raise fail("record", "empty; every row needs a record id")
+            raise fail(column, f"'{raw.get(column, value)}' is not allowed; {_allowed(props[column])}")
+        if record in seen:
+            raise fail("record", f"'{record}' is the id of row {seen[record]} too; give each record its own id")
+        seen[record] = number
+        out.append(_completed(row, sheet, Path(simulated), fail))
+    _check_blocks(out, sheet, seen)
+    return out
+
+
+def _completed(row: dict, sheet: Path, simulated: Path, fail) -> dict:
+    """A row with its defaults, its path resolved and its step known (:func:`read_sheet`)."""
+    props = schema()["properties"]
+    row = {**{k: p["default"] for k, p in props.items() if "default" in p}, **row}
+    row.setdefault("block", row["record"])
+    if "dt" in row and "fs" in row:
+        raise fail("fs", "both dt and fs are given; give the sampling as one of them")
+    given = row.get("dt", 1.0 / row["fs"] if "fs" in row else None)
+    if "simulate" in row:
+        for column in ("true_e", "dt"):
+            if column not in row:
+                raise fail(column, f"a row the workflow simulates (simulate) needs its {column}")
+        if "path" in row:
+            raise fail("path", "a row the workflow simulates (simulate) writes its own file; leave path empty")
+        row["path"] = str(simulated / f"{row['record']}.nc")
+        row["simulate"] = simulation(row["simulate"], fail)
+    else:
+        if "path" not in row:
+            raise fail("path", "empty; give the record's file (absolute, or relative to the sheet's folder)")
+        path = Path(row["path"]).expanduser()
+        path = path if path.is_absolute() else sheet.resolve().parent / path
+        if not path.is_file():
+            raise fail("path", f"'{path}' {'is a folder' if path.is_dir() else 'does not exist'}; give the record's file")
+        row["path"] = str(path)
+        try:
+            own, units = file_step(path, row["variable"], row["column"])
+        except timeaxis.RecordError as exc:
+            raise fail("path", str(exc).rstrip(".")) from None
+        if units is not None and timeaxis.angle_factor(units, str(path), row["variable"]) != timeaxis.ANGLE_UNITS[row["units"]]:
+            raise fail("units", f"'{row['units']}' differs from the file's own units '{units}'; leave units empty or give the file's")
+        if own is not None and given is not None and abs(given - own) > STEP_RTOL * own:
+            raise fail("dt" if "dt" in row else "fs", f"a step of {given:g} s disagrees with the file's time axis ({own:g} s); leave it empty or correct it")
+        if own is None and given is None:
+            raise fail("dt", f"'{path.name}' has no time axis; give the sampling step dt (s) or rate fs (Hz)")
+        row["file_has_time"] = own is not None
+        given = own if given is None else given
+    row["dt"] = float(given)
+    row.pop("fs", None)
+    if row["model"] == "housner" and "theta_cr" not in row:
+        raise fail("theta_cr", "model housner needs the block's critical angle theta_cr in rad (atan(width/height))")
+    if row["model"] != "housner" and "theta_cr" in row:
+        raise fail("theta_cr", "theta_cr is the Housner model's critical angle; set model to housner, or leave it empty")
+    try:
+        row["load"] = load_option(row["load"], sheet)
+    except InputError as exc:
+        raise fail("load", str(exc).rstrip(".")) from None
+    try:
+        sensor_option(row["sensor_noise"])
+    except InputError as exc:
+        raise fail("sensor_noise", str(exc).rstrip(".")) from None
+    return row
+
+
+def _check_blocks(rows: list[dict], sheet: Path, numbers: dict) -> None:
+    """The records of one block share their step (within :data:`STEP_RTOL`) and :data:`BLOCK_OPTIONS`."""
+    first: dict[str, dict] = {}
+    for row in rows:
+        lead = first.setdefault(row["block"], row)
+        number = numbers[row["record"]]
+        if abs(row["dt"] - lead["dt"]) > STEP_RTOL * lead["dt"]:
+            raise _fail(sheet, number, row["record"], "dt",
+                        f"a step of {row['dt']:g} s differs from the {lead['dt']:g} s of record '{lead['record']}' of the same "
+                        f"block '{row['block']}'; records pooled in one block share one step (resample it, or give it a block of its own)")
+        for option in BLOCK_OPTIONS:
+            if row.get(option) != lead.get(option):
+                raise _fail(sheet, number, row["record"], option,
+                            f"{row.get(option)!r} differs from record '{lead['record']}' of the same block '{row['block']}' "
+                            f"({lead.get(option)!r}); the records of one block are pooled under one {option}")
+
+
+def simulation(text: str, fail=None) -> dict:
+    """The recipe of a ``simulate`` cell: ``seed=N`` and optional ``n_points=N`` (default
+    200000), ``noise=SHARE`` (sensor noise in units of ``sigma_Y``, default 0) and ``corner=C``
+    (a low-pass load's corner in rocking frequencies, default white).
+
+    Examples
+    --------
+    >>> simulation("seed=3 noise=0.03")
+    {'seed': 3, 'n_points': 200000, 'noise': 0.03, 'corner': None}
+    """
+    out = {"seed": None, "n_points": 200000, "noise": 0.0, "corner": None}
+    for part in text.split():
+        key, _, value = part.partition("=")
+        out[key] = int(float(value)) if key in ("seed", "n_points") else float(value)
+    if out["n_points"] < 1000 or out["noise"] < 0 or (out["corner"] is not None and out["corner"] <= 0):
+        problem = f"'{text}' asks for fewer than 1000 samples, a negative noise or a corner <= 0; fix the recipe"
+        if fail is None:
+            raise SheetError(problem + ".")
+        raise fail("simulate", problem)
+    return out
+
+
+def load_option(text: str, sheet: Path) -> str:
+    """A ``load`` cell, checked (:func:`rockdec.physics.record_model.parse_load`), a table's or
+    a base record's file made absolute against the sheet's folder; ``auto`` as is."""
+    from rockdec.physics.record_model import parse_load
+
+    if text == "auto":
+        return text
+    kind, sep, arg = text.partition(":")
+    if kind in ("spectrum", "base"):
+        path = Path(arg).expanduser()
+        text = f"{kind}:{path if path.is_absolute() else sheet.resolve().parent / path}"
+    parse_load(text, dt=1.0, points_per_cycle=1.0)  # a file is checked at a stand-in rocking frequency
+    return text
+
+
+def sensor_option(text: str):
+    """A ``sensor_noise`` cell as the engine takes it: ``None`` for ``auto`` (measured off the
+    record), else a :class:`rockdec.physics.record_model.SensorNoise` (``0``, a standard deviation
+    in rad, or ``N%`` of ``sigma_Y``).
+
+    Examples
+    --------
+    >>> sensor_option("2%")
+    SensorNoise(std=0.02, units='sigma_y')
+    """
+    from rockdec.physics.record_model import SensorNoise
+
+    if text == "auto":
+        return None
+    percent = text.endswith("%")
+    try:
+        value = float(text[:-1] if percent else text)
+    except ValueError:
+        value = math.nan
+    if not (0.0 <= value < math.inf):
+        raise InputError(f"'{text}' is not a noise level; give auto, 0, a standard deviation in rad or a share of sigma_Y (2%)")
+    return SensorNoise(value / 100.0, "sigma_y") if percent else SensorNoise(value, "rad")
+
+
+def file_step(path: str | Path, variable: str = "theta", column: str = "theta") -> tuple[float | None, str | None]:
+    """The step (s) of a record file's own time axis and the units its angle carries, from its
+    header or first :data:`STEP_LINES` lines, never the whole record: ``(None, None)`` for a
+    ``.npy`` file or a CSV without a ``time`` column."""
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix in (".nc", ".nc4", ".netcdf"):
+        import netCDF4
+
+        try:
+            with netCDF4.Dataset(path) as ds:
+                if variable not in ds.variables:
+                    raise timeaxis.RecordError(f"'{path.name}' has no variable '{variable}'; name it in the variable column")
+                var = ds.variables[variable]
+                units = getattr(var, "units", None)
+                dim = var.dimensions[-1]
+                if dim in ds.variables:
+                    coord = ds.variables[dim]
+                    factor = timeaxis.time_factor(getattr(coord, "units", None), str(path), dim)
+                    return timeaxis.sampling_step(coord[: STEP_LINES].data, str(path)) * factor, units
+                step = getattr(var, "dt", getattr(ds, "dt", None))
+                return (float(step) if step is not None else None), units
+        except OSError as exc:
+            raise timeaxis.RecordError(f"'{path.name}' is not a readable NetCDF file ({exc.strerror or exc})") from None
+    if suffix in (".csv", ".txt"):
+        with open(path, encoding="utf-8", errors="replace") as f:
+            lines = [line for _, line in zip(range(STEP_LINES), f) if line.strip() and not line.lstrip().startswith("#")]
+        if not lines:
+            raise timeaxis.RecordError(f"'{path.name}' is empty")
+        sep = next((s for s in (",", ";", "\t") if s in lines[0]), None)
+        names = [n.strip() for n in (lines[0].split(sep) if sep else lines[0].split())]
+        if "time" not in names:
+            return None, None
+        index = names.index("time")
+        try:
+            times = [float((line.split(sep) if sep else line.split())[index]) for line in lines[1:]]
+        except (ValueError, IndexError):
+            raise timeaxis.RecordError(f"'{path.name}' has a time column that is not all numbers in its first lines") from None
+        return timeaxis.sampling_step(times, str(path)), None
+    if suffix == ".npy":
+        return None, None
+    raise timeaxis.RecordError(f"'{path.name}' is not a record format rockdec reads; give a .csv, .nc or .npy file")
+
+
+# --- what the campaign's jobs compute -----------------------------------------------------
+
+
+def units(rows: list[dict]) -> dict[str, list[dict]]:
+    """The campaign's estimates: ``record_<id>`` for each record and ``block_<name>`` for each
+    block of two or more records, each mapped to its rows (the records it pools)."""
+    out = {f"record_{row['record']}": [row] for row in rows}
+    blocks: dict[str, list[dict]] = {}
+    for row in rows:
+        blocks.setdefault(row["block"], []).append(row)
+    out.update({f"block_{name}": members for name, members in blocks.items() if len(members) > 1})
+    return out
+
+
+def options(row: dict) -> dict:
+    """The estimate options of a row (those of ``rockdec estimate``), as its job's params."""
+    return {key: row.get(key) for key in ("load", "sensor_noise", "model", "theta_cr", "g")}
+
+
+def read(rows: list[dict]):
+    """The records of ``rows`` as :class:`rockdec.record.records.Record` (their angles in rad),
+    read as ``rockdec estimate`` reads them: the step passed only to a file without a time axis."""
+    from rockdec.record import records
+    from rockdec.timeaxis import ANGLE_UNITS
+
+    out = []
+    for row in rows:
+        dt = None if row.get("file_has_time", row.get("simulate") is not None) else row["dt"]
+        for rec in records.read_records(row["path"], column=row["column"], variable=row["variable"], dt=dt):
+            factor = ANGLE_UNITS[row["units"]] if Path(row["path"]).suffix.lower() not in (".nc", ".nc4", ".netcdf") else 1.0
+            out.append(rec if factor == 1.0 else rec._replace(theta=rec.theta * factor))
+    return out
+
+
+def estimate(records, opts: dict, cache) -> dict:
+    """The estimate of ``records`` (pooled) under ``opts`` as ``rockdec estimate --json`` prints
+    it: the one adapter between the workflow and the estimate.
+
+    Raises :class:`rockdec.validate.InputError` for records the estimate refuses.
+    """
+    from rockdec.calibrate import inference
+
+    result = inference.estimate(
+        records, cache_dir=cache, g=opts.get("g"), load=None if opts["load"] == "auto" else opts["load"],
+        sensor=sensor_option(opts["sensor_noise"]), rocking=opts["model"], theta_cr=opts.get("theta_cr"),
+    )
+    return {key: value for key, value in result.items() if not key.startswith("_")}
+
+
+class _Requested(Exception):
+    """Raised in place of loading or building a calibration while :func:`calibration_request` runs."""
+
+    def __init__(self, settings: dict):
+        super().__init__("calibration requested")
+        self.settings = settings
+
+
+_PLANNING = threading.local()
+_HOOK_LOCK = threading.Lock()
+
+
+def _hook_calibrations() -> None:
+    """Route :func:`rockdec.calibrate.calibration.load_or_build` through a check of
+    :data:`_PLANNING`: in a thread that plans, it raises :class:`_Requested` with its settings;
+    everywhere else it runs as it is. Installed once a process."""
+    from rockdec.calibrate import calibration
+
+    with _HOOK_LOCK:
+        if getattr(calibration.load_or_build, "_campaign_hook", False):
+            return
+        original = calibration.load_or_build
+
+        @functools.wraps(original)
+        def load_or_build(cal_settings, cache_dir, notes=None):
+            if getattr(_PLANNING, "active", False):
+                raise _Requested(cal_settings)
+            return original(cal_settings, cache_dir, notes)
+
+        load_or_build._campaign_hook = True
+        calibration.load_or_build = load_or_build
+
+
+def calibration_request(records, opts: dict) -> dict | None:
+    """The settings of the calibration :func:`estimate` of ``records`` under ``opts`` asks for,
+    or ``None`` when it asks for none (a declined record model).
+
+    The estimate runs up to the point where it would load or build its calibration: the
+    settings are the engine's own, so the calibration job builds exactly the file the estimate
+    job then finds in the cache.
+    """
+    _hook_calibrations()
+    _PLANNING.active = True
+    try:
+        estimate(records, opts, cache=os.devnull)
+    except _Requested as asked:
+        return asked.settings
+    finally:
+        _PLANNING.active = False
+    return None
+
+
+def plan(rows: list[dict], opts: dict) -> dict:
+    """What the estimate of ``rows`` (a record, or a block's records pooled) needs:
+    ``calibration`` (the file name in the cache, ``None`` for none), ``settings`` and, when the
+    estimate refuses the records, ``error`` (its sentence)."""
+    from rockdec.calibrate import calibration
+
+    if rows[0]["test"] == "free":
+        return {"calibration": None, "settings": None, "error": None}
+    try:
+        settings = calibration_request(read(rows), opts)
+    except InputError as exc:
+        return {"calibration": None, "settings": None, "error": str(exc)}
+    name = None if settings is None else f"calibration-{calibration.settings_hash(settings)}.nc"
+    return {"calibration": name, "settings": settings, "error": None}
+
+
+def build_calibration(settings: dict, cache) -> Path:
+    """The calibration of ``settings`` built into (or found in) the folder ``cache``, the one
+    ``rockdec estimate`` reads (:func:`rockdec.calibrate.calibration.load_or_build`); its path."""
+    from rockdec.calibrate import calibration
+
+    calibration.load_or_build(settings, cache)
+    return Path(cache) / f"calibration-{calibration.settings_hash(settings)}.nc"
+
+
+def free_rocking_unit(rows: list[dict]) -> dict:
+    """A free-rocking row's document: :func:`rockdec.free_rocking` of its record when rockdec
+    has one, else a null ``e`` whose reason is :data:`FREE_UNAVAILABLE`."""
+    import rockdec
+
+    analysis = getattr(rockdec, "free_rocking", None)
+    if analysis is None:
+        return {"e": None, "interval": [None, None], "reason": FREE_UNAVAILABLE, "estimator": None, "test": "free",
+                "records": [row["path"] for row in rows], "warnings": []}
+    result = analysis(read(rows)[0].theta, rows[0]["dt"])
+    return {**(result.to_dict() if hasattr(result, "to_dict") else dict(result)), "test": "free"}
+
+
+def estimate_unit(rows: list[dict], opts: dict, cache) -> dict:
+    """The document of one record or block: :func:`estimate`'s JSON (``rockdec estimate
+    --json``); a refusal (:class:`rockdec.validate.InputError`) is a null ``e`` with the
+    refusal as its ``reason`` and ``refused: true``; a free-rocking row :func:`free_rocking_unit`."""
+    if rows[0]["test"] == "free":
+        return free_rocking_unit(rows)
+    try:
+        return estimate(read(rows), opts, cache)
+    except InputError as exc:
+        return {"e": None, "interval": [None, None], "reason": str(exc), "estimator": None, "refused": True,
+                "records": [row["path"] for row in rows], "warnings": []}
+
+
+# --- the campaign's table: every record's and block's estimate side by side --------------
+
+#: CF units of the document's numbers, by the last part of their name (``"1"`` otherwise).
+UNITS = {"g": "rad s-2", "g_raw": "rad s-2", "g_interval": "rad s-2", "sigma_y": "rad", "dt": "s", "load_corner_hz": "Hz",
+         "seconds": "s"}
+
+#: Parts of the document under which each key is an estimator or a check: a dimension each.
+_BY = {"estimators": "estimator", "diagnostics": "check"}
+
+
+def _numbers(doc, prefix: str = "") -> dict[str, float]:
+    """Every number of the document ``doc`` (booleans as 0 and 1, nulls as NaN) by its path
+    joined with ``_``; a pair (an interval) as ``_low`` and ``_high``; lists of text left out."""
+    out: dict[str, float] = {}
+    if isinstance(doc, dict):
+        for key, value in doc.items():
+            out.update(_numbers(value, f"{prefix}{key}_"))
+    elif isinstance(doc, list):
+        if len(doc) == 2 and all(v is None or isinstance(v, (int, float)) for v in doc):
+            out[f"{prefix}low"] = math.nan if doc[0] is None else float(doc[0])
+            out[f"{prefix}high"] = math.nan if doc[1] is None else float(doc[1])
+    elif isinstance(doc, bool):
+        out[prefix[:-1]] = float(doc)
+    elif isinstance(doc, (int, float)):
+        out[prefix[:-1]] = float(doc)
+    return out
+
+
+def unit_dataset(name: str, rows: list[dict], doc: dict):
+    """The document of one record or block (:func:`estimate_unit`) as a CF dataset along
+    ``record`` (length 1): every number of it, those per estimator along ``estimator`` and per
+    check along ``check``; the reported estimator, the reason, the warnings and the simulated
+    record model as text; the block, the kind (``record`` or ``block``) and the true ``e``
+    (NaN when not known) as coordinates."""
+    import xarray as xr
+
+    data: dict = {}
+    per: dict[str, dict] = {dim: {} for dim in _BY.values()}
+    for part, dim in _BY.items():
+        for key, sub in (doc.get(part) or {}).items():
+            for field, value in _numbers(sub).items():
+                per[dim].setdefault(f"{dim}_{field}", {})[key] = value
+    rest = {k: v for k, v in doc.items() if k not in _BY and k not in ("selection",)}
+    for field, value in _numbers(rest).items():
+        data[field] = (("record",), [value], {"units": UNITS.get(field.removesuffix("_low").removesuffix("_high").removesuffix("_value").removesuffix("_se"), "1")})
+    for dim, fields in per.items():
+        keys = sorted({key for values in fields.values() for key in values})
+        for field, values in fields.items():
+            data[field] = (("record", dim), [[values.get(key, math.nan) for key in keys]], {"units": "1"})
+        if keys:
+            data[f"_{dim}"] = keys
+    coords = {f"{dim}": (dim, data.pop(f"_{dim}")) for dim in _BY.values() if f"_{dim}" in data}
+    model = ((doc.get("record_model") or {}).get("simulated") or {}).get("described", "")
+    text = {
+        "estimator_reported": doc.get("estimator") or "",
+        "reason": doc.get("reason") or "",
+        "warnings": "\n".join(doc.get("warnings") or []),
+        "record_model": model,
+    }
+    for field, value in text.items():
+        data[field] = (("record",), np.array([value], dtype=object), {"long_name": field.replace("_", " ")})
+    true_e = rows[0].get("true_e") if all(r.get("true_e") == rows[0].get("true_e") for r in rows) else None
+    kind = "block" if name.startswith("block_") else "record"
+    coords.update({
+        "record": ("record", [name.split("_", 1)[1] if kind == "record" else f"{rows[0]['block']} (pooled)"], {"long_name": "record, or a block's records pooled"}),
+        "block": ("record", [rows[0]["block"]], {"long_name": "block the record belongs to"}),
+        "kind": ("record", [kind], {"long_name": "record, or block (its records pooled)"}),
+        "true_e": ("record", [math.nan if true_e is None else float(true_e)], {"units": "1", "long_name": "coefficient of restitution the record was simulated with"}),
+    })
+    ds = xr.Dataset(data, coords=coords)
+    for name_, var in ds.data_vars.items():
+        var.attrs.setdefault("long_name", name_.replace("_", " "))
+    return ds
+
+
+def summary_dataset(datasets: list):
+    """The unit datasets (:func:`unit_dataset`) of a campaign along ``record``, records first
+    then blocks, each in the sheet's order."""
+    import xarray as xr
+
+    ds = xr.concat(datasets, dim="record", join="outer", data_vars="all", coords="different", compat="equals", fill_value=np.nan)
+    for name in ("estimator_reported", "reason", "warnings", "record_model"):
+        ds[name] = ds[name].fillna("").astype(str)
+    return ds
+
+
+def table(ds):
+    """One row per record and per block of the summary dataset ``ds``: its block, the true ``e``
+    when known and whether the interval holds it, ``e``, the interval, the reported estimator,
+    ``g``, the record model the calibration simulated, the warnings and the reason when ``e``
+    is not given (a :class:`pandas.DataFrame`)."""
+    import pandas as pd
+
+    def holds(i):
+        e, low, high, true = (float(ds[v][i]) for v in ("e", "interval_low", "interval_high", "true_e"))
+        if math.isnan(true):
+            return ""
+        if math.isnan(e):
+            return "no estimate"
+        return "yes" if low <= true <= high else "no"
+
+    n = ds.sizes["record"]
+    rows = {
+        "record": [str(v) for v in ds["record"].values],
+        "kind": [str(v) for v in ds["kind"].values],
+        "block": [str(v) for v in ds["block"].values],
+        "true_e": ds["true_e"].values,
+        "e": ds["e"].values,
+        "low": ds["interval_low"].values,
+        "high": ds["interval_high"].values,
+        "holds_true_e": [holds(i) for i in range(n)],
+        "estimator": [str(v) for v in ds["estimator_reported"].values],
+        "g": ds["g"].values if "g" in ds else np.full(n, np.nan),
+        "record_model": [str(v) for v in ds["record_model"].values],
+        "warnings": [str(v).replace("\n", "; ") for v in ds["warnings"].values],
+        "reason": [str(v) for v in ds["reason"].values],
+    }
+    out = pd.DataFrame(rows)
+    return out if not out["true_e"].isna().all() else out.drop(columns=["true_e", "holds_true_e"])
+
+
+def markdown(tab) -> str:
+    """The campaign's table as Markdown: numbers to 3 decimals, a missing one blank."""
+    shown = tab.copy()
+    for column in ("true_e", "e", "low", "high", "g"):
+        if column in shown:
+            shown[column] = [("" if math.isnan(v) else f"{v:.3f}") for v in shown[column]]
+    return shown.to_markdown(index=False) + "\n"
