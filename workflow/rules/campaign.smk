@@ -38,7 +38,11 @@ except rockdec_campaign.InputError as exc:
 
 CAMPAIGN_UNITS = rockdec_campaign.units(CAMPAIGN_ROWS)
 CAMPAIGN_RECORDS = {row["record"]: row for row in CAMPAIGN_ROWS}
-CAMPAIGN_CODE = step_code("campaign_estimate.py")
+# The simulation, the plans, the calibrations and the estimates run inside the Snakemake
+# process (rockdec.pipeline.in_snakemake.campaign); their code input is what that reaches.
+CAMPAIGN_CODE = code_fingerprint(
+    "campaign", [find_spec("rockdec.pipeline.in_snakemake").origin, *package_sources("rockdec.pipeline.campaign")]
+)
 
 
 wildcard_constraints:
@@ -103,7 +107,7 @@ CAMPAIGN_FIGURES = ("forest", "record_model", "diagnostics")
 rule campaign_simulate:
     """A record of the demonstration campaign, simulated with its known e (a row with `simulate`)."""
     input:
-        code=step_code("campaign_simulate.py"),
+        code=CAMPAIGN_CODE,
     output:
         "results/{campaign}/simulated/{record}.nc",
     log:
@@ -118,10 +122,8 @@ rule campaign_simulate:
         runtime=10,
     params:
         row=lambda w: CAMPAIGN_RECORDS[w.record],
-    conda:
-        "../envs/rockdec.yaml"
-    script:
-        "../scripts/campaign_simulate.py"
+    run:
+        in_snakemake.campaign(rule, log[0], params.row, output[0])
 
 
 checkpoint campaign_plan:
@@ -143,10 +145,8 @@ checkpoint campaign_plan:
     params:
         rows=unit_rows,
         options=unit_options,
-    conda:
-        "../envs/rockdec.yaml"
-    script:
-        "../scripts/campaign_plan.py"
+    run:
+        in_snakemake.campaign(rule, log[0], params.rows, params.options, output[0])
 
 
 rule campaign_calibration:
@@ -166,10 +166,8 @@ rule campaign_calibration:
     resources:
         mem_mb=4000,
         runtime=60,
-    conda:
-        "../envs/rockdec.yaml"
-    script:
-        "../scripts/campaign_calibration.py"
+    run:
+        in_snakemake.campaign(rule, log[0], input.plan, output[0], threads)
 
 
 rule campaign_record:
@@ -197,10 +195,8 @@ rule campaign_record:
         rows=unit_rows,
         options=unit_options,
         cache=CAMPAIGN_CACHE,
-    conda:
-        "../envs/rockdec.yaml"
-    script:
-        "../scripts/campaign_estimate.py"
+    run:
+        in_snakemake.campaign(rule, log[0], wildcards.unit, params.rows, params.options, params.cache, input.plan, output.json, output.nc, rule)
 
 
 rule campaign_block:
@@ -228,10 +224,8 @@ rule campaign_block:
         rows=unit_rows,
         options=unit_options,
         cache=CAMPAIGN_CACHE,
-    conda:
-        "../envs/rockdec.yaml"
-    script:
-        "../scripts/campaign_estimate.py"
+    run:
+        in_snakemake.campaign(rule, log[0], wildcards.unit, params.rows, params.options, params.cache, input.plan, output.json, output.nc, rule)
 
 
 rule campaign_table:

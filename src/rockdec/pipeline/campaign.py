@@ -23,6 +23,7 @@ A row whose ``test`` is ``free`` (a free-rocking test) goes to :func:`free_rocki
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import functools
 import json
@@ -484,16 +485,16 @@ def calibration_request(records, opts: dict) -> dict | None:
     return None
 
 
-def plan(rows: list[dict], opts: dict) -> dict:
-    """What the estimate of ``rows`` (a record, or a block's records pooled) needs:
-    ``calibration`` (the file name in the cache, ``None`` for none), ``settings`` and, when the
-    estimate refuses the records, ``error`` (its sentence)."""
+def plan(rows: list[dict], opts: dict, records=None) -> dict:
+    """What the estimate of ``rows`` (a record, or a block's records pooled; ``records``, when
+    read already) needs: ``calibration`` (the file name in the cache, ``None`` for none),
+    ``settings`` and, when the estimate refuses the records, ``error`` (its sentence)."""
     from rockdec.calibrate import calibration
 
     if rows[0]["test"] == "free":
         return {"calibration": None, "settings": None, "error": None}
     try:
-        settings = calibration_request(read(rows), opts)
+        settings = calibration_request(read(rows) if records is None else records, opts)
     except InputError as exc:
         return {"calibration": None, "settings": None, "error": str(exc)}
     name = None if settings is None else f"calibration-{calibration.settings_hash(settings)}.nc"
@@ -522,17 +523,23 @@ def free_rocking_unit(rows: list[dict]) -> dict:
     return {**(result.to_dict() if hasattr(result, "to_dict") else dict(result)), "test": "free"}
 
 
-def estimate_unit(rows: list[dict], opts: dict, cache) -> dict:
-    """The document of one record or block: :func:`estimate`'s JSON (``rockdec estimate
-    --json``); a refusal (:class:`rockdec.validate.InputError`) is a null ``e`` with the
-    refusal as its ``reason`` and ``refused: true``; a free-rocking row :func:`free_rocking_unit`."""
+def estimate_unit(rows: list[dict], opts: dict, cache, records=None) -> dict:
+    """The document of one record or block (``records``, when read already): :func:`estimate`'s
+    JSON (``rockdec estimate --json``); a refusal (:class:`rockdec.validate.InputError`) is a
+    null ``e`` with the refusal as its ``reason`` and ``refused: true``; a free-rocking row
+    :func:`free_rocking_unit`."""
     if rows[0]["test"] == "free":
         return free_rocking_unit(rows)
     try:
-        return estimate(read(rows), opts, cache)
+        return estimate(read(rows) if records is None else records, opts, cache)
     except InputError as exc:
-        return {"e": None, "interval": [None, None], "reason": str(exc), "estimator": None, "refused": True,
-                "records": [row["path"] for row in rows], "warnings": []}
+        return refused(rows, exc)
+
+
+def refused(rows: list[dict], exc: Exception) -> dict:
+    """The document of records the estimate refuses: a null ``e``, the refusal as its reason."""
+    return {"e": None, "interval": [None, None], "reason": str(exc), "estimator": None, "refused": True,
+            "records": [row["path"] for row in rows], "warnings": []}
 
 
 # --- the campaign's table: every record's and block's estimate side by side --------------
@@ -663,3 +670,113 @@ def markdown(tab) -> str:
         if column in shown:
             shown[column] = [("" if math.isnan(v) else f"{v:.3f}") for v in shown[column]]
     return shown.to_markdown(index=False) + "\n"
+
+
+# --- the steps the campaign's rules run inside the Snakemake process ----------------------
+# (rockdec.pipeline.in_snakemake.campaign): each reads and writes its files holding FILES,
+# since the HDF5 library under netCDF4 is used by one thread of a process at a time.
+
+
+@contextlib.contextmanager
+def _files():
+    """Hold the locks of every HDF5 user of the process: the workflow's in-process steps'
+    (:data:`rockdec.pipeline.in_snakemake._STEP_LOCK`) and the calibration cache's."""
+    from rockdec.calibrate import calibration
+    from rockdec.pipeline import in_snakemake
+
+    with in_snakemake._STEP_LOCK, calibration._FILE_ACCESS:
+        yield
+
+
+def simulated_record(row: dict):
+    """The record of a ``simulate`` row as a dataset ``theta(time)`` (rad, s): the compiled
+    kernel (:func:`rockdec.physics.simulate.simulate_block`, ``g = sigma_p = 1``) at ``true_e``
+    and the row's ``dt``, the recipe's low-pass load placed at 75 samples per cycle (the
+    coverage study's records, :mod:`rockdec.studies.coverage`), white sensor noise of the
+    recipe's share of the record's rms (:func:`rockdec.physics.loading.add_sensor_noise`)."""
+    import xarray as xr
+
+    from rockdec.physics.loading import add_sensor_noise
+    from rockdec.physics.record_model import Load
+    from rockdec.physics.simulate import default_burn_in, simulate_block
+
+    recipe, e, dt = row["simulate"], row["true_e"], row["dt"]
+    placed_at = 75.0  # samples per cycle the coverage study places a load's corner at
+    pole = (Load() if recipe["corner"] is None else Load("lowpass", recipe["corner"])).pole(placed_at)
+    theta = simulate_block([recipe["seed"]], recipe["n_points"], dt=dt, g=1.0, e=e, sigma_p=1.0,
+                           burn_in=default_burn_in(e, placed_at), pole=pole)[0]
+    add_sensor_noise(theta, [recipe["seed"]], recipe["noise"] * float(np.sqrt(np.mean(theta**2))))
+    return xr.Dataset(
+        {"theta": ("time", theta[0], {"units": "rad", "long_name": "rocking angle"})},
+        coords={"time": ("time", np.arange(theta.shape[1]) * dt, {"units": "s", "standard_name": "time", "long_name": "time", "axis": "T"})},
+        attrs={"true_e": e},
+    )
+
+
+def simulate_step(row: dict, output: str) -> str:
+    """Rule ``campaign_simulate``: :func:`simulated_record` of ``row`` written to ``output``."""
+    from rockdec import io
+
+    ds = simulated_record(row)
+    ds.attrs.update(io.provenance("campaign_simulate", {"record": row["record"], "true_e": row["true_e"], "dt": row["dt"], **row["simulate"]}))
+    with _files():
+        io.write_netcdf(ds, output)
+    return f"simulated {row['record']}: e = {row['true_e']}, {json.dumps(row['simulate'], sort_keys=True)}"
+
+
+def _read_locked(rows: list[dict]):
+    with _files():
+        return read(rows)
+
+
+def plan_step(rows: list[dict], opts: dict, output: str) -> str:
+    """Rule ``campaign_plan``: :func:`plan` of ``rows`` written to ``output`` (JSON)."""
+    if rows[0]["test"] == "free":
+        done = {"calibration": None, "settings": None, "error": None}
+    else:
+        try:
+            done = plan(rows, opts, records=_read_locked(rows))
+        except InputError as exc:
+            done = {"calibration": None, "settings": None, "error": str(exc)}
+    Path(output).write_text(json.dumps(done, indent=2, sort_keys=True) + "\n")
+    return f"plan: {done['calibration'] or 'no calibration'}" + (f" ({done['error']})" if done["error"] else "")
+
+
+def calibration_step(plan_file: str, output: str, threads: int) -> str:
+    """Rule ``campaign_calibration``: the calibration ``plan_file`` asks for, built into the
+    folder of ``output`` on ``threads`` (:func:`build_calibration`, on the engine of
+    :mod:`rockdec.pipeline.engine`)."""
+    from rockdec.pipeline import engine
+
+    settings = json.loads(Path(plan_file).read_text())["settings"]
+    with engine.session(threads):
+        path = build_calibration(settings, Path(output).parent)
+    if str(path) != str(Path(output)):
+        raise RuntimeError(f"{plan_file} asks for {path.name}, not {Path(output).name}")
+    return f"calibration: {path}"
+
+
+def estimate_step(unit: str, rows: list[dict], opts: dict, cache, plan_file: str, json_out: str, nc_out: str, step: str) -> str:
+    """Rules ``campaign_record`` and ``campaign_block``: :func:`estimate_unit` of ``rows``
+    written as JSON (what ``rockdec estimate --json`` prints) to ``json_out`` and as a CF
+    dataset (:func:`unit_dataset`) to ``nc_out``; the calibration it used checked against
+    its plan's (``plan_file``)."""
+    from rockdec import io
+
+    try:
+        records = None if rows[0]["test"] == "free" else _read_locked(rows)
+    except InputError as exc:
+        doc = refused(rows, exc)
+    else:
+        doc = estimate_unit(rows, opts, cache, records)
+    if rows[0]["test"] != "free":
+        planned = json.loads(Path(plan_file).read_text())["calibration"]
+        used = (doc.get("calibration") or {}).get("file")
+        if used != planned:  # the plan reads the engine's own request: a mismatch is a bug, not the user's
+            raise RuntimeError(f"{unit}: the estimate used {used}, its plan asked for {planned}")
+    Path(json_out).write_text(json.dumps(doc, indent=2) + "\n")
+    ds = unit_dataset(unit, rows, doc)
+    ds.attrs.update(io.provenance(step, {"rows": rows, "options": opts}, inputs=[row["path"] for row in rows]))
+    with _files():
+        io.write_netcdf(ds, nc_out)
+    return f"{unit}: e = {doc.get('e')}"

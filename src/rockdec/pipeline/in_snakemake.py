@@ -138,6 +138,31 @@ def step(rule: str, log: str, *args) -> None:
         _logged(rule, log, work)
 
 
+#: What the campaign's steps import as they start (the estimate's engine, the calibration's
+#: Dask, the campaign's steps): :func:`campaign` imports them once, holding :data:`_IMPORTS`.
+CAMPAIGN_STARTS = ("dask", "dask.array", "dask.threaded", "rockdec.calibrate.inference", "rockdec.pipeline.campaign", "xarray")
+
+
+def campaign(rule: str, log: str, *args) -> None:
+    """Rules ``campaign_simulate``, ``campaign_plan``, ``campaign_calibration``,
+    ``campaign_record`` and ``campaign_block``: the :mod:`rockdec.pipeline.campaign` step of
+    that name (``campaign_plan`` runs ``plan_step``; the record and block rules
+    ``estimate_step``) on ``*args``, inside the Snakemake process: a record's plan and estimate
+    take a fraction of a second once the estimate's modules are loaded, which a script would
+    load again for each. Steps run side by side on Snakemake's threads (the numba kernels
+    and the calibration's Dask threads release the GIL) and hold the HDF5 locks only to read
+    and write files. Logged as :func:`step` logs."""
+    name = {"campaign_record": "estimate", "campaign_block": "estimate"}.get(rule, rule.removeprefix("campaign_"))
+
+    def work():
+        _load(CAMPAIGN_STARTS)
+        from rockdec.pipeline import campaign as steps
+
+        return getattr(steps, f"{name}_step")(*args)
+
+    _logged(rule, log, work)
+
+
 def draw(rule: str, log: str, *args) -> None:
     """Run figure rule ``rule`` as the :mod:`rockdec.pipeline.steps` function of that name, on
     ``*args``, in a worker process (:mod:`rockdec.pipeline.figure_workers`): the figure's
