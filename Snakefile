@@ -21,6 +21,7 @@ include: "workflow/rules/studies.smk"
 include: "workflow/rules/tradeoff.smk"
 include: "workflow/rules/coverage.smk"
 include: "workflow/rules/archive.smk"
+include: "workflow/rules/campaign_common.smk"
 include: "workflow/rules/campaign.smk"
 
 

@@ -4,6 +4,9 @@
 
 from rockdec.pipeline.layout import workflow_sources
 
+# The workflow's own files, which an archive holds, as one input (common.smk, code_fingerprint).
+WORKFLOW_CODE = code_fingerprint("workflow", [f"{workflow.basedir}/{name}" for name in workflow_sources(workflow.basedir)])
+
 
 rule archive:
     """The archive of the default scene: results/<default scene>/archive."""
@@ -16,7 +19,7 @@ rule archive_scene:
     manifest.json and ro-crate-metadata.json."""
     input:
         products=lambda w: [f"results/{w.scene}/{name}" for name in archive_files(w.scene)],
-        workflow=[f"{workflow.basedir}/{name}" for name in workflow_sources(workflow.basedir)],
+        workflow=WORKFLOW_CODE,
     output:
         # the folder's two files of its own, not the folder: Snakemake would leave in a
         # directory() output a marker file the manifest does not list

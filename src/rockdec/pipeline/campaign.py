@@ -742,17 +742,16 @@ def plan_step(rows: list[dict], opts: dict, output: str) -> str:
     return f"plan: {done['calibration'] or 'no calibration'}" + (f" ({done['error']})" if done["error"] else "")
 
 
-def calibration_step(plan_file: str, output: str, threads: int) -> str:
-    """Rule ``campaign_calibration``: the calibration ``plan_file`` asks for, built into the
+def calibration_step(settings: dict, output: str, threads: int) -> str:
+    """Rule ``campaign_calibration``: the calibration of ``settings`` (a plan's), built into the
     folder of ``output`` on ``threads`` (:func:`build_calibration`, on the engine of
     :mod:`rockdec.pipeline.engine`)."""
     from rockdec.pipeline import engine
 
-    settings = json.loads(Path(plan_file).read_text())["settings"]
     with engine.session(threads):
         path = build_calibration(settings, Path(output).parent)
     if str(path) != str(Path(output)):
-        raise RuntimeError(f"{plan_file} asks for {path.name}, not {Path(output).name}")
+        raise RuntimeError(f"the settings given name {path.name}, not {Path(output).name}")
     return f"calibration: {path}"
 
 
