@@ -548,6 +548,13 @@ def refused(rows: list[dict], exc: Exception) -> dict:
 UNITS = {"g": "rad s-2", "g_raw": "rad s-2", "g_interval": "rad s-2", "sigma_y": "rad", "dt": "s", "load_corner_hz": "Hz",
          "seconds": "s"}
 
+def _units(field: str) -> str:
+    """The CF units of the number ``field`` of a document (:data:`UNITS`, by its name's end)."""
+    for suffix in ("_low", "_high", "_value", "_se"):
+        field = field.removesuffix(suffix)
+    return next((units for name, units in UNITS.items() if field == name or field.endswith(f"_{name}")), "1")
+
+
 #: Parts of the document under which each key is an estimator or a check: a dimension each.
 _BY = {"estimators": "estimator", "diagnostics": "check"}
 
@@ -586,7 +593,7 @@ def unit_dataset(name: str, rows: list[dict], doc: dict):
                 per[dim].setdefault(f"{dim}_{field}", {})[key] = value
     rest = {k: v for k, v in doc.items() if k not in _BY and k not in ("selection",)}
     for field, value in _numbers(rest).items():
-        data[field] = (("record",), [value], {"units": UNITS.get(field.removesuffix("_low").removesuffix("_high").removesuffix("_value").removesuffix("_se"), "1")})
+        data[field] = (("record",), [value], {"units": _units(field)})
     for dim, fields in per.items():
         keys = sorted({key for values in fields.values() for key in values})
         for field, values in fields.items():

@@ -1,0 +1,236 @@
+"""The campaign sheet (rockdec.pipeline.campaign.read_sheet): every kind of bad row refused in
+one sentence that names its row and its column, before any job; what a good sheet completes;
+the plan reads the calibration the estimate then asks for; the summary's table. Without
+Snakemake (the campaign through the workflow: test_campaign_workflow.py)."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from rockdec.pipeline import campaign
+from rockdec.pipeline.campaign import SheetError
+
+DT = 0.01
+
+
+def write_csv(path: Path, n: int = 1200, dt: float = DT, time: bool = True) -> Path:
+    theta = 0.01 * np.sin(np.arange(n) * 0.3)
+    if time:
+        path.write_text("time,theta\n" + "".join(f"{i * dt:.6f},{v:.6g}\n" for i, v in enumerate(theta)))
+    else:
+        path.write_text("theta\n" + "".join(f"{v:.6g}\n" for v in theta))
+    return path
+
+
+@pytest.fixture
+def folder(tmp_path):
+    write_csv(tmp_path / "r1.csv")
+    write_csv(tmp_path / "r2.csv")
+    write_csv(tmp_path / "slow.csv", dt=2 * DT)
+    write_csv(tmp_path / "bare.csv", time=False)
+    np.save(tmp_path / "r3.npy", 0.01 * np.sin(np.arange(1200) * 0.3))
+    return tmp_path
+
+
+def sheet(folder: Path, *lines: str) -> Path:
+    path = folder / "records.tsv"
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+BAD = {
+    # kind: (sheet lines, row, column, words of the sentence)
+    "missing file": (["record\tpath", "a\tr1.csv", "b\tnone.csv"], 2, "path", "does not exist"),
+    "duplicate id": (["record\tpath", "a\tr1.csv", "a\tr2.csv"], 2, "record", "row 1 too"),
+    "unknown unit": (["record\tpath\tunits", "a\tr1.csv\tfurlong"], 1, "units", "give one of rad"),
+    "negative dt": (["record\tpath\tdt", "a\tr3.npy\t-0.01"], 1, "dt", "'-0.01' is not allowed"),
+    "dt and fs both": (["record\tpath\tdt\tfs", "a\tr3.npy\t0.01\t100"], 1, "fs", "both dt and fs"),
+    "unknown load": (["record\tpath\tload", "a\tr1.csv\tpink"], 1, "load", "'pink' is not allowed"),
+    "block steps differ": (["record\tpath\tblock", "a\tr1.csv\tA", "b\tslow.csv\tA"], 2, "dt", "same block 'A'"),
+    "dt against the file": (["record\tpath\tdt", "a\tr1.csv\t0.02"], 1, "dt", "disagrees with the file's time axis"),
+    "no step at all": (["record\tpath", "a\tr3.npy"], 1, "dt", "has no time axis"),
+    "not a number": (["record\tpath\tg", "a\tr1.csv\tnine"], 1, "g", "'nine' is not a number"),
+    "nan": (["record\tpath\ttheta_cr\tmodel", "a\tr1.csv\tnan\thousner"], 1, "theta_cr", "not a finite number"),
+    "housner without theta_cr": (["record\tpath\tmodel", "a\tr1.csv\thousner"], 1, "theta_cr", "needs the block's critical angle"),
+    "theta_cr without housner": (["record\tpath\ttheta_cr", "a\tr1.csv\t0.2"], 1, "theta_cr", "set model to housner"),
+    "unknown sensor noise": (["record\tpath\tsensor_noise", "a\tr1.csv\tloud"], 1, "sensor_noise", "'loud' is not allowed"),
+    "unknown test": (["record\tpath\ttest", "a\tr1.csv\tshake"], 1, "test", "give one of random, free"),
+    "bad id": (["record\tpath", "1a\tr1.csv"], 1, "record", "'1a' is not allowed"),
+    "block options differ": (["record\tpath\tblock\tload", "a\tr1.csv\tA\twhite", "b\tr2.csv\tA\tauto"], 2, "load", "pooled under one load"),
+    "simulated without true e": (["record\tdt\tsimulate", "a\t0.8\tseed=1"], 1, "true_e", "needs its true_e"),
+    "no path": (["record\tblock", "a\tA"], 1, "path", "empty; give the record's file"),
+    "a folder": (["record\tpath", "a\t."], 1, "path", "is a folder"),
+    "empty id": (["record\tpath", "\tr1.csv"], 1, "record", "empty; every row needs a record id"),
+    "too many cells": (["record\tpath", "a\tr1.csv\textra"], 1, None, "3 cells for 2 columns"),
+}
+
+
+@pytest.mark.parametrize("kind", BAD)
+def test_a_bad_row_is_refused_in_one_sentence_naming_its_row_and_column(folder, kind):
+    lines, row, column, words = BAD[kind]
+    with pytest.raises(SheetError) as err:
+        campaign.read_sheet(sheet(folder, *lines))
+    message = str(err.value)
+    assert f"row {row}" in message and words in message, message
+    assert column is None or f"column '{column}'" in message, message
+    assert message.count(". ") == 0 and message.endswith("."), message  # one sentence
+
+
+@pytest.mark.parametrize(
+    "lines, words",
+    [
+        ([], "is empty"),
+        (["# only a comment"], "is empty"),
+        (["record\tpath"], "no record"),
+        (["path", "r1.csv"], "column 'record'"),
+        (["record\tpath\tcolour", "a\tr1.csv\tred"], "column 'colour': no such column"),
+        (["record\tpath\tpath", "a\tr1.csv\tr1.csv"], "names this column twice"),
+    ],
+    ids=["empty sheet", "comments only", "header only", "no record column", "unknown column", "column twice"],
+)
+def test_a_sheet_without_rows_or_with_a_bad_header_is_refused(folder, lines, words):
+    with pytest.raises(SheetError, match=words):
+        campaign.read_sheet(sheet(folder, *lines))
+
+
+def test_a_missing_sheet_names_the_config_field(tmp_path):
+    with pytest.raises(SheetError, match="campaign.sheet"):
+        campaign.read_sheet(tmp_path / "none.tsv")
+
+
+def test_a_good_sheet_is_completed_paths_resolved_and_steps_read_off_the_files(folder):
+    rows = campaign.read_sheet(sheet(
+        folder,
+        "# a comment",
+        "record\tpath\tblock\tdt\tunits",
+        "a\tr1.csv\tA\t\t",
+        f"b\t{folder / 'r2.csv'}\tA\t{DT}\t",
+        "c\tr3.npy\t\t0.01\tdeg",
+        "",
+    ))
+    assert [r["record"] for r in rows] == ["a", "b", "c"]
+    assert [r["block"] for r in rows] == ["A", "A", "c"]  # a record's own block by default
+    assert [r["path"] for r in rows] == [str(folder / name) for name in ("r1.csv", "r2.csv", "r3.npy")]
+    assert [r["dt"] for r in rows] == pytest.approx([DT, DT, 0.01])
+    assert rows[0]["load"] == "auto" and rows[0]["sensor_noise"] == "auto" and rows[0]["test"] == "random"
+    assert list(campaign.units(rows)) == ["record_a", "record_b", "record_c", "block_A"]
+
+
+def test_a_netcdf_records_step_and_units_are_read_from_its_header(tmp_path):
+    theta = xr.DataArray(np.zeros(1200), dims="time", coords={"time": ("time", np.arange(1200) * 5.0, {"units": "ms"})},
+                         attrs={"units": "degree"})
+    xr.Dataset({"theta": theta}).to_netcdf(tmp_path / "r.nc")
+    assert campaign.file_step(tmp_path / "r.nc") == (pytest.approx(0.005), "degree")
+    rows = campaign.read_sheet(sheet(tmp_path, "record\tpath\tunits", "a\tr.nc\tdeg"))
+    assert rows[0]["dt"] == pytest.approx(0.005)
+    with pytest.raises(SheetError, match="column 'units'.*differs from the file's own units 'degree'"):
+        campaign.read_sheet(sheet(tmp_path, "record\tpath\tunits", "a\tr.nc\trad"))
+
+
+def test_angles_in_degrees_are_read_in_rad(folder):
+    rows = campaign.read_sheet(sheet(folder, "record\tpath\tdt\tunits", "a\tr3.npy\t0.01\tdeg", "b\tr3.npy\t0.01\trad"))
+    deg, rad = (campaign.read([row])[0].theta for row in rows)
+    np.testing.assert_allclose(deg, rad * math.pi / 180)
+
+
+def test_a_spectrum_files_path_is_taken_relative_to_the_sheet(folder):
+    (folder / "psd.csv").write_text("frequency_rocking,psd\n0.1,1\n1,1\n10,0.01\n")
+    rows = campaign.read_sheet(sheet(folder, "record\tpath\tload", "a\tr1.csv\tspectrum:psd.csv"))
+    assert rows[0]["load"] == f"spectrum:{folder / 'psd.csv'}"
+
+
+def test_sensor_noise_cells_read_as_the_command_reads_them():
+    assert campaign.sensor_option("auto") is None
+    assert campaign.sensor_option("2%").std == pytest.approx(0.02) and campaign.sensor_option("2%").units == "sigma_y"
+    assert campaign.sensor_option("0.0003").units == "rad"
+
+
+def test_a_free_rocking_row_says_the_analysis_is_not_available_until_rockdec_has_one(folder, monkeypatch):
+    import rockdec
+
+    rows = campaign.read_sheet(sheet(folder, "record\tpath\ttest", "a\tr1.csv\tfree"))
+    monkeypatch.delattr(rockdec, "free_rocking", raising=False)
+    doc = campaign.estimate_unit(rows, campaign.options(rows[0]), folder)
+    assert doc["e"] is None and doc["reason"] == campaign.FREE_UNAVAILABLE
+    assert campaign.plan(rows, campaign.options(rows[0]))["calibration"] is None
+
+
+def test_a_free_rocking_row_calls_rockdecs_free_rocking_when_there_is_one(folder, monkeypatch):
+    import rockdec
+
+    seen = {}
+
+    def free_rocking(theta, dt):
+        seen.update(n=theta.size, dt=dt)
+        return {"e": 0.9, "interval": [0.88, 0.92], "reason": None}
+
+    monkeypatch.setattr(rockdec, "free_rocking", free_rocking, raising=False)
+    rows = campaign.read_sheet(sheet(folder, "record\tpath\ttest", "a\tr1.csv\tfree"))
+    doc = campaign.estimate_unit(rows, campaign.options(rows[0]), folder)
+    assert doc["e"] == 0.9 and doc["test"] == "free" and seen == {"n": 1200, "dt": pytest.approx(DT)}
+
+
+# --- the plan and the estimate: the calibration the plan names is the one the estimate reads
+
+
+@pytest.fixture(scope="module")
+def simulated(tmp_path_factory):
+    """A short simulated record of known e (the demonstration's recipe) in a sheet of its own."""
+    folder = tmp_path_factory.mktemp("simulated")
+    rows = campaign.read_sheet(sheet(folder, "record\ttrue_e\tdt\tsimulate", "a\t0.9\t0.796\tseed=4 n_points=4000"), simulated=folder)
+    campaign.simulate_step(rows[0], rows[0]["path"])
+    return rows
+
+
+def test_the_plan_names_the_calibration_the_estimate_asks_for(simulated, tmp_path, monkeypatch):
+    from rockdec.calibrate import calibration
+
+    import fake_calibration
+
+    monkeypatch.setattr(calibration, "_grid_point", fake_calibration.grid_point)
+    opts = campaign.options(simulated[0])
+    planned = campaign.plan(simulated, opts)
+    assert planned["calibration"] == f"calibration-{calibration.settings_hash(planned['settings'])}.nc"
+    assert not list(tmp_path.iterdir())  # planning builds nothing
+    built = campaign.build_calibration(planned["settings"], tmp_path)
+    assert built.name == planned["calibration"]
+    doc = campaign.estimate_unit(simulated, opts, tmp_path)
+    assert doc["calibration"]["file"] == planned["calibration"] and doc["calibration"]["cached"] is True
+
+
+def test_the_simulated_record_has_the_rows_step_and_its_true_e(simulated):
+    with xr.open_dataset(simulated[0]["path"]) as ds:
+        assert ds.attrs["true_e"] == 0.9 and ds["theta"].size == 4000
+        assert float(ds["time"][1] - ds["time"][0]) == pytest.approx(0.796)
+
+
+def test_the_table_says_whether_each_interval_holds_the_true_e():
+    def doc(e, low, high, reason=None):
+        return {"e": e, "interval": [low, high], "estimator": "e_v" if e else None, "reason": reason, "g": 1.0,
+                "warnings": [], "estimators": {"e_v": {"e": e, "interval": [low, high]}}}
+
+    rows = [{"record": name, "block": "A", "true_e": 0.9} for name in ("a", "b", "c")]
+    units = [("record_a", doc(0.91, 0.88, 0.93)), ("record_b", doc(0.8, 0.75, 0.85)), ("record_c", doc(None, None, None, "declined"))]
+    ds = campaign.summary_dataset([campaign.unit_dataset(name, [row], d) for (name, d), row in zip(units, rows)])
+    assert set(ds["e"].dims) == {"record"} and ds["estimator_e"].dims == ("record", "estimator")
+    assert list(ds["block"].values) == ["A", "A", "A"]
+    tab = campaign.table(ds)
+    assert list(tab["holds_true_e"]) == ["yes", "no", "no estimate"]
+    assert list(tab["reason"]) == ["", "", "declined"]
+    assert "| a " in campaign.markdown(tab)
+
+
+def test_every_number_of_the_document_becomes_a_variable():
+    doc = {"e": 0.9, "interval": [0.8, 0.95], "g_given": False, "records": ["x"], "calibration": {"seconds": 1.5},
+           "diagnostics": {"drift": {"statistic": 1.0, "threshold": 2.0, "fired": False}}}
+    ds = campaign.unit_dataset("record_a", [{"record": "a", "block": "a"}], doc)
+    assert float(ds["interval_high"][0]) == 0.95 and float(ds["g_given"][0]) == 0.0
+    assert ds["calibration_seconds"].attrs["units"] == "s"
+    assert float(ds["check_threshold"].sel(check="drift")[0]) == 2.0
+    assert json.dumps(doc)  # the document itself stays JSON
