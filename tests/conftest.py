@@ -299,6 +299,7 @@ def pytest_runtest_teardown(item, nextitem):
 #: :data:`FORKS` (one fork server, about 1.4 s of CPU to start).
 WORKFLOW_MODULES = (
     "tests/pipeline/test_workflow.py",
+    "tests/pipeline/test_campaign_workflow.py",
     "tests/test_engine.py",
     "tests/pipeline/test_archive.py",
     "tests/pipeline/test_workflow_rules.py",

@@ -136,7 +136,7 @@ rule campaign_table:
     input:
         records=campaign_units("record"),
         blocks=campaign_units("block"),
-        code=step_code("campaign_table.py"),
+        code=CAMPAIGN_CODE,
     output:
         nc="results/{campaign}/estimates.nc",
         csv=report("results/{campaign}/estimates.csv", category="Campaign", caption="../report/campaign_table.rst", labels={"table": "estimates"}),
@@ -145,13 +145,11 @@ rule campaign_table:
         "results/{campaign}/logs/table.log",
     benchmark:
         "results/{campaign}/benchmarks/table.tsv"
-    threads: 1
+    threads: IN_PROCESS_THREADS
     params:
         units=lambda w: list(CAMPAIGN_UNITS),
-    conda:
-        "../envs/rockdec.yaml"
-    script:
-        "../scripts/campaign_table.py"
+    run:
+        in_snakemake.campaign(rule, log[0], [*input.records, *input.blocks], output.nc, output.csv, output.md, params.units)
 
 
 rule campaign_figures:

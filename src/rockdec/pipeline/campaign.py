@@ -731,6 +731,13 @@ def simulate_step(row: dict, output: str) -> str:
     return f"simulated {row['record']}: e = {row['true_e']}, {json.dumps(row['simulate'], sort_keys=True)}"
 
 
+def _write_text(path: str, text: str) -> None:
+    """Write ``path`` whole or not at all: the workflow reads the plans while others are written."""
+    partial = Path(path).with_name(f".{Path(path).name}.partial")
+    partial.write_text(text)
+    os.replace(partial, path)
+
+
 def _read_locked(rows: list[dict]):
     with _files():
         return read(rows)
@@ -745,7 +752,7 @@ def plan_step(rows: list[dict], opts: dict, output: str) -> str:
             done = plan(rows, opts, records=_read_locked(rows))
         except InputError as exc:
             done = {"calibration": None, "settings": None, "error": str(exc)}
-    Path(output).write_text(json.dumps(done, indent=2, sort_keys=True) + "\n")
+    _write_text(output, json.dumps(done, indent=2, sort_keys=True) + "\n")
     return f"plan: {done['calibration'] or 'no calibration'}" + (f" ({done['error']})" if done["error"] else "")
 
 
@@ -780,9 +787,30 @@ def estimate_step(unit: str, rows: list[dict], opts: dict, cache, plan_file: str
         used = (doc.get("calibration") or {}).get("file")
         if used != planned:  # the plan reads the engine's own request: a mismatch is a bug, not the user's
             raise RuntimeError(f"{unit}: the estimate used {used}, its plan asked for {planned}")
-    Path(json_out).write_text(json.dumps(doc, indent=2) + "\n")
+    _write_text(json_out, json.dumps(doc, indent=2) + "\n")
     ds = unit_dataset(unit, rows, doc)
     ds.attrs.update(io.provenance(step, {"rows": rows, "options": opts}, inputs=[row["path"] for row in rows]))
     with _files():
         io.write_netcdf(ds, nc_out)
     return f"{unit}: e = {doc.get('e')}"
+
+
+def table_step(inputs: list[str], nc: str, csv_out: str, md: str, names: list[str]) -> str:
+    """Rule ``campaign_table``: the estimates ``inputs`` (:func:`unit_dataset` files) as the
+    campaign's dataset (:func:`summary_dataset`) in ``nc``, its table (:func:`table`) in
+    ``csv_out`` and ``md`` (:func:`markdown`)."""
+    from rockdec import io
+
+    with _files():
+        datasets = []
+        for path in inputs:
+            with io.open_dataset(path) as ds:
+                datasets.append(ds.load())
+    summary = summary_dataset(datasets)
+    summary.attrs.update(io.provenance("campaign_table", {"units": list(names)}))
+    with _files():
+        io.write_netcdf(summary, nc)
+    tab = table(summary)
+    tab.to_csv(csv_out, index=False)
+    _write_text(md, markdown(tab))
+    return f"{len(tab)} rows"
