@@ -133,6 +133,20 @@ def test_archive_holds_every_netcdf_and_table_of_the_products_with_the_rule_that
     assert {f["name"]: f["rule"] for f in manifest["files"]} == made_by
 
 
+def test_the_archive_folder_holds_exactly_what_its_manifest_lists(reference):
+    folder = reference / "results" / SCENE / "archive"
+    manifest = json.loads((folder / "manifest.json").read_text())
+    listed = {entry["name"] for entry in manifest["workflow"] + manifest["files"]} | {"manifest.json", "ro-crate-metadata.json"}
+    assert {p.relative_to(folder).as_posix() for p in folder.rglob("*") if not p.is_dir()} == listed  # no .snakemake_timestamp
+
+
+def test_verify_reports_a_snakemake_marker_left_in_the_folder(reference, tmp_path, capsys):
+    copy = tmp_path / "archive"
+    shutil.copytree(reference / "results" / SCENE / "archive", copy)
+    (copy / ".snakemake_timestamp").touch()
+    assert archive.verify(copy) == ["unlisted: .snakemake_timestamp (in the folder, not in manifest.json)"]
+
+
 def test_manifest_records_size_checksum_settings_versions_and_commit(reference):
     folder = reference / "results" / SCENE / "archive"
     manifest = json.loads((folder / "manifest.json").read_text())
@@ -217,7 +231,7 @@ def archived(folder: Path) -> dict[str, bytes]:
     return {
         p.relative_to(folder).as_posix(): p.read_bytes()
         for p in folder.rglob("*")
-        if p.is_file() and p.name not in ("ro-crate-metadata.json", ".snakemake_timestamp")
+        if p.is_file() and p.name != "ro-crate-metadata.json"
     }
 
 

@@ -57,7 +57,9 @@ def set_times(root: Path) -> None:
 
 
 def touch(path: Path) -> None:
-    """Make ``path`` newer than every product."""
+    """Edit ``path`` (a comment line more) and make it newer than every product: a rule's code
+    input is the fingerprint of what its modules hold (rockdec.sources.fingerprint_file)."""
+    path.write_text(path.read_text() + "\n# edited\n")
     os.utime(path, (BUILT + 30, BUILT + 30))
 
 
@@ -98,8 +100,23 @@ def dry_run(root: Path, target: str) -> dict[str, int]:
 def test_the_rules_read_the_copied_package(studies):
     code, out = snakemake(studies, "-n", "--forcerun", "tradeoff", "tradeoff")
     assert code == 0, out
-    assert str(studies / "rockdec" / "studies" / "tradeoff.py") in out
-    assert str(REPO / "src") not in out
+    fingerprint = (studies / ".snakemake" / "rockdec-code" / "tradeoff.sha256").read_text()
+    assert f" {studies / 'rockdec' / 'studies' / 'tradeoff.py'}\n" in fingerprint
+    assert str(REPO / "src") not in fingerprint + out
+
+
+def test_a_module_touched_without_a_change_reruns_nothing(studies):
+    os.utime(studies / "rockdec" / "studies" / "tradeoff.py", (BUILT + 30, BUILT + 30))
+    assert dry_run(studies, "tradeoff_study") == {}
+
+
+def test_no_line_of_a_dry_run_lists_the_package_sources(studies):
+    code, out = snakemake(studies, "-n", "--forcerun", "tradeoff", "amplitude", "--", "tradeoff_study", "amplitude_study")
+    assert code == 0, out
+    inputs = [line for line in out.splitlines() if line.strip().startswith("input:")]
+    assert len(inputs) == 6, out  # two studies, their figures and their targets
+    for line in inputs:  # a study's fingerprint, the drawing code's one module, or none (the targets)
+        assert line.count(".sha256") + line.count(str(studies / "rockdec")) <= 1, line
 
 
 @pytest.mark.parametrize("target", STUDIES)
