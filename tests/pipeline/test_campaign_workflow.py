@@ -190,3 +190,13 @@ def test_a_module_touched_reruns_nothing_and_one_edited_reruns_what_reaches_it(b
         shutil.rmtree(saved)
     code, out = snakemake(root, "-n", "campaign")
     assert code == 0 and job_stats(out) == {}, out
+
+
+def test_the_demonstration_runs_from_an_empty_folder_with_the_workflow_elsewhere(tmp_path):
+    """As `rockdec workflow -- campaign` runs it from an install (the Snakefile and its config in
+    the package's copy of the workflow): the sheet is found beside the workflow."""
+    code, out = snakemake(tmp_path, "campaign", "-n", "--snakefile", str(REPO / "Snakefile"),
+                          "--configfile", str(REPO / "config" / "config.yaml"))
+    assert code == 0, out
+    stats = job_stats(out)
+    assert stats["campaign_simulate"] == 6 and stats["campaign_plan"] == 7, out  # six records, block A pooled
