@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 import xarray as xr
+from matplotlib.colors import ListedColormap
 from matplotlib.figure import Figure
 
 from rockdec.report.figures import _new_figure
@@ -20,8 +21,9 @@ __all__ = ["FIGURES", "forest", "record_model", "diagnostics"]
 
 
 def _positions(ds: xr.Dataset) -> tuple[np.ndarray, list[str]]:
-    """A row for each record and block estimate, grouped by block (its records, then its
-    pooled estimate), a blank row between blocks; and the rows' labels."""
+    """The row of each record and block estimate of ``ds`` (in its order), grouped by block (its
+    records, then its pooled estimate) with a gap between blocks; and the labels of the rows
+    from the top (at ``sorted(rows)``)."""
     rows, labels, y = [], [], 0
     for block in dict.fromkeys(str(b) for b in ds["block"].values):
         members = [i for i in range(ds.sizes["record"]) if str(ds["block"].values[i]) == block]
@@ -48,8 +50,9 @@ def forest(ds: xr.Dataset) -> Figure:
     ...                  "interval_high": ("record", [0.93, np.nan]), "reason": ("record", ["", "declined"])},
     ...                 coords={"record": ["a", "b"], "block": ("record", ["A", "B"]), "kind": ("record", ["record", "record"]),
     ...                         "true_e": ("record", [0.9, 0.8])})
-    >>> len(forest(ds).axes)
-    1
+    >>> fig = forest(ds)
+    >>> [t.get_text() for t in fig.axes[0].get_yticklabels()]
+    ['a', 'b']
     """
     y, labels = _positions(ds)
     fig = _new_figure(6.0, 1.2 + 0.32 * len(labels))
@@ -65,7 +68,7 @@ def forest(ds: xr.Dataset) -> Figure:
     for i in np.flatnonzero(~np.isfinite(e)):
         reason = str(ds["reason"].values[i]) or "no estimate"
         ax.annotate(f"no e: {reason[:40]}", (0.01, y[i]), xycoords=("axes fraction", "data"), va="center", fontsize=7, color="tab:red")
-    ax.set_yticks(y, labels)
+    ax.set_yticks(np.sort(y), labels)
     ax.invert_yaxis()
     ax.set_xlabel("coefficient of restitution e (95 % interval)")
     ax.grid(axis="x", alpha=0.3)
@@ -79,8 +82,8 @@ def _value(ds: xr.Dataset, name: str) -> np.ndarray:
 
 def record_model(ds: xr.Dataset) -> Figure:
     """Per record: the sensor noise measured off it (in ``sigma_Y``), the corner of its load
-    (rocking frequencies ``1/T(sigma_Y)``, eq. 5; none for a white load) and its samples per
-    cycle at ``sigma_Y``, each with the standard error the measurement gives."""
+    (rocking frequencies ``1/T(sigma_Y)``, eq. 5; "none" where no colour was detected) and its
+    samples per cycle at ``sigma_Y``, each with the standard error the measurement gives."""
     records = ds.where(ds["kind"] == "record", drop=True) if (ds["kind"] == "record").any() else ds
     names = [str(r) for r in records["record"].values]
     panels = (
@@ -91,9 +94,12 @@ def record_model(ds: xr.Dataset) -> Figure:
     fig = _new_figure(9.0, 1.4 + 0.3 * len(names))
     axes = fig.subplots(1, len(panels), sharey=True)
     y = np.arange(len(names))
+    coloured = _value(records, "record_model_measured_detected_colour") > 0.5
     for ax, (name, label) in zip(axes, panels):
         value = _value(records, f"{name}_value" if f"{name}_value" in records else name)
         se = _value(records, f"{name}_se")
+        if name.endswith("load_corner_rocking"):  # a corner only where colour was detected: else white
+            value, se = np.where(coloured, value, np.nan), np.where(coloured, se, np.nan)
         ax.errorbar(value, y, xerr=np.where(np.isfinite(se), se, 0.0), fmt="o", capsize=3)
         for i in np.flatnonzero(~np.isfinite(value)):
             ax.annotate("none", (0.02, y[i]), xycoords=("axes fraction", "data"), va="center", fontsize=7, color="0.4")
@@ -105,31 +111,28 @@ def record_model(ds: xr.Dataset) -> Figure:
 
 
 def diagnostics(ds: xr.Dataset) -> Figure:
-    """Per record and check: the check's statistic over its threshold (a check fires at 1 and
-    above; :mod:`rockdec.record.diagnostics`), fired checks outlined."""
+    """Per record and check (:mod:`rockdec.record.diagnostics`): whether the check fired (red)
+    or not, with its statistic and its threshold written in the cell (a check fires above or
+    below its threshold, as the check reads it; the warnings say which in the table)."""
     records = ds.where(ds["kind"] == "record", drop=True) if (ds["kind"] == "record").any() else ds
     names = [str(r) for r in records["record"].values]
-    fig = _new_figure(7.0, 1.6 + 0.3 * len(names))
+    fig = _new_figure(8.0, 1.6 + 0.35 * len(names))
     ax = fig.add_subplot()
     if "check" not in records.dims:
         ax.text(0.5, 0.5, "no record was checked", ha="center", va="center", transform=ax.transAxes)
         return fig
     checks = [str(c) for c in records["check"].values]
-    ratio = (records["check_statistic"] / records["check_threshold"]).transpose("record", "check").values.astype(float)
-    image = ax.imshow(np.abs(ratio), aspect="auto", cmap="viridis", vmin=0.0, vmax=max(2.0, float(np.nanmax(np.abs(ratio), initial=0.0))))
-    fired = records["check_fired"].transpose("record", "check").values.astype(float) > 0.5
-    for i, j in zip(*np.nonzero(fired)):
-        ax.add_patch(_outline(j, i))
+    fired = records["check_fired"].transpose("record", "check").values.astype(float)
+    statistic = records["check_statistic"].transpose("record", "check").values.astype(float)
+    threshold = records["check_threshold"].transpose("record", "check").values.astype(float)
+    ax.imshow(np.where(np.isfinite(fired), fired, 0.0), aspect="auto", cmap=ListedColormap(["#e8f0e8", "#f2a0a0"]), vmin=0, vmax=1)
+    for i in range(len(names)):
+        for j in range(len(checks)):
+            ax.text(j, i, f"{statistic[i, j]:.3g} / {threshold[i, j]:.3g}", ha="center", va="center", fontsize=7)
     ax.set_xticks(np.arange(len(checks)), checks, rotation=30, ha="right")
     ax.set_yticks(np.arange(len(names)), names)
-    fig.colorbar(image, ax=ax, label="|statistic| / threshold (fired: outlined)")
+    ax.set_title("statistic / threshold of each check (red: fired)", fontsize=9)
     return fig
-
-
-def _outline(x: float, y: float):
-    from matplotlib.patches import Rectangle
-
-    return Rectangle((x - 0.5, y - 0.5), 1.0, 1.0, fill=False, edgecolor="tab:red", lw=2.0)
 
 
 #: The campaign's figures by name: what rule ``campaign_figures`` draws.
