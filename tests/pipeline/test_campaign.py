@@ -8,11 +8,13 @@ from __future__ import annotations
 import json
 import math
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 import xarray as xr
 
+import rockdec
 from rockdec.pipeline import campaign
 from rockdec.pipeline.campaign import SheetError
 
@@ -151,28 +153,22 @@ def test_sensor_noise_cells_read_as_the_command_reads_them():
     assert campaign.sensor_option("0.0003").units == "rad"
 
 
-def test_a_free_rocking_row_says_the_analysis_is_not_available_until_rockdec_has_one(folder, monkeypatch):
-    import rockdec
-
+def test_a_free_rocking_row_says_the_analysis_is_not_available_until_rockdec_has_one(folder):
     rows = campaign.read_sheet(sheet(folder, "record\tpath\ttest", "a\tr1.csv\tfree"))
-    monkeypatch.delattr(rockdec, "free_rocking", raising=False)
-    doc = campaign.estimate_unit(rows, campaign.options(rows[0]), folder)
-    assert doc["e"] is None and doc["reason"] == campaign.FREE_UNAVAILABLE
+    doc, result = campaign.estimate_unit(rows, campaign.options(rows[0]), folder, SimpleNamespace())
+    assert doc["e"] is None and doc["reason"] == campaign.FREE_UNAVAILABLE and result is None
     assert campaign.plan(rows, campaign.options(rows[0]))["calibration"] is None
 
 
-def test_a_free_rocking_row_calls_rockdecs_free_rocking_when_there_is_one(folder, monkeypatch):
-    import rockdec
-
+def test_a_free_rocking_row_calls_rockdecs_free_rocking_when_there_is_one(folder):
     seen = {}
 
     def free_rocking(theta, dt):
         seen.update(n=theta.size, dt=dt)
         return {"e": 0.9, "interval": [0.88, 0.92], "reason": None}
 
-    monkeypatch.setattr(rockdec, "free_rocking", free_rocking, raising=False)
     rows = campaign.read_sheet(sheet(folder, "record\tpath\ttest", "a\tr1.csv\tfree"))
-    doc = campaign.estimate_unit(rows, campaign.options(rows[0]), folder)
+    doc, _ = campaign.estimate_unit(rows, campaign.options(rows[0]), folder, SimpleNamespace(free_rocking=free_rocking))
     assert doc["e"] == 0.9 and doc["test"] == "free" and seen == {"n": 1200, "dt": pytest.approx(DT)}
 
 
@@ -200,8 +196,9 @@ def test_the_plan_names_the_calibration_the_estimate_asks_for(simulated, tmp_pat
     assert not list(tmp_path.iterdir())  # planning builds nothing
     built = campaign.build_calibration(planned["settings"], tmp_path)
     assert built.name == planned["calibration"]
-    doc = campaign.estimate_unit(simulated, opts, tmp_path)
+    doc, result = campaign.estimate_unit(simulated, opts, tmp_path, rockdec)
     assert doc["calibration"]["file"] == planned["calibration"] and doc["calibration"]["cached"] is True
+    assert doc == result.to_dict()
 
 
 def test_the_simulated_record_has_the_rows_step_and_its_true_e(simulated):

@@ -99,7 +99,9 @@ rule campaign_record:
         options=unit_options,
         cache=CAMPAIGN_CACHE,
     run:
-        in_snakemake.campaign(rule, log[0], wildcards.unit, params.rows, params.options, params.cache, input.plan, output.json, output.nc, rule)
+        in_snakemake.campaign(
+            rule, log[0], wildcards.unit, params.rows, params.options, params.cache, input.plan, output.json, output.nc, rule, api=rockdec
+        )
 
 
 rule campaign_block:
@@ -128,7 +130,9 @@ rule campaign_block:
         options=unit_options,
         cache=CAMPAIGN_CACHE,
     run:
-        in_snakemake.campaign(rule, log[0], wildcards.unit, params.rows, params.options, params.cache, input.plan, output.json, output.nc, rule)
+        in_snakemake.campaign(
+            rule, log[0], wildcards.unit, params.rows, params.options, params.cache, input.plan, output.json, output.nc, rule, api=rockdec
+        )
 
 
 rule campaign_table:
@@ -147,7 +151,7 @@ rule campaign_table:
         "results/{campaign}/benchmarks/table.tsv"
     threads: IN_PROCESS_THREADS
     params:
-        units=lambda w: list(CAMPAIGN_UNITS),
+        units=lambda w: CAMPAIGN_UNITS,
     run:
         in_snakemake.campaign(rule, log[0], [*input.records, *input.blocks], output.nc, output.csv, output.md, params.units)
 

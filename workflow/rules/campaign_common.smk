@@ -4,11 +4,13 @@ import json
 import os
 from pathlib import Path
 
+import rockdec  # the front door, which the estimate steps call (its modules load on first use)
+from rockdec.cache import default_cache
 from rockdec.pipeline import campaign as rockdec_campaign
 
 CAMPAIGN = config["campaign"]["name"]
 CAMPAIGN_CACHE = os.path.abspath(
-    os.path.expanduser(config["campaign"]["cache"] or rockdec_campaign.default_cache())
+    os.path.expanduser(config["campaign"]["cache"] or str(default_cache()))
 )
 
 
@@ -85,8 +87,8 @@ def calibration_settings(wildcards):
 
 
 def campaign_units(kind):
-    """The records' (``record``) or the blocks' (``block``) estimates (NetCDF)."""
-    return [f"results/{CAMPAIGN}/estimates/{unit}.nc" for unit in CAMPAIGN_UNITS if unit.startswith(f"{kind}_")]
+    """The records' (``record``) or the blocks' (``block``) estimates (JSON)."""
+    return [f"results/{CAMPAIGN}/estimates/{unit}.json" for unit in CAMPAIGN_UNITS if unit.startswith(f"{kind}_")]
 
 
 def campaign_products():

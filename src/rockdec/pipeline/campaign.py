@@ -29,7 +29,6 @@ import functools
 import json
 import math
 import os
-import threading
 from importlib import resources
 from pathlib import Path
 
@@ -58,15 +57,6 @@ FREE_UNAVAILABLE = "free-rocking analysis not available"
 
 class SheetError(InputError):
     """A campaign sheet the user can fix; the message names the row and the column."""
-
-
-def default_cache() -> str:
-    """Where ``rockdec estimate`` stores its calibrations: ``$ROCKDEC_CACHE``, else the user's
-    cache folder; the campaign's calibrations go there unless the config's ``campaign.cache``
-    names another folder."""
-    import platformdirs
-
-    return os.environ.get("ROCKDEC_CACHE") or str(Path(platformdirs.user_cache_dir("rockdec")) / "calibration")
 
 
 @functools.lru_cache(maxsize=1)
@@ -405,84 +395,74 @@ def options(row: dict) -> dict:
 
 def read(rows: list[dict]):
     """The records of ``rows`` as :class:`rockdec.record.records.Record` (their angles in rad),
-    read as ``rockdec estimate`` reads them: the step passed only to a file without a time axis."""
+    read as ``rockdec estimate`` reads them (:func:`rockdec.record.records.read_records`): the
+    step passed only to a file without a time axis. What :func:`plan` analyses."""
     from rockdec.record import records
-    from rockdec.timeaxis import ANGLE_UNITS
 
     out = []
-    for row in rows:
-        dt = None if row.get("file_has_time", row.get("simulate") is not None) else row["dt"]
-        for rec in records.read_records(row["path"], column=row["column"], variable=row["variable"], dt=dt):
-            factor = ANGLE_UNITS[row["units"]] if Path(row["path"]).suffix.lower() not in (".nc", ".nc4", ".netcdf") else 1.0
-            out.append(rec if factor == 1.0 else rec._replace(theta=rec.theta * factor))
+    with _files():
+        for row in rows:
+            for rec in records.read_records(row["path"], column=row["column"], variable=row["variable"], dt=_given_step(row)):
+                factor = _angle_factor(row)
+                out.append(rec if factor == 1.0 else rec._replace(theta=rec.theta * factor))
     return out
 
 
-def estimate(records, opts: dict, cache) -> dict:
-    """The estimate of ``records`` (pooled) under ``opts`` as ``rockdec estimate --json`` prints
-    it: the one adapter between the workflow and the estimate.
+def _given_step(row: dict) -> float | None:
+    """The step a row passes to the reader: its own for a file without a time axis, else none."""
+    return None if row.get("file_has_time", row.get("simulate") is not None) else row["dt"]
+
+
+def _angle_factor(row: dict) -> float:
+    """The factor from the row's ``units`` to rad for a CSV or ``.npy`` file (a NetCDF file's
+    ``units`` attribute is read by the reader itself)."""
+    netcdf = Path(row["path"]).suffix.lower() in (".nc", ".nc4", ".netcdf")
+    return 1.0 if netcdf else timeaxis.ANGLE_UNITS[row["units"]]
+
+
+def estimate(rows: list[dict], opts: dict, cache, api):
+    """The estimate of the records of ``rows`` (pooled) under ``opts``: the one adapter
+    between the workflow and the public estimate. ``api`` is the package's front door (the
+    ``rockdec`` module), which the workflow hands in, this layer sitting beneath it: its
+    ``read_record`` reads each file and its ``estimate`` returns a
+    :class:`rockdec.RestitutionEstimate`, whose ``to_dict()`` is what ``rockdec estimate
+    --json`` prints for the same files and options.
 
     Raises :class:`rockdec.validate.InputError` for records the estimate refuses.
     """
-    from rockdec.calibrate import inference
-
-    result = inference.estimate(
-        records, cache_dir=cache, g=opts.get("g"), load=None if opts["load"] == "auto" else opts["load"],
-        sensor=sensor_option(opts["sensor_noise"]), rocking=opts["model"], theta_cr=opts.get("theta_cr"),
-    )
-    return {key: value for key, value in result.items() if not key.startswith("_")}
-
-
-class _Requested(Exception):
-    """Raised in place of loading or building a calibration while :func:`calibration_request` runs."""
-
-    def __init__(self, settings: dict):
-        super().__init__("calibration requested")
-        self.settings = settings
+    theta = []
+    with _files():
+        for row in rows:
+            da = api.read_record(row["path"], column=row["column"], variable=row["variable"], dt=_given_step(row))
+            theta.append(da if _angle_factor(row) == 1.0 else da.copy(data=da.values * _angle_factor(row)))
+    return api.estimate(theta, g=opts.get("g"), load=opts["load"], sensor_noise=opts["sensor_noise"], model=opts["model"],
+                        theta_cr=opts.get("theta_cr"), cache=cache)
 
 
-_PLANNING = threading.local()
-_HOOK_LOCK = threading.Lock()
+def declared(opts: dict) -> dict:
+    """The declared parts of the record model under ``opts``, as the estimate's stages take
+    them (``load``: ``None`` for ``auto``, a table's text, else a
+    :class:`rockdec.physics.record_model.Load`; ``sensor``: :func:`sensor_option`), as the
+    public estimate passes them on."""
+    from rockdec.physics.record_model import parse_load
 
-
-def _hook_calibrations() -> None:
-    """Route :func:`rockdec.calibrate.calibration.load_or_build` through a check of
-    :data:`_PLANNING`: in a thread that plans, it raises :class:`_Requested` with its settings;
-    everywhere else it runs as it is. Installed once a process."""
-    from rockdec.calibrate import calibration
-
-    with _HOOK_LOCK:
-        if getattr(calibration.load_or_build, "_campaign_hook", False):
-            return
-        original = calibration.load_or_build
-
-        @functools.wraps(original)
-        def load_or_build(cal_settings, cache_dir, notes=None):
-            if getattr(_PLANNING, "active", False):
-                raise _Requested(cal_settings)
-            return original(cal_settings, cache_dir, notes)
-
-        load_or_build._campaign_hook = True
-        calibration.load_or_build = load_or_build
+    load = None
+    if opts["load"] != "auto":
+        parsed = parse_load(opts["load"], dt=1.0, points_per_cycle=1.0)  # a file is checked at a stand-in rocking frequency
+        load = opts["load"] if parsed.kind == "spectrum" else parsed
+    return {"load": load, "sensor": sensor_option(opts["sensor_noise"])}
 
 
 def calibration_request(records, opts: dict) -> dict | None:
-    """The settings of the calibration :func:`estimate` of ``records`` under ``opts`` asks for,
-    or ``None`` when it asks for none (a declined record model).
+    """The settings of the calibration the estimate of ``records`` under ``opts`` asks for,
+    or ``None`` when it asks for none (the records are declined): its first two stages,
+    :func:`rockdec.calibrate.inference.analyse` and
+    :func:`rockdec.calibrate.inference.choose_model`."""
+    from rockdec.calibrate import inference
 
-    The estimate runs up to the point where it would load or build its calibration: the
-    settings are the engine's own, so the calibration job builds exactly the file the estimate
-    job then finds in the cache.
-    """
-    _hook_calibrations()
-    _PLANNING.active = True
-    try:
-        estimate(records, opts, cache=os.devnull)
-    except _Requested as asked:
-        return asked.settings
-    finally:
-        _PLANNING.active = False
-    return None
+    analysed = inference.analyse(records, g=opts.get("g"))
+    choice = inference.choose_model(analysed, rocking=opts["model"], theta_cr=opts.get("theta_cr"), **declared(opts))
+    return None if choice.declined else choice.cal_settings
 
 
 def plan(rows: list[dict], opts: dict, records=None) -> dict:
@@ -510,12 +490,10 @@ def build_calibration(settings: dict, cache) -> Path:
     return Path(cache) / f"calibration-{calibration.settings_hash(settings)}.nc"
 
 
-def free_rocking_unit(rows: list[dict]) -> dict:
-    """A free-rocking row's document: :func:`rockdec.free_rocking` of its record when rockdec
-    has one, else a null ``e`` whose reason is :data:`FREE_UNAVAILABLE`."""
-    import rockdec
-
-    analysis = getattr(rockdec, "free_rocking", None)
+def free_rocking_unit(rows: list[dict], api) -> dict:
+    """A free-rocking row's document: ``free_rocking`` of the front door ``api`` on its record
+    when rockdec has one, else a null ``e`` whose reason is :data:`FREE_UNAVAILABLE`."""
+    analysis = getattr(api, "free_rocking", None)
     if analysis is None:
         return {"e": None, "interval": [None, None], "reason": FREE_UNAVAILABLE, "estimator": None, "test": "free",
                 "records": [row["path"] for row in rows], "warnings": []}
@@ -523,17 +501,19 @@ def free_rocking_unit(rows: list[dict]) -> dict:
     return {**(result.to_dict() if hasattr(result, "to_dict") else dict(result)), "test": "free"}
 
 
-def estimate_unit(rows: list[dict], opts: dict, cache, records=None) -> dict:
-    """The document of one record or block (``records``, when read already): :func:`estimate`'s
-    JSON (``rockdec estimate --json``); a refusal (:class:`rockdec.validate.InputError`) is a
-    null ``e`` with the refusal as its ``reason`` and ``refused: true``; a free-rocking row
-    :func:`free_rocking_unit`."""
+def estimate_unit(rows: list[dict], opts: dict, cache, api) -> tuple[dict, object]:
+    """The document of one record or block and its estimate: :func:`estimate`'s
+    ``to_dict()`` (``rockdec estimate --json``) and the :class:`rockdec.RestitutionEstimate`;
+    a refusal (:class:`rockdec.validate.InputError`) is a null ``e`` with the refusal as its
+    ``reason`` and ``refused: true``, and no estimate; a free-rocking row
+    :func:`free_rocking_unit`, no estimate."""
     if rows[0]["test"] == "free":
-        return free_rocking_unit(rows)
+        return free_rocking_unit(rows, api), None
     try:
-        return estimate(read(rows) if records is None else records, opts, cache)
+        result = estimate(rows, opts, cache, api)
     except InputError as exc:
-        return refused(rows, exc)
+        return refused(rows, exc), None
+    return result.to_dict(), result
 
 
 def refused(rows: list[dict], exc: Exception) -> dict:
@@ -738,18 +718,13 @@ def _write_text(path: str, text: str) -> None:
     os.replace(partial, path)
 
 
-def _read_locked(rows: list[dict]):
-    with _files():
-        return read(rows)
-
-
 def plan_step(rows: list[dict], opts: dict, output: str) -> str:
     """Rule ``campaign_plan``: :func:`plan` of ``rows`` written to ``output`` (JSON)."""
     if rows[0]["test"] == "free":
         done = {"calibration": None, "settings": None, "error": None}
     else:
         try:
-            done = plan(rows, opts, records=_read_locked(rows))
+            done = plan(rows, opts)
         except InputError as exc:
             done = {"calibration": None, "settings": None, "error": str(exc)}
     _write_text(output, json.dumps(done, indent=2, sort_keys=True) + "\n")
@@ -759,8 +734,8 @@ def plan_step(rows: list[dict], opts: dict, output: str) -> str:
 def calibration_step(settings: dict, output: str, threads: int) -> str:
     """Rule ``campaign_calibration``: the calibration of ``settings`` (a plan's), built into the
     folder of ``output`` on ``threads`` (:func:`build_calibration`, on the engine of
-    :mod:`rockdec.pipeline.engine`)."""
-    from rockdec.pipeline import engine
+    :mod:`rockdec.engine`)."""
+    from rockdec import engine
 
     with engine.session(threads):
         path = build_calibration(settings, Path(output).parent)
@@ -769,45 +744,38 @@ def calibration_step(settings: dict, output: str, threads: int) -> str:
     return f"calibration: {path}"
 
 
-def estimate_step(unit: str, rows: list[dict], opts: dict, cache, plan_file: str, json_out: str, nc_out: str, step: str) -> str:
+def estimate_step(unit: str, rows: list[dict], opts: dict, cache, plan_file: str, json_out: str, nc_out: str, step: str, api) -> str:
     """Rules ``campaign_record`` and ``campaign_block``: :func:`estimate_unit` of ``rows``
-    written as JSON (what ``rockdec estimate --json`` prints) to ``json_out`` and as a CF
-    dataset (:func:`unit_dataset`) to ``nc_out``; the calibration it used checked against
-    its plan's (``plan_file``)."""
+    written as JSON (what ``rockdec estimate --json`` prints) to ``json_out`` and as its CF
+    dataset (``to_dataset()``; a refused or free-rocking row's :func:`unit_dataset`) to
+    ``nc_out``; the calibration it used checked against its plan's (``plan_file``)."""
     from rockdec import io
 
-    try:
-        records = None if rows[0]["test"] == "free" else _read_locked(rows)
-    except InputError as exc:
-        doc = refused(rows, exc)
-    else:
-        doc = estimate_unit(rows, opts, cache, records)
+    doc, result = estimate_unit(rows, opts, cache, api)
     if rows[0]["test"] != "free":
         planned = json.loads(Path(plan_file).read_text())["calibration"]
         used = (doc.get("calibration") or {}).get("file")
-        if used != planned:  # the plan reads the engine's own request: a mismatch is a bug, not the user's
+        if used != planned:  # the plan runs the estimate's own first stages: a mismatch is a bug, not the user's
             raise RuntimeError(f"{unit}: the estimate used {used}, its plan asked for {planned}")
     _write_text(json_out, json.dumps(doc, indent=2) + "\n")
-    ds = unit_dataset(unit, rows, doc)
-    ds.attrs.update(io.provenance(step, {"rows": rows, "options": opts}, inputs=[row["path"] for row in rows]))
+    ds = result.to_dataset() if result is not None else unit_dataset(unit, rows, doc)
+    for key, value in io.provenance(step, {"rows": rows, "options": opts}, inputs=[row["path"] for row in rows]).items():
+        ds.attrs.setdefault(key, value)
     with _files():
         io.write_netcdf(ds, nc_out)
     return f"{unit}: e = {doc.get('e')}"
 
 
-def table_step(inputs: list[str], nc: str, csv_out: str, md: str, names: list[str]) -> str:
-    """Rule ``campaign_table``: the estimates ``inputs`` (:func:`unit_dataset` files) as the
-    campaign's dataset (:func:`summary_dataset`) in ``nc``, its table (:func:`table`) in
-    ``csv_out`` and ``md`` (:func:`markdown`)."""
+def table_step(inputs: list[str], nc: str, csv_out: str, md: str, units_rows: dict) -> str:
+    """Rule ``campaign_table``: the documents ``inputs`` (``estimates/<unit>.json``, of the
+    units ``units_rows`` maps to their rows) as the campaign's dataset (:func:`unit_dataset`
+    each, :func:`summary_dataset`) in ``nc``, its table (:func:`table`) in ``csv_out`` and
+    ``md`` (:func:`markdown`)."""
     from rockdec import io
 
-    with _files():
-        datasets = []
-        for path in inputs:
-            with io.open_dataset(path) as ds:
-                datasets.append(ds.load())
+    datasets = [unit_dataset(Path(path).stem, units_rows[Path(path).stem], json.loads(Path(path).read_text())) for path in inputs]
     summary = summary_dataset(datasets)
-    summary.attrs.update(io.provenance("campaign_table", {"units": list(names)}))
+    summary.attrs.update(io.provenance("campaign_table", {"units": list(units_rows)}, inputs=inputs))
     with _files():
         io.write_netcdf(summary, nc)
     tab = table(summary)

@@ -143,7 +143,7 @@ def step(rule: str, log: str, *args) -> None:
 CAMPAIGN_STARTS = ("dask", "dask.array", "dask.threaded", "rockdec.calibrate.inference", "rockdec.pipeline.campaign", "xarray")
 
 
-def campaign(rule: str, log: str, *args) -> None:
+def campaign(rule: str, log: str, *args, api=None) -> None:
     """Rules ``campaign_simulate``, ``campaign_plan``, ``campaign_calibration``,
     ``campaign_record`` and ``campaign_block``: the :mod:`rockdec.pipeline.campaign` step of
     that name (``campaign_plan`` runs ``plan_step``; the record and block rules
@@ -151,14 +151,20 @@ def campaign(rule: str, log: str, *args) -> None:
     take a fraction of a second once the estimate's modules are loaded, which a script would
     load again for each. Steps run side by side on Snakemake's threads (the numba kernels
     and the calibration's Dask threads release the GIL) and hold the HDF5 locks only to read
-    and write files. Logged as :func:`step` logs."""
+    and write files. Logged as :func:`step` logs. ``api``: the package's front door (the
+    ``rockdec`` module), which the estimate steps call and the workflow hands in; its modules
+    load on first use, here one thread at a time (:data:`_IMPORTS`)."""
     name = {"campaign_record": "estimate", "campaign_block": "estimate"}.get(rule, rule.removeprefix("campaign_"))
 
     def work():
         _load(CAMPAIGN_STARTS)
         from rockdec.pipeline import campaign as steps
 
-        return getattr(steps, f"{name}_step")(*args)
+        if api is None:
+            return getattr(steps, f"{name}_step")(*args)
+        with _IMPORTS:
+            getattr(api, "estimate"), getattr(api, "read_record")
+        return getattr(steps, f"{name}_step")(*args, api=api)
 
     _logged(rule, log, work)
 
