@@ -20,7 +20,7 @@ import numpy as np
 
 from rockdec.cache import default_cache
 from rockdec.calibrate import calibration, inference
-from rockdec.physics.record_model import SensorNoise, parse_load
+from rockdec.physics.record_model import SensorNoise, declared_load, parse_sensor_noise
 from rockdec.record import records as records_mod
 from rockdec.report.result import RestitutionEstimate
 from rockdec.timeaxis import RecordError, angle_factor
@@ -127,36 +127,13 @@ def _records(theta, dt) -> list[records_mod.Record]:
 
 
 def _sensor_noise(value) -> SensorNoise | None:
-    """:func:`estimate`'s ``sensor_noise``: ``"auto"`` (``None``), a :class:`SensorNoise`, a
-    number (its standard deviation in rad) or ``"N%"`` (per cent of ``sigma_Y``)."""
-    if isinstance(value, SensorNoise):
-        return value
-    word = str(value).strip().lower()
-    if word == "auto":
-        return None
-    percent = word.endswith("%")
-    try:
-        number = float(word[:-1] if percent else word)
-    except ValueError:
-        number = math.nan
-    if not (number >= 0.0 and number < math.inf):
-        raise InputError(
-            f"`sensor_noise` {value!r} is not a noise level; give auto (measured), 0, a standard deviation in rad "
-            "(0.0002) or a share of sigma_Y (2%), >= 0."
-        )
-    return SensorNoise(number / 100.0, "sigma_y") if percent else SensorNoise(number, "rad")
+    """:func:`estimate`'s ``sensor_noise`` (:func:`rockdec.physics.record_model.parse_sensor_noise`)."""
+    return parse_sensor_noise(value)
 
 
 def _load(value):
-    """:func:`estimate`'s ``load``: ``"auto"`` (``None``), a Load, or its text, checked here;
-    a spectrum's text is returned for the estimate to place against the record's rocking
-    frequency."""
-    if not isinstance(value, str):
-        return value
-    if value.strip().lower() == "auto":
-        return None
-    load = parse_load(value, dt=1.0, points_per_cycle=1.0)  # a file is checked at a stand-in rocking frequency
-    return value if load.kind == "spectrum" else load
+    """:func:`estimate`'s ``load`` (:func:`rockdec.physics.record_model.declared_load`)."""
+    return declared_load(value)
 
 
 def _cache(cache) -> Path:

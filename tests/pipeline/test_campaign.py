@@ -147,10 +147,12 @@ def test_a_spectrum_files_path_is_taken_relative_to_the_sheet(folder):
     assert rows[0]["load"] == f"spectrum:{folder / 'psd.csv'}"
 
 
-def test_sensor_noise_cells_read_as_the_command_reads_them():
-    assert campaign.sensor_option("auto") is None
-    assert campaign.sensor_option("2%").std == pytest.approx(0.02) and campaign.sensor_option("2%").units == "sigma_y"
-    assert campaign.sensor_option("0.0003").units == "rad"
+def test_the_declared_options_are_what_the_estimate_takes():
+    from rockdec.physics.record_model import Load
+
+    got = campaign.declared({"load": "lowpass:3", "sensor_noise": "2%"})
+    assert got["load"] == Load("lowpass", 3.0) and got["sensor"].std == pytest.approx(0.02) and got["sensor"].units == "sigma_y"
+    assert campaign.declared({"load": "auto", "sensor_noise": "auto"}) == {"load": None, "sensor": None}
 
 
 def test_a_free_rocking_row_says_the_analysis_is_not_available_until_rockdec_has_one(folder):

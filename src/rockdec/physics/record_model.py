@@ -457,6 +457,53 @@ LOAD_ATTRS = ("load", "load_corner", "load_frequency", "load_psd", "load_source"
 """The attributes that name a load (:func:`load_attrs`; the last three for a spectrum only)."""
 
 
+def declared_load(value):
+    """A declared ``load`` as the estimate's stages take it: ``None`` for ``"auto"`` (measured
+    off the record), a :class:`Load` as given, or a text checked by :func:`parse_load` (a file
+    at a stand-in rocking frequency) -- a spectrum's text kept, for the estimate to place
+    against the record's rocking frequency, any other its :class:`Load`.
+
+    Examples
+    --------
+    >>> declared_load("auto") is None, declared_load("lowpass:3").corner
+    (True, 3.0)
+    """
+    if not isinstance(value, str):
+        return value
+    if value.strip().lower() == "auto":
+        return None
+    load = parse_load(value, dt=1.0, points_per_cycle=1.0)
+    return value if load.kind == "spectrum" else load
+
+
+def parse_sensor_noise(value) -> SensorNoise | None:
+    """A declared ``sensor_noise``: ``None`` for ``"auto"`` (measured off the record), a
+    :class:`SensorNoise` as given, a number (its standard deviation in rad) or ``"N%"`` (per
+    cent of ``sigma_Y``); anything else is refused in one sentence.
+
+    Examples
+    --------
+    >>> parse_sensor_noise("2%")
+    SensorNoise(std=0.02, units='sigma_y')
+    """
+    if isinstance(value, SensorNoise):
+        return value
+    word = str(value).strip().lower()
+    if word == "auto":
+        return None
+    percent = word.endswith("%")
+    try:
+        number = float(word[:-1] if percent else word)
+    except ValueError:
+        number = math.nan
+    if not (number >= 0.0 and number < math.inf):
+        raise checks.InputError(
+            f"`sensor_noise` {value!r} is not a noise level; give auto (measured), 0, a standard deviation in rad "
+            "(0.0002) or a share of sigma_Y (2%), >= 0."
+        )
+    return SensorNoise(number / 100.0, "sigma_y") if percent else SensorNoise(number, "rad")
+
+
 def load_attrs(load: Load) -> dict:
     """The load as flat attributes: ``load`` (its kind) and ``load_corner`` (NaN but for
     lowpass); a spectrum adds its table as two lists of floats, ``load_frequency`` (rocking

@@ -9,14 +9,17 @@ row and the column (:class:`SheetError`).
 
 What each job of ``workflow/rules/campaign.smk`` runs:
 
-* :func:`plan`: the calibration a record's (or a block's pooled) estimate asks for, read off
-  the engine itself (:func:`calibration_request`), so the calibration is a job of its own keyed
-  by its content (:func:`rockdec.calibrate.calibration.settings_hash`);
-* :func:`build_calibration`: that calibration, into the cache ``rockdec estimate`` reads;
-* :func:`estimate_unit`: the estimate of a record or of a block, through :func:`estimate`,
-  the one adapter to the public estimate (its JSON is what ``rockdec estimate --json`` prints
-  for the same file and options);
-* :func:`table` and :func:`markdown`: every record's and block's estimate side by side.
+* :func:`simulate_step`: a record of known ``e`` for the demonstration (a row with ``simulate``);
+* :func:`plan_step`: the calibration a record's (or a block's pooled) estimate asks for, read
+  off the estimate's own first stages (:func:`calibration_request`), so the calibration is a
+  job of its own keyed by its content (:func:`rockdec.calibrate.calibration.settings_hash`);
+* :func:`calibration_step`: that calibration, into the cache ``rockdec estimate`` reads;
+* :func:`estimate_step`: the estimate of a record or of a block through :func:`estimate`,
+  the one adapter to the public estimate (its JSON is what ``rockdec estimate --json``
+  prints for the same files and options);
+* :func:`table_step`: every record's and block's estimate side by side (:func:`table`).
+
+The steps run inside the Snakemake process (:func:`rockdec.pipeline.in_snakemake.campaign`).
 
 A row whose ``test`` is ``free`` (a free-rocking test) goes to :func:`free_rocking_unit`.
 """
@@ -37,7 +40,7 @@ import numpy as np
 from rockdec import timeaxis
 from rockdec.validate import InputError
 
-#: The columns of a sheet, in the order :func:`read_sheet` returns them (the schema's properties).
+#: The sheet's JSON Schema, a data file of the package: its properties are the sheet's columns.
 SCHEMA_FILE = "records_schema.yaml"
 
 #: Relative tolerance on a step the sheet gives against the file's own time axis, and between
@@ -65,11 +68,6 @@ def schema() -> dict:
     import yaml
 
     return yaml.safe_load(resources.files("rockdec").joinpath(SCHEMA_FILE).read_text())
-
-
-def columns() -> list[str]:
-    """Every column a sheet may have, in the schema's order."""
-    return list(schema()["properties"])
 
 
 def _where(sheet: Path, row: int | None, record: str | None, column: str | None) -> str:
@@ -201,6 +199,8 @@ def read_sheet(sheet: str | Path, *, simulated: str | Path = "results/simulated"
 
 def _completed(row: dict, sheet: Path, simulated: Path, fail) -> dict:
     """A row with its defaults, its path resolved and its step known (:func:`read_sheet`)."""
+    from rockdec.physics.record_model import parse_sensor_noise
+
     props = schema()["properties"]
     row = {**{k: p["default"] for k, p in props.items() if "default" in p}, **row}
     row.setdefault("block", row["record"])
@@ -246,7 +246,7 @@ def _completed(row: dict, sheet: Path, simulated: Path, fail) -> dict:
     except InputError as exc:
         raise fail("load", str(exc).rstrip(".")) from None
     try:
-        sensor_option(row["sensor_noise"])
+        parse_sensor_noise(row["sensor_noise"])
     except InputError as exc:
         raise fail("sensor_noise", str(exc).rstrip(".")) from None
     return row
@@ -304,30 +304,6 @@ def load_option(text: str, sheet: Path) -> str:
         text = f"{kind}:{path if path.is_absolute() else sheet.resolve().parent / path}"
     parse_load(text, dt=1.0, points_per_cycle=1.0)  # a file is checked at a stand-in rocking frequency
     return text
-
-
-def sensor_option(text: str):
-    """A ``sensor_noise`` cell as the engine takes it: ``None`` for ``auto`` (measured off the
-    record), else a :class:`rockdec.physics.record_model.SensorNoise` (``0``, a standard deviation
-    in rad, or ``N%`` of ``sigma_Y``).
-
-    Examples
-    --------
-    >>> sensor_option("2%")
-    SensorNoise(std=0.02, units='sigma_y')
-    """
-    from rockdec.physics.record_model import SensorNoise
-
-    if text == "auto":
-        return None
-    percent = text.endswith("%")
-    try:
-        value = float(text[:-1] if percent else text)
-    except ValueError:
-        value = math.nan
-    if not (0.0 <= value < math.inf):
-        raise InputError(f"'{text}' is not a noise level; give auto, 0, a standard deviation in rad or a share of sigma_Y (2%)")
-    return SensorNoise(value / 100.0, "sigma_y") if percent else SensorNoise(value, "rad")
 
 
 def file_step(path: str | Path, variable: str = "theta", column: str = "theta") -> tuple[float | None, str | None]:
@@ -440,17 +416,12 @@ def estimate(rows: list[dict], opts: dict, cache, api):
 
 
 def declared(opts: dict) -> dict:
-    """The declared parts of the record model under ``opts``, as the estimate's stages take
-    them (``load``: ``None`` for ``auto``, a table's text, else a
-    :class:`rockdec.physics.record_model.Load`; ``sensor``: :func:`sensor_option`), as the
-    public estimate passes them on."""
-    from rockdec.physics.record_model import parse_load
+    """The declared parts of the record model under ``opts`` as the estimate's stages take
+    them, and as the public estimate passes them on
+    (:func:`rockdec.physics.record_model.declared_load`, :func:`~rockdec.physics.record_model.parse_sensor_noise`)."""
+    from rockdec.physics.record_model import declared_load, parse_sensor_noise
 
-    load = None
-    if opts["load"] != "auto":
-        parsed = parse_load(opts["load"], dt=1.0, points_per_cycle=1.0)  # a file is checked at a stand-in rocking frequency
-        load = opts["load"] if parsed.kind == "spectrum" else parsed
-    return {"load": load, "sensor": sensor_option(opts["sensor_noise"])}
+    return {"load": declared_load(opts["load"]), "sensor": parse_sensor_noise(opts["sensor_noise"])}
 
 
 def calibration_request(records, opts: dict) -> dict | None:
