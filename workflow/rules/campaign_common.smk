@@ -38,9 +38,10 @@ except rockdec_campaign.InputError as exc:
 CAMPAIGN_UNITS = rockdec_campaign.units(CAMPAIGN_ROWS)
 CAMPAIGN_RECORDS = {row["record"]: row for row in CAMPAIGN_ROWS}
 # The simulation, the plans, the calibrations and the estimates run inside the Snakemake
-# process (rockdec.pipeline.in_snakemake.campaign); their code input is what that reaches.
+# process (rockdec.pipeline.in_snakemake.campaign); their code input is what that reaches,
+# the public estimate they are handed included.
 CAMPAIGN_CODE = code_fingerprint(
-    "campaign", [find_spec("rockdec.pipeline.in_snakemake").origin, *package_sources("rockdec.pipeline.campaign")]
+    "campaign", [find_spec("rockdec.pipeline.in_snakemake").origin, *package_sources("rockdec.pipeline.campaign", "rockdec.api")]
 )
 
 
