@@ -17,7 +17,8 @@ A plain script (not a test): prints timings and their ratio, never asserts them.
    and each command is run again once it is stored (warm). A calibration's build time is
    its cold command's time less the same command's warm time.
 4. The ratio: the campaign's wall time over (the sum of the warm times + the sum of the
-   build times) / 2, the by-hand work spread over 2 cores.
+   build times) / 2, the by-hand work spread over 2 cores; and the same in CPU seconds
+   (every process and thread), which another user's load moves less.
 
 Wall seconds on a machine that may be shared: the load average is printed with them.
 """
@@ -27,6 +28,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import shutil
 import subprocess
 import sys
@@ -37,13 +39,19 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 
 
-def _timed(command: list[str], cwd: Path) -> tuple[float, str]:
-    start = time.perf_counter()
+def _cpu() -> float:
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
+
+
+def _timed(command: list[str], cwd: Path) -> tuple[float, float, str]:
+    """Wall and CPU seconds (the command's and its children's, every thread) and its output."""
+    start, cpu = time.perf_counter(), _cpu()
     done = subprocess.run(command, cwd=cwd, capture_output=True, text=True)
     seconds = time.perf_counter() - start
     if done.returncode:
         sys.exit(f"failed ({done.returncode}): {' '.join(command)}\n{done.stderr[-3000:]}")
-    return seconds, done.stdout
+    return seconds, _cpu() - cpu, done.stdout
 
 
 def records(folder: Path, samples: int) -> list[dict]:
@@ -79,27 +87,32 @@ def main() -> None:
     for cache in (campaign_cache, hand_cache):
         shutil.rmtree(cache, ignore_errors=True)
     load = os.getloadavg()[0]
-    wall, _ = _timed([sys.executable, "-m", "snakemake", "--cores", "2", "campaign", "--config",
-                      f"campaign={{name: bench, sheet: {sheet}, cache: {campaign_cache}}}"], work)
+    wall, wall_cpu, _ = _timed([sys.executable, "-m", "snakemake", "--cores", "2", "campaign", "--config",
+                                f"campaign={{name: bench, sheet: {sheet}, cache: {campaign_cache}}}"], work)
 
     blocks: dict[str, list[str]] = {}
     for row in rows:
         blocks.setdefault(row["block"], []).append(row["path"])
     units = [[row["path"]] for row in rows] + [paths for paths in blocks.values() if len(paths) > 1]
-    warm, built = [], []
+    warm, built, warm_cpu, built_cpu = [], [], [], []
     for paths in units:
         command = [sys.executable, "-m", "rockdec", "estimate", *paths, "--json", "--cache", str(hand_cache)]
-        first, out = _timed(command, work)
-        again, _ = _timed(command, work)
+        first, first_cpu, out = _timed(command, work)
+        again, again_cpu, _ = _timed(command, work)
         warm.append(again)
+        warm_cpu.append(again_cpu)
         if not json.loads(out)["calibration"]["cached"]:
             built.append(first - again)
+            built_cpu.append(first_cpu - again_cpu)
     hand = (sum(warm) + sum(built)) / 2
     print(f"records: {len(rows)} of {args.samples} samples, {len(units) - len(rows)} pooled block(s); load average {load:.2f} at the start")
     print(f"campaign (snakemake --cores 2 campaign): {wall:.1f} s wall, {len(list(campaign_cache.glob('calibration-*.nc')))} calibrations")
     print(f"by hand: {len(units)} warm estimates {sum(warm):.1f} s in all, {len(built)} calibrations built in {sum(built):.1f} s; "
           f"(warm + builds) / 2 = {hand:.1f} s")
     print(f"ratio: {wall / hand:.2f}")
+    hand_cpu = sum(warm_cpu) + sum(built_cpu)
+    print(f"CPU: campaign {wall_cpu:.1f} s, by hand {hand_cpu:.1f} s (warm {sum(warm_cpu):.1f} + builds {sum(built_cpu):.1f}); "
+          f"ratio {wall_cpu / hand_cpu:.2f} (less moved by a shared machine's load than the wall times)")
     if not args.keep:
         shutil.rmtree(work)
 
