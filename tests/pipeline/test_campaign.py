@@ -155,23 +155,28 @@ def test_the_declared_options_are_what_the_estimate_takes():
     assert campaign.declared({"load": "auto", "sensor_noise": "auto"}) == {"load": None, "sensor": None}
 
 
-def test_a_free_rocking_row_says_the_analysis_is_not_available_until_rockdec_has_one(folder):
+def test_a_free_rocking_row_says_the_analysis_is_not_available_where_rockdec_has_none(folder):
     rows = campaign.read_sheet(sheet(folder, "record\tpath\ttest", "a\tr1.csv\tfree"))
     doc, result = campaign.estimate_unit(rows, campaign.options(rows[0]), folder, SimpleNamespace())
     assert doc["e"] is None and doc["reason"] == campaign.FREE_UNAVAILABLE and result is None
     assert campaign.plan(rows, campaign.options(rows[0]))["calibration"] is None
 
 
-def test_a_free_rocking_row_calls_rockdecs_free_rocking_when_there_is_one(folder):
-    seen = {}
+def test_a_free_rocking_rows_json_is_what_rockdec_estimate_test_free_prints(tmp_path, monkeypatch, capsys):
+    from rockdec import cli
 
-    def free_rocking(theta, dt):
-        seen.update(n=theta.size, dt=dt)
-        return {"e": 0.9, "interval": [0.88, 0.92], "reason": None}
+    rockdec.simulate(0.9, 3000, seed=0, sigma_p=0.0, theta0=0.01).to_netcdf(tmp_path / "free.nc")
+    rows = campaign.read_sheet(sheet(tmp_path, "record\tpath\ttest", "f\tfree.nc\tfree"))
+    doc, result = campaign.estimate_unit(rows, campaign.options(rows[0]), tmp_path, rockdec)
+    assert doc["test"] == "free" and doc["e"] == pytest.approx(0.9, abs=1e-3) and result.to_dict() == doc
+    monkeypatch.chdir(tmp_path)
+    assert cli.main(["estimate", "--test", "free", str(tmp_path / "free.nc"), "--json"]) in (0, None)
+    assert json.loads(capsys.readouterr().out) == doc
 
-    rows = campaign.read_sheet(sheet(folder, "record\tpath\ttest", "a\tr1.csv\tfree"))
-    doc, _ = campaign.estimate_unit(rows, campaign.options(rows[0]), folder, SimpleNamespace(free_rocking=free_rocking))
-    assert doc["e"] == 0.9 and doc["test"] == "free" and seen == {"n": 1200, "dt": pytest.approx(DT)}
+
+def test_a_free_rocking_row_takes_no_record_model(folder):
+    with pytest.raises(SheetError, match="row 1 \\(record 'a'\\), column 'load': a free-rocking test"):
+        campaign.read_sheet(sheet(folder, "record\tpath\ttest\tload", "a\tr1.csv\tfree\twhite"))
 
 
 # --- the plan and the estimate: the calibration the plan names is the one the estimate reads

@@ -1,5 +1,5 @@
-"""A small campaign through the workflow, built once: two simulated records of one block and a
-measured record (a CSV file), records of 6000 samples so that their calibrations take a second or
+"""A small campaign through the workflow, built once: two simulated records of one block, a
+measured record (a CSV file) and a free-rocking test, records of 6000 samples so that their calibrations take a second or
 two each. Each record's JSON is what ``rockdec estimate --json`` prints for its file; each distinct
 calibration is built once, by a job of its own; a new row reruns only its record, its block
 and the summaries; the table, the NetCDF (CF), the figures and the verified archive; the
@@ -25,12 +25,13 @@ from rockdec.pipeline import archive
 from test_workflow import REPO, job_stats
 
 SHEET = [
-    "record\tpath\tblock\ttrue_e\tdt\tsimulate",
-    "a1\t\tA\t0.9\t0.796\tseed=4 n_points=6000",
-    "a2\t\tA\t0.9\t0.796\tseed=2 n_points=6000",
-    "m1\tlab/m1.csv\tM\t\t\t",
+    "record\tpath\tblock\ttrue_e\tdt\tsimulate\ttest",
+    "a1\t\tA\t0.9\t0.796\tseed=4 n_points=6000\t",
+    "a2\t\tA\t0.9\t0.796\tseed=2 n_points=6000\t",
+    "m1\tlab/m1.csv\tM\t\t\t\t",
+    "f1\t\tF\t0.9\t0.796\tseed=41 n_points=3000 theta0=20 noise=0.01\tfree",
 ]
-NEW_ROW = "a3\t\tA\t0.9\t0.796\tseed=3 n_points=6000"
+NEW_ROW = "a3\t\tA\t0.9\t0.796\tseed=3 n_points=6000\t"
 
 
 def measured_record(path: Path) -> None:
@@ -80,13 +81,15 @@ def test_each_records_json_is_what_rockdec_estimate_prints_for_its_file(built, m
 
 
 def test_each_distinct_calibration_is_built_once_by_a_job_of_its_own(built):
-    plans = [json.loads(p.read_text()) for p in (built["results"] / "plans").glob("*.json")]
-    wanted = {plan["calibration"] for plan in plans}
-    assert len(plans) == 4 and None not in wanted  # a1, a2, m1 and block A
+    plans = {p.stem: json.loads(p.read_text()) for p in (built["results"] / "plans").glob("*.json")}
+    assert plans["record_f1"]["calibration"] is None  # a free-rocking test needs none
+    wanted = {plan["calibration"] for unit, plan in plans.items() if unit != "record_f1"}
+    assert len(plans) == 5 and None not in wanted  # a1, a2, m1, f1 and block A
     assert built["log"].count("rule campaign_calibration:") == len(wanted)
     assert {p.name for p in built["cache"].glob("calibration-*.nc")} == wanted
     for path in (built["results"] / "estimates").glob("*.json"):
-        assert json.loads(path.read_text())["calibration"]["cached"] is True, path.name  # no estimate built one
+        if path.stem != "record_f1":
+            assert json.loads(path.read_text())["calibration"]["cached"] is True, path.name  # no estimate built one
 
 
 def test_adding_a_row_reruns_only_that_record_its_block_and_the_summaries(built):
@@ -108,11 +111,12 @@ def test_adding_a_row_reruns_only_that_record_its_block_and_the_summaries(built)
 
 def test_the_table_shows_each_estimate_beside_the_true_e_and_says_why_when_there_is_none(built):
     tab = pd.read_csv(built["results"] / "estimates.csv", keep_default_na=False)
-    assert list(tab["record"]) == ["a1", "a2", "m1", "A (pooled)"]
+    assert list(tab["record"]) == ["a1", "a2", "m1", "f1", "A (pooled)"]
+    assert float(tab.loc[tab["record"] == "f1", "e"].iloc[0]) == pytest.approx(0.9, abs=0.01)  # the free-rocking test's
     for row in tab.itertuples():
         assert row.holds_true_e in ("yes", "no", "no estimate", "")
         assert (row.e != "") or row.reason, row  # no e: the reason says why
-    assert (tab["true_e"] == "").tolist() == [False, False, True, False]
+    assert (tab["true_e"] == "").tolist() == [False, False, True, False, False]
     assert "| A (pooled) |" in (built["results"] / "estimates.md").read_text()
 
 
@@ -120,7 +124,7 @@ def test_the_estimates_netcdf_runs_along_record_and_estimator_and_is_cf_clean(bu
     path = built["results"] / "estimates.nc"
     with xr.open_dataset(path) as ds:
         assert ds["e"].dims == ("record",) and ds["estimator_e"].dims == ("record", "estimator")
-        assert list(ds["block"].values) == ["A", "A", "M", "A"]
+        assert list(ds["block"].values) == ["A", "A", "M", "F", "A"]
         assert ds["g"].attrs["units"] == "rad s-2" and ds["dt"].attrs["units"] == "s"
         one = json.loads((built["results"] / "estimates" / "record_a1.json").read_text())
         assert float(ds["e"].sel(record="a1")) == pytest.approx(np.nan if one["e"] is None else one["e"], nan_ok=True)
@@ -152,18 +156,18 @@ def test_the_slurm_profile_plans_a_job_per_record_block_and_calibration(built):
                           "--config", f"campaign={{name: demo, sheet: config/records.tsv, cache: {empty}}}")
     assert code == 0, out
     stats = job_stats(out)
-    assert stats["campaign_record"] == 3 and stats["campaign_block"] == 1 and stats["campaign_calibration"] == 4, out
+    assert stats["campaign_record"] == 4 and stats["campaign_block"] == 1 and stats["campaign_calibration"] == 4, out
 
 
 def test_a_bad_sheet_stops_the_run_before_any_job_naming_row_and_column(built):
     sheet = built["root"] / "config" / "records.tsv"
     before = sheet.read_text()
-    sheet.write_text(before + "m1\tlab/m1.csv\tM\t\t\t\n")
+    sheet.write_text(before + "m1\tlab/m1.csv\tM\t\t\t\t\n")
     try:
         code, out = snakemake(built["root"], "-n", "campaign")
     finally:
         sheet.write_text(before)
-    assert code == 2 and "row 4 (record 'm1'), column 'record'" in out, out
+    assert code == 2 and "row 5 (record 'm1'), column 'record'" in out, out
     assert "Job stats" not in out
 
 
@@ -199,4 +203,4 @@ def test_the_demonstration_runs_from_an_empty_folder_with_the_workflow_elsewhere
                           "--configfile", str(REPO / "config" / "config.yaml"))
     assert code == 0, out
     stats = job_stats(out)
-    assert stats["campaign_simulate"] == 6 and stats["campaign_plan"] == 7, out  # six records, block A pooled
+    assert stats["campaign_simulate"] == 7 and stats["campaign_plan"] == 8, out  # seven records, block A pooled

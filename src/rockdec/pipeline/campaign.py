@@ -21,7 +21,8 @@ What each job of ``workflow/rules/campaign.smk`` runs:
 
 The steps run inside the Snakemake process (:func:`rockdec.pipeline.in_snakemake.campaign`).
 
-A row whose ``test`` is ``free`` (a free-rocking test) goes to :func:`free_rocking_unit`.
+A row whose ``test`` is ``free`` (a free-rocking test) goes to :func:`free_rocking_unit`
+(``rockdec.free_rocking``, as ``rockdec estimate --test free`` runs it): no calibration.
 """
 
 from __future__ import annotations
@@ -237,6 +238,10 @@ def _completed(row: dict, sheet: Path, simulated: Path, fail) -> dict:
         given = own if given is None else given
     row["dt"] = float(given)
     row.pop("fs", None)
+    if row["test"] == "free":
+        for column, default in (("g", None), ("load", "auto"), ("sensor_noise", "auto")):
+            if row.get(column) != default:
+                raise fail(column, "a free-rocking test reads g off its arcs and needs no record model; leave it empty")
     if row["model"] == "housner" and "theta_cr" not in row:
         raise fail("theta_cr", "model housner needs the block's critical angle theta_cr in rad (atan(width/height))")
     if row["model"] != "housner" and "theta_cr" in row:
@@ -271,15 +276,16 @@ def _check_blocks(rows: list[dict], sheet: Path, numbers: dict) -> None:
 
 def simulation(text: str, fail=None) -> dict:
     """The recipe of a ``simulate`` cell: ``seed=N`` and optional ``n_points=N`` (default
-    200000), ``noise=SHARE`` (sensor noise in units of ``sigma_Y``, default 0) and ``corner=C``
-    (a low-pass load's corner in rocking frequencies, default white).
+    200000), ``noise=SHARE`` (sensor noise as a share of the record's rms, default 0),
+    ``corner=C`` (a low-pass load's corner in rocking frequencies, default white) and
+    ``theta0=ANGLE`` (a free-rocking test: released from this tilt with no load).
 
     Examples
     --------
     >>> simulation("seed=3 noise=0.03")
-    {'seed': 3, 'n_points': 200000, 'noise': 0.03, 'corner': None}
+    {'seed': 3, 'n_points': 200000, 'noise': 0.03, 'corner': None, 'theta0': None}
     """
-    out = {"seed": None, "n_points": 200000, "noise": 0.0, "corner": None}
+    out = {"seed": None, "n_points": 200000, "noise": 0.0, "corner": None, "theta0": None}
     for part in text.split():
         key, _, value = part.partition("=")
         out[key] = int(float(value)) if key in ("seed", "n_points") else float(value)
@@ -406,13 +412,18 @@ def estimate(rows: list[dict], opts: dict, cache, api):
 
     Raises :class:`rockdec.validate.InputError` for records the estimate refuses.
     """
+    return api.estimate(_theta(rows, api), g=opts.get("g"), load=opts["load"], sensor_noise=opts["sensor_noise"],
+                        model=opts["model"], theta_cr=opts.get("theta_cr"), cache=cache)
+
+
+def _theta(rows: list[dict], api) -> list:
+    """The records of ``rows`` as the front door ``api`` reads them (``read_record``), in rad."""
     theta = []
     with _files():
         for row in rows:
             da = api.read_record(row["path"], column=row["column"], variable=row["variable"], dt=_given_step(row))
             theta.append(da if _angle_factor(row) == 1.0 else da.copy(data=da.values * _angle_factor(row)))
-    return api.estimate(theta, g=opts.get("g"), load=opts["load"], sensor_noise=opts["sensor_noise"], model=opts["model"],
-                        theta_cr=opts.get("theta_cr"), cache=cache)
+    return theta
 
 
 def declared(opts: dict) -> dict:
@@ -461,29 +472,29 @@ def build_calibration(settings: dict, cache) -> Path:
     return Path(cache) / f"calibration-{calibration.settings_hash(settings)}.nc"
 
 
-def free_rocking_unit(rows: list[dict], api) -> dict:
-    """A free-rocking row's document: ``free_rocking`` of the front door ``api`` on its record
-    when rockdec has one, else a null ``e`` whose reason is :data:`FREE_UNAVAILABLE`."""
+def free_rocking_unit(rows: list[dict], opts: dict, api):
+    """A free-rocking test's estimate: ``free_rocking`` of the front door ``api`` on the records
+    of ``rows`` (pooled), as ``rockdec estimate --test free`` runs it; ``None`` when this
+    rockdec has no free-rocking analysis."""
     analysis = getattr(api, "free_rocking", None)
     if analysis is None:
-        return {"e": None, "interval": [None, None], "reason": FREE_UNAVAILABLE, "estimator": None, "test": "free",
-                "records": [row["path"] for row in rows], "warnings": []}
-    result = analysis(read(rows)[0].theta, rows[0]["dt"])
-    return {**(result.to_dict() if hasattr(result, "to_dict") else dict(result)), "test": "free"}
+        return None
+    return analysis(_theta(rows, api), model=opts["model"], theta_cr=opts.get("theta_cr"))
 
 
 def estimate_unit(rows: list[dict], opts: dict, cache, api) -> tuple[dict, object]:
     """The document of one record or block and its estimate: :func:`estimate`'s
     ``to_dict()`` (``rockdec estimate --json``) and the :class:`rockdec.RestitutionEstimate`;
     a refusal (:class:`rockdec.validate.InputError`) is a null ``e`` with the refusal as its
-    ``reason`` and ``refused: true``, and no estimate; a free-rocking row
-    :func:`free_rocking_unit`, no estimate."""
-    if rows[0]["test"] == "free":
-        return free_rocking_unit(rows, api), None
+    ``reason`` and ``refused: true``, and no estimate; a free-rocking test goes to
+    :func:`free_rocking_unit` (its reason :data:`FREE_UNAVAILABLE` when rockdec has none)."""
     try:
-        result = estimate(rows, opts, cache, api)
+        result = free_rocking_unit(rows, opts, api) if rows[0]["test"] == "free" else estimate(rows, opts, cache, api)
     except InputError as exc:
         return refused(rows, exc), None
+    if result is None:
+        return {"e": None, "interval": [None, None], "reason": FREE_UNAVAILABLE, "estimator": None, "test": "free",
+                "records": [row["path"] for row in rows], "warnings": []}, None
     return result.to_dict(), result
 
 
@@ -580,7 +591,7 @@ def summary_dataset(datasets: list):
     then blocks, each in the sheet's order."""
     import xarray as xr
 
-    ds = xr.concat(datasets, dim="record", join="outer", data_vars="all", coords="different", compat="equals", fill_value=np.nan)
+    ds = xr.concat(datasets, dim="record", join="outer", data_vars="all", coords="minimal", compat="override", fill_value=np.nan)
     for name in ("estimator_reported", "reason", "warnings", "record_model"):
         ds[name] = ds[name].fillna("").astype(str)
     return ds
@@ -651,7 +662,8 @@ def simulated_record(row: dict):
     kernel (:func:`rockdec.physics.simulate.simulate_block`, ``g = sigma_p = 1``) at ``true_e``
     and the row's ``dt``, the recipe's low-pass load placed at 75 samples per cycle (the
     coverage study's records, :mod:`rockdec.studies.coverage`), white sensor noise of the
-    recipe's share of the record's rms (:func:`rockdec.physics.loading.add_sensor_noise`)."""
+    recipe's share of the record's rms (:func:`rockdec.physics.loading.add_sensor_noise`). A
+    recipe with ``theta0`` is a free-rocking test: released from that tilt, no load, no burn-in."""
     import xarray as xr
 
     from rockdec.physics.loading import add_sensor_noise
@@ -661,8 +673,11 @@ def simulated_record(row: dict):
     recipe, e, dt = row["simulate"], row["true_e"], row["dt"]
     placed_at = 75.0  # samples per cycle the coverage study places a load's corner at
     pole = (Load() if recipe["corner"] is None else Load("lowpass", recipe["corner"])).pole(placed_at)
-    theta = simulate_block([recipe["seed"]], recipe["n_points"], dt=dt, g=1.0, e=e, sigma_p=1.0,
-                           burn_in=default_burn_in(e, placed_at), pole=pole)[0]
+    if recipe.get("theta0") is None:
+        theta = simulate_block([recipe["seed"]], recipe["n_points"], dt=dt, g=1.0, e=e, sigma_p=1.0,
+                               burn_in=default_burn_in(e, placed_at), pole=pole)[0]
+    else:
+        theta = simulate_block([recipe["seed"]], recipe["n_points"], dt=dt, g=1.0, e=e, sigma_p=0.0, theta0=recipe["theta0"])[0]
     add_sensor_noise(theta, [recipe["seed"]], recipe["noise"] * float(np.sqrt(np.mean(theta**2))))
     return xr.Dataset(
         {"theta": ("time", theta[0], {"units": "rad", "long_name": "rocking angle"})},
