@@ -7,7 +7,8 @@ drift: :func:`rockdec.record.record_measure.measure`) unless it is declared, fet
 the calibration for their lengths, sampling and model (:func:`record_model`,
 :mod:`rockdec.calibrate.calibration`), corrects every estimator and gives its 95 % interval,
 reports the trusted candidate whose belt is narrowest at their common ``e`` (:func:`select`),
-corrects ``g`` the same way,
+declines it when records given together disagree on one ``e`` (:func:`check_pooled`,
+:mod:`rockdec.calibrate.consistency`), corrects ``g`` the same way,
 and lists what looks wrong with the records (:func:`diagnose`: the checks of
 :mod:`rockdec.record.diagnostics`, their thresholds from the calibration's own simulated
 records). When no ``e`` can be given, ``reason`` says why.
@@ -32,7 +33,7 @@ import numpy as np
 
 from rockdec import console
 from rockdec._version import __version__
-from rockdec.calibrate import belt, calibration
+from rockdec.calibrate import belt, calibration, consistency
 from rockdec.record import diagnostics
 from rockdec.rdd import measured, registry
 from rockdec.physics.record_model import NO_NOISE, WHITE, Load, RecordModel, SensorNoise, parse_load
@@ -446,6 +447,8 @@ NOTE_CODES = {
     "g_unchecked": "a given g is checked against the records' own only to within a factor",
     "long_record": "the records are far longer than the calibration's, beyond the lengths whose coverage was measured",
     "calibration": "the stored calibration was rebuilt, or a stopped run's lock was taken over",
+    "pooled_disagree": "records given together disagree on one e; e is declined",
+    "pooled_unchecked": "a record given with others could not be analysed alone, so it was not checked against them",
 }
 
 
@@ -791,6 +794,89 @@ def declined_rows(analysed: Analysed) -> tuple[dict, tuple]:
     return per, (None, rows, None)
 
 
+class Pooled(NamedTuple):
+    """What :func:`check_pooled` (a stage of :func:`estimate`) makes of records given
+    together: the ``selection`` of :func:`select`, its estimator and reason replaced when
+    the records disagree on one ``e``; its :class:`Note` s; its entry of the JSON
+    ``diagnostics`` (empty for a single record)."""
+
+    selection: tuple
+    notes: tuple
+    checks: dict
+
+
+def check_pooled(analysed: Analysed, choice: ModelChoice, calibrated: Calibrated, selection: tuple) -> Pooled:
+    """The stage of :func:`estimate` after :func:`select`: whether records given together
+    agree on one ``e`` (:func:`rockdec.calibrate.consistency.check`: Cochran's ``Q`` of
+    each record's own raw value of the reported estimator (:func:`_alone`) about their
+    weighted mean, each with the spread of the calibration's belt scaled to its length). A
+    single record passes unchanged. A record that cannot be analysed alone is left out of
+    the test with a ``pooled_unchecked`` :class:`Note`.
+
+    Records that disagree decline ``e`` (``reason`` names what each reads alone) with a
+    ``pooled_disagree`` :class:`Note`, rather than print the pooled interval beside a
+    warning. The pooled interval is a claim about one ``e`` that the test rejects: for
+    records of ``e`` 0.80 and 0.90 it holds neither, and an interval beside a warning is
+    still copied into a paper; a record-by-record estimate is always valid and costs a
+    pool of one block little, which the test declines on few pools
+    (:data:`rockdec.calibrate.consistency.LEVEL`; ``benchmarks/pooled_consistency.py``).
+    """
+    records = analysed.records
+    chosen, rows, _ = selection
+    if len(records) < 2:
+        return Pooled(selection, (), {})
+    if chosen is None:  # no e to check the records against
+        return Pooled(selection, (), {"pooled_consistency": {"statistic": None, "threshold": None, "fired": False}})
+    raws, unread = _alone(analysed, chosen)
+    b = calibrated.simulated_belts[chosen]
+    outcome = consistency.check(raws, [r.theta.size for r in records], b.e, b.mean, b.spread, sum(choice.cal_settings["lengths"]))
+    checks = {"pooled_consistency": {"statistic": _num(outcome.statistic), "threshold": _num(outcome.threshold), "fired": outcome.fired}}
+    notes = []
+    if unread:
+        rest = "the other records were checked against each other" if outcome.dof >= 1 else "whether the records agree on one e was not checked"
+        notes.append(Note("pooled_unchecked", f"{'; '.join(unread)} could not be analysed alone: {rest}"))
+    if not outcome.fired:
+        return Pooled(selection, tuple(notes), checks)
+    alone = ", ".join(f"{r.source} {_reads(b, x)}" for r, x in zip(records, raws) if np.isfinite(x))
+    test = (f"Cochran's Q of their {chosen} {outcome.statistic:.3g} is above {outcome.threshold:.3g}, the "
+            f"{consistency.LEVEL * 100:g} % point of chi-square with {outcome.dof} degree{'s' if outcome.dof > 1 else ''} of freedom")
+    notes.append(Note("pooled_disagree", f"the records given together disagree on one e ({test}): alone, {alone}; e is declined"))
+    why = (f"the records given together disagree on one e (alone, {alone}; {test}), so no e holds for them all; "
+           "estimate each record alone, or pool only records of one block")
+    return Pooled((None, rows, why), tuple(notes), checks)
+
+
+def _alone(analysed: Analysed, name: str) -> tuple[list[float], list[str]]:
+    """Each record's raw value of estimator ``name`` analysed alone
+    (:func:`rockdec.rdd.measured.analyse` with the ``g`` of the pooled analysis, so that every
+    record is read with the lag range of the same block), NaN for a record that cannot be;
+    and for those, the record and why."""
+    g = analysed.g if analysed.g is not None else analysed.analysis.raw[measured.G_NAME]
+    log.info(f"checking that the {len(analysed.records)} records agree on one e: each analysed alone, "
+             f"{console.about(analysed.samples * ANALYSIS_SECONDS)}")
+    raws, unread = [], []
+    for r in analysed.records:
+        try:
+            raw = measured.analyse([r.theta], analysed.dt, analysed.settings, g=g if np.isfinite(g) else None).raw[name]
+        except ValueError as exc:
+            raw, why = math.nan, str(exc).rstrip(".")
+        else:
+            why = f"no value of {name}"
+        raws.append(raw)
+        if not np.isfinite(raw):
+            unread.append(f"{r.source} ({why})")
+    return raws, unread
+
+
+def _reads(b: belt.Belt, raw: float) -> str:
+    """Where a record's raw value alone places ``e`` on the belt ``b``'s mean curve
+    (:func:`rockdec.calibrate.consistency.reads`), in words."""
+    e = consistency.reads(b.e, b.mean, raw)
+    if np.isfinite(e):
+        return f"about {e:.3f}"
+    return f"beyond the calibrated range {b.e[0]:.3f}-{b.e[-1]:.3f} (raw {raw:.3f})"
+
+
 def estimate(
     records: list[Record], *, cache_dir, g: float | None = None, settings: dict | None = None, model: RecordModel | None = None,
     load: Load | str | None = None, sensor: SensorNoise | None = None, rocking: str | None = None, theta_cr: float | None = None,
@@ -801,7 +887,8 @@ def estimate(
     or take the declared one; decline when no calibration fits) → :func:`calibrate` (get or
     build the calibration) → :func:`correct` (correct every estimator and invert its belt)
     → :func:`select` (the reported estimator; none when the impacts gain speed,
-    :func:`gains_speed`) → :func:`read_g` → :func:`diagnose` (the
+    :func:`gains_speed`) → :func:`check_pooled` (records given together agree on one
+    ``e``, else ``e`` is declined) → :func:`read_g` → :func:`diagnose` (the
     checks, thresholds from the calibration) → :func:`document` (the report).
 
     ``model`` declares the whole record model (:mod:`rockdec.physics.record_model`); else
@@ -828,13 +915,14 @@ def estimate(
     impossible = gains_speed(analysed, calibrated)
     if impossible:
         selection = (None, selection[1], impossible)
-    chosen = selection[0]
+    pooled = check_pooled(analysed, choice, calibrated, selection)
+    chosen = pooled.selection[0]
     shown = per[chosen] if chosen else {"e": None, "interval": [None, None]}
     g_reading = read_g(analysed, choice, calibrated, chosen, math.nan if shown["e"] is None else shown["e"])
-    notes = [*analysed.notes, *calibrated.notes, *g_reading.notes, *long_record_note(analysed, choice)]
+    notes = [*analysed.notes, *calibrated.notes, *g_reading.notes, *long_record_note(analysed, choice), *pooled.notes]
     fired, checks = diagnose(list(analysed.records), analysed.analysis, analysed.settings, calibrated.cal,
                              *checks_place(per, shown), 1.0 / calibrated.scale**2)
-    doc = document(analysed, choice, calibrated, per, selection, g_reading, notes + fired, checks)
+    doc = document(analysed, choice, calibrated, per, pooled.selection, g_reading, notes + fired, {**checks, **pooled.checks})
     return Outcome(doc, analysed.analysis, calibrated.belts)
 
 

@@ -1,0 +1,269 @@
+"""Whether records given together are consistent with one coefficient of restitution.
+
+Records pooled by :func:`rockdec.calibrate.inference.estimate` are taken to be of one block:
+their triggers add into one signature per window and one ``e`` is calibrated for them
+all. Records of two blocks (or of one block whose ``e`` changed between tests) pool into
+an ``e`` that holds neither. This module tests that assumption; the estimate calls it in
+its stage :func:`rockdec.calibrate.inference.check_pooled`.
+
+The test (no equation of the paper: a test of homogeneity, Cochran's ``Q``). Record ``i``
+of ``n_i`` samples, analysed alone (:func:`rockdec.rdd.measured.analyse`), gives the raw
+zero-window value ``x_i`` of the reported estimator. Under the null, one ``e`` for every
+record, ``x_i`` scatters about the belt's mean ``m(e)`` with the belt's spread at the
+length of the calibration's simulated record sets, ``s(e)`` at ``N`` samples, scaled to the
+record's length (the spread falls as ``1/sqrt(length)``, which is how the belt of records
+longer than the calibration's is scaled too,
+:func:`rockdec.calibrate.calibration.spread_scale`)::
+
+    s_i = s(e) sqrt(N / n_i),   w_i = 1 / s_i^2  (proportional to n_i),
+    x_w = sum(n_i x_i) / sum(n_i),
+    Q   = sum(w_i (x_i - x_w)^2)  ~  chi^2 with k - 1 degrees of freedom (k records).
+
+``Q`` compares the records with each other, not with ``m(e)``: the error of the
+calibration's mean curve, and any bias that the records share, cancel; only the spread is
+read off the belt, at ``e_w``, where the mean curve takes ``x_w`` (:func:`reads`; the end
+of the curve nearest ``x_w`` beyond it). Not at the pooled records' corrected ``e``: records
+of two blocks at ``e`` = 0.85 and 0.6 (one step, so the second has a smaller amplitude and
+fewer samples per cycle) pool into an ``e`` near the lower one, where the spread is several
+times the one at 0.85, and the test read there missed such pairs
+(``benchmarks/pooled_consistency.py``); their own mean lies between them. The records' own values also say where each lies
+(:func:`reads`), which the message names.
+
+The threshold is the :data:`LEVEL` quantile of ``chi^2_{k-1}`` (:func:`threshold`); its
+false-alarm rate on pairs of records of one block and its detection rate on pairs of two
+blocks are measured by ``benchmarks/pooled_consistency.py``.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+#: Share of the ``chi^2_{k-1}`` distribution below the threshold (:func:`threshold`): a pool
+#: of records of one block whose raw values were normal with the belt's spread would fire on
+#: ``1 - LEVEL`` of pools. Far stricter than 95 % because neither holds at low ``e``: a single
+#: record's ``e_v`` there has a heavy right tail, and the belt's spread, from a few dozen
+#: sets per grid point of such values, falls short of their scatter; at the 95 % to 99.5 %
+#: points pairs of one block at ``e = 0.6`` fired on more than 5 % of pairs, while records of
+#: ``e`` 0.80 and 0.90 lie so far apart that this point still finds them
+#: (``benchmarks/pooled_consistency.py``; docs/explanation/method/warnings.md, "Records given
+#: together").
+LEVEL = 0.999
+
+
+class Consistency(NamedTuple):
+    """The outcome of :func:`check`: Cochran's ``statistic`` ``Q``, its ``threshold``,
+    whether it ``fired``, the degrees of freedom ``dof`` (records tested less one), each
+    record's standardised offset ``z_i = (x_i - x_w) / s_i`` (NaN for a record left out)."""
+
+    statistic: float
+    threshold: float
+    fired: bool
+    dof: int
+    z: np.ndarray
+
+
+def record_spreads(spread: float, simulated_samples: int, lengths) -> np.ndarray:
+    """The spread of each record's raw value alone: ``s_i = s sqrt(N / n_i)``.
+
+    Parameters
+    ----------
+    spread : float
+        The belt's spread ``s(e)`` at the pooled ``e``, for record sets of
+        ``simulated_samples`` in all (:attr:`rockdec.calibrate.belt.Belt.spread` of the
+        belt at the calibration's simulated length).
+    simulated_samples : int
+        ``N``: samples in all of one of the calibration's simulated record sets.
+    lengths : sequence of int
+        ``n_i``: samples of each record.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``s_i``, one per record.
+
+    Examples
+    --------
+    >>> record_spreads(0.01, 400_000, [200_000, 100_000]).round(5).tolist()
+    [0.01414, 0.02]
+    """
+    return float(spread) * np.sqrt(float(simulated_samples) / np.asarray(lengths, dtype=float))
+
+
+def statistic(raws, spreads) -> tuple[float, np.ndarray]:
+    """Cochran's ``Q`` of the raw values ``x_i`` with spreads ``s_i`` (module docstring),
+    and each record's standardised offset from their weighted mean; records whose raw
+    value or spread is not finite are left out (their offset NaN).
+
+    Parameters
+    ----------
+    raws : sequence of float
+        ``x_i``: each record's raw value of the estimator.
+    spreads : sequence of float
+        ``s_i``: the spread of each (:func:`record_spreads`).
+
+    Returns
+    -------
+    tuple of (float, numpy.ndarray)
+        ``Q`` (NaN with fewer than two usable records) and ``z_i = (x_i - x_w) / s_i``.
+
+    Examples
+    --------
+    Two records one spread either side of their mean: ``Q = 1 + 1``.
+
+    >>> q, z = statistic([0.79, 0.81], [0.01, 0.01])
+    >>> round(q, 6), z.round(6).tolist()
+    (2.0, [-1.0, 1.0])
+    """
+    x, s = np.asarray(raws, dtype=float), np.asarray(spreads, dtype=float)
+    ok = np.isfinite(x) & np.isfinite(s) & (s > 0.0)
+    z = np.full(x.shape, np.nan)
+    if ok.sum() < 2:
+        return math.nan, z
+    w = 1.0 / s[ok] ** 2
+    centre = float(np.sum(w * x[ok]) / np.sum(w))
+    z[ok] = (x[ok] - centre) / s[ok]
+    return float(np.sum(z[ok] ** 2)), z
+
+
+def threshold(dof: int, level: float = LEVEL) -> float:
+    """The ``level`` quantile of ``chi^2`` with ``dof`` degrees of freedom (NaN for none).
+
+    Parameters
+    ----------
+    dof : int
+        Records tested less one.
+    level : float
+        Share of the null below the threshold (:data:`LEVEL`).
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
+    With one degree of freedom, the square of the normal quantile:
+
+    >>> round(threshold(1, 0.95), 4)
+    3.8415
+    """
+    if dof < 1:
+        return math.nan
+    from scipy.special import chdtri
+
+    return float(chdtri(dof, 1.0 - level))
+
+
+def centre(raws, lengths) -> float:
+    """``x_w = sum(n_i x_i) / sum(n_i)`` over the records with a finite raw value (NaN for none).
+
+    Examples
+    --------
+    >>> round(centre([0.80, 0.90, float("nan")], [100_000, 300_000, 50_000]), 6)
+    0.875
+    """
+    x, n = np.asarray(raws, dtype=float), np.asarray(lengths, dtype=float)
+    ok = np.isfinite(x)
+    return float(np.sum(n[ok] * x[ok]) / np.sum(n[ok])) if ok.any() else math.nan
+
+
+def spread_at(mean_e: np.ndarray, mean: np.ndarray, spread: np.ndarray, raw: float) -> float:
+    """The belt's spread where its mean curve takes the value ``raw`` (:func:`reads`), at
+    the end of the curve nearest ``raw`` when the curve never takes it; NaN for an empty belt.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> e = np.linspace(0.4, 0.99, 60)
+    >>> round(spread_at(e, e, 0.1 * (1 - e), 0.9), 6), round(spread_at(e, e, 0.1 * (1 - e), 1.5), 6)
+    (0.01, 0.001)
+    """
+    if mean.size == 0 or not np.isfinite(raw):
+        return math.nan
+    e = reads(mean_e, mean, raw)
+    if not np.isfinite(e):
+        e = mean_e[int(np.argmin(np.abs(mean - raw)))]
+    return float(np.interp(e, mean_e, spread))
+
+
+def check(raws, lengths, mean_e: np.ndarray, mean: np.ndarray, spread: np.ndarray, simulated_samples: int,
+          level: float = LEVEL) -> Consistency:
+    """Whether the records' raw values agree with one ``e`` (module docstring): Cochran's
+    ``Q`` (:func:`statistic`) with the spreads of :func:`record_spreads`, the belt's spread
+    read where its mean takes the records' weighted mean (:func:`centre`,
+    :func:`spread_at`), against the ``level`` quantile of ``chi^2_{k-1}``
+    (:func:`threshold`), ``k`` the records with a finite raw value. Fewer than two such
+    records: NaN statistic, never fired.
+
+    Parameters
+    ----------
+    raws : sequence of float
+        Each record's raw value of the estimator, analysed alone (NaN: not analysed).
+    lengths : sequence of int
+        Samples of each record.
+    mean_e, mean, spread : numpy.ndarray
+        The belt of the estimator at the length of the calibration's simulated record sets:
+        its dense ``e``, mean curve and spread (:class:`rockdec.calibrate.belt.Belt`).
+    simulated_samples : int
+        Samples in all of one of the calibration's simulated record sets.
+    level : float
+        :data:`LEVEL`.
+
+    Returns
+    -------
+    Consistency
+
+    Examples
+    --------
+    Two records of 200,000 samples, calibrated on pairs (400,000 samples) whose raw value
+    reads ``e`` with a spread of 0.004: each record alone scatters by 0.0057, and raw
+    values 0.03 apart are 3.7 spreads of their difference apart.
+
+    >>> import numpy as np
+    >>> e = np.linspace(0.4, 0.995, 200)
+    >>> c = check([0.80, 0.83], [200_000, 200_000], e, e, np.full(e.size, 0.004), 400_000)
+    >>> c.fired, round(c.statistic, 2), c.dof
+    (True, 14.06, 1)
+    >>> check([0.80, float("nan")], [200_000, 200_000], e, e, np.full(e.size, 0.004), 400_000).fired
+    False
+    """
+    s = spread_at(mean_e, mean, spread, centre(raws, lengths))
+    q, z = statistic(raws, record_spreads(s, simulated_samples, lengths))
+    dof = int(np.isfinite(z).sum()) - 1
+    limit = threshold(dof, level)
+    return Consistency(q, limit, bool(q > limit), max(dof, 0), z)
+
+
+def reads(mean_e: np.ndarray, mean: np.ndarray, raw: float) -> float:
+    """The ``e`` at which the belt's mean curve ``mean(mean_e)`` takes the value ``raw``:
+    where a record's raw value alone places it (its bias corrected at the pooled records'
+    length), for the message; NaN when the curve never takes it.
+
+    Parameters
+    ----------
+    mean_e, mean : numpy.ndarray
+        The belt's dense ``e`` and its mean curve (:class:`rockdec.calibrate.belt.Belt`).
+    raw : float
+        A record's raw value.
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> e = np.linspace(0.4, 0.99, 60)
+    >>> round(reads(e, e + 0.01, 0.86), 4)
+    0.85
+    """
+    if not np.isfinite(raw) or mean.size < 2:
+        return math.nan
+    gap = np.asarray(mean) - raw
+    crossing = np.flatnonzero(np.diff(np.sign(gap)) != 0)
+    if crossing.size == 0:
+        return math.nan
+    i = int(crossing[0])
+    return float(mean_e[i] + (mean_e[i + 1] - mean_e[i]) * gap[i] / (gap[i] - gap[i + 1]))
