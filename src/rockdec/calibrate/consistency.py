@@ -26,12 +26,18 @@ of the curve nearest ``x_w`` beyond it). Not at the pooled records' corrected ``
 of two blocks at ``e`` = 0.85 and 0.6 (one step, so the second has a smaller amplitude and
 fewer samples per cycle) pool into an ``e`` near the lower one, where the spread is several
 times the one at 0.85, and the test read there missed such pairs
-(``benchmarks/pooled_consistency.py``); their own mean lies between them. The records' own values also say where each lies
-(:func:`reads`), which the message names.
+(``benchmarks/pooled_consistency.py``); their own mean lies between them. The records'
+own values also say where each lies (:func:`reads`), which the message names.
 
 The threshold is the :data:`LEVEL` quantile of ``chi^2_{k-1}`` (:func:`threshold`); its
 false-alarm rate on pairs of records of one block and its detection rate on pairs of two
 blocks are measured by ``benchmarks/pooled_consistency.py``.
+
+Limits. Every record is taken to share the mean ``m(e)`` of the pooled records' belt: a
+record much shorter than the others, or read at other samples per cycle, has a bias of its
+own, which the test counts as disagreement (measured on records of equal length only). The
+raw values are taken as normal; where they are not (``e_v`` at low ``e``), the point
+:data:`LEVEL` absorbs it.
 """
 
 from __future__ import annotations
