@@ -102,12 +102,13 @@ def stage_seconds(samples: int, csv: bool, g_given: bool, cores: int = 2, record
     :func:`rockdec.calibrate.calibration.simulated_lengths`, and beyond it the step search's
     pilot sets of that length), from :data:`CSV_SECONDS` and the other constants of the
     model; each record beyond the first adds :data:`RECORD_SECONDS` in every simulated set
-    and each pair of records :data:`PAIR_SECONDS`."""
+    and each pair of records :data:`PAIR_SECONDS`; several records are analysed once more,
+    each alone (:func:`check_pooled`)."""
     simulated = sum(calibration.simulated_lengths([samples]))
     sets = calibration_sets(samples)
     return {
         "reading": samples * CSV_SECONDS * csv,
-        "analysing": samples * ANALYSIS_SECONDS * (1 + g_given) + records * (records - 1) / 2 * PAIR_SECONDS,
+        "analysing": samples * ANALYSIS_SECONDS * (1 + g_given + (records > 1)) + records * (records - 1) / 2 * PAIR_SECONDS,
         "calibrating": simulated * sets * CALIBRATION_SECONDS / cores + (records - 1) * sets * RECORD_SECONDS,
     }
 
