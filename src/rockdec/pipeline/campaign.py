@@ -38,7 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rockdec import timeaxis
+from rockdec import locks, timeaxis
 from rockdec.validate import InputError
 
 #: The sheet's JSON Schema, a data file of the package: its properties are the sheet's columns.
@@ -649,11 +649,10 @@ def markdown(tab) -> str:
 @contextlib.contextmanager
 def _files():
     """Hold the locks of every HDF5 user of the process: the workflow's in-process steps'
-    (:data:`rockdec.pipeline.in_snakemake._STEP_LOCK`) and the calibration cache's."""
+    (:data:`rockdec.locks.HDF5`) and the calibration cache's."""
     from rockdec.calibrate import calibration
-    from rockdec.pipeline import in_snakemake
 
-    with in_snakemake._STEP_LOCK, calibration._FILE_ACCESS:
+    with locks.HDF5, calibration._FILE_ACCESS:
         yield
 
 

@@ -41,6 +41,7 @@ import threading
 import time
 import traceback
 
+from rockdec import locks
 from rockdec.validate import InputError
 
 #: What the signature pass and the light steps import as they start (Dask, its threaded
@@ -113,8 +114,8 @@ def _check_stop(*_) -> None:
 
 
 #: One :func:`step` at a time in a process: the HDF5 library under netCDF4 is not safe to
-#: use from two threads at once.
-_STEP_LOCK = threading.Lock()
+#: use from two threads at once (:data:`rockdec.locks.HDF5`).
+_STEP_LOCK = locks.HDF5
 
 
 def step(rule: str, log: str, *args) -> None:

@@ -1,0 +1,9 @@
+"""Process-wide locks shared by the steps that run side by side in one process."""
+
+from __future__ import annotations
+
+import threading
+
+#: One user of HDF5 files at a time in a process: the HDF5 library under netCDF4 is not safe
+#: to use from two threads at once (the workflow's in-process steps and the campaign's).
+HDF5 = threading.Lock()
