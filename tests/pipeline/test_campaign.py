@@ -238,3 +238,24 @@ def test_every_number_of_the_document_becomes_a_variable():
     assert ds["calibration_seconds"].attrs["units"] == "s"
     assert float(ds["check_threshold"].sel(check="drift")[0]) == 2.0
     assert json.dumps(doc)  # the document itself stays JSON
+
+
+def test_the_comparison_sets_each_blocks_free_test_beside_its_random_estimate():
+    """Issue 37: per block with both tests, the pooled random estimate (or the one record) and
+    the free-rocking estimate side by side; they agree when their intervals overlap."""
+    import pandas as pd
+
+    tab = pd.DataFrame({
+        "record": ["a1", "a2", "fa", "A (records pooled)", "b1", "fb", "c1"],
+        "kind": ["record", "record", "record", "block", "record", "record", "record"],
+        "test": ["random", "random", "free", "random", "random", "free", "random"],
+        "block": ["A", "A", "A", "A", "B", "B", "C"],
+        "e": [0.88, 0.91, 0.90, 0.895, 0.70, 0.80, 0.85],
+        "low": [0.85, 0.88, 0.899, 0.88, 0.65, 0.79, 0.8],
+        "high": [0.91, 0.94, 0.901, 0.91, 0.75, 0.81, 0.9],
+    })
+    out = campaign.comparison(tab)
+    assert list(out["block"]) == ["A", "B"]  # C has no free test
+    a, b = out.iloc[0], out.iloc[1]
+    assert (a["random_e"], a["free_e"], a["agree"]) == (0.895, 0.90, "yes")  # the pooled estimate, not a record's
+    assert (b["random_high"], b["free_low"], b["agree"]) == (0.75, 0.79, "no")

@@ -29,7 +29,7 @@ SHEET = [
     "a1\t\tA\t0.9\t0.796\tseed=4 n_points=6000\t",
     "a2\t\tA\t0.9\t0.796\tseed=2 n_points=6000\t",
     "m1\tlab/m1.csv\tM\t\t\t\t",
-    "f1\t\tF\t0.9\t0.796\tseed=41 n_points=3000 theta0=20 noise=0.01\tfree",
+    "f1\t\tA\t0.9\t0.796\tseed=41 n_points=3000 theta0=20 noise=0.01\tfree",
 ]
 NEW_ROW = "a3\t\tA\t0.9\t0.796\tseed=3 n_points=6000\t"
 
@@ -111,20 +111,23 @@ def test_adding_a_row_reruns_only_that_record_its_block_and_the_summaries(built)
 
 def test_the_table_shows_each_estimate_beside_the_true_e_and_says_why_when_there_is_none(built):
     tab = pd.read_csv(built["results"] / "estimates.csv", keep_default_na=False)
-    assert list(tab["record"]) == ["a1", "a2", "m1", "f1", "A (pooled)"]
+    assert list(tab["record"]) == ["a1", "a2", "m1", "f1", "A (records pooled)"]
     assert float(tab.loc[tab["record"] == "f1", "e"].iloc[0]) == pytest.approx(0.9, abs=0.01)  # the free-rocking test's
     for row in tab.itertuples():
         assert row.holds_true_e in ("yes", "no", "no estimate", "")
         assert (row.e != "") or row.reason, row  # no e: the reason says why
     assert (tab["true_e"] == "").tolist() == [False, False, True, False, False]
-    assert "| A (pooled) |" in (built["results"] / "estimates.md").read_text()
+    md = (built["results"] / "estimates.md").read_text()
+    assert "| A (records pooled) |" in md
+    side = md[md.index("## The free-rocking test beside the random response"):]  # block A holds both tests
+    assert "| A " in side and ("| yes " in side or "| no " in side)
 
 
 def test_the_estimates_netcdf_runs_along_record_and_estimator_and_is_cf_clean(built, tmp_path):
     path = built["results"] / "estimates.nc"
     with xr.open_dataset(path) as ds:
         assert ds["e"].dims == ("record",) and ds["estimator_e"].dims == ("record", "estimator")
-        assert list(ds["block"].values) == ["A", "A", "M", "F", "A"]
+        assert list(ds["block"].values) == ["A", "A", "M", "A", "A"]
         assert ds["g"].attrs["units"] == "rad s-2" and ds["dt"].attrs["units"] == "s"
         one = json.loads((built["results"] / "estimates" / "record_a1.json").read_text())
         assert float(ds["e"].sel(record="a1")) == pytest.approx(np.nan if one["e"] is None else one["e"], nan_ok=True)
@@ -203,4 +206,4 @@ def test_the_demonstration_runs_from_an_empty_folder_with_the_workflow_elsewhere
                           "--configfile", str(REPO / "config" / "config.yaml"))
     assert code == 0, out
     stats = job_stats(out)
-    assert stats["campaign_simulate"] == 7 and stats["campaign_plan"] == 8, out  # seven records, block A pooled
+    assert stats["campaign_simulate"] == 10 and stats["campaign_plan"] == 11, out  # ten records, block A pooled

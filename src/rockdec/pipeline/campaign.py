@@ -53,7 +53,7 @@ STEP_RTOL = 1e-6
 STEP_LINES = 2000
 
 #: Options the records of one block must share: their pooled estimate takes one of each.
-BLOCK_OPTIONS = ("load", "sensor_noise", "model", "theta_cr", "g", "test")
+BLOCK_OPTIONS = ("load", "sensor_noise", "model", "theta_cr", "g")
 
 #: What the table says of a free-rocking row while rockdec has no free-rocking analysis.
 FREE_UNAVAILABLE = "free-rocking analysis not available"
@@ -258,10 +258,11 @@ def _completed(row: dict, sheet: Path, simulated: Path, fail) -> dict:
 
 
 def _check_blocks(rows: list[dict], sheet: Path, numbers: dict) -> None:
-    """The records of one block share their step (within :data:`STEP_RTOL`) and :data:`BLOCK_OPTIONS`."""
-    first: dict[str, dict] = {}
+    """The records of one block and one test (random or free: a block may hold both, each
+    pooled apart) share their step (within :data:`STEP_RTOL`) and :data:`BLOCK_OPTIONS`."""
+    first: dict[tuple, dict] = {}
     for row in rows:
-        lead = first.setdefault(row["block"], row)
+        lead = first.setdefault((row["block"], row["test"]), row)
         number = numbers[row["record"]]
         if abs(row["dt"] - lead["dt"]) > STEP_RTOL * lead["dt"]:
             raise _fail(sheet, number, row["record"], "dt",
@@ -360,13 +361,14 @@ def file_step(path: str | Path, variable: str = "theta", column: str = "theta") 
 
 
 def units(rows: list[dict]) -> dict[str, list[dict]]:
-    """The campaign's estimates: ``record_<id>`` for each record and ``block_<name>`` for each
-    block of two or more records, each mapped to its rows (the records it pools)."""
+    """The campaign's estimates: ``record_<id>`` for each record, ``block_<name>`` for each
+    block of two or more random-response records and ``block_<name>_free`` for each block of
+    two or more free-rocking tests, each mapped to its rows (the records it pools)."""
     out = {f"record_{row['record']}": [row] for row in rows}
-    blocks: dict[str, list[dict]] = {}
+    blocks: dict[tuple, list[dict]] = {}
     for row in rows:
-        blocks.setdefault(row["block"], []).append(row)
-    out.update({f"block_{name}": members for name, members in blocks.items() if len(members) > 1})
+        blocks.setdefault((row["block"], row["test"] == "free"), []).append(row)
+    out.update({f"block_{name}" + ("_free" if free else ""): members for (name, free), members in blocks.items() if len(members) > 1})
     return out
 
 
@@ -574,8 +576,11 @@ def unit_dataset(name: str, rows: list[dict], doc: dict):
         data[field] = (("record",), np.array([value], dtype=object), {"long_name": field.replace("_", " ")})
     true_e = rows[0].get("true_e") if all(r.get("true_e") == rows[0].get("true_e") for r in rows) else None
     kind = "block" if name.startswith("block_") else "record"
+    test = "free" if rows[0].get("test") == "free" else "random"
+    pooled = f"{rows[0]['block']} ({'free tests' if test == 'free' else 'records'} pooled)"
     coords.update({
-        "record": ("record", [name.split("_", 1)[1] if kind == "record" else f"{rows[0]['block']} (pooled)"], {"long_name": "record, or a block's records pooled"}),
+        "record": ("record", [name.split("_", 1)[1] if kind == "record" else pooled], {"long_name": "record, or a block's records pooled"}),
+        "test": ("record", [test], {"long_name": "random (random response, Random Decrement) or free (free-rocking test)"}),
         "block": ("record", [rows[0]["block"]], {"long_name": "block the record belongs to"}),
         "kind": ("record", [kind], {"long_name": "record, or block (its records pooled)"}),
         "true_e": ("record", [math.nan if true_e is None else float(true_e)], {"units": "1", "long_name": "coefficient of restitution the record was simulated with"}),
@@ -616,6 +621,7 @@ def table(ds):
     rows = {
         "record": [str(v) for v in ds["record"].values],
         "kind": [str(v) for v in ds["kind"].values],
+        "test": [str(v) for v in ds["test"].values] if "test" in ds.coords else ["random"] * n,
         "block": [str(v) for v in ds["block"].values],
         "true_e": ds["true_e"].values,
         "e": ds["e"].values,
@@ -630,6 +636,30 @@ def table(ds):
     }
     out = pd.DataFrame(rows)
     return out if not out["true_e"].isna().all() else out.drop(columns=["true_e", "holds_true_e"])
+
+
+def comparison(tab):
+    """Per block that has both, the free-rocking ``e`` beside the random-response ``e`` (each
+    the block's pooled estimate, or its one record's) with both 95 % intervals, and whether
+    they agree (the intervals overlap); an empty table when no block has both."""
+    import pandas as pd
+
+    def pick(part, test):
+        rows = part[part["test"] == test]
+        pooled = rows[rows["kind"] == "block"]
+        return pooled.iloc[0] if len(pooled) else rows.iloc[0] if len(rows) == 1 else None
+
+    out = []
+    for block in dict.fromkeys(tab["block"]):
+        part = tab[tab["block"] == block]
+        random, free = pick(part, "random"), pick(part, "free")
+        if random is None or free is None:
+            continue
+        known = all(math.isfinite(v) for v in (random["low"], random["high"], free["low"], free["high"]))
+        agree = ("yes" if random["low"] <= free["high"] and free["low"] <= random["high"] else "no") if known else "no estimate"
+        out.append({"block": block, "random_e": random["e"], "random_low": random["low"], "random_high": random["high"],
+                    "free_e": free["e"], "free_low": free["low"], "free_high": free["high"], "agree": agree})
+    return pd.DataFrame(out, columns=["block", "random_e", "random_low", "random_high", "free_e", "free_low", "free_high", "agree"])
 
 
 def markdown(tab) -> str:
@@ -765,5 +795,13 @@ def table_step(inputs: list[str], nc: str, csv_out: str, md: str, units_rows: di
         io.write_netcdf(summary, nc)
     tab = table(summary)
     tab.to_csv(csv_out, index=False)
-    _write_text(md, markdown(tab))
+    both = comparison(tab)
+    text = markdown(tab)
+    if len(both):
+        shown = both.copy()
+        for column in shown.columns[1:-1]:
+            shown[column] = [("" if math.isnan(v) else f"{v:.3f}") for v in shown[column]]
+        text += ("\n## The free-rocking test beside the random response, per block\n\n"
+                 "agree: the two 95 % intervals overlap.\n\n" + shown.to_markdown(index=False) + "\n")
+    _write_text(md, text)
     return f"{len(tab)} rows"

@@ -58,8 +58,10 @@ def forest(ds: xr.Dataset) -> Figure:
     fig = _new_figure(6.0, 1.2 + 0.32 * len(labels))
     ax = fig.add_subplot()
     pooled = ds["kind"].values == "block"
+    free = ds["test"].values == "free" if "test" in ds.coords else np.zeros(pooled.size, dtype=bool)
     e, low, high = (ds[v].values.astype(float) for v in ("e", "interval_low", "interval_high"))
-    for mask, marker, label in ((~pooled, "o", "record"), (pooled, "D", "block (records pooled)")):
+    for mask, marker, label in ((~pooled & ~free, "o", "record"), (pooled & ~free, "D", "block (records pooled)"),
+                                (free, "s", "free-rocking test")):
         shown = mask & np.isfinite(e)
         ax.errorbar(e[shown], y[shown], xerr=[e[shown] - low[shown], high[shown] - e[shown]], fmt=marker, capsize=3, label=label)
     true = ds["true_e"].values.astype(float)
