@@ -692,7 +692,9 @@ def simulated_record(row: dict):
     and the row's ``dt``, the recipe's low-pass load placed at 75 samples per cycle (the
     coverage study's records, :mod:`rockdec.studies.coverage`), white sensor noise of the
     recipe's share of the record's rms (:func:`rockdec.physics.loading.add_sensor_noise`). A
-    recipe with ``theta0`` is a free-rocking test: released from that tilt, no load, no burn-in."""
+    recipe with ``theta0`` is a free-rocking test: released from that tilt, no load, no
+    burn-in, its noise a share of the release angle (as the free-rocking study draws it,
+    :mod:`rockdec.studies.free_coverage`)."""
     import xarray as xr
 
     from rockdec.physics.loading import add_sensor_noise
@@ -707,7 +709,8 @@ def simulated_record(row: dict):
                                burn_in=default_burn_in(e, placed_at), pole=pole)[0]
     else:
         theta = simulate_block([recipe["seed"]], recipe["n_points"], dt=dt, g=1.0, e=e, sigma_p=0.0, theta0=recipe["theta0"])[0]
-    add_sensor_noise(theta, [recipe["seed"]], recipe["noise"] * float(np.sqrt(np.mean(theta**2))))
+    scale = abs(recipe["theta0"]) if recipe.get("theta0") is not None else float(np.sqrt(np.mean(theta**2)))
+    add_sensor_noise(theta, [recipe["seed"]], recipe["noise"] * scale)
     return xr.Dataset(
         {"theta": ("time", theta[0], {"units": "rad", "long_name": "rocking angle"})},
         coords={"time": ("time", np.arange(theta.shape[1]) * dt, {"units": "s", "standard_name": "time", "long_name": "time", "axis": "T"})},
