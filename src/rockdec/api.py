@@ -20,7 +20,7 @@ import numpy as np
 
 from rockdec.cache import default_cache
 from rockdec.calibrate import calibration, inference
-from rockdec.physics.record_model import SensorNoise, declared_load, parse_sensor_noise
+from rockdec.physics.record_model import declared_load, parse_sensor_noise
 from rockdec.record import records as records_mod
 from rockdec.report.result import RestitutionEstimate
 from rockdec.timeaxis import RecordError, angle_factor
@@ -126,16 +126,6 @@ def _records(theta, dt) -> list[records_mod.Record]:
     return [records_mod.check_values(values, step, source) for values, step, source in _arrays(theta, dt)]
 
 
-def _sensor_noise(value) -> SensorNoise | None:
-    """:func:`estimate`'s ``sensor_noise`` (:func:`rockdec.physics.record_model.parse_sensor_noise`)."""
-    return parse_sensor_noise(value)
-
-
-def _load(value):
-    """:func:`estimate`'s ``load`` (:func:`rockdec.physics.record_model.declared_load`)."""
-    return declared_load(value)
-
-
 def _cache(cache) -> Path:
     return calibration.cache_folder(default_cache() if cache is None else cache)
 
@@ -229,7 +219,7 @@ def estimate_options(*, g=None, load="auto", sensor_noise="auto", model="simplif
         raise InputError("`theta_cr` is the Housner model's critical angle; give `model` housner with it, or leave it out.")
     if g is not None:
         positive(g, "`g`", "give the restoring acceleration nu^2 theta_cr in rad/s^2, or leave it out")
-    return {"load": _load(load), "sensor": _sensor_noise(sensor_noise)}, _cache(cache)
+    return {"load": declared_load(load), "sensor": parse_sensor_noise(sensor_noise)}, _cache(cache)
 
 
 def free_rocking(theta, dt: float | None = None, *, model: str = "simplified", theta_cr: float | None = None) -> RestitutionEstimate:

@@ -470,11 +470,6 @@ class Analysed(NamedTuple):
     notes: tuple
 
     @property
-    def names(self) -> str:
-        """The records' sources, for messages."""
-        return ", ".join(r.source for r in self.records)
-
-    @property
     def own_points_per_cycle(self) -> float:
         """Samples per cycle the analysis reads with the records' own ``g`` (NaN when unread)."""
         return self.own.points_per_cycle if self.own is not None else math.nan

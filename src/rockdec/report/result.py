@@ -14,11 +14,11 @@ import copy
 import dataclasses
 import html
 import json
-import math
 from importlib import resources
 from typing import TYPE_CHECKING, Any, NamedTuple
 
 from rockdec.rdd import registry
+from rockdec.report.summary import beyond_note, pct, reads
 from rockdec.validate import InputError
 
 if TYPE_CHECKING:
@@ -251,10 +251,10 @@ class RestitutionEstimate:
         for name, est in self.document["estimators"].items():
             shown = est["e"] is not None
             rows.append({
-                "estimator": name, "reads": _reads(name), "raw": est["raw"], "corrected": est["e"],
+                "estimator": name, "reads": reads(name), "raw": est["raw"], "corrected": est["e"],
                 "low": est["interval"][0] if shown else None, "high": est["interval"][1] if shown else None,
                 "coverage": est["coverage"], "triggers": est["triggers"], "candidate": name in registry.CANDIDATES,
-                "reported": name == self.estimator, "notes": "; ".join(([_beyond_note(est)] if est.get("beyond") else []) + est["notes"]),
+                "reported": name == self.estimator, "notes": "; ".join(([beyond_note(est)] if est.get("beyond") else []) + est["notes"]),
             })
         return pd.DataFrame(rows).set_index("estimator")
 
@@ -292,7 +292,7 @@ class RestitutionEstimate:
             return [("e", "not estimated"), ("reason", self.reason or "")]
         low, high = self.confidence_interval
         out = [("e", f"{self.e:.4f}"), ("95 % interval", f"[{low:.4f}, {high:.4f}]"), ("estimator", str(self.estimator)),
-               ("coverage on the calibration's records", _pct(self.coverage))]
+               ("coverage on the calibration's records", pct(self.coverage))]
         if self.g is not None:
             out.append(("restoring acceleration g (rad/s²)", f"{self.g:.5g}"))
         return out
@@ -386,24 +386,5 @@ class RestitutionEstimate:
         return fig_record(self, ax)
 
 
-def _pct(x) -> str:
-    return "-" if x is None else f"{x:.1%}"
-
-
 def _short(text: str | None, n: int = 80) -> str | None:
     return text if text is None or len(text) <= n else text[: n - 1] + "…"
-
-
-def _reads(name: str) -> str:
-    """What estimator ``name`` reads, in words (the registry's ``reads``; blank for a name it lacks)."""
-    return registry.spec(name).reads if name in registry.ESTIMATORS else ""
-
-
-def _beyond_note(est: dict) -> str:
-    """Why an estimator's raw value gives no corrected value: it lies beyond its calibration."""
-    lo, hi = est["calibrated_range"] or (math.nan, math.nan)
-    if est["beyond"] == "below":
-        return f"below the calibrated range {lo:.3f}-{hi:.3f}: e is less than {lo:.3f}, not estimated"
-    if est["beyond"] == "above":
-        return f"above the calibrated range {lo:.3f}-{hi:.3f}: e is more than {hi:.3f}, not estimated"
-    return "the raw value is beyond what any calibrated e gives on average: not estimated"

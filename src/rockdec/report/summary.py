@@ -3,22 +3,39 @@
 The reported ``e`` and its interval come first, then the candidates it was chosen from,
 then the record in a few words and the warnings; ``verbose`` adds every estimator with its
 notes, the record model as measured, the calibration and the checks. The words are
-those of :data:`GLOSSARY`.
+those of :data:`rockdec.report.glossary.GLOSSARY`.
 """
 
 from __future__ import annotations
 
-from rockdec.rdd import registry
-from rockdec.report.glossary import GLOSSARY
+import math
 
-__all__ = ["GLOSSARY", "text"]
+from rockdec.rdd import registry
+
+__all__ = ["beyond_note", "pct", "reads", "text"]
 
 def _f(x, spec: str = ".4f") -> str:
     return "-" if x is None else format(x, spec)
 
 
-def _pct(x) -> str:
+def pct(x) -> str:
+    """A share as a percentage with one decimal, ``-`` when there is none."""
     return "-" if x is None else f"{x:.1%}"
+
+
+def reads(name: str) -> str:
+    """What estimator ``name`` reads, in words (the registry's ``reads``; blank for a name it lacks)."""
+    return registry.spec(name).reads if name in registry.ESTIMATORS else ""
+
+
+def beyond_note(est: dict) -> str:
+    """Why an estimator's raw value gives no corrected value: it lies beyond its calibration."""
+    lo, hi = est["calibrated_range"] or (math.nan, math.nan)
+    if est["beyond"] == "below":
+        return f"below the calibrated range {lo:.3f}-{hi:.3f}: e is less than {lo:.3f}, not estimated"
+    if est["beyond"] == "above":
+        return f"above the calibrated range {lo:.3f}-{hi:.3f}: e is more than {hi:.3f}, not estimated"
+    return "the raw value is beyond what any calibrated e gives on average: not estimated"
 
 
 def _interval(est: dict) -> str:
@@ -38,15 +55,15 @@ def _corrected(est: dict) -> str:
 
 
 def _table(doc: dict, names) -> list[str]:
-    reads = {name: registry.spec(name).reads if name in registry.ESTIMATORS else "" for name in names}
-    width = max([len(r) for r in reads.values()] + [5])
+    words = {name: reads(name) for name in names}
+    width = max([len(r) for r in words.values()] + [5])
     lines = [f"  {'estimator':<10} {'reads':<{width}} {'raw':>7} {'corrected':>10}  {'95 % interval':<18} {'coverage':>8} {'triggers':>8}"]
     for name in [n for n in names if n in doc["estimators"]]:
         est = doc["estimators"][name]
         mark = " *" if name == doc["estimator"] else ""
         lines.append(
-            f"  {name + mark:<10} {reads[name]:<{width}} {_f(est['raw']):>7} {_corrected(est):>10}  {_interval(est):<18} "
-            f"{_pct(est['coverage']):>8} {est['triggers']:>8}"
+            f"  {name + mark:<10} {words[name]:<{width}} {_f(est['raw']):>7} {_corrected(est):>10}  {_interval(est):<18} "
+            f"{pct(est['coverage']):>8} {est['triggers']:>8}"
         )
     return lines
 
@@ -58,7 +75,7 @@ def _headline(doc: dict) -> list[str]:
     return [
         f"e = {doc['e']:.4f} (95 % interval [{low:.4f}, {high:.4f}]; estimator {doc['estimator']}, "
         f"{registry.spec(doc['estimator']).reads})",
-        f"  the interval held the true e on {_pct(doc['coverage'])} of the calibration's simulated records",
+        f"  the interval held the true e on {pct(doc['coverage'])} of the calibration's simulated records",
     ]
 
 
@@ -149,7 +166,7 @@ def text(doc: dict, verbose: bool = False) -> str:
         others = [name for name in doc["estimators"] if name not in registry.CANDIDATES]
         lines += ["", "other estimators:", *_table(doc, others), "", "notes on the estimators:"]
         for name, est in doc["estimators"].items():
-            notes = est["notes"] + ([f"{est['beyond']} the calibrated range"] if est.get("beyond") else [])
+            notes = est["notes"] + ([beyond_note(est)] if est.get("beyond") else [])
             lines += [f"  {name}: {note}" for note in notes]
         lines += ["", *_measured(doc.get("record_model")), _calibration(doc)]
         if doc.get("diagnostics"):
