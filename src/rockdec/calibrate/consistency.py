@@ -51,11 +51,9 @@ import numpy as np
 #: of records of one block whose raw values were normal with the belt's spread would fire on
 #: ``1 - LEVEL`` of pools. Far stricter than 95 % because neither holds at low ``e``: a single
 #: record's ``e_v`` there has a heavy right tail, and the belt's spread, from a few dozen
-#: sets per grid point of such values, falls short of their scatter; at the 95 % to 99.5 %
-#: points pairs of one block at ``e = 0.6`` fired on more than 5 % of pairs, while records of
-#: ``e`` 0.80 and 0.90 lie so far apart that this point still finds them
-#: (``benchmarks/pooled_consistency.py``; docs/explanation/method/warnings.md, "Records given
-#: together").
+#: sets per grid point of such values, falls short of their scatter. The rates of pairs of one
+#: block and of two blocks at each level: ``benchmarks/pooled_consistency.py``
+#: (docs/explanation/method/warnings.md, "Records given together").
 LEVEL = 0.999
 
 

@@ -81,8 +81,9 @@ _POOL_SIZE = 4
 _INIT_A, _MULT_A, _INIT_B, _MULT_B = 0x43B0D7E5, 0x931E8875, 0x8B51F9DD, 0x58F38DED
 _MIX_MULT_L, _MIX_MULT_R = 0xCA01F9DD, 0x4973F715
 _WORD = 0xFFFFFFFF
-#: Up to this many seeds :func:`stream_words` hashes each seed's Python ints (about 15 us a
-#: seed); more share NumPy's array operations (about 0.2 ms a call, whatever the number).
+#: Up to this many seeds :func:`stream_words` hashes each seed's Python ints (a cost per
+#: seed); more share NumPy's array operations (a fixed cost per call, whatever the number);
+#: the two costs meet near this many seeds.
 _SEEDS_ONE_BY_ONE = 16
 #: PCG64's multiplier (numpy/random/src/pcg64/pcg64.h, PCG_DEFAULT_MULTIPLIER_128).
 _PCG_MULTIPLIER = 0x2360ED051FC65DA44385DF649FCCF645

@@ -74,9 +74,8 @@ NOISE_LEVELS = (0.0, 0.01, 0.03, 0.05)
 #: ``1/T(sigma_Y)`` (eq. 5), 0 for white impulses (the table's ``corner`` column). Clean
 #: records go under every load; under a coloured load only at the noise levels of
 #: ``COLOURED_NOISE`` and with the defects of ``COLOURED_DEFECTS``: each coloured cell asks
-#: for calibrations of its own, each several times a white one's cost (a noisy coloured one
-#: 20 s to 2 minutes on two shared cores), and its records' measured models scatter over
-#: many bins (37 calibrations for 400 records at ``e`` = 0.8 and 0.95 with 3 % noise).
+#: for calibrations of its own, each several times a white one's cost, and its records'
+#: measured models scatter over many bins, so a coloured cell asks for many calibrations.
 CORNERS, COLOURED_NOISE, COLOURED_DEFECTS = (0.0, 3.0), (0.0, 0.03), ("asymmetry",)
 
 #: Records per cell and their length (``coarse_sampling`` uses :data:`COARSE_POINTS`).
