@@ -143,3 +143,96 @@ def test_every_relative_link_of_the_readme_reaches_a_file():
     readme = (REPO / "README.md").read_text()
     targets = [t.split("#", 1)[0] for t in re.findall(r"\]\(([^)\s]+)\)", readme) if "://" not in t]
     assert targets and sorted(t for t in targets if not (REPO / t).exists()) == []
+
+
+# Prose pages whose numbers a reader takes for what the code does now: a study result typed
+# into them goes stale silently, so they point to the study instead (its tables are included
+# from the files the workflow writes, stamped with their commit).
+PROSE_PAGES = ("explanation", "how-to", "getting-started")
+
+# Fenced blocks that are not prose: code, and the directives that include generated files.
+NOT_PROSE = ("{include}", "{toctree}", "{code-block}", "{code-cell}", "{literalinclude}", "{code}")
+
+# What a hand-typed study result looks like.
+STUDY_NUMBER = {
+    "a percentage with decimals": r"(?<![\w.])(\d+\.\d+) ?%",
+    "a timing": r"(?<![\w.])\d+(?:\.\d+)? ?(?:ms|us|s of CPU|s wall|s of wall|CPU-seconds|CPU-hours|minutes of CPU)\b",
+    "a count of study records": r"(?<![\w.])\d[\d,]* of (?:the |its |their )?\d[\d,]* (?:\w+ )?(?:records|sets|pairs|cells|runs)\b",
+    "a coverage": r"\bcover(?:s|ed)\s+\d",
+    "a measured value": r"\bmeasured\s+(?:at|on|to|in|as|by)\b[^.;:\n]{0,60}?(?<![\w.])\d+(?:\.\d+)?\b",
+}
+
+
+def design_percentages() -> set[str]:
+    """Percentages with decimals that are settings of the code, not study results."""
+    from rockdec.calibrate import calibration, consistency, inference
+    from rockdec.record import diagnostics, record_measure
+
+    shares = [
+        diagnostics.QUANTILE,  # a check's threshold quantile
+        1.0 - diagnostics.QUANTILE,
+        0.025, 0.975,  # the ends of a 95 % band
+        consistency.LEVEL,  # the pooled-records check's chi-square point
+        record_measure.NOISE_FLOOR,  # the smallest noise called noise
+        calibration.SET_PPC_TOLERANCE,  # how closely a coloured calibration's sets hit their sampling
+        inference.coverage_floor(10 * calibration.SETS_PER_E),  # the selection's coverage floor
+        inference.coverage_floor(10 * calibration.SETS_PER_E_MODELLED),
+    ]
+    return {f"{100 * share:.1f}".rstrip("0").rstrip(".") for share in shares}
+
+
+def prose_of(text: str) -> str:
+    """``text`` without fenced code, included generated files, inline code and quoted messages."""
+    out, fence, keep = [], None, True
+    for line in text.splitlines():
+        m = re.match(r"^\s*(`{3,}|~{3,})(.*)$", line)
+        if fence is None and m:
+            fence, info = m.group(1), m.group(2).strip()
+            keep = info.startswith("{") and not info.startswith(NOT_PROSE)
+            continue
+        if fence is not None and m and m.group(1)[0] == fence[0] and len(m.group(1)) >= len(fence) and not m.group(2).strip():
+            fence, keep = None, True
+            continue
+        if fence is None or keep:
+            out.append(line)
+    prose = re.sub(r"`[^`\n]*`", "CODE", "\n".join(out))
+    return re.sub(r'"[^"]{0,600}"', "QUOTE", prose)
+
+
+def study_numbers(text: str, allowed: set[str]) -> list[str]:
+    """Every hand-typed study number in ``text``'s prose, as ``line N: match (kind)``."""
+    prose = prose_of(text)
+    hits = []
+    for kind, pattern in STUDY_NUMBER.items():
+        for m in re.finditer(pattern, prose):
+            if kind == "a percentage with decimals" and m.group(1).rstrip("0").rstrip(".") in allowed:
+                continue
+            hits.append(f"line {prose.count(chr(10), 0, m.start()) + 1} of the prose: {m.group(0)!r} ({kind})")
+    return hits
+
+
+def test_the_study_number_check_tells_results_from_settings():
+    allowed = design_percentages()
+    assert {"98.5", "2.5", "97.5", "99.9", "0.2"} <= allowed
+    results = ("covered 91.0 % of them", "fired on 8 of 167 records", "takes 5.4 ms a record",
+               "was measured at 0.0304 on 12 records", "covers 96 %")
+    for sentence in results:
+        assert study_numbers(sentence, allowed), sentence
+    settings = ("the 98.5 % quantile of the null", "10 values of `e`, 30 sets per `e`",
+                "coverage 92-98 % in every cell", "```bash\nrockdec estimate  # 4.2 s, 91.3 %\n```",
+                "```{include} ../../generated/studies/coverage.md\n```", "the message \"about 242 CPU-hours\"",
+                "a measured load whose share is below 0.7")
+    for sentence in settings:
+        assert not study_numbers(sentence, allowed), sentence
+
+
+@pytest.mark.parametrize("section", PROSE_PAGES + ("README",))
+def test_the_prose_quotes_no_study_number_by_hand(section):
+    """Measured results (coverages, false-alarm rates, timings, "measured at ...") belong in
+    a table included from ``docs/generated/`` or in the study the prose points to; the
+    prose says what the code does and which study holds the numbers."""
+    allowed = design_percentages()
+    pages = [REPO / "README.md"] if section == "README" else sorted((DOCS / section).rglob("*.md"))
+    assert pages
+    found = {str(p.relative_to(REPO)): hits for p in pages if (hits := study_numbers(p.read_text(), allowed))}
+    assert found == {}
