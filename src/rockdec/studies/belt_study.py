@@ -8,7 +8,7 @@ at any other ``e`` (:func:`pool` draws sets on any grid of ``e``). The coverage 
 interval per ``e`` then comes from hundreds of sets without any analysis code of its own
 (:func:`coverage`, and :func:`g_coverage` for ``g``'s interval; :func:`study` over several
 belts). Run it as ``python -m rockdec.studies.belt_study --samples 200000 --pool-sets 120 200 200 200
---replicas 1 3 5 6 --out DIR`` (it prints a row per belt design; the pools are stored in
+--replicas 1 3 5 6 --out DIR`` (it prints each estimator's coverage at each ``e``; the pools are stored in
 ``DIR``, so a second run does not simulate them again; docs/explanation/studies/coverage.md,
 "The belt alone").
 """
