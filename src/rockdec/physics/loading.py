@@ -36,8 +36,8 @@ and its ziggurat normal sampler with NumPy's tables in LLVM (:func:`_normals`), 
 operation, so the numbers are NumPy's bit for bit (tested on seeds of every width and both
 streams). A kernel then draws and integrates a whole block of series without Python between
 series: no generator objects are built and the GIL stays released. The sampler is LLVM
-rather than numba-typed Python because numba's typing and lowering of it took 0.3-0.5 s of
-CPU on a fresh install, about as much as the integrator's own.
+rather than numba-typed Python because numba's typing and lowering of it would cost a fresh
+install about as much compile time as the integrator's own (``benchmarks/bench_compile.py``).
 """
 
 from __future__ import annotations

@@ -355,9 +355,9 @@ def secant_step(history: list, dt: float, achieved: float, target: float) -> flo
     The load's correlation time is a fixed number of steps (its spectrum is placed in cycles
     per step), so it scales with ``dt`` and the white law ``points_per_cycle ~ dt^-2`` no
     longer holds: near a corner at the rocking frequency the load acts like a force that
-    must exceed ``g`` to lift the block, and the samples per cycle fall by two decades over
-    a factor 1.3 in ``dt`` (measured at ``e = 0.98``), so an extrapolated exponent
-    overshoots and the search oscillates. ``history`` holds every pilot ``(ln dt, ln N)``
+    must exceed ``g`` to lift the block, and the samples per cycle fall steeply with ``dt``
+    (the more so the higher ``e``), so an extrapolated exponent overshoots and the search
+    oscillates. ``history`` holds every pilot ``(ln dt, ln N)``
     (appended to here). Once pilots lie on both sides of the target, the next step
     interpolates (in logs) between the nearest step below and the nearest above, kept
     inside the middle 80 % of that bracket, which shrinks it at every pilot like a

@@ -266,7 +266,8 @@ def _compare_readings(node, path) -> None:
 @functools.lru_cache(maxsize=1)
 def _parsed_schema() -> dict:
     """The scene schema file, parsed once a process (by libyaml when PyYAML has it: the
-    pure-Python parser takes 0.03 s of every Snakemake start, a no-op rerun's included)."""
+    pure-Python parser would add a noticeable share of every Snakemake start, a no-op
+    rerun's included)."""
     return yaml.load(resources.files("rockdec").joinpath("scene_schema.yaml").read_text(), Loader=getattr(yaml, "CSafeLoader", yaml.SafeLoader))
 
 
