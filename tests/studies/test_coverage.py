@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pandas as pd
 import pytest
+import xarray as xr
 
 import fake_calibration
 import rocking_vectorised
@@ -243,3 +244,104 @@ def test_band_chance_tells_a_calibrated_interval_from_an_overdispersed_one():
     assert abs(calibrated["outside"] - calibrated["expected_outside"]) < 4 * math.sqrt(calibrated["expected_outside"])
     spread = coverage.band_chance(_table_of_counts(n, rng.binomial(n, np.where(np.arange(400) % 2, 0.90, 0.99))))
     assert spread["chi2_ratio"] > 2.0 and spread["p_chi2"] < 1e-6 and spread["p_outside"] < 1e-6
+
+
+def _synthetic_cell(e, values, widths, cell="kernel_noise3_e0.95"):
+    """A cell (as :func:`rockdec.studies.coverage.run_cell` returns it) whose reported values
+    and interval widths are given, every interval centred on its value; the rest filler."""
+    values, widths = np.asarray(values, float), np.asarray(widths, float)
+    n, names = len(values), list(registry.ESTIMATORS)
+    rec, rest = ("record",), ("record", "estimator")
+    text = np.array([""] * n, dtype=object).astype(str)
+    low, high = values - widths / 2, values + widths / 2
+    simulator, condition, _ = COVERAGE_CASES[cell]
+    ds = xr.Dataset(
+        {"e_hat": (rec, values), "low": (rec, low), "high": (rec, high), "reason": (rec, text),
+         "reported_by": (rec, np.array(["e_0"] * n, dtype=object).astype(str)), "warnings": (rec, text),
+         "calibration": (rec, np.array(["cal.nc"] * n, dtype=object).astype(str)),
+         "paper_e": (rec, values), "paper_low": (rec, low), "paper_high": (rec, high),
+         "est_low": (rest, np.repeat(low[:, None], len(names), 1)), "est_high": (rest, np.repeat(high[:, None], len(names), 1)),
+         **{v: (rec, np.full(n, 75.0)) for v in ("ppc_true", "ppc_read")},
+         **{v: (rec, np.full(n, np.nan)) for v in ("corner_true", "corner_read", "noise_read")},
+         "noisy": (rec, np.ones(n, bool)), "coloured": (rec, np.zeros(n, bool))},
+        coords={"record": np.arange(n), "estimator": names},
+        attrs={"cell": cell, "simulator": simulator, "condition": condition, "e_true": e, "noise": 0.03, "corner": np.nan},
+    )
+    return ds
+
+
+def _standard(n, seed=3):
+    """``n`` normal numbers shifted and scaled to mean 0 and root mean square 1 exactly."""
+    z = np.random.default_rng(seed).standard_normal(n)
+    z -= z.mean()
+    return z / np.sqrt(np.mean(z**2))
+
+
+@pytest.mark.parametrize("ratio", [0.8, 1.0, 1.3])
+def test_sharpness_of_a_cell_of_known_spread_and_width(ratio):
+    """Reported values scattered about the truth with root mean square ``sd`` exactly and
+    intervals all ``ratio x 3.92 sd`` wide read ``ratio``; the cell is sharp only inside
+    0.9-1.15, and the table marks it bold outside."""
+    e, sd, n = 0.95, 0.004, 200
+    ds = _synthetic_cell(e, e + sd * _standard(n), np.full(n, ratio * 2 * 1.959963984540054 * sd))
+    row = coverage.summary(ds)
+    assert row["sharpness"] == pytest.approx(ratio, rel=1e-12)
+    assert row["sharp"] == (coverage.SHARPNESS_BAND[0] <= ratio <= coverage.SHARPNESS_BAND[1])
+    markdown = coverage.markdown(coverage.table([ds]))
+    assert (f"**{ratio:.2f}**" in markdown) == (not row["sharp"])
+    assert "width / (3.92 sd)" in markdown
+
+
+def test_sharpness_measures_the_scatter_about_the_truth_not_the_mean():
+    """A bias ``b`` adds to the scatter the interval must hold: root mean square
+    ``sqrt(sd^2 + b^2)``; widths are read by their median (the widest half can be any)."""
+    e, sd, bias, n = 0.9, 0.006, 0.008, 101
+    widths = np.full(n, 0.05)
+    widths[: n // 2] = np.linspace(0.06, 9.0, n // 2)
+    ratio = coverage.sharpness(e, e + bias + sd * _standard(n), widths)
+    assert ratio == pytest.approx(0.05 / (2 * 1.959963984540054 * math.hypot(sd, bias)), rel=1e-12)
+    assert math.isnan(coverage.sharpness(e, [e, np.nan], [0.1, 0.1]))  # one value: no scatter to read
+
+
+def test_band_chance_reads_the_target():
+    """Cells at 95 % on 200 records, each as wide as its scatter, meet the target; one cell
+    too narrow (0.8) or one below 90 % does not, and each is counted."""
+    n = np.full(10, 200)
+    good = _table_of_counts(n, np.full(10, 190)).assign(sharpness=1.0)
+    chance = coverage.band_chance(good)
+    assert chance["meets"] and chance["unsharp"] == 0 and chance["below_floor"] == 0 and chance["sharpness_cells"] == 10
+    narrow = good.assign(sharpness=np.r_[0.8, np.ones(9)])
+    chance = coverage.band_chance(narrow)
+    assert not chance["meets"] and chance["unsharp"] == 1 and chance["too_narrow"] == 1
+    low = _table_of_counts(n, np.r_[176, np.full(9, 191)]).assign(sharpness=1.0)
+    chance = coverage.band_chance(low)
+    assert not chance["meets"] and chance["below_floor"] == 1
+    assert "not met" in coverage.band_markdown(chance) and "Target" in coverage.band_markdown(coverage.band_chance(good))
+
+
+def test_fresh_records_are_judged_per_calibration():
+    """Two calibrations of one cell, on fresh records of known coverage and sharpness each:
+    one row per calibration with its own numbers; the table reads the cells on their own and
+    on fresh records against chance, and lists each calibration."""
+    e, sd, n = 0.95, 0.004, 100
+    z = _standard(n)
+    unit = 2 * 1.959963984540054 * sd
+    rows = []
+    for file, ratio in (("a.nc", 1.0), ("b.nc", 0.7)):
+        values, width = e + sd * z, ratio * unit
+        rows += [{"ppc_read": 75.0, "bin": 75.0, "calibration": file, "estimator": "e_0", "raw": v, "e": v,
+                  "low": v - width / 2, "high": v + width / 2, "covered": bool(abs(v - e) <= width / 2)} for v in values]
+    fresh = pd.DataFrame(rows)
+    ds = _synthetic_cell(e, e + sd * _standard(40), np.full(40, unit))
+    ds["calibration"].values[:] = np.where(np.arange(40) < 30, "a.nc", "b.nc")
+    by = coverage.fresh_calibrations(ds, fresh).set_index("calibration")
+    assert list(by.index) == ["a.nc", "b.nc"] and list(by["records"]) == [30, 10] and list(by["fresh_answered"]) == [n, n]
+    for file, ratio in (("a.nc", 1.0), ("b.nc", 0.7)):
+        assert by.loc[file, "fresh_sharpness"] == pytest.approx(ratio, rel=1e-12)
+        assert by.loc[file, "fresh_coverage"] == pytest.approx(np.mean(np.abs(z) <= ratio * 1.959963984540054))
+    assert by.loc["a.nc", "sharp"] and not by.loc["b.nc", "sharp"]
+    row = coverage.fresh_summary(ds, fresh)
+    assert row["sharpness"] == pytest.approx(1.0) and row["fresh_sharpness"] == pytest.approx(0.85, rel=1e-12)
+    markdown = coverage.fresh_markdown(pd.DataFrame([row]), by.reset_index())
+    assert "On their own records:" in markdown and "On the fresh records:" in markdown
+    assert "| b.nc | e_0 | 10 |" in markdown and "**0.70**" in markdown

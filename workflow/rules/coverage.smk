@@ -32,7 +32,8 @@ rule coverage_case:
 
 
 rule coverage_table:
-    """Coverage, corrected bias, spread, interval width, nulls and warnings per cell."""
+    """Coverage, corrected bias, spread, interval width and width / (3.92 sd), nulls and warnings per cell, and the
+    cells read against chance and the target."""
     input:
         cases=expand("results/studies/coverage/cells/{case}.nc", case=CASES),
         code=step_code("coverage_table.py"),
@@ -101,7 +102,8 @@ rule coverage_fresh:
 
 
 rule coverage_fresh_table:
-    """Each cell's coverage on its own records beside its calibrations' on fresh records."""
+    """Each cell's coverage and width / (3.92 sd) on its own records beside its calibrations' on fresh records,
+    both read against chance, and each calibration's check on the fresh records it served."""
     input:
         cases=expand("results/studies/coverage/cells/{case}.nc", case=CASES),
         fresh=expand("results/studies/coverage/fresh/{case}.csv", case=CASES),
@@ -109,6 +111,7 @@ rule coverage_fresh_table:
     output:
         csv="results/studies/coverage/fresh/table.csv",
         md="results/studies/coverage/fresh/table.md",
+        calibrations="results/studies/coverage/fresh/calibrations.csv",
     log:
         "results/studies/coverage/logs/fresh_table.log",
     benchmark:

@@ -9,9 +9,15 @@ from rockdec.report import tables
 
 
 def main(smk):
-    rows = pd.DataFrame([coverage.fresh_summary(xr.load_dataset(cell), pd.read_csv(fresh, keep_default_na=True).fillna({"calibration": "", "estimator": ""}))
-                         for cell, fresh in zip(smk.input.cases, smk.input.fresh)])
-    tables.write_table(rows, smk.output.csv, smk.output.md, coverage.fresh_markdown(rows))
+    rows, calibrations = [], []
+    for cell, fresh in zip(smk.input.cases, smk.input.fresh):
+        ds = xr.load_dataset(cell)
+        records = pd.read_csv(fresh, keep_default_na=True).fillna({"calibration": "", "estimator": ""})
+        rows.append(coverage.fresh_summary(ds, records))
+        calibrations.append(coverage.fresh_calibrations(ds, records))
+    rows, calibrations = pd.DataFrame(rows), pd.concat(calibrations, ignore_index=True)
+    tables.write_table(rows, smk.output.csv, smk.output.md, coverage.fresh_markdown(rows, calibrations))
+    calibrations.to_csv(smk.output.calibrations, index=False)
 
 
 if __name__ == "__main__":

@@ -42,6 +42,7 @@ from scipy import stats
 
 from rockdec import engine
 from rockdec.calibrate import inference
+from rockdec.calibrate.belt import Z95
 from rockdec.rdd import registry
 from rockdec.pipeline.layout import COVERAGE_CASES, COVERAGE_CONDITIONS, COVERAGE_SIMULATORS
 from rockdec.physics.models import SCALE_CONSTANT_GUESS, period_from_g, step_for_density
@@ -75,6 +76,20 @@ BIAS_RATIO = 0.25
 
 #: Nominal coverage of the reported interval.
 NOMINAL = 0.95
+
+#: The target the study's cells are judged by together (:func:`band_chance`): pooled
+#: coverage within ``POOLED_BAND``; the covered counts' dispersion about :data:`NOMINAL` at
+#: most ``DISPERSION_MAX`` times the binomial's; the number of cells outside
+#: :data:`COVERAGE_BAND` at least ``P_OUTSIDE_MIN`` probable under an exactly calibrated
+#: interval; no cell answered on ``FLOOR_ANSWERED`` records or more below ``CELL_FLOOR``.
+POOLED_BAND, DISPERSION_MAX, P_OUTSIDE_MIN = (0.94, 0.96), 1.3, 0.05
+CELL_FLOOR, FLOOR_ANSWERED = 0.90, 100
+
+#: Range of a cell's sharpness (:func:`sharpness`: median interval width over 3.92 times
+#: the spread of the reported ``e`` about the truth) a calibrated interval is held to: below
+#: it the interval is narrower than the scatter it must hold, above it wider than the
+#: record needs.
+SHARPNESS_BAND = (0.9, 1.15)
 
 #: Fewest answered records for a cell to count in :func:`band_chance` (fewer cannot tell
 #: 92 % from 98 %: the binomial sd at 50 records is 3 points).
@@ -399,8 +414,9 @@ def fresh_summary(ds: xr.Dataset, fresh: pd.DataFrame) -> dict:
     (:func:`summary`: of the answered) beside its calibrations' on the fresh records
     ``fresh`` (:func:`fresh_coverage`): of the answered, its binomial standard error, and of
     every fresh record (a null or a bin without calibration counted as not covered); the
-    share of fresh records declined or without a calibration; the corrected sd of both; and
-    the coverage of the answered fresh records in the bin most of them read and in the others."""
+    share of fresh records declined or without a calibration; the corrected sd of both and
+    their sharpness (:func:`sharpness`); and the coverage of the answered fresh records in
+    the bin most of them read and in the others."""
     own = summary(ds)
     answered = fresh[np.isfinite(fresh["low"]) & np.isfinite(fresh["high"])]
     n = len(answered)
@@ -409,23 +425,58 @@ def fresh_summary(ds: xr.Dataset, fresh: pd.DataFrame) -> dict:
     in_main = answered["bin"] == main
     return {
         "cell": ds.attrs["cell"], "e_true": ds.attrs["e_true"], "records": own["answered"], "coverage": own["answered_coverage"],
-        "sd": own["sd"], "fresh": len(fresh), "fresh_answered": n, "fresh_coverage": cov,
+        "sd": own["sd"], "sharpness": own["sharpness"], "fresh": len(fresh), "fresh_answered": n, "fresh_coverage": cov,
         "fresh_coverage_se": math.sqrt(cov * (1.0 - cov) / n) if n else math.nan,
         "fresh_coverage_all": float(fresh["covered"].mean()) if len(fresh) else math.nan,
         "fresh_declined": 1.0 - n / len(fresh) if len(fresh) else math.nan,
         "fresh_sd": float(np.std(answered["e"], ddof=1)) if n > 1 else math.nan,
+        "fresh_sharpness": sharpness(ds.attrs["e_true"], answered["e"], answered["high"] - answered["low"]),
         "main_bin": float(main), "main_coverage": float(answered[in_main]["covered"].mean()) if in_main.any() else math.nan,
         "main_share": float(in_main.mean()) if n else math.nan,
         "other_coverage": float(answered[~in_main]["covered"].mean()) if (~in_main).any() else math.nan,
     }
 
 
-def fresh_markdown(rows: pd.DataFrame) -> str:
-    """The fresh-records table (:func:`fresh_summary` rows) as Markdown; coverages outside
-    :data:`COVERAGE_BAND` in bold."""
+def fresh_calibrations(ds: xr.Dataset, fresh: pd.DataFrame) -> pd.DataFrame:
+    """Each calibration of the cell ``ds`` judged on its own: one row per calibration file
+    that served fresh records (:func:`fresh_coverage`'s ``fresh``), with the estimator it
+    inverted, the cell's own records it served, the fresh records it answered, their
+    coverage and its binomial standard error, their sharpness (:func:`sharpness`) and
+    whether both lie in their bands (:func:`in_band`, :func:`in_sharpness_band`)."""
+    e = ds.attrs["e_true"]
+    own = Counter(str(c) for c in ds["calibration"].values if c)
+    answered = fresh[np.isfinite(fresh["low"]) & np.isfinite(fresh["high"])]
+    rows = []
+    for file, part in answered.groupby("calibration", sort=False):
+        n, cov = len(part), float(part["covered"].mean())
+        ratio = sharpness(e, part["e"], part["high"] - part["low"])
+        rows.append({"cell": ds.attrs["cell"], "e_true": e, "calibration": file, "estimator": part["estimator"].mode().iloc[0],
+                     "records": own[file], "fresh_answered": n, "fresh_coverage": cov, "fresh_coverage_se": math.sqrt(cov * (1.0 - cov) / n),
+                     "fresh_sharpness": ratio, "in_band": bool(in_band(cov)), "sharp": bool(in_sharpness_band(ratio))})
+    return pd.DataFrame(rows, columns=["cell", "e_true", "calibration", "estimator", "records", "fresh_answered", "fresh_coverage",
+                                       "fresh_coverage_se", "fresh_sharpness", "in_band", "sharp"])
+
+
+def fresh_chance(rows: pd.DataFrame) -> tuple[dict, dict]:
+    """:func:`band_chance` of the cells of the fresh-records table ``rows``
+    (:func:`fresh_summary`) read on their own records and on the fresh ones."""
+    own = pd.DataFrame({"answered": rows["records"], "answered_coverage": rows["coverage"], "in_band": in_band(rows["coverage"]),
+                        "sharpness": rows["sharpness"]})
+    fresh = pd.DataFrame({"answered": rows["fresh_answered"], "answered_coverage": rows["fresh_coverage"],
+                          "in_band": in_band(rows["fresh_coverage"]), "sharpness": rows["fresh_sharpness"]})
+    return band_chance(own), band_chance(fresh)
+
+
+def fresh_markdown(rows: pd.DataFrame, calibrations: pd.DataFrame | None = None) -> str:
+    """The fresh-records table (:func:`fresh_summary` rows) as Markdown, coverages outside
+    :data:`COVERAGE_BAND` and sharpness outside :data:`SHARPNESS_BAND` in bold; below it
+    the cells read against chance on their own records and on the fresh ones
+    (:func:`fresh_chance`, :func:`band_markdown`), and, given ``calibrations``
+    (:func:`fresh_calibrations` rows), each calibration's check on the fresh records it
+    served (bold marks only those answered on :data:`BAND_MIN_ANSWERED` or more)."""
     lines = ["| cell | own records: coverage (n) | fresh: coverage ± se (answered / n) | fresh: every record | fresh declined | "
-             "sd own, fresh | fresh: main bin (share) | fresh: other bins |",
-             "| --- | --- | --- | --- | --- | --- | --- | --- |"]
+             "sd own, fresh | width / (3.92 sd) own, fresh | fresh: main bin (share) | fresh: other bins |",
+             "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
 
     def pct(x, bold=True):
         if not np.isfinite(x):
@@ -436,7 +487,18 @@ def fresh_markdown(rows: pd.DataFrame) -> str:
     for r in rows.itertuples():
         lines.append(f"| {r.cell} | {pct(r.coverage)} ({r.records}) | {pct(r.fresh_coverage)} ± {100 * r.fresh_coverage_se:.1f} "
                      f"({r.fresh_answered} / {r.fresh}) | {pct(r.fresh_coverage_all, False)} | {100 * r.fresh_declined:.1f} % | "
-                     f"{r.sd:.4f}, {r.fresh_sd:.4f} | {pct(r.main_coverage, False)} ({100 * r.main_share:.0f} %) | {pct(r.other_coverage, False)} |")
+                     f"{r.sd:.4f}, {r.fresh_sd:.4f} | {_sharp_cell(r.sharpness)}, {_sharp_cell(r.fresh_sharpness)} | "
+                     f"{pct(r.main_coverage, False)} ({100 * r.main_share:.0f} %) | {pct(r.other_coverage, False)} |")
+    own, fresh = fresh_chance(rows)
+    lines += ["", f"On their own records: {band_markdown(own)}", "", f"On the fresh records: {band_markdown(fresh)}"]
+    if calibrations is not None and len(calibrations):
+        lines += ["", "| cell | calibration | estimator | own records served | fresh: coverage ± se (answered) | fresh: width / (3.92 sd) |",
+                  "| --- | --- | --- | --- | --- | --- |"]
+        for r in calibrations.itertuples():
+            judged = r.fresh_answered >= BAND_MIN_ANSWERED
+            lines.append(f"| {r.cell} | {r.calibration} | {r.estimator} | {r.records} | {pct(r.fresh_coverage, judged)} ± "
+                         f"{100 * r.fresh_coverage_se:.1f} ({r.fresh_answered}) | "
+                         f"{_sharp_cell(r.fresh_sharpness, judged)} |")
     return "\n".join(lines) + "\n"
 
 
@@ -498,12 +560,51 @@ def _median(values) -> float:
     return float(np.median(values[np.isfinite(values)])) if np.isfinite(values).any() else math.nan
 
 
+def sharpness(e: float, values, widths) -> float:
+    """Median of the finite ``widths`` over ``2 x 1.96`` times the root mean square of the
+    finite ``values`` about the true ``e``: 1 for a 95 % interval exactly as wide as a
+    normal scatter of the reported ``e`` about the truth needs (a bias widens the scatter
+    it is measured against); NaN with fewer than two values or none off the truth.
+
+    Parameters
+    ----------
+    e : float
+        True value.
+    values : array_like
+        Reported values (NaN: none).
+    widths : array_like
+        Widths of their intervals (NaN: none).
+
+    Returns
+    -------
+    float
+        The ratio (judged against :data:`SHARPNESS_BAND`).
+
+    Examples
+    --------
+    >>> round(sharpness(0.5, [0.49, 0.51], [4 * 1.959963984540054 * 0.01] * 2), 6)
+    2.0
+    """
+    values, widths = np.asarray(values, dtype=float), np.asarray(widths, dtype=float)
+    values = values[np.isfinite(values)]
+    if values.size < 2 or not np.any(values != e):
+        return math.nan
+    return _median(widths) / (2.0 * Z95 * float(np.sqrt(np.mean((values - e) ** 2))))
+
+
+def in_sharpness_band(ratio):
+    """Whether ``ratio`` (:func:`sharpness`, a number or an array) lies inside :data:`SHARPNESS_BAND`."""
+    return (SHARPNESS_BAND[0] <= ratio) & (ratio <= SHARPNESS_BAND[1])
+
+
 def summary(ds: xr.Dataset) -> dict:
     """One row of the study's table for the cell ``ds`` (:func:`run_cell`): ``coverage`` over
     every record (a null counted as not covered) and, apart, ``declined`` (the share of
     records with a null ``e``) and ``answered_coverage`` with its binomial standard error
     over the ``answered`` records, by which ``in_band`` judges the cell (a cell declined
-    whole is not in the band)."""
+    whole is not in the band); ``sharpness``, the median width over 3.92 times the spread
+    of the reported ``e`` about the truth (:func:`sharpness`), by which ``sharp`` judges it
+    (:data:`SHARPNESS_BAND`)."""
     e = ds.attrs["e_true"]
     n = ds.sizes["record"]
     values = ds["e_hat"].values
@@ -530,6 +631,7 @@ def summary(ds: xr.Dataset) -> dict:
         "sd": sd,
         "bias_over_sd": bias / sd if sd > 0 else math.nan,
         "median_width": _median(ds["high"].values - ds["low"].values),
+        "sharpness": sharpness(e, values, ds["high"].values - ds["low"].values),
         "nulls": int((~ok).sum()),
         "null_reasons": _counts(ds["reason"].values[~ok], n, clause=True),
         "estimators": "; ".join(f"{k} {v}" for k, v in Counter(s for s in ds["reported_by"].values if s).most_common()),
@@ -550,6 +652,7 @@ def summary(ds: xr.Dataset) -> dict:
         "calibrations": len({c for c in ds["calibration"].values if c}),
     }
     row["in_band"] = bool(in_band(answered))
+    row["sharp"] = bool(in_sharpness_band(row["sharpness"]))
     row["bias_ok"] = bool(abs(row["bias_over_sd"]) <= BIAS_RATIO)
     return row
 
@@ -584,7 +687,11 @@ def band_chance(tab: pd.DataFrame) -> dict:
     at least as many (their sum's exact distribution, a Poisson binomial); and the dispersion
     ``chi2 = sum((k - p n)^2 / (n p (1 - p)))`` of the covered counts ``k`` about ``p n``
     with its ratio to the cells' number and its upper-tail probability (``chi2`` with one
-    degree of freedom per cell: a calibrated interval gives a ratio near 1)."""
+    degree of freedom per cell: a calibrated interval gives a ratio near 1); the cells
+    below :data:`CELL_FLOOR` among those answered on :data:`FLOOR_ANSWERED` records or more,
+    the cells whose sharpness lies outside :data:`SHARPNESS_BAND` (``unsharp``, and
+    ``too_narrow`` of them below it; a table without the column counts none), and whether
+    the whole target holds (``meets``: the module's target constants)."""
     used = tab[tab["answered"] >= BAND_MIN_ANSWERED]
     n = used["answered"].to_numpy(dtype=int)
     k = np.rint(used["answered_coverage"].to_numpy() * n)
@@ -595,28 +702,40 @@ def band_chance(tab: pd.DataFrame) -> dict:
     out = int((~used["in_band"]).sum())
     chi2 = float(np.sum((k - NOMINAL * n) ** 2 / (n * NOMINAL * (1.0 - NOMINAL))))
     cells = len(used)
-    return {
+    ratio = used["sharpness"].to_numpy(dtype=float) if "sharpness" in used else np.full(cells, np.nan)
+    known = np.isfinite(ratio)
+    chance = {
         "cells": cells, "outside": out, "expected_outside": float(np.sum(1.0 - inside)),
         "p_outside": float(count[out:].sum()), "p_all_inside": float(count[0]),
         "pooled_coverage": float(k.sum() / n.sum()) if cells else math.nan,
         "chi2_ratio": chi2 / cells if cells else math.nan,
         "p_chi2": float(stats.chi2.sf(chi2, cells)) if cells else math.nan,
+        "below_floor": int((used[used["answered"] >= FLOOR_ANSWERED]["answered_coverage"] < CELL_FLOOR).sum()),
+        "sharpness_cells": int(known.sum()),
+        "unsharp": int((known & ~in_sharpness_band(ratio)).sum()),
+        "too_narrow": int((known & (ratio < SHARPNESS_BAND[0])).sum()),
         "few": int(((tab["answered"] > 0) & (tab["answered"] < BAND_MIN_ANSWERED)).sum()),
         "declined_whole": int((tab["answered"] == 0).sum()),
     }
+    chance["meets"] = bool(cells and POOLED_BAND[0] <= chance["pooled_coverage"] <= POOLED_BAND[1]
+                           and chance["chi2_ratio"] <= DISPERSION_MAX and chance["p_outside"] >= P_OUTSIDE_MIN
+                           and chance["below_floor"] == 0 and chance["unsharp"] == 0)
+    return chance
 
 
 def markdown(tab: pd.DataFrame) -> str:
     """The table as Markdown: the share of records declined (``e`` null), the coverage of
     the reported interval on the records answered (its binomial standard error; bold
     outside :data:`COVERAGE_BAND`, ``-`` when every record is declined), corrected bias and
-    sd, median width, the paper model's width and coverage (every record, a null counted
+    sd, median width and its sharpness (:func:`sharpness`; bold outside
+    :data:`SHARPNESS_BAND`), the paper model's width and coverage (every record, a null counted
     as not covered), and the records' samples per cycle, corner and noise (true, and as the
     tool read them); the warnings and null reasons of each cell below."""
     lines = [
-        "| simulator | condition | e | n | declined | coverage of answered | bias | sd | bias/sd | width | paper-model width | "
-        "paper-model coverage | samples/cycle (true, read) | corner (true, read) | noise read | noisy, coloured | reported by |",
-        "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
+        "| simulator | condition | e | n | declined | coverage of answered | bias | sd | bias/sd | width | width / (3.92 sd) | "
+        "paper-model width | paper-model coverage | samples/cycle (true, read) | corner (true, read) | noise read | noisy, coloured "
+        "| reported by |",
+        "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
     ]
 
     def num(x, fmt):
@@ -629,7 +748,7 @@ def markdown(tab: pd.DataFrame) -> str:
         lines.append(
             f"| {r.simulator} | {r.condition} | {r.e_true:g} | {r.records} | {100 * r.declined:.0f} % | {covered} "
             f"| {num(r.bias, '+.4f')} | {num(r.sd, '.4f')} | {num(r.bias_over_sd, '+.2f')} | "
-            f"{num(r.median_width, '.4f')} | {num(r.paper_median_width, '.4f')} | {100 * r.paper_coverage:.0f} % | "
+            f"{num(r.median_width, '.4f')} | {_sharp_cell(r.sharpness)} | {num(r.paper_median_width, '.4f')} | {100 * r.paper_coverage:.0f} % | "
             f"{num(r.ppc_true, '.0f')}, {num(r.ppc_read, '.0f')} | {num(r.corner_true, '.2f')}, {num(r.corner_read, '.2f')} | "
             f"{num(r.noise_read, '.3f')} | {100 * r.noisy:.0f} %, {100 * r.coloured:.0f} % | {r.estimators or '-'} |"
         )
@@ -638,8 +757,16 @@ def markdown(tab: pd.DataFrame) -> str:
     return "\n".join(lines) + "\n\n" + band_markdown(band_chance(tab)) + "\n\n" + "\n".join(notes) + "\n"
 
 
+def _sharp_cell(ratio: float, bold: bool = True) -> str:
+    """A sharpness in a table: two decimals, bold outside :data:`SHARPNESS_BAND` (``bold``), ``-`` when unknown."""
+    if not np.isfinite(ratio):
+        return "-"
+    flag = "**" if bold and not in_sharpness_band(ratio) else ""
+    return f"{flag}{ratio:.2f}{flag}"
+
+
 def band_markdown(chance: dict) -> str:
-    """:func:`band_chance` in one paragraph."""
+    """:func:`band_chance` in one paragraph, closed by the target it is judged by and whether it holds."""
     return (f"Cells answered on at least {BAND_MIN_ANSWERED} records: {chance['cells']}, pooled coverage "
             f"{100 * chance['pooled_coverage']:.1f} %; outside {100 * COVERAGE_BAND[0]:.0f}-{100 * COVERAGE_BAND[1]:.0f} %: "
             f"{chance['outside']}, where an interval that holds e {100 * NOMINAL:.0f} % of the time leaves "
@@ -647,4 +774,9 @@ def band_markdown(chance: dict) -> str:
             f"{chance['p_outside']:.2g}, none with probability {chance['p_all_inside']:.2f}; the covered counts' dispersion "
             f"about {100 * NOMINAL:.0f} % is {chance['chi2_ratio']:.2f} times the binomial (chi2 upper tail "
             f"{chance['p_chi2']:.2g}). Cells answered on 1-{BAND_MIN_ANSWERED - 1} records: {chance['few']}; "
-            f"declined whole: {chance['declined_whole']}.")
+            f"declined whole: {chance['declined_whole']}. Cells below {100 * CELL_FLOOR:.0f} % on {FLOOR_ANSWERED} records or "
+            f"more: {chance['below_floor']}; width / (3.92 sd) outside {SHARPNESS_BAND[0]:g}-{SHARPNESS_BAND[1]:g}: "
+            f"{chance['unsharp']} of {chance['sharpness_cells']} ({chance['too_narrow']} too narrow). Target (pooled "
+            f"{100 * POOLED_BAND[0]:.0f}-{100 * POOLED_BAND[1]:.0f} %, dispersion at most {DISPERSION_MAX:g}, out-of-band "
+            f"probability at least {P_OUTSIDE_MIN:g}, no cell below {100 * CELL_FLOOR:.0f} %, every cell's width / (3.92 sd) "
+            f"inside {SHARPNESS_BAND[0]:g}-{SHARPNESS_BAND[1]:g}): {'met' if chance['meets'] else 'not met'}.")
