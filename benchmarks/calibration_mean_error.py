@@ -38,12 +38,17 @@ SEED_OFFSET = 2**62
 TEST_E = (0.5, 0.6, 0.65, 0.7, 0.75, 0.8, 0.865, 0.9, 0.95, 0.985)
 
 
-def pool(noise: float, ppc: float, samples: int, sets: int, es) -> np.ndarray:
-    """Raw zero-window values ``(e, set, name)`` of ``sets`` sets at each of ``es``."""
+def pool(noise: float, ppc: float, samples: int, sets: int, es, threads: int = 1) -> np.ndarray:
+    """Raw zero-window values ``(e, set, name)`` of ``sets`` sets at each of ``es`` (the values
+    of ``e`` spread over ``threads`` threads; the same numbers whatever their number)."""
+    from concurrent.futures import ThreadPoolExecutor
+
     model = RecordModel("simplified", WHITE, SensorNoise(noise, "sigma_y"))
     settings = dict(measured.DEFAULT_SETTINGS)
-    raw = np.full((len(es), sets, len(calibration.NAMES)), np.nan)
-    for j, e in enumerate(es):
+
+    def one(j: int) -> np.ndarray:
+        e = es[j]
+        raw = np.full((sets, len(calibration.NAMES)), np.nan)
         seed0 = SEED_OFFSET + j * 10**7
         dt, burn_in, _ = calibration.step_for(e, ppc, [samples], settings, seed0 + 9 * 10**6, model)
         probe = [measured.analyse(calibration._simulate_set(seed0 + 8 * 10**6 + k, [samples], dt, e, burn_in, model), dt, settings).points_per_cycle
@@ -54,9 +59,12 @@ def pool(noise: float, ppc: float, samples: int, sets: int, es) -> np.ndarray:
                 analysis = measured.analyse(calibration._simulate_set(seed0 + k, [samples], dt, e, burn_in, model), dt, settings)
             except ValueError:
                 continue
-            raw[j, k] = [analysis.raw[name] for name in calibration.NAMES]
+            raw[k] = [analysis.raw[name] for name in calibration.NAMES]
         print(f"pool e = {e}: dt = {dt:.4g}, median samples per cycle of the probe {np.median(probe):.1f}", flush=True)
-    return raw
+        return raw
+
+    with ThreadPoolExecutor(threads) as workers:
+        return np.stack(list(workers.map(one, range(len(es)))))
 
 
 def errors(raw: np.ndarray, es, name: str, n: int) -> np.ndarray:

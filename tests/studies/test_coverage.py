@@ -270,11 +270,13 @@ def _synthetic_cell(e, values, widths, cell="kernel_noise3_e0.95"):
     return ds
 
 
-def _standard(n, seed=3):
-    """``n`` normal numbers shifted and scaled to mean 0 and root mean square 1 exactly."""
-    z = np.random.default_rng(seed).standard_normal(n)
-    z -= z.mean()
-    return z / np.sqrt(np.mean(z**2))
+def _standard(n):
+    """``n`` normal quantiles, symmetric about 0, scaled so that the median of their size is
+    a standard normal's exactly (a scatter of sd 1 as :func:`rockdec.studies.coverage.sharpness` reads it)."""
+    from scipy import stats
+
+    z = stats.norm.ppf((np.arange(n) + 0.5) / n)
+    return z * coverage.MAD_NORMAL / np.median(np.abs(z))
 
 
 @pytest.mark.parametrize("ratio", [0.8, 1.0, 1.3])
@@ -293,14 +295,28 @@ def test_sharpness_of_a_cell_of_known_spread_and_width(ratio):
 
 
 def test_sharpness_measures_the_scatter_about_the_truth_not_the_mean():
-    """A bias ``b`` adds to the scatter the interval must hold: root mean square
-    ``sqrt(sd^2 + b^2)``; widths are read by their median (the widest half can be any)."""
-    e, sd, bias, n = 0.9, 0.006, 0.008, 101
+    """Values all off the truth on one side: their scatter about their own mean is a third
+    of their distance from the truth, the ratio reads the distance; widths are read by their
+    median (the widest half can be anything)."""
+    e, n = 0.9, 101
+    values = e + np.r_[np.full(50, 0.01), np.full(51, 0.03)]
     widths = np.full(n, 0.05)
     widths[: n // 2] = np.linspace(0.06, 9.0, n // 2)
-    ratio = coverage.sharpness(e, e + bias + sd * _standard(n), widths)
-    assert ratio == pytest.approx(0.05 / (2 * 1.959963984540054 * math.hypot(sd, bias)), rel=1e-12)
+    assert coverage.sharpness(e, values, widths) == pytest.approx(0.05 * coverage.MAD_NORMAL / (2 * 1.959963984540054 * 0.03), rel=1e-12)
     assert math.isnan(coverage.sharpness(e, [e, np.nan], [0.1, 0.1]))  # one value: no scatter to read
+
+
+def test_sharpness_is_not_moved_by_a_few_wild_records():
+    """Five of 200 records reported by an estimator ten times wider, far off but covered,
+    move the ratio by a few per cent; the root mean square of the error, beside it, grows
+    many times."""
+    e, sd, n = 0.98, 0.005, 200
+    values, widths = e + sd * _standard(n), np.full(n, 2 * 1.959963984540054 * sd)
+    clean = coverage.summary(_synthetic_cell(e, values, widths))
+    values[::40], widths[::40] = e - 0.1, 0.3
+    wild = coverage.summary(_synthetic_cell(e, values, widths))
+    assert clean["sharpness"] == pytest.approx(1.0, rel=1e-12) and wild["sharpness"] == pytest.approx(1.0, rel=0.05)
+    assert wild["rms_error"] > 3 * clean["rms_error"]
 
 
 def test_band_chance_reads_the_target():

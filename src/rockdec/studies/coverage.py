@@ -85,6 +85,10 @@ NOMINAL = 0.95
 POOLED_BAND, DISPERSION_MAX, P_OUTSIDE_MIN = (0.94, 0.96), 1.3, 0.05
 CELL_FLOOR, FLOOR_ANSWERED = 0.90, 100
 
+#: Median of ``|x|`` for a standard normal ``x`` (its 75 % quantile): a normal scatter's
+#: median distance from its centre over its sd (:func:`sharpness`).
+MAD_NORMAL = float(stats.norm.ppf(0.75))
+
 #: Range of a cell's sharpness (:func:`sharpness`: median interval width over 3.92 times
 #: the spread of the reported ``e`` about the truth) a calibrated interval is held to: below
 #: it the interval is narrower than the scatter it must hold, above it wider than the
@@ -561,10 +565,14 @@ def _median(values) -> float:
 
 
 def sharpness(e: float, values, widths) -> float:
-    """Median of the finite ``widths`` over ``2 x 1.96`` times the root mean square of the
-    finite ``values`` about the true ``e``: 1 for a 95 % interval exactly as wide as a
-    normal scatter of the reported ``e`` about the truth needs (a bias widens the scatter
-    it is measured against); NaN with fewer than two values or none off the truth.
+    """Median of the finite ``widths`` over ``2 x 1.96`` times the spread of the finite
+    ``values`` about the true ``e``: 1 for a 95 % interval exactly as wide as a normal
+    scatter of the reported ``e`` about the truth needs. The spread is read robustly, as
+    the median width is: the median of ``|value - e|`` over its normal value
+    :data:`MAD_NORMAL` (the sd of a normal scatter centred on ``e``; a bias widens it), so
+    that a few records reported by a much wider estimator, whose own intervals hold their
+    scatter, move neither end of the ratio. NaN with fewer than two values or none off the
+    truth.
 
     Parameters
     ----------
@@ -582,14 +590,16 @@ def sharpness(e: float, values, widths) -> float:
 
     Examples
     --------
-    >>> round(sharpness(0.5, [0.49, 0.51], [4 * 1.959963984540054 * 0.01] * 2), 6)
+    A scatter of ``0.01 x MAD_NORMAL`` about the truth each way, intervals twice 3.92 times 0.01:
+
+    >>> round(sharpness(0.5, [0.5 - 0.01 * MAD_NORMAL, 0.5 + 0.01 * MAD_NORMAL], [4 * 1.959963984540054 * 0.01] * 2), 6)
     2.0
     """
-    values, widths = np.asarray(values, dtype=float), np.asarray(widths, dtype=float)
+    values = np.asarray(values, dtype=float)
     values = values[np.isfinite(values)]
     if values.size < 2 or not np.any(values != e):
         return math.nan
-    return _median(widths) / (2.0 * Z95 * float(np.sqrt(np.mean((values - e) ** 2))))
+    return _median(widths) / (2.0 * Z95 * float(np.median(np.abs(values - e))) / MAD_NORMAL)
 
 
 def in_sharpness_band(ratio):
@@ -604,7 +614,7 @@ def summary(ds: xr.Dataset) -> dict:
     over the ``answered`` records, by which ``in_band`` judges the cell (a cell declined
     whole is not in the band); ``sharpness``, the median width over 3.92 times the spread
     of the reported ``e`` about the truth (:func:`sharpness`), by which ``sharp`` judges it
-    (:data:`SHARPNESS_BAND`)."""
+    (:data:`SHARPNESS_BAND`), beside the root mean square of the error (``rms_error``)."""
     e = ds.attrs["e_true"]
     n = ds.sizes["record"]
     values = ds["e_hat"].values
@@ -632,6 +642,7 @@ def summary(ds: xr.Dataset) -> dict:
         "bias_over_sd": bias / sd if sd > 0 else math.nan,
         "median_width": _median(ds["high"].values - ds["low"].values),
         "sharpness": sharpness(e, values, ds["high"].values - ds["low"].values),
+        "rms_error": float(np.sqrt(np.mean((values[ok] - e) ** 2))) if ok.any() else math.nan,
         "nulls": int((~ok).sum()),
         "null_reasons": _counts(ds["reason"].values[~ok], n, clause=True),
         "estimators": "; ".join(f"{k} {v}" for k, v in Counter(s for s in ds["reported_by"].values if s).most_common()),
