@@ -16,8 +16,9 @@ square error for the spread), and the same for each
 candidate estimator's own interval over the same records, with the sensor noise the tool
 read against the true one. Each record's row (every estimator's corrected value, interval
 and raw value, the noise read, the calibration used) goes to ``<out>/<simulator>_e<E>_noise<N>.csv``,
-so that a belt or selection variant can be read offline
-(:func:`rockdec.studies.coverage.recorrect`'s inverter on the stored calibrations).
+so that a belt variant can be read offline: ``--read`` reports stored cells, and with
+``--sets N`` reads their records again through calibrations of ``N`` sets per ``e``
+(:func:`reread`).
 Seeds start at :data:`SEED_OFFSET`, apart from the study's, the fresh records' and the
 calibrations'.
 """
@@ -93,6 +94,32 @@ def report(df: pd.DataFrame) -> None:
     sys.stdout.flush()
 
 
+def reread(df: pd.DataFrame, cache: Path, sets: int) -> pd.DataFrame:
+    """The records of ``df`` read again through calibrations of ``sets`` sets per ``e``:
+    each record's calibration settings (stored in the file it used) with ``sets_per_e``
+    replaced, built into ``cache`` (other settings, other seeds: independent sets), and the
+    raw value of the estimator it reported inverted through that calibration's belt
+    (:func:`rockdec.studies.coverage.recorrect`'s inverter). The estimator reported stays;
+    a record with a null ``e`` stays null."""
+    import json
+
+    from rockdec.calibrate import calibration, ncread
+
+    out, files = df.copy(), {}
+    invert = coverage._Inverter(cache, int(df.attrs.get("n_points", 200_000)))
+    for k, row in df.iterrows():
+        if not isinstance(row["reported_by"], str) or not np.isfinite(row["e_hat"]):
+            continue
+        if row["calibration"] not in files:
+            settings = json.loads(ncread.read(cache / row["calibration"]).attrs["settings"])
+            settings["sets_per_e"] = sets
+            files[row["calibration"]] = f"calibration-{calibration.settings_hash(settings)}.nc"
+            calibration.load_or_build(settings, cache)
+        name = row["reported_by"]
+        out.loc[k, ["e_hat", "low", "high"]] = invert(files[row["calibration"]], name, float(row[f"{name}_raw"]))
+    return out
+
+
 def main() -> None:
     """Run the cells the arguments name, or (``--read``) report cells stored before."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -105,11 +132,17 @@ def main() -> None:
     parser.add_argument("--cache", type=Path, required=True, help="calibration folder (shared between runs)")
     parser.add_argument("--out", type=Path, required=True, help="folder for each cell's CSV")
     parser.add_argument("--read", action="store_true", help="report the cells stored in --out, simulate nothing")
+    parser.add_argument("--sets", type=int, help="with --read: read the records again through calibrations of this many sets per e")
     args = parser.parse_args()
     if args.read:
         for e in args.e:
             for noise in args.noise:
-                report(pd.read_csv(args.out / f"{args.simulator}_e{e:g}_noise{noise:g}.csv"))
+                df = pd.read_csv(args.out / f"{args.simulator}_e{e:g}_noise{noise:g}.csv")
+                if args.sets:
+                    with engine.session(args.threads):
+                        df = reread(df, args.cache, args.sets)
+                    print(f"read again through calibrations of {args.sets} sets per e:")
+                report(df)
         return
     args.out.mkdir(parents=True, exist_ok=True)
     with engine.session(args.threads):

@@ -18,7 +18,8 @@ smoothers, :data:`rockdec.calibrate.belt.GCV_GAMMA`, where 4.9 leaves ten points
 straight line; the quantile pooling's bandwidth :data:`rockdec.calibrate.belt.QUANTILE_BANDWIDTH`)
 it prints the mean of that ratio over the blocks, its sd (one calibration against another)
 and the share of the pool's sets the band holds at each test ``e`` (the interval's
-coverage at that ``e``, with the mean curve's error).
+coverage at that ``e``, with the mean curve's error), its mean and sd over the blocks (how
+far one calibration's coverage strays from another's).
 """
 
 from __future__ import annotations
@@ -86,14 +87,15 @@ def main(argv=None) -> None:
             np.save(args.save, raw)
     print(f"\nnoise {args.noise:g}, {args.ppc:g} samples per cycle, {args.samples} samples, pool {args.pool} sets per e")
     print("| estimator | sets per e | GCV penalty | bandwidth | blocks | width / (3.92 sd) mean (sd over blocks) at e = "
-          + ", ".join(map(str, TEST_E)) + " | band holds at each e |")
+          + ", ".join(map(str, TEST_E)) + " | band holds at each e: mean (sd over blocks), % |")
     print("| --- | --- | --- | --- | --- | --- | --- |")
     for name, n, gamma, bw in itertools.product(args.names, args.sets, args.gamma, args.bandwidth):
         belt.GCV_GAMMA, belt.QUANTILE_BANDWIDTH = gamma, bw
         w, h = ratios(raw, es, name, n)
         print(f"| {name} | {n} | {gamma:g} | {bw:g} | {len(w)} | "
               + " / ".join(f"{a:.2f} ({b:.2f})" for a, b in zip(np.nanmean(w, 0), np.nanstd(w, 0, ddof=1)))
-              + " | " + " / ".join(f"{100 * x:.1f}" for x in np.nanmean(h, 0)) + " |", flush=True)
+              + " | " + " / ".join(f"{100 * a:.1f} ({100 * b:.1f})" for a, b in zip(np.nanmean(h, 0), np.nanstd(h, 0, ddof=1))) + " |",
+              flush=True)
 
 
 if __name__ == "__main__":
