@@ -11,8 +11,7 @@ each record's angle and time scaled at random (a block of another ``g``; the too
 ``g``), go through :func:`rockdec.studies.coverage.estimate_record`, the path of
 ``rockdec estimate`` with the record model measured. Per cell it prints the reported
 interval's coverage and its median width over 3.92 times the spread of the reported ``e``
-about the truth (:func:`rockdec.studies.coverage.sharpness`; beside it with the root mean
-square error for the spread), and the same for each
+about the truth (:func:`rockdec.studies.coverage.sharpness`, and its robust reading), and the same for each
 candidate estimator's own interval over the same records, with the sensor noise the tool
 read against the true one. Each record's row (every estimator's corrected value, interval
 and raw value, the noise read, the calibration used) goes to ``<out>/<simulator>_e<E>_noise<N>.csv``,
@@ -79,9 +78,9 @@ def report(df: pd.DataFrame) -> None:
     def line(label, value, low, high):
         ok = np.isfinite(value) & np.isfinite(low) & np.isfinite(high)
         cov = float(np.mean((low[ok] <= e) & (e <= high[ok]))) if ok.any() else math.nan
-        rms = np.sqrt(np.mean((value[ok] - e) ** 2))
+        width = high[ok] - low[ok]
         return (f"  {label:>10}: n {ok.sum():3d}, coverage {100 * cov:5.1f} %, width/(3.92 sd) "
-                f"{coverage.sharpness(e, value[ok], high[ok] - low[ok]):.2f} (sd as rms: {np.median(high[ok] - low[ok]) / (3.92 * rms):.2f}), "
+                f"{coverage.sharpness(e, value[ok], width):.2f} (robust {coverage.sharpness(e, value[ok], width, robust=True):.2f}), "
                 f"bias {np.mean(value[ok]) - e:+.4f}")
 
     print(f"{df['simulator'].iloc[0]} e = {e:g}, noise {df['noise'].iloc[0]:g}: noise read median "

@@ -271,23 +271,25 @@ def _synthetic_cell(e, values, widths, cell="kernel_noise3_e0.95"):
 
 
 def _standard(n):
-    """``n`` normal quantiles, symmetric about 0, scaled so that the median of their size is
-    a standard normal's exactly (a scatter of sd 1 as :func:`rockdec.studies.coverage.sharpness` reads it)."""
+    """``n`` normal quantiles, symmetric about 0 (mean 0), scaled to a root mean square of 1
+    exactly (a scatter of sd 1 about the truth as :func:`rockdec.studies.coverage.sharpness` reads it)."""
     from scipy import stats
 
     z = stats.norm.ppf((np.arange(n) + 0.5) / n)
-    return z * coverage.MAD_NORMAL / np.median(np.abs(z))
+    return z / np.sqrt(np.mean(z**2))
 
 
 @pytest.mark.parametrize("ratio", [0.8, 1.0, 1.3])
 def test_sharpness_of_a_cell_of_known_spread_and_width(ratio):
-    """Reported values scattered about the truth with root mean square ``sd`` exactly and
-    intervals all ``ratio x 3.92 sd`` wide read ``ratio``; the cell is sharp only inside
-    0.9-1.15, and the table marks it bold outside."""
+    """Reported values scattered about the truth with sd ``sd`` exactly and intervals all
+    ``ratio x 3.92 sd`` wide read ``ratio`` (the robust reading too, within the quantiles'
+    departure from a normal's median); the cell is sharp only inside 0.9-1.15, and the table
+    marks it bold outside."""
     e, sd, n = 0.95, 0.004, 200
     ds = _synthetic_cell(e, e + sd * _standard(n), np.full(n, ratio * 2 * 1.959963984540054 * sd))
     row = coverage.summary(ds)
     assert row["sharpness"] == pytest.approx(ratio, rel=1e-12)
+    assert row["sharpness_robust"] == pytest.approx(ratio, rel=0.02)
     assert row["sharp"] == (coverage.SHARPNESS_BAND[0] <= ratio <= coverage.SHARPNESS_BAND[1])
     markdown = coverage.markdown(coverage.table([ds]))
     assert (f"**{ratio:.2f}**" in markdown) == (not row["sharp"])
@@ -296,27 +298,30 @@ def test_sharpness_of_a_cell_of_known_spread_and_width(ratio):
 
 def test_sharpness_measures_the_scatter_about_the_truth_not_the_mean():
     """Values all off the truth on one side: their scatter about their own mean is a third
-    of their distance from the truth, the ratio reads the distance; widths are read by their
-    median (the widest half can be anything)."""
+    of their distance from the truth, the ratio reads the distance (root mean square, or
+    median); widths are read by their median (the widest half can be anything)."""
     e, n = 0.9, 101
     values = e + np.r_[np.full(50, 0.01), np.full(51, 0.03)]
     widths = np.full(n, 0.05)
     widths[: n // 2] = np.linspace(0.06, 9.0, n // 2)
-    assert coverage.sharpness(e, values, widths) == pytest.approx(0.05 * coverage.MAD_NORMAL / (2 * 1.959963984540054 * 0.03), rel=1e-12)
+    rms = math.sqrt((50 * 0.01**2 + 51 * 0.03**2) / n)
+    assert coverage.sharpness(e, values, widths) == pytest.approx(0.05 / (2 * 1.959963984540054 * rms), rel=1e-12)
+    robust = coverage.sharpness(e, values, widths, robust=True)
+    assert robust == pytest.approx(0.05 * coverage.MAD_NORMAL / (2 * 1.959963984540054 * 0.03), rel=1e-12)
     assert math.isnan(coverage.sharpness(e, [e, np.nan], [0.1, 0.1]))  # one value: no scatter to read
 
 
-def test_sharpness_is_not_moved_by_a_few_wild_records():
-    """Five of 200 records reported by an estimator ten times wider, far off but covered,
-    move the ratio by a few per cent; the root mean square of the error, beside it, grows
-    many times."""
+def test_a_few_wild_records_move_the_sd_reading_not_the_robust_one():
+    """Five of 200 records reported by an estimator far wider, far off but covered: the
+    root mean square reads the cell much too narrow, the median distance moves by a few per
+    cent."""
     e, sd, n = 0.98, 0.005, 200
     values, widths = e + sd * _standard(n), np.full(n, 2 * 1.959963984540054 * sd)
     clean = coverage.summary(_synthetic_cell(e, values, widths))
     values[::40], widths[::40] = e - 0.1, 0.3
     wild = coverage.summary(_synthetic_cell(e, values, widths))
-    assert clean["sharpness"] == pytest.approx(1.0, rel=1e-12) and wild["sharpness"] == pytest.approx(1.0, rel=0.05)
-    assert wild["rms_error"] > 3 * clean["rms_error"]
+    assert clean["sharpness"] == pytest.approx(1.0, rel=1e-12) and wild["sharpness"] < 0.5
+    assert wild["sharpness_robust"] == pytest.approx(clean["sharpness_robust"], rel=0.05)
 
 
 def test_band_chance_reads_the_target():

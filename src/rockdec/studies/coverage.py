@@ -564,15 +564,15 @@ def _median(values) -> float:
     return float(np.median(values[np.isfinite(values)])) if np.isfinite(values).any() else math.nan
 
 
-def sharpness(e: float, values, widths) -> float:
+def sharpness(e: float, values, widths, robust: bool = False) -> float:
     """Median of the finite ``widths`` over ``2 x 1.96`` times the spread of the finite
     ``values`` about the true ``e``: 1 for a 95 % interval exactly as wide as a normal
-    scatter of the reported ``e`` about the truth needs. The spread is read robustly, as
-    the median width is: the median of ``|value - e|`` over its normal value
-    :data:`MAD_NORMAL` (the sd of a normal scatter centred on ``e``; a bias widens it), so
-    that a few records reported by a much wider estimator, whose own intervals hold their
-    scatter, move neither end of the ratio. NaN with fewer than two values or none off the
-    truth.
+    scatter of the reported ``e`` about the truth needs. The spread is the root mean square
+    of ``value - e`` (a bias widens it), the target's measure; ``robust``: the median of
+    ``|value - e|`` over its normal value :data:`MAD_NORMAL`, read as the width is, which a
+    few records reported by a much wider estimator (far off, their own intervals holding
+    them) do not move, but which heavy tails lower. NaN with fewer than two values or none
+    off the truth.
 
     Parameters
     ----------
@@ -582,6 +582,8 @@ def sharpness(e: float, values, widths) -> float:
         Reported values (NaN: none).
     widths : array_like
         Widths of their intervals (NaN: none).
+    robust : bool, optional
+        Read the spread by the median distance from ``e`` instead of the root mean square.
 
     Returns
     -------
@@ -590,16 +592,19 @@ def sharpness(e: float, values, widths) -> float:
 
     Examples
     --------
-    A scatter of ``0.01 x MAD_NORMAL`` about the truth each way, intervals twice 3.92 times 0.01:
+    A scatter of 0.01 about the truth each way, intervals twice 3.92 times 0.01:
 
-    >>> round(sharpness(0.5, [0.5 - 0.01 * MAD_NORMAL, 0.5 + 0.01 * MAD_NORMAL], [4 * 1.959963984540054 * 0.01] * 2), 6)
+    >>> round(sharpness(0.5, [0.49, 0.51], [4 * 1.959963984540054 * 0.01] * 2), 6)
+    2.0
+    >>> round(sharpness(0.5, [0.49, 0.51], [4 * 1.959963984540054 * 0.01] * 2, robust=True) / MAD_NORMAL, 6)
     2.0
     """
     values = np.asarray(values, dtype=float)
     values = values[np.isfinite(values)]
     if values.size < 2 or not np.any(values != e):
         return math.nan
-    return _median(widths) / (2.0 * Z95 * float(np.median(np.abs(values - e))) / MAD_NORMAL)
+    spread = float(np.median(np.abs(values - e))) / MAD_NORMAL if robust else float(np.sqrt(np.mean((values - e) ** 2)))
+    return _median(widths) / (2.0 * Z95 * spread)
 
 
 def in_sharpness_band(ratio):
@@ -614,7 +619,8 @@ def summary(ds: xr.Dataset) -> dict:
     over the ``answered`` records, by which ``in_band`` judges the cell (a cell declined
     whole is not in the band); ``sharpness``, the median width over 3.92 times the spread
     of the reported ``e`` about the truth (:func:`sharpness`), by which ``sharp`` judges it
-    (:data:`SHARPNESS_BAND`), beside the root mean square of the error (``rms_error``)."""
+    (:data:`SHARPNESS_BAND`), and beside it ``sharpness_robust`` (its spread read by the
+    median distance from the truth)."""
     e = ds.attrs["e_true"]
     n = ds.sizes["record"]
     values = ds["e_hat"].values
@@ -642,7 +648,7 @@ def summary(ds: xr.Dataset) -> dict:
         "bias_over_sd": bias / sd if sd > 0 else math.nan,
         "median_width": _median(ds["high"].values - ds["low"].values),
         "sharpness": sharpness(e, values, ds["high"].values - ds["low"].values),
-        "rms_error": float(np.sqrt(np.mean((values[ok] - e) ** 2))) if ok.any() else math.nan,
+        "sharpness_robust": sharpness(e, values, ds["high"].values - ds["low"].values, robust=True),
         "nulls": int((~ok).sum()),
         "null_reasons": _counts(ds["reason"].values[~ok], n, clause=True),
         "estimators": "; ".join(f"{k} {v}" for k, v in Counter(s for s in ds["reported_by"].values if s).most_common()),
@@ -739,11 +745,11 @@ def markdown(tab: pd.DataFrame) -> str:
     the reported interval on the records answered (its binomial standard error; bold
     outside :data:`COVERAGE_BAND`, ``-`` when every record is declined), corrected bias and
     sd, median width and its sharpness (:func:`sharpness`; bold outside
-    :data:`SHARPNESS_BAND`), the paper model's width and coverage (every record, a null counted
+    :data:`SHARPNESS_BAND`; the robust reading beside it), the paper model's width and coverage (every record, a null counted
     as not covered), and the records' samples per cycle, corner and noise (true, and as the
     tool read them); the warnings and null reasons of each cell below."""
     lines = [
-        "| simulator | condition | e | n | declined | coverage of answered | bias | sd | bias/sd | width | width / (3.92 sd) | "
+        "| simulator | condition | e | n | declined | coverage of answered | bias | sd | bias/sd | width | width / (3.92 sd) (robust) | "
         "paper-model width | paper-model coverage | samples/cycle (true, read) | corner (true, read) | noise read | noisy, coloured "
         "| reported by |",
         "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
@@ -759,7 +765,7 @@ def markdown(tab: pd.DataFrame) -> str:
         lines.append(
             f"| {r.simulator} | {r.condition} | {r.e_true:g} | {r.records} | {100 * r.declined:.0f} % | {covered} "
             f"| {num(r.bias, '+.4f')} | {num(r.sd, '.4f')} | {num(r.bias_over_sd, '+.2f')} | "
-            f"{num(r.median_width, '.4f')} | {_sharp_cell(r.sharpness)} | {num(r.paper_median_width, '.4f')} | {100 * r.paper_coverage:.0f} % | "
+            f"{num(r.median_width, '.4f')} | {_sharp_cell(r.sharpness)} ({num(r.sharpness_robust, '.2f')}) | {num(r.paper_median_width, '.4f')} | {100 * r.paper_coverage:.0f} % | "
             f"{num(r.ppc_true, '.0f')}, {num(r.ppc_read, '.0f')} | {num(r.corner_true, '.2f')}, {num(r.corner_read, '.2f')} | "
             f"{num(r.noise_read, '.3f')} | {100 * r.noisy:.0f} %, {100 * r.coloured:.0f} % | {r.estimators or '-'} |"
         )
