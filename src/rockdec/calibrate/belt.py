@@ -9,11 +9,11 @@ of ``e`` (:func:`fit`):
   cubic smoothing spline (weights: sets over spread squared) along ``e``, ``log(1 - e)``
   or ``1/e``, whichever cross-validates best (:data:`MEAN_VARIABLES`), its smoothing
   chosen by generalised cross-validation (:func:`_smooth`): from a straight line to a
-  curve through every point, as the points say. A fixed cubic misses the simulated mean
-  by about 0.001 near ``e = 0.95``, more than the spread of a long record.
+  curve through every point, as the points say (a fixed cubic misses the simulated mean
+  near ``e = 0.95`` by more than the spread of a long record: ``rockdec.studies.belt_study``).
 - ``log s``: the same smoother through the spreads of the grid points, in
   ``u = log(1 - e)`` (the spread shrinks like a power of ``1 - e`` as ``e -> 1``, with
-  bends between 0.7 and 0.98 that a quadratic in ``u`` misses by 10-20 %).
+  bends between 0.7 and 0.98 that a quadratic in ``u`` misses: ``rockdec.studies.belt_study``).
 - the band's ends: the 2.5 % and 97.5 % quantiles ``q_low``, ``q_high`` of the sets'
   scatter about their own point's mean in units of the fitted spread, pooled over
   neighbouring grid points (Gaussian kernel of :data:`QUANTILE_BANDWIDTH` in ``u``). A
@@ -95,9 +95,10 @@ QUANTILE_BANDWIDTH = 0.8
 GCV_GAMMA = 1.4
 
 #: The penalty of :data:`GCV_GAMMA` for a belt scaled to longer records than its sets
-#: (:func:`fit`, ``scale`` below 1): plain GCV, which follows the bias's bends closer (at
-#: 20 million samples ``e_v``'s bias bends by 0.003 between ``e`` = 0.8 and 0.92, several
-#: spreads, which :data:`GCV_GAMMA` smooths away by a third).
+#: (:func:`fit`, ``scale`` below 1): plain GCV, which follows the bias's bends closer (on
+#: records of millions of samples ``e_v``'s bias bends between ``e`` = 0.8 and 0.92 by
+#: several of their spreads, which :data:`GCV_GAMMA` smooths away in part; the long-records
+#: coverage benchmark ``benchmarks/long_coverage.py`` shows it).
 GCV_GAMMA_LONG = 1.0
 
 #: Variables along which the mean's offset from ``e`` is smoothed (:func:`fit`), each a
@@ -317,7 +318,7 @@ def held_e(b: Belt, raw: float) -> float:
     else NaN: the ``e`` at which ``g``'s band applies (:func:`g_band`, :func:`g_interval`).
     An interval that reaches an end of the range holds ``e`` too loosely (on records of
     20,000 samples nearly every interval reaches ``e = 0.4``), and dividing ``g`` by the
-    ratio at such an ``e`` covered 78-91 % below ``e = 0.8``."""
+    ratio at such an ``e`` under-covers ``g`` (``tests/calibrate/test_estimate.py``)."""
     return float(held_es(b, np.array([raw]))[0])
 
 

@@ -19,8 +19,8 @@ import numpy as np
 from rockdec.record.records import MIN_SAMPLES
 
 #: Smallest ``|r|`` over an overlap that marks two records as the same data. Independent
-#: records of one block stay below 0.76 at the shortest overlap (``tests/record/test_sameness.py``
-#: measures them); a copy with white noise of standard deviation ``q`` (in units of the
+#: records of one block stay well below it at the shortest overlap (``tests/record/test_sameness.py``
+#: checks them); a copy with white noise of standard deviation ``q`` (in units of the
 #: record's) added reaches ``1/sqrt(1 + q^2)``: 0.99 holds copies noisier by up to 14 %.
 SAME_CORRELATION = 0.99
 
