@@ -10,8 +10,9 @@ source named), archive (tampered archives given to ``verify``), concurrency, kil
 Ctrl-C, locks stamped in the future or left by ended processes), limits (memory, disk, file
 size, YAML alias bombs), sizes (runs too long to finish), cache (caches that cannot be
 written), engines (Dask schedulers), wrong answers (records and options that once gave a
-confident wrong ``e``; the same data given twice in disguise; simulations that overturn or
-miss their sampling) and report (what the report prints). ``outcome`` is what the case asserts the tool does:
+confident wrong ``e``; the same data given twice in disguise; records through a low-pass
+filter after the block, undeclared; declared models the record contradicts; simulations that
+overturn or miss their sampling) and report (what the report prints). ``outcome`` is what the case asserts the tool does:
 refused (one sentence, exit 2, or ``verify`` naming the fault), answered (the correct result),
 warned (the result with the warning that qualifies it), or refused or answered (generated
 values, each draw one or the other).

@@ -20,7 +20,7 @@ import numpy as np
 
 from rockdec.cache import default_cache
 from rockdec.calibrate import calibration, inference
-from rockdec.physics.record_model import declared_load, parse_sensor_noise
+from rockdec.physics.record_model import declared_load, parse_sensor_filter, parse_sensor_noise
 from rockdec.record import records as records_mod
 from rockdec.report.result import RestitutionEstimate
 from rockdec.timeaxis import RecordError, angle_factor
@@ -130,7 +130,7 @@ def _cache(cache) -> Path:
     return calibration.cache_folder(default_cache() if cache is None else cache)
 
 
-def estimate(theta, dt: float | None = None, *, g: float | None = None, load="auto", sensor_noise="auto",
+def estimate(theta, dt: float | None = None, *, g: float | None = None, load="auto", sensor_noise="auto", sensor_filter="auto",
              model: str = "simplified", theta_cr: float | None = None, cache=None) -> RestitutionEstimate:
     """Estimate the coefficient of restitution ``e`` of a rocking block from its random response.
 
@@ -159,6 +159,13 @@ def estimate(theta, dt: float | None = None, *, g: float | None = None, load="au
         rocking frequencies, eq. 5), ``"spectrum:FILE"`` or ``"base:FILE"``.
     sensor_noise : str, float or SensorNoise, optional
         ``"auto"`` (measured), ``0``, a standard deviation in rad, or ``"N%"`` of sigma_Y.
+    sensor_filter : str, SensorFilter or None, optional
+        A low-pass filter between the block and the record, which the calibration applies to
+        its simulated records: ``"auto"`` (the record is checked for one and ``e`` declined
+        when it shows one), ``"none"`` (the record is unfiltered), or
+        ``"butterworth:ORDER:CORNER:PHASE"`` / ``"rc:CORNER:PHASE"`` with CORNER in rocking
+        frequencies (eq. 5) or Hz (``12hz``) and PHASE ``zero-phase`` or ``causal``; declare
+        ``load`` and ``sensor_noise`` beside it.
     model : {"simplified", "housner"}
         The rocking model of the calibration: eq. 4, or Housner's eq. 2 (needs ``theta_cr``).
     theta_cr : float, optional
@@ -186,15 +193,17 @@ def estimate(theta, dt: float | None = None, *, g: float | None = None, load="au
     >>> res.confidence_interval.low < 0.85 < res.confidence_interval.high
     True
     """
-    declared, folder = estimate_options(g=g, load=load, sensor_noise=sensor_noise, model=model, theta_cr=theta_cr, cache=cache)
+    declared, folder = estimate_options(g=g, load=load, sensor_noise=sensor_noise, sensor_filter=sensor_filter, model=model,
+                                        theta_cr=theta_cr, cache=cache)
     outcome = inference.estimate(_records(theta, dt), cache_dir=folder, g=g, rocking=model, theta_cr=theta_cr, **declared)
     return RestitutionEstimate.from_dict(outcome.document, analysis=outcome.analysis, belts=outcome.belts)
 
 
-def estimate_options(*, g=None, load="auto", sensor_noise="auto", model="simplified", theta_cr=None, cache=None) -> tuple[dict, Path]:
+def estimate_options(*, g=None, load="auto", sensor_noise="auto", sensor_filter="auto", model="simplified", theta_cr=None,
+                     cache=None) -> tuple[dict, Path]:
     """Check :func:`estimate`'s options before any record is read: the declared record
-    model (``load``, ``sensor``) as :func:`rockdec.calibrate.inference.estimate` takes it,
-    and the calibration folder.
+    model (``load``, ``sensor``, ``sensor_filter``) as :func:`rockdec.calibrate.inference.estimate`
+    takes it, and the calibration folder.
 
     Raises
     ------
@@ -219,7 +228,13 @@ def estimate_options(*, g=None, load="auto", sensor_noise="auto", model="simplif
         raise InputError("`theta_cr` is the Housner model's critical angle; give `model` housner with it, or leave it out.")
     if g is not None:
         positive(g, "`g`", "give the restoring acceleration nu^2 theta_cr in rad/s^2, or leave it out")
-    return {"load": declared_load(load), "sensor": parse_sensor_noise(sensor_noise)}, _cache(cache)
+    declared = {"load": declared_load(load), "sensor": parse_sensor_noise(sensor_noise), "sensor_filter": parse_sensor_filter(sensor_filter)}
+    if not isinstance(declared["sensor_filter"], str | None) and (declared["load"] is None or declared["sensor"] is None):
+        raise InputError(
+            "a declared `sensor_filter` smooths what the load's colour and the sensor noise are measured from; declare "
+            "`load` and `sensor_noise` beside it (`load` white with `sensor_noise` 0 is the paper's model)."
+        )
+    return declared, _cache(cache)
 
 
 def free_rocking(theta, dt: float | None = None, *, model: str = "simplified", theta_cr: float | None = None) -> RestitutionEstimate:

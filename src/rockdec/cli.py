@@ -70,7 +70,7 @@ PLOT_FORMATS = (".png", ".pdf")
 #: The command-line flag of each Python parameter that the library's messages name (in
 #: backquotes, :func:`in_flags`).
 FLAGS = {
-    "dt": "--dt", "fs": "--fs", "g": "--g", "load": "--load", "sensor_noise": "--sensor-noise", "model": "--model",
+    "dt": "--dt", "fs": "--fs", "g": "--g", "load": "--load", "sensor_noise": "--sensor-noise", "sensor_filter": "--sensor-filter", "model": "--model",
     "theta_cr": "--theta-cr", "cache": "--cache", "column": "--column", "variable": "--variable", "out": "--out",
     "overwrite": "--overwrite", "burn_in": "--burn-in", "theta0": "--theta0", "points_per_cycle": "--points-per-cycle",
     "e": "--e", "nu": "--nu", "sigma_p": "--sigma-p", "n_points": "--n-points", "theta": "the record",
@@ -325,12 +325,13 @@ def cmd_estimate(args) -> None:
     free = args.test == "free"
     if free:
         unused = [flag for flag, given in (("--g", args.g is not None), ("--load", args.load != "auto"),
-                                           ("--sensor-noise", args.sensor_noise != "auto")) if given]
+                                           ("--sensor-noise", args.sensor_noise != "auto"),
+                                           ("--sensor-filter", args.sensor_filter != "auto")) if given]
         if unused:
             raise UsageError(f"{', '.join(unused)}: the free-rocking test reads g off its arcs and needs no record model; leave them out.")
     else:
-        api.estimate_options(g=args.g, load=args.load, sensor_noise=args.sensor_noise, model=args.model, theta_cr=args.theta_cr,
-                             cache=args.cache)  # refused before any record is read
+        api.estimate_options(g=args.g, load=args.load, sensor_noise=args.sensor_noise, sensor_filter=args.sensor_filter, model=args.model,
+                             theta_cr=args.theta_cr, cache=args.cache)  # refused before any record is read
     with contextlib.ExitStack() as stack:
         plot = stack.enter_context(io.claimed(_plot_path(args), args.overwrite)) if args.plot else None
         seconds = 0.0 if free else _check_estimate_size(args)
@@ -340,8 +341,8 @@ def cmd_estimate(args) -> None:
         else:
             log.info(f"estimate: {len(args.records)} file(s) (up to {console.about(seconds)} when their calibration must be built)")
             with console.progress("calibrating"):  # a bar only while a calibration missing from the cache is built
-                res = rockdec.estimate(theta, g=args.g, load=args.load, sensor_noise=args.sensor_noise, model=args.model,
-                                       theta_cr=args.theta_cr, cache=args.cache)
+                res = rockdec.estimate(theta, g=args.g, load=args.load, sensor_noise=args.sensor_noise, sensor_filter=args.sensor_filter,
+                                       model=args.model, theta_cr=args.theta_cr, cache=args.cache)
         if plot is not None:
             from rockdec.report import figures
 
@@ -488,6 +489,14 @@ def build_parser() -> argparse.ArgumentParser:
         "--sensor-noise", default="auto", metavar="NOISE",
         help="the sensor noise the calibration adds: auto (measured off the record, when detected), 0, a standard deviation "
         "in rad, or N%% of sigma_Y (default: %(default)s)",
+    )
+    est1.add_argument(
+        "--sensor-filter", default="auto", metavar="FILTER",
+        help="a low-pass filter between the block and the record (a logger's anti-alias filter, a sensor's bandwidth, a "
+        "smoothing), which the calibration applies to its simulated records: auto (the record is checked for one, and e "
+        "declined when it shows one), none, butterworth:ORDER:CORNER:PHASE or rc:CORNER:PHASE (CORNER in rocking "
+        "frequencies 1/T(sigma_Y), eq. 5, or Hz as 12hz; PHASE zero-phase or causal); declare --load and --sensor-noise "
+        "with it (default: %(default)s)",
     )
     est1.add_argument(
         "--model", default="simplified", choices=("simplified", "housner"),

@@ -127,6 +127,11 @@ SET_PPC_TOLERANCE, SET_STEP_TRIES = PPC_BIN / 4, 3
 #: (``-ln`` of the pole per sample) agree within these relative steps (:func:`binned_model`).
 NOISE_BIN, POLE_BIN = 0.1, 0.1
 
+#: Calibrations are shared by records whose sensor filter's corner per sample agrees within
+#: this relative step (:func:`binned_model`): a filter's effect on ``e`` changes steeply with
+#: its corner (``benchmarks/filter_study.py``), so its bins are half the load's.
+FILTER_BIN = 0.05
+
 #: Housner's model (eq. 2) is not scale-free in ``sigma_Y / theta_cr``: calibrations are
 #: shared by records whose ratio agrees within this relative step.
 RATIO_BIN = 0.1
@@ -178,7 +183,9 @@ def binned_model(model: RecordModel, points_per_cycle: float, ppc_bin: float = P
     per cycle (:func:`ppc_key` on bins of ``ppc_bin``), at which the calibration simulates, so that the
     calibration's records carry the binned pole per sample and are read at the binned
     samples per cycle. A spectrum load is simulated as stated (its table in rocking
-    frequencies, placed at the binned samples per cycle).
+    frequencies, placed at the binned samples per cycle). A sensor filter is matched like the
+    load, by its corner per sample (``corner / N``, binned on :data:`FILTER_BIN`), stated in
+    rocking frequencies at the binned samples per cycle.
     """
     if model.sensor.units != "sigma_y":
         raise ValueError("a calibration takes its sensor noise in units of sigma_Y")
@@ -189,14 +196,18 @@ def binned_model(model: RecordModel, points_per_cycle: float, ppc_bin: float = P
     if load.kind == "lowpass":
         rate = log_bin(-math.log(load.pole(points_per_cycle)), POLE_BIN)
         load = Load("lowpass", float(f"{rate * ppc_key(points_per_cycle, ppc_bin) / (2.0 * math.pi):.6g}"))
-    return dataclasses.replace(model, load=load, sensor=sensor)
+    found = model.filter
+    if found is not None:
+        rate = log_bin(found.cycles_per_sample(points_per_cycle), FILTER_BIN)
+        found = dataclasses.replace(found, corner=float(f"{rate * ppc_key(points_per_cycle, ppc_bin):.6g}"))
+    return dataclasses.replace(model, load=load, sensor=sensor, filter=found)
 
 
 def sets_per_e(model: RecordModel, capped: bool = False) -> int:
     """Sets per grid point of the calibration of records of ``model``: :data:`SETS_PER_E_MODELLED`
-    under sensor noise or a coloured load, else :data:`SETS_PER_E`; a calibration on shortened
+    under sensor noise, a coloured load or a sensor filter, else :data:`SETS_PER_E`; a calibration on shortened
     records (``capped``, :func:`simulated_lengths`) always :data:`SETS_PER_E`."""
-    modelled = model.sensor.std > 0.0 or model.load.kind != "white"
+    modelled = model.sensor.std > 0.0 or model.load.kind != "white" or model.filter is not None
     return SETS_PER_E_MODELLED if modelled and not capped else SETS_PER_E
 
 
@@ -295,13 +306,14 @@ def seed_base(cal_settings: dict) -> int:
 
 def _simulate_set(
     seed0: int, lengths, dt: float, e: float, burn_in: int, model: RecordModel, pole: float = 0.0, theta_cr: float | None = None,
-    spectrum=None,
+    spectrum=None, points_per_cycle: float | None = None,
 ) -> list[np.ndarray]:
     """One set of records (one per length), seeds ``seed0, seed0 + 1, ...``; ``g = sigma_p = 1``,
     the rocking model of ``model`` (``theta_cr`` for Housner's, eq. 2, with ``nu^2 = 1/theta_cr``;
     :func:`rockdec.physics.simulate.simulate_model`), the load's filter ``pole`` or its ``spectrum``
-    (:meth:`rockdec.physics.record_model.Load.draw_options`), and the sensor noise of ``model``
-    relative to each record's rms."""
+    (:meth:`rockdec.physics.record_model.Load.draw_options`), the sensor filter of ``model``
+    placed at ``points_per_cycle`` (:meth:`rockdec.physics.record_model.SensorFilter.apply`: the
+    block's angle is filtered), then the sensor noise of ``model`` relative to each record's rms."""
     from rockdec.physics.loading import add_sensor_noise  # the simulators load only when a calibration is built
     from rockdec.physics.simulate import simulate_model
 
@@ -310,6 +322,8 @@ def _simulate_set(
         theta = simulate_model(
             model.rocking, [seed0 + k], n, dt=dt, g=1.0, e=e, sigma_p=1.0, theta_cr=theta_cr, burn_in=burn_in, pole=pole, spectrum=spectrum,
         )[0]
+        if model.filter is not None:
+            theta = model.filter.apply(theta, points_per_cycle)
         if model.sensor.std > 0.0:
             add_sensor_noise(theta, [seed0 + k], model.sensor.std_rad(float(np.sqrt(np.nanmean(theta**2)))))
         out.append(theta[0])
@@ -358,7 +372,7 @@ def step_for(
         read, rms = [], []
         for k in range(sets):
             try:
-                records = _simulate_set(seed0 + k * len(pilot), pilot, dt, e, burn_in, model, theta_cr=theta_cr, **draw)
+                records = _simulate_set(seed0 + k * len(pilot), pilot, dt, e, burn_in, model, theta_cr=theta_cr, points_per_cycle=points_per_cycle, **draw)
                 read.append(measured.analyse(records, dt, settings).points_per_cycle)
                 rms.append(float(np.sqrt(np.nanmean(np.concatenate(records) ** 2))))
             except ValueError:
@@ -389,7 +403,7 @@ def _sets(e: float, cal_settings: dict, seed0: int, dt: float, burn_in: int, the
     read = np.full(n_sets, np.nan)
     for k in range(n_sets):
         try:
-            records = _simulate_set(seed0 + k * len(lengths), lengths, dt, e, burn_in, model, theta_cr=theta_cr, **model.load.draw_options(ppc))
+            records = _simulate_set(seed0 + k * len(lengths), lengths, dt, e, burn_in, model, theta_cr=theta_cr, points_per_cycle=ppc, **model.load.draw_options(ppc))
             analysis = measured.analyse(records, dt, settings)
         except ValueError:
             continue

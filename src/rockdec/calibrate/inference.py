@@ -36,7 +36,7 @@ from rockdec._version import __version__
 from rockdec.calibrate import belt, calibration, consistency
 from rockdec.record import diagnostics
 from rockdec.rdd import measured, registry
-from rockdec.physics.record_model import NO_NOISE, WHITE, Load, RecordModel, SensorNoise, parse_load
+from rockdec.physics.record_model import NO_NOISE, WHITE, Load, RecordModel, SensorFilter, SensorNoise, parse_load
 from rockdec.record.records import Record, RecordError, distinct, same_step
 from rockdec.record.sameness import same_data
 from rockdec.validate import InputError
@@ -78,6 +78,14 @@ COLOUR_CORNER_Z = 2.0
 #: follows the load, which the fitted pole does not describe (evidence:
 #: docs/explanation/constants.md, the coverage study's coloured cells).
 SIDE_G_SHARE = 0.7
+
+#: A declared part of the record model (``sensor_noise``, ``load``) is said to be contradicted
+#: by the records' own measurement when the two differ by more than ``DECLARED_Z`` of the
+#: measurement's standard errors and by more than the factor ``DECLARED_FACTOR`` (sensor noise,
+#: or the load's corner); a noise difference below
+#: :data:`rockdec.record.record_measure.NOISE_FLOOR` never is (:func:`declared_contradictions`).
+#: Evidence: the false alarms on right declarations, ``benchmarks/filter_study.py``.
+DECLARED_Z, DECLARED_FACTOR = 4.0, 2.0
 
 #: Cost model of :func:`cost`: seconds per sample to read a CSV and to do all but the
 #: calibration, seconds per simulated and analysed calibration sample on one core, and
@@ -226,7 +234,7 @@ def measure_model(records: list[Record], dt: float) -> tuple[record_measure.Meas
 
 def record_model(
     measurement, analysis: measured.Analysis, *, model: RecordModel | None = None, load: Load | str | None = None,
-    sensor: SensorNoise | None = None, rocking: str | None = None,
+    sensor: SensorNoise | None = None, rocking: str | None = None, sensor_filter: SensorFilter | str | None = "auto",
 ) -> tuple[RecordModel, dict]:
     """The record model the calibration simulates (before :func:`rockdec.calibrate.calibration.binned_model`)
     and where each part came from.
@@ -244,21 +252,26 @@ def record_model(
     declared noise in rad is expressed in the records' ``sigma_Y``; a declared load given as
     text (:func:`rockdec.physics.record_model.parse_load`) is read with the records'
     ``dt`` and samples per cycle, which place a spectrum table in Hz and a base record
-    against their rocking frequency ``1/(dt N)``. Returns
-    ``(model, sources)``, ``sources`` naming ``load``, ``sensor_noise`` and ``rocking`` as
+    against their rocking frequency ``1/(dt N)``. ``sensor_filter``: a declared
+    :class:`~rockdec.physics.record_model.SensorFilter` (a corner in Hz placed at the records'
+    rocking frequency ``1/(dt N)``), ``None`` (declared none) or ``"auto"`` (none; the records
+    are checked for one by :func:`filter_decline`). Returns
+    ``(model, sources)``, ``sources`` naming ``load``, ``sensor_noise``, ``sensor_filter`` and ``rocking`` as
     ``"declared"``, ``"measured"`` or ``"paper (not measured)"``.
     """
     if isinstance(load, str):
         load = parse_load(load, dt=analysis.dt, points_per_cycle=analysis.points_per_cycle)
     if model is not None:
-        load, sensor, rocking, how = model.load, model.sensor, model.rocking, "declared"
-        sources = {"load": how, "sensor_noise": how, "rocking": how}
+        load, sensor, rocking, sensor_filter, how = model.load, model.sensor, model.rocking, model.filter, "declared"
+        sources = {"load": how, "sensor_noise": how, "rocking": how, "sensor_filter": how}
     else:
         sources = {"rocking": "paper (the simplified model, eq. 4)" if rocking is None else "declared"}
         rocking = rocking or "simplified"
         missing = "paper (not measured)" if measurement is None else "measured"
         sources["load"] = "declared" if load is not None else missing
         sources["sensor_noise"] = "declared" if sensor is not None else missing
+        sources["sensor_filter"] = "measured (none shown)" if isinstance(sensor_filter, str) else "declared"
+        sensor_filter = None if isinstance(sensor_filter, str) else sensor_filter
         if load is None:
             load = WHITE
             if measurement is not None and measurement.coloured:
@@ -269,7 +282,10 @@ def record_model(
                 sensor = SensorNoise(measurement.noise_ratio.value, "sigma_y")
     if sensor.units == "rad":
         sensor = SensorNoise(sensor.std / analysis.sigma_y, "sigma_y")
-    return RecordModel(rocking, load, sensor), sources
+    if sensor_filter is not None:
+        sensor_filter = sensor_filter.in_rocking(1.0 / (analysis.dt * analysis.points_per_cycle))
+        sensor_filter.cycles_per_sample(analysis.points_per_cycle)  # refuses a corner at or above the Nyquist frequency
+    return RecordModel(rocking, load, sensor, sensor_filter), sources
 
 
 def _quantity(q, scale: float = 1.0) -> dict:
@@ -277,11 +293,16 @@ def _quantity(q, scale: float = 1.0) -> dict:
     return {"value": _num(q.value * scale), "se": _num(q.se * scale)}
 
 
-def model_report(measurement, why_not: str | None, analysis: measured.Analysis, sources: dict, simulated: RecordModel, cal_settings: dict, own_points_per_cycle: float) -> dict:
+def model_report(measurement, why_not: str | None, analysis: measured.Analysis, sources: dict, simulated: RecordModel, cal_settings: dict,
+                 own_points_per_cycle: float, rolloff=None, load_pole: float | None = None) -> dict:
     """The ``record_model`` of :func:`estimate`'s JSON: what was measured (each quantity
     with its standard error), what was detected, what the calibration simulated (the
     binned model, :func:`rockdec.calibrate.calibration.binned_model`) and where each part
-    came from; ``g_side_share`` at ``own_points_per_cycle`` (:func:`colour_decline`)."""
+    came from; ``g_side_share`` at ``own_points_per_cycle`` (:func:`colour_decline`);
+    ``filter_rolloff``: the roll-off check (:func:`rockdec.record.record_measure.rolloff`,
+    ``None`` when not made: a declared filter, or too few samples per cycle), with how much
+    faster than a low-pass load of pole ``load_pole`` per sample the records fall
+    (``beyond_load``; ``None`` without one) and whether a filter shows (:func:`filter_decline`)."""
     cal_ppc = cal_settings["points_per_cycle"]
     ratio = cal_settings.get("sigma_y_over_theta_cr")
     out = {
@@ -295,10 +316,16 @@ def model_report(measurement, why_not: str | None, analysis: measured.Analysis, 
             "points_per_cycle": _num(cal_ppc),
             "sigma_y_over_theta_cr": ratio,
             "described": f"{simulated.rocking} rocking" + (f" (sigma_Y/theta_cr {ratio:.3g})" if ratio else "") + f", {simulated.load.describe()} load, "
-            + (f"sensor noise {simulated.sensor.std:.3g} sigma_Y" if simulated.sensor.std > 0 else "no sensor noise"),
+            + (f"sensor noise {simulated.sensor.std:.3g} sigma_Y" if simulated.sensor.std > 0 else "no sensor noise")
+            + (f", {simulated.filter.describe()} sensor filter" if simulated.filter is not None else ""),
         },
         "measured": None,
         "not_measured": why_not,
+        "filter_rolloff": None if rolloff is None else {
+            "slope": _quantity(rolloff.slope), "band_rocking": list(rolloff.band), "z": _num(rolloff.z),
+            "beyond_load": None if load_pole is None else _quantity(rolloff.beyond_pole(load_pole)[0]),
+            "detected": rolloff.filtered or (load_pole is not None and rolloff.filtered_beyond(load_pole)),
+        },
     }
     if measurement is not None:
         m = measurement
@@ -382,6 +409,98 @@ def colour_decline(model: RecordModel, sources: dict, measurement, points_per_cy
     )
 
 
+_FILTER_HELP = (
+    "a low-pass filter after the block (a logger's anti-alias filter, a sensor's bandwidth, a smoothing) rounds the "
+    "impacts, which moves e; declare it (`sensor_filter` butterworth:ORDER:CORNER:PHASE or rc:CORNER:PHASE) and the "
+    "calibration filters its records alike, or `sensor_filter` none if the records are not filtered"
+)
+
+
+def filter_decline(rolloff, model: RecordModel | None = None, points_per_cycle: float = math.nan) -> str | None:
+    """Why ``e`` is declined for records that show a filter after the block, in one sentence
+    naming the slope and the declaration that would help; else ``None``: their second
+    differences fall faster than an unfiltered rocking record's
+    (:attr:`rockdec.record.record_measure.Rolloff.filtered`), or, when ``model`` has a low-pass
+    load (measured or declared), faster than that load's own spectrum at ``points_per_cycle``
+    (:meth:`rockdec.record.record_measure.Rolloff.filtered_beyond`: a first-order filter read as
+    the load)."""
+    if rolloff is None:
+        return None
+    from rockdec.record.record_measure import ROLLOFF_FLOOR
+
+    if rolloff.filtered:
+        lo, hi = rolloff.band
+        return (
+            f"the spectrum of these records' second differences falls as f^{rolloff.slope.value:.1f} (+- {rolloff.slope.se:.2f}) "
+            f"between {lo:g} and {hi:g} times the rocking frequency, {-rolloff.z:.0f} errors steeper than the f^{ROLLOFF_FLOOR:g} "
+            f"that the steps and impacts of an unfiltered rocking record keep: {_FILTER_HELP}"
+        )
+    if model is None or model.load.kind != "lowpass":
+        return None
+    pole = model.load.pole(points_per_cycle)
+    if not rolloff.filtered_beyond(pole):
+        return None
+    gap, (lo, hi) = rolloff.beyond_pole(pole)
+    return (
+        f"the spectrum of these records' second differences falls {-gap.value:.2f} (+- {gap.se:.2f}) faster in log-log slope "
+        f"between {lo:g} and {hi:g} times the rocking frequency than the low-pass load they are read as (corner "
+        f"{model.load.corner:.3g} times the rocking frequency) lets it: such a load leaves the steps and impacts of the "
+        f"rocking sharp, a filter rounds them with it; {_FILTER_HELP}"
+    )
+
+
+def declared_contradictions(measurement, model: RecordModel, sources: dict, points_per_cycle: float) -> tuple:
+    """A :class:`Note` for each declared part of ``model`` that the records' own measurement
+    (``measurement``, :func:`rockdec.record.record_measure.measure`) contradicts: they differ
+    by more than :data:`DECLARED_Z` standard errors of the measurement and by more than the
+    factor :data:`DECLARED_FACTOR` (``noise_contradicted``: the sensor noise in ``sigma_Y``, a
+    difference below :data:`rockdec.record.record_measure.NOISE_FLOOR` aside;
+    ``load_contradicted``: a white or low-pass load's pole per sample at ``points_per_cycle``,
+    the factor on its corner). A declaration is the user's knowledge and the measurement has
+    cells where it is misread (a load slow enough for the side to follow it, :func:`colour_decline`),
+    so it warns and the estimate keeps the declared model."""
+    if measurement is None:
+        return ()
+    from rockdec.record.record_measure import NOISE_FLOOR
+
+    notes = []
+    if sources.get("sensor_noise") == "declared":
+        told, read = model.sensor.std, measurement.noise_ratio
+        gap = abs(told - read.value)
+        if gap > max(DECLARED_Z * read.se, NOISE_FLOOR) and max(told, read.value) > DECLARED_FACTOR * min(told, read.value):
+            notes.append(Note("noise_contradicted", (
+                f"the declared `sensor_noise` ({told:.3g} sigma_Y) is not what these records show ({read.value:.3g} +- {read.se:.2g} "
+                f"sigma_Y, {gap / read.se if read.se > 0 else math.inf:.0f} errors apart): the calibration simulates the declared "
+                "noise, which moves e; check it, or give `sensor_noise` auto to have it measured"
+            )))
+    if sources.get("load") == "declared" and model.load.kind in ("white", "lowpass"):
+        from rockdec.record.record_measure import pole_of_shape, shape_of_pole
+
+        told, read, shape = model.load.pole(points_per_cycle), measurement.pole, measurement.shape
+
+        def corner(pole):
+            return -math.log(pole) * points_per_cycle / (2.0 * math.pi) if 0.0 < pole < 1.0 else math.inf
+
+        def errors(gap, se):
+            return abs(gap) / se if se > 0 else math.inf if gap else 0.0
+
+        # the fit's pole and the shape ratio (which sees the colour beneath noise and has the
+        # smaller error near a white load): the declaration is contradicted when either lies
+        # DECLARED_Z errors away and both read a corner beyond DECLARED_FACTOR of the declared
+        apart = max(errors(told - read.value, read.se), errors(float(shape_of_pole(told)) - shape.value, shape.se))
+        read_corners = [corner(read.value), corner(float(pole_of_shape(shape.value)))]
+        beyond = all(not max(c, corner(told)) <= DECLARED_FACTOR * min(c, corner(told)) for c in read_corners)
+        if apart > DECLARED_Z and beyond:
+            shown = "white" if min(read_corners) == math.inf else f"low-pass with its corner near {min(read_corners):.3g} times the rocking frequency"
+            notes.append(Note("load_contradicted", (
+                f"the declared `load` ({model.load.describe()}) is not what these records show ({shown}; pole per sample "
+                f"{read.value:.3f} +- {read.se:.2g}, shape ratio {shape.value:.2f} +- {shape.se:.2g} against the declared "
+                f"{told:.3f} and {float(shape_of_pole(told)):.2f}, {apart:.0f} errors apart): the calibration simulates the "
+                "declared load, which moves e; check it, or give `load` auto to have it measured"
+            )))
+    return tuple(notes)
+
+
 def coverage_floor(n_sets: int) -> float:
     """Lowest calibrated coverage (:func:`rockdec.calibrate.belt.calibration_coverage`) at which an
     interval is taken to hold 95 %: the lower end of the binomial band
@@ -450,6 +569,8 @@ NOTE_CODES = {
     "calibration": "the stored calibration was rebuilt, or a stopped run's lock was taken over",
     "pooled_disagree": "records given together disagree on one e; e is declined",
     "pooled_unchecked": "a record given with others could not be analysed alone, so it was not checked against them",
+    "noise_contradicted": "the declared sensor noise is not what the records show, beyond the measurement's error",
+    "load_contradicted": "the declared load is not what the records show, beyond the measurement's error",
 }
 
 
@@ -524,7 +645,9 @@ class ModelChoice(NamedTuple):
     whether a part was left to measure; ``model`` and ``sources``: :func:`record_model`;
     ``cal_settings``: the calibration's settings
     (:func:`rockdec.calibrate.calibration.calibration_settings`); ``declined``: why no
-    calibration fits these records (one sentence), else ``None``."""
+    calibration fits these records (one sentence), else ``None``; ``rolloff``: the roll-off
+    check (:func:`rockdec.record.record_measure.rolloff`, ``None`` when not made); ``notes``:
+    :class:`Note` s on declared parts the records contradict (:func:`declared_contradictions`)."""
 
     measurement: object
     why_not: str | None
@@ -533,12 +656,15 @@ class ModelChoice(NamedTuple):
     sources: dict
     cal_settings: dict
     declined: str | None
+    rolloff: object = None
+    notes: tuple = ()
 
     def report(self, analysed: Analysed) -> dict:
         """The ``record_model`` of the JSON document (:func:`model_report`)."""
         simulated = RecordModel.from_key(self.cal_settings["record_model"])
+        pole = self.model.load.pole(analysed.analysis.points_per_cycle) if self.model.load.kind == "lowpass" else None
         out = model_report(self.measurement, self.why_not if self.measuring else None, analysed.analysis, self.sources, simulated,
-                           self.cal_settings, analysed.own_points_per_cycle)
+                           self.cal_settings, analysed.own_points_per_cycle, self.rolloff, pole)
         if self.declined:
             out["simulated"]["described"] = f"nothing (declined; a calibration would simulate {out['simulated']['described']})"
         return out
@@ -546,15 +672,30 @@ class ModelChoice(NamedTuple):
 
 def choose_model(
     analysed: Analysed, *, model: RecordModel | None = None, load: Load | str | None = None, sensor: SensorNoise | None = None,
-    rocking: str | None = None, theta_cr: float | None = None,
+    rocking: str | None = None, theta_cr: float | None = None, sensor_filter: SensorFilter | str | None = "auto",
 ) -> ModelChoice:
     """Stage 2 of :func:`estimate`: measure the records' model (sensor noise, load colour,
-    drift) unless declared, choose what the calibration simulates (:func:`record_model`)
-    and whether the records must be declined (:func:`colour_decline`, or a part left to
-    measure that cannot be). Housner's model (eq. 2) needs ``theta_cr``, and only it."""
+    drift) unless declared, check them for a filter after the block unless one (or none) is
+    declared (:func:`rockdec.record.record_measure.rolloff`), choose what the calibration
+    simulates (:func:`record_model`), note declared parts the records contradict
+    (:func:`declared_contradictions`) and whether the records must be declined
+    (:func:`filter_decline`, :func:`colour_decline`, or a part left to measure that cannot
+    be). Housner's model (eq. 2) needs ``theta_cr``, and only it."""
+    from rockdec.record.record_measure import rolloff
+
     measuring = model is None and (load is None or sensor is None)
-    measurement, why_not = measure_model(list(analysed.records), analysed.dt) if model is None else (None, "declared")
-    model, sources = record_model(measurement, analysed.analysis, model=model, load=load, sensor=sensor, rocking=rocking)
+    if isinstance(sensor_filter, SensorFilter) and measuring:
+        raise InputError(
+            "a declared `sensor_filter` smooths what the load's colour and the sensor noise are measured from; declare "
+            "`load` and `sensor_noise` beside it (`load` white with `sensor_noise` 0 is the paper's model)."
+        )
+    filtered = isinstance(sensor_filter, SensorFilter) or (model is not None and model.filter is not None)
+    measurement, why_not = measure_model(list(analysed.records), analysed.dt) if model is None and not filtered else (None, "declared")
+    checking = model is None and isinstance(sensor_filter, str)
+    found = rolloff([r.theta for r in analysed.records], analysed.analysis.points_per_cycle) if checking else None
+    model, sources = record_model(measurement, analysed.analysis, model=model, load=load, sensor=sensor, rocking=rocking, sensor_filter=sensor_filter)
+    if checking and found is None:
+        sources["sensor_filter"] = "not checked (too few samples per cycle or too short records)"
     if (model.rocking == "housner") != (theta_cr is not None):
         raise InputError("Housner's model (eq. 2) needs the block's critical angle `theta_cr`, and only it; give both or neither.")
     ratio = analysed.analysis.sigma_y / theta_cr if theta_cr is not None else None
@@ -568,8 +709,11 @@ def choose_model(
             "model) to have e estimated under the declared model"
         )
     else:
-        declined = colour_decline(model, sources, measurement, analysed.analysis.points_per_cycle, analysed.own_points_per_cycle)
-    return ModelChoice(measurement, why_not, measuring, model, sources, cal_settings, declined)
+        declined = filter_decline(found, model, analysed.analysis.points_per_cycle) or colour_decline(
+            model, sources, measurement, analysed.analysis.points_per_cycle, analysed.own_points_per_cycle,
+        )
+    notes = declared_contradictions(measurement, model, sources, analysed.analysis.points_per_cycle)
+    return ModelChoice(measurement, why_not, measuring, model, sources, cal_settings, declined, found, notes)
 
 
 class Calibrated(NamedTuple):
@@ -876,6 +1020,7 @@ def _reads(b: belt.Belt, raw: float) -> str:
 def estimate(
     records: list[Record], *, cache_dir, g: float | None = None, settings: dict | None = None, model: RecordModel | None = None,
     load: Load | str | None = None, sensor: SensorNoise | None = None, rocking: str | None = None, theta_cr: float | None = None,
+    sensor_filter: SensorFilter | str | None = "auto",
 ) -> Outcome:
     """Calibrated estimates of ``e`` from ``records`` of one block (pooled), in named stages.
 
@@ -888,7 +1033,8 @@ def estimate(
     checks, thresholds from the calibration) → :func:`document` (the report).
 
     ``model`` declares the whole record model (:mod:`rockdec.physics.record_model`); else
-    ``load``, ``sensor`` and ``rocking`` declare their parts and the rest is measured.
+    ``load``, ``sensor``, ``rocking`` and ``sensor_filter`` (``"auto"``: checked for, none
+    simulated; ``None``: none) declare their parts and the rest is measured.
     Housner's model (eq. 2) needs the block's ``theta_cr`` (rad). Returns an
     :class:`Outcome` whose ``document`` holds ``e``, ``interval`` (95 %), ``reason`` (why
     ``e`` is null), ``estimator``, ``selection``, ``coverage``, ``raw``, ``g`` (rad/s^2),
@@ -900,10 +1046,10 @@ def estimate(
     ``rockdec_version`` and ``calibration``.
     """
     analysed = analyse(records, g=g, settings=settings)
-    choice = choose_model(analysed, model=model, load=load, sensor=sensor, rocking=rocking, theta_cr=theta_cr)
+    choice = choose_model(analysed, model=model, load=load, sensor=sensor, rocking=rocking, theta_cr=theta_cr, sensor_filter=sensor_filter)
     if choice.declined:
         per, selection = declined_rows(analysed)
-        doc = document(analysed, choice, None, per, (None, selection[1], choice.declined), None, list(analysed.notes), {})
+        doc = document(analysed, choice, None, per, (None, selection[1], choice.declined), None, [*analysed.notes, *choice.notes], {})
         return Outcome(doc, analysed.analysis, {})
     calibrated = calibrate(analysed, choice, cache_dir)
     per = correct(analysed, calibrated)
@@ -915,7 +1061,7 @@ def estimate(
     chosen = pooled.selection[0]
     shown = per[chosen] if chosen else {"e": None, "interval": [None, None]}
     g_reading = read_g(analysed, choice, calibrated, chosen, math.nan if shown["e"] is None else shown["e"])
-    notes = [*analysed.notes, *calibrated.notes, *g_reading.notes, *long_record_note(analysed, choice), *pooled.notes]
+    notes = [*analysed.notes, *choice.notes, *calibrated.notes, *g_reading.notes, *long_record_note(analysed, choice), *pooled.notes]
     fired, checks = diagnose(list(analysed.records), analysed.analysis, analysed.settings, calibrated.cal,
                              *checks_place(per, shown), 1.0 / calibrated.scale**2)
     doc = document(analysed, choice, calibrated, per, pooled.selection, g_reading, notes + fired, {**checks, **pooled.checks})

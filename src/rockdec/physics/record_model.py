@@ -9,9 +9,17 @@
 :class:`SensorNoise`
     white noise added to the recorded angle, its standard deviation in units of
     ``sigma_Y`` (``units="sigma_y"``) or in rad (``units="rad"``).
+:class:`SensorFilter`
+    a low-pass filter after the block (a logger's anti-alias filter, a sensor's bandwidth,
+    an analyst's smoothing): ``butterworth`` of order 1-8 or a first-order ``rc``, its
+    ``corner`` in rocking frequencies ``1/T(sigma_Y)`` (eq. 5, like a low-pass load's) or in
+    Hz (placed against the record's rocking frequency, like a spectrum table), run
+    forward only (``causal``, as an instrument does) or forward and back (``zero_phase``,
+    as ``scipy.signal.filtfilt`` does). The calibration filters its simulated angle with it
+    before the sensor noise is added (:meth:`SensorFilter.apply`).
 :class:`RecordModel`
     the rocking model (``simplified``, eq. 4, or ``housner``, eq. 2, whose geometry
-    ``nu``, ``theta_cr`` the run holds), the load and the sensor noise together: what a
+    ``nu``, ``theta_cr`` the run holds), the load, the sensor noise and the sensor filter together: what a
     scene (``excitation.load``, ``excitation.sensor_noise``) or a measurement of a record
     states, what :class:`rockdec.physics.run.Run` carries and the calibration's cache key names.
 
@@ -413,44 +421,220 @@ class SensorNoise:
 NO_NOISE = SensorNoise()
 """A perfect sensor."""
 
+
+FILTER_KINDS = ("butterworth", "rc")
+"""The filters after the block a record model can state (:class:`SensorFilter`)."""
+
+FILTER_UNITS = ("rocking", "hz")
+"""Units of a sensor filter's corner: rocking frequencies ``1/T(sigma_Y)`` (eq. 5), or Hz."""
+
+BUTTERWORTH_ORDERS = (1, 8)
+"""Lowest and highest order of a Butterworth sensor filter."""
+
+FILTER_FORMS = "none, auto, butterworth:ORDER:CORNER:PHASE or rc:CORNER:PHASE (CORNER in rocking frequencies, or Hz as 12hz; PHASE zero-phase or causal)"
+"""The forms of a sensor filter on the command line (:func:`parse_sensor_filter`)."""
+
+
+@dataclasses.dataclass(frozen=True)
+class SensorFilter:
+    """A low-pass filter between the block and the record: ``kind`` in :data:`FILTER_KINDS`
+    (``rc``: a first-order resistor-capacitor stage, ``order`` 1), ``order``
+    (:data:`BUTTERWORTH_ORDERS`), ``corner`` (``> 0``, its -3 dB frequency in ``units``,
+    :data:`FILTER_UNITS`) and ``zero_phase`` (run forward and back, so its gain is squared
+    and its delay 0; else causal, run forward as an instrument runs it).
+
+    Examples
+    --------
+    >>> SensorFilter("butterworth", 4, 10.0, zero_phase=True).describe()
+    'zero-phase Butterworth of order 4, corner 10 x rocking frequency'
+    """
+
+    kind: str = "butterworth"
+    order: int = 4
+    corner: float = math.nan
+    zero_phase: bool = False
+    units: str = "rocking"
+
+    def __post_init__(self):
+        if self.kind not in FILTER_KINDS:
+            raise checks.InputError(f"sensor filter kind '{self.kind}' is not known; use one of {', '.join(FILTER_KINDS)}")
+        if self.units not in FILTER_UNITS:
+            raise checks.InputError(f"sensor filter units '{self.units}' are not known; use one of {', '.join(FILTER_UNITS)}")
+        lo, hi = BUTTERWORTH_ORDERS if self.kind == "butterworth" else (1, 1)
+        if isinstance(self.order, bool) or not checks.is_finite_number(self.order) or int(self.order) != self.order or not lo <= self.order <= hi:
+            orders = f"an integer from {lo} to {hi}" if hi > lo else "1"
+            raise checks.InputError(f"a {self.kind} sensor filter of order {checks.show(self.order)} is not one; give order {orders}")
+        if not isinstance(self.zero_phase, bool):
+            raise checks.InputError(f"sensor filter zero_phase {self.zero_phase!r} is not True or False")
+        corner = checks.positive(self.corner, "sensor filter corner", "give the filter's corner (-3 dB) in rocking frequencies or Hz, > 0")
+        object.__setattr__(self, "order", int(self.order))
+        object.__setattr__(self, "corner", float(corner))
+
+    def in_rocking(self, rocking_frequency: float | None) -> "SensorFilter":
+        """The filter with its corner in rocking frequencies: a corner in Hz divided by the
+        record's ``rocking_frequency`` ``1/(dt N_cycle)`` (Hz); one in rocking frequencies as it is."""
+        if self.units == "rocking":
+            return self
+        f_rock = _rocking_frequency(rocking_frequency, f"a sensor filter corner of {self.corner:g} Hz")
+        return dataclasses.replace(self, corner=self.corner / f_rock, units="rocking")
+
+    def cycles_per_sample(self, points_per_cycle: float) -> float:
+        """The corner in cycles per sample at ``points_per_cycle`` samples per rocking cycle
+        (a corner in rocking frequencies); refused in one sentence at or above the Nyquist
+        frequency, 0.5."""
+        if self.units != "rocking":
+            raise ValueError("a sensor filter is placed on the samples with its corner in rocking frequencies (in_rocking)")
+        n = checks.positive(points_per_cycle, "points_per_cycle", "a sensor filter needs the samples per cycle that place its corner")
+        rate = self.corner / n
+        if not rate < 0.5:
+            raise checks.InputError(
+                f"`sensor_filter` corner {self.corner:.4g} x rocking frequency at {n:.4g} samples per rocking cycle lies at or above "
+                f"the Nyquist frequency ({n / 2.0:.4g} x rocking frequency), where a filter leaves the record as it is; give a lower "
+                "corner, or `sensor_filter` none"
+            )
+        return rate
+
+    def apply(self, theta, points_per_cycle: float):
+        """``theta`` (last axis: time) through the filter at ``points_per_cycle`` samples per
+        rocking cycle: a Butterworth of :func:`scipy.signal.butter` (second-order sections,
+        :func:`scipy.signal.sosfilt`, or :func:`scipy.signal.sosfiltfilt` zero-phase), an RC
+        stage ``y[k] = a y[k-1] + (1 - a) x[k]`` with ``a = exp(-2 pi f_c dt)`` (the exact
+        sampled response of the analog stage, :func:`scipy.signal.lfilter`, or
+        :func:`scipy.signal.filtfilt` zero-phase). A new array.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> step = SensorFilter("rc", 1, 1.0).apply(np.ones(400), 100.0)
+        >>> round(float(step[-1]), 6)
+        1.0
+        """
+        from scipy import signal
+
+        rate = self.cycles_per_sample(points_per_cycle)
+        if self.kind == "rc":
+            a = math.exp(-2.0 * math.pi * rate)
+            b, den = [1.0 - a], [1.0, -a]
+            return signal.filtfilt(b, den, theta, axis=-1) if self.zero_phase else signal.lfilter(b, den, theta, axis=-1)
+        sos = signal.butter(self.order, 2.0 * rate, output="sos")
+        return signal.sosfiltfilt(sos, theta, axis=-1) if self.zero_phase else signal.sosfilt(sos, theta, axis=-1)
+
+    def describe(self) -> str:
+        """The filter in words, as the report states it."""
+        phase = "zero-phase" if self.zero_phase else "causal"
+        what = f"Butterworth of order {self.order}" if self.kind == "butterworth" else "RC (first order)"
+        where = "x rocking frequency" if self.units == "rocking" else "Hz"
+        return f"{phase} {what}, corner {self.corner:g} {where}"
+
+    def text(self) -> str:
+        """The filter in the form :func:`parse_sensor_filter` reads."""
+        corner = f"{self.corner:g}" + ("hz" if self.units == "hz" else "")
+        phase = "zero-phase" if self.zero_phase else "causal"
+        return f"butterworth:{self.order}:{corner}:{phase}" if self.kind == "butterworth" else f"rc:{corner}:{phase}"
+
+    def to_dict(self) -> dict:
+        return {"kind": self.kind, "order": self.order, "corner": self.corner, "zero_phase": self.zero_phase, "units": self.units}
+
+    @classmethod
+    def from_dict(cls, d: dict | None) -> "SensorFilter | None":
+        """The filter of :meth:`to_dict` (``None``: no filter)."""
+        if not d:
+            return None
+        return cls(d.get("kind", "butterworth"), d.get("order", 1), d.get("corner", math.nan), d.get("zero_phase", False), d.get("units", "rocking"))
+
+
+def parse_sensor_filter(value) -> SensorFilter | str | None:
+    """A declared ``sensor_filter``: ``"auto"`` (the record is checked for one, and declined
+    when it shows one, :func:`rockdec.record.record_measure.rolloff`), ``None`` or ``"none"``
+    (no filter: the record is taken as unfiltered, unchecked), a :class:`SensorFilter`, or a
+    text ``butterworth:ORDER:CORNER:PHASE`` or ``rc:CORNER:PHASE`` with CORNER in rocking
+    frequencies ``1/T(sigma_Y)`` (eq. 5), or in Hz with the suffix ``hz``, and PHASE
+    ``zero-phase`` or ``causal``; anything else is refused in one sentence.
+
+    Examples
+    --------
+    >>> parse_sensor_filter("butterworth:4:10:zero-phase")
+    SensorFilter(kind='butterworth', order=4, corner=10.0, zero_phase=True, units='rocking')
+    >>> parse_sensor_filter("rc:12.5Hz:causal").text()
+    'rc:12.5hz:causal'
+    >>> parse_sensor_filter("none") is None, parse_sensor_filter("auto")
+    (True, 'auto')
+    """
+    if value is None or isinstance(value, SensorFilter):
+        return value
+    text = str(value).strip().lower()
+    if text in ("none", "auto"):
+        return None if text == "none" else "auto"
+    parts = [p.strip() for p in text.split(":")]
+    kind = parts[0]
+    wanted = {"butterworth": 4, "rc": 3}.get(kind)
+    if wanted is None or len(parts) != wanted:
+        raise checks.InputError(f"`sensor_filter` {value!r} is not a filter; give {FILTER_FORMS}")
+    if parts[-1] not in ("zero-phase", "causal"):
+        raise checks.InputError(
+            f"`sensor_filter` {value!r}: the phase '{parts[-1]}' is not known; end it with zero-phase (run forward and back, "
+            "as filtfilt does) or causal (run forward, as an instrument does)"
+        )
+    corner_text = parts[-2]
+    units = "hz" if corner_text.endswith("hz") else "rocking"
+    corner_text = corner_text.removesuffix("hz").strip()
+    try:
+        corner = float(corner_text)
+        order = float(parts[1]) if kind == "butterworth" else 1
+    except ValueError:
+        raise checks.InputError(f"`sensor_filter` {value!r}: the order and the corner must be numbers; give {FILTER_FORMS}") from None
+    if not (math.isfinite(corner) and corner > 0.0):
+        raise checks.InputError(f"`sensor_filter` {value!r}: the corner {corner_text} is not a frequency; give it > 0 (rocking frequencies, or Hz as 12hz)")
+    return SensorFilter(kind, order, corner, parts[-1] == "zero-phase", units)
+
 ROCKING_MODELS = ("simplified", "housner")
 """The rocking models a record model states (eq. 4, eq. 2)."""
 
 
 @dataclasses.dataclass(frozen=True)
 class RecordModel:
-    """The rocking model (:data:`ROCKING_MODELS`), the load and the sensor noise of a record."""
+    """The rocking model (:data:`ROCKING_MODELS`), the load, the sensor noise and the sensor
+    filter (:class:`SensorFilter`, ``None``: none) of a record."""
 
     rocking: str = "simplified"
     load: Load = WHITE
     sensor: SensorNoise = NO_NOISE
+    filter: SensorFilter | None = None
 
     def __post_init__(self):
         if self.rocking not in ROCKING_MODELS:
             raise checks.InputError(f"rocking model '{self.rocking}' is not known; use one of {', '.join(ROCKING_MODELS)}")
+        if self.filter is not None and not isinstance(self.filter, SensorFilter):
+            raise checks.InputError(f"sensor filter {self.filter!r} is not a SensorFilter; give one, or None")
 
     def to_attrs(self) -> dict:
         """Flat file attributes (numbers, strings, lists of numbers): ``rocking_model``, the load's
-        (:func:`load_attrs`), ``sensor_noise``, ``sensor_noise_units``."""
-        return {"rocking_model": self.rocking, **load_attrs(self.load), **sensor_attrs(self.sensor)}
+        (:func:`load_attrs`), ``sensor_noise``, ``sensor_noise_units`` and, with a filter,
+        ``sensor_filter`` (its text, :meth:`SensorFilter.text`)."""
+        out = {"rocking_model": self.rocking, **load_attrs(self.load), **sensor_attrs(self.sensor)}
+        return out if self.filter is None else {**out, "sensor_filter": self.filter.text()}
 
     @classmethod
     def from_attrs(cls, attrs) -> "RecordModel":
         """The record model of attributes written by :meth:`to_attrs` (missing ones: the paper's)."""
-        return cls(rocking=str(attrs.get("rocking_model", "simplified")), load=load_from_attrs(attrs), sensor=sensor_from_attrs(attrs))
+        found = parse_sensor_filter(attrs["sensor_filter"]) if "sensor_filter" in attrs else None
+        return cls(rocking=str(attrs.get("rocking_model", "simplified")), load=load_from_attrs(attrs), sensor=sensor_from_attrs(attrs),
+                   filter=found if isinstance(found, SensorFilter) else None)
 
     def key(self) -> dict:
-        """The model as a JSON-able dict (a calibration's cache key names it); :meth:`from_key` reads it."""
-        return {"rocking": self.rocking, "load": self.load.to_dict(), "sensor_noise": self.sensor.to_dict()}
+        """The model as a JSON-able dict (a calibration's cache key names it; a filter only
+        when there is one); :meth:`from_key` reads it."""
+        out = {"rocking": self.rocking, "load": self.load.to_dict(), "sensor_noise": self.sensor.to_dict()}
+        return out if self.filter is None else {**out, "sensor_filter": self.filter.to_dict()}
 
     @classmethod
     def from_key(cls, key: dict) -> "RecordModel":
         """The record model of :meth:`key`."""
-        return cls(key["rocking"], Load.from_dict(key["load"]), SensorNoise.from_dict(key["sensor_noise"]))
+        return cls(key["rocking"], Load.from_dict(key["load"]), SensorNoise.from_dict(key["sensor_noise"]), SensorFilter.from_dict(key.get("sensor_filter")))
 
 
 PAPER = RecordModel()
-"""The paper's record model: simplified rocking, white load, no sensor noise."""
+"""The paper's record model: simplified rocking, white load, no sensor noise, no sensor filter."""
 
 
 LOAD_ATTRS = ("load", "load_corner", "load_frequency", "load_psd", "load_source")
@@ -531,9 +715,9 @@ def sensor_attrs(sensor: SensorNoise) -> dict:
 
 
 def carried_attrs(attrs) -> dict:
-    """The load and sensor attributes (:func:`load_attrs`, :func:`sensor_attrs`) among ``attrs``:
+    """The load and sensor attributes (:func:`load_attrs`, :func:`sensor_attrs`, ``sensor_filter``) among ``attrs``:
     what a product derived from a file of a run carries on, so every product names its load."""
-    keys = (*LOAD_ATTRS, *sensor_attrs(NO_NOISE))
+    keys = (*LOAD_ATTRS, *sensor_attrs(NO_NOISE), "sensor_filter")
     return {key: attrs[key] for key in keys if key in attrs}
 
 

@@ -102,6 +102,30 @@ would distort the excursions the colour is read from). The asymmetry of the two 
 block) is reported beside it, read as the asymmetry check reads it (:func:`_asymmetry`): about each
 record's impact level, which a lean moves away from the record's mean.
 
+A filter after the block. A low-pass filter between the block and the record (a logger's
+anti-alias filter, a sensor's bandwidth, an analyst's smoothing) rounds what the block itself
+cannot round: the acceleration steps at every zero crossing (the sign of the restoring term,
+eq. 4) and the velocity jumps at every impact (eq. 6), so the spectrum of an unfiltered
+record's second differences falls no faster than ``f^-2`` above a few rocking frequencies,
+whatever the load's colour (a low-pass load takes away its own fast part, not the steps and
+jumps): flat under a white load, near ``f^-2`` under a slow one, rising under sensor noise.
+A filter makes it fall faster beyond its corner. :func:`rolloff` reads the log-log slope of
+the Welch spectrum of the second differences over the octaves :data:`ROLLOFF_BANDS` (rocking
+frequencies, those below :data:`ROLLOFF_TOP` of the samples per cycle), its standard error by
+the delete-one-group jackknife over the Welch segments, and the steepest band's standard
+errors below :data:`ROLLOFF_FLOOR`; :data:`ROLLOFF_Z` of them show a filter (its rate on
+unfiltered records: ``benchmarks/filter_study.py``). Sensor noise added after the filter
+lifts the spectrum where it dominates and can hide a filter there.
+
+A gentle causal filter (a first-order RC stage) on a record under a white load adds at most
+``f^-2`` and so stays above the floor; but it runs the second differences through a
+first-order recursion, which the fit of the load reads as a low-pass load of about its corner.
+Such a load, unfiltered, leaves the steps and impacts sharp, so its spectrum falls no faster
+than the load's own, ``1/|1 - alpha exp(-2 pi i f)|^2`` (:func:`pole_slope`), and flattens
+above it; a filter makes everything fall with it. :meth:`Rolloff.beyond_pole` reads by how
+much the record falls faster than the load it is read as: more than :data:`POLE_MARGIN`
+and :data:`ROLLOFF_Z` errors shows a filter.
+
 Standard errors. The records are cut into :data:`JACKKNIFE_BLOCKS` consecutive blocks; every
 quantity is a function of sums over triples and pairs, which add over blocks, so each
 is recomputed with one block left out and the delete-one-block jackknife gives its
@@ -190,6 +214,169 @@ MIN_TRIPLES = 1000
 
 #: Largest pole of the fit's search (a corner of ``1e-4`` of the sampling frequency).
 MAX_POLE = 1.0 - 1e-4
+
+
+#: Octaves of the roll-off check (:func:`rolloff`), in rocking frequencies ``1/T(sigma_Y)``
+#: (eq. 5): above the block's own resonance, up to where a filter that moves ``e`` sits (a
+#: zero-phase Butterworth at 20 rocking frequencies still does: ``benchmarks/filter_study.py``).
+ROLLOFF_BANDS = ((5.0, 10.0), (7.0, 14.0), (10.0, 20.0), (14.0, 28.0))
+
+#: A band of :data:`ROLLOFF_BANDS` is read only below this share of the samples per cycle
+#: (0.9 of the Nyquist frequency), short of where the window's leakage from beyond it counts.
+ROLLOFF_TOP = 0.45
+
+#: Steepest log-log slope of the second differences' spectrum of an unfiltered record
+#: (module docstring, "A filter after the block": the steps at the zero crossings).
+ROLLOFF_FLOOR = -2.0
+
+#: Standard errors below :data:`ROLLOFF_FLOOR` at which the steepest band shows a filter;
+#: evidence: its false alarms on unfiltered records, ``benchmarks/filter_study.py``.
+ROLLOFF_Z = 3.0
+
+#: The bands of :data:`ROLLOFF_BANDS` in which a record is compared with the low-pass load it
+#: is read as (:meth:`Rolloff.beyond_pole`): not the top one, where the sampled steps of an
+#: unfiltered low-pass record fall faster than the load's flattening spectrum (false alarms
+#: there: ``benchmarks/filter_study.py``).
+POLE_BANDS = ROLLOFF_BANDS[:3]
+
+#: Slope (log-log) by which a record read as a low-pass load must fall faster than that
+#: load's own spectrum to show a filter (:meth:`Rolloff.beyond_pole`); evidence: its false
+#: alarms on unfiltered low-pass records, ``benchmarks/filter_study.py``.
+POLE_MARGIN = 0.3
+
+#: Longest Welch segment of the roll-off check (samples), fewest Welch bins in a band, and
+#: jackknife groups of Welch segments.
+ROLLOFF_SEGMENT, ROLLOFF_MIN_BINS, ROLLOFF_GROUPS = 1024, 4, 10
+
+
+@dataclass(frozen=True)
+class Rolloff:
+    """The roll-off of the records' second differences (:func:`rolloff`): ``slope`` of the
+    steepest band (log PSD against log frequency, with its jackknife error), the ``band``
+    (rocking frequencies), ``z`` (its standard errors above :data:`ROLLOFF_FLOOR`; below
+    ``-ROLLOFF_Z``: filtered), the slope of every band read (``slopes``), their errors
+    (``errors``), the ``bands`` and the samples per cycle they were placed at."""
+
+    slope: Quantity
+    band: tuple
+    z: float
+    slopes: tuple
+    errors: tuple = ()
+    bands: tuple = ()
+    points_per_cycle: float = math.nan
+
+    def beyond_pole(self, pole: float) -> tuple[Quantity, tuple]:
+        """How much faster than a low-pass load of pole ``pole`` per sample the records fall
+        (module docstring): of the bands of :data:`POLE_BANDS` read, the one whose slope lies
+        most errors below :func:`pole_slope`, as ``(slope - pole_slope, band)``; ``(NaN, ())``
+        when none was read."""
+        rows = [(s, e, band) for s, e, band in zip(self.slopes, self.errors, self.bands) if band in POLE_BANDS]
+        gaps = [Quantity(s - pole_slope(pole, band, self.points_per_cycle), e) for s, e, band in rows]
+        if not gaps:
+            return Quantity(math.nan, math.nan), ()
+        k = min(range(len(gaps)), key=lambda i: gaps[i].z if math.isfinite(gaps[i].value) else math.inf)
+        return gaps[k], rows[k][2]
+
+    def filtered_beyond(self, pole: float) -> bool:
+        """A filter shows against a low-pass load of pole ``pole``: the records fall faster
+        than its spectrum by more than :data:`POLE_MARGIN` and :data:`ROLLOFF_Z` errors."""
+        gap, _ = self.beyond_pole(pole)
+        return gap.value < -POLE_MARGIN and gap.z < -ROLLOFF_Z
+
+
+    @property
+    def filtered(self) -> bool:
+        """A filter after the block shows: the steepest band lies more than :data:`ROLLOFF_Z`
+        standard errors below :data:`ROLLOFF_FLOOR`."""
+        return self.z < -ROLLOFF_Z
+
+
+def pole_slope(pole: float, band, points_per_cycle: float) -> float:
+    """Log-log slope over ``band`` (rocking frequencies, at ``points_per_cycle`` samples per
+    cycle) of the spectrum ``1/|1 - alpha exp(-2 pi i f)|^2`` of a first-order low-pass load of
+    pole ``alpha`` (:mod:`rockdec.physics.loading`), fitted as :func:`rolloff` fits (0 for a
+    pole outside ``(0, 1)``, a white load).
+
+    Examples
+    --------
+    >>> round(pole_slope(0.0, (5, 10), 75.0), 6), pole_slope(0.9, (5, 10), 75.0) < -1.5
+    (0.0, True)
+    """
+    if not 0.0 < pole < 1.0:
+        return 0.0
+    f = np.linspace(band[0], band[1], 64) / points_per_cycle
+    power = 1.0 / np.abs(1.0 - pole * np.exp(-2j * math.pi * f)) ** 2
+    return float(np.polyfit(np.log(f), np.log(power), 1)[0])
+
+
+def _segment_spectra(records, size: int) -> tuple[np.ndarray, np.ndarray]:
+    """``(frequency, spectra)``: the Hann-windowed periodograms ``(segments, frequency)`` of the
+    second differences of ``records`` in segments of ``size`` samples overlapping by half
+    (:func:`scipy.signal.spectrogram`); frequency in cycles per sample, segments touching a
+    NaN left out."""
+    from scipy import signal
+
+    spectra = []
+    for y in records:
+        d = np.diff(y, 2)
+        if d.size < size:
+            continue
+        frequency, _, s = signal.spectrogram(np.nan_to_num(d), nperseg=size, noverlap=size // 2, detrend="constant")
+        bad = signal.spectrogram(np.isnan(d).astype(float), nperseg=size, noverlap=size // 2, detrend=False)[2].any(axis=0)
+        spectra.append(s[:, ~bad].T)
+    if not spectra:
+        return np.empty(0), np.empty((0, 0))
+    return frequency, np.concatenate(spectra)
+
+
+def rolloff(records, points_per_cycle: float) -> Rolloff | None:
+    """The roll-off check (module docstring, "A filter after the block") of ``records`` (1-D
+    arrays of one step) read at ``points_per_cycle`` samples per rocking cycle; ``None`` when no
+    band of :data:`ROLLOFF_BANDS` can be read (too few samples per cycle, or too short records).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> walk = np.cumsum(np.cumsum(np.random.default_rng(1).standard_normal(50_000)))
+    >>> r = rolloff(walk, 75.0)  # white second differences: a flat spectrum
+    >>> abs(r.slope.value) < 0.2, r.filtered
+    (True, False)
+    """
+    if isinstance(records, np.ndarray) and records.ndim == 1:
+        records = [records]
+    records = [np.asarray(y, dtype=np.float64).ravel() for y in records]
+    longest = max((y.size - 2 for y in records), default=0)
+    if not (points_per_cycle > 0.0) or longest < 64:
+        return None
+    size = int(min(ROLLOFF_SEGMENT, 2 ** int(math.log2(longest / 8)) if longest >= 128 else 16))
+    frequency, spectra = _segment_spectra(records, size)
+    if spectra.shape[0] < 2:
+        return None
+    rocking = frequency * points_per_cycle
+    bands = [(lo, hi) for lo, hi in ROLLOFF_BANDS if hi <= ROLLOFF_TOP * points_per_cycle]
+    picks = [(rocking >= lo) & (rocking <= hi) for lo, hi in bands]
+    bands = [band for band, pick in zip(bands, picks) if pick.sum() >= ROLLOFF_MIN_BINS]
+    picks = [pick for pick in picks if pick.sum() >= ROLLOFF_MIN_BINS]
+    if not bands:
+        return None
+    groups = np.array_split(np.arange(spectra.shape[0]), min(ROLLOFF_GROUPS, spectra.shape[0]))
+    sums = np.stack([spectra[g].sum(axis=0) for g in groups])
+    total = sums.sum(axis=0)
+
+    def slopes(mean):
+        with np.errstate(divide="ignore"):
+            return np.array([np.polyfit(np.log(rocking[p]), np.log(mean[p]), 1)[0] if (mean[p] > 0).all() else math.nan for p in picks])
+
+    whole = slopes(total)
+    reps = np.stack([slopes(total - part) for part in sums])
+    jack = len(groups)
+    se = np.sqrt((jack - 1) / jack * np.sum((reps - reps.mean(axis=0)) ** 2, axis=0))
+    z = np.where(se > 0.0, (whole - ROLLOFF_FLOOR) / np.where(se > 0.0, se, 1.0), np.where(whole < ROLLOFF_FLOOR, -math.inf, math.inf))
+    if not np.isfinite(whole).any():
+        return None
+    k = int(np.nanargmin(np.where(np.isfinite(whole), z, np.inf)))
+    return Rolloff(Quantity(float(whole[k]), float(se[k])), bands[k], float(z[k]), tuple(float(x) for x in whole),
+                   tuple(float(x) for x in se), tuple(bands), float(points_per_cycle))
 
 
 @dataclass(frozen=True)

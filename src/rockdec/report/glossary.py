@@ -29,8 +29,14 @@ GLOSSARY = """glossary:
              median of their values) is reported and marked *
   record model  what besides e makes the record, and what the calibration simulates:
              the load (white, or low-pass with its corner in rocking frequencies), the
-             sensor noise (in % of sigma_Y) and the rocking model; each measured off the
-             record (with its standard error; used when detected) or declared
+             sensor noise (in % of sigma_Y), the sensor filter and the rocking model; each
+             measured off the record (with its standard error; used when detected) or
+             declared
+  sensor filter  a low-pass filter between the block and the record (a logger's
+             anti-alias filter, a sensor's bandwidth, a smoothing): declared, the
+             calibration filters its records alike; undeclared, the record is checked
+             for one (the roll-off of its second differences) and e declined when it
+             shows one
   triggers   stretches of the record averaged into the signature, in the largest
              trigger window (more: less scatter)
   below / above the calibrated range  the raw value lies beyond what any calibrated e

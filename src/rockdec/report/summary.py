@@ -100,7 +100,8 @@ def _model(doc: dict) -> str:
         return "record model: not determined"
     src = report["sources"]
     return (f"record model the calibration simulates: {report['simulated']['described']} "
-            f"(load {src['load']}, sensor noise {src['sensor_noise']}, rocking model {src['rocking']})")
+            f"(load {src['load']}, sensor noise {src['sensor_noise']}, rocking model {src['rocking']}"
+            + (f", sensor filter {src['sensor_filter']}" if "sensor_filter" in src else "") + ")")
 
 
 def _measured(report: dict | None) -> list[str]:
@@ -108,8 +109,16 @@ def _measured(report: dict | None) -> list[str]:
     if not report:
         return []
     m = report.get("measured")
+    roll = report.get("filter_rolloff")
+    lines = [] if roll is None else [
+        f"  sensor filter check: the second differences fall as f^{roll['slope']['value']:.2f} (+- {roll['slope']['se']:.2g}) between "
+        f"{roll['band_rocking'][0]:g} and {roll['band_rocking'][1]:g} rocking frequencies, {roll['z']:+.1f} errors from f^-2"
+        + ("" if not roll.get("beyond_load") or roll["beyond_load"]["value"] is None else
+           f", {roll['beyond_load']['value']:+.2f} in slope against the low-pass load it is read as")
+        + f" ({'a filter shows' if roll['detected'] else 'no filter shows'})"
+    ]
     if m is None:
-        return [f"  record model not measured: {report['not_measured']}"] if report.get("not_measured") else []
+        return lines + ([f"  record model not measured: {report['not_measured']}"] if report.get("not_measured") else [])
 
     def pm(q, scale=1.0, spec=".3g"):
         if q["value"] is None:
@@ -124,7 +133,7 @@ def _measured(report: dict | None) -> list[str]:
         load = "white (no colour detected)"
     drift = f"{m['drift_rms_sigma_y']:.2g} sigma_Y in the block means ({'detected' if det['drift'] else 'not detected'})"
     share = "" if m["g_side_share"] is None else f", {m['g_side_share']:.2f} of the signature's"
-    return [
+    return lines + [
         "  measured off the record:",
         f"    sensor noise {noise}",
         f"    load {load}",
