@@ -131,7 +131,7 @@ def _cache(cache) -> Path:
 
 
 def estimate(theta, dt: float | None = None, *, g: float | None = None, load="auto", sensor_noise="auto", sensor_filter="auto",
-             model: str = "simplified", theta_cr: float | None = None, cache=None) -> RestitutionEstimate:
+             model: str = "simplified", theta_cr: float | None = None, cache=None, repair: bool = True) -> RestitutionEstimate:
     """Estimate the coefficient of restitution ``e`` of a rocking block from its random response.
 
     The record's Random Decrement signatures (paper eqs. 8, 19) give every estimator of
@@ -173,6 +173,11 @@ def estimate(theta, dt: float | None = None, *, g: float | None = None, load="au
     cache : str or path, optional
         Folder of stored calibrations; ``None``: :func:`rockdec.cache.default_cache` (shared with
         the command line).
+    repair : bool
+        Repair the record first (:mod:`rockdec.record.repair`): isolated spikes are replaced by the line through their neighbours
+        and, when the record drifts, a zero-phase high-pass well below the rocking frequency
+        removes the drift; the calibration's simulated records are repaired alike, and the
+        result's ``repair`` says what was done. ``False``: estimate the record as given.
 
     Returns
     -------
@@ -195,7 +200,9 @@ def estimate(theta, dt: float | None = None, *, g: float | None = None, load="au
     """
     declared, folder = estimate_options(g=g, load=load, sensor_noise=sensor_noise, sensor_filter=sensor_filter, model=model,
                                         theta_cr=theta_cr, cache=cache)
-    outcome = inference.estimate(_records(theta, dt), cache_dir=folder, g=g, rocking=model, theta_cr=theta_cr, **declared)
+    if not isinstance(repair, bool):
+        raise InputError(f"`repair` {show(repair)} is not True or False; give True to repair spikes and drift, False to leave the record as given.")
+    outcome = inference.estimate(_records(theta, dt), cache_dir=folder, g=g, rocking=model, theta_cr=theta_cr, repair_records=repair, **declared)
     return RestitutionEstimate.from_dict(outcome.document, analysis=outcome.analysis, belts=outcome.belts)
 
 

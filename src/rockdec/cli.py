@@ -75,6 +75,7 @@ FLAGS = {
     "overwrite": "--overwrite", "burn_in": "--burn-in", "theta0": "--theta0", "points_per_cycle": "--points-per-cycle",
     "e": "--e", "nu": "--nu", "sigma_p": "--sigma-p", "n_points": "--n-points", "theta": "the record",
     "group_size": "--group-size", "n_periods": "--n-periods", "fit_points": "--fit-points", "weights": "--weights",
+    "repair": "--no-repair",
 }
 
 
@@ -342,7 +343,7 @@ def cmd_estimate(args) -> None:
             log.info(f"estimate: {len(args.records)} file(s) (up to {console.about(seconds)} when their calibration must be built)")
             with console.progress("calibrating"):  # a bar only while a calibration missing from the cache is built
                 res = rockdec.estimate(theta, g=args.g, load=args.load, sensor_noise=args.sensor_noise, sensor_filter=args.sensor_filter,
-                                       model=args.model, theta_cr=args.theta_cr, cache=args.cache)
+                                       model=args.model, theta_cr=args.theta_cr, cache=args.cache, repair=args.repair)
         if plot is not None:
             from rockdec.report import figures
 
@@ -507,6 +508,11 @@ def build_parser() -> argparse.ArgumentParser:
         "--test", choices=("random", "free"), default="random",
         help="random: the block's random response (Random Decrement, calibrated); free: a free-rocking test, the block "
         "released from a tilt (impacts and fitted flights) (default: %(default)s)",
+    )
+    est1.add_argument(
+        "--no-repair", dest="repair", action="store_false",
+        help="estimate the record as given: no spikes replaced, no high-pass of a drifting zero (by default both are "
+        "repaired when found, the calibration's records repaired alike, and the report names the repair)",
     )
     est1.add_argument("--json", action="store_true", help="print one JSON object instead of the table")
     est1.add_argument("--plot", help="draw the signature and the calibration curve to this PNG or PDF")

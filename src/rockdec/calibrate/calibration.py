@@ -62,7 +62,7 @@ import numpy as np
 
 from rockdec import io
 from rockdec._version import __version__
-from rockdec.record import diagnostics
+from rockdec.record import diagnostics, repair
 from rockdec import engine
 from rockdec.rdd import measured, registry
 from rockdec.calibrate import ncread
@@ -211,7 +211,10 @@ def sets_per_e(model: RecordModel, capped: bool = False) -> int:
     return SETS_PER_E_MODELLED if modelled and not capped else SETS_PER_E
 
 
-def calibration_settings(lengths, points_per_cycle: float, settings: dict | None = None, model: RecordModel = PAPER, theta_cr_ratio: float | None = None) -> dict:
+def calibration_settings(
+    lengths, points_per_cycle: float, settings: dict | None = None, model: RecordModel = PAPER, theta_cr_ratio: float | None = None,
+    repaired: dict | None = None,
+) -> dict:
     """Everything a calibration depends on, as a JSON-able dict (hashed for the cache name).
 
     ``model``: the record model of the records (:mod:`rockdec.physics.record_model`): its load (a
@@ -220,6 +223,9 @@ def calibration_settings(lengths, points_per_cycle: float, settings: dict | None
     (:func:`binned_model`). Under the simplified model (eq. 4) nothing else sets the
     statistics; Housner's (eq. 2) adds ``nu^2 theta = g theta / theta_cr``, so the records'
     ``theta_cr_ratio = sigma_Y / theta_cr`` (binned by :data:`RATIO_BIN`) enters the key.
+    ``repaired``: the repair of the records (:func:`rockdec.record.repair.settings`), which
+    every simulated set then gets too (:func:`_repaired`); it enters the key only when it
+    repairs something, so an unrepaired record keeps its calibration.
     """
     if model.sensor.units != "sigma_y":
         raise ValueError("a calibration takes its sensor noise in units of sigma_Y")
@@ -243,7 +249,15 @@ def calibration_settings(lengths, points_per_cycle: float, settings: dict | None
         out["length_cap"] = {"samples": LENGTH_CAP, "spread": "scaled by sqrt(simulated samples / record samples)"}
     if housner:
         out["sigma_y_over_theta_cr"] = log_bin(theta_cr_ratio, RATIO_BIN)
+    if repaired and any(repaired.get(k) is not None for k in ("spikes", "highpass")):
+        out["repair"] = dict(repaired)
     return out
+
+
+def _repaired(records: list, repaired: dict | None, points_per_cycle: float) -> list:
+    """A simulated set as the measured records were repaired (:func:`rockdec.record.repair.apply`,
+    the high-pass placed at the calibration's ``points_per_cycle``)."""
+    return repair.apply(records, repaired, points_per_cycle)[0] if repaired else records
 
 
 def simulated_lengths(lengths) -> list[int]:
@@ -332,7 +346,7 @@ def _simulate_set(
 
 def step_for(
     e: float, points_per_cycle: float, lengths, settings: dict, seed0: int, model: RecordModel = PAPER, theta_cr_ratio: float | None = None,
-    pilot_samples: int = PILOT_SAMPLES,
+    pilot_samples: int = PILOT_SAMPLES, repaired: dict | None = None,
 ) -> tuple[float, int, float | None]:
     """Step ``dt`` (for ``g = sigma_p = 1``) at which :func:`rockdec.rdd.measured.analyse` reads
     ``points_per_cycle`` off simulated records at ``e``, the burn-in, and (Housner's model,
@@ -353,7 +367,8 @@ def step_for(
     :data:`rockdec.physics.simulate.STEP_ITERATIONS` iterations. Under Housner's model each pilot
     also sets the next ``theta_cr = sigma_Y / theta_cr_ratio`` from its median ``sigma_Y``
     (the first from eq. 5 at the target: ``sigma_Y = (N dt / 4)^2 / 2``), and the search
-    runs at least :data:`HOUSNER_ITERATIONS` iterations.
+    runs at least :data:`HOUSNER_ITERATIONS` iterations. ``repaired``: the records' repair,
+    applied to each pilot set before it is read (:func:`_repaired`).
     """
     from rockdec.physics.simulate import STEP_ITERATIONS, default_burn_in, secant_step
 
@@ -373,6 +388,7 @@ def step_for(
         for k in range(sets):
             try:
                 records = _simulate_set(seed0 + k * len(pilot), pilot, dt, e, burn_in, model, theta_cr=theta_cr, points_per_cycle=points_per_cycle, **draw)
+                records = _repaired(records, repaired, points_per_cycle)
                 read.append(measured.analyse(records, dt, settings).points_per_cycle)
                 rms.append(float(np.sqrt(np.nanmean(np.concatenate(records) ** 2))))
             except ValueError:
@@ -392,7 +408,8 @@ def step_for(
 
 
 def _sets(e: float, cal_settings: dict, seed0: int, dt: float, burn_in: int, theta_cr: float | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Every set of one grid point at step ``dt``: raw zero-window values ``(set, name)``, the
+    """Every set of one grid point at step ``dt``, repaired as the records were
+    (:func:`_repaired`): raw zero-window values ``(set, name)``, the
     checks' statistics ``(set, check)`` and the samples per cycle read off each set (NaN for
     a set that cannot be analysed)."""
     lengths, ppc, settings = cal_settings["lengths"], cal_settings["points_per_cycle"], cal_settings["analysis"]
@@ -404,6 +421,7 @@ def _sets(e: float, cal_settings: dict, seed0: int, dt: float, burn_in: int, the
     for k in range(n_sets):
         try:
             records = _simulate_set(seed0 + k * len(lengths), lengths, dt, e, burn_in, model, theta_cr=theta_cr, points_per_cycle=ppc, **model.load.draw_options(ppc))
+            records = _repaired(records, cal_settings.get("repair"), ppc)
             analysis = measured.analyse(records, dt, settings)
         except ValueError:
             continue
@@ -435,7 +453,8 @@ def _grid_point(j: int, e: float, cal_settings: dict, seed_base: int) -> tuple[n
     ratio = cal_settings.get("sigma_y_over_theta_cr")
     seed0 = seed_base + j * 10**7
     try:
-        dt, burn_in, theta_cr = step_for(e, ppc, lengths, settings, seed0 + 9 * 10**6, model, ratio, LENGTH_CAP if "length_cap" in cal_settings else PILOT_SAMPLES)
+        dt, burn_in, theta_cr = step_for(e, ppc, lengths, settings, seed0 + 9 * 10**6, model, ratio, LENGTH_CAP if "length_cap" in cal_settings else PILOT_SAMPLES,
+                                         cal_settings.get("repair"))
     except ValueError:  # no record at this e can be analysed: the belt leaves this e out
         n_sets = cal_settings["sets_per_e"]
         return np.full((n_sets, len(NAMES)), np.nan), np.full((n_sets, len(diagnostics.CHECKS)), np.nan)

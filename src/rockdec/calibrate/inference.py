@@ -34,7 +34,7 @@ import numpy as np
 from rockdec import console
 from rockdec._version import __version__
 from rockdec.calibrate import belt, calibration, consistency
-from rockdec.record import diagnostics
+from rockdec.record import diagnostics, repair
 from rockdec.rdd import measured, registry
 from rockdec.physics.record_model import NO_NOISE, WHITE, Load, RecordModel, SensorFilter, SensorNoise, parse_load
 from rockdec.record.records import Record, RecordError, distinct, same_step
@@ -673,6 +673,7 @@ class ModelChoice(NamedTuple):
 def choose_model(
     analysed: Analysed, *, model: RecordModel | None = None, load: Load | str | None = None, sensor: SensorNoise | None = None,
     rocking: str | None = None, theta_cr: float | None = None, sensor_filter: SensorFilter | str | None = "auto",
+    repaired: dict | None = None,
 ) -> ModelChoice:
     """Stage 2 of :func:`estimate`: measure the records' model (sensor noise, load colour,
     drift) unless declared, check them for a filter after the block unless one (or none) is
@@ -680,7 +681,9 @@ def choose_model(
     simulates (:func:`record_model`), note declared parts the records contradict
     (:func:`declared_contradictions`) and whether the records must be declined
     (:func:`filter_decline`, :func:`colour_decline`, or a part left to measure that cannot
-    be). Housner's model (eq. 2) needs ``theta_cr``, and only it."""
+    be). Housner's model (eq. 2) needs ``theta_cr``, and only it. ``repaired``: the repair
+    the records had (:func:`rockdec.record.repair.settings`), which the calibration's sets
+    get too."""
     from rockdec.record.record_measure import rolloff
 
     measuring = model is None and (load is None or sensor is None)
@@ -700,7 +703,7 @@ def choose_model(
         raise InputError("Housner's model (eq. 2) needs the block's critical angle `theta_cr`, and only it; give both or neither.")
     ratio = analysed.analysis.sigma_y / theta_cr if theta_cr is not None else None
     cal_settings = calibration.calibration_settings(
-        [r.theta.size for r in analysed.records], analysed.analysis.points_per_cycle, analysed.settings, model, ratio,
+        [r.theta.size for r in analysed.records], analysed.analysis.points_per_cycle, analysed.settings, model, ratio, repaired,
     )
     if measuring and measurement is None:  # a part left to measure cannot be: no calibration is known to fit
         declined = (
@@ -889,10 +892,11 @@ class Outcome(NamedTuple):
 
 
 def document(analysed: Analysed, choice: ModelChoice, calibrated: Calibrated | None, per: dict, selection: tuple,
-             g_reading: GReading | None, notes: list, checks: dict) -> dict:
+             g_reading: GReading | None, notes: list, checks: dict, repaired: dict | None = None) -> dict:
     """The report stage of :func:`estimate`: its JSON document (keys in
     :func:`estimate`'s docstring). ``calibrated``, ``g_reading`` ``None``: the records were
-    declined before any calibration (``choice.declined``)."""
+    declined before any calibration (``choice.declined``). ``repaired``: the document's
+    ``repair`` (:func:`repair_report`; none repaired when not given)."""
     chosen, rows, reason = selection
     shown = per[chosen] if chosen else {"e": None, "interval": [None, None], "coverage": None, "raw": None}
     analysis, g = analysed.analysis, analysed.g
@@ -914,6 +918,7 @@ def document(analysed: Analysed, choice: ModelChoice, calibrated: Calibrated | N
         "nan_samples": int(analysis.nan_samples), "record_model": choice.report(analysed), "estimators": per,
         "warnings": [n.message for n in notes], "warning_codes": [n.code for n in notes], "diagnostics": checks,
         "rockdec_version": __version__, "calibration": cal,
+        "repair": repaired if repaired is not None else repair_report(None, analysed.dt, True),
     }
 
 
@@ -1017,20 +1022,75 @@ def _reads(b: belt.Belt, raw: float) -> str:
     return f"beyond the calibrated range {b.e[0]:.3f}-{b.e[-1]:.3f} (raw {raw:.3f})"
 
 
+#: Checks whose defect moves ``e`` by more than half its interval and which the repair
+#: (:mod:`rockdec.record.repair`) did not remove when they still fire after it: a load whose
+#: strength changes, a block that leans, drift or spikes the repair left. Any of them fired
+#: declines ``e`` (:func:`decline_unrepaired`), rather than print an interval beside a
+#: warning that the record is broken (evidence: ``benchmarks/repair_study.py``,
+#: docs/explanation/constants.md).
+DECLINING_CHECKS = ("nonstationary", "drift", "spikes", "asymmetry")
+
+#: Checks that start the high-pass (:mod:`rockdec.record.repair`) when they fire on the
+#: records as given: a drifting zero moves the block means (``drift``), the level the sides
+#: are read about (``asymmetry``: a drift of a few ``sigma_Y`` fires it on a symmetric block)
+#: and the largest distances off the neighbours' line (``spikes``). Spikes are replaced
+#: before any analysis (:func:`rockdec.record.repair.find_spikes`), since spikes of tens of
+#: ``sigma_Y`` leave the analysis too few triggers.
+REPAIRING_CHECKS = ("drift", "asymmetry", "spikes")
+
+
+def repair_report(done: repair.Repair | None, dt: float, enabled: bool, why: str | None = None) -> dict:
+    """The JSON document's ``repair``: whether the repair was ``enabled``, the ``spikes``
+    replaced (``spikes_removed``), the high-pass corner in rocking frequencies and in Hz (``None`` without
+    one), and ``why`` it was done, in words (``None`` when nothing was repaired)."""
+    spikes = 0 if done is None else done.removed
+    corner = None if done is None else done.corner
+    hz = None if corner is None else _num(done.per_sample / dt)
+    return {"enabled": enabled, "spikes_removed": spikes, "highpass_corner_rocking": corner, "highpass_corner_hz": hz,
+            "repaired": bool(spikes or corner is not None), "why": why}
+
+
+def decline_unrepaired(doc: dict) -> dict:
+    """``doc`` with ``e`` declined when a check of :data:`DECLINING_CHECKS` fired on the
+    records as estimated (after any repair): ``reason`` names the check and its message."""
+    fired = [name for name in DECLINING_CHECKS if doc["diagnostics"].get(name, {}).get("fired")]
+    if doc["e"] is None or not fired:
+        return doc
+    messages = {code: message for code, message in zip(doc["warning_codes"], doc["warnings"])}
+    defects = "; ".join(f"{name}: {messages.get(name, name)}" for name in fired)
+    repaired = " after the repair" if doc["repair"]["repaired"] else ""
+    reason = (f"the records show a defect that moves e by more than its interval and that{repaired} is still there ({defects}); "
+              "e is declined rather than given with an interval that does not hold")
+    return {**doc, "e": None, "interval": [None, None], "coverage": None, "estimator": None, "reason": reason}
+
+
 def estimate(
     records: list[Record], *, cache_dir, g: float | None = None, settings: dict | None = None, model: RecordModel | None = None,
     load: Load | str | None = None, sensor: SensorNoise | None = None, rocking: str | None = None, theta_cr: float | None = None,
     sensor_filter: SensorFilter | str | None = "auto",
+    repair_records: bool = True,
 ) -> Outcome:
-    """Calibrated estimates of ``e`` from ``records`` of one block (pooled), in named stages.
+    """Calibrated estimates of ``e`` from ``records`` of one block (pooled), in named stages,
+    after the records' repair.
 
-    :func:`analyse` (check and analyse) → :func:`choose_model` (measure the record model,
-    or take the declared one; decline when no calibration fits) → :func:`calibrate` (get or
-    build the calibration) → :func:`correct` (correct every estimator and invert its belt)
-    → :func:`select` (the reported estimator; none when the impacts gain speed,
-    :func:`gains_speed`) → :func:`check_pooled` (records given together agree on one
-    ``e``, else ``e`` is declined) → :func:`read_g` → :func:`diagnose` (the
-    checks, thresholds from the calibration) → :func:`document` (the report).
+    Repair (``repair_records``, :mod:`rockdec.record.repair`): spikes are replaced before
+    anything else (:func:`rockdec.record.repair.find_spikes`); when a check of :data:`REPAIRING_CHECKS` fires (or the
+    record model measures drift) the records are high-passed and estimated again. Each
+    repaired estimate has a calibration whose simulated sets were repaired alike. Records
+    the analysis refuses, or declines before any calibration, are high-passed and tried
+    again too (a drift of a few ``sigma_Y`` can hide the rocking); when that does not help,
+    the first refusal or decline stands. A check of
+    :data:`DECLINING_CHECKS` that fires on the records as estimated declines ``e``
+    (:func:`decline_unrepaired`).
+
+    The stages of each estimate (:func:`estimate_once`): :func:`analyse` (check and analyse)
+    → :func:`choose_model` (measure the record model, or take the declared one; decline when
+    no calibration fits) → :func:`calibrate` (get or build the calibration) →
+    :func:`correct` (correct every estimator and invert its belt) → :func:`select` (the
+    reported estimator; none when the impacts gain speed, :func:`gains_speed`) →
+    :func:`check_pooled` (records given together agree on one ``e``, else ``e`` is declined)
+    → :func:`read_g` → :func:`diagnose` (the checks, thresholds from the calibration) →
+    :func:`document` (the report).
 
     ``model`` declares the whole record model (:mod:`rockdec.physics.record_model`); else
     ``load``, ``sensor``, ``rocking`` and ``sensor_filter`` (``"auto"``: checked for, none
@@ -1043,13 +1103,71 @@ def estimate(
     ``record_model`` (:func:`model_report`), ``estimators`` (per estimator: ``raw``,
     ``e``, ``interval``, ``coverage``, ``triggers``, ``notes``, ``calibrated_range``,
     ``beyond``), ``warnings`` and ``warning_codes`` (:class:`Note`), ``diagnostics``,
-    ``rockdec_version`` and ``calibration``.
+    ``rockdec_version``, ``calibration`` and ``repair`` (:func:`repair_report`).
     """
+    options = dict(cache_dir=cache_dir, g=g, settings=settings, model=model, load=load, sensor=sensor, rocking=rocking, theta_cr=theta_cr,
+                   sensor_filter=sensor_filter)
+    records = list(records)
+    if not repair_records:
+        return estimate_once(records, None, None, False, **options)
+    thetas = [r.theta for r in records]
+    cleaned, done = repair.apply(thetas, repair.settings(True, False), math.nan)  # no high-pass: no rocking frequency needed
+    found = done.removed
+    despiked = [r._replace(theta=y) for r, y in zip(records, cleaned)] if found else records
+    repaired = repair.settings(True, False) if found else None
+    why = f"{found} isolated sample{'s' if found > 1 else ''} off {repair.SPIKE_Z:g} robust scales of the second differences" if found else None
+    try:
+        first, refusal = estimate_once(despiked, repaired, done if found else None, True, why, **options), None
+    except RecordError as exc:  # drift can leave a record the analysis refuses until it is filtered
+        first, refusal = None, exc
+    doc = first.document if first is not None else None
+    failed = doc is None or doc["calibration"]["file"] is None  # refused, or declined before any calibration
+    drifting = not failed and ((doc.get("record_model") or {}).get("measured") or {}).get("detected", {}).get("drift", False)
+    fired = [] if failed else [name for name in REPAIRING_CHECKS if doc["diagnostics"].get(name, {}).get("fired")]
+    if not (fired or drifting or failed):
+        return first._replace(document=decline_unrepaired(doc))
+    log.info("estimating again after a high-pass well below the rocking frequency (drift)")
+    hp = repair.settings(bool(found), True)
+    ppc = doc["points_per_cycle"] if doc is not None and doc["points_per_cycle"] else repair.cycle_samples([r.theta for r in despiked])
+    filtered, done = repair.apply(thetas, hp, ppc)
+    try:  # the rocking frequency read off the filtered records places the corner
+        ppc = measured.analyse(filtered, same_step(records), {**measured.DEFAULT_SETTINGS, **(settings or {})}, g=g).points_per_cycle
+        filtered, done = repair.apply(thetas, hp, ppc)
+    except ValueError:
+        pass
+    why = f"the check{'s' if len(fired) > 1 else ''} {', '.join(fired)} fired" if fired else ("the record model measured drift" if drifting else "the records as given could not be estimated")
+    if found:
+        why = f"{why}; {found} isolated samples off {repair.SPIKE_Z:g} robust scales of the second differences"
+    try:
+        second = estimate_once([r._replace(theta=y) for r, y in zip(records, filtered)], hp, done, True, why, **options)
+    except RecordError:
+        second = None
+    if failed and (second is None or second.document["calibration"]["file"] is None):  # the high-pass did not help: as given
+        if first is None:
+            raise refusal
+        return first._replace(document=decline_unrepaired(doc))
+    if second is None:
+        return first._replace(document=decline_unrepaired(doc))
+    return second._replace(document=decline_unrepaired(second.document))
+
+
+def estimate_once(
+    records: list[Record], repaired: dict | None, done: repair.Repair | None, enabled: bool, why: str | None = None, *, cache_dir,
+    g: float | None = None, settings: dict | None = None, model: RecordModel | None = None, load: Load | str | None = None,
+    sensor: SensorNoise | None = None, rocking: str | None = None, theta_cr: float | None = None,
+    sensor_filter: SensorFilter | str | None = "auto",
+) -> Outcome:
+    """One estimate of :func:`estimate` on ``records`` as they are (already repaired as
+    ``repaired`` says, :func:`rockdec.record.repair.settings`, with ``done`` what the repair
+    did, ``why`` in words; ``enabled``: whether the repair was on), in the stages
+    :func:`estimate` lists; the calibration's sets are repaired alike."""
     analysed = analyse(records, g=g, settings=settings)
-    choice = choose_model(analysed, model=model, load=load, sensor=sensor, rocking=rocking, theta_cr=theta_cr, sensor_filter=sensor_filter)
+    report = repair_report(done, analysed.dt, enabled, why)
+    choice = choose_model(analysed, model=model, load=load, sensor=sensor, rocking=rocking, theta_cr=theta_cr, sensor_filter=sensor_filter,
+                          repaired=repaired)
     if choice.declined:
         per, selection = declined_rows(analysed)
-        doc = document(analysed, choice, None, per, (None, selection[1], choice.declined), None, [*analysed.notes, *choice.notes], {})
+        doc = document(analysed, choice, None, per, (None, selection[1], choice.declined), None, [*analysed.notes, *choice.notes], {}, report)
         return Outcome(doc, analysed.analysis, {})
     calibrated = calibrate(analysed, choice, cache_dir)
     per = correct(analysed, calibrated)
@@ -1064,7 +1182,7 @@ def estimate(
     notes = [*analysed.notes, *choice.notes, *calibrated.notes, *g_reading.notes, *long_record_note(analysed, choice), *pooled.notes]
     fired, checks = diagnose(list(analysed.records), analysed.analysis, analysed.settings, calibrated.cal,
                              *checks_place(per, shown), 1.0 / calibrated.scale**2)
-    doc = document(analysed, choice, calibrated, per, pooled.selection, g_reading, notes + fired, {**checks, **pooled.checks})
+    doc = document(analysed, choice, calibrated, per, pooled.selection, g_reading, notes + fired, {**checks, **pooled.checks}, report)
     return Outcome(doc, analysed.analysis, calibrated.belts)
 
 

@@ -41,6 +41,9 @@ GLOSSARY = """glossary:
              trigger window (more: less scatter)
   below / above the calibrated range  the raw value lies beyond what any calibrated e
              produces: e is outside that range, not estimated
+  repaired   what was mended before the estimate: spikes replaced by the line through
+             their neighbours, a drifting zero removed by a high-pass well below the
+             rocking frequency; the calibration's records are mended alike (--no-repair: off)
   sigma_Y    the rms angle of the record
   g          the block's restoring acceleration nu^2 theta_cr (rad/s^2, eq. 4), read
              off the record; not the acceleration of gravity"""

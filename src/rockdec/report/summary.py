@@ -151,7 +151,25 @@ def _record(doc: dict) -> list[str]:
         f"{ppc} samples per rocking cycle at sigma_Y",
         f"  {_g(doc)}",
         f"  {_model(doc)}",
+        *_repair(doc.get("repair")),
     ]
+
+
+def _repair(rep: dict | None) -> list[str]:
+    """What the repair did, in a line (none when nothing was repaired)."""
+    if not rep:
+        return []
+    if not rep.get("enabled"):
+        return ["  repair: off (the record as given)"]
+    if not rep.get("repaired"):
+        return []
+    parts = []
+    if rep["spikes_removed"]:
+        parts.append(f"{rep['spikes_removed']} spike{'s' if rep['spikes_removed'] > 1 else ''} replaced by the line through their neighbours")
+    if rep["highpass_corner_rocking"] is not None:
+        hz = "" if rep["highpass_corner_hz"] is None else f", {rep['highpass_corner_hz']:.3g} Hz"
+        parts.append(f"drift removed by a zero-phase high-pass at {rep['highpass_corner_rocking']:g} rocking frequencies{hz}")
+    return [f"  repaired: {'; '.join(parts)}; the calibration's records were repaired alike (--no-repair: as given)"]
 
 
 def _calibration(doc: dict) -> str:
