@@ -180,7 +180,8 @@ def test_a_filtered_record_is_declined_undeclared_and_covered_declared(tmp_path,
 
     doc = json.loads(capsys.readouterr().out)
     assert doc["e"] is None and "`sensor_filter`" in doc["reason"] and doc["record_model"]["filter_rolloff"]["detected"]
-    assert main([*common, "--sensor-filter", f"butterworth:4:{hz:.8g}hz:zero-phase", "--load", "white", "--sensor-noise", "0"]) == 0
+    # as given: the checks' thresholds of this small calibration fire often, and a fired check starts the repair
+    assert main([*common, "--sensor-filter", f"butterworth:4:{hz:.8g}hz:zero-phase", "--load", "white", "--sensor-noise", "0", "--no-repair"]) == 0
     doc = json.loads(capsys.readouterr().out)
     assert doc["record_model"]["simulated"]["sensor_filter"]["order"] == 4
     assert doc["record_model"]["sources"]["sensor_filter"] == "declared"
