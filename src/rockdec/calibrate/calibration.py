@@ -113,8 +113,8 @@ PILOT_SETS, PILOT_SAMPLES, PILOT_SAMPLES_COLOURED = 8, 50_000, 200_000
 
 #: Calibrations are shared by records whose samples per cycle agree within this relative
 #: step; records longer than :data:`LENGTH_CAP`, within the finer ``PPC_BIN_LONG``: the bias
-#: of ``e_v`` moves by 0.001-0.0016 from one bin of ``PPC_BIN`` to the next (e = 0.95 and
-#: 0.85, records of 1,000,000 samples), more than a 20-million-sample record's spread (0.0007).
+#: of ``e_v`` moves from one bin of ``PPC_BIN`` to the next by more than a 20-million-sample
+#: record's spread (``benchmarks/long_coverage.py``).
 PPC_BIN, PPC_BIN_LONG = 0.1, 0.02
 
 #: Under a coloured load, the sets of a grid point are re-simulated (same seeds) at a
@@ -437,8 +437,8 @@ def _grid_point(j: int, e: float, cal_settings: dict, seed_base: int) -> tuple[n
     point) that cannot be analysed, e.g. records too short for the lag range at this ``e``.
 
     The step is :func:`step_for`'s. Under a coloured load the pilot's median samples per
-    cycle misses the median of the point's own sets by up to 10 % (measured at corner 3,
-    200,000 samples: 67-82 read for 74), so the sets of one calibration would sit at
+    cycle misses the median of the point's own sets by several per cent (the pilot's records
+    are few, and such a load's sampling varies widely from record to record), so the sets of one calibration would sit at
     different samplings from ``e`` to ``e``; the sets are then simulated again with the same
     seeds at a corrected step until their own median is within :data:`SET_PPC_TOLERANCE` of
     the calibration's samples per cycle (at most :data:`SET_STEP_TRIES` times; the try that

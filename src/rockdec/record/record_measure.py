@@ -17,8 +17,8 @@ after it lie beyond a margin on that side (:func:`second_differences`): an impac
 the triple, a flight that crosses zero and returns between samples (the chatter of a
 block near rest), and a crossing hidden by sensor noise are all left out, and because
 the guard samples carry noise independent of the triple's own, the choice does not
-select the noise ``d`` holds (choosing by the triple's own samples biases ``g`` by -30 %
-at a noise of 5 % of ``sigma_Y``). The margin, several ``g dt^2`` and several
+select the noise ``d`` holds (choosing by the triple's own samples biases ``g`` low under
+sensor noise). The margin, several ``g dt^2`` and several
 ``sigma_n``, is measured on a first pass without it and refined twice. Each side's mean
 ``-g dt^2 sgn(y)`` is removed, which also measures ``g``:
 ``g = (mean_- - mean_+) / (2 dt^2)``. The autocorrelation ``r(m)`` of what remains
@@ -71,9 +71,8 @@ longer spans weigh that tail more (they bias ``alpha`` upward).
 
 The shape beneath noise. ``S(L)`` summed from the autocovariance mixes pairs of kept
 second differences that no window holds whole, so its noise does not cancel exactly and its
-error grows with ``L``: on the coverage study's records the fitted ``alpha``'s ``z`` ranged
-from below 1 to 130 at a corner of one rocking frequency beneath 2 % noise, and reached 14
-on white records beneath 5 % noise.
+error grows with ``L``, enough beneath a few per cent of noise to read a white record's
+load as coloured with a large ``z`` (the coverage study's "corner read" column).
 :func:`span_differences` reads the span-``L`` differences off the windows whose every second
 difference is kept (one side, no impact), where the noise is ``n[k+L] - 2 n[k] + n[k-L]``
 exactly; each side's mean is removed (it holds ``-g dt^2 L^2``). With their variances at
@@ -864,11 +863,9 @@ def _asymmetry(records, n_blocks: int) -> Quantity:
     level (:func:`rockdec.record.diagnostics.impact_sides`), summed per block, with its
     jackknife standard error. A push ``b g`` towards the positive side leaves ``g (1 - b)``
     there and ``g (1 + b)`` on the other: ``-b``. About the record's mean instead, a lean
-    moves the mean off the impact level and triples across it land on the wrong side:
-    under a low-pass load at 3 rocking frequencies a lean of 3 % at ``e = 0.9`` read
-    -0.023 +- 0.034 (median and sd of 12 records of 100,000 samples), one of 30 % at
-    ``e = 0.98`` +0.301 +- 0.070; about the level, -0.031 +- 0.006 and -0.300 +- 0.002
-    (docs/method.md §11)."""
+    moves the mean off the impact level and triples across it land on the wrong side, which
+    under a low-pass load scatters the reading widely and can flip its sign; about the
+    level it reads the lean (``tests/record/test_record_measure.py``)."""
     total = sum(y.size for y in records)
     sums = np.zeros((n_blocks, 4))  # n0, n1, s0, s1 per block
     offset = 0
