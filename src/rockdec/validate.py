@@ -77,6 +77,18 @@ def is_whole(value) -> bool:
     return isinstance(value, numbers.Integral) and not isinstance(value, bool)
 
 
+def json_number(x) -> float | None:
+    """``x`` as a float for a JSON document, ``None`` when it is NaN or infinite.
+
+    Examples
+    --------
+    >>> json_number(0.5), json_number(float("nan"))
+    (0.5, None)
+    """
+    x = float(x)
+    return x if math.isfinite(x) else None
+
+
 def finite(value, name: str, fix: str = "give a finite number") -> float:
     """``value`` as a float; refuses NaN, +-inf and anything that is not a real number."""
     if not is_number(value):

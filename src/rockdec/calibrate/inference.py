@@ -39,7 +39,7 @@ from rockdec.rdd import measured, registry
 from rockdec.physics.record_model import NO_NOISE, WHITE, Load, RecordModel, SensorFilter, SensorNoise, parse_load
 from rockdec.record.records import Record, RecordError, distinct, same_step
 from rockdec.record.sameness import same_data
-from rockdec.validate import InputError
+from rockdec.validate import InputError, json_number
 
 from rockdec.rdd.registry import DEFAULT_ESTIMATOR
 
@@ -171,7 +171,7 @@ def diagnose(
     level = settings.get("level", measured.DEFAULT_SETTINGS["level"])
     outcomes = diagnostics.evaluate([r.theta for r in records], analysis, cal, e, interval, level, length_ratio)
     notes = [Note(name, o.message) for name, o in outcomes.items() if o.fired]
-    return notes, {name: {"statistic": _num(o.statistic), "threshold": _num(o.threshold), "fired": o.fired} for name, o in outcomes.items()}
+    return notes, {name: {"statistic": json_number(o.statistic), "threshold": json_number(o.threshold), "fired": o.fired} for name, o in outcomes.items()}
 
 
 def _spike(records: list[Record]) -> str | None:
@@ -290,7 +290,7 @@ def record_model(
 
 def _quantity(q, scale: float = 1.0) -> dict:
     """A measured quantity and its standard error for JSON (``scale`` multiplies both)."""
-    return {"value": _num(q.value * scale), "se": _num(q.se * scale)}
+    return {"value": json_number(q.value * scale), "se": json_number(q.se * scale)}
 
 
 def model_report(measurement, why_not: str | None, analysis: measured.Analysis, sources: dict, simulated: RecordModel, cal_settings: dict,
@@ -312,8 +312,8 @@ def model_report(measurement, why_not: str | None, analysis: measured.Analysis, 
             "load": simulated.load.to_dict() if simulated.load.kind != "spectrum" else {
                 "kind": "spectrum", "rows": len(simulated.load.frequency), "source": simulated.load.source,
             },
-            "load_pole_per_sample": _num(simulated.load.pole(cal_ppc)),
-            "points_per_cycle": _num(cal_ppc),
+            "load_pole_per_sample": json_number(simulated.load.pole(cal_ppc)),
+            "points_per_cycle": json_number(cal_ppc),
             "sigma_y_over_theta_cr": ratio,
             "described": f"{simulated.rocking} rocking" + (f" (sigma_Y/theta_cr {ratio:.3g})" if ratio else "") + f", {simulated.load.describe()} load, "
             + (f"sensor noise {simulated.sensor.std:.3g} sigma_Y" if simulated.sensor.std > 0 else "no sensor noise")
@@ -322,7 +322,7 @@ def model_report(measurement, why_not: str | None, analysis: measured.Analysis, 
         "measured": None,
         "not_measured": why_not,
         "filter_rolloff": None if rolloff is None else {
-            "slope": _quantity(rolloff.slope), "band_rocking": list(rolloff.band), "z": _num(rolloff.z),
+            "slope": _quantity(rolloff.slope), "band_rocking": list(rolloff.band), "z": json_number(rolloff.z),
             "beyond_load": None if load_pole is None else _quantity(rolloff.beyond_pole(load_pole)[0]),
             "detected": rolloff.filtered or (load_pole is not None and rolloff.filtered_beyond(load_pole)),
         },
@@ -331,25 +331,25 @@ def model_report(measurement, why_not: str | None, analysis: measured.Analysis, 
         m = measurement
         rate = analysis.points_per_cycle / (2.0 * math.pi)  # corner in rocking frequencies per unit of -ln(pole)
         corner = (
-            {"value": _num(-math.log(m.pole.value) * rate), "se": _num(m.pole.se / m.pole.value * rate)}
+            {"value": json_number(-math.log(m.pole.value) * rate), "se": json_number(m.pole.se / m.pole.value * rate)}
             if 0.0 < m.pole.value < 1.0 else {"value": None, "se": None}
         )
         out["measured"] = {
             "kind": m.kind,
             "detected": {"sensor_noise": m.noisy, "colour": m.coloured, "drift": m.drifting},
             "sensor_noise_sigma_y": _quantity(m.noise_ratio),
-            "sensor_noise_z": _num(m.noise_var.z),
+            "sensor_noise_z": json_number(m.noise_var.z),
             "load_pole_per_sample": _quantity(m.pole),
-            "load_pole_z": _num(m.pole.z),
+            "load_pole_z": json_number(m.pole.z),
             "load_shape": _quantity(m.shape),
-            "load_shape_z": _num(m.shape_z),
+            "load_shape_z": json_number(m.shape_z),
             "load_corner_rocking": corner,
             "load_corner_hz": _quantity(m.corner_hz),
-            "drift_rms_sigma_y": _num(m.drift_rms),
-            "drift_z": _num(m.drift_z),
+            "drift_rms_sigma_y": json_number(m.drift_rms),
+            "drift_z": json_number(m.drift_z),
             "g": _quantity(m.g),
             "g_asymmetry": _quantity(m.asymmetry),
-            "g_side_share": _num(m.side_g_share(own_points_per_cycle)),
+            "g_side_share": json_number(m.side_g_share(own_points_per_cycle)),
             "triples": m.triples,
         }
     return out
@@ -540,8 +540,8 @@ def select(per: dict, n_sets: int, belts: dict[str, belt.Belt]) -> tuple[str | N
         else:
             why = None
         rows.append({
-            "estimator": name, "width": _num(width) if width is not None else None,
-            "width_at_common_e": _num(belt.width_at(belts[name], common)) if why is None else None,
+            "estimator": name, "width": json_number(width) if width is not None else None,
+            "width_at_common_e": json_number(belt.width_at(belts[name], common)) if why is None else None,
             "coverage": cov, "holds": why is None, "why_not": why,
         })
     trusted = [row for row in rows if row["holds"]]
@@ -775,12 +775,12 @@ def correct(analysed: Analysed, calibrated: Calibrated) -> dict:
         c = belt.correct(belts[name], analysis.raw[name])
         side = beyond(belts[name], analysis.raw[name], c)
         per[name] = {
-            "raw": _num(analysis.raw[name]),
-            "e": None if side else _num(c.value),
+            "raw": json_number(analysis.raw[name]),
+            "e": None if side else json_number(c.value),
             "beyond": side,
-            "calibrated_range": [_num(belts[name].e[0]), _num(belts[name].e[-1])] if belts[name].e.size else None,
-            "interval": [_num(c.low), _num(c.high)],
-            "coverage": _num(belt.calibration_coverage(calibrated.cal, name, calibrated.simulated_belts[name])),
+            "calibrated_range": [json_number(belts[name].e[0]), json_number(belts[name].e[-1])] if belts[name].e.size else None,
+            "interval": [json_number(c.low), json_number(c.high)],
+            "coverage": json_number(belt.calibration_coverage(calibrated.cal, name, calibrated.simulated_belts[name])),
             "triggers": int(analysis.count[registry.trigger(name)][-1]),
             "notes": [note for note in c.notes if not (side and "nearest point" in note)],  # no value is shown
         }
@@ -845,9 +845,9 @@ def read_g(analysed: Analysed, choice: ModelChoice, calibrated: Calibrated, chos
                 "interval; the estimate rests on the given g"
             )))
     return GReading(
-        _num(value),
-        None if g is not None or not np.isfinite(low) else [_num(low), _num(high)],
-        None if no_interval else _num(belt.g_calibration_coverage(calibrated.cal, e_name, e_belt, g_belt, g_band)),
+        json_number(value),
+        None if g is not None or not np.isfinite(low) else [json_number(low), json_number(high)],
+        None if no_interval else json_number(belt.g_calibration_coverage(calibrated.cal, e_name, e_belt, g_belt, g_band)),
         _g_note(g is not None, bool(np.isfinite(low)), chosen is not None, calibrated.scale, sum(choice.cal_settings["lengths"])),
         tuple(notes),
     )
@@ -901,7 +901,7 @@ def document(analysed: Analysed, choice: ModelChoice, calibrated: Calibrated | N
     shown = per[chosen] if chosen else {"e": None, "interval": [None, None], "coverage": None, "raw": None}
     analysis, g = analysed.analysis, analysed.g
     if calibrated is None:
-        g_reading = GReading(None if g is None else _num(g), None, None, _g_note(g is not None, False, False, 1.0, 0), ())
+        g_reading = GReading(None if g is None else json_number(g), None, None, _g_note(g is not None, False, False, 1.0, 0), ())
         cal = {"file": None, "cached": False, "seconds": 0.0}
     else:
         cal = {
@@ -912,8 +912,8 @@ def document(analysed: Analysed, choice: ModelChoice, calibrated: Calibrated | N
     return {
         "e": shown["e"], "interval": shown["interval"], "reason": reason, "estimator": chosen, "selection": rows,
         "coverage": shown["coverage"], "raw": shown["raw"], "g": g_reading.value, "g_given": g is not None,
-        "g_raw": _num(analysis.raw[measured.G_NAME]), "g_interval": g_reading.interval, "g_coverage": g_reading.coverage,
-        "g_interval_note": g_reading.note, "points_per_cycle": _num(analysis.points_per_cycle), "sigma_y": _num(analysis.sigma_y),
+        "g_raw": json_number(analysis.raw[measured.G_NAME]), "g_interval": g_reading.interval, "g_coverage": g_reading.coverage,
+        "g_interval_note": g_reading.note, "points_per_cycle": json_number(analysis.points_per_cycle), "sigma_y": json_number(analysis.sigma_y),
         "dt": analysed.dt, "records": [r.source for r in analysed.records], "samples": analysed.samples,
         "nan_samples": int(analysis.nan_samples), "record_model": choice.report(analysed), "estimators": per,
         "warnings": [n.message for n in notes], "warning_codes": [n.code for n in notes], "diagnostics": checks,
@@ -928,7 +928,7 @@ def declined_rows(analysed: Analysed) -> tuple[dict, tuple]:
     analysis = analysed.analysis
     per = {
         name: {
-            "raw": _num(analysis.raw[name]), "e": None, "beyond": None, "calibrated_range": None, "interval": [None, None],
+            "raw": json_number(analysis.raw[name]), "e": None, "beyond": None, "calibrated_range": None, "interval": [None, None],
             "coverage": None, "triggers": int(analysis.count[registry.trigger(name)][-1]), "notes": [],
         }
         for name in registry.ESTIMATORS
@@ -975,7 +975,7 @@ def check_pooled(analysed: Analysed, choice: ModelChoice, calibrated: Calibrated
     raws, unread = _alone(analysed, chosen)
     b = calibrated.simulated_belts[chosen]
     outcome = consistency.check(raws, [r.theta.size for r in records], b.e, b.mean, b.spread, sum(choice.cal_settings["lengths"]))
-    checks = {"pooled_consistency": {"statistic": _num(outcome.statistic), "threshold": _num(outcome.threshold), "fired": outcome.fired}}
+    checks = {"pooled_consistency": {"statistic": json_number(outcome.statistic), "threshold": json_number(outcome.threshold), "fired": outcome.fired}}
     notes = []
     if unread:
         rest = "the other records were checked against each other" if outcome.dof >= 1 else "whether the records agree on one e was not checked"
@@ -1045,7 +1045,7 @@ def repair_report(done: repair.Repair | None, dt: float, enabled: bool, why: str
     one), and ``why`` it was done, in words (``None`` when nothing was repaired)."""
     spikes = 0 if done is None else done.removed
     corner = None if done is None else done.corner
-    hz = None if corner is None else _num(done.per_sample / dt)
+    hz = None if corner is None else json_number(done.per_sample / dt)
     return {"enabled": enabled, "spikes_removed": spikes, "highpass_corner_rocking": corner, "highpass_corner_hz": hz,
             "repaired": bool(spikes or corner is not None), "why": why}
 
@@ -1201,7 +1201,3 @@ def beyond(b: belt.Belt, raw: float, c: belt.Corrected) -> str | None:
     return "above" if c.value == b.e[-1] else "unreached"
 
 
-def _num(x) -> float | None:
-    """A float for JSON, ``None`` for NaN."""
-    x = float(x)
-    return x if math.isfinite(x) else None

@@ -13,6 +13,7 @@ import math
 import numpy as np
 
 from rockdec._version import __version__
+from rockdec.validate import json_number
 
 __all__ = ["free_dataset", "free_document", "free_text"]
 
@@ -20,13 +21,8 @@ __all__ = ["free_dataset", "free_document", "free_text"]
 NOTE_CODE = "free_rocking"
 
 
-def _num(x) -> float | None:
-    x = float(x)
-    return x if math.isfinite(x) else None
-
-
 def _pair(pair) -> list | None:
-    low, high = (_num(v) for v in pair)
+    low, high = (json_number(v) for v in pair)
     return None if low is None or high is None else [low, high]
 
 
@@ -36,38 +32,38 @@ def free_document(fit, sources: list[str], steps: list[float], sizes: list[int])
     ``steps`` (s) with ``sizes`` samples."""
     has_e = fit.reason is None and math.isfinite(fit.e)
     impacts = [
-        {"record": int(fit.impact_record[i]), "release": int(fit.impact_release[i]), "time": _num(fit.impact_time[i]),
-         "amplitude_before": _num(fit.amplitude_before[i]), "omega_before": _num(fit.omega_before[i]),
-         "omega_before_se": _num(fit.omega_before_se[i]), "omega_after": _num(fit.omega_after[i]),
-         "omega_after_se": _num(fit.omega_after_se[i]), "e": _num(fit.e_impact[i]), "e_se": _num(fit.e_impact_se[i])}
+        {"record": int(fit.impact_record[i]), "release": int(fit.impact_release[i]), "time": json_number(fit.impact_time[i]),
+         "amplitude_before": json_number(fit.amplitude_before[i]), "omega_before": json_number(fit.omega_before[i]),
+         "omega_before_se": json_number(fit.omega_before_se[i]), "omega_after": json_number(fit.omega_after[i]),
+         "omega_after_se": json_number(fit.omega_after_se[i]), "e": json_number(fit.e_impact[i]), "e_se": json_number(fit.e_impact_se[i])}
         for i in range(fit.n_impacts)
     ]
     releases = [
-        {"record": int(fit.release_record[j]), "time": _num(fit.release_time[j]), "angle": _num(fit.release_angle[j]),
-         "g": _num(fit.release_g[j]), "stop_time": _num(fit.stop_time[j]), "stop_reason": fit.stop_reason[j],
-         "residual_std": _num(fit.residual_std[j])}
+        {"record": int(fit.release_record[j]), "time": json_number(fit.release_time[j]), "angle": json_number(fit.release_angle[j]),
+         "g": json_number(fit.release_g[j]), "stop_time": json_number(fit.stop_time[j]), "stop_reason": fit.stop_reason[j],
+         "residual_std": json_number(fit.residual_std[j])}
         for j in range(len(fit.release_time))
     ]
     return {
-        "e": _num(fit.e) if has_e else None,
+        "e": json_number(fit.e) if has_e else None,
         "interval": _pair(fit.e_interval) if has_e else [None, None],
         "reason": fit.reason,
         "estimator": "impacts" if has_e else None,
         "coverage": None,
-        "g": _num(fit.g),
+        "g": json_number(fit.g),
         "g_interval": _pair(fit.g_interval),
-        "nu": _num(fit.nu),
+        "nu": json_number(fit.nu),
         "nu_interval": _pair(fit.nu_interval),
         "model": fit.model,
         "theta_cr": fit.theta_cr,
-        "log_e_se": _num(fit.log_e_se),
-        "scatter_ratio": _num(fit.scatter_ratio),
-        "e_trend": _num(fit.e_trend),
-        "e_trend_se": _num(fit.e_trend_se),
+        "log_e_se": json_number(fit.log_e_se),
+        "scatter_ratio": json_number(fit.scatter_ratio),
+        "e_trend": json_number(fit.e_trend),
+        "e_trend_se": json_number(fit.e_trend_se),
         "dt": float(steps[0]),
         "records": list(sources),
         "samples": int(sum(sizes)),
-        "noise_std": [_num(v) for v in fit.noise_std],
+        "noise_std": [json_number(v) for v in fit.noise_std],
         "impacts": impacts,
         "releases": releases,
         "warnings": list(fit.notes),
