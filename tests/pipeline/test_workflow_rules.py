@@ -289,3 +289,13 @@ def test_a_rerun_refuses_while_the_snakemake_of_a_running_job_still_runs(tmp_pat
         orphan.kill()
         parent.kill()
         parent.wait()
+
+
+def test_every_rule_file_is_included_by_the_snakefile():
+    """A rule file that no ``include:`` names is dead: its rules cannot be run by name."""
+    repo = Path(__file__).resolve().parents[2]
+    included = set()
+    for source in [repo / "Snakefile", *(repo / "workflow" / "rules").glob("*.smk")]:
+        included |= {Path(m).name for m in re.findall(r'^include:\s*"([^"]+)"', source.read_text(), flags=re.M)}
+    rule_files = {p.name for p in (repo / "workflow" / "rules").glob("*.smk")}
+    assert rule_files - included == set()
