@@ -1,4 +1,4 @@
-"""Does the repair (drift high-passed, spikes made gaps) give intervals that hold, and no false asymmetry?
+"""Does the repair (drift high-passed, spikes replaced by their neighbours' line) give intervals that hold, and no false asymmetry?
 
 A plain script (not a test): measures, never asserts.
 

@@ -1077,9 +1077,9 @@ def estimate(
     anything else (:func:`rockdec.record.repair.find_spikes`); when a check of :data:`REPAIRING_CHECKS` fires (or the
     record model measures drift) the records are high-passed and estimated again. Each
     repaired estimate has a calibration whose simulated sets were repaired alike. Records
-    the analysis refuses, or declines before any calibration, are high-passed and tried
-    again too (a drift of a few ``sigma_Y`` can hide the rocking); when that does not help,
-    the first refusal or decline stands. A check of
+    the analysis refuses, or declines before any calibration while their record model
+    measures drift, are high-passed and tried again too (a drift of a few ``sigma_Y`` can
+    hide the rocking); when that does not help, the first refusal or decline stands. A check of
     :data:`DECLINING_CHECKS` that fires on the records as estimated declines ``e``
     (:func:`decline_unrepaired`).
 
@@ -1122,9 +1122,9 @@ def estimate(
         first, refusal = None, exc
     doc = first.document if first is not None else None
     failed = doc is None or doc["calibration"]["file"] is None  # refused, or declined before any calibration
-    drifting = not failed and ((doc.get("record_model") or {}).get("measured") or {}).get("detected", {}).get("drift", False)
+    drifting = doc is not None and bool(((doc.get("record_model") or {}).get("measured") or {}).get("detected", {}).get("drift", False))
     fired = [] if failed else [name for name in REPAIRING_CHECKS if doc["diagnostics"].get(name, {}).get("fired")]
-    if not (fired or drifting or failed):
+    if not (fired or drifting or doc is None):  # a decline for the load or the instrument is not retried unless drift is measured
         return first._replace(document=decline_unrepaired(doc))
     log.info("estimating again after a high-pass well below the rocking frequency (drift)")
     hp = repair.settings(bool(found), True)
