@@ -96,8 +96,9 @@ def noise_std(theta: np.ndarray) -> float:
     d3 = np.diff(np.asarray(theta, dtype=float), 3)
     if d3.size == 0:
         return 0.0
-    mad = np.median(np.abs(d3 - np.median(d3)))
-    return float(1.482602218505602 * mad / np.sqrt(20.0))
+    from scipy.stats import median_abs_deviation
+
+    return float(median_abs_deviation(d3, scale="normal") / np.sqrt(20.0))
 
 
 @dataclass(frozen=True)

@@ -144,7 +144,9 @@ def second_difference_scale(y: np.ndarray) -> float:
     d = d[np.isfinite(d)]
     if not d.size:
         return float("nan")
-    return MAD_TO_SD * float(np.median(np.abs(d - np.median(d))))
+    from scipy.stats import median_abs_deviation
+
+    return MAD_TO_SD * float(median_abs_deviation(d))
 
 
 def find_spikes(y, z: float = SPIKE_Z) -> np.ndarray:
@@ -217,11 +219,7 @@ def highpass(y, per_sample: float, order: int = HIGHPASS_ORDER) -> np.ndarray:
 
     y = np.asarray(y, dtype=np.float64)
     gaps = ~np.isfinite(y)
-    filled = y
-    if gaps.any():
-        k = np.arange(y.size)
-        filled = y.copy()
-        filled[gaps] = np.interp(k[gaps], k[~gaps], y[~gaps])
+    filled = fill(y, np.flatnonzero(gaps)) if gaps.any() else y
     sos = signal.butter(order, 2.0 * per_sample, btype="highpass", output="sos")
     out = signal.sosfiltfilt(sos, filled)
     out[gaps] = np.nan
