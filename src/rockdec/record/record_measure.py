@@ -368,8 +368,7 @@ def rolloff(records, points_per_cycle: float) -> Rolloff | None:
 
     whole = slopes(total)
     reps = np.stack([slopes(total - part) for part in sums])
-    jack = len(groups)
-    se = np.sqrt((jack - 1) / jack * np.sum((reps - reps.mean(axis=0)) ** 2, axis=0))
+    se = np.array([_jackknife(whole[b], reps[:, b]).se for b in range(len(bands))])
     z = np.where(se > 0.0, (whole - ROLLOFF_FLOOR) / np.where(se > 0.0, se, 1.0), np.where(whole < ROLLOFF_FLOOR, -math.inf, math.inf))
     if not np.isfinite(whole).any():
         return None
