@@ -12,16 +12,21 @@ at the requested 75 samples per cycle). Each record is estimated twice:
 * declared (``sensor_filter`` the same filter in Hz, ``load`` white, ``sensor_noise`` 0):
   its coverage.
 
-Then the false alarms: the filter check (:func:`rockdec.calibrate.inference.filter_decline`:
-the roll-off floor, :func:`rockdec.record.record_measure.rolloff`, and the roll-off beyond a
-measured low-pass load) on unfiltered records (white and low-pass corner-3 loads, sensor
-noise 0, 1 and 5 % of ``sigma_Y``, ``e`` 0.6-0.98), and the declared-model check
+Then the false alarms, on unfiltered records (white and low-pass loads of corners 3, 5 and
+10 rocking frequencies, sensor noise 0 and 1 % of ``sigma_Y``, ``e`` 0.6-0.98), each estimated
+whole: how often the steep-filter check before the calibration
+(:func:`rockdec.calibrate.inference.filter_decline`, the roll-off floor of
+:func:`rockdec.record.record_measure.rolloff`) declines ``e``, how often the calibrated check
+``filtered`` (:func:`rockdec.record.diagnostics.impact_sharpness`) fires, and how often ``e``
+is declined for either; and the declared-model check
 (:func:`rockdec.calibrate.inference.declared_contradictions`) on records whose declaration is
 right (and, beside them, on two that are wrong).
 
-Run::
+Run (the parts and filter kinds can run apart, in parallel)::
 
     nice -n 10 python benchmarks/filter_study.py --records 30 --declared 10 --out filter_study.md
+    python benchmarks/filter_study.py --part filters --kinds rc --out rc.md
+    python benchmarks/filter_study.py --part alarms --seeds 8 --out alarms.md
 
 Writes a markdown table per part (appended as each configuration finishes); asserts nothing.
 """
@@ -106,12 +111,12 @@ def outcome(doc: dict) -> str:
     return "covered" if low <= E_TRUE <= high else "miss"
 
 
-def study_filters(n: int, n_declared: int, cache: Path, out) -> None:
+def study_filters(n: int, n_declared: int, cache: Path, out, kinds=KINDS) -> None:
     base = records(n)
     out.write("## Filtered records, e = 0.85\n\n| filter | corner (x rocking f) | phase | undeclared: covered / declined / confident miss "
               "| declared: covered / declined / miss | misses (e, interval) |\n|---|---|---|---|---|---|\n")
     out.flush()
-    for kind, order in KINDS:
+    for kind, order in kinds:
         for corner in CORNERS:
             for zero in (True, False):
                 started = time.perf_counter()
@@ -150,31 +155,37 @@ def clean_record(e: float, corner: float | None, seed: int, noise: float, steps:
     return y, dt
 
 
-def study_false_alarms(seeds: int, out) -> None:
+def study_false_alarms(seeds: int, cache: Path, out) -> None:
     steps: dict = {}
-    out.write("\n## The filter check on unfiltered records (false alarms)\n\n| load | sensor noise | records | declined for a filter | "
-              "lowest z of the floor (fires below -%g) | lowest z beyond the measured load | ms per record (roll-off) |\n"
-              "|---|---|---|---|---|---|---|\n" % record_measure.ROLLOFF_Z)
-    for corner in (None, 3.0):
-        for noise in (0.0, 0.01, 0.05):
-            fired, zs, beyond, ms = 0, [], [], []
-            for e in (0.6, 0.7, 0.8, 0.85, 0.9, 0.95, 0.98):
+    out.write("\n## The filter checks on unfiltered records (false alarms)\n\n| load | sensor noise | e | records | declined by the "
+              "steep-filter check (floor f^%g) | lowest z of the floor | `filtered` fired | declined for a filter | answered, "
+              "interval holds e |\n|---|---|---|---|---|---|---|---|---|\n" % record_measure.ROLLOFF_FLOOR)
+    totals = np.zeros(4, dtype=int)
+    for corner in (None, 3.0, 5.0, 10.0):
+        for noise in (0.0, 0.01):
+            for e in (0.6, 0.85, 0.95, 0.98):
+                steep = fired = declined = covered = answered = 0
+                zs = []
                 for seed in range(seeds):
                     y, dt = clean_record(e, corner, 500 + seed, noise, steps)
-                    analysed = inference.analyse([Record(y, dt, "record")])
-                    t = time.perf_counter()
-                    record_measure.rolloff(y, analysed.analysis.points_per_cycle)
-                    ms.append(1e3 * (time.perf_counter() - t))
-                    choice = inference.choose_model(analysed)
-                    fired += bool(choice.declined and "`sensor_filter`" in choice.declined)
-                    r = choice.rolloff
-                    zs.append(r.z if r else math.nan)
-                    if r and choice.model.load.kind == "lowpass":
-                        beyond.append(r.beyond_pole(choice.model.load.pole(analysed.analysis.points_per_cycle))[0].z)
-            low = f"{min(beyond):.1f} ({len(beyond)} read as low-pass)" if beyond else "- (none read as low-pass)"
-            out.write(f"| {'white' if corner is None else f'low-pass {corner:g}'} | {noise:.0%} | {len(zs)} | {fired} ({fired / len(zs):.1%}) | "
-                      f"{np.nanmin(zs):.1f} | {low} | {np.median(ms):.0f} |\n")
-            out.flush()
+                    doc = rockdec.estimate(y, dt, cache=cache).to_dict()
+                    roll = doc["record_model"].get("filter_rolloff")
+                    zs.append(roll["z"] if roll and roll["z"] is not None else math.nan)
+                    structural = bool(roll and roll["detected"])
+                    calibrated = bool(doc["diagnostics"].get("filtered", {}).get("fired"))
+                    steep, fired = steep + structural, fired + calibrated
+                    declined += doc["e"] is None and (structural or calibrated)
+                    if doc["e"] is not None:
+                        answered += 1
+                        covered += doc["interval"][0] <= e <= doc["interval"][1]
+                totals += (seeds, steep, fired, declined)
+                out.write(f"| {'white' if corner is None else f'low-pass {corner:g}'} | {noise:.0%} | {e:g} | {seeds} | {steep} | "
+                          f"{np.nanmin(zs):.1f} | {fired} | {declined} | {covered} of {answered} |\n")
+                out.flush()
+                print(f"alarms {corner} {noise} {e}: steep {steep} fired {fired} declined {declined}", file=sys.stderr, flush=True)
+    n, steep, fired, declined = totals
+    out.write(f"\nOver {n} unfiltered records: the steep-filter check declined {steep} ({steep / n:.1%}), `filtered` fired on "
+              f"{fired} ({fired / n:.1%}), {declined} ({declined / n:.1%}) declined for a filter.\n")
     out.write("\n## Declared parts checked against the record\n\n| record | declared | records | noted |\n|---|---|---|---|\n")
     cases = (
         ("white, no noise", None, 0.0, {"load": Load(), "sensor": SensorNoise()}),
@@ -206,13 +217,15 @@ def main(argv=None) -> int:
     parser.add_argument("--cache", default="filter_study_cache", help="folder of stored calibrations")
     parser.add_argument("--out", default="filter_study.md", help="markdown file written")
     parser.add_argument("--part", choices=("all", "filters", "alarms"), default="all")
+    parser.add_argument("--kinds", choices=("all", "rc", "butterworth"), default="all", help="filter kinds of the filters part")
     args = parser.parse_args(argv)
     with open(args.out, "w") as out:
         out.write(f"# Filter study (benchmarks/filter_study.py, rockdec {rockdec.__version__})\n\n")
         if args.part in ("all", "alarms"):
-            study_false_alarms(args.seeds, out)
+            study_false_alarms(args.seeds, Path(args.cache), out)
         if args.part in ("all", "filters"):
-            study_filters(args.records, args.declared, Path(args.cache), out)
+            kinds = [k for k in KINDS if args.kinds in ("all", k[0])]
+            study_filters(args.records, args.declared, Path(args.cache), out, kinds)
     return 0
 
 

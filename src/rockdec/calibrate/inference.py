@@ -294,15 +294,15 @@ def _quantity(q, scale: float = 1.0) -> dict:
 
 
 def model_report(measurement, why_not: str | None, analysis: measured.Analysis, sources: dict, simulated: RecordModel, cal_settings: dict,
-                 own_points_per_cycle: float, rolloff=None, load_pole: float | None = None) -> dict:
+                 own_points_per_cycle: float, rolloff=None) -> dict:
     """The ``record_model`` of :func:`estimate`'s JSON: what was measured (each quantity
     with its standard error), what was detected, what the calibration simulated (the
     binned model, :func:`rockdec.calibrate.calibration.binned_model`) and where each part
     came from; ``g_side_share`` at ``own_points_per_cycle`` (:func:`colour_decline`);
     ``filter_rolloff``: the roll-off check (:func:`rockdec.record.record_measure.rolloff`,
-    ``None`` when not made: a declared filter, or too few samples per cycle), with how much
-    faster than a low-pass load of pole ``load_pole`` per sample the records fall
-    (``beyond_load``; ``None`` without one) and whether a filter shows (:func:`filter_decline`)."""
+    ``None`` when not made: a declared filter, or too few samples per cycle), and whether a
+    steep filter shows (:func:`filter_decline`; a gentle one is the calibrated check
+    ``filtered`` of :mod:`rockdec.record.diagnostics`)."""
     cal_ppc = cal_settings["points_per_cycle"]
     ratio = cal_settings.get("sigma_y_over_theta_cr")
     out = {
@@ -323,8 +323,7 @@ def model_report(measurement, why_not: str | None, analysis: measured.Analysis, 
         "not_measured": why_not,
         "filter_rolloff": None if rolloff is None else {
             "slope": _quantity(rolloff.slope), "band_rocking": list(rolloff.band), "z": json_number(rolloff.z),
-            "beyond_load": None if load_pole is None else _quantity(rolloff.beyond_pole(load_pole)[0]),
-            "detected": rolloff.filtered or (load_pole is not None and rolloff.filtered_beyond(load_pole)),
+            "detected": rolloff.filtered,
         },
     }
     if measurement is not None:
@@ -416,36 +415,21 @@ _FILTER_HELP = (
 )
 
 
-def filter_decline(rolloff, model: RecordModel | None = None, points_per_cycle: float = math.nan) -> str | None:
-    """Why ``e`` is declined for records that show a filter after the block, in one sentence
-    naming the slope and the declaration that would help; else ``None``: their second
-    differences fall faster than an unfiltered rocking record's
-    (:attr:`rockdec.record.record_measure.Rolloff.filtered`), or, when ``model`` has a low-pass
-    load (measured or declared), faster than that load's own spectrum at ``points_per_cycle``
-    (:meth:`rockdec.record.record_measure.Rolloff.filtered_beyond`: a first-order filter read as
-    the load)."""
-    if rolloff is None:
+def filter_decline(rolloff) -> str | None:
+    """Why ``e`` is declined, before any calibration, for records whose second differences fall
+    faster than any unfiltered rocking record's (:attr:`rockdec.record.record_measure.Rolloff.filtered`:
+    a filter of order two or more), in one sentence naming the slope and the declaration that
+    would help; else ``None``. A gentler filter is left to the calibrated check ``filtered``
+    (:mod:`rockdec.record.diagnostics`), which compares the records with the calibration's."""
+    if rolloff is None or not rolloff.filtered:
         return None
     from rockdec.record.record_measure import ROLLOFF_FLOOR
 
-    if rolloff.filtered:
-        lo, hi = rolloff.band
-        return (
-            f"the spectrum of these records' second differences falls as f^{rolloff.slope.value:.1f} (+- {rolloff.slope.se:.2f}) "
-            f"between {lo:g} and {hi:g} times the rocking frequency, {-rolloff.z:.0f} errors steeper than the f^{ROLLOFF_FLOOR:g} "
-            f"that the steps and impacts of an unfiltered rocking record keep: {_FILTER_HELP}"
-        )
-    if model is None or model.load.kind != "lowpass":
-        return None
-    pole = model.load.pole(points_per_cycle)
-    if not rolloff.filtered_beyond(pole):
-        return None
-    gap, (lo, hi) = rolloff.beyond_pole(pole)
+    lo, hi = rolloff.band
     return (
-        f"the spectrum of these records' second differences falls {-gap.value:.2f} (+- {gap.se:.2f}) faster in log-log slope "
-        f"between {lo:g} and {hi:g} times the rocking frequency than the low-pass load they are read as (corner "
-        f"{model.load.corner:.3g} times the rocking frequency) lets it: such a load leaves the steps and impacts of the "
-        f"rocking sharp, a filter rounds them with it; {_FILTER_HELP}"
+        f"the spectrum of these records' second differences falls as f^{rolloff.slope.value:.1f} (+- {rolloff.slope.se:.2f}) "
+        f"between {lo:g} and {hi:g} times the rocking frequency, {-rolloff.z:.0f} errors steeper than the f^{ROLLOFF_FLOOR:g} "
+        f"that no unfiltered rocking record reaches: {_FILTER_HELP}"
     )
 
 
@@ -662,9 +646,8 @@ class ModelChoice(NamedTuple):
     def report(self, analysed: Analysed) -> dict:
         """The ``record_model`` of the JSON document (:func:`model_report`)."""
         simulated = RecordModel.from_key(self.cal_settings["record_model"])
-        pole = self.model.load.pole(analysed.analysis.points_per_cycle) if self.model.load.kind == "lowpass" else None
         out = model_report(self.measurement, self.why_not if self.measuring else None, analysed.analysis, self.sources, simulated,
-                           self.cal_settings, analysed.own_points_per_cycle, self.rolloff, pole)
+                           self.cal_settings, analysed.own_points_per_cycle, self.rolloff)
         if self.declined:
             out["simulated"]["described"] = f"nothing (declined; a calibration would simulate {out['simulated']['described']})"
         return out
@@ -712,7 +695,7 @@ def choose_model(
             "model) to have e estimated under the declared model"
         )
     else:
-        declined = filter_decline(found, model, analysed.analysis.points_per_cycle) or colour_decline(
+        declined = filter_decline(found) or colour_decline(
             model, sources, measurement, analysed.analysis.points_per_cycle, analysed.own_points_per_cycle,
         )
     notes = declared_contradictions(measurement, model, sources, analysed.analysis.points_per_cycle)
@@ -1024,11 +1007,11 @@ def _reads(b: belt.Belt, raw: float) -> str:
 
 #: Checks whose defect moves ``e`` by more than half its interval and which the repair
 #: (:mod:`rockdec.record.repair`) did not remove when they still fire after it: a load whose
-#: strength changes, a block that leans, drift or spikes the repair left. Any of them fired
-#: declines ``e`` (:func:`decline_unrepaired`), rather than print an interval beside a
-#: warning that the record is broken (evidence: ``benchmarks/repair_study.py``,
-#: docs/explanation/constants.md).
-DECLINING_CHECKS = ("nonstationary", "drift", "spikes", "asymmetry")
+#: strength changes, a block that leans, drift or spikes the repair left, a filter after the
+#: block that was not declared. Any of them fired declines ``e`` (:func:`decline_unrepaired`),
+#: rather than print an interval beside a warning that the record is broken (evidence:
+#: ``benchmarks/repair_study.py``, ``benchmarks/filter_study.py``, docs/explanation/constants.md).
+DECLINING_CHECKS = ("nonstationary", "drift", "spikes", "asymmetry", "filtered")
 
 #: Checks that start the high-pass (:mod:`rockdec.record.repair`) when they fire on the
 #: records as given: a drifting zero moves the block means (``drift``), the level the sides
@@ -1052,8 +1035,10 @@ def repair_report(done: repair.Repair | None, dt: float, enabled: bool, why: str
 
 def decline_unrepaired(doc: dict) -> dict:
     """``doc`` with ``e`` declined when a check of :data:`DECLINING_CHECKS` fired on the
-    records as estimated (after any repair): ``reason`` names the check and its message."""
-    fired = [name for name in DECLINING_CHECKS if doc["diagnostics"].get(name, {}).get("fired")]
+    records as estimated (after any repair): ``reason`` names the check and its message. A
+    ``filtered`` that fired warns only when the records' filter (or its absence) was declared."""
+    declared = (doc.get("record_model") or {}).get("sources", {}).get("sensor_filter") == "declared"
+    fired = [name for name in DECLINING_CHECKS if doc["diagnostics"].get(name, {}).get("fired") and not (name == "filtered" and declared)]
     if doc["e"] is None or not fired:
         return doc
     messages = {code: message for code, message in zip(doc["warning_codes"], doc["warnings"])}

@@ -98,6 +98,10 @@ GUARD_G, LEVEL_STEPS, LEVEL_RANGE, LEVEL_SHARE = 8.0, 8, 1.0, 0.05
 #: no corrected ``e`` (the floor is highest for small ``e``; 0.95 is the paper's middle).
 FLOOR_E = 0.95
 
+#: Samples on each side of a zero crossing over which :func:`impact_ratios` reads the wide
+#: velocities (the narrow ones: one sample).
+IMPACT_WIDE = 4
+
 #: Fewest of the records' trigger positions whose segment holds no NaN (:func:`segments`)
 #: before ``few_triggers`` fires: the calibration's records have none, so gaps costing more
 #: than a tenth of the triggers leave the interval too narrow (docs/method.md §10).
@@ -185,7 +189,10 @@ class Sums(NamedTuple):
     largest ratio of a record's largest distance of a sample from the line through its
     neighbours to its :data:`SPIKE_REFERENCE` quantile of those distances
     (:func:`_spike_ratio`); ``gaps``: per record, its length and the starts and ends
-    (exclusive) of its runs of NaN (:func:`_nan_runs`)."""
+    (exclusive) of its runs of NaN (:func:`_nan_runs`); ``impact_narrow``, ``impact_wide``:
+    over the fast zero crossings of every record, the logarithm of the ratio of the velocity
+    after to that before, read over one sample and over :data:`IMPACT_WIDE` samples on each
+    side (:func:`impact_ratios`)."""
 
     count: int
     block_mean: np.ndarray
@@ -195,6 +202,8 @@ class Sums(NamedTuple):
     side_sum: np.ndarray
     off: float
     gaps: tuple
+    impact_narrow: np.ndarray
+    impact_wide: np.ndarray
 
 
 def _spike_ratio(distance: np.ndarray, largest: float) -> float:
@@ -273,9 +282,10 @@ def sums(records) -> Sums:
     """:class:`Sums` of ``records`` (1-D arrays, NaN allowed): one compiled pass per record
     (:func:`_record_sums`), the quantile of :func:`_spike_ratio`, the sides of
     :func:`asymmetry` (:func:`_sides`) and the runs of NaN (:func:`_nan_runs`)."""
+    records = list(records)
     count, off = 0, np.nan
     side_n, side_s = np.zeros(2), np.zeros(2)
-    means, variances, owners, gaps = [], [], [], []
+    means, variances, owners, gaps, narrow_wide = [], [], [], [], []
     for i, y in enumerate(records):
         y = np.ascontiguousarray(y, dtype=np.float64)
         b = min(BLOCKS, y.size // BLOCK_MIN)
@@ -285,12 +295,53 @@ def sums(records) -> Sums:
         n0, n1, s0, s1 = _sides(y, float(bn.sum()), float(b1.sum()), float(b2.sum()))
         side_n, side_s = side_n + (n0, n1), side_s + (s0, s1)
         gaps.append((y.size, *_nan_runs(y)))
+        narrow_wide.append(impact_ratios(y))
         if b >= 4 and (bn > 1).all():
             means.append(b1 / bn)
             variances.append(b2 / bn - (b1 / bn) ** 2)
             owners.append(np.full(b, i))
     stack = (lambda parts: np.concatenate(parts) if parts else np.empty(0))
-    return Sums(count, stack(means), stack(variances), stack(owners), side_n, side_s, float(off), tuple(gaps))
+    narrow, wide = (stack([part[k] for part in narrow_wide]) for k in (0, 1))
+    return Sums(count, stack(means), stack(variances), stack(owners), side_n, side_s, float(off), tuple(gaps), narrow, wide)
+
+
+def impact_ratios(y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(narrow, wide)``: at each zero crossing of ``y`` about its median (an impact, eq. 6)
+    at least as fast as the record's median crossing, ``log(v_after / v_before)`` with the
+    velocities read as differences over one sample (``narrow``) and over :data:`IMPACT_WIDE`
+    samples (``wide``) on each side of the crossing; crossings whose windows touch a NaN, or
+    whose ratio is not positive, are left out.
+
+    Unfiltered, the velocity jumps within the crossing's sample step, so the one-sample ratio
+    holds the whole jump (about ``ln e``) and the wide one, over which the restoring term (eq.
+    4) speeds the block up before the impact and slows it after, a little less; a low-pass
+    filter after the block spreads the jump over several samples, so the one-sample ratio
+    holds less of it than the wide one (:func:`impact_sharpness`).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.arange(40.0)
+    >>> y = np.where(t < 20, 19.5 - t, 0.8 * (19.5 - t))  # a straight fall through zero, the speed cut by 0.8
+    >>> narrow, wide = impact_ratios(np.concatenate([y, -y]))
+    >>> np.round(np.exp(narrow), 3).tolist(), np.round(np.exp(wide), 3).tolist()
+    ([0.8, 0.8], [0.8, 0.8])
+    """
+    y = np.asarray(y, dtype=np.float64)
+    w = IMPACT_WIDE
+    if np.count_nonzero(np.isfinite(y)) < 2 * w + 3:
+        return np.empty(0), np.empty(0)
+    d = y - np.nanmedian(y)
+    n = np.flatnonzero(d[:-1] * d[1:] < 0.0)
+    n = n[(n >= w) & (n + 1 + w < y.size)]
+    before = y[n] - y[n - 1]
+    fast = np.abs(before) >= np.nanmedian(np.abs(before)) if n.size else np.zeros(0, dtype=bool)
+    n, before = n[fast], before[fast]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        narrow = (y[n + 2] - y[n + 1]) / before
+        wide = (y[n + 1 + w] - y[n + 1]) / (y[n] - y[n - w])
+        keep = (narrow > 0.0) & (wide > 0.0)  # NaN compares False
+        return np.log(narrow[keep]), np.log(wide[keep])
 
 
 def _nan_runs(y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -419,7 +470,19 @@ def segments(s: Sums, analysis) -> float:
     return (positions - lost) / positions if positions else np.nan
 
 
+def impact_sharpness(s: Sums, analysis) -> float:
+    """How much more of the impacts' velocity jump a one-sample reading holds than a wide one
+    (:func:`impact_ratios`): the median of the narrow log ratios less the median of the wide
+    ones, over every record's fast zero crossings. Negative on unfiltered records (the jump is
+    sharp); a low-pass filter after the block spreads it over several samples and makes it
+    larger, towards or beyond zero. NaN without crossings."""
+    if s.impact_narrow.size == 0:
+        return np.nan
+    return float(np.median(s.impact_narrow) - np.median(s.impact_wide))
+
+
 def sampling(s: Sums, analysis) -> float:
+
     """Samples per cycle at amplitude ``sigma_Y`` (eq. 5)."""
     return float(analysis.points_per_cycle)
 
@@ -479,6 +542,12 @@ REGISTRY = (
           "the response is asymmetric: the block falls back with a different g on each side (|g+ - g-|/(g+ + g-) "
           "{value:.3f}, calibrated limit {threshold:.3f}); it may lean on one side or the load push one way, and the "
           "model assumes a symmetric block", "root", "widest"),
+    Check("filtered", "a low-pass filter after the block", impact_sharpness, "high",
+          "the impacts' velocity jumps are spread over several samples: read over one sample they hold {value:+.3f} more "
+          "of the jump's logarithm than read over " + str(IMPACT_WIDE) + ", where unfiltered records of this model reach "
+          "{threshold:+.3f}; a low-pass filter after the block (a logger's anti-alias filter, a sensor's bandwidth, "
+          "smoothing) rounds the impacts and moves e: declare it (`sensor_filter`, with `load` and `sensor_noise`) or "
+          "give the record as the sensor sampled it"),
     Check("few_triggers", "gaps (NaN) that cost triggers", segments, "low",
           "gaps (NaN) leave {value:.0%} of the record's trigger positions a whole segment (below {threshold:.0%}): the "
           "record gives that share of the triggers of the calibration's records, which have no gaps, so its interval is "

@@ -104,26 +104,23 @@ record's impact level, which a lean moves away from the record's mean.
 A filter after the block. A low-pass filter between the block and the record (a logger's
 anti-alias filter, a sensor's bandwidth, an analyst's smoothing) rounds what the block itself
 cannot round: the acceleration steps at every zero crossing (the sign of the restoring term,
-eq. 4) and the velocity jumps at every impact (eq. 6), so the spectrum of an unfiltered
-record's second differences falls no faster than ``f^-2`` above a few rocking frequencies,
-whatever the load's colour (a low-pass load takes away its own fast part, not the steps and
-jumps): flat under a white load, near ``f^-2`` under a slow one, rising under sensor noise.
-A filter makes it fall faster beyond its corner. :func:`rolloff` reads the log-log slope of
-the Welch spectrum of the second differences over the octaves :data:`ROLLOFF_BANDS` (rocking
-frequencies, those below :data:`ROLLOFF_TOP` of the samples per cycle), its standard error by
-the delete-one-group jackknife over the Welch segments, and the steepest band's standard
-errors below :data:`ROLLOFF_FLOOR`; :data:`ROLLOFF_Z` of them show a filter (its rate on
-unfiltered records: ``benchmarks/filter_study.py``). Sensor noise added after the filter
+eq. 4) and the velocity jumps at every impact (eq. 6). The spectrum of the second
+differences then falls faster above the filter's corner than the record's own load, noise
+and impacts let it. How fast an unfiltered record falls is not one number: flat under a white
+load, rising under sensor noise, and under a low-pass load near and, at high ``e`` (small
+impacts), somewhat beyond ``f^-2``. So two checks read it. Here, before any calibration,
+:func:`rolloff` reads the log-log slope of the Welch spectrum of the second differences over
+the octaves :data:`ROLLOFF_BANDS` (rocking frequencies, those below
+:data:`ROLLOFF_TOP` of the samples per cycle), its standard error
+by the delete-one-group jackknife over the Welch segments, and the steepest band's standard
+errors below :data:`ROLLOFF_FLOOR`, a slope no unfiltered record reaches: :data:`ROLLOFF_Z` of
+them show a steep filter (Butterworth of order 2 and up above its corner) without the cost of
+a calibration. A gentle filter (a first-order RC stage) adds at most ``f^-2`` and its record
+is read as a low-pass load of about its corner; the check ``filtered`` of
+:mod:`rockdec.record.diagnostics` compares the record's steepest band with the calibration's
+records, which share its load, noise and ``e`` and have no filter. Both rates on unfiltered
+and filtered records: ``benchmarks/filter_study.py``. Sensor noise added after the filter
 lifts the spectrum where it dominates and can hide a filter there.
-
-A gentle causal filter (a first-order RC stage) on a record under a white load adds at most
-``f^-2`` and so stays above the floor; but it runs the second differences through a
-first-order recursion, which the fit of the load reads as a low-pass load of about its corner.
-Such a load, unfiltered, leaves the steps and impacts sharp, so its spectrum falls no faster
-than the load's own, ``1/|1 - alpha exp(-2 pi i f)|^2`` (:func:`pole_slope`), and flattens
-above it; a filter makes everything fall with it. :meth:`Rolloff.beyond_pole` reads by how
-much the record falls faster than the load it is read as: more than :data:`POLE_MARGIN`
-and :data:`ROLLOFF_Z` errors shows a filter.
 
 Standard errors. The records are cut into :data:`JACKKNIFE_BLOCKS` consecutive blocks; every
 quantity is a function of sums over triples and pairs, which add over blocks, so each
@@ -215,7 +212,7 @@ MIN_TRIPLES = 1000
 MAX_POLE = 1.0 - 1e-4
 
 
-#: Octaves of the roll-off check (:func:`rolloff`), in rocking frequencies ``1/T(sigma_Y)``
+#: Octaves of the roll-off of the second differences' spectrum (:func:`rolloff`), in rocking frequencies ``1/T(sigma_Y)``
 #: (eq. 5): above the block's own resonance, up to where a filter that moves ``e`` sits (a
 #: zero-phase Butterworth at 20 rocking frequencies still does: ``benchmarks/filter_study.py``).
 ROLLOFF_BANDS = ((5.0, 10.0), (7.0, 14.0), (10.0, 20.0), (14.0, 28.0))
@@ -224,28 +221,86 @@ ROLLOFF_BANDS = ((5.0, 10.0), (7.0, 14.0), (10.0, 20.0), (14.0, 28.0))
 #: (0.9 of the Nyquist frequency), short of where the window's leakage from beyond it counts.
 ROLLOFF_TOP = 0.45
 
-#: Steepest log-log slope of the second differences' spectrum of an unfiltered record
-#: (module docstring, "A filter after the block": the steps at the zero crossings).
-ROLLOFF_FLOOR = -2.0
+#: Longest Welch segment of the roll-off (samples) and fewest Welch bins in a band.
+ROLLOFF_SEGMENT, ROLLOFF_MIN_BINS = 1024, 4
+
+#: A log-log slope of the second differences' spectrum that no unfiltered record reaches
+#: (module docstring, "A filter after the block"; the steepest unfiltered records, at high
+#: ``e`` under a low-pass load: ``benchmarks/filter_study.py``): a first-order filter adds
+#: ``f^-2`` at most, so below it a filter of order two or more shows.
+ROLLOFF_FLOOR = -3.0
 
 #: Standard errors below :data:`ROLLOFF_FLOOR` at which the steepest band shows a filter;
 #: evidence: its false alarms on unfiltered records, ``benchmarks/filter_study.py``.
 ROLLOFF_Z = 3.0
 
-#: The bands of :data:`ROLLOFF_BANDS` in which a record is compared with the low-pass load it
-#: is read as (:meth:`Rolloff.beyond_pole`): not the top one, where the sampled steps of an
-#: unfiltered low-pass record fall faster than the load's flattening spectrum (false alarms
-#: there: ``benchmarks/filter_study.py``).
-POLE_BANDS = ROLLOFF_BANDS[:3]
+#: Jackknife groups of Welch segments of :func:`rolloff`.
+ROLLOFF_GROUPS = 10
 
-#: Slope (log-log) by which a record read as a low-pass load must fall faster than that
-#: load's own spectrum to show a filter (:meth:`Rolloff.beyond_pole`); evidence: its false
-#: alarms on unfiltered low-pass records, ``benchmarks/filter_study.py``.
-POLE_MARGIN = 0.3
 
-#: Longest Welch segment of the roll-off check (samples), fewest Welch bins in a band, and
-#: jackknife groups of Welch segments.
-ROLLOFF_SEGMENT, ROLLOFF_MIN_BINS, ROLLOFF_GROUPS = 1024, 4, 10
+def second_difference_spectra(records) -> tuple[np.ndarray, np.ndarray]:
+    """``(frequency, spectra)``: the Hann-windowed periodograms ``(segment, frequency)`` of the
+    second differences of ``records`` (1-D arrays, NaN allowed) in segments overlapping by
+    half (:func:`scipy.signal.spectrogram`), each of :data:`ROLLOFF_SEGMENT` samples or, for
+    shorter records, the power of two at or below an eighth of the longest (at least 16);
+    frequency in cycles per sample. Segments touching a NaN are left out; records shorter
+    than a segment give none, and none is made when the longest has fewer than 66 samples.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> walk = np.cumsum(np.cumsum(np.random.default_rng(1).standard_normal(20_000)))
+    >>> frequency, spectra = second_difference_spectra([walk])
+    >>> spectra.shape, float(frequency[-1])
+    ((38, 513), 0.5)
+    """
+    from scipy import signal
+
+    records = [np.asarray(y, dtype=np.float64).ravel() for y in records]
+    longest = max((y.size - 2 for y in records), default=0)
+    if longest < 64:
+        return np.empty(0), np.empty((0, 0))
+    size = int(min(ROLLOFF_SEGMENT, 2 ** int(math.log2(longest / 8)) if longest >= 128 else 16))
+    frequency, spectra = np.empty(0), []
+    for y in records:
+        d = np.diff(y, 2)
+        if d.size < size:
+            continue
+        frequency, _, s = signal.spectrogram(np.nan_to_num(d), nperseg=size, noverlap=size // 2, detrend="constant")
+        bad = signal.spectrogram(np.isnan(d).astype(float), nperseg=size, noverlap=size // 2, detrend=False)[2].any(axis=0)
+        spectra.append(s[:, ~bad].T)
+    return (frequency, np.concatenate(spectra)) if spectra else (np.empty(0), np.empty((0, 0)))
+
+
+def band_slopes(frequency: np.ndarray, power: np.ndarray, points_per_cycle: float) -> tuple[tuple, np.ndarray]:
+    """``(bands, slopes)``: the least-squares slope of ``log power`` against ``log frequency``
+    over each band of :data:`ROLLOFF_BANDS` that can be read at ``points_per_cycle`` samples
+    per rocking cycle (below :data:`ROLLOFF_TOP` of them, with at least
+    :data:`ROLLOFF_MIN_BINS` bins), for each row of ``power`` (``(..., frequency)``, slopes
+    ``(..., band)``; NaN where a bin's power is not positive).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> f = np.linspace(0.0, 0.5, 513)
+    >>> bands, slopes = band_slopes(f, np.where(f > 0, f, 1.0) ** -3.0, 75.0)
+    >>> bands[0], np.round(slopes, 6).tolist()
+    ((5.0, 10.0), [-3.0, -3.0, -3.0, -3.0])
+    """
+    power = np.asarray(power, dtype=float)
+    bands, slopes = [], []
+    rocking = np.asarray(frequency, dtype=float) * points_per_cycle
+    for lo, hi in ROLLOFF_BANDS if points_per_cycle > 0.0 else ():
+        pick = (rocking >= lo) & (rocking <= hi)
+        if hi > ROLLOFF_TOP * points_per_cycle or pick.sum() < ROLLOFF_MIN_BINS:
+            continue
+        x = np.log(rocking[pick])
+        x = x - x.mean()
+        with np.errstate(divide="ignore", invalid="ignore"):
+            y = np.log(np.where(power[..., pick] > 0.0, power[..., pick], np.nan))
+        bands.append((lo, hi))
+        slopes.append(((y - y.mean(axis=-1, keepdims=True)) * x).sum(axis=-1) / (x * x).sum())
+    return tuple(bands), (np.stack(slopes, axis=-1) if slopes else np.empty(power.shape[:-1] + (0,)))
 
 
 @dataclass(frozen=True)
@@ -264,68 +319,11 @@ class Rolloff:
     bands: tuple = ()
     points_per_cycle: float = math.nan
 
-    def beyond_pole(self, pole: float) -> tuple[Quantity, tuple]:
-        """How much faster than a low-pass load of pole ``pole`` per sample the records fall
-        (module docstring): of the bands of :data:`POLE_BANDS` read, the one whose slope lies
-        most errors below :func:`pole_slope`, as ``(slope - pole_slope, band)``; ``(NaN, ())``
-        when none was read."""
-        rows = [(s, e, band) for s, e, band in zip(self.slopes, self.errors, self.bands) if band in POLE_BANDS]
-        gaps = [Quantity(s - pole_slope(pole, band, self.points_per_cycle), e) for s, e, band in rows]
-        if not gaps:
-            return Quantity(math.nan, math.nan), ()
-        k = min(range(len(gaps)), key=lambda i: gaps[i].z if math.isfinite(gaps[i].value) else math.inf)
-        return gaps[k], rows[k][2]
-
-    def filtered_beyond(self, pole: float) -> bool:
-        """A filter shows against a low-pass load of pole ``pole``: the records fall faster
-        than its spectrum by more than :data:`POLE_MARGIN` and :data:`ROLLOFF_Z` errors."""
-        gap, _ = self.beyond_pole(pole)
-        return gap.value < -POLE_MARGIN and gap.z < -ROLLOFF_Z
-
-
     @property
     def filtered(self) -> bool:
         """A filter after the block shows: the steepest band lies more than :data:`ROLLOFF_Z`
         standard errors below :data:`ROLLOFF_FLOOR`."""
         return self.z < -ROLLOFF_Z
-
-
-def pole_slope(pole: float, band, points_per_cycle: float) -> float:
-    """Log-log slope over ``band`` (rocking frequencies, at ``points_per_cycle`` samples per
-    cycle) of the spectrum ``1/|1 - alpha exp(-2 pi i f)|^2`` of a first-order low-pass load of
-    pole ``alpha`` (:mod:`rockdec.physics.loading`), fitted as :func:`rolloff` fits (0 for a
-    pole outside ``(0, 1)``, a white load).
-
-    Examples
-    --------
-    >>> round(pole_slope(0.0, (5, 10), 75.0), 6), pole_slope(0.9, (5, 10), 75.0) < -1.5
-    (0.0, True)
-    """
-    if not 0.0 < pole < 1.0:
-        return 0.0
-    f = np.linspace(band[0], band[1], 64) / points_per_cycle
-    power = 1.0 / np.abs(1.0 - pole * np.exp(-2j * math.pi * f)) ** 2
-    return float(np.polyfit(np.log(f), np.log(power), 1)[0])
-
-
-def _segment_spectra(records, size: int) -> tuple[np.ndarray, np.ndarray]:
-    """``(frequency, spectra)``: the Hann-windowed periodograms ``(segments, frequency)`` of the
-    second differences of ``records`` in segments of ``size`` samples overlapping by half
-    (:func:`scipy.signal.spectrogram`); frequency in cycles per sample, segments touching a
-    NaN left out."""
-    from scipy import signal
-
-    spectra = []
-    for y in records:
-        d = np.diff(y, 2)
-        if d.size < size:
-            continue
-        frequency, _, s = signal.spectrogram(np.nan_to_num(d), nperseg=size, noverlap=size // 2, detrend="constant")
-        bad = signal.spectrogram(np.isnan(d).astype(float), nperseg=size, noverlap=size // 2, detrend=False)[2].any(axis=0)
-        spectra.append(s[:, ~bad].T)
-    if not spectra:
-        return np.empty(0), np.empty((0, 0))
-    return frequency, np.concatenate(spectra)
 
 
 def rolloff(records, points_per_cycle: float) -> Rolloff | None:
@@ -343,35 +341,18 @@ def rolloff(records, points_per_cycle: float) -> Rolloff | None:
     """
     if isinstance(records, np.ndarray) and records.ndim == 1:
         records = [records]
-    records = [np.asarray(y, dtype=np.float64).ravel() for y in records]
-    longest = max((y.size - 2 for y in records), default=0)
-    if not (points_per_cycle > 0.0) or longest < 64:
-        return None
-    size = int(min(ROLLOFF_SEGMENT, 2 ** int(math.log2(longest / 8)) if longest >= 128 else 16))
-    frequency, spectra = _segment_spectra(records, size)
-    if spectra.shape[0] < 2:
-        return None
-    rocking = frequency * points_per_cycle
-    bands = [(lo, hi) for lo, hi in ROLLOFF_BANDS if hi <= ROLLOFF_TOP * points_per_cycle]
-    picks = [(rocking >= lo) & (rocking <= hi) for lo, hi in bands]
-    bands = [band for band, pick in zip(bands, picks) if pick.sum() >= ROLLOFF_MIN_BINS]
-    picks = [pick for pick in picks if pick.sum() >= ROLLOFF_MIN_BINS]
-    if not bands:
+    frequency, spectra = second_difference_spectra(records)
+    if not (points_per_cycle > 0.0) or spectra.shape[0] < 2:
         return None
     groups = np.array_split(np.arange(spectra.shape[0]), min(ROLLOFF_GROUPS, spectra.shape[0]))
     sums = np.stack([spectra[g].sum(axis=0) for g in groups])
     total = sums.sum(axis=0)
-
-    def slopes(mean):
-        with np.errstate(divide="ignore"):
-            return np.array([np.polyfit(np.log(rocking[p]), np.log(mean[p]), 1)[0] if (mean[p] > 0).all() else math.nan for p in picks])
-
-    whole = slopes(total)
-    reps = np.stack([slopes(total - part) for part in sums])
-    se = np.array([_jackknife(whole[b], reps[:, b]).se for b in range(len(bands))])
-    z = np.where(se > 0.0, (whole - ROLLOFF_FLOOR) / np.where(se > 0.0, se, 1.0), np.where(whole < ROLLOFF_FLOOR, -math.inf, math.inf))
+    bands, whole = band_slopes(frequency, total, points_per_cycle)
     if not np.isfinite(whole).any():
         return None
+    _, reps = band_slopes(frequency, total - sums, points_per_cycle)
+    se = np.array([_jackknife(whole[b], reps[:, b]).se for b in range(len(bands))])
+    z = np.where(se > 0.0, (whole - ROLLOFF_FLOOR) / np.where(se > 0.0, se, 1.0), np.where(whole < ROLLOFF_FLOOR, -math.inf, math.inf))
     k = int(np.nanargmin(np.where(np.isfinite(whole), z, np.inf)))
     return Rolloff(Quantity(float(whole[k]), float(se[k])), bands[k], float(z[k]), tuple(float(x) for x in whole),
                    tuple(float(x) for x in se), tuple(bands), float(points_per_cycle))

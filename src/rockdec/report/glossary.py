@@ -35,8 +35,9 @@ GLOSSARY = """glossary:
   sensor filter  a low-pass filter between the block and the record (a logger's
              anti-alias filter, a sensor's bandwidth, a smoothing): declared, the
              calibration filters its records alike; undeclared, the record is checked
-             for one (the roll-off of its second differences) and e declined when it
-             shows one
+             for one (the roll-off of its second differences; the impacts' velocity
+             jumps spread over several samples, check `filtered`) and e declined when
+             it shows one
   triggers   stretches of the record averaged into the signature, in the largest
              trigger window (more: less scatter)
   below / above the calibrated range  the raw value lies beyond what any calibrated e

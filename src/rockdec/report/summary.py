@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 
 from rockdec.rdd import registry
+from rockdec.record.record_measure import ROLLOFF_FLOOR
 
 __all__ = ["beyond_note", "pct", "reads", "text"]
 
@@ -112,10 +113,8 @@ def _measured(report: dict | None) -> list[str]:
     roll = report.get("filter_rolloff")
     lines = [] if roll is None else [
         f"  sensor filter check: the second differences fall as f^{roll['slope']['value']:.2f} (+- {roll['slope']['se']:.2g}) between "
-        f"{roll['band_rocking'][0]:g} and {roll['band_rocking'][1]:g} rocking frequencies, {roll['z']:+.1f} errors from f^-2"
-        + ("" if not roll.get("beyond_load") or roll["beyond_load"]["value"] is None else
-           f", {roll['beyond_load']['value']:+.2f} in slope against the low-pass load it is read as")
-        + f" ({'a filter shows' if roll['detected'] else 'no filter shows'})"
+        f"{roll['band_rocking'][0]:g} and {roll['band_rocking'][1]:g} rocking frequencies, {roll['z']:+.1f} errors from f^{ROLLOFF_FLOOR:g}"
+        f" ({'a steep filter shows' if roll['detected'] else 'no steep filter shows'})"
     ]
     if m is None:
         return lines + ([f"  record model not measured: {report['not_measured']}"] if report.get("not_measured") else [])
