@@ -329,7 +329,9 @@ def cmd_estimate(args) -> None:
                                            ("--sensor-noise", args.sensor_noise != "auto"),
                                            ("--sensor-filter", args.sensor_filter != "auto")) if given]
         if unused:
-            raise UsageError(f"{', '.join(unused)}: the free-rocking test reads g off its arcs and needs no record model; leave them out.")
+            from rockdec.free import NO_RECORD_MODEL
+
+            raise UsageError(f"{', '.join(unused)}: {NO_RECORD_MODEL}; leave them out.")
     else:
         api.estimate_options(g=args.g, load=args.load, sensor_noise=args.sensor_noise, sensor_filter=args.sensor_filter, model=args.model,
                              theta_cr=args.theta_cr, cache=args.cache)  # refused before any record is read

@@ -39,6 +39,7 @@ from pathlib import Path
 import numpy as np
 
 from rockdec import locks, timeaxis
+from rockdec.free import NO_RECORD_MODEL
 from rockdec.validate import InputError
 
 #: The sheet's JSON Schema, a data file of the package: its properties are the sheet's columns.
@@ -241,7 +242,7 @@ def _completed(row: dict, sheet: Path, simulated: Path, fail) -> dict:
     if row["test"] == "free":
         for column, default in (("g", None), ("load", "auto"), ("sensor_noise", "auto")):
             if row.get(column) != default:
-                raise fail(column, "a free-rocking test reads g off its arcs and needs no record model; leave it empty")
+                raise fail(column, f"{NO_RECORD_MODEL}; leave it empty")
     if row["model"] == "housner" and "theta_cr" not in row:
         raise fail("theta_cr", "model housner needs the block's critical angle theta_cr in rad (atan(width/height))")
     if row["model"] != "housner" and "theta_cr" in row:
