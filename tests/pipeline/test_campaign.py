@@ -175,7 +175,7 @@ def test_a_free_rocking_rows_json_is_what_rockdec_estimate_test_free_prints(tmp_
 
 
 def test_a_free_rocking_row_takes_no_record_model(folder):
-    with pytest.raises(SheetError, match="row 1 \\(record 'a'\\), column 'load': a free-rocking test"):
+    with pytest.raises(SheetError, match="row 1 \\(record 'a'\\), column 'load': the free-rocking test reads g off its arcs"):
         campaign.read_sheet(sheet(folder, "record\tpath\ttest\tload", "a\tr1.csv\tfree\twhite"))
 
 
