@@ -63,6 +63,13 @@ BAD = {
     "theta_cr without housner": (["record\tpath\ttheta_cr", "a\tr1.csv\t0.2"], 1, "theta_cr", "set model to housner"),
     "unknown sensor noise": (["record\tpath\tsensor_noise", "a\tr1.csv\tloud"], 1, "sensor_noise", "'loud' is not allowed"),
     "unknown test": (["record\tpath\ttest", "a\tr1.csv\tshake"], 1, "test", "give one of random, free"),
+    "unknown filter": (["record\tpath\tsensor_filter", "a\tr1.csv\tbessel:4:10:causal"], 1, "sensor_filter", "'bessel:4:10:causal' is not allowed"),
+    "filter phase": (["record\tpath\tload\tsensor_noise\tsensor_filter", "a\tr1.csv\twhite\t0\trc:5:sideways"], 1, "sensor_filter",
+                     "the phase 'sideways' is not known"),
+    "filter without its load": (["record\tpath\tsensor_filter", "a\tr1.csv\trc:5:causal"], 1, "sensor_filter", "declare load and sensor_noise"),
+    "filters differ in a block": (["record\tpath\tblock\tsensor_filter", "a\tr1.csv\tA\tnone", "b\tr2.csv\tA\tauto"], 2,
+                                  "sensor_filter", "pooled under one"),
+    "free test with a filter": (["record\tpath\ttest\tsensor_filter", "a\tr1.csv\tfree\tnone"], 1, "sensor_filter", "needs no record model"),
     "bad id": (["record\tpath", "1a\tr1.csv"], 1, "record", "'1a' is not allowed"),
     "block options differ": (["record\tpath\tblock\tload", "a\tr1.csv\tA\twhite", "b\tr2.csv\tA\tauto"], 2, "load", "pooled under one load"),
     "simulated without true e": (["record\tdt\tsimulate", "a\t0.8\tseed=1"], 1, "true_e", "needs its true_e"),
@@ -206,6 +213,18 @@ def test_the_plan_names_the_calibration_the_estimate_asks_for(simulated, tmp_pat
     doc, result = campaign.estimate_unit(simulated, opts, tmp_path, rockdec)
     assert doc["calibration"]["file"] == planned["calibration"] and doc["calibration"]["cached"] is True
     assert doc == result.to_dict()
+
+
+def test_a_declared_filter_reaches_the_calibration_the_plan_names(simulated):
+    """The sheet's ``sensor_filter`` is what ``rockdec estimate --sensor-filter`` declares: the
+    calibration the plan asks for filters its records alike (the filter in its record model)."""
+    from rockdec.physics.record_model import RecordModel
+
+    row = {**simulated[0], "load": "white", "sensor_noise": "0", "sensor_filter": "butterworth:4:10:zero-phase"}
+    planned = campaign.plan([row], campaign.options(row))
+    found = RecordModel.from_key(planned["settings"]["record_model"]).filter
+    assert planned["error"] is None and (found.kind, found.order, found.zero_phase) == ("butterworth", 4, True)
+    assert RecordModel.from_key(campaign.plan(simulated, campaign.options(simulated[0]))["settings"]["record_model"]).filter is None
 
 
 def test_the_simulated_record_has_the_rows_step_and_its_true_e(simulated):

@@ -54,7 +54,7 @@ STEP_RTOL = 1e-6
 STEP_LINES = 2000
 
 #: Options the records of one block must share: their pooled estimate takes one of each.
-BLOCK_OPTIONS = ("load", "sensor_noise", "model", "theta_cr", "g")
+BLOCK_OPTIONS = ("load", "sensor_noise", "sensor_filter", "model", "theta_cr", "g")
 
 #: What the table says of a free-rocking row while rockdec has no free-rocking analysis.
 FREE_UNAVAILABLE = "free-rocking analysis not available"
@@ -201,7 +201,7 @@ def read_sheet(sheet: str | Path, *, simulated: str | Path = "results/simulated"
 
 def _completed(row: dict, sheet: Path, simulated: Path, fail) -> dict:
     """A row with its defaults, its path resolved and its step known (:func:`read_sheet`)."""
-    from rockdec.physics.record_model import parse_sensor_noise
+    from rockdec.physics.record_model import parse_sensor_filter, parse_sensor_noise
 
     props = schema()["properties"]
     row = {**{k: p["default"] for k, p in props.items() if "default" in p}, **row}
@@ -240,7 +240,7 @@ def _completed(row: dict, sheet: Path, simulated: Path, fail) -> dict:
     row["dt"] = float(given)
     row.pop("fs", None)
     if row["test"] == "free":
-        for column, default in (("g", None), ("load", "auto"), ("sensor_noise", "auto")):
+        for column, default in (("g", None), ("load", "auto"), ("sensor_noise", "auto"), ("sensor_filter", "auto")):
             if row.get(column) != default:
                 raise fail(column, f"{NO_RECORD_MODEL}; leave it empty")
     if row["model"] == "housner" and "theta_cr" not in row:
@@ -255,6 +255,13 @@ def _completed(row: dict, sheet: Path, simulated: Path, fail) -> dict:
         parse_sensor_noise(row["sensor_noise"])
     except InputError as exc:
         raise fail("sensor_noise", str(exc).rstrip(".")) from None
+    try:
+        found = parse_sensor_filter(row["sensor_filter"])
+    except InputError as exc:
+        raise fail("sensor_filter", str(exc).rstrip(".")) from None
+    if not isinstance(found, str | None) and "auto" in (row["load"], row["sensor_noise"]):
+        raise fail("sensor_filter", "a declared filter smooths what the load's colour and the sensor noise are measured from; "
+                   "declare load and sensor_noise beside it (load white with sensor_noise 0 is the paper's model)")
     return row
 
 
@@ -375,7 +382,7 @@ def units(rows: list[dict]) -> dict[str, list[dict]]:
 
 def options(row: dict) -> dict:
     """The estimate options of a row (those of ``rockdec estimate``), as its job's params."""
-    return {key: row.get(key) for key in ("load", "sensor_noise", "model", "theta_cr", "g")}
+    return {key: row.get(key) for key in ("load", "sensor_noise", "sensor_filter", "model", "theta_cr", "g")}
 
 
 def read(rows: list[dict]):
@@ -416,7 +423,7 @@ def estimate(rows: list[dict], opts: dict, cache, api):
     Raises :class:`rockdec.validate.InputError` for records the estimate refuses.
     """
     return api.estimate(_theta(rows, api), g=opts.get("g"), load=opts["load"], sensor_noise=opts["sensor_noise"],
-                        model=opts["model"], theta_cr=opts.get("theta_cr"), cache=cache)
+                        sensor_filter=opts["sensor_filter"], model=opts["model"], theta_cr=opts.get("theta_cr"), cache=cache)
 
 
 def _theta(rows: list[dict], api) -> list:
@@ -432,10 +439,12 @@ def _theta(rows: list[dict], api) -> list:
 def declared(opts: dict) -> dict:
     """The declared parts of the record model under ``opts`` as the estimate's stages take
     them, and as the public estimate passes them on
-    (:func:`rockdec.physics.record_model.declared_load`, :func:`~rockdec.physics.record_model.parse_sensor_noise`)."""
-    from rockdec.physics.record_model import declared_load, parse_sensor_noise
+    (:func:`rockdec.physics.record_model.declared_load`, :func:`~rockdec.physics.record_model.parse_sensor_noise`,
+    :func:`~rockdec.physics.record_model.parse_sensor_filter`)."""
+    from rockdec.physics.record_model import declared_load, parse_sensor_filter, parse_sensor_noise
 
-    return {"load": declared_load(opts["load"]), "sensor": parse_sensor_noise(opts["sensor_noise"])}
+    return {"load": declared_load(opts["load"]), "sensor": parse_sensor_noise(opts["sensor_noise"]),
+            "sensor_filter": parse_sensor_filter(opts["sensor_filter"])}
 
 
 def calibration_request(records, opts: dict) -> dict | None:
