@@ -111,9 +111,11 @@ def outcome(doc: dict) -> str:
     return "covered" if low <= E_TRUE <= high else "miss"
 
 
-def study_filters(n: int, n_declared: int, cache: Path, out, kinds=KINDS) -> None:
+def study_filters(n: int, n_declared: int, cache: Path, out, kinds=KINDS, noise: float = 0.0) -> None:
+    """``noise``: sensor noise added after the filter, in units of the filtered record's rms
+    (declared as such when the filter is)."""
     base = records(n)
-    out.write("## Filtered records, e = 0.85\n\n| filter | corner (x rocking f) | phase | undeclared: covered / declined / confident miss "
+    out.write(f"## Filtered records, e = 0.85, sensor noise {noise:.0%} after the filter\n\n"| filter | corner (x rocking f) | phase | undeclared: covered / declined / confident miss "
               "| declared: covered / declined / miss | misses (e, interval) |\n|---|---|---|---|---|---|\n")
     out.flush()
     for kind, order in kinds:
@@ -125,12 +127,14 @@ def study_filters(n: int, n_declared: int, cache: Path, out, kinds=KINDS) -> Non
                 missed = []
                 for i, (y, dt, _) in enumerate(base):
                     z, text = filtered(y, dt, kind, order, corner, zero)
+                    if noise:
+                        z = z + noise * float(np.std(z)) * np.random.default_rng(i).standard_normal(z.size)
                     doc = rockdec.estimate(z, dt, cache=cache).to_dict()
                     counts[outcome(doc)] += 1
                     if outcome(doc) == "miss":
                         missed.append(f"{doc['e']:.3f} [{doc['interval'][0]:.3f}, {doc['interval'][1]:.3f}]")
                     if i < n_declared:
-                        doc = rockdec.estimate(z, dt, cache=cache, sensor_filter=text, load="white", sensor_noise=0).to_dict()
+                        doc = rockdec.estimate(z, dt, cache=cache, sensor_filter=text, load="white", sensor_noise=f"{noise:.6%}").to_dict()
                         declared[outcome(doc)] += 1
                 name = f"Butterworth {order}" if kind == "butterworth" else "RC"
                 out.write(
@@ -218,6 +222,7 @@ def main(argv=None) -> int:
     parser.add_argument("--out", default="filter_study.md", help="markdown file written")
     parser.add_argument("--part", choices=("all", "filters", "alarms"), default="all")
     parser.add_argument("--kinds", choices=("all", "rc", "butterworth"), default="all", help="filter kinds of the filters part")
+    parser.add_argument("--noise", type=float, default=0.0, help="sensor noise added after the filter (share of the record's rms)")
     args = parser.parse_args(argv)
     with open(args.out, "w") as out:
         out.write(f"# Filter study (benchmarks/filter_study.py, rockdec {rockdec.__version__})\n\n")
@@ -225,7 +230,7 @@ def main(argv=None) -> int:
             study_false_alarms(args.seeds, Path(args.cache), out)
         if args.part in ("all", "filters"):
             kinds = [k for k in KINDS if args.kinds in ("all", k[0])]
-            study_filters(args.records, args.declared, Path(args.cache), out, kinds)
+            study_filters(args.records, args.declared, Path(args.cache), out, kinds, args.noise)
     return 0
 
 

@@ -37,7 +37,8 @@ noise of the record's model as the calibration simulates it: each is a ratio, a 
 a share, and none grows with the noise level (the calibration simulates the noise on bins
 10 % wide). One compiled pass over each record (:func:`sums`) and one quantile of its
 distances off the neighbours' line (:func:`spikes`) give what they read, and the record's
-median, a histogram of levels and two passes over its sides the asymmetry (:func:`_sides`).
+median, a histogram of levels and two passes over its sides the asymmetry (:func:`_sides`);
+the velocities on either side of its zero crossings give ``filtered`` (:func:`impact_ratios`).
 
 Two checks are the exception, their thresholds structural (:class:`Check`'s ``floor``): the
 calibration's records say nothing about them. ``coarse_sampling``: the calibration copies
