@@ -222,10 +222,13 @@ def main(argv=None) -> int:
     parser.add_argument("--out", default="filter_study.md", help="markdown file written")
     parser.add_argument("--part", choices=("all", "filters", "alarms"), default="all")
     parser.add_argument("--kinds", choices=("all", "rc", "butterworth"), default="all", help="filter kinds of the filters part")
+    parser.add_argument("--n-points", type=int, default=N_POINTS, help="samples per record")
     parser.add_argument("--noise", type=float, default=0.0, help="sensor noise added after the filter (share of the record's rms)")
     args = parser.parse_args(argv)
+    global N_POINTS
+    N_POINTS = args.n_points
     with open(args.out, "w") as out:
-        out.write(f"# Filter study (benchmarks/filter_study.py, rockdec {rockdec.__version__})\n\n")
+        out.write(f"# Filter study (benchmarks/filter_study.py, rockdec {rockdec.__version__}, {N_POINTS} samples a record)\n\n")
         if args.part in ("all", "alarms"):
             study_false_alarms(args.seeds, Path(args.cache), out)
         if args.part in ("all", "filters"):
