@@ -115,7 +115,7 @@ def study_filters(n: int, n_declared: int, cache: Path, out, kinds=KINDS, noise:
     """``noise``: sensor noise added after the filter, in units of the filtered record's rms
     (declared as such when the filter is)."""
     base = records(n)
-    out.write(f"## Filtered records, e = 0.85, sensor noise {noise:.0%} after the filter\n\n"| filter | corner (x rocking f) | phase | undeclared: covered / declined / confident miss "
+    out.write(f"## Filtered records, e = 0.85, sensor noise {noise:.0%} after the filter\n\n| filter | corner (x rocking f) | phase | undeclared: covered / declined / confident miss "
               "| declared: covered / declined / miss | misses (e, interval) |\n|---|---|---|---|---|---|\n")
     out.flush()
     for kind, order in kinds:
