@@ -214,6 +214,7 @@ def study_false_alarms(seeds: int, cache: Path, out) -> None:
 
 
 def main(argv=None) -> int:
+    global N_POINTS
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--records", type=int, default=30, help="records per filter configuration (undeclared)")
     parser.add_argument("--declared", type=int, default=10, help="of them, estimated with the filter declared")
@@ -225,7 +226,6 @@ def main(argv=None) -> int:
     parser.add_argument("--n-points", type=int, default=N_POINTS, help="samples per record")
     parser.add_argument("--noise", type=float, default=0.0, help="sensor noise added after the filter (share of the record's rms)")
     args = parser.parse_args(argv)
-    global N_POINTS
     N_POINTS = args.n_points
     with open(args.out, "w") as out:
         out.write(f"# Filter study (benchmarks/filter_study.py, rockdec {rockdec.__version__}, {N_POINTS} samples a record)\n\n")
