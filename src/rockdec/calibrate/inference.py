@@ -1011,7 +1011,7 @@ def _reads(b: belt.Belt, raw: float) -> str:
 #: block that was not declared. Any of them fired declines ``e`` (:func:`decline_unrepaired`),
 #: rather than print an interval beside a warning that the record is broken (evidence:
 #: ``benchmarks/repair_study.py``, ``benchmarks/filter_study.py``, docs/explanation/constants.md).
-DECLINING_CHECKS = ("nonstationary", "drift", "spikes", "asymmetry", "filtered")
+DECLINING_CHECKS = ("filtered", "nonstationary", "drift", "spikes", "asymmetry")
 
 #: Checks that start the high-pass (:mod:`rockdec.record.repair`) when they fire on the
 #: records as given: a drifting zero moves the block means (``drift``), the level the sides
@@ -1033,12 +1033,18 @@ def repair_report(done: repair.Repair | None, dt: float, enabled: bool, why: str
             "repaired": bool(spikes or corner is not None), "why": why}
 
 
+def declining_fired(doc: dict) -> list[str]:
+    """The checks of :data:`DECLINING_CHECKS` that fired in ``doc`` and decline ``e``: all but a
+    ``filtered`` whose records' filter (or its absence) was declared, which only warns."""
+    declared = (doc.get("record_model") or {}).get("sources", {}).get("sensor_filter") == "declared"
+    return [name for name in DECLINING_CHECKS if doc["diagnostics"].get(name, {}).get("fired") and not (name == "filtered" and declared)]
+
+
 def decline_unrepaired(doc: dict) -> dict:
     """``doc`` with ``e`` declined when a check of :data:`DECLINING_CHECKS` fired on the
     records as estimated (after any repair): ``reason`` names the check and its message. A
     ``filtered`` that fired warns only when the records' filter (or its absence) was declared."""
-    declared = (doc.get("record_model") or {}).get("sources", {}).get("sensor_filter") == "declared"
-    fired = [name for name in DECLINING_CHECKS if doc["diagnostics"].get(name, {}).get("fired") and not (name == "filtered" and declared)]
+    fired = declining_fired(doc)
     if doc["e"] is None or not fired:
         return doc
     messages = {code: message for code, message in zip(doc["warning_codes"], doc["warnings"])}
@@ -1066,7 +1072,9 @@ def estimate(
     measures drift, are high-passed and tried again too (a drift of a few ``sigma_Y`` can
     hide the rocking); when that does not help, the first refusal or decline stands. A check of
     :data:`DECLINING_CHECKS` that fires on the records as estimated declines ``e``
-    (:func:`decline_unrepaired`).
+    (:func:`decline_unrepaired`); ``filtered`` (a filter after the block, not declared) fired on
+    the records as given declines ``e`` without the high-pass, which cannot remove a filter
+    and moves the zero crossings off the impacts that the check reads.
 
     The stages of each estimate (:func:`estimate_once`): :func:`analyse` (check and analyse)
     → :func:`choose_model` (measure the record model, or take the declared one; decline when
@@ -1109,7 +1117,10 @@ def estimate(
     failed = doc is None or doc["calibration"]["file"] is None  # refused, or declined before any calibration
     drifting = doc is not None and bool(((doc.get("record_model") or {}).get("measured") or {}).get("detected", {}).get("drift", False))
     fired = [] if failed else [name for name in REPAIRING_CHECKS if doc["diagnostics"].get(name, {}).get("fired")]
-    if not (fired or drifting or doc is None):  # a decline for the load or the instrument is not retried unless drift is measured
+    # a filter after the block is not what a high-pass mends, and the high-pass moves the zero crossings off the impacts
+    # that the check reads: the records as given decide it (its ringing can fire spikes too)
+    filter_shown = not failed and "filtered" in declining_fired(doc)
+    if filter_shown or not (fired or drifting or doc is None):  # a decline for the load or the instrument is not retried unless drift is measured
         return first._replace(document=decline_unrepaired(doc))
     log.info("estimating again after a high-pass well below the rocking frequency (drift)")
     hp = repair.settings(bool(found), True)
