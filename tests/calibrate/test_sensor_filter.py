@@ -234,6 +234,32 @@ def test_a_fired_filter_check_declines_unless_the_filter_was_declared(source, de
     assert not declined or "filtered: the impacts' velocity jumps are spread" in out["reason"]
 
 
+@pytest.mark.parametrize("source", ["measured (none shown)", "declared"])
+def test_a_filter_shown_on_the_records_as_given_is_not_high_passed(monkeypatch, source):
+    """A causal filter rings after each impact and can fire ``spikes`` beside ``filtered``;
+    the high-pass that spikes would start cannot remove a filter and moves the zero crossings
+    off the impacts, so an undeclared filter declines ``e`` on the records as given, its reason
+    first. Declared, ``filtered`` only warns and the repair goes on."""
+    calls = []
+
+    def once(records, *args, **kwargs):
+        calls.append(args[0])
+        doc = {"e": 0.9, "interval": [0.88, 0.92], "coverage": 0.95, "estimator": "e_0", "reason": None,
+               "calibration": {"file": "calibration-x.nc"}, "points_per_cycle": 75.0,
+               "diagnostics": {"filtered": {"fired": True}, "spikes": {"fired": True}}, "warning_codes": ["spikes", "filtered"],
+               "warnings": ["a sample stands far off", "the impacts' velocity jumps are spread"], "repair": {"repaired": bool(calls[1:])},
+               "record_model": {"sources": {"sensor_filter": source}}}
+        return inference.Outcome(doc, None, {})
+
+    monkeypatch.setattr(inference, "estimate_once", once)
+    y = _record(5, n=20_000)
+    out = inference.estimate([Record(y, DT_WHITE, "record")], cache_dir=None).document
+    if source == "declared":
+        assert len(calls) == 2 and out["reason"].startswith("the records show a defect") and "filtered" not in out["reason"]
+    else:
+        assert len(calls) == 1 and out["e"] is None and "(filtered: the impacts' velocity jumps are spread; spikes:" in out["reason"]
+
+
 @pytest.fixture(scope="module")
 def white_record():
     y = _record(29, n=100_000)
