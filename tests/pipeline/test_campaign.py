@@ -157,9 +157,12 @@ def test_a_spectrum_files_path_is_taken_relative_to_the_sheet(folder):
 def test_the_declared_options_are_what_the_estimate_takes():
     from rockdec.physics.record_model import Load
 
-    got = campaign.declared({"load": "lowpass:3", "sensor_noise": "2%"})
+    from rockdec.physics.record_model import SensorFilter
+
+    got = campaign.declared({"load": "lowpass:3", "sensor_noise": "2%", "sensor_filter": "rc:5:causal"})
     assert got["load"] == Load("lowpass", 3.0) and got["sensor"].std == pytest.approx(0.02) and got["sensor"].units == "sigma_y"
-    assert campaign.declared({"load": "auto", "sensor_noise": "auto"}) == {"load": None, "sensor": None}
+    assert got["sensor_filter"] == SensorFilter("rc", 1, 5.0, False)
+    assert campaign.declared({"load": "auto", "sensor_noise": "auto", "sensor_filter": "auto"}) == {"load": None, "sensor": None, "sensor_filter": "auto"}
 
 
 def test_a_free_rocking_row_says_the_analysis_is_not_available_where_rockdec_has_none(folder):
