@@ -73,12 +73,12 @@ def commit_of(product: Path | None) -> str:
     return _git("rev-parse", "HEAD") + dirty
 
 
-def stamp(table: Path, product: Path | None) -> str:
+def stamp(table: Path, product: Path | None, study: str = "") -> str:
     made = dt.datetime.fromtimestamp(table.stat().st_mtime, dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
     commit = commit_of(product)
     return (
         f"*Generated from `{table.relative_to(ROOT)}` (made at commit `{commit[:12]}` on {made}; "
-        f"regenerate: `python docs/refresh_studies.py --run`).*\n\n"
+        f"regenerate: `python docs/refresh_studies.py --run{' ' + study if study else ''}`).*\n\n"
     )
 
 
@@ -152,7 +152,7 @@ def refresh(names: list[str]) -> list[str]:
         table = ROOT / table
         if not table.exists():
             continue
-        text = stamp(table, ROOT / product if product else None) + table.read_text()
+        text = stamp(table, ROOT / product if product else None, name) + table.read_text()
         (OUT / "studies" / f"{name}.md").write_text(text)
         done.append(name)
     for folder, files in FIGURES.items():
