@@ -20,7 +20,7 @@ import numpy as np
 
 from rockdec.cache import default_cache
 from rockdec.calibrate import calibration, inference
-from rockdec.physics.record_model import declared_load, parse_sensor_filter, parse_sensor_noise
+from rockdec.physics.record_model import check_filter_declared_with_model, declared_load, parse_sensor_filter, parse_sensor_noise
 from rockdec.record import records as records_mod
 from rockdec.report.result import RestitutionEstimate
 from rockdec.timeaxis import RecordError, angle_factor
@@ -236,11 +236,7 @@ def estimate_options(*, g=None, load="auto", sensor_noise="auto", sensor_filter=
     if g is not None:
         positive(g, "`g`", "give the restoring acceleration nu^2 theta_cr in rad/s^2, or leave it out")
     declared = {"load": declared_load(load), "sensor": parse_sensor_noise(sensor_noise), "sensor_filter": parse_sensor_filter(sensor_filter)}
-    if not isinstance(declared["sensor_filter"], str | None) and (declared["load"] is None or declared["sensor"] is None):
-        raise InputError(
-            "a declared `sensor_filter` smooths what the load's colour and the sensor noise are measured from; declare "
-            "`load` and `sensor_noise` beside it (`load` white with `sensor_noise` 0 is the paper's model)."
-        )
+    check_filter_declared_with_model(declared["sensor_filter"], declared["load"], declared["sensor"])
     return declared, _cache(cache)
 
 

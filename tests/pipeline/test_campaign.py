@@ -66,7 +66,7 @@ BAD = {
     "unknown filter": (["record\tpath\tsensor_filter", "a\tr1.csv\tbessel:4:10:causal"], 1, "sensor_filter", "'bessel:4:10:causal' is not allowed"),
     "filter phase": (["record\tpath\tload\tsensor_noise\tsensor_filter", "a\tr1.csv\twhite\t0\trc:5:sideways"], 1, "sensor_filter",
                      "the phase 'sideways' is not known"),
-    "filter without its load": (["record\tpath\tsensor_filter", "a\tr1.csv\trc:5:causal"], 1, "sensor_filter", "declare load and sensor_noise"),
+    "filter without its load": (["record\tpath\tsensor_filter", "a\tr1.csv\trc:5:causal"], 1, "sensor_filter", "declare `load` and `sensor_noise` beside it"),
     "filters differ in a block": (["record\tpath\tblock\tsensor_filter", "a\tr1.csv\tA\tnone", "b\tr2.csv\tA\tauto"], 2,
                                   "sensor_filter", "pooled under one"),
     "free test with a filter": (["record\tpath\ttest\tsensor_filter", "a\tr1.csv\tfree\tnone"], 1, "sensor_filter", "needs no record model"),

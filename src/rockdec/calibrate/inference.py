@@ -36,7 +36,7 @@ from rockdec._version import __version__
 from rockdec.calibrate import belt, calibration, consistency
 from rockdec.record import diagnostics, repair
 from rockdec.rdd import measured, registry
-from rockdec.physics.record_model import NO_NOISE, WHITE, Load, RecordModel, SensorFilter, SensorNoise, parse_load
+from rockdec.physics.record_model import NO_NOISE, WHITE, Load, RecordModel, SensorFilter, SensorNoise, check_filter_declared_with_model, parse_load
 from rockdec.record.records import Record, RecordError, distinct, same_step
 from rockdec.record.sameness import same_data
 from rockdec.validate import InputError, json_number
@@ -408,13 +408,6 @@ def colour_decline(model: RecordModel, sources: dict, measurement, points_per_cy
     )
 
 
-_FILTER_HELP = (
-    "a low-pass filter after the block (a logger's anti-alias filter, a sensor's bandwidth, a smoothing) rounds the "
-    "impacts, which moves e; declare it (`sensor_filter` butterworth:ORDER:CORNER:PHASE or rc:CORNER:PHASE) and the "
-    "calibration filters its records alike, or `sensor_filter` none if the records are not filtered"
-)
-
-
 def filter_decline(rolloff) -> str | None:
     """Why ``e`` is declined, before any calibration, for records whose second differences fall
     faster than any unfiltered rocking record's (:attr:`rockdec.record.record_measure.Rolloff.filtered`:
@@ -429,7 +422,7 @@ def filter_decline(rolloff) -> str | None:
     return (
         f"the spectrum of these records' second differences falls as f^{rolloff.slope.value:.1f} (+- {rolloff.slope.se:.2f}) "
         f"between {lo:g} and {hi:g} times the rocking frequency, {-rolloff.z:.0f} errors steeper than the f^{ROLLOFF_FLOOR:g} "
-        f"that no unfiltered rocking record reaches: {_FILTER_HELP}"
+        f"that no unfiltered rocking record reaches: {diagnostics.FILTER_HELP}"
     )
 
 
@@ -670,11 +663,8 @@ def choose_model(
     from rockdec.record.record_measure import rolloff
 
     measuring = model is None and (load is None or sensor is None)
-    if isinstance(sensor_filter, SensorFilter) and measuring:
-        raise InputError(
-            "a declared `sensor_filter` smooths what the load's colour and the sensor noise are measured from; declare "
-            "`load` and `sensor_noise` beside it (`load` white with `sensor_noise` 0 is the paper's model)."
-        )
+    if model is None:
+        check_filter_declared_with_model(sensor_filter, load, sensor)
     filtered = isinstance(sensor_filter, SensorFilter) or (model is not None and model.filter is not None)
     measurement, why_not = measure_model(list(analysed.records), analysed.dt) if model is None and not filtered else (None, "declared")
     checking = model is None and isinstance(sensor_filter, str)

@@ -587,6 +587,29 @@ def parse_sensor_filter(value) -> SensorFilter | str | None:
         raise checks.InputError(f"`sensor_filter` {value!r}: the corner {corner_text} is not a frequency; give it > 0 (rocking frequencies, or Hz as 12hz)")
     return SensorFilter(kind, order, corner, parts[-1] == "zero-phase", units)
 
+
+def check_filter_declared_with_model(sensor_filter, load, sensor) -> None:
+    """Refuse a declared ``sensor_filter`` (a :class:`SensorFilter`) while ``load`` or ``sensor``
+    is left to measure (``None``): the filter smooths what the load's colour and the sensor
+    noise are measured from, so all three are declared together.
+
+    Raises
+    ------
+    rockdec.validate.InputError
+        In one sentence naming the declarations that would help.
+
+    Examples
+    --------
+    >>> check_filter_declared_with_model(parse_sensor_filter("rc:5:causal"), Load(), SensorNoise())  # all declared: fine
+    >>> check_filter_declared_with_model("auto", None, None)  # no filter declared: fine
+    """
+    if isinstance(sensor_filter, SensorFilter) and (load is None or sensor is None):
+        raise checks.InputError(
+            "a declared `sensor_filter` smooths what the load's colour and the sensor noise are measured from; declare "
+            "`load` and `sensor_noise` beside it (`load` white with `sensor_noise` 0 is the paper's model)."
+        )
+
+
 ROCKING_MODELS = ("simplified", "housner")
 """The rocking models a record model states (eq. 4, eq. 2)."""
 

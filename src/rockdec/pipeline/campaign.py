@@ -201,7 +201,7 @@ def read_sheet(sheet: str | Path, *, simulated: str | Path = "results/simulated"
 
 def _completed(row: dict, sheet: Path, simulated: Path, fail) -> dict:
     """A row with its defaults, its path resolved and its step known (:func:`read_sheet`)."""
-    from rockdec.physics.record_model import parse_sensor_filter, parse_sensor_noise
+    from rockdec.physics.record_model import check_filter_declared_with_model, parse_sensor_filter, parse_sensor_noise
 
     props = schema()["properties"]
     row = {**{k: p["default"] for k, p in props.items() if "default" in p}, **row}
@@ -255,13 +255,11 @@ def _completed(row: dict, sheet: Path, simulated: Path, fail) -> dict:
         parse_sensor_noise(row["sensor_noise"])
     except InputError as exc:
         raise fail("sensor_noise", str(exc).rstrip(".")) from None
-    try:
-        found = parse_sensor_filter(row["sensor_filter"])
+    try:  # "auto" is a part left to measure
+        check_filter_declared_with_model(parse_sensor_filter(row["sensor_filter"]), None if row["load"] == "auto" else row["load"],
+                                         None if row["sensor_noise"] == "auto" else row["sensor_noise"])
     except InputError as exc:
         raise fail("sensor_filter", str(exc).rstrip(".")) from None
-    if not isinstance(found, str | None) and "auto" in (row["load"], row["sensor_noise"]):
-        raise fail("sensor_filter", "a declared filter smooths what the load's colour and the sensor noise are measured from; "
-                   "declare load and sensor_noise beside it (load white with sensor_noise 0 is the paper's model)")
     return row
 
 

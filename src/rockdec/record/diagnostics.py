@@ -103,6 +103,16 @@ FLOOR_E = 0.95
 #: velocities (the narrow ones: one sample).
 IMPACT_WIDE = 4
 
+#: What a record that shows a filter after the block should do: the end of ``filtered``'s
+#: message and of the decline before any calibration
+#: (:func:`rockdec.calibrate.inference.filter_decline`).
+FILTER_HELP = (
+    "a low-pass filter after the block (a logger's anti-alias filter, a sensor's bandwidth, a smoothing) rounds the "
+    "impacts, which moves e; declare it (`sensor_filter` butterworth:ORDER:CORNER:PHASE or rc:CORNER:PHASE, with `load` "
+    "and `sensor_noise`) and the calibration filters its records alike, or `sensor_filter` none if the records are not "
+    "filtered"
+)
+
 #: Fewest of the records' trigger positions whose segment holds no NaN (:func:`segments`)
 #: before ``few_triggers`` fires: the calibration's records have none, so gaps costing more
 #: than a tenth of the triggers leave the interval too narrow (docs/method.md §10).
@@ -283,7 +293,6 @@ def sums(records) -> Sums:
     """:class:`Sums` of ``records`` (1-D arrays, NaN allowed): one compiled pass per record
     (:func:`_record_sums`), the quantile of :func:`_spike_ratio`, the sides of
     :func:`asymmetry` (:func:`_sides`) and the runs of NaN (:func:`_nan_runs`)."""
-    records = list(records)
     count, off = 0, np.nan
     side_n, side_s = np.zeros(2), np.zeros(2)
     means, variances, owners, gaps, narrow_wide = [], [], [], [], []
@@ -546,9 +555,7 @@ REGISTRY = (
     Check("filtered", "a low-pass filter after the block", impact_sharpness, "high",
           "the impacts' velocity jumps are spread over several samples: read over one sample they hold {value:+.3f} more "
           "of the jump's logarithm than read over " + str(IMPACT_WIDE) + ", where unfiltered records of this model reach "
-          "{threshold:+.3f}; a low-pass filter after the block (a logger's anti-alias filter, a sensor's bandwidth, "
-          "smoothing) rounds the impacts and moves e: declare it (`sensor_filter`, with `load` and `sensor_noise`) or "
-          "give the record as the sensor sampled it"),
+          "{threshold:+.3f}: " + FILTER_HELP),
     Check("few_triggers", "gaps (NaN) that cost triggers", segments, "low",
           "gaps (NaN) leave {value:.0%} of the record's trigger positions a whole segment (below {threshold:.0%}): the "
           "record gives that share of the triggers of the calibration's records, which have no gaps, so its interval is "
