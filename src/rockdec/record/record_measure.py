@@ -307,17 +307,12 @@ def band_slopes(frequency: np.ndarray, power: np.ndarray, points_per_cycle: floa
 class Rolloff:
     """The roll-off of the records' second differences (:func:`rolloff`): ``slope`` of the
     steepest band (log PSD against log frequency, with its jackknife error), the ``band``
-    (rocking frequencies), ``z`` (its standard errors above :data:`ROLLOFF_FLOOR`; below
-    ``-ROLLOFF_Z``: filtered), the slope of every band read (``slopes``), their errors
-    (``errors``), the ``bands`` and the samples per cycle they were placed at."""
+    (rocking frequencies) and ``z`` (its standard errors above :data:`ROLLOFF_FLOOR`; below
+    ``-ROLLOFF_Z``: filtered)."""
 
     slope: Quantity
     band: tuple
     z: float
-    slopes: tuple
-    errors: tuple = ()
-    bands: tuple = ()
-    points_per_cycle: float = math.nan
 
     @property
     def filtered(self) -> bool:
@@ -354,8 +349,7 @@ def rolloff(records, points_per_cycle: float) -> Rolloff | None:
     se = np.array([_jackknife(whole[b], reps[:, b]).se for b in range(len(bands))])
     z = np.where(se > 0.0, (whole - ROLLOFF_FLOOR) / np.where(se > 0.0, se, 1.0), np.where(whole < ROLLOFF_FLOOR, -math.inf, math.inf))
     k = int(np.nanargmin(np.where(np.isfinite(whole), z, np.inf)))
-    return Rolloff(Quantity(float(whole[k]), float(se[k])), bands[k], float(z[k]), tuple(float(x) for x in whole),
-                   tuple(float(x) for x in se), tuple(bands), float(points_per_cycle))
+    return Rolloff(Quantity(float(whole[k]), float(se[k])), bands[k], float(z[k]))
 
 
 @dataclass(frozen=True)

@@ -11,7 +11,6 @@ from __future__ import annotations
 import math
 
 from rockdec.rdd import registry
-from rockdec.record.record_measure import ROLLOFF_FLOOR
 
 __all__ = ["beyond_note", "pct", "reads", "text"]
 
@@ -109,6 +108,8 @@ def _measured(report: dict | None) -> list[str]:
     """The record model as measured, in words (verbose)."""
     if not report:
         return []
+    from rockdec.record.record_measure import ROLLOFF_FLOOR  # not at the top: it imports numba, which the report needs not
+
     m = report.get("measured")
     roll = report.get("filter_rolloff")
     lines = [] if roll is None else [
