@@ -489,7 +489,7 @@ def tiny_calibration():
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(calibration, "E_GRID", (0.5, 0.65, 0.75, 0.85, 0.92, 0.97))
         mp.setattr(calibration, "SETS_PER_E", 5)
-        mp.setattr(calibration, "SETS_PER_E_MODELLED", 5)
+        mp.setattr(calibration, "SETS_PER_E_CAPPED", 5)
         yield
 
 
@@ -1039,7 +1039,7 @@ ESTIMATE_PROCESS = """
 import json, sys
 from rockdec.calibrate import calibration
 calibration.E_GRID = (0.5, 0.65, 0.75, 0.85, 0.92, 0.97)
-calibration.SETS_PER_E = calibration.SETS_PER_E_MODELLED = 5
+calibration.SETS_PER_E = calibration.SETS_PER_E_CAPPED = 5
 calibration.POLL_S = 0.05  # the waiting process reads the stored file within 0.05 s of its writing, not 1 s
 from rockdec.cli import main
 sys.exit(main(["estimate", sys.argv[1], "--json", "--cache", sys.argv[2]]))

@@ -556,22 +556,20 @@ def test_records_up_to_the_length_cap_keep_their_own_calibration():
     assert calibration.settings_hash(calibration.calibration_settings([20_000_000], 75.0)) == calibration.settings_hash(longer)
 
 
-def test_a_noisy_or_coloured_record_is_calibrated_on_more_sets_than_a_clean_white_one():
-    """sets_per_e: the paper's model SETS_PER_E; sensor noise or a low-pass load
-    SETS_PER_E_MODELLED, more; beyond the length cap SETS_PER_E whatever the model. The
-    number is in the settings, so the two calibrations have names (and seeds) of their own."""
+def test_records_up_to_the_cap_are_calibrated_on_more_sets_than_shortened_ones_whatever_their_model():
+    """sets_per_e: SETS_PER_E for records up to the length cap, whatever their record model;
+    SETS_PER_E_CAPPED, fewer, beyond it. The number is in the settings, so calibrations of
+    the two sizes have names (and seeds) of their own."""
     from rockdec.physics.record_model import RecordModel, SensorNoise
 
-    assert calibration.SETS_PER_E_MODELLED > calibration.SETS_PER_E
+    assert calibration.SETS_PER_E_CAPPED < calibration.SETS_PER_E
     noisy = RecordModel(sensor=SensorNoise(0.03, "sigma_y"))
     coloured = RecordModel(load=Load("lowpass", 3.0))
-    clean = calibration.calibration_settings([200_000], 75.0)
-    assert clean["sets_per_e"] == calibration.SETS_PER_E
-    for model in (noisy, coloured):
+    for model in (calibration.PAPER, noisy, coloured):
         got = calibration.calibration_settings([200_000], 75.0, model=model)
-        assert got["sets_per_e"] == calibration.SETS_PER_E_MODELLED
-        assert calibration.seed_base(got) != calibration.seed_base({**got, "sets_per_e": calibration.SETS_PER_E})
-        assert calibration.calibration_settings([calibration.LENGTH_CAP + 1], 75.0, model=model)["sets_per_e"] == calibration.SETS_PER_E
+        assert got["sets_per_e"] == calibration.SETS_PER_E
+        assert calibration.seed_base(got) != calibration.seed_base({**got, "sets_per_e": calibration.SETS_PER_E_CAPPED})
+        assert calibration.calibration_settings([calibration.LENGTH_CAP + 1], 75.0, model=model)["sets_per_e"] == calibration.SETS_PER_E_CAPPED
 
 
 def test_long_records_are_shortened_in_proportion_and_the_spread_scaled_by_the_root_of_the_ratio():
@@ -625,7 +623,7 @@ def test_the_cost_of_a_long_record_stops_growing_with_its_length():
     assert inference.cost(n, False, False)[0] == pytest.approx(expected, rel=1e-12)
     long = inference.stage_seconds(20_000_000, False, False)
     assert long["calibrating"] == pytest.approx(inference.stage_seconds(40_000_000, True, True)["calibrating"], rel=1e-12)
-    sets = calibration.SETS_PER_E + calibration.PILOT_SETS * 3  # and the white step search's 3 rounds of pilots
+    sets = calibration.SETS_PER_E_CAPPED + calibration.PILOT_SETS * 3  # and the white step search's 3 rounds of pilots
     assert long["calibrating"] == pytest.approx(
         calibration.LENGTH_CAP * len(calibration.E_GRID_LONG) * sets * inference.CALIBRATION_SECONDS / 2, rel=1e-12)
     # against benchmarks/long_record.py on 20 million samples: 77.5 s of CPU with the calibration

@@ -39,7 +39,7 @@ def _record(seed, n=40_000, pole=0.0, dt=DT_WHITE, noise=0.0):
 def small_calibration(monkeypatch):
     monkeypatch.setattr(calibration, "E_GRID", SMALL_GRID)
     monkeypatch.setattr(calibration, "SETS_PER_E", SMALL_SETS)
-    monkeypatch.setattr(calibration, "SETS_PER_E_MODELLED", SMALL_SETS)
+    monkeypatch.setattr(calibration, "SETS_PER_E_CAPPED", SMALL_SETS)
 
 
 def test_binned_model_keeps_noise_and_pole_per_sample_within_half_a_bin():

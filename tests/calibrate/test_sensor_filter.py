@@ -162,7 +162,7 @@ def test_a_declared_part_the_record_contradicts_is_noted_and_a_right_one_is_not(
 def small_calibration(monkeypatch):
     monkeypatch.setattr(calibration, "E_GRID", SMALL_GRID)
     monkeypatch.setattr(calibration, "SETS_PER_E", SMALL_SETS)
-    monkeypatch.setattr(calibration, "SETS_PER_E_MODELLED", SMALL_SETS)
+    monkeypatch.setattr(calibration, "SETS_PER_E_CAPPED", SMALL_SETS)
 
 
 @pytest.mark.hostile("wrong answers", "refused or answered")

@@ -11,10 +11,10 @@ only on ``e`` and one dimensionless step (equivalently the samples per cycle at 
 ``sigma_Y``, eq. 5); a low-pass load adds its pole per sample, sensor noise its level in
 ``sigma_Y``, Housner's model (eq. 2) the ratio ``sigma_Y / theta_cr`` (the record model,
 :func:`binned_model`). So the calibration simulates, for each ``e`` of a grid
-(:data:`E_GRID`), :data:`SETS_PER_E` sets of records (:data:`SETS_PER_E_MODELLED` under
-sensor noise or a coloured load: :func:`sets_per_e`) with the measured records' lengths
-(records of more than :data:`LENGTH_CAP` samples in all: sets of that many samples on the
-denser grid :data:`E_GRID_LONG`, the belt's spread scaled to the records' length:
+(:data:`E_GRID`), :data:`SETS_PER_E` sets of records (:func:`sets_per_e`) with the measured
+records' lengths (records of more than :data:`LENGTH_CAP` samples in all:
+:data:`SETS_PER_E_CAPPED` sets of that many samples on the denser grid
+:data:`E_GRID_LONG`, the belt's spread scaled to the records' length:
 :func:`simulated_lengths`, :func:`spread_scale`), ``g = 1`` and ``sigma_p = 1``
 (scale-free), at the step for which the analysis
 (:func:`rockdec.rdd.measured.analyse`) reads the same samples per cycle off the simulated
@@ -81,13 +81,15 @@ log = logging.getLogger(__name__)
 #: docs/explanation/constants.md.
 E_GRID = (0.4, 0.55, 0.7, 0.8, 0.865, 0.92, 0.95, 0.972, 0.985, 0.995)
 
-#: Simulated record sets per grid point: ``SETS_PER_E`` for records of the paper's model
-#: (white load, no sensor noise), ``SETS_PER_E_MODELLED`` under sensor noise or a coloured
-#: load (:func:`sets_per_e`): the error of a calibration's mean curve is shared by every record
-#: it corrects, and a modelled record needs more sets to keep it small; a clean white record
-#: keeps the cheaper calibration (its cold estimate has the tightest time budget). Evidence:
-#: ``benchmarks/calibration_mean_error.py``, docs/explanation/constants.md.
-SETS_PER_E, SETS_PER_E_MODELLED = 30, 60
+#: Simulated record sets per grid point: ``SETS_PER_E`` for records of at most
+#: :data:`LENGTH_CAP` samples in all, whatever their record model; ``SETS_PER_E_CAPPED`` for a
+#: calibration on shortened records (:func:`simulated_lengths`), whose sets are each as long
+#: as the cap. The belt's spread and mean curve come from these sets, and their error is
+#: shared by every record a calibration serves: the interval's coverage and width scatter
+#: from one calibration to the next by about ``1/sqrt(sets)`` (evidence:
+#: ``benchmarks/calibration_replicates.py``; cold time: ``benchmarks/bench_estimate.py``;
+#: docs/explanation/constants.md).
+SETS_PER_E, SETS_PER_E_CAPPED = 120, 30
 
 #: Records longer than this (samples in all) are calibrated on simulated records of this
 #: many samples in all (:func:`simulated_lengths`), their belt's spread scaled to the
@@ -203,12 +205,16 @@ def binned_model(model: RecordModel, points_per_cycle: float, ppc_bin: float = P
     return dataclasses.replace(model, load=load, sensor=sensor, filter=found)
 
 
-def sets_per_e(model: RecordModel, capped: bool = False) -> int:
-    """Sets per grid point of the calibration of records of ``model``: :data:`SETS_PER_E_MODELLED`
-    under sensor noise, a coloured load or a sensor filter, else :data:`SETS_PER_E`; a calibration on shortened
-    records (``capped``, :func:`simulated_lengths`) always :data:`SETS_PER_E`."""
-    modelled = model.sensor.std > 0.0 or model.load.kind != "white" or model.filter is not None
-    return SETS_PER_E_MODELLED if modelled and not capped else SETS_PER_E
+def sets_per_e(capped: bool = False) -> int:
+    """Sets per grid point of a calibration: :data:`SETS_PER_E`, or :data:`SETS_PER_E_CAPPED`
+    for a calibration on shortened records (``capped``, :func:`simulated_lengths`).
+
+    Examples
+    --------
+    >>> sets_per_e() > sets_per_e(capped=True)
+    True
+    """
+    return SETS_PER_E_CAPPED if capped else SETS_PER_E
 
 
 def calibration_settings(
@@ -241,7 +247,7 @@ def calibration_settings(
         "record_model": binned_model(model, points_per_cycle, ppc_bin).key(),
         "analysis": {k: (list(v) if isinstance(v, tuple) else v) for k, v in {**measured.DEFAULT_SETTINGS, **(settings or {})}.items()},
         "e_grid": list(E_GRID_LONG if capped else E_GRID),
-        "sets_per_e": sets_per_e(model, capped),
+        "sets_per_e": sets_per_e(capped),
         "rockdec_version": __version__,
         "pipeline": pipeline_fingerprint(),
     }

@@ -104,8 +104,7 @@ RECORD_SECONDS, PAIR_SECONDS = 4e-4, 7e-5
 def stage_seconds(samples: int, csv: bool, g_given: bool, cores: int = 2, records: int = 1) -> dict[str, float]:
     """Seconds each stage of :func:`estimate` takes on ``records`` records of ``samples`` in all:
     ``reading`` (a CSV), ``analysing`` (twice with a given ``g``) and ``calibrating``
-    (building the calibration: :data:`rockdec.calibrate.calibration.SETS_PER_E` sets at each
-    ``e`` of its grid, of the records' length up to
+    (building the calibration: :func:`calibration_sets` records, of the records' length up to
     :data:`rockdec.calibrate.calibration.LENGTH_CAP` in all,
     :func:`rockdec.calibrate.calibration.simulated_lengths`, and beyond it the step search's
     pilot sets of that length), from :data:`CSV_SECONDS` and the other constants of the
@@ -123,17 +122,16 @@ def stage_seconds(samples: int, csv: bool, g_given: bool, cores: int = 2, record
 
 def calibration_sets(samples: int) -> int:
     """How many records a calibration for records of ``samples`` in all simulates:
-    :data:`rockdec.calibrate.calibration.SETS_PER_E` at each ``e`` of its grid (the paper's
-    record model; twice as many under sensor noise or a coloured load,
-    :func:`rockdec.calibrate.calibration.sets_per_e`, which is measured after this count is
-    given), and beyond
-    :data:`rockdec.calibrate.calibration.LENGTH_CAP` the step search's pilot sets too (as
-    long as the sets, :func:`rockdec.calibrate.calibration.step_for`) on the longer grid."""
+    :data:`rockdec.calibrate.calibration.SETS_PER_E` at each ``e`` of its grid, and beyond
+    :data:`rockdec.calibrate.calibration.LENGTH_CAP`
+    :data:`rockdec.calibrate.calibration.SETS_PER_E_CAPPED` and the step search's pilot sets
+    (as long as the sets, :func:`rockdec.calibrate.calibration.step_for`) on the longer grid
+    (:func:`rockdec.calibrate.calibration.sets_per_e`)."""
     if sum(calibration.simulated_lengths([samples])) == samples:
         return len(calibration.E_GRID) * calibration.SETS_PER_E
     from rockdec.physics.simulate import STEP_ITERATIONS
 
-    sets = calibration.SETS_PER_E + calibration.PILOT_SETS * STEP_ITERATIONS["white"]
+    sets = calibration.SETS_PER_E_CAPPED + calibration.PILOT_SETS * STEP_ITERATIONS["white"]
     return len(calibration.E_GRID_LONG) * sets
 
 
