@@ -29,7 +29,6 @@ import numpy as np
 from rockdec.calibrate import belt, calibration
 from rockdec.physics.record_model import Load, RecordModel
 from rockdec.rdd import registry
-from rockdec.studies import belt_study
 
 
 def _watch() -> dict:
@@ -71,7 +70,7 @@ def coverage(corner: float, n_points: int, cache: str) -> None:
         cells = []
         for i, e in enumerate(cal["e_true"].values):
             raw = np.asarray(cal["raw"].sel(name=name).values[i])
-            low, high = belt_study.intervals(belts[name], raw)
+            low, high = belt.intervals(belts[name], raw)
             ok = np.isfinite(raw)
             cells.append(f"{e:g}: {np.mean((low[ok] <= e) & (e <= high[ok])):.2f}")
         print(f"{name} per e: " + ", ".join(cells))

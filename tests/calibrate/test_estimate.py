@@ -309,7 +309,7 @@ def test_the_belts_interval_covers_95_percent_at_every_e(skew):
         b = belt.belt(curved_calibration(skew, sets=calibration.SETS_PER_E, seed=seed), "e_v")
         for i, e in enumerate(e_true):
             m, s = known_curves(np.array([e]), "e_v")
-            low, high = belt_study.intervals(b, m + s * standard_draws(rng, 500, skew))
+            low, high = belt.intervals(b, m + s * standard_draws(rng, 500, skew))
             covered[i] += np.mean((low <= e) & (e <= high)) / 8
     assert np.all((covered >= 0.93) & (covered <= 0.97)), covered
 
@@ -350,6 +350,27 @@ def test_held_e_of_many_raw_values_is_each_ones_correction_held_inside_the_range
         inside = b.mean.min() <= raw <= b.mean.max() and b.e[0] < c.low and c.high < b.e[-1]
         assert (got == c.value) if inside else math.isnan(got), (raw, got, c)
     assert np.isfinite(held).sum() > 100 and np.isnan(held).sum() > 20  # both kinds met
+
+
+@pytest.mark.parametrize("bump", [0.0, 3.0])
+def test_intervals_of_many_raw_values_are_the_first_and_last_e_whose_band_holds_each(bump):
+    """belt.intervals finds every interval at once (by bisection when the band's edges rise
+    with e); each is the first and last dense e of the (raw value, e) table of the band,
+    and NaN where no e holds the value. With a bump in the spread the lower edge falls for
+    a while, the band holds some values on two runs of e, and the table is read instead."""
+    b = belt.belt(curved_calibration(False, sets=calibration.SETS_PER_E, seed=4), "e_v")
+    b = b._replace(spread=b.spread * (1.0 + bump * np.exp(-0.5 * ((b.e - 0.8) / 0.01) ** 2)))
+    lower, upper = b.mean + b.q_low * b.spread, b.mean + b.q_high * b.spread
+    assert (np.all(np.diff(lower) >= 0) and np.all(np.diff(upper) >= 0)) == (bump == 0.0)
+    raws = np.r_[np.linspace(lower.min() - 0.05, upper.max() + 0.05, 2001), np.nan, -np.inf, np.inf]
+    low, high = belt.intervals(b, raws)
+    table = (raws[:, None] >= lower) & (raws[:, None] <= upper)
+    held = table.any(axis=1)
+    np.testing.assert_array_equal(np.isfinite(low), held)
+    np.testing.assert_array_equal(low[held], b.e[np.argmax(table[held], axis=1)])
+    np.testing.assert_array_equal(high[held], b.e[b.e.size - 1 - np.argmax(table[held][:, ::-1], axis=1)])
+    if bump:  # some value is held on two runs of e
+        assert (np.diff(table.astype(int), axis=1) == 1).sum(axis=1).max() >= 2
 
 
 def test_the_test_bed_measures_95_percent_on_pools_of_known_curves():
@@ -606,7 +627,7 @@ def test_a_belt_scaled_to_longer_records_has_their_spread_and_covers_them():
         b = belt.belt(cal, "e_v", scale=scale)
         for i, e in enumerate(e_true):
             m, s = known_curves(np.array([e]), "e_v")
-            low, high = belt_study.intervals(b, m + scale * s * rng.standard_normal(300))
+            low, high = belt.intervals(b, m + scale * s * rng.standard_normal(300))
             covered[i] += np.mean((low <= e) & (e <= high)) / 12
     assert np.all(covered[:-1] >= 0.92) and covered[-1] >= 0.90 and np.all(covered <= 0.97), covered
 

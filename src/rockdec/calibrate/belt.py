@@ -264,15 +264,55 @@ def belts(cal: ncread.Stored | xr.Dataset, scale: float = 1.0) -> dict[str, Belt
     return {str(name): belt(cal, str(name), scale=scale) for name in cal["name"].values}
 
 
+def _edges(b: Belt) -> tuple[np.ndarray, np.ndarray]:
+    """The lower and upper edge of the belt's 95 % band at each dense ``e``."""
+    return b.mean + b.q_low * b.spread, b.mean + b.q_high * b.spread
+
+
 def _inside(b: Belt, observed: np.ndarray) -> np.ndarray:
     """``(observation, dense e)``: where the 95 % band of the belt holds each observation."""
-    offset = observed[:, None] - b.mean[None, :]
-    return (offset >= b.q_low * b.spread[None, :]) & (offset <= b.q_high * b.spread[None, :])
+    lower, upper = _edges(b)
+    x = np.asarray(observed, dtype=float)[:, None]
+    return (x >= lower[None, :]) & (x <= upper[None, :])
 
 
-def _ends(b: Belt, inside: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The 95 % interval of each row of :func:`_inside`: its first and last ``e``."""
-    return b.e[np.argmax(inside, axis=1)], b.e[b.e.size - 1 - np.argmax(inside[:, ::-1], axis=1)]
+def _spans(b: Belt, observed: np.ndarray) -> tuple[np.ndarray, np.ndarray, bool]:
+    """The first and last dense ``e`` (indices) whose band holds each observation (first
+    above last where none does, and for NaN), and whether the band's edges both rise with
+    ``e``. Rising edges hold every observation on one run of ``e``, found by bisection
+    without the ``(observation, e)`` table of :func:`_inside`; else that table is read."""
+    lower, upper = _edges(b)
+    observed = np.asarray(observed, dtype=float)
+    rising = bool(np.all(np.diff(lower) >= 0.0) and np.all(np.diff(upper) >= 0.0))
+    if rising:
+        return np.searchsorted(upper, observed, side="left"), np.searchsorted(lower, observed, side="right") - 1, True
+    inside = _inside(b, observed)
+    held = inside.any(axis=1)
+    n = b.e.size
+    return np.where(held, np.argmax(inside, axis=1), n), np.where(held, n - 1 - np.argmax(inside[:, ::-1], axis=1), -1), False
+
+
+def intervals(b: Belt, raws) -> tuple[np.ndarray, np.ndarray]:
+    """The 95 % interval of :func:`correct` for every raw value of ``raws`` (flattened), at
+    once: its low and high ends, NaN where no calibrated ``e`` holds the value or the belt
+    is empty.
+
+    Examples
+    --------
+    >>> e = np.linspace(0.4, 0.99, 60)
+    >>> b = Belt(e, e, np.full(e.size, 0.01), 0.0)
+    >>> low, high = intervals(b, [0.8, 2.0])
+    >>> bool(low[0] < 0.8 < high[0]), bool(np.isnan(low[1]))
+    (True, True)
+    """
+    raws = np.ravel(np.asarray(raws, dtype=float))
+    low, high = np.full(raws.size, np.nan), np.full(raws.size, np.nan)
+    if b.e.size == 0:
+        return low, high
+    first, last, _ = _spans(b, raws)
+    found = first <= last
+    low[found], high[found] = b.e[first[found]], b.e[last[found]]
+    return low, high
 
 
 def width_at(b: Belt, e: float) -> float:
@@ -282,7 +322,7 @@ def width_at(b: Belt, e: float) -> float:
     calibrated range); NaN for an empty belt or a NaN ``e``."""
     if b.e.size == 0 or not np.isfinite(e):
         return float("nan")
-    low, high = _ends(b, _inside(b, np.array([np.interp(e, b.e, b.mean)])))
+    low, high = intervals(b, [np.interp(e, b.e, b.mean)])
     return float(high[0] - low[0])
 
 
@@ -332,12 +372,12 @@ def held_es(b: Belt, raws: np.ndarray) -> np.ndarray:
         on_curve = np.isfinite(raws) & (b.mean.min() <= raws) & (raws <= b.mean.max())  # beyond the mean curve: no estimate (inference.beyond)
     where = np.flatnonzero(on_curve.ravel())
     observed = raws.ravel()[where]
-    inside = _inside(b, observed)
-    low, high = _ends(b, inside)
-    held = inside.any(axis=1) & (b.e[0] < low) & (high < b.e[-1])
+    first, last, rising = _spans(b, observed)
+    held = (first <= last) & (first > 0) & (last < b.e.size - 1)
     flat = out.reshape(-1)
     for i in np.flatnonzero(held):
-        flat[where[i]] = _corrected_value(b, observed[i], np.flatnonzero(inside[i]))[0]
+        idx = np.arange(first[i], last[i] + 1) if rising else np.flatnonzero(_inside(b, observed[i:i + 1])[0])
+        flat[where[i]] = _corrected_value(b, observed[i], idx)[0]
     return out
 
 
@@ -397,8 +437,7 @@ def correct(b: Belt, observed: float) -> Corrected:
         nearest = int(np.argmin(np.abs(observed - b.mean) / b.spread))
         return Corrected(np.nan, np.nan, np.nan, (f"the raw value {observed:.4f} is not produced by any calibrated e (nearest e = {b.e[nearest]:.3f})",))
     idx = np.flatnonzero(inside)
-    low, high = _ends(b, inside[None])
-    low, high = low[0], high[0]
+    low, high = b.e[idx[0]], b.e[idx[-1]]
     if idx[0] == 0 or idx[-1] == b.e.size - 1:
         notes.append(f"the interval reaches the end of the calibrated range [{b.e[0]:.3f}, {b.e[-1]:.3f}]")
     value, on_curve = _corrected_value(b, observed, idx)
@@ -431,8 +470,5 @@ def calibration_coverage(cal: ncread.Stored | xr.Dataset, name: str, b: Belt) ->
         return float("nan")
     raw = cal["raw"].sel(name=name).values  # (e_true, set)
     truth = np.broadcast_to(cal["e_true"].values[:, None], raw.shape).ravel()
-    x = raw.ravel()
-    inside = _inside(b, x)
-    any_inside = inside.any(axis=1) & np.isfinite(x)
-    low, high = _ends(b, inside)
-    return float(np.mean(any_inside & (low <= truth) & (truth <= high)))
+    low, high = intervals(b, raw)
+    return float(np.mean((low <= truth) & (truth <= high)))

@@ -47,18 +47,6 @@ def pool(e_values, sets: int, n_points: int, points_per_cycle: float = 75.0, rep
     )
 
 
-def intervals(b: belt.Belt, raw: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The 95 % interval of :func:`rockdec.calibrate.belt.correct` for every raw value of ``raw``
-    (NaN ends where there is none), vectorised."""
-    raw = np.asarray(raw, dtype=float).ravel()
-    if b.e.size == 0:
-        return np.full(raw.size, np.nan), np.full(raw.size, np.nan)
-    inside = belt._inside(b, raw)
-    low, high = belt._ends(b, inside)
-    found = inside.any(axis=1) & np.isfinite(raw)
-    return np.where(found, low, np.nan), np.where(found, high, np.nan)
-
-
 def coverage(cal: xr.Dataset, test: xr.Dataset, names=registry.CANDIDATES) -> pd.DataFrame:
     """Per true ``e`` of ``test`` and estimator: coverage of the 95 % interval of the belt
     of ``cal`` (:func:`rockdec.calibrate.belt.correct`) over the test sets, and its median width;
@@ -67,7 +55,7 @@ def coverage(cal: xr.Dataset, test: xr.Dataset, names=registry.CANDIDATES) -> pd
     for name in names:
         b = belt.belt(cal, name)
         for e in test["e_true"].values:
-            low, high = intervals(b, test["raw"].sel(name=name, e_true=e).values)
+            low, high = belt.intervals(b, test["raw"].sel(name=name, e_true=e).values)
             rows.append(
                 {
                     "estimator": str(name),
