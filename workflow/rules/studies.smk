@@ -4,6 +4,10 @@
 # rule lists only the drawing code (rockdec.report.figures) and the study's data, so a change to
 # a plot never reruns the study.
 
+import re
+
+from rockdec.pipeline.layout import DIAGNOSTICS_E
+
 
 rule amplitude:
     """Simplified vs Housner model over sigma_Y/theta_cr: where the simplified model's estimates drift."""
@@ -56,19 +60,21 @@ rule amplitude_study:
 
 
 rule diagnostics_records:
-    """Records of known e, clean and with each defect at growing sizes, through `rockdec estimate`'s checks."""
+    """Records of known e (one job per e), clean and with each defect at growing sizes, through `rockdec estimate`'s checks."""
     input:
         code=step_code("diagnostics_records.py"),
     output:
-        "results/studies/diagnostics/records.csv",
+        "results/studies/diagnostics/records_e{e}.csv",
     log:
-        "results/studies/diagnostics/logs/records.log",
+        "results/studies/diagnostics/logs/records_e{e}.log",
     benchmark:
-        "results/studies/diagnostics/benchmarks/records.tsv"
+        "results/studies/diagnostics/benchmarks/records_e{e}.tsv"
+    wildcard_constraints:
+        e="|".join(re.escape(f"{e:g}") for e in DIAGNOSTICS_E),
     threads: 2
     resources:
         mem_mb=4000,
-        runtime=240,
+        runtime=150,
     params:
         cache="results/studies/diagnostics/calibration",
     conda:
@@ -80,7 +86,7 @@ rule diagnostics_records:
 rule diagnostics_table:
     """Per check, e and defect size: the shift of e, false alarms and detections."""
     input:
-        records="results/studies/diagnostics/records.csv",
+        records=expand("results/studies/diagnostics/records_e{e}.csv", e=[f"{e:g}" for e in DIAGNOSTICS_E]),
         code=step_code("diagnostics_table.py"),
     output:
         csv=report("results/studies/diagnostics/table.csv", category="Measured records", caption="../report/diagnostics.rst"),

@@ -1,4 +1,4 @@
-"""Rule `diagnostics_records`: every record of the warnings' study, with its checks."""
+"""Rule `diagnostics_records`: every record of the warnings' study at one true e, with its checks."""
 
 import sys
 
@@ -9,7 +9,7 @@ from rockdec.pipeline import job
 
 def main(smk):
     with engine.session(smk.threads):
-        table = diagnostics_study.run(cache_dir=smk.params.cache)
+        table = diagnostics_study.run(e_values=(float(smk.wildcards.e),), cache_dir=smk.params.cache)
     cost = table.attrs
     print(
         f"checks' statistics {cost['statistics_s']:.1f} s, simulating and analysing {cost['simulate_analyse_s']:.1f} s "

@@ -8,7 +8,8 @@ from rockdec.report import tables
 
 
 def main(smk):
-    tables.write_table(diagnostics_study.summary(pd.read_csv(smk.input.records)), smk.output.csv, smk.output.md)
+    records = pd.concat([pd.read_csv(path) for path in smk.input.records], ignore_index=True)
+    tables.write_table(diagnostics_study.summary(records), smk.output.csv, smk.output.md)
 
 
 if __name__ == "__main__":

@@ -47,6 +47,11 @@ COVERAGE_CASES = {
 """The coverage study's cells (``results/studies/coverage/cells/{case}.nc``): name ->
 (simulator, condition, true ``e``)."""
 
+DIAGNOSTICS_E = (0.6, 0.8, 0.95, 0.98)
+"""True ``e`` of the warnings' study (:mod:`rockdec.studies.diagnostics_study`): one workflow
+job each (``results/studies/diagnostics/records_e{e}.csv``), so that the study, hours long
+on 2 cores, is kept in parts as they finish."""
+
 FIGURE_SERIES = 10
 """Series ``stored_series.nc`` keeps when every series is stored apart: the pooling of fig. 2c."""
 

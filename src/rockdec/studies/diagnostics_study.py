@@ -52,6 +52,7 @@ from rockdec import engine
 from rockdec.rdd import measured
 from rockdec.physics.loading import add_sensor_noise, draw_impulses, series_rng
 from rockdec.physics.simulate import calibrate_dt, integrate
+from rockdec.pipeline.layout import DIAGNOSTICS_E
 from rockdec.record.records import Record
 from rockdec.validate import InputError
 
@@ -63,8 +64,8 @@ STUDY_SEED_OFFSET, PILOT_SEEDS = 5 * 2**60, 9 * 10**8
 #: Samples per cycle at ``sigma_Y`` of the clean records (the paper's sampling).
 POINTS_PER_CYCLE = 75.0
 
-#: True ``e`` of the study.
-E_VALUES = (0.6, 0.8, 0.95, 0.98)
+#: True ``e`` of the study (one workflow job each).
+E_VALUES = DIAGNOSTICS_E
 
 #: Sensor noise of the records, in units of each clean record's rms (white, as the
 #: calibration simulates it once the record's own noise is measured).
@@ -216,10 +217,17 @@ def run(
     are estimated. The result's attributes ``statistics_s`` and ``simulate_analyse_s`` hold
     the seconds spent on the checks' statistics and on simulating and analysing the records
     (their ratio is the checks' share of a calibration's work), ``calibrations`` how many
-    calibrations the records used."""
+    calibrations the records used.
+
+    The records of each ``e`` draw the seeds of its place in :data:`E_VALUES`, so a run of
+    some of them gives the rows a run of all gives them (the workflow runs one ``e`` a job).
+    """
+    unknown = [e for e in e_values if e not in E_VALUES]
+    if unknown:
+        raise ValueError(f"e = {unknown} is not one of the study's values {E_VALUES}: add it to rockdec.pipeline.layout.DIAGNOSTICS_E")
     cells = []
-    for i, e in enumerate(e_values):
-        seeds = STUDY_SEED_OFFSET + i * 10**6 + np.arange(n_records)
+    for e in e_values:
+        seeds = STUDY_SEED_OFFSET + E_VALUES.index(e) * 10**6 + np.arange(n_records)
         for corner in corners:
             for noise in noise_levels if corner == 0.0 else [x for x in noise_levels if x in coloured_noise]:
                 cells.append((e, noise, corner, "clean", 0.0, seeds, n_points, POINTS_PER_CYCLE))
