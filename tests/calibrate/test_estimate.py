@@ -729,3 +729,20 @@ def test_the_up_front_cost_counts_each_pooled_record():
     alone = 600_000 * inference.ANALYSIS_SECONDS  # each record analysed alone for the consistency check
     assert many - one == pytest.approx(299 * sets * inference.RECORD_SECONDS + 300 * 299 / 2 * inference.PAIR_SECONDS + alone)
     assert many > 2 * one
+
+
+def test_the_pipeline_fingerprint_is_read_once_per_process(monkeypatch, tmp_path):
+    """A source file edited while a process runs does not rename the calibrations that process
+    builds with the code it imported; a new process (here: the cache cleared) reads the edit."""
+    source = tmp_path / "module.py"
+    source.write_text("x = 1\n")
+    monkeypatch.setattr(calibration, "package_sources", lambda name: [source])
+    calibration.pipeline_fingerprint.cache_clear()
+    try:
+        first = calibration.pipeline_fingerprint()
+        source.write_text("x = 2\n")
+        assert calibration.pipeline_fingerprint() == first
+        calibration.pipeline_fingerprint.cache_clear()
+        assert calibration.pipeline_fingerprint() != first
+    finally:
+        calibration.pipeline_fingerprint.cache_clear()

@@ -45,6 +45,7 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import errno
+import functools
 import hashlib
 import json
 import logging
@@ -293,11 +294,15 @@ def spread_scale(cal_settings: dict, samples: int) -> float:
     return math.sqrt(sum(cal_settings["lengths"]) / samples)
 
 
+@functools.lru_cache(maxsize=1)
 def pipeline_fingerprint() -> str:
     """SHA-256 (16 hex digits) of the source of every module this one reaches by import
     (:func:`rockdec.sources.package_sources`, the list the workflow's rules declare too): a
     change to the simulator, the models, the signatures, the estimators, the analysis or this
-    module makes every stored calibration stale, whatever the version number says."""
+    module makes every stored calibration stale, whatever the version number says.
+
+    Read once per process: every calibration a process builds or reads is named by the
+    source it runs, not by files edited while it runs (a study of hours keeps its names)."""
     digest = hashlib.sha256()
     for path in package_sources(__name__):
         digest.update(Path(path).read_bytes())
