@@ -10,7 +10,8 @@ checkout's commit) and when, and copies the figures to ``docs/generated/figures/
 pages ``{include}`` those files, so no study number is typed into the prose. A study whose
 results are absent keeps its last generated file. ``--run`` takes the studies to run first
 (``paper``, ``choices``, ``diagnostics``, ``amplitude``, ``tradeoff``, ``coverage``,
-``coverage_fresh``; ``all``); the coverage study takes about an hour on 2 cores.
+``coverage_fresh``; ``all``); the coverage and warnings' studies take hours on 2 cores, in
+jobs per cell or per ``e`` that are kept as they finish (run again to go on).
 """
 
 from __future__ import annotations
