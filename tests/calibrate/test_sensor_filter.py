@@ -260,6 +260,28 @@ def test_a_filter_shown_on_the_records_as_given_is_not_high_passed(monkeypatch, 
         assert len(calls) == 1 and out["e"] is None and "(filtered: the impacts' velocity jumps are spread; spikes:" in out["reason"]
 
 
+def test_a_drifting_record_that_shows_a_filter_is_high_passed_and_read_again(monkeypatch):
+    """A drifting zero moves the zero crossings off the impacts and fires ``filtered`` on
+    unfiltered records (benchmarks/repair_study.py: most drift records were declined for a
+    filter): with ``drift`` fired beside it, the records are high-passed and estimated again,
+    and ``e`` is declined only when a check still fires on the repaired records."""
+    calls = []
+
+    def once(records, *args, **kwargs):
+        calls.append(args[0])
+        fired = {"filtered": {"fired": True}, "drift": {"fired": True}} if len(calls) == 1 else {"filtered": {"fired": False}, "drift": {"fired": False}}
+        doc = {"e": 0.9, "interval": [0.88, 0.92], "coverage": 0.95, "estimator": "e_0", "reason": None,
+               "calibration": {"file": "calibration-x.nc"}, "points_per_cycle": 75.0, "diagnostics": fired,
+               "warning_codes": [], "warnings": [], "repair": {"repaired": len(calls) > 1},
+               "record_model": {"sources": {"sensor_filter": "auto"}}}
+        return inference.Outcome(doc, None, {})
+
+    monkeypatch.setattr(inference, "estimate_once", once)
+    y = _record(5, n=20_000)
+    out = inference.estimate([Record(y, DT_WHITE, "record")], cache_dir=None).document
+    assert len(calls) == 2 and calls[1] is not None and out["e"] == 0.9 and out["repair"]["repaired"]
+
+
 @pytest.fixture(scope="module")
 def white_record():
     y = _record(29, n=100_000)

@@ -1062,7 +1062,10 @@ def estimate(
     :data:`DECLINING_CHECKS` that fires on the records as estimated declines ``e``
     (:func:`decline_unrepaired`); ``filtered`` (a filter after the block, not declared) fired on
     the records as given declines ``e`` without the high-pass, which cannot remove a filter
-    and moves the zero crossings off the impacts that the check reads.
+    and moves the zero crossings off the impacts that the check reads, unless the records
+    drift (the ``drift`` check fired, or the record model measures drift): a drifting zero
+    moves the crossings off the impacts too and fires ``filtered`` on unfiltered records, so
+    those are high-passed and the check is read again on the repaired records.
 
     The stages of each estimate (:func:`estimate_once`): :func:`analyse` (check and analyse)
     → :func:`choose_model` (measure the record model, or take the declared one; decline when
@@ -1106,8 +1109,9 @@ def estimate(
     drifting = doc is not None and bool(((doc.get("record_model") or {}).get("measured") or {}).get("detected", {}).get("drift", False))
     fired = [] if failed else [name for name in REPAIRING_CHECKS if doc["diagnostics"].get(name, {}).get("fired")]
     # a filter after the block is not what a high-pass mends, and the high-pass moves the zero crossings off the impacts
-    # that the check reads: the records as given decide it (its ringing can fire spikes too)
-    filter_shown = not failed and "filtered" in declining_fired(doc)
+    # that the check reads: the records as given decide it (its ringing can fire spikes too); but a drifting zero moves
+    # the crossings off the impacts as well and fires it on unfiltered records, so drift is high-passed first
+    filter_shown = not failed and "filtered" in declining_fired(doc) and not (drifting or "drift" in fired)
     if filter_shown or not (fired or drifting or doc is None):  # a decline for the load or the instrument is not retried unless drift is measured
         return first._replace(document=decline_unrepaired(doc))
     log.info("estimating again after a high-pass well below the rocking frequency (drift)")
