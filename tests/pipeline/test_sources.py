@@ -37,13 +37,18 @@ def test_every_listed_source_is_a_package_file():
 
 def test_editing_models_changes_the_calibration_cache_key(monkeypatch):
     """models.py sets the lag range and the samples-per-cycle bins: an edit to it must make
-    stored calibrations stale."""
+    stored calibrations stale (in the next process: the fingerprint is read once per process,
+    here its cache cleared)."""
     key = calibration.calibration_settings([20_000], 75.0)
     before = calibration.settings_hash(key)
     models_file = Path(models.__file__).resolve()
     read_bytes = Path.read_bytes
     monkeypatch.setattr(Path, "read_bytes", lambda self: read_bytes(self) + (b"\n# edited\n" if self.resolve() == models_file else b""))
-    after = calibration.settings_hash(calibration.calibration_settings([20_000], 75.0))
+    calibration.pipeline_fingerprint.cache_clear()
+    try:
+        after = calibration.settings_hash(calibration.calibration_settings([20_000], 75.0))
+    finally:
+        calibration.pipeline_fingerprint.cache_clear()
     assert after != before
 
 
