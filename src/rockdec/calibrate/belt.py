@@ -276,20 +276,20 @@ def _inside(b: Belt, observed: np.ndarray) -> np.ndarray:
     return (x >= lower[None, :]) & (x <= upper[None, :])
 
 
-def _spans(b: Belt, observed: np.ndarray) -> tuple[np.ndarray, np.ndarray, bool]:
+def _spans(b: Belt, observed: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
     """The first and last dense ``e`` (indices) whose band holds each observation (first
-    above last where none does, and for NaN), and whether the band's edges both rise with
-    ``e``. Rising edges hold every observation on one run of ``e``, found by bisection
-    without the ``(observation, e)`` table of :func:`_inside`; else that table is read."""
+    above last where none does, and for NaN), and the ``(observation, e)`` table of
+    :func:`_inside` they were read from, or ``None`` when the band's edges both rise with
+    ``e``: then every observation is held on one run of ``e``, found by bisection."""
     lower, upper = _edges(b)
     observed = np.asarray(observed, dtype=float)
     rising = bool(np.all(np.diff(lower) >= 0.0) and np.all(np.diff(upper) >= 0.0))
     if rising:
-        return np.searchsorted(upper, observed, side="left"), np.searchsorted(lower, observed, side="right") - 1, True
+        return np.searchsorted(upper, observed, side="left"), np.searchsorted(lower, observed, side="right") - 1, None
     inside = _inside(b, observed)
     held = inside.any(axis=1)
     n = b.e.size
-    return np.where(held, np.argmax(inside, axis=1), n), np.where(held, n - 1 - np.argmax(inside[:, ::-1], axis=1), -1), False
+    return np.where(held, np.argmax(inside, axis=1), n), np.where(held, n - 1 - np.argmax(inside[:, ::-1], axis=1), -1), inside
 
 
 def intervals(b: Belt, raws) -> tuple[np.ndarray, np.ndarray]:
@@ -372,11 +372,11 @@ def held_es(b: Belt, raws: np.ndarray) -> np.ndarray:
         on_curve = np.isfinite(raws) & (b.mean.min() <= raws) & (raws <= b.mean.max())  # beyond the mean curve: no estimate (inference.beyond)
     where = np.flatnonzero(on_curve.ravel())
     observed = raws.ravel()[where]
-    first, last, rising = _spans(b, observed)
+    first, last, table = _spans(b, observed)
     held = (first <= last) & (first > 0) & (last < b.e.size - 1)
     flat = out.reshape(-1)
     for i in np.flatnonzero(held):
-        idx = np.arange(first[i], last[i] + 1) if rising else np.flatnonzero(_inside(b, observed[i:i + 1])[0])
+        idx = np.arange(first[i], last[i] + 1) if table is None else np.flatnonzero(table[i])
         flat[where[i]] = _corrected_value(b, observed[i], idx)[0]
     return out
 
