@@ -11,6 +11,7 @@ import their helpers from one another (``cf_check``, ``test_hostile``).
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import json
 import os
@@ -53,6 +54,27 @@ def calibrated_step(e: float, g: float, sigma_p: float, points_per_cycle: float 
     their records at the same ``e``, ``g``, ``sigma_p`` and samples per cycle, and the pilots
     (fixed seeds, so the same step every time) cost 0.7-0.9 s of CPU."""
     return dict(_calibrated_step(e, g, sigma_p, points_per_cycle))
+
+
+@contextlib.contextmanager
+def capped_calibration_sets():
+    """Calibrations of :data:`~rockdec.calibrate.calibration.SETS_PER_E_CAPPED` sets per ``e``
+    (a fourth of the default's cost) for tests whose claims do not rest on the number of
+    sets; the sets are in the calibration's cache key, so these never meet a default one.
+    The number of sets is measured by the coverage study and
+    ``benchmarks/calibration_replicates.py``."""
+    from rockdec.calibrate import calibration
+
+    with pytest.MonkeyPatch.context() as monkeypatch:
+        monkeypatch.setattr(calibration, "SETS_PER_E", calibration.SETS_PER_E_CAPPED)
+        yield
+
+
+@pytest.fixture
+def capped_sets():
+    """:func:`capped_calibration_sets` for one test."""
+    with capped_calibration_sets():
+        yield
 
 
 @functools.cache

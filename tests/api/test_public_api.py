@@ -19,10 +19,18 @@ import xarray as xr
 import rockdec
 from rockdec import io
 from cf_check import cf_findings
+from conftest import capped_calibration_sets
 from rockdec.cli import main
 from rockdec.report import result as result_mod
 
 ROOT = Path(__file__).resolve().parents[2]
+
+
+@pytest.fixture(scope="module", autouse=True)
+def capped_module():
+    """Every calibration of the module on the capped sets per ``e`` (nothing here rests on their number)."""
+    with capped_calibration_sets():
+        yield
 
 
 @pytest.fixture(scope="module")

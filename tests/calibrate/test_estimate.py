@@ -61,6 +61,7 @@ def record_085(tmp_path_factory):
     return write_csv(tmp_path_factory.mktemp("rec") / "block.csv", theta, dt)
 
 
+@pytest.mark.usefixtures("capped_sets")
 def test_record_at_085_is_inside_its_interval(record_085, cache, capsys, tmp_path):
     res = run_json([record_085, "--cache", cache, "--plot", tmp_path / "block.png"], capsys)
     low, high = res["interval"]
@@ -74,6 +75,7 @@ def test_record_at_085_is_inside_its_interval(record_085, cache, capsys, tmp_pat
     assert 0.9 <= res["coverage"] <= 1.0  # the interval's coverage on the calibration's records
 
 
+@pytest.mark.usefixtures("capped_sets")
 def test_second_run_reuses_the_calibration_and_agrees(record_085, cache, capsys):
     first = run_json([record_085, "--cache", cache], capsys)
     again = run_json([record_085, "--cache", cache], capsys)
@@ -81,6 +83,7 @@ def test_second_run_reuses_the_calibration_and_agrees(record_085, cache, capsys)
     assert again["e"] == first["e"] and again["interval"] == first["interval"]
 
 
+@pytest.mark.usefixtures("capped_sets")
 def test_the_report_gives_every_check_its_statistic_threshold_and_warning(record_085, cache, capsys):
     """The JSON's diagnostics hold every check of rockdec.record.diagnostics; a check fires exactly
     when its statistic passes its threshold, and each that fires has its warning."""
@@ -95,6 +98,7 @@ def test_the_report_gives_every_check_its_statistic_threshold_and_warning(record
     assert len(res["warnings"]) >= sum(c["fired"] for c in res["diagnostics"].values())
 
 
+@pytest.mark.usefixtures("capped_sets")
 def test_g_is_recovered_within_2_percent(cache, tmp_path, capsys):
     """On 200,000 samples the g of seeds 4-8 lies within 0.16, 0.08, 0.13, 0.48 and 1.1 % of
     the truth: 2 % leaves room for the spread, not for a bias. The record is as long as
@@ -106,6 +110,7 @@ def test_g_is_recovered_within_2_percent(cache, tmp_path, capsys):
     assert res["g_given"] is False
 
 
+@pytest.mark.usefixtures("capped_sets")
 def test_given_g_is_reported_as_given(record_085, cache, capsys):
     res = run_json([record_085, "--cache", cache, "--g", "1.0"], capsys)
     assert res["g"] == 1.0 and res["g_given"] is True

@@ -135,14 +135,12 @@ def test_every_cell_names_a_condition_and_a_simulator():
         assert condition in COVERAGE_CONDITIONS and simulator in ("kernel", "reference") and 0.0 < e < 1.0
 
 
-def test_reduced_coverage_holds(calibrations, monkeypatch):
+@pytest.mark.usefixtures("capped_sets")
+def test_reduced_coverage_holds(calibrations):
     """40 records of 20,000 samples at e = 0.9: the 95 % interval of e_v covers e >= 85 %
     (on the paper model's calibrations of those records, of the capped calibration's sets per
     ``e``: the study's route is tested here, the number of sets by the coverage study and
     ``benchmarks/calibration_replicates.py``)."""
-    from rockdec.calibrate import calibration
-
-    monkeypatch.setattr(calibration, "SETS_PER_E", calibration.SETS_PER_E_CAPPED)
     ds = coverage.run_cell("kernel_clean_e0.9", 40, 20_000, calibrations, model=PAPER)
     row = coverage.summary(ds)
     assert row["coverage_e_v"] >= 0.85
