@@ -11,6 +11,7 @@ from conftest import calibrated_step
 from rockdec.record import diagnostics
 from rockdec.studies import diagnostics_study as ds
 from rockdec.physics.simulate import simulate_block
+from rockdec.pipeline.layout import DIAGNOSTICS_E
 
 E, N = 0.9, 20_000
 
@@ -86,15 +87,15 @@ def test_a_record_that_rockdec_estimate_declines_asks_for_no_calibration(step):
 
 def test_a_run_of_one_e_gives_the_rows_a_run_of_all_gives_it(monkeypatch):
     """The workflow runs the study one ``e`` a job: the records of an ``e`` draw the seeds of
-    its place in E_VALUES, whichever values a run holds; an ``e`` that is not the study's is
+    its place in DIAGNOSTICS_E, whichever values a run holds; an ``e`` that is not the study's is
     refused in one sentence that names where the values live. (The simulation and the
     estimates are stood in for: only the cells and their seeds are read.)"""
     monkeypatch.setattr(ds, "_cell", lambda *args: [(None, 0.0, 0.0)] * len(args[4]))
     monkeypatch.setattr(ds, "_estimates", lambda *args: [None] * len(args[4]))
     small = {"n_records": 3, "noise_levels": (0.0,), "corners": (0.0,), "defects": {}}
     whole = ds.run(**small)
-    one = ds.run(e_values=(ds.E_VALUES[2],), **small)
-    pd.testing.assert_frame_equal(one, whole[whole["e_true"] == ds.E_VALUES[2]].reset_index(drop=True))
+    one = ds.run(e_values=(DIAGNOSTICS_E[2],), **small)
+    pd.testing.assert_frame_equal(one, whole[whole["e_true"] == DIAGNOSTICS_E[2]].reset_index(drop=True))
     assert whole["seed"].nunique() == len(whole)
     with pytest.raises(ValueError, match="DIAGNOSTICS_E"):
         ds.run(e_values=(0.7,), **small)

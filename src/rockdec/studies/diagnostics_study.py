@@ -64,9 +64,6 @@ STUDY_SEED_OFFSET, PILOT_SEEDS = 5 * 2**60, 9 * 10**8
 #: Samples per cycle at ``sigma_Y`` of the clean records (the paper's sampling).
 POINTS_PER_CYCLE = 75.0
 
-#: True ``e`` of the study (one workflow job each).
-E_VALUES = DIAGNOSTICS_E
-
 #: Sensor noise of the records, in units of each clean record's rms (white, as the
 #: calibration simulates it once the record's own noise is measured).
 NOISE_LEVELS = (0.0, 0.01, 0.03, 0.05)
@@ -205,7 +202,7 @@ def _step(e: float, corner: float, points_per_cycle: float, n: int, seed0: int) 
 
 
 def run(
-    e_values=E_VALUES, defects=DEFECTS, n_records: int = RECORDS, n_points: int = N_POINTS, cache_dir=None, noise_levels=NOISE_LEVELS,
+    e_values=DIAGNOSTICS_E, defects=DEFECTS, n_records: int = RECORDS, n_points: int = N_POINTS, cache_dir=None, noise_levels=NOISE_LEVELS,
     corners=CORNERS, coloured_noise=COLOURED_NOISE, coloured_defects=COLOURED_DEFECTS,
 ) -> pd.DataFrame:
     """One row per record and cell (``e``, sensor ``noise``, load ``corner``, ``defect``,
@@ -219,15 +216,15 @@ def run(
     (their ratio is the checks' share of a calibration's work), ``calibrations`` how many
     calibrations the records used.
 
-    The records of each ``e`` draw the seeds of its place in :data:`E_VALUES`, so a run of
+    The records of each ``e`` draw the seeds of its place in :data:`rockdec.pipeline.layout.DIAGNOSTICS_E`, so a run of
     some of them gives the rows a run of all gives them (the workflow runs one ``e`` a job).
     """
-    unknown = [e for e in e_values if e not in E_VALUES]
+    unknown = [e for e in e_values if e not in DIAGNOSTICS_E]
     if unknown:
-        raise ValueError(f"e = {unknown} is not one of the study's values {E_VALUES}: add it to rockdec.pipeline.layout.DIAGNOSTICS_E")
+        raise ValueError(f"e = {unknown} is not one of the study's values {DIAGNOSTICS_E}: add it to rockdec.pipeline.layout.DIAGNOSTICS_E")
     cells = []
     for e in e_values:
-        seeds = STUDY_SEED_OFFSET + E_VALUES.index(e) * 10**6 + np.arange(n_records)
+        seeds = STUDY_SEED_OFFSET + DIAGNOSTICS_E.index(e) * 10**6 + np.arange(n_records)
         for corner in corners:
             for noise in noise_levels if corner == 0.0 else [x for x in noise_levels if x in coloured_noise]:
                 cells.append((e, noise, corner, "clean", 0.0, seeds, n_points, POINTS_PER_CYCLE))
