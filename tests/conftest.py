@@ -182,6 +182,7 @@ class Forks:
         if self.proc is not None:
             self.proc.stdin.close()
             self.proc.wait(timeout=60)
+            self.proc.stdout.close()
             if self.folder is not None:
                 shutil.rmtree(self.folder, ignore_errors=True)
 
