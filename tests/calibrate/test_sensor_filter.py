@@ -210,12 +210,15 @@ def test_a_gentle_filter_blunts_the_impacts_where_the_spectrum_cannot_show_it(ma
 
 
 @pytest.mark.hostile("wrong answers", "refused")
-def test_a_gentle_filter_undeclared_is_declined_by_the_calibrated_check(tmp_path, small_calibration):
+def test_a_gentle_filter_undeclared_is_declined_by_the_calibrated_check(tmp_path, small_calibration, monkeypatch):
     """A causal RC stage at 5 rocking frequencies, end to end: the calibration's unfiltered
     records hold sharper impacts, ``filtered`` fires, and ``e`` is declined naming the
-    declaration that would help."""
+    declaration that would help. Twice the small calibration's sets: the threshold pools
+    every grid point the record's wide interval reaches, and a tail quantile of 6 sets a
+    point rests on the few largest of them."""
     from rockdec.api import estimate as estimate_record
 
+    monkeypatch.setattr(calibration, "SETS_PER_E", 2 * SMALL_SETS)
     y = _record(17, n=60_000)
     z = SensorFilter("rc", 1, 5.0, False).apply(y, measured.analyse([y], DT_WHITE).points_per_cycle)
     doc = estimate_record(z, DT_WHITE, cache=tmp_path).to_dict()

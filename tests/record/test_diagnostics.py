@@ -78,7 +78,8 @@ def test_a_doctored_calibration_moves_the_thresholds_and_the_structural_one_stay
 
 def test_with_an_e_its_neighbours_are_pooled_and_without_one_the_strictest_grid_point_rules():
     dense = np.array([0.4, 0.5, 0.6, 0.7, 0.75, 0.8, 0.85, 0.88, 0.91, 0.93, 0.95, 0.98, 0.995])
-    assert list(dense[diagnostics._near(dense, 0.86, (0.79, 0.9))]) == [0.8, 0.85, 0.88]  # inside, and a neighbour each side
+    assert list(dense[diagnostics._near(dense, 0.86, (0.79, 0.9))]) == [0.75, 0.8, 0.85, 0.88, 0.91]  # inside, and the nearest beyond each end
+    assert list(dense[diagnostics._near(dense, 0.86, None)]) == [0.85, 0.88]  # without an interval: a neighbour each side of e
     assert list(dense[diagnostics._near(dense, 0.995, (None, None))]) == [0.995]
     grid = np.asarray(calibration.E_GRID)
     rng = np.random.default_rng(3)
@@ -371,6 +372,30 @@ def test_the_null_takes_its_shape_from_every_grid_point_and_its_place_from_the_n
     assert np.mean(null > 0.05) < 0.5 * np.mean(own > 0.05)
 
 
+def test_a_statistic_that_moves_with_e_is_read_against_points_that_bracket_the_interval():
+    """A clean record of true ``e`` = 0.6 whose reported ``e`` came out low, 0.52 in
+    (0.43, 0.61): its statistic, whose location climbs steeply with ``e`` (as ``filtered``'s
+    does at low ``e``), follows the truth. The threshold pools the grid points beyond both
+    ends of the interval, so it lies at or above the truth's own 98.5 % point; points on the
+    low side of the truth alone (0.4 and 0.55) would put it below, and the check would fire on
+    a clean record far more often than 1.5 %."""
+    from scipy.stats import norm
+
+    grid = np.asarray(calibration.E_GRID)
+    j = diagnostics.CHECKS.index("filtered")
+    assert diagnostics.REGISTRY[j].side == "high"
+    location = lambda e: -0.3 + 0.4 * e  # noqa: E731  (0.02 a unit of spread per 0.05 of e)
+    rng = np.random.default_rng(5)
+    values = np.ones((grid.size, 120, len(diagnostics.CHECKS)))
+    values[:, :, j] = location(grid)[:, None] + 0.01 * rng.standard_normal((grid.size, 120))
+    e, interval, truth = 0.52, (0.43, 0.61), 0.6
+    limit = diagnostics.thresholds(_calibration(values, calibration.E_GRID), e, interval, LEVEL)["filtered"]
+    truth_point = location(truth) + 0.01 * norm.ppf(diagnostics.QUANTILE)
+    assert limit >= truth_point
+    one_side = np.quantile(diagnostics.null(values[:, :, j], (grid == 0.4) | (grid == 0.55)), diagnostics.QUANTILE)
+    assert one_side < truth_point  # what the low side alone gives: the clean record would fire
+
+
 def test_the_asymmetry_null_takes_the_widest_point_with_one_spread_for_the_grid():
     """The asymmetry of a clean record is about ``|N(0, s(e))|``: as a logarithm its spread is
     the same at every ``e`` and only its location moves (falling from ``e`` = 0.55 to 0.7). On
@@ -389,7 +414,7 @@ def test_the_asymmetry_null_takes_the_widest_point_with_one_spread_for_the_grid(
     e, interval = 0.6, (0.52, 0.66)
     true_scale = float(np.exp(np.interp(e, knots, knot_scales)))
     near = diagnostics._near(grid, e, interval)
-    assert list(grid[near]) == [0.55, 0.7]
+    assert list(grid[near]) == [0.4, 0.55, 0.7]
     rng = np.random.default_rng(9)
     widest, pooled = [], []
     for _ in range(200):

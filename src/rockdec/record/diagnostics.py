@@ -13,8 +13,9 @@ its simulated record sets, which have the measured records' lengths and sampling
 clean (the record model the calibration simulates, nothing else), and stores them as
 ``diagnostic(e_true, set, check)``. :func:`thresholds` takes the :data:`QUANTILE` quantile
 of a ``"high"`` check (``1 - QUANTILE`` of a ``"low"`` one) of the null (:func:`null`) of
-the grid points inside the record's 95 % interval of ``e`` and the nearest grid point on
-each side of its corrected ``e``: each point's own location and scale, the shape of the
+the grid points inside the record's 95 % interval of ``e`` and the nearest grid point
+beyond each end of it (:func:`_near`; a statistic that moves with ``e``, as ``filtered`` does
+at low ``e``, is then read against points that bracket the truth): each point's own location and scale, the shape of the
 tail read off every set of the calibration (a tail quantile of the near points' few dozen
 sets alone rests on their few largest values and fires too often on clean records; the
 pooled null's false alarms, also under a low-pass load whose model is measured off the
@@ -579,12 +580,17 @@ def statistics(records, analysis) -> np.ndarray:
 
 def _near(e_grid: np.ndarray, e: float, interval, side: int = 1) -> np.ndarray:
     """Grid points pooled for a record of corrected ``e`` and 95 % ``interval``: those inside
-    the interval and the ``side`` nearest on each side of ``e``."""
+    the interval and the ``side`` nearest beyond each of its ends (beyond ``e`` without an
+    interval), so that the points bracket every ``e`` the interval allows: a statistic that
+    moves with ``e`` (``filtered`` at low ``e``) read against points on one side of the
+    truth alone would fire on clean records whose ``e`` came out low."""
     keep = np.zeros(e_grid.size, dtype=bool)
     low, high = (np.nan, np.nan) if interval is None else (np.nan if v is None else v for v in interval)
     if np.isfinite(low) and np.isfinite(high):
         keep |= (e_grid >= low) & (e_grid <= high)
-    below, above = np.flatnonzero(e_grid <= e), np.flatnonzero(e_grid >= e)
+    else:
+        low = high = e
+    below, above = np.flatnonzero(e_grid <= min(e, low)), np.flatnonzero(e_grid >= max(e, high))
     keep[below[-side:] if below.size else 0] = True
     keep[above[:side] if above.size else -1] = True
     return keep
