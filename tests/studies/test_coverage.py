@@ -237,6 +237,35 @@ def test_band_chance_of_equal_cells_is_a_binomial_count():
     assert chance["pooled_coverage"] == pytest.approx((190 * 10 + 180 + 199) / (n * cells))
 
 
+@pytest.mark.parametrize("n", [100, 200])
+def test_sharpness_probability_is_what_exact_intervals_show_on_normal_records(n):
+    """Against simulation: cells of ``n`` normal values about the truth, every interval
+    exactly 3.92 sd wide, read by :func:`rockdec.studies.coverage.sharpness`; the share of
+    cells inside the band matches the closed form within four Monte Carlo errors."""
+    rng = np.random.default_rng(n)
+    cells, e, sd = 4000, 0.9, 0.01
+    widths = np.full(n, 2 * 1.959963984540054 * sd)
+    ratios = np.array([coverage.sharpness(e, e + sd * rng.standard_normal(n), widths) for _ in range(cells)])
+    p = coverage.sharpness_probability(n)
+    assert 0.8 < p < 1.0
+    assert np.mean(coverage.in_sharpness_band(ratios)) == pytest.approx(p, abs=4 * math.sqrt(p * (1 - p) / cells))
+
+
+def test_band_chance_reads_the_sharpness_against_chance():
+    """Equal cells: the number outside the sharpness band is binomial over the cells at one
+    minus :func:`rockdec.studies.coverage.sharpness_probability` (closed form)."""
+    from scipy import stats
+
+    n, cells = 100, 20
+    tab = _table_of_counts([n] * cells, [95] * cells).assign(sharpness=np.r_[0.85, 1.2, 1.3, np.ones(cells - 3)])
+    chance = coverage.band_chance(tab)
+    q = 1.0 - coverage.sharpness_probability(n)
+    assert chance["unsharp"] == 3 and chance["too_narrow"] == 1
+    assert chance["expected_unsharp"] == pytest.approx(cells * q)
+    assert chance["p_unsharp"] == pytest.approx(stats.binom.sf(2, cells, q))
+    assert "sampling error alone" in coverage.band_markdown(chance)
+
+
 def test_band_chance_tells_a_calibrated_interval_from_an_overdispersed_one():
     """Counts drawn binomial at 95 % read a dispersion near 1; counts whose cells hold e
     90 % or 99 % of the time (the same 94.5 % pooled), well above it."""

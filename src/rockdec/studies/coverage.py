@@ -696,6 +696,26 @@ def band_probability(n: int, p: float = NOMINAL) -> float:
     return float(stats.binom.pmf(covered, n, p)[in_band(covered / n)].sum())
 
 
+def sharpness_probability(n: int) -> float:
+    """Probability that a cell of ``n`` answered records gives a sharpness
+    (:func:`sharpness`) inside :data:`SHARPNESS_BAND` when its intervals are exactly 3.92
+    times the spread of the reported ``e`` about the truth (normal, unbiased), from the
+    sampling error of that spread alone: the root mean square of ``n`` normal distances
+    from the truth is ``s sqrt(chi2_n / n)``, so the ratio lies inside when ``chi2_n`` lies
+    between ``n / 1.15^2`` and ``n / 0.9^2``. The widths' median is taken as known (its own
+    scatter only adds to the chance of straying). NaN below two records.
+
+    Examples
+    --------
+    >>> sharpness_probability(1000) > sharpness_probability(200) > sharpness_probability(100)
+    True
+    """
+    if n < 2:
+        return math.nan
+    low, high = SHARPNESS_BAND
+    return float(stats.chi2.cdf(n / low**2, n) - stats.chi2.cdf(n / high**2, n))
+
+
 def band_chance(tab: pd.DataFrame) -> dict:
     """Whether the cells of ``tab`` (:func:`table`) stray from :data:`NOMINAL` more than
     chance: over the cells answered on at least :data:`BAND_MIN_ANSWERED` records, the number
@@ -707,20 +727,24 @@ def band_chance(tab: pd.DataFrame) -> dict:
     degree of freedom per cell: a calibrated interval gives a ratio near 1); the cells
     below :data:`CELL_FLOOR` among those answered on :data:`FLOOR_ANSWERED` records or more,
     the cells whose sharpness lies outside :data:`SHARPNESS_BAND` (``unsharp``, and
-    ``too_narrow`` of them below it; a table without the column counts none), and whether
-    the whole target holds (``meets``: the module's target constants)."""
+    ``too_narrow`` of them below it; a table without the column counts none) with the
+    number an interval exactly as wide as the scatter leaves outside on average from the
+    spread's sampling error alone (``expected_unsharp``, each cell's
+    :func:`sharpness_probability`) and the probability of at least as many
+    (``p_unsharp``), and whether the whole target holds (``meets``: the module's target
+    constants)."""
     used = tab[tab["answered"] >= BAND_MIN_ANSWERED]
     n = used["answered"].to_numpy(dtype=int)
     k = np.rint(used["answered_coverage"].to_numpy() * n)
     inside = np.array([band_probability(int(m)) for m in n])
-    count = np.array([1.0])  # distribution of the number of cells outside the band
-    for q in inside:
-        count = np.convolve(count, [q, 1.0 - q])
+    count = _outside_count(inside)
     out = int((~used["in_band"]).sum())
     chi2 = float(np.sum((k - NOMINAL * n) ** 2 / (n * NOMINAL * (1.0 - NOMINAL))))
     cells = len(used)
     ratio = used["sharpness"].to_numpy(dtype=float) if "sharpness" in used else np.full(cells, np.nan)
     known = np.isfinite(ratio)
+    sharp_inside = np.array([sharpness_probability(int(m)) for m in n[known]])
+    unsharp = int((known & ~in_sharpness_band(ratio)).sum())
     chance = {
         "cells": cells, "outside": out, "expected_outside": float(np.sum(1.0 - inside)),
         "p_outside": float(count[out:].sum()), "p_all_inside": float(count[0]),
@@ -729,7 +753,9 @@ def band_chance(tab: pd.DataFrame) -> dict:
         "p_chi2": float(stats.chi2.sf(chi2, cells)) if cells else math.nan,
         "below_floor": int((used[used["answered"] >= FLOOR_ANSWERED]["answered_coverage"] < CELL_FLOOR).sum()),
         "sharpness_cells": int(known.sum()),
-        "unsharp": int((known & ~in_sharpness_band(ratio)).sum()),
+        "unsharp": unsharp,
+        "expected_unsharp": float(np.sum(1.0 - sharp_inside)),
+        "p_unsharp": float(_outside_count(sharp_inside)[unsharp:].sum()),
         "too_narrow": int((known & (ratio < SHARPNESS_BAND[0])).sum()),
         "few": int(((tab["answered"] > 0) & (tab["answered"] < BAND_MIN_ANSWERED)).sum()),
         "declined_whole": int((tab["answered"] == 0).sum()),
@@ -738,6 +764,15 @@ def band_chance(tab: pd.DataFrame) -> dict:
                            and chance["chi2_ratio"] <= DISPERSION_MAX and chance["p_outside"] >= P_OUTSIDE_MIN
                            and chance["below_floor"] == 0 and chance["unsharp"] == 0)
     return chance
+
+
+def _outside_count(inside: np.ndarray) -> np.ndarray:
+    """Distribution of the number of cells outside a band, cell ``i`` inside it with
+    probability ``inside[i]`` (a Poisson binomial): entry ``k`` is the probability of ``k``."""
+    count = np.array([1.0])
+    for q in inside:
+        count = np.convolve(count, [q, 1.0 - q])
+    return count
 
 
 def markdown(tab: pd.DataFrame) -> str:
@@ -793,7 +828,9 @@ def band_markdown(chance: dict) -> str:
             f"{chance['p_chi2']:.2g}). Cells answered on 1-{BAND_MIN_ANSWERED - 1} records: {chance['few']}; "
             f"declined whole: {chance['declined_whole']}. Cells below {100 * CELL_FLOOR:.0f} % on {FLOOR_ANSWERED} records or "
             f"more: {chance['below_floor']}; width / (3.92 sd) outside {SHARPNESS_BAND[0]:g}-{SHARPNESS_BAND[1]:g}: "
-            f"{chance['unsharp']} of {chance['sharpness_cells']} ({chance['too_narrow']} too narrow). Target (pooled "
+            f"{chance['unsharp']} of {chance['sharpness_cells']} ({chance['too_narrow']} too narrow), where intervals exactly "
+            f"as wide as the scatter leave {chance['expected_unsharp']:.1f} outside on average from the spread's sampling "
+            f"error alone, {chance['unsharp']} or more with probability {chance['p_unsharp']:.2g}. Target (pooled "
             f"{100 * POOLED_BAND[0]:.0f}-{100 * POOLED_BAND[1]:.0f} %, dispersion at most {DISPERSION_MAX:g}, out-of-band "
             f"probability at least {P_OUTSIDE_MIN:g}, no cell below {100 * CELL_FLOOR:.0f} %, every cell's width / (3.92 sd) "
             f"inside {SHARPNESS_BAND[0]:g}-{SHARPNESS_BAND[1]:g}): {'met' if chance['meets'] else 'not met'}.")
