@@ -319,6 +319,38 @@ def test_the_belts_interval_covers_95_percent_at_every_e(skew):
     assert np.all((covered >= 0.93) & (covered <= 0.97)), covered
 
 
+def test_a_set_that_fails_wildly_leaves_the_spread_and_the_coverage_of_its_neighbours_alone():
+    """One set of a calibration's size reading far off at the top grid point (0.21 for a true
+    0.995, as ``e_v`` does under a low-pass load): the spread at e = 0.95-0.985 stays within
+    5 % of the clean calibration's (with a plain standard deviation it grows several-fold),
+    fresh draws at 0.985 are covered 93-97 % of the time, and the wild value still counts
+    in the band's quantiles (it widens the top point's band, never narrows it)."""
+    clean = curved_calibration(False, sets=calibration.SETS_PER_E, seed=5)
+    wild = clean.copy(deep=True)
+    top = int(np.argmax(wild["e_true"].values))
+    wild["raw"].loc[{"name": "e_v"}][top, 0] = 0.21
+    b0, b1 = belt.belt(clean, "e_v"), belt.belt(wild, "e_v")
+    at = (b0.e >= 0.95) & (b0.e <= 0.985)
+    assert np.max(np.abs(b1.spread[at] / b0.spread[at] - 1.0)) < 0.05
+    assert np.asarray(b1.q_low)[-1] <= np.asarray(b0.q_low)[-1]
+    m, s = known_curves(np.array([0.985]), "e_v")
+    low, high = belt.intervals(b1, m + s * np.random.default_rng(11).standard_normal(2000))
+    assert 0.93 <= np.mean((low <= 0.985) & (0.985 <= high)) <= 0.97
+
+
+def test_the_fences_keep_every_set_of_a_normal_or_skewed_estimator():
+    """The fences leave out no draw of 120 x 10 normal or gamma(4) values (a normal draw
+    lies beyond them with probability 1e-13, a gamma(4) one 2e-5), and leave out a value
+    some 70 interquartile ranges off, and NaN."""
+    rng = np.random.default_rng(2)
+    for skew in (False, True):
+        raw = standard_draws(rng, (10, 120), skew)
+        assert belt._within_fences(raw).all()
+    raw[3, 7], raw[4, 0] = 100.0, np.nan
+    kept = belt._within_fences(raw)
+    assert not kept[3, 7] and not kept[4, 0] and kept.sum() == raw.size - 2
+
+
 def test_g_interval_covers_the_true_g():
     """On synthetic calibrations of the calibration's size with a known ratio measured g /
     true g, the 95 % interval of g (its scatter and the error of the corrected e it is

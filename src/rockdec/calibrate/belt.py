@@ -14,6 +14,10 @@ of ``e`` (:func:`fit`):
 - ``log s``: the same smoother through the spreads of the grid points, in
   ``u = log(1 - e)`` (the spread shrinks like a power of ``1 - e`` as ``e -> 1``, with
   bends between 0.7 and 0.98 that a quadratic in ``u`` misses: ``rockdec.studies.belt_study``).
+- both read past the sets that fail wildly: a grid point's mean and spread leave out the
+  raw values beyond its fences (:data:`FENCE` interquartile ranges past its quartiles),
+  which a normal or moderately skewed estimator never reaches; those values still count
+  in the band's quantiles below, so they widen the band as often as they happen.
 - the band's ends: the 2.5 % and 97.5 % quantiles ``q_low``, ``q_high`` of the sets'
   scatter about their own point's mean in units of the fitted spread, pooled over
   neighbouring grid points (Gaussian kernel of :data:`QUANTILE_BANDWIDTH` in ``u``). A
@@ -46,6 +50,7 @@ calibrations stale (their name hashes the source of the modules that build them)
 
 from __future__ import annotations
 
+import warnings
 from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
@@ -85,6 +90,14 @@ class Belt(NamedTuple):
     q_low: np.ndarray | float = -Z95
     q_high: np.ndarray | float = Z95
 
+
+#: Fences of the raw values: those more than this many interquartile ranges beyond their
+#: grid point's quartiles are left out of its mean and spread (they stay in the band's
+#: quantiles). A normal estimator puts 1e-13 of its sets there (7.4 standard deviations),
+#: a gamma of shape 4 (skewness 1, ``e_v`` at low ``e``) 2e-5; one set of 120 that fails
+#: wildly (``e_v`` reading 0.21 or 1.17 for a true 0.995 under a low-pass load) would
+#: otherwise set the spread of its grid point and, through the smoothing, of its neighbours.
+FENCE = 5.0
 
 #: Bandwidth (in ``log(1 - e)``) of the Gaussian kernel that pools the standardised raw
 #: values of neighbouring grid points into the quantiles of the band.
@@ -210,10 +223,11 @@ def fit(e_grid: np.ndarray, raw: np.ndarray, ratio: bool = False, points: int = 
     """
     e_grid = np.asarray(e_grid, dtype=float)
     ok = np.isfinite(raw)
-    n = ok.sum(axis=1)
+    kept = ok & _within_fences(raw)
+    n = kept.sum(axis=1)
     use = n >= 3
-    means = np.array([raw[j, ok[j]].mean() if use[j] else np.nan for j in range(e_grid.size)])
-    sds = np.array([raw[j, ok[j]].std(ddof=1) if use[j] else np.nan for j in range(e_grid.size)])
+    means = np.array([raw[j, kept[j]].mean() if use[j] else np.nan for j in range(e_grid.size)])
+    sds = np.array([raw[j, kept[j]].std(ddof=1) if use[j] else np.nan for j in range(e_grid.size)])
     use &= sds > 0
     failed = float(1.0 - ok.sum() / ok.size)
     if use.sum() < 5:  # an empty belt: correct() says why
@@ -249,6 +263,26 @@ def fit(e_grid: np.ndarray, raw: np.ndarray, ratio: bool = False, points: int = 
     var_log_s = np.einsum("ij,jk,ik->i", basis_s, (hat_s / (2.0 * (counts - 1.0))) @ hat_s.T * max(scatter_s, 1.0), basis_s)
     widen = _t_quantile(1.0 / (2.0 * var_log_s)) / Z95  # a spread estimated from few sets: Student's t
     return Belt(dense, mean, spread, failed, widen * np.interp(ud, u, q[:, 0]), widen * np.interp(ud, u, q[:, 1]))
+
+
+def _within_fences(raw: np.ndarray) -> np.ndarray:
+    """``(e, set)``: whether each raw value lies within the fences of its grid point,
+    :data:`FENCE` interquartile ranges beyond its quartiles (every finite value when the
+    quartiles coincide); NaN lies outside.
+
+    Examples
+    --------
+    >>> raw = np.array([[0.80, 0.81, 0.79, 0.80, 0.21, np.nan]])
+    >>> _within_fences(raw).tolist()
+    [[True, True, True, True, False, False]]
+    """
+    finite = np.isfinite(raw)
+    with warnings.catch_warnings():  # a grid point of NaN only has no quartiles
+        warnings.simplefilter("ignore", RuntimeWarning)
+        q1, q3 = np.nanpercentile(np.where(finite, raw, np.nan), [25.0, 75.0], axis=1, keepdims=True)
+    reach = FENCE * (q3 - q1)
+    with np.errstate(invalid="ignore"):
+        return finite & ((reach == 0.0) | ((raw >= q1 - reach) & (raw <= q3 + reach)))
 
 
 def _t_quantile(dof: np.ndarray) -> np.ndarray:
