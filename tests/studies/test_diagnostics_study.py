@@ -11,7 +11,7 @@ from conftest import calibrated_step
 from rockdec.record import diagnostics
 from rockdec.studies import diagnostics_study as ds
 from rockdec.physics.simulate import simulate_block
-from rockdec.pipeline.layout import DIAGNOSTICS_E
+from rockdec.pipeline.layout import DIAGNOSTICS_E, DIAGNOSTICS_PARTS
 
 E, N = 0.9, 20_000
 
@@ -83,6 +83,23 @@ def test_a_record_that_rockdec_estimate_declines_asks_for_no_calibration(step):
     assert coloured[0][0] is None and white[0][0] is not None
     y = ds.record(E, 14, N, 2.513, 4362, None, 0.0, 0.0, pole)
     assert inference.estimate([ds.Record(y, 2.513, "coloured")], cache_dir=None).document["reason"]  # declined, with its reason
+
+
+def test_the_workflow_parts_together_give_the_rows_of_one_run_of_all(monkeypatch):
+    """The workflow's jobs (DIAGNOSTICS_PARTS: one e, load and noise level each) make, put
+    together, exactly the rows of one run over every e, load and noise level, each row once.
+    (The simulation and the estimates are stood in for: only the cells and their seeds are read.)"""
+    monkeypatch.setattr(ds, "_cell", lambda *args: [(None, 0.0, 0.0)] * len(args[4]))
+    monkeypatch.setattr(ds, "_estimates", lambda *args: [None] * len(args[4]))
+    monkeypatch.setattr(ds, "_step", lambda e, corner, ppc, n, seed0: {"dt": 1.0, "burn_in": 10, "pole": 0.5 * (corner > 0.0)})
+    small = {"n_records": 2, "defects": {"drift": (1.0,), "asymmetry": (0.1,)}}
+    whole = ds.run(**small)
+    parts = pd.concat([ds.run(e_values=(e,), corners=(corner,), noise_levels=(noise,), **small)
+                       for e, corner, noise in DIAGNOSTICS_PARTS.values()], ignore_index=True)
+    keys = ["e_true", "corner", "noise", "defect", "size", "seed"]
+    pd.testing.assert_frame_equal(parts.sort_values(keys).reset_index(drop=True), whole.sort_values(keys).reset_index(drop=True))
+    assert not whole.duplicated(keys).any()
+    assert set(whole["corner"]) == {0.0, 3.0} and (whole.loc[whole["corner"] == 3.0, "defect"] != "drift").all()
 
 
 def test_a_run_of_one_e_gives_the_rows_a_run_of_all_gives_it(monkeypatch):

@@ -6,7 +6,7 @@
 
 import re
 
-from rockdec.pipeline.layout import DIAGNOSTICS_E
+from rockdec.pipeline.layout import DIAGNOSTICS_PARTS
 
 
 rule amplitude:
@@ -60,17 +60,17 @@ rule amplitude_study:
 
 
 rule diagnostics_records:
-    """Records of known e (one job per e), clean and with each defect at growing sizes, through `rockdec estimate`'s checks."""
+    """Records of known e (one job per e, load and noise level), clean and with each defect at growing sizes, through `rockdec estimate`'s checks."""
     input:
         code=step_code("diagnostics_records.py"),
     output:
-        "results/studies/diagnostics/records_e{e}.csv",
+        "results/studies/diagnostics/records_{part}.csv",
     log:
-        "results/studies/diagnostics/logs/records_e{e}.log",
+        "results/studies/diagnostics/logs/records_{part}.log",
     benchmark:
-        "results/studies/diagnostics/benchmarks/records_e{e}.tsv"
+        "results/studies/diagnostics/benchmarks/records_{part}.tsv"
     wildcard_constraints:
-        e="|".join(re.escape(f"{e:g}") for e in DIAGNOSTICS_E),
+        part="|".join(re.escape(name) for name in DIAGNOSTICS_PARTS),
     threads: 2
     resources:
         mem_mb=4000,
@@ -86,7 +86,7 @@ rule diagnostics_records:
 rule diagnostics_table:
     """Per check, e and defect size: the shift of e, false alarms and detections."""
     input:
-        records=expand("results/studies/diagnostics/records_e{e}.csv", e=[f"{e:g}" for e in DIAGNOSTICS_E]),
+        records=expand("results/studies/diagnostics/records_{part}.csv", part=DIAGNOSTICS_PARTS),
         code=step_code("diagnostics_table.py"),
     output:
         csv=report("results/studies/diagnostics/table.csv", category="Measured records", caption="../report/diagnostics.rst"),

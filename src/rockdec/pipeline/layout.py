@@ -48,9 +48,29 @@ COVERAGE_CASES = {
 (simulator, condition, true ``e``)."""
 
 DIAGNOSTICS_E = (0.6, 0.8, 0.95, 0.98)
-"""True ``e`` of the warnings' study (:mod:`rockdec.studies.diagnostics_study`): one workflow
-job each (``results/studies/diagnostics/records_e{e}.csv``), so that the study, hours long
-on 2 cores, is kept in parts as they finish."""
+"""True ``e`` of the warnings' study (:mod:`rockdec.studies.diagnostics_study`)."""
+
+DIAGNOSTICS_NOISE = (0.0, 0.01, 0.03, 0.05)
+"""Sensor noise of the warnings' study's records, in units of each clean record's rms (white,
+as the calibration simulates it once the record's own noise is measured)."""
+
+DIAGNOSTICS_CORNERS, DIAGNOSTICS_COLOURED_NOISE = (0.0, 3.0), (0.0, 0.03)
+"""Loads of the warnings' study's records: the corner of a first-order low-pass load in
+rocking frequencies ``1/T(sigma_Y)`` (eq. 5), 0 for white impulses; under a coloured load
+only the noise levels of ``DIAGNOSTICS_COLOURED_NOISE`` (each coloured cell asks for
+calibrations of its own, each several times a white one's cost, and its records' measured
+models scatter over many bins)."""
+
+DIAGNOSTICS_PARTS = {
+    f"e{e:g}_{'white' if corner == 0.0 else f'corner{corner:g}'}_noise{noise:g}": (e, corner, noise)
+    for e in DIAGNOSTICS_E
+    for corner in DIAGNOSTICS_CORNERS
+    for noise in (DIAGNOSTICS_NOISE if corner == 0.0 else [x for x in DIAGNOSTICS_NOISE if x in DIAGNOSTICS_COLOURED_NOISE])
+}
+"""The warnings' study's workflow jobs (``results/studies/diagnostics/records_{part}.csv``):
+name -> (true ``e``, load corner, sensor noise), so that the study, hours long on 2 cores,
+is kept in parts as they finish; together they make the rows of one run of all
+(:func:`rockdec.studies.diagnostics_study.run`)."""
 
 FIGURE_SERIES = 10
 """Series ``stored_series.nc`` keeps when every series is stored apart: the pooling of fig. 2c."""

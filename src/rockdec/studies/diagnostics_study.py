@@ -3,12 +3,12 @@
 Records of known ``e`` are simulated apart from any calibration (``g = sigma_p = 1``, the
 step calibrated to :data:`POINTS_PER_CYCLE` samples per cycle at ``sigma_Y``, eq. 5; seeds
 from :data:`STUDY_SEED_OFFSET`), with or without one defect of a given size
-(:data:`DEFECTS`), each at every sensor noise level of :data:`NOISE_LEVELS` (white, a share
+(:data:`DEFECTS`), each at every sensor noise level of :data:`rockdec.pipeline.layout.DIAGNOSTICS_NOISE` (white, a share
 of the clean record's rms, as the calibration simulates it) and under every load of
-:data:`CORNERS` (white impulses, or low-pass filtered with the corner at a given number of
+:data:`rockdec.pipeline.layout.DIAGNOSTICS_CORNERS` (white impulses, or low-pass filtered with the corner at a given number of
 rocking frequencies: the step and pole of :func:`rockdec.studies.coverage.stage`, which
 places the records' own samples per cycle and the corner; under it, the noise levels of
-:data:`COLOURED_NOISE` and the defects of :data:`COLOURED_DEFECTS`), and each goes through
+``DIAGNOSTICS_COLOURED_NOISE`` and the defects of :data:`COLOURED_DEFECTS`), and each goes through
 ``rockdec estimate`` itself (:func:`rockdec.calibrate.inference.estimate`): the record model
 measured off the record (:mod:`rockdec.record.record_measure`), the calibration for that
 model, its length and its sampling (:mod:`rockdec.calibrate.calibration`, shared by records
@@ -52,7 +52,7 @@ from rockdec import engine
 from rockdec.rdd import measured
 from rockdec.physics.loading import add_sensor_noise, draw_impulses, series_rng
 from rockdec.physics.simulate import calibrate_dt, integrate
-from rockdec.pipeline.layout import DIAGNOSTICS_E
+from rockdec.pipeline.layout import DIAGNOSTICS_COLOURED_NOISE, DIAGNOSTICS_CORNERS, DIAGNOSTICS_E, DIAGNOSTICS_NOISE
 from rockdec.record.records import Record
 from rockdec.validate import InputError
 
@@ -64,17 +64,10 @@ STUDY_SEED_OFFSET, PILOT_SEEDS = 5 * 2**60, 9 * 10**8
 #: Samples per cycle at ``sigma_Y`` of the clean records (the paper's sampling).
 POINTS_PER_CYCLE = 75.0
 
-#: Sensor noise of the records, in units of each clean record's rms (white, as the
-#: calibration simulates it once the record's own noise is measured).
-NOISE_LEVELS = (0.0, 0.01, 0.03, 0.05)
-
-#: Loads of the records: the corner of a first-order low-pass load in rocking frequencies
-#: ``1/T(sigma_Y)`` (eq. 5), 0 for white impulses (the table's ``corner`` column). Clean
-#: records go under every load; under a coloured load only at the noise levels of
-#: ``COLOURED_NOISE`` and with the defects of ``COLOURED_DEFECTS``: each coloured cell asks
-#: for calibrations of its own, each several times a white one's cost, and its records'
-#: measured models scatter over many bins, so a coloured cell asks for many calibrations.
-CORNERS, COLOURED_NOISE, COLOURED_DEFECTS = (0.0, 3.0), (0.0, 0.03), ("asymmetry",)
+#: Defects studied under a coloured load too (the loads and noise levels of the records:
+#: :data:`rockdec.pipeline.layout.DIAGNOSTICS_CORNERS`, ``DIAGNOSTICS_NOISE`` and
+#: ``DIAGNOSTICS_COLOURED_NOISE``).
+COLOURED_DEFECTS = ("asymmetry",)
 
 #: Records per cell and their length (``coarse_sampling`` uses :data:`COARSE_POINTS`).
 RECORDS, N_POINTS, COARSE_POINTS = 40, 100_000, 50_000
@@ -202,8 +195,8 @@ def _step(e: float, corner: float, points_per_cycle: float, n: int, seed0: int) 
 
 
 def run(
-    e_values=DIAGNOSTICS_E, defects=DEFECTS, n_records: int = RECORDS, n_points: int = N_POINTS, cache_dir=None, noise_levels=NOISE_LEVELS,
-    corners=CORNERS, coloured_noise=COLOURED_NOISE, coloured_defects=COLOURED_DEFECTS,
+    e_values=DIAGNOSTICS_E, defects=DEFECTS, n_records: int = RECORDS, n_points: int = N_POINTS, cache_dir=None, noise_levels=DIAGNOSTICS_NOISE,
+    corners=DIAGNOSTICS_CORNERS, coloured_noise=DIAGNOSTICS_COLOURED_NOISE, coloured_defects=COLOURED_DEFECTS,
 ) -> pd.DataFrame:
     """One row per record and cell (``e``, sensor ``noise``, load ``corner``, ``defect``,
     ``size``; ``defect`` ``"clean"`` for the records without one): the corrected ``e`` and
@@ -217,7 +210,8 @@ def run(
     calibrations the records used.
 
     The records of each ``e`` draw the seeds of its place in :data:`rockdec.pipeline.layout.DIAGNOSTICS_E`, so a run of
-    some of them gives the rows a run of all gives them (the workflow runs one ``e`` a job).
+    some of them gives the rows a run of all gives them (the workflow runs one ``e``, load and
+    noise level a job: :data:`rockdec.pipeline.layout.DIAGNOSTICS_PARTS`).
     """
     unknown = [e for e in e_values if e not in DIAGNOSTICS_E]
     if unknown:
