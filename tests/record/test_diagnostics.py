@@ -246,6 +246,63 @@ def test_the_trend_statistic_is_the_least_squares_slopes_t():
     assert np.isnan(diagnostics._trend_z(np.ones(20), np.zeros(20, int)))
 
 
+def test_the_split_statistic_is_the_largest_two_sample_t_over_the_splits():
+    """One record: ``_split_t`` is the largest ``|t|`` of scipy's pooled two-sample t test over
+    the splits with two values or more on each side; unchanged by the values' scale, offset
+    and order reversed; several records: the root mean square of theirs."""
+    from scipy import stats
+
+    rng = np.random.default_rng(4)
+    v = rng.normal(size=20)
+    best = max(abs(stats.ttest_ind(v[:k], v[k:]).statistic) for k in range(2, 19))
+    assert diagnostics._split_t(v, np.zeros(20, int)) == pytest.approx(best, rel=1e-10)
+    assert diagnostics._split_t(3.0 * v[::-1] - 7.0, np.zeros(20, int)) == pytest.approx(best, rel=1e-10)
+    w = rng.normal(size=20)
+    both = diagnostics._split_t(np.r_[v, w], np.repeat([0, 1], 20))
+    assert both == pytest.approx(np.sqrt((best**2 + diagnostics._split_t(w, np.zeros(20, int)) ** 2) / 2), rel=1e-10)
+    assert np.isnan(diagnostics._split_t(np.ones(20), np.zeros(20, int)))
+    assert np.isnan(diagnostics._split_t(v[:3], np.zeros(3, int)))
+
+
+def test_a_step_in_the_loads_strength_lifts_the_nonstationarity_without_bound():
+    """Von Neumann's ratio of 20 block variances stays below 4.3 however large a step in them
+    (its ceiling); the split's t grows with the step, and the nonstationarity statistic is the
+    larger of the two. On independent normal values the split's 98.5 % point lies between
+    the middle split's alone (Student's t, 18 degrees of freedom) and the Bonferroni bound
+    over the 17 splits."""
+    from scipy import stats
+
+    rng = np.random.default_rng(5)
+    noise = rng.normal(size=20)
+    sizes = (2.0, 10.0, 100.0)
+    steps = [np.r_[np.zeros(10), np.full(10, size)] + noise for size in sizes]
+    vn = [diagnostics._von_neumann_z(v, np.zeros(20, int)) for v in steps]
+    split = [diagnostics._split_t(v, np.zeros(20, int)) for v in steps]
+    assert max(vn) < 4.3 and split[2] > 10 * split[0] > 10 * vn[0]
+    point = np.percentile([diagnostics._split_t(rng.normal(size=20), np.zeros(20, int)) for _ in range(4000)], 98.5)
+    assert stats.t.ppf(1 - 0.015 / 2, 18) < point < stats.t.ppf(1 - 0.015 / 2 / 17, 18)
+
+
+def test_a_load_that_doubles_halfway_stands_above_every_clean_record_at_e_098():
+    """At e = 0.98 stationary records' block variances wander and von Neumann's ratio of
+    them reaches its ceiling's range; a record whose impulses double in strength halfway
+    (its rms rises about tenfold) reads a nonstationarity above the largest of 40 clean
+    records of the same e and sampling."""
+    from rockdec.physics.loading import draw_impulses, series_rng
+    from rockdec.physics.simulate import integrate
+
+    step = calibrated_step(0.98, 1.0, 1.0)
+    n, burn_in = 100_000, step["burn_in"]
+    theta, _ = simulate_block(np.arange(40) + 900, n, dt=step["dt"], g=1.0, e=0.98, sigma_p=1.0, burn_in=burn_in)
+    clean = max(diagnostics.nonstationarity(diagnostics.sums([y]), None) for y in theta)
+    impulses = np.empty(burn_in + n - 1)
+    draw_impulses(series_rng(3), impulses, 1.0, 0.0)
+    impulses[burn_in + n // 2:] *= 2.0
+    doubled, omega = np.empty(n), np.empty(n)
+    integrate(impulses, step["dt"], 1.0, 0.98, 0.0, 0.0, burn_in, doubled, omega)
+    assert diagnostics.nonstationarity(diagnostics.sums([doubled]), None) > clean
+
+
 def test_the_spikes_statistic_does_not_grow_with_the_sensor_noise(clean):
     """The largest distance off the neighbours' line is read against the record's own 99th
     percentile of it, so white sensor noise of 1, 3 or 5 % of sigma_Y gives the same ratio
