@@ -94,9 +94,9 @@ class Belt(NamedTuple):
 #: Fences of the raw values: those more than this many interquartile ranges beyond their
 #: grid point's quartiles are left out of its mean and spread (they stay in the band's
 #: quantiles). A normal estimator puts 1e-13 of its sets there (7.4 standard deviations),
-#: a gamma of shape 4 (skewness 1, ``e_v`` at low ``e``) 2e-5; one set of 120 that fails
-#: wildly (``e_v`` reading 0.21 or 1.17 for a true 0.995 under a low-pass load) would
-#: otherwise set the spread of its grid point and, through the smoothing, of its neighbours.
+#: a gamma of shape 4 (skewness 1, ``e_v`` at low ``e``) 2e-5; one set that fails wildly
+#: (``e_v`` near 1 under a low-pass load, the CHANGELOG says how far) would otherwise set the
+#: spread of its grid point and, through the smoothing, of its neighbours.
 FENCE = 5.0
 
 #: Bandwidth (in ``log(1 - e)``) of the Gaussian kernel that pools the standardised raw

@@ -416,9 +416,9 @@ def nonstationarity(s: Sums, analysis) -> float:
     variances (each block about its own mean, so an offset does not count): large when the
     load's strength changes slowly along the record (von Neumann's ratio) or steps (the
     split's ``t``, which a step of any size lifts; von Neumann's ratio of 20 blocks stays
-    below about 4.2, and at ``e = 0.98``, where stationary records reach 3.7, a load that
-    doubles halfway read 3.3-4.2). Scale-free; the threshold is calibrated on the larger of
-    the two."""
+    below about 4.2, a range that stationary records near ``e = 1`` reach, so a load that
+    doubles halfway would pass unseen there). Scale-free; the threshold is calibrated on
+    the larger of the two."""
     v = np.log(s.block_var)
     return float(np.fmax(_von_neumann_z(v, s.block_record), _split_t(v, s.block_record)))
 
