@@ -261,10 +261,14 @@ def calibration_settings(
     return out
 
 
-def _repaired(records: list, repaired: dict | None, points_per_cycle: float) -> list:
+def _repaired(records: list, repaired: dict | None, points_per_cycle: float) -> tuple[list, tuple | None]:
     """A simulated set as the measured records were repaired (:func:`rockdec.record.repair.apply`,
-    the high-pass placed at the calibration's ``points_per_cycle``)."""
-    return repair.apply(records, repaired, points_per_cycle)[0] if repaired else records
+    the high-pass placed at the calibration's ``points_per_cycle``), and the samples the
+    repair replaced per record (``None`` without a repair)."""
+    if not repaired:
+        return records, None
+    records, done = repair.apply(records, repaired, points_per_cycle)
+    return records, done.spikes
 
 
 def simulated_lengths(lengths) -> list[int]:
@@ -399,7 +403,7 @@ def step_for(
         for k in range(sets):
             try:
                 records = _simulate_set(seed0 + k * len(pilot), pilot, dt, e, burn_in, model, theta_cr=theta_cr, points_per_cycle=points_per_cycle, **draw)
-                records = _repaired(records, repaired, points_per_cycle)
+                records, _ = _repaired(records, repaired, points_per_cycle)
                 read.append(measured.analyse(records, dt, settings).points_per_cycle)
                 rms.append(float(np.sqrt(np.nanmean(np.concatenate(records) ** 2))))
             except ValueError:
@@ -432,12 +436,12 @@ def _sets(e: float, cal_settings: dict, seed0: int, dt: float, burn_in: int, the
     for k in range(n_sets):
         try:
             records = _simulate_set(seed0 + k * len(lengths), lengths, dt, e, burn_in, model, theta_cr=theta_cr, points_per_cycle=ppc, **model.load.draw_options(ppc))
-            records = _repaired(records, cal_settings.get("repair"), ppc)
+            records, replaced = _repaired(records, cal_settings.get("repair"), ppc)
             analysis = measured.analyse(records, dt, settings)
         except ValueError:
             continue
         out[k] = [analysis.raw[name] for name in NAMES]
-        diag[k] = diagnostics.statistics(records, analysis)
+        diag[k] = diagnostics.statistics(records, analysis, replaced)
         read[k] = analysis.points_per_cycle
     return out, diag, read
 

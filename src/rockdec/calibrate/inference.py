@@ -161,13 +161,15 @@ def checks_place(per: dict, shown: dict) -> tuple[float | None, list | None]:
 
 def diagnose(
     records: list[Record], analysis: measured.Analysis, settings: dict, cal, e: float | None, interval, length_ratio: float = 1.0,
+    replaced=None,
 ) -> tuple[list, dict]:
     """The checks of :mod:`rockdec.record.diagnostics` on the records, against thresholds from the
     calibration ``cal`` near ``e`` and its 95 % ``interval`` (:func:`checks_place`;
-    ``length_ratio``: the records' length over the calibration's records'): a :class:`Note`
+    ``length_ratio``: the records' length over the calibration's records'; ``replaced``: the
+    samples the repair replaced, per record, which the spikes statistic leaves out): a :class:`Note`
     (its code the check's name) for each check that fired, and per check ``{"statistic", "threshold", "fired"}`` (JSON-able)."""
     level = settings.get("level", measured.DEFAULT_SETTINGS["level"])
-    outcomes = diagnostics.evaluate([r.theta for r in records], analysis, cal, e, interval, level, length_ratio)
+    outcomes = diagnostics.evaluate([r.theta for r in records], analysis, cal, e, interval, level, length_ratio, replaced)
     notes = [Note(name, o.message) for name, o in outcomes.items() if o.fired]
     return notes, {name: {"statistic": json_number(o.statistic), "threshold": json_number(o.threshold), "fired": o.fired} for name, o in outcomes.items()}
 
@@ -1169,7 +1171,7 @@ def estimate_once(
     g_reading = read_g(analysed, choice, calibrated, chosen, math.nan if shown["e"] is None else shown["e"])
     notes = [*analysed.notes, *choice.notes, *calibrated.notes, *g_reading.notes, *long_record_note(analysed, choice), *pooled.notes]
     fired, checks = diagnose(list(analysed.records), analysed.analysis, analysed.settings, calibrated.cal,
-                             *checks_place(per, shown), 1.0 / calibrated.scale**2)
+                             *checks_place(per, shown), 1.0 / calibrated.scale**2, None if done is None else done.spikes)
     doc = document(analysed, choice, calibrated, per, pooled.selection, g_reading, notes + fired, {**checks, **pooled.checks}, report)
     return Outcome(doc, analysed.analysis, calibrated.belts)
 

@@ -290,10 +290,16 @@ def impact_level(y: np.ndarray, centre: float, sd: float, guard: float) -> float
     return centre + (0.5 * (i[first] + i[last]) - half) * step
 
 
-def sums(records) -> Sums:
+def sums(records, replaced=None) -> Sums:
     """:class:`Sums` of ``records`` (1-D arrays, NaN allowed): one compiled pass per record
     (:func:`_record_sums`), the quantile of :func:`_spike_ratio`, the sides of
-    :func:`asymmetry` (:func:`_sides`) and the runs of NaN (:func:`_nan_runs`)."""
+    :func:`asymmetry` (:func:`_sides`) and the runs of NaN (:func:`_nan_runs`).
+
+    ``replaced``: per record, the indices of the samples the repair replaced
+    (:attr:`rockdec.record.repair.Repair.spikes`), or ``None``. The spikes statistic leaves
+    the triples that touch them out (a second pass over the record with them NaN): a
+    replaced sample lies on its neighbours' line, and a per cent of them would lower the
+    record's percentile of distances and lift its ratio above a clean record's."""
     count, off = 0, np.nan
     side_n, side_s = np.zeros(2), np.zeros(2)
     means, variances, owners, gaps, narrow_wide = [], [], [], [], []
@@ -302,6 +308,10 @@ def sums(records) -> Sums:
         b = min(BLOCKS, y.size // BLOCK_MIN)
         distance = np.empty(max(y.size - 2, 0))  # allocated here: the kernel then compiles no np.empty
         _, bn, (b1, b2), worst, written = _record_sums(y, max(b, 1), distance)
+        if replaced is not None and np.size(replaced[i]):
+            masked = y.copy()
+            masked[np.asarray(replaced[i], dtype=np.int64)] = np.nan
+            worst, written = _record_sums(masked, max(b, 1), distance)[3:]
         count, off = count + int(bn.sum()), np.fmax(off, _spike_ratio(distance[:written], worst))
         n0, n1, s0, s1 = _sides(y, float(bn.sum()), float(b1.sum()), float(b2.sum()))
         side_n, side_s = side_n + (n0, n1), side_s + (s0, s1)
@@ -608,10 +618,11 @@ CHECKS = tuple(check.name for check in REGISTRY)
 """Names of the checks, in registry order."""
 
 
-def statistics(records, analysis) -> np.ndarray:
+def statistics(records, analysis, replaced=None) -> np.ndarray:
     """Every check's statistic on ``records`` (1-D arrays, NaN allowed) and their
-    :class:`rockdec.rdd.measured.Analysis`, in registry order."""
-    s = sums(records)
+    :class:`rockdec.rdd.measured.Analysis`, in registry order; ``replaced``: the samples the
+    repair replaced, per record (:func:`sums`)."""
+    s = sums(records, replaced)
     return np.array([check.statistic(s, analysis) for check in REGISTRY], dtype=float)
 
 
@@ -738,8 +749,8 @@ def judge(values, limits: dict) -> dict:
     return out
 
 
-def evaluate(records, analysis, cal, e: float | None, interval, level: float, length_ratio: float = 1.0) -> dict:
+def evaluate(records, analysis, cal, e: float | None, interval, level: float, length_ratio: float = 1.0, replaced=None) -> dict:
     """Every check on ``records`` against the calibration ``cal``: :func:`judge` of
     :func:`statistics` and :func:`thresholds` (``length_ratio``: the records' length over
-    the calibration's records')."""
-    return judge(statistics(records, analysis), thresholds(cal, e, interval, level, length_ratio))
+    the calibration's records'; ``replaced``: the samples the repair replaced, per record)."""
+    return judge(statistics(records, analysis, replaced), thresholds(cal, e, interval, level, length_ratio))

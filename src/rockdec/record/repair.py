@@ -59,9 +59,9 @@ MAD_TO_SD = 1.4826
 
 
 class Repair(NamedTuple):
-    """What :func:`apply` did to a set of records: ``spikes``, the samples replaced (per
-    record); ``corner``: the high-pass corner in rocking frequencies (``None``: no
-    high-pass) and ``per_sample``, the same in cycles per sample."""
+    """What :func:`apply` did to a set of records: ``spikes``, the indices of the samples
+    replaced (an integer array per record); ``corner``: the high-pass corner in rocking
+    frequencies (``None``: no high-pass) and ``per_sample``, the same in cycles per sample."""
 
     spikes: tuple
     corner: float | None
@@ -70,7 +70,7 @@ class Repair(NamedTuple):
     @property
     def removed(self) -> int:
         """Spikes replaced over all records."""
-        return int(sum(self.spikes))
+        return int(sum(where.size for where in self.spikes))
 
 
 def settings(spikes: bool, drift: bool) -> dict:
@@ -298,20 +298,14 @@ def apply(records, repair: dict | None, points_per_cycle: float) -> tuple[list[n
     """
     records = [np.asarray(y, dtype=np.float64) for y in records]
     if not repair or (repair.get("spikes") is None and repair.get("highpass") is None):
-        return records, Repair(tuple(0 for _ in records), None, None)
-    counts = []
+        return records, Repair(tuple(np.empty(0, dtype=np.int64) for _ in records), None, None)
+    replaced = [np.empty(0, dtype=np.int64) for _ in records]
     if repair.get("spikes") is not None:
-        out = []
-        for y in records:
-            where = find_spikes(y, repair["spikes"])
-            out.append(fill(y, where) if where.size else y)
-            counts.append(int(where.size))
-        records = out
-    else:
-        counts = [0 for _ in records]
+        replaced = [find_spikes(y, repair["spikes"]) for y in records]
+        records = [fill(y, where) if where.size else y for y, where in zip(records, replaced)]
     corner = repair.get("highpass")
     per_sample = None
     if corner is not None:
         per_sample = float(corner) / float(points_per_cycle)
         records = [highpass(y, per_sample, int(repair.get("order", HIGHPASS_ORDER))) for y in records]
-    return records, Repair(tuple(counts), corner, per_sample)
+    return records, Repair(tuple(replaced), corner, per_sample)
