@@ -50,7 +50,6 @@ calibrations stale (their name hashes the source of the modules that build them)
 
 from __future__ import annotations
 
-import warnings
 from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
@@ -277,9 +276,10 @@ def _within_fences(raw: np.ndarray) -> np.ndarray:
     [[True, True, True, True, False, False]]
     """
     finite = np.isfinite(raw)
-    with warnings.catch_warnings():  # a grid point of NaN only has no quartiles
-        warnings.simplefilter("ignore", RuntimeWarning)
-        q1, q3 = np.nanpercentile(np.where(finite, raw, np.nan), [25.0, 75.0], axis=1, keepdims=True)
+    some = finite.any(axis=1)  # a grid point of NaN only has no quartiles
+    q1, q3 = np.full((2, raw.shape[0], 1), np.nan)
+    if some.any():
+        q1[some], q3[some] = np.nanpercentile(np.where(finite[some], raw[some], np.nan), [25.0, 75.0], axis=1, keepdims=True)
     reach = FENCE * (q3 - q1)
     with np.errstate(invalid="ignore"):
         return finite & ((reach == 0.0) | ((raw >= q1 - reach) & (raw <= q3 + reach)))
