@@ -11,7 +11,7 @@ pages ``{include}`` those files, so no study number is typed into the prose. A s
 results are absent keeps its last generated file. ``--run`` takes the studies to run first
 (``paper``, ``choices``, ``diagnostics``, ``amplitude``, ``tradeoff``, ``coverage``,
 ``coverage_fresh``; ``all``); the coverage and warnings' studies take hours on 2 cores, in
-jobs per cell or per ``e`` that are kept as they finish (run again to go on).
+jobs per cell or per ``e``, load and noise level that are kept as they finish (run again to go on).
 """
 
 from __future__ import annotations
