@@ -649,6 +649,7 @@ def summary(ds: xr.Dataset) -> dict:
         "median_width": _median(ds["high"].values - ds["low"].values),
         "sharpness": sharpness(e, values, ds["high"].values - ds["low"].values),
         "sharpness_robust": sharpness(e, values, ds["high"].values - ds["low"].values, robust=True),
+        "kurtosis": kurtosis_about(e, values),
         "nulls": int((~ok).sum()),
         "null_reasons": _counts(ds["reason"].values[~ok], n, clause=True),
         "estimators": "; ".join(f"{k} {v}" for k, v in Counter(s for s in ds["reported_by"].values if s).most_common()),
@@ -696,24 +697,48 @@ def band_probability(n: int, p: float = NOMINAL) -> float:
     return float(stats.binom.pmf(covered, n, p)[in_band(covered / n)].sum())
 
 
-def sharpness_probability(n: int) -> float:
+def sharpness_probability(n: int, kurtosis: float = 3.0) -> float:
     """Probability that a cell of ``n`` answered records gives a sharpness
     (:func:`sharpness`) inside :data:`SHARPNESS_BAND` when its intervals are exactly 3.92
-    times the spread of the reported ``e`` about the truth (normal, unbiased), from the
-    sampling error of that spread alone: the root mean square of ``n`` normal distances
-    from the truth is ``s sqrt(chi2_n / n)``, so the ratio lies inside when ``chi2_n`` lies
-    between ``n / 1.15^2`` and ``n / 0.9^2``. The widths' median is taken as known (its own
-    scatter only adds to the chance of straying). NaN below two records.
+    times the spread of the reported ``e`` about the truth (unbiased), from the sampling error
+    of that spread alone. The mean square of ``n`` distances from the truth whose
+    distribution has ``kurtosis`` (3: normal) has a relative variance ``(kurtosis - 1) / n``;
+    it is read as ``chi2_nu / nu`` with ``nu = 2 n / (kurtosis - 1)`` (exact for normal
+    distances, ``nu = n``; within a few per cent of simulation for kurtosis up to about 6),
+    so the ratio lies inside when ``chi2_nu`` lies between ``nu / 1.15^2`` and ``nu / 0.9^2``.
+    Heavy tails (a few records reported far off by a much wider estimator) make the spread
+    of a cell less certain and a ratio outside the band likelier. The widths' median is
+    taken as known (its own scatter only adds to the chance of straying). NaN below two
+    records.
 
     Examples
     --------
     >>> sharpness_probability(1000) > sharpness_probability(200) > sharpness_probability(100)
     True
+    >>> sharpness_probability(200, kurtosis=6.0) < sharpness_probability(200)
+    True
     """
     if n < 2:
         return math.nan
+    nu = 2.0 * n / (max(float(kurtosis), 1.0 + 1e-9) - 1.0) if np.isfinite(kurtosis) else float(n)
     low, high = SHARPNESS_BAND
-    return float(stats.chi2.cdf(n / low**2, n) - stats.chi2.cdf(n / high**2, n))
+    return float(stats.chi2.cdf(nu / low**2, nu) - stats.chi2.cdf(nu / high**2, nu))
+
+
+def kurtosis_about(e: float, values) -> float:
+    """``mean(r^4) / mean(r^2)^2`` of the finite ``values`` about ``e`` (``r = value - e``): 3
+    for a normal scatter about the truth, more for heavy tails; NaN below two values or none
+    off ``e``.
+
+    Examples
+    --------
+    >>> round(kurtosis_about(0.0, [-1.0, 1.0, -1.0, 1.0]), 6)
+    1.0
+    """
+    r = np.asarray(values, dtype=float)
+    r = r[np.isfinite(r)] - e
+    m2 = float(np.mean(r**2)) if r.size > 1 else 0.0
+    return float(np.mean(r**4)) / m2**2 if m2 > 0.0 else math.nan
 
 
 def band_chance(tab: pd.DataFrame) -> dict:
@@ -730,7 +755,8 @@ def band_chance(tab: pd.DataFrame) -> dict:
     ``too_narrow`` of them below it; a table without the column counts none) with the
     number an interval exactly as wide as the scatter leaves outside on average from the
     spread's sampling error alone (``expected_unsharp``, each cell's
-    :func:`sharpness_probability`) and the probability of at least as many
+    :func:`sharpness_probability` at its answered count and its ``kurtosis``, 3 where the
+    table has none) and the probability of at least as many
     (``p_unsharp``), and whether the whole target holds (``meets``: the module's target
     constants)."""
     used = tab[tab["answered"] >= BAND_MIN_ANSWERED]
@@ -743,7 +769,8 @@ def band_chance(tab: pd.DataFrame) -> dict:
     cells = len(used)
     ratio = used["sharpness"].to_numpy(dtype=float) if "sharpness" in used else np.full(cells, np.nan)
     known = np.isfinite(ratio)
-    sharp_inside = np.array([sharpness_probability(int(m)) for m in n[known]])
+    kurt = used["kurtosis"].to_numpy(dtype=float) if "kurtosis" in used else np.full(cells, 3.0)
+    sharp_inside = np.array([sharpness_probability(int(m), k) for m, k in zip(n[known], kurt[known])])
     unsharp = int((known & ~in_sharpness_band(ratio)).sum())
     chance = {
         "cells": cells, "outside": out, "expected_outside": float(np.sum(1.0 - inside)),
@@ -830,7 +857,7 @@ def band_markdown(chance: dict) -> str:
             f"more: {chance['below_floor']}; width / (3.92 sd) outside {SHARPNESS_BAND[0]:g}-{SHARPNESS_BAND[1]:g}: "
             f"{chance['unsharp']} of {chance['sharpness_cells']} ({chance['too_narrow']} too narrow), where intervals exactly "
             f"as wide as the scatter leave {chance['expected_unsharp']:.1f} outside on average from the spread's sampling "
-            f"error alone, {chance['unsharp']} or more with probability {chance['p_unsharp']:.2g}. Target (pooled "
+            f"error alone (at each cell's kurtosis), {chance['unsharp']} or more with probability {chance['p_unsharp']:.2g}. Target (pooled "
             f"{100 * POOLED_BAND[0]:.0f}-{100 * POOLED_BAND[1]:.0f} %, dispersion at most {DISPERSION_MAX:g}, out-of-band "
             f"probability at least {P_OUTSIDE_MIN:g}, no cell below {100 * CELL_FLOOR:.0f} %, every cell's width / (3.92 sd) "
             f"inside {SHARPNESS_BAND[0]:g}-{SHARPNESS_BAND[1]:g}): {'met' if chance['meets'] else 'not met'}.")
