@@ -61,11 +61,25 @@ only the noise levels of ``DIAGNOSTICS_COLOURED_NOISE`` (each coloured cell asks
 calibrations of its own, each several times a white one's cost, and its records' measured
 models scatter over many bins)."""
 
+
+def diagnostics_noise(corner: float, noise_levels=DIAGNOSTICS_NOISE, coloured_noise=DIAGNOSTICS_COLOURED_NOISE) -> tuple:
+    """The sensor noise levels the warnings' study runs under a load of ``corner`` (0: white
+    impulses): every one of ``noise_levels`` under a white load, under a coloured one only
+    those also in ``coloured_noise``.
+
+    Examples
+    --------
+    >>> diagnostics_noise(0.0), diagnostics_noise(3.0)
+    ((0.0, 0.01, 0.03, 0.05), (0.0, 0.03))
+    """
+    return tuple(noise_levels) if corner == 0.0 else tuple(x for x in noise_levels if x in coloured_noise)
+
+
 DIAGNOSTICS_PARTS = {
     f"e{e:g}_{'white' if corner == 0.0 else f'corner{corner:g}'}_noise{noise:g}": (e, corner, noise)
     for e in DIAGNOSTICS_E
     for corner in DIAGNOSTICS_CORNERS
-    for noise in (DIAGNOSTICS_NOISE if corner == 0.0 else [x for x in DIAGNOSTICS_NOISE if x in DIAGNOSTICS_COLOURED_NOISE])
+    for noise in diagnostics_noise(corner)
 }
 """The warnings' study's workflow jobs (``results/studies/diagnostics/records_{part}.csv``):
 name -> (true ``e``, load corner, sensor noise), so that the study, hours long on 2 cores,

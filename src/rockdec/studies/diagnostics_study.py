@@ -52,7 +52,7 @@ from rockdec import engine
 from rockdec.rdd import measured
 from rockdec.physics.loading import add_sensor_noise, draw_impulses, series_rng
 from rockdec.physics.simulate import calibrate_dt, integrate
-from rockdec.pipeline.layout import DIAGNOSTICS_COLOURED_NOISE, DIAGNOSTICS_CORNERS, DIAGNOSTICS_E, DIAGNOSTICS_NOISE
+from rockdec.pipeline.layout import DIAGNOSTICS_COLOURED_NOISE, DIAGNOSTICS_CORNERS, DIAGNOSTICS_E, DIAGNOSTICS_NOISE, diagnostics_noise
 from rockdec.record.records import Record
 from rockdec.validate import InputError
 
@@ -220,7 +220,7 @@ def run(
     for e in e_values:
         seeds = STUDY_SEED_OFFSET + DIAGNOSTICS_E.index(e) * 10**6 + np.arange(n_records)
         for corner in corners:
-            for noise in noise_levels if corner == 0.0 else [x for x in noise_levels if x in coloured_noise]:
+            for noise in diagnostics_noise(corner, noise_levels, coloured_noise):
                 cells.append((e, noise, corner, "clean", 0.0, seeds, n_points, POINTS_PER_CYCLE))
                 for defect, sizes in defects.items():
                     if corner != 0.0 and defect not in coloured_defects:
