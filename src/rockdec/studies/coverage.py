@@ -471,13 +471,52 @@ def fresh_chance(rows: pd.DataFrame) -> tuple[dict, dict]:
     return band_chance(own), band_chance(fresh)
 
 
+def calibration_error(rows: pd.DataFrame, calibrations: pd.DataFrame) -> dict:
+    """How far single calibrations stray from :data:`NOMINAL`, and what that does to the
+    dispersion of the cells (:func:`band_chance`) whose records share them.
+
+    ``sd``: the spread of the calibrations' own coverage beyond the binomial, by moments
+    over the calibrations answered on at least :data:`BAND_MIN_ANSWERED` fresh records
+    (``calibrations``, :func:`fresh_calibrations`): ``sqrt(mean((c - p)^2 - p (1 - p) / n))``,
+    0 when the binomial explains it all. ``dispersion``: the covered counts' dispersion a
+    study of the cells ``rows`` (:func:`fresh_summary`) has on average when each cell's
+    records are spread over its calibrations as its own records were: a cell of ``n``
+    records whose calibrations serve shares ``w`` has
+    ``var(k) = n p (1 - p) + (n sum(w^2) - 1) n sd^2``, so the ratio is the mean over the
+    cells answered on at least :data:`BAND_MIN_ANSWERED` records of
+    ``1 + (n sum(w^2) - 1) sd^2 / (p (1 - p))``; ``shares``: the mean ``sum(w^2)``.
+
+    Examples
+    --------
+    >>> rows = pd.DataFrame({"cell": ["a"], "records": [200]})
+    >>> cals = pd.DataFrame({"cell": ["a", "a"], "records": [100, 100], "fresh_answered": [400, 400],
+    ...                      "fresh_coverage": [0.93, 0.97]})
+    >>> out = calibration_error(rows, cals)
+    >>> round(out["sd"], 4), round(out["shares"], 2), round(out["dispersion"], 2)
+    (0.0168, 0.5, 1.59)
+    """
+    p = NOMINAL
+    judged = calibrations[calibrations["fresh_answered"] >= BAND_MIN_ANSWERED]
+    n = judged["fresh_answered"].to_numpy(dtype=float)
+    excess = np.mean((judged["fresh_coverage"].to_numpy(dtype=float) - p) ** 2 - p * (1.0 - p) / n) if len(judged) else math.nan
+    sd = math.sqrt(max(excess, 0.0)) if np.isfinite(excess) else math.nan
+    served = calibrations.groupby("cell")["records"]
+    shares = (served.apply(lambda r: float(np.sum((r / r.sum()) ** 2)) if r.sum() else math.nan)).reindex(rows["cell"]).to_numpy()
+    cells = rows["records"].to_numpy(dtype=float)
+    used = (cells >= BAND_MIN_ANSWERED) & np.isfinite(shares)
+    ratio = 1.0 + (cells[used] * shares[used] - 1.0) * sd**2 / (p * (1.0 - p))
+    return {"calibrations": len(judged), "sd": sd, "shares": float(np.mean(shares[used])) if used.any() else math.nan,
+            "dispersion": float(np.mean(ratio)) if used.any() else math.nan}
+
+
 def fresh_markdown(rows: pd.DataFrame, calibrations: pd.DataFrame | None = None) -> str:
     """The fresh-records table (:func:`fresh_summary` rows) as Markdown, coverages outside
     :data:`COVERAGE_BAND` and sharpness outside :data:`SHARPNESS_BAND` in bold; below it
     the cells read against chance on their own records and on the fresh ones
     (:func:`fresh_chance`, :func:`band_markdown`), and, given ``calibrations``
-    (:func:`fresh_calibrations` rows), each calibration's check on the fresh records it
-    served (bold marks only those answered on :data:`BAND_MIN_ANSWERED` or more)."""
+    (:func:`fresh_calibrations` rows), how far single calibrations stray and the dispersion
+    that makes (:func:`calibration_error`), and each calibration's check on the fresh records
+    it served (bold marks only those answered on :data:`BAND_MIN_ANSWERED` or more)."""
     lines = ["| cell | own records: coverage (n) | fresh: coverage ± se (answered / n) | fresh: every record | fresh declined | "
              "sd own, fresh | width / (3.92 sd) own, fresh | fresh: main bin (share) | fresh: other bins |",
              "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
@@ -496,6 +535,12 @@ def fresh_markdown(rows: pd.DataFrame, calibrations: pd.DataFrame | None = None)
     own, fresh = fresh_chance(rows)
     lines += ["", f"On their own records: {band_markdown(own)}", "", f"On the fresh records: {band_markdown(fresh)}"]
     if calibrations is not None and len(calibrations):
+        error = calibration_error(rows, calibrations)
+        lines += ["", f"Single calibrations on fresh records ({error['calibrations']} answered on at least {BAND_MIN_ANSWERED}): "
+                  f"their coverage strays from {100 * NOMINAL:.0f} % by a standard deviation of {100 * error['sd']:.1f} points "
+                  f"beyond the binomial. The cells' records share their calibrations (mean sum of squared shares "
+                  f"{error['shares']:.2f}), so that error alone makes the own records' dispersion {error['dispersion']:.2f} times "
+                  f"the binomial on average (read on them: {own['chi2_ratio']:.2f})."]
         lines += ["", "| cell | calibration | estimator | own records served | fresh: coverage ± se (answered) | fresh: width / (3.92 sd) |",
                   "| --- | --- | --- | --- | --- | --- |"]
         for r in calibrations.itertuples():
