@@ -116,3 +116,27 @@ def test_a_run_of_one_e_gives_the_rows_a_run_of_all_gives_it(monkeypatch):
     assert whole["seed"].nunique() == len(whole)
     with pytest.raises(ValueError, match="DIAGNOSTICS_E"):
         ds.run(e_values=(0.7,), **small)
+
+
+def test_the_digest_reads_each_checks_false_alarms_and_the_share_caught_where_the_defect_matters():
+    """Two noise levels of 40 and 20 clean records (drift fired on 2 and on none) and the
+    drift of size 1 that moves e at noise 0 only (fired on 30 of 40): false alarms worst
+    5 %, mean (2 + 0) / 60; caught 75 % at size 1 in the one cell where it matters; a check
+    with no defect studied says so rather than a rate."""
+    rows = []
+    for noise, n, alarms in ((0.0, 40, 2), (0.05, 20, 0)):
+        for seed in range(n):
+            row = {"e_true": E, "noise": noise, "corner": 0.0, "defect": "clean", "size": 0.0, "seed": seed, "e_hat": E, "low": E - 0.02, "high": E + 0.02}
+            row.update({f"{c}_fired": c == "drift" and seed < alarms for c in diagnostics.CHECKS})
+            rows.append(row)
+            defective = dict(row, defect="drift", size=1.0, e_hat=E + 0.05 * (noise == 0.0))
+            defective.update({f"{c}_fired": c == "drift" and seed < 30 for c in diagnostics.CHECKS})
+            rows.append(defective)
+    digest = ds.digest(ds.summary(pd.DataFrame(rows))).set_index("check")
+    drift = digest.loc["drift"]
+    assert drift["false_white_worst"] == 5.0 and drift["false_white_mean"] == pytest.approx(100 * 2 / 60)
+    assert drift["false_white_by_noise"] == "0 %: 5.0; 5 %: 0.0" and np.isnan(drift["false_lowpass_mean"])
+    assert drift["caught_mean"] == 75.0 and drift["caught_lowest"] == 75.0 and drift["caught_sizes"] == "1"
+    assert not digest.loc["filtered", "defect_studied"] and np.isnan(digest.loc["filtered", "caught_mean"])
+    text = ds.digest_markdown(digest.reset_index())
+    assert "| `drift` | 5.0 % (3.3 %) |" in text and "its defect is not studied here" in text

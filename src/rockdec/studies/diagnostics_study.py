@@ -298,3 +298,73 @@ def summary(table: pd.DataFrame) -> pd.DataFrame:
                              "lost_pct": 100.0 * lost, "half_interval": half, "matters": bool(abs(shift) > half or lost >= 0.5),
                              "fired_pct": 100.0 * float(fired.mean()) if fired.size else np.nan})
     return pd.DataFrame(rows)
+
+
+def digest(summary_table: pd.DataFrame) -> pd.DataFrame:
+    """One row per check of :func:`summary`'s table: its false alarms on the clean records
+    (size 0), under white impulses (corner 0) and under a low-pass load, as the worst cell's
+    rate and the mean over the cells (each cell weighted by its records), the white load's
+    mean also at each noise level; whether its defect is studied (``defect_studied``); and, on the defective records of the smallest size that
+    matters in each cell (``e``, noise, load), the share caught: the check fired, or
+    ``rockdec estimate`` declined the record (``lost_pct``), as the mean over those records
+    and the lowest cell's (NaN where no size studied matters); and the mean share caught at
+    the most severe size of :data:`DEFECTS` (``caught_severe``, ``severe_size``).
+
+    Examples
+    --------
+    >>> rows = pd.DataFrame({"check": "drift", "e_true": 0.8, "noise": 0.0, "corner": 0.0, "size": [0.0, 1.0, 3.0],
+    ...                      "records": 40, "lost_pct": [0.0, 50.0, 100.0], "matters": [False, True, True],
+    ...                      "fired_pct": [2.5, 60.0, np.nan]})
+    >>> digest(rows)[["check", "false_white_worst", "caught_mean", "caught_sizes"]].to_dict("records")
+    [{'check': 'drift', 'false_white_worst': 2.5, 'caught_mean': 80.0, 'caught_sizes': '1'}]
+    """
+    def rate(rows: pd.DataFrame) -> tuple[float, float]:
+        rows = rows[rows["records"] > 0]
+        if rows.empty:
+            return np.nan, np.nan
+        return float(rows["fired_pct"].max()), float(np.average(rows["fired_pct"], weights=rows["records"]))
+
+    out = []
+    for check, rows in summary_table.groupby("check", sort=False):
+        clean = rows[rows["size"] == 0.0]
+        white, coloured = clean[clean["corner"] == 0.0], clean[clean["corner"] > 0.0]
+        row = {"check": check}
+        row["false_white_worst"], row["false_white_mean"] = rate(white)
+        row["false_white_by_noise"] = "; ".join(f"{100 * noise:g} %: {rate(part)[1]:.1f}" for noise, part in white.groupby("noise"))
+        row["defect_studied"] = bool((rows["size"] > 0.0).any())
+        row["false_lowpass_worst"], row["false_lowpass_mean"] = rate(coloured)
+        defective = rows[rows["size"] > 0.0]
+        smallest = defective[defective["matters"].astype(bool)].sort_values("size").groupby(["e_true", "noise", "corner"]).head(1)
+        caught = _caught(smallest)
+        row["caught_mean"] = float(np.average(caught, weights=smallest["records"].clip(lower=1))) if len(smallest) else np.nan
+        row["caught_lowest"] = float(caught.min()) if len(smallest) else np.nan
+        row["caught_sizes"] = ", ".join(f"{s:g}" for s in sorted(smallest["size"].unique()))
+        severe = defective[defective["size"] == DEFECTS[check][-1]] if check in DEFECTS else defective.iloc[:0]
+        row["severe_size"] = DEFECTS[check][-1] if len(severe) else np.nan
+        row["caught_severe"] = float(np.average(_caught(severe), weights=severe["records"].clip(lower=1))) if len(severe) else np.nan
+        out.append(row)
+    return pd.DataFrame(out)
+
+
+def _caught(rows: pd.DataFrame) -> pd.Series:
+    """Per row of :func:`summary`: the share (%) of its records on which the check fired
+    or which lost their ``e``."""
+    return 100.0 - (100.0 - rows["lost_pct"]) * (1.0 - rows["fired_pct"].fillna(0.0) / 100.0)
+
+
+def digest_markdown(table: pd.DataFrame) -> str:
+    """:func:`digest`'s table as Markdown (rates in per cent, ``-`` where none was read)."""
+    def pct(x) -> str:
+        return "-" if not np.isfinite(x) else f"{x:.1f} %"
+
+    lines = ["| check | false alarms, white load: worst cell (mean) | mean by sensor noise | "
+             "false alarms, low-pass load: worst cell (mean) | caught where it moves `e`: mean (lowest cell) | at sizes | "
+             "caught at the most severe size studied (mean) |",
+             "| --- | --- | --- | --- | --- | --- | --- |"]
+    for r in table.itertuples():
+        caught = (f"{pct(r.caught_mean)} ({pct(r.caught_lowest)})" if np.isfinite(r.caught_mean)
+                  else "no size studied moves `e`" if r.defect_studied else "its defect is not studied here")
+        lines.append(f"| `{r.check}` | {pct(r.false_white_worst)} ({pct(r.false_white_mean)}) | {r.false_white_by_noise or '-'} | "
+                     f"{pct(r.false_lowpass_worst)} ({pct(r.false_lowpass_mean)}) | {caught} | {r.caught_sizes or '-'} | "
+                     + (f"{pct(r.caught_severe)} at {r.severe_size:g} |" if np.isfinite(r.caught_severe) else "- |"))
+    return "\n".join(lines) + "\n"
