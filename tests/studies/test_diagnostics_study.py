@@ -140,3 +140,11 @@ def test_the_digest_reads_each_checks_false_alarms_and_the_share_caught_where_th
     assert not digest.loc["filtered", "defect_studied"] and np.isnan(digest.loc["filtered", "caught_mean"])
     text = ds.digest_markdown(digest.reset_index())
     assert "| `drift` | 5.0 % (3.3 %) |" in text and "its defect is not studied here" in text
+
+
+def test_a_cell_whose_records_are_all_declined_is_caught_in_full():
+    """Every defective record declined (no record checked), some of their clean twins
+    declined too: the records that had an e all lost it, so the cell counts as caught."""
+    rows = pd.DataFrame({"check": "asymmetry", "e_true": 0.98, "noise": 0.05, "corner": 0.0, "size": [0.0, 0.3], "records": [40, 0],
+                         "lost_pct": [0.0, 82.5], "matters": [False, True], "fired_pct": [0.0, np.nan]})
+    assert ds.digest(rows).loc[0, "caught_lowest"] == 100.0

@@ -348,8 +348,10 @@ def digest(summary_table: pd.DataFrame) -> pd.DataFrame:
 
 def _caught(rows: pd.DataFrame) -> pd.Series:
     """Per row of :func:`summary`: the share (%) of its records on which the check fired
-    or which lost their ``e``."""
-    return 100.0 - (100.0 - rows["lost_pct"]) * (1.0 - rows["fired_pct"].fillna(0.0) / 100.0)
+    or which lost their ``e``; a row with no record checked (every record declined, with or
+    without its clean twin) counts as caught in full when any record lost its ``e``."""
+    caught = 100.0 - (100.0 - rows["lost_pct"]) * (1.0 - rows["fired_pct"].fillna(0.0) / 100.0)
+    return caught.where(rows["records"] > 0, np.where(rows["lost_pct"] > 0.0, 100.0, np.nan))
 
 
 def digest_markdown(table: pd.DataFrame) -> str:
