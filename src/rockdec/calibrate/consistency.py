@@ -50,7 +50,7 @@ import numpy as np
 #: Share of the ``chi^2_{k-1}`` distribution below the threshold (:func:`threshold`): a pool
 #: of records of one block whose raw values were normal with the belt's spread would fire on
 #: ``1 - LEVEL`` of pools. Far stricter than 95 % because neither holds at low ``e``: a single
-#: record's ``e_v`` there has a heavy right tail, and the belt's spread, from a few dozen
+#: record's ``e_v`` there has a heavy right tail, and the belt's spread, from the finite
 #: sets per grid point of such values, falls short of their scatter. The rates of pairs of one
 #: block and of two blocks at each level: ``benchmarks/pooled_consistency.py``
 #: (docs/explanation/method/warnings.md, "Records given together").

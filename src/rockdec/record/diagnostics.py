@@ -16,7 +16,7 @@ of a ``"high"`` check (``1 - QUANTILE`` of a ``"low"`` one) of the null (:func:`
 the grid points inside the record's 95 % interval of ``e`` and the nearest grid point
 beyond each end of it (:func:`_near`; a statistic that moves with ``e``, as ``filtered`` does
 at low ``e``, is then read against points that bracket the truth): each point's own location and scale, the shape of the
-tail read off every set of the calibration (a tail quantile of the near points' few dozen
+tail read off every set of the calibration (a tail quantile of the near points' few hundred
 sets alone rests on their few largest values and fires too often on clean records; the
 pooled null's false alarms, also under a low-pass load whose model is measured off the
 record, are what :mod:`rockdec.studies.diagnostics_study` measures). Pooling over the interval takes the widest null of
@@ -668,8 +668,8 @@ def null(values: np.ndarray, group: np.ndarray, shared_spread: bool = False) -> 
     point, the root mean of the usable points' variances (a statistic whose spread, as a
     logarithm, is the same at every ``e``: :data:`REGISTRY`'s ``"widest"`` nulls), so only
     the location is read off each point's sets. The shape of the null's tail is read off every set of the
-    calibration (some 300), only its location and scale off the sets near the record's
-    ``e`` (some 90): a tail quantile of 90 sets rests on their few largest values. Values all positive (counts, ratios, magnitudes) are
+    calibration, only its location and scale off the sets near the record's ``e`` (those of
+    three or so grid points): a tail quantile of so few sets rests on their few largest values. Values all positive (counts, ratios, magnitudes) are
     located and scaled as logarithms, so the null stays positive. A grid point with fewer
     than :data:`NULL_MIN_SETS` finite values or none spread contributes its values as they
     are."""
