@@ -306,9 +306,11 @@ def digest(summary_table: pd.DataFrame) -> pd.DataFrame:
     rate and the mean over the cells (each cell weighted by its records), the white load's
     mean also at each noise level; whether its defect is studied (``defect_studied``); and, on the defective records of the smallest size that
     matters in each cell (``e``, noise, load), the share caught: the check fired, or
-    ``rockdec estimate`` declined the record (``lost_pct``), as the mean over those records
-    and the lowest cell's (NaN where no size studied matters); and the mean share caught at
-    the most severe size of :data:`DEFECTS` (``caught_severe``, ``severe_size``).
+    ``rockdec estimate`` declined the record (``lost_pct``), as the mean over those cells
+    weighted by the records checked in each (one for a cell whose every record was
+    declined) and the lowest cell's (NaN where no size studied matters); and the share
+    caught at the most severe size of :data:`DEFECTS`, averaged alike (``caught_severe``,
+    ``severe_size``).
 
     Examples
     --------
@@ -331,9 +333,9 @@ def digest(summary_table: pd.DataFrame) -> pd.DataFrame:
         row = {"check": check}
         row["false_white_worst"], row["false_white_mean"] = rate(white)
         row["false_white_by_noise"] = "; ".join(f"{100 * noise:g} %: {rate(part)[1]:.1f}" for noise, part in white.groupby("noise"))
-        row["defect_studied"] = bool((rows["size"] > 0.0).any())
         row["false_lowpass_worst"], row["false_lowpass_mean"] = rate(coloured)
         defective = rows[rows["size"] > 0.0]
+        row["defect_studied"] = not defective.empty
         smallest = defective[defective["matters"].astype(bool)].sort_values("size").groupby(["e_true", "noise", "corner"]).head(1)
         caught = _caught(smallest)
         row["caught_mean"] = float(np.average(caught, weights=smallest["records"].clip(lower=1))) if len(smallest) else np.nan
