@@ -138,19 +138,31 @@ def housner_spectrum_run():
 
 def test_housner_honours_a_spectrum_load():
     """The impulses a Housner series received (velocity after each step minus the free
-    flight's, eq. 2) have ``sigma_p`` and the table's lag-m autocorrelation ``c^m``."""
+    flight's, eq. 2) have ``sigma_p`` and the table's lag-m autocorrelation ``c^m``, read
+    over four seeds, each series up to the step before its overturn (if it falls): which
+    series fall, and when, is not the same on every machine (the spectrum load's gains go
+    through NumPy's SIMD logarithm), but the claim holds on any stretch of any series."""
     from rockdec.physics.housner import housner_flight
 
     contract = housner_spectrum_run()
     assert contract.model == "housner" and contract.load.kind == "spectrum" and math.isnan(contract.pole)
     c = Load("lowpass", 1.0).pole(N_CYCLE)
-    theta, theta_dot = (contract.dataset([3], 20_000)[name].values[0] for name in ("theta", "theta_dot"))
+    ds = contract.dataset([0, 1, 2, 3], 20_000)
     nu = math.sqrt(contract.g / contract.theta_cr)
-    free = np.array([housner_flight(theta[n], theta_dot[n], contract.dt, nu, contract.theta_cr, contract.e)[1] for n in range(theta.size - 1)])
-    p = theta_dot[1:] - free
+    received = []
+    for theta, theta_dot in zip(ds["theta"].values, ds["theta_dot"].values):
+        standing = np.flatnonzero(~(np.abs(theta) < contract.theta_cr))
+        end = (standing[0] if standing.size else theta.size) - 1  # the last step that starts and ends standing
+        free = np.array([housner_flight(theta[n], theta_dot[n], contract.dt, nu, contract.theta_cr, contract.e)[1] for n in range(end)])
+        received.append(theta_dot[1 : end + 1] - free)
+    lengths = [p.size for p in received]
+    assert sum(lengths) >= 40_000, lengths  # most of the four series stand
+    p = np.concatenate(received)
+    assert np.isfinite(p).all()
     assert p.std() == pytest.approx(contract.sigma_p, rel=0.1)
     for m in (1, 5):
-        assert np.corrcoef(p[m:], p[:-m])[0, 1] == pytest.approx(c**m, abs=0.03)
+        lagged = np.concatenate([q[m:] * q[:-m] for q in received]).mean() / np.concatenate([q * q for q in received]).mean()
+        assert lagged == pytest.approx(c**m, abs=0.03)
 
 
 @pytest.mark.filterwarnings("ignore::rockdec.rdd.signatures.NoTriggerWarning")

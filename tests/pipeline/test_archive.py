@@ -211,6 +211,7 @@ def test_rebuild_remakes_tables_and_figures_from_the_archive_without_simulating(
     code, text = verify([folder, "--rebuild", out], capsys)
     assert code == 0, text
     assert text.count(": same as the archived") == 6 and "DIFFERS" not in text
+    assert "checked: the 6 files above" in text and "not rerun: the simulation" in text  # says what it compared
     results = reference / "results" / SCENE
     rebuilt = products(out)
     expected = {name for name in products(results) if name.endswith((".csv", ".md", ".png", ".pdf"))}
