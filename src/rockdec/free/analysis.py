@@ -3,19 +3,21 @@
 Per impact (eq. 6): ``e_i = |omega_after| / |omega_before|``, the speeds of the fitted arcs
 either side of the impact (:mod:`rockdec.free.arcs`), with the standard error of the fit.
 
-Pooled over the impacts: both models lose the same fraction of speed at every impact and
-none in flight, so the log of each arc's impact speed falls on a straight line in the arc's
-number, ``log S_k = a + k log e`` (one intercept ``a`` per release). The line is fitted by
-generalised least squares with the arcs' covariance from the fit (neighbouring arcs share an
-impact time, so their speeds are correlated); this is the efficient combination of the
-impacts, where a plain mean of ``log e_i`` would telescope to the first and last arc only.
-The standard error of the slope is widened by the Birge ratio ``sqrt(chi^2/dof)`` of the
-line when it exceeds 1 (the impacts scatter more than their fit errors say: a block whose
-``e`` varies from impact to impact, or a model that misses), and the 95 % interval is
-``exp(slope +- z se)`` with ``z`` the normal quantile (:data:`CONFIDENCE`): the fit's scale
-rests on every sample of the arcs, so its own uncertainty is negligible, and widening by the
-Birge ratio only where it exceeds 1 already errs on the wide side. Its coverage and the per-impact bias are measured by
-:mod:`rockdec.studies.free_coverage` (benchmarks/free_coverage.py).
+Pooled over the impacts: ``log e_k = log S_k - log S_(k-1)``, the steps between the log
+impact speeds of neighbouring arcs, scatter about the block's ``mu = log e`` by the arcs'
+fit errors (neighbouring arcs share an impact time, so the steps are correlated: covariance
+``D C D^T`` of each release's log speeds ``C``) and by the block's own impact-to-impact
+spread ``tau`` (its ``e`` varies from impact to impact: each impact draws anew, so the log
+speeds walk). ``mu`` is their generalised least-squares mean under the covariance
+``D C D^T + tau^2 I``, with ``tau^2`` where the generalised Q statistic equals its degrees of
+freedom (Paule-Mandel) and the 95 % interval of ``tau`` where Q meets the chi-square
+quantiles (the Q-profile). With ``tau = 0`` this is the line of log speeds
+``log S_k = a + k log e`` (one intercept per release), the efficient combination of the
+impacts, which ``e`` keeps (its interval widened by the Birge ratio ``sqrt(Q(0)/dof)`` above
+1) unless ``Q(0)`` passes its chi-square test (:data:`SCATTER_LEVEL`); past it, ``e = exp(mu)``
+under the spread, with Student's ``t`` quantile. The impacts' spread is reported as ``e tau`` (the standard deviation of the
+per-impact ``e``). Per-impact ratios above 1 are kept and counted. Coverage and per-impact
+bias: :mod:`rockdec.studies.free_coverage` (benchmarks/free_coverage.py).
 
 A valid record that gives no ``e`` (fewer than :data:`MIN_IMPACTS` impacts) returns a result
 whose ``e`` is NaN and whose ``reason`` says why; a record that is not a free-rocking record
@@ -26,9 +28,10 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, fields
+from typing import NamedTuple
 
 import numpy as np
-from scipy import stats
+from scipy import optimize, stats
 
 from rockdec import validate as checks
 from rockdec.free import arcs
@@ -71,6 +74,12 @@ OVERTURN_FACTOR = 2.0
 #: Float32 records are held to their own rounding (``eps/sqrt(12)``).
 SAMPLE_PRECISION = 1e-12
 
+#: Level of the chi-square test of the impacts' scatter over their fit errors (``Q(0)``,
+#: module docstring) beyond which ``e`` is the mean of a walk of log speeds (``tau > 0``)
+#: rather than the line of log speeds: a spread the fits explain keeps the line's efficient
+#: weighting, which a chance ``tau`` of the size of the fit errors would undo.
+SCATTER_LEVEL = 0.95
+
 #: A trend of ``e`` with amplitude this many standard errors from zero is noted: both models
 #: hold ``e`` constant, so a trend is the block's own (or a model that misses).
 TREND_Z = 3.0
@@ -104,8 +113,11 @@ class FreeRockingFit:
     """What a free-rocking analysis found (:func:`analyse_free_rocking`).
 
     Pooled: ``e`` with its ``e_interval`` (low, high) at ``confidence_level``, the standard
-    error of ``log e`` (``log_e_se``, widened by ``scatter_ratio`` when that exceeds 1) and
-    the degrees of freedom of the line of log speeds (``dof``); ``g`` (rad/s^2) and ``nu``
+    error of ``log e`` (``log_e_se``, with the impacts' spread in its weights), the scatter
+    of the impacts over their fit errors alone (``scatter_ratio``, 1 when the fits explain
+    it) and the degrees of freedom (``dof``, impacts less one); the impacts' spread
+    ``e_spread`` (the standard deviation of the per-impact ``e``) with its
+    ``e_spread_interval``, and ``impacts_above_one`` (ratios above 1, kept); ``g`` (rad/s^2) and ``nu``
     (rad/s, NaN without ``theta_cr``) read from the arcs with their intervals; ``reason``:
     why there is no ``e`` (``None`` when there is one).
 
@@ -158,6 +170,9 @@ class FreeRockingFit:
     noise_std: np.ndarray
     e_trend: float = math.nan
     e_trend_se: float = math.nan
+    e_spread: float = math.nan
+    e_spread_interval: tuple[float, float] = (math.nan, math.nan)
+    impacts_above_one: int = 0
     notes: tuple[str, ...] = field(default=())
 
     @property
@@ -422,7 +437,7 @@ def analyse_free_rocking(theta, dt, *, model: str = "simplified", theta_cr: floa
 def _result(fits, seq_meta, notes, noises, model, theta_cr) -> FreeRockingFit:
     """Per-impact table and the pooled estimates of the fitted releases."""
     cols = {k: [] for k in ("time", "record", "release", "amp", "wb", "wb_se", "wa", "wa_se", "e", "e_se")}
-    blocks, ys, index, owner = [], [], [], []
+    blocks, ys = [], []
     for s, (fit, (r, _, _)) in enumerate(zip(fits, seq_meta)):
         logs, cov = arcs.log_speeds(fit)
         H = fit.half_durations
@@ -445,20 +460,27 @@ def _result(fits, seq_meta, notes, noises, model, theta_cr) -> FreeRockingFit:
             cols["e_se"].append(e_i * math.sqrt(max(var, 0.0)))
         blocks.append(cov)
         ys.append(logs)
-        index.append(np.arange(logs.size))
-        owner.append(np.full(logs.size, s))
     n_impacts = len(cols["e"])
     e, log_se, birge, dof, interval, reason = math.nan, math.nan, math.nan, 0, (math.nan, math.nan), None
+    spread, spread_interval = math.nan, (math.nan, math.nan)
     if n_impacts < MIN_IMPACTS:
         reason = (f"only {n_impacts} impact{'s' if n_impacts != 1 else ''} could be fitted, fewer than the {MIN_IMPACTS} a pooled e "
                   "with an interval needs; record more samples per cycle, a larger release angle or more releases.")
     else:
-        slope, log_se, birge, dof = _line_of_log_speeds(ys, index, owner, blocks)
-        e = math.exp(slope)
-        log_se = max(log_se * (max(1.0, birge) if dof > 0 else 1.0), SAMPLE_PRECISION)
-        interval = _interval(slope, log_se, log=True)
+        pooled = _impact_mean(ys, blocks)
+        e, birge, dof = math.exp(pooled.mu), pooled.scatter, pooled.dof
+        log_se = max(pooled.se, SAMPLE_PRECISION)
+        interval = (math.exp(pooled.mu - pooled.quantile * log_se), math.exp(pooled.mu + pooled.quantile * log_se))
+        spread, spread_interval = e * pooled.tau, tuple(e * t for t in pooled.tau_interval)
         if dof == 0:
             notes.append("one impact only: its interval rests on the fit alone, with no check of the impacts' scatter.")
+    above = np.asarray(cols["e"]) > 1.0
+    for s in range(len(fits)):
+        mine = above[np.asarray(cols["release"], dtype=int) == s]
+        if mine.size >= 2 and mine.mean() > 0.5:
+            notes.append(f"release {s + 1}: {int(mine.sum())} of its {mine.size} impacts return more speed than they receive "
+                         "(ratio above 1), which a free block cannot do on average: a bounce, a second contact or the sensor; "
+                         "look at this release's record.")
     trend, trend_se = _trend(ys, blocks, cols["amp"])
     if abs(trend) > TREND_Z * trend_se:
         notes.append(f"e changes with amplitude: log e grows by {trend:.3g} per rad of the apex before the impact "
@@ -489,7 +511,8 @@ def _result(fits, seq_meta, notes, noises, model, theta_cr) -> FreeRockingFit:
         release_record=np.array([m[0] for m in seq_meta], dtype=int), release_g=np.asarray(release_g, dtype=float),
         stop_time=np.array([m[1] for m in seq_meta]), stop_reason=tuple(m[2] for m in seq_meta),
         residual_std=np.array([f.residual_std for f in fits]), fitted_times=tuple(f.times for f in fits), fitted_q=q,
-        noise_std=np.array(noises), e_trend=trend, e_trend_se=trend_se, notes=tuple(notes),
+        noise_std=np.array(noises), e_trend=trend, e_trend_se=trend_se, e_spread=spread, e_spread_interval=tuple(spread_interval),
+        impacts_above_one=int(above.sum()), notes=tuple(notes),
     )
 
 
@@ -517,17 +540,66 @@ def _gls(y, X, V):
     return beta, np.linalg.pinv(Xw.T @ Xw), float(np.sum((yw - Xw @ beta) ** 2))
 
 
-def _line_of_log_speeds(ys, index, owner, blocks):
-    """GLS slope of ``log S`` on the arc number, one intercept per release; returns the
-    slope, its standard error, the Birge ratio and the degrees of freedom."""
-    y = np.concatenate(ys)
-    X = np.zeros((y.size, len(ys) + 1))
-    X[np.arange(y.size), np.concatenate(owner)] = 1.0
-    X[:, -1] = np.concatenate(index)
-    beta, cov, chi2 = _gls(y, X, _block_diagonal(blocks))
-    dof = y.size - len(ys) - 1
-    birge = math.sqrt(chi2 / dof) if dof > 0 else math.nan
-    return float(beta[-1]), float(math.sqrt(max(cov[-1, -1], 0.0))), birge, int(dof)
+class _ImpactMean(NamedTuple):
+    """The pooled ``mu = log e`` of the impacts (module docstring): its standard error, the
+    scatter of the steps over their fit errors alone (``sqrt(Q(0)/dof)``), the degrees of
+    freedom, the impacts' spread ``tau`` of ``log e`` with its 95 % interval, and the
+    quantile of the interval of ``mu`` (normal with ``tau = 0``, Student's ``t`` otherwise)."""
+
+    mu: float
+    se: float
+    scatter: float
+    dof: int
+    tau: float
+    tau_interval: tuple[float, float]
+    quantile: float
+
+
+def _impact_mean(ys, blocks) -> _ImpactMean:
+    """The steps of each release's log speeds ``ys`` (covariances ``blocks``) pooled into one
+    ``mu`` under the covariance ``D C D^T + tau^2 I``, ``tau^2`` by Paule-Mandel and its
+    interval by the Q-profile (module docstring). Each release's step covariance is
+    diagonalised once, its eigenvalues held above ``1e-14`` of the largest (a noise-free
+    record's covariance is near-singular), so ``Q(tau^2)`` costs a sum."""
+    parts = []
+    for y, c in zip(ys, blocks):
+        if y.size >= 2:
+            w, U = np.linalg.eigh(np.diff(np.diff(c, axis=0), axis=1))  # D C D^T
+            parts.append((U.T @ np.diff(y), U.sum(axis=0), w))
+    floor = max(max(float(w.max()) for _, _, w in parts), np.finfo(float).tiny) * 1e-14
+
+    def weighted(tau2):
+        inv = [1.0 / np.maximum(w + tau2, floor) for _, _, w in parts]
+        a = sum(float(o @ (i * o)) for (_, o, _), i in zip(parts, inv))
+        mu = sum(float(o @ (i * d)) for (d, o, _), i in zip(parts, inv)) / a
+        q = sum(float(np.sum(i * (d - mu * o) ** 2)) for (d, o, _), i in zip(parts, inv))
+        return mu, 1.0 / math.sqrt(a), q
+
+    dof = sum(d.size for d, _, _ in parts) - 1
+    steps = np.concatenate([d for d, _, _ in parts])
+    q0 = weighted(0.0)[2]
+
+    def tau2_at(target):  # Q falls as tau^2 grows: the tau^2 where it meets target (0 if below already)
+        if not q0 > target:
+            return 0.0
+        high = max(float(np.var(steps)), floor)
+        while weighted(high)[2] > target:
+            high *= 4.0
+        return optimize.brentq(lambda t2: weighted(t2)[2] - target, 0.0, high, xtol=1e-14 * high, rtol=1e-12)
+
+    if dof < 1:
+        mu, se, _ = weighted(0.0)
+        return _ImpactMean(mu, se, math.nan, dof, math.nan, (math.nan, math.nan), stats.norm.ppf(0.5 + CONFIDENCE / 2))
+    tau2 = tau2_at(dof)
+    low, high = (math.sqrt(tau2_at(stats.chi2.ppf(p, dof))) for p in (0.5 + CONFIDENCE / 2, 0.5 - CONFIDENCE / 2))
+    if q0 > stats.chi2.ppf(SCATTER_LEVEL, dof):  # the impacts scatter beyond their fits: the log speeds walk
+        mu, se, _ = weighted(tau2)
+        quantile = stats.t.ppf(0.5 + CONFIDENCE / 2, dof)
+    else:  # the line of log speeds, widened by the Birge ratio where it exceeds 1
+        mu, se, _ = weighted(0.0)
+        se *= max(1.0, math.sqrt(q0 / dof))
+        quantile = stats.norm.ppf(0.5 + CONFIDENCE / 2)
+    return _ImpactMean(mu, se, math.sqrt(q0 / dof), dof, math.sqrt(tau2), (low, high), float(quantile))
 
 
 def _trend(ys, blocks, amplitudes):

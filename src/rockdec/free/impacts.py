@@ -7,9 +7,9 @@ impact gives one crossing, not several; its position is the zero of the straight
 between the samples around it (the arc fits of :mod:`rockdec.free.arcs` then refine it).
 The record splits into segments between crossings. A segment that rises above the last
 fitted arc (more than noise and sampling allow, :data:`GROWTH_RELATIVE`, :data:`GROWTH_SIGMAS`)
-holds a release, or else the record is a forced response: free rocking only loses energy, so
-the amplitude can grow only where a hand lifts the block, after holding it
-(:data:`RELEASE_LEAD`). A release's sequence runs on, arc by arc, while each arc has at least
+holds a release, or else the record is a forced response: free rocking loses energy on
+average, so the amplitude can grow beyond one impact's scatter (:data:`IMPACT_GAIN`) only
+where a hand lifts the block, after holding it (:data:`RELEASE_LEAD`). A release's sequence runs on, arc by arc, while each arc has at least
 ``min_arc_samples`` samples and rises :data:`MIN_HEIGHT_SIGMAS` noise standard deviations
 above zero; the first arc that does not ends it, with the reason.
 
@@ -40,6 +40,12 @@ MIN_HEIGHT_SIGMAS = 5.0
 #: release: a relative part (beside the sampled apex's miss, :func:`_sampled_share`) and a part in sensor-noise standard deviations
 #: (the largest of a few hundred noisy samples exceeds the true apex by up to about 3 of them).
 GROWTH_RELATIVE, GROWTH_SIGMAS = 0.02, 6.0
+
+#: Largest ratio of speeds after and before one impact that is still read as an impact of a
+#: rocking block rather than a new push: a block whose ``e`` scatters from impact to impact
+#: (per-impact ratios above 1 are common in laboratory records) raises its next apex by up
+#: to the square of this; a larger rise while the block rocks is a forced response.
+IMPACT_GAIN = 1.25
 
 #: Level below the peak, in sensor-noise standard deviations, that still counts as the held
 #: block before a release (the noisy hold scatters about 3 of them either way of its level).
@@ -227,7 +233,7 @@ def find_sequences(theta: np.ndarray, noise: float, min_arc_samples: int) -> lis
     current: dict | None = None
     reference = np.inf  # the highest apex any later free flight can have: that of the last fitted arc
     for k, (lo, hi, side, peak) in enumerate(segments):
-        grew = peak > reference * (1.0 + GROWTH_RELATIVE) + GROWTH_SIGMAS * noise
+        grew = peak > reference * IMPACT_GAIN**2 * (1.0 + GROWTH_RELATIVE) + GROWTH_SIGMAS * noise
         last = k == len(segments) - 1
         if grew and not last and k > 0:
             release = _release(theta, lo, hi, side, peak, noise, crossings.position[k])

@@ -1,7 +1,8 @@
 """The free-rocking test as an estimate's document, report and dataset
 (:func:`rockdec.free_rocking`, a :class:`rockdec.RestitutionEstimate` with ``test == "free"``).
 
-The document holds the pooled ``e`` and its interval, ``g`` (and ``nu``), one row per impact
+The document holds the pooled ``e`` and its interval, the impacts' spread of ``e`` with its
+interval and how many impacts returned more speed than they received, ``g`` (and ``nu``), one row per impact
 and one per release (where its analysis stopped and why), the trend of ``e`` with
 amplitude and the notes of the analysis (:mod:`rockdec.free.analysis`).
 """
@@ -58,6 +59,9 @@ def free_document(fit, sources: list[str], steps: list[float], sizes: list[int])
         "theta_cr": fit.theta_cr,
         "log_e_se": json_number(fit.log_e_se),
         "scatter_ratio": json_number(fit.scatter_ratio),
+        "e_spread": json_number(fit.e_spread),
+        "e_spread_interval": _pair(fit.e_spread_interval),
+        "impacts_above_one": int(fit.impacts_above_one),
         "e_trend": json_number(fit.e_trend),
         "e_trend_se": json_number(fit.e_trend_se),
         "dt": float(steps[0]),
@@ -81,9 +85,13 @@ def free_text(doc: dict, verbose: bool = False) -> str:
         low, high = doc["interval"]
         lines = [
             f"e = {doc['e']:.4f} (95 % interval [{low:.4f}, {high:.4f}]; free-rocking test: {len(impacts)} impacts of "
-            f"{len(releases)} release(s), the line of log impact speeds)",
+            f"{len(releases)} release(s), pooled over the steps of their log impact speeds)",
             "  the interval's coverage is measured by the free-rocking study on simulated records of known e",
         ]
+        if doc.get("e_spread") is not None and doc.get("e_spread_interval"):
+            s_low, s_high = doc["e_spread_interval"]
+            lines.append(f"  spread of e from impact to impact: {doc['e_spread']:.4f} (95 % interval [{s_low:.4f}, {s_high:.4f}]); "
+                         f"{doc.get('impacts_above_one', 0)} of {len(impacts)} impacts returned more speed than they received")
     g = "-" if doc["g"] is None else f"{doc['g']:.5g}"
     inner = f", 95 % interval [{doc['g_interval'][0]:.5g}, {doc['g_interval'][1]:.5g}]" if doc.get("g_interval") else ""
     lines += [
@@ -110,7 +118,7 @@ def free_text(doc: dict, verbose: bool = False) -> str:
 
 def free_dataset(res):
     """The CF-1.10 dataset of a free-rocking estimate: ``e`` with ``e_low``/``e_high``,
-    ``g`` with its bounds, and per ``impact`` its time, apex, speeds and ``e``."""
+    the impact-to-impact spread ``e_spread`` with its bounds, ``g`` with its bounds, and per ``impact`` its time, apex, speeds and ``e``."""
     import xarray as xr
 
     from rockdec.report.result_dataset import global_attrs
@@ -123,6 +131,7 @@ def free_dataset(res):
 
     low, high = doc["interval"] if doc["e"] is not None else (None, None)
     g_low, g_high = doc["g_interval"] or (None, None)
+    spread_low, spread_high = doc.get("e_spread_interval") or (None, None)
     nan = lambda x: math.nan if x is None else float(x)  # noqa: E731
     what = "coefficient of restitution"
     ds = xr.Dataset(
@@ -134,6 +143,10 @@ def free_dataset(res):
                                       "ancillary_variables": "g_low g_high"}),
             "g_low": ((), nan(g_low), {"units": "rad s-2", "long_name": "restoring acceleration, lower end of the 95 % confidence interval"}),
             "g_high": ((), nan(g_high), {"units": "rad s-2", "long_name": "restoring acceleration, upper end of the 95 % confidence interval"}),
+            "e_spread": ((), nan(doc.get("e_spread")), {"units": "1", "long_name": f"standard deviation of the {what} from impact to impact",
+                                                         "ancillary_variables": "e_spread_low e_spread_high"}),
+            "e_spread_low": ((), nan(spread_low), {"units": "1", "long_name": "impact-to-impact spread, lower end of the 95 % confidence interval"}),
+            "e_spread_high": ((), nan(spread_high), {"units": "1", "long_name": "impact-to-impact spread, upper end of the 95 % confidence interval"}),
             "impact_time": ("impact", column("time"), {"units": "s", "long_name": "time of the impact on its record's axis"}),
             "amplitude_before": ("impact", column("amplitude_before"), {"units": "rad", "long_name": "apex of the flight before the impact"}),
             "omega_before": ("impact", column("omega_before"), {"units": "rad s-1", "long_name": "angular velocity just before the impact"}),
