@@ -34,7 +34,7 @@ import numpy as np
 from scipy import optimize, stats
 
 from rockdec import validate as checks
-from rockdec.free import arcs
+from rockdec.free import arcs, flight_loss
 from rockdec.free.impacts import CROSSING_BAND_SIGMAS, find_crossings, find_sequences, noise_std
 from rockdec.physics.models import MODEL_TOLERANCE, MODELS, amplitude_limit
 from rockdec.timeaxis import RecordError, sampling_step
@@ -80,6 +80,11 @@ SAMPLE_PRECISION = 1e-12
 #: weighting, which a chance ``tau`` of the size of the fit errors would undo.
 SCATTER_LEVEL = 0.95
 
+#: ``z`` of the pooled loss in flight ``c`` (the score test, one-sided) beyond which the arcs
+#: are fitted with it (:mod:`rockdec.free.flight_loss`) and ``e`` is the impacts' share: an
+#: ideal block's ``c`` passes it by chance on about 2.5 % of records (tests/free/test_flight_loss.py).
+LOSS_Z = 1.96
+
 #: A trend of ``e`` with amplitude this many standard errors from zero is noted: both models
 #: hold ``e`` constant, so a trend is the block's own (or a model that misses).
 TREND_Z = 3.0
@@ -117,7 +122,11 @@ class FreeRockingFit:
     of the impacts over their fit errors alone (``scatter_ratio``, 1 when the fits explain
     it) and the degrees of freedom (``dof``, impacts less one); the impacts' spread
     ``e_spread`` (the standard deviation of the per-impact ``e``) with its
-    ``e_spread_interval``, and ``impacts_above_one`` (ratios above 1, kept); ``g`` (rad/s^2) and ``nu``
+    ``e_spread_interval``, and ``impacts_above_one`` (ratios above 1, kept); the loss in
+    flight ``flight_loss`` (``c`` of ``theta'' = -g sign(theta) - c theta'``, 1/s) with its
+    ``flight_loss_interval``, and ``loss_in_flight``: whether the arcs were fitted with it
+    (its score test passed :data:`LOSS_Z`; else ``c`` is the test's one-step reading and
+    ``e`` is the one-``e`` model's); ``g`` (rad/s^2) and ``nu``
     (rad/s, NaN without ``theta_cr``) read from the arcs with their intervals; ``reason``:
     why there is no ``e`` (``None`` when there is one).
 
@@ -173,6 +182,9 @@ class FreeRockingFit:
     e_spread: float = math.nan
     e_spread_interval: tuple[float, float] = (math.nan, math.nan)
     impacts_above_one: int = 0
+    flight_loss: float = math.nan
+    flight_loss_interval: tuple[float, float] = (math.nan, math.nan)
+    loss_in_flight: bool = False
     notes: tuple[str, ...] = field(default=())
 
     @property
@@ -385,7 +397,7 @@ def analyse_free_rocking(theta, dt, *, model: str = "simplified", theta_cr: floa
     many = len(records) > 1
     limit = amplitude_limit(MODEL_TOLERANCE)
 
-    fits, seq_meta, notes, noises = [], [], [], []
+    fits, seq_meta, notes, noises, scores = [], [], [], [], []
     for r, (y, step, t0, precision) in enumerate(records):
         name = f"theta[{r}]" if many else "theta"
         noise = noise_std(y)
@@ -431,35 +443,68 @@ def analyse_free_rocking(theta, dt, *, model: str = "simplified", theta_cr: floa
                              f"differ by more than {MODEL_TOLERANCE:.0%}; model='housner' follows the flights there.")
             fits.append(fit)
             seq_meta.append((r, stop_time, reason))
-    return _result(fits, seq_meta, notes, noises, model, theta_cr)
+            if model == "simplified":
+                scores.append((t, y[seq.start : last + 1], precision, *flight_loss.loss_score(t, y[seq.start : last + 1], fit, precision)))
+    loss, loss_se = _pooled_mean([c for *_, c, _ in scores], [se for *_, se in scores]) if scores else (math.nan, math.nan)
+    damped = None
+    if loss > LOSS_Z * loss_se:  # the score test finds a loss in flight: the arcs are fitted with it
+        damped = [flight_loss.fit_sequence(t, y_fit, fit, floor=precision, c0=c) for (t, y_fit, precision, c, _), fit in zip(scores, fits)]
+    return _result(fits, seq_meta, notes, noises, model, theta_cr, damped, (loss, loss_se))
 
 
-def _result(fits, seq_meta, notes, noises, model, theta_cr) -> FreeRockingFit:
-    """Per-impact table and the pooled estimates of the fitted releases."""
+def _impact_steps(fit, damped):
+    """Of one release: each impact's ``log e``, their covariance, and the speeds landing
+    before and leaving after each impact with their standard errors; from the arcs without
+    loss (``damped`` None: neighbouring arcs' log speeds, ``D C D^T``) or with it
+    (:func:`rockdec.free.flight_loss.log_ratios`)."""
+    if damped is None:
+        logs, cov = arcs.log_speeds(fit)
+        speed, sd = np.exp(logs), np.sqrt(np.clip(np.diag(cov), 0.0, None))
+        steps_cov = np.diff(np.diff(cov, axis=0), axis=1)
+        return np.diff(logs), steps_cov, speed[:-1], speed[:-1] * sd[:-1], speed[1:], speed[1:] * sd[1:]
+    steps, steps_cov = flight_loss.log_ratios(damped)
+    landing, leaving = flight_loss.impact_speeds(damped)
+    se = np.sqrt(np.clip(np.diag(steps_cov), 0.0, None))  # the step's error, shared by its two speeds
+    return steps, steps_cov, landing, landing * se / math.sqrt(2.0), leaving, leaving * se / math.sqrt(2.0)
+
+
+def _loss_in_flight(damped) -> tuple[float, float]:
+    """The block's loss in flight ``c`` (1/s) pooled over the releases' fits with it, and its
+    standard error."""
+    c = np.array([d.c for d in damped])
+    c_se = np.array([math.sqrt(max(d.covariance[-1, -1], 0.0)) for d in damped])
+    return _pooled_mean(c, c_se)
+
+
+def _result(fits, seq_meta, notes, noises, model, theta_cr, damped, score) -> FreeRockingFit:
+    """Per-impact table and the pooled estimates of the fitted releases: from their fits
+    with a loss in flight (``damped``, when the score test found one) or without; ``score``
+    is the score test's pooled ``c`` and its standard error."""
+    with_loss = damped is not None
+    loss, loss_se = _loss_in_flight(damped) if with_loss else score
+    if with_loss:
+        notes.append(f"the block loses speed in flight as well as at its impacts (theta'' = -g sign(theta) - c theta', c = {loss:.3g} "
+                     f"+- {loss_se:.2g} per s): e is the impacts' share, flight_loss the flight's.")
     cols = {k: [] for k in ("time", "record", "release", "amp", "wb", "wb_se", "wa", "wa_se", "e", "e_se")}
     blocks, ys = [], []
     for s, (fit, (r, _, _)) in enumerate(zip(fits, seq_meta)):
-        logs, cov = arcs.log_speeds(fit)
-        H = fit.half_durations
-        amp = arcs.shape(0.0, H, fit.q, model, theta_cr)[0]
-        speeds = np.exp(logs)
-        sd = np.sqrt(np.clip(np.diag(cov), 0.0, None))
-        for i in range(1, logs.size):
-            var = cov[i, i] + cov[i - 1, i - 1] - 2.0 * cov[i, i - 1]
-            before_sign = -fit.side * (1.0 if (i - 1) % 2 == 0 else -1.0)
-            e_i = float(np.exp(logs[i] - logs[i - 1]))
-            cols["time"].append(fit.times[i])
+        steps, steps_cov, landing, landing_se, leaving, leaving_se = _impact_steps(fit, damped[s] if with_loss else None)
+        amp = arcs.shape(0.0, fit.half_durations, fit.q, model, theta_cr)[0]
+        for i in range(steps.size):
+            before_sign = -fit.side * (1.0 if i % 2 == 0 else -1.0)
+            e_i = float(np.exp(steps[i]))
+            cols["time"].append(fit.times[i + 1])
             cols["record"].append(r)
             cols["release"].append(s)
-            cols["amp"].append(amp[i - 1])
-            cols["wb"].append(before_sign * speeds[i - 1])
-            cols["wb_se"].append(speeds[i - 1] * sd[i - 1])
-            cols["wa"].append(before_sign * speeds[i])
-            cols["wa_se"].append(speeds[i] * sd[i])
+            cols["amp"].append(amp[i])
+            cols["wb"].append(before_sign * landing[i])
+            cols["wb_se"].append(landing_se[i])
+            cols["wa"].append(before_sign * leaving[i])
+            cols["wa_se"].append(leaving_se[i])
             cols["e"].append(e_i)
-            cols["e_se"].append(e_i * math.sqrt(max(var, 0.0)))
-        blocks.append(cov)
-        ys.append(logs)
+            cols["e_se"].append(e_i * math.sqrt(max(steps_cov[i, i], 0.0)))
+        blocks.append(steps_cov)
+        ys.append(steps)
     n_impacts = len(cols["e"])
     e, log_se, birge, dof, interval, reason = math.nan, math.nan, math.nan, 0, (math.nan, math.nan), None
     spread, spread_interval = math.nan, (math.nan, math.nan)
@@ -485,8 +530,9 @@ def _result(fits, seq_meta, notes, noises, model, theta_cr) -> FreeRockingFit:
     if abs(trend) > TREND_Z * trend_se:
         notes.append(f"e changes with amplitude: log e grows by {trend:.3g} per rad of the apex before the impact "
                      f"(+-{trend_se:.2g}), where the {model} model holds it constant.")
-    q = np.array([f.q for f in fits])
-    q_se = np.array([math.sqrt(max(f.covariance[-1, -1], 0.0)) for f in fits])
+    q = np.array([d.g for d in damped] if with_loss else [f.q for f in fits])
+    q_se = np.array([math.sqrt(max((d if with_loss else f).covariance[-2 if with_loss else -1, -2 if with_loss else -1], 0.0))
+                     for f, d in zip(fits, damped or fits)])
     q_mean, q_mean_se = _pooled_mean(q, q_se) if fits else (math.nan, math.nan)
     q_interval = _interval(q_mean, q_mean_se)
     if model == "simplified":
@@ -512,7 +558,8 @@ def _result(fits, seq_meta, notes, noises, model, theta_cr) -> FreeRockingFit:
         stop_time=np.array([m[1] for m in seq_meta]), stop_reason=tuple(m[2] for m in seq_meta),
         residual_std=np.array([f.residual_std for f in fits]), fitted_times=tuple(f.times for f in fits), fitted_q=q,
         noise_std=np.array(noises), e_trend=trend, e_trend_se=trend_se, e_spread=spread, e_spread_interval=tuple(spread_interval),
-        impacts_above_one=int(above.sum()), notes=tuple(notes),
+        impacts_above_one=int(above.sum()), flight_loss=loss, flight_loss_interval=_interval(loss, loss_se),
+        loss_in_flight=with_loss, notes=tuple(notes),
     )
 
 
@@ -555,17 +602,17 @@ class _ImpactMean(NamedTuple):
     quantile: float
 
 
-def _impact_mean(ys, blocks) -> _ImpactMean:
-    """The steps of each release's log speeds ``ys`` (covariances ``blocks``) pooled into one
-    ``mu`` under the covariance ``D C D^T + tau^2 I``, ``tau^2`` by Paule-Mandel and its
-    interval by the Q-profile (module docstring). Each release's step covariance is
-    diagonalised once, its eigenvalues held above ``1e-14`` of the largest (a noise-free
-    record's covariance is near-singular), so ``Q(tau^2)`` costs a sum."""
+def _impact_mean(steps, covariances) -> _ImpactMean:
+    """Each release's impacts' ``log e`` (``steps``, covariances ``covariances``: ``D C D^T``
+    without loss in flight) pooled into one ``mu`` under the covariance plus ``tau^2 I``,
+    ``tau^2`` by Paule-Mandel and its interval by the Q-profile (module docstring). Each
+    release's covariance is diagonalised once, its eigenvalues held above ``1e-14`` of the
+    largest (a noise-free record's covariance is near-singular), so ``Q(tau^2)`` costs a sum."""
     parts = []
-    for y, c in zip(ys, blocks):
-        if y.size >= 2:
-            w, U = np.linalg.eigh(np.diff(np.diff(c, axis=0), axis=1))  # D C D^T
-            parts.append((U.T @ np.diff(y), U.sum(axis=0), w))
+    for d, c in zip(steps, covariances):
+        if d.size >= 1:
+            w, U = np.linalg.eigh(c)
+            parts.append((U.T @ d, U.sum(axis=0), w))
     floor = max(max(float(w.max()) for _, _, w in parts), np.finfo(float).tiny) * 1e-14
 
     def weighted(tau2):
@@ -602,17 +649,16 @@ def _impact_mean(ys, blocks) -> _ImpactMean:
     return _ImpactMean(mu, se, math.sqrt(q0 / dof), dof, math.sqrt(tau2), (low, high), float(quantile))
 
 
-def _trend(ys, blocks, amplitudes):
+def _trend(steps, covariances, amplitudes):
     """GLS slope of ``log e_i`` on the apex before each impact (1/rad) and its standard error
     (widened by the Birge ratio above 1); NaN with fewer than three impacts or one amplitude.
-    ``log e_i`` are differences of neighbouring log speeds, so their covariance is
-    ``D C D^T`` of each release's (``D`` the difference matrix): neighbours are correlated."""
-    diffs = [np.diff(y) for y in ys]
-    covs = [np.diff(np.diff(c, axis=0), axis=1) for c in blocks]  # D C D^T
-    y = np.concatenate(diffs) if diffs else np.empty(0)
+    ``steps`` and ``covariances`` are each release's ``log e_i`` and their covariance
+    (neighbours are correlated: ``D C D^T`` of the log speeds)."""
+    y = np.concatenate(steps) if steps else np.empty(0)
+    covs = [c for c in covariances if c.size]
     a = np.asarray(amplitudes, dtype=float)
     if y.size < 3 or np.ptp(a) == 0.0:
         return math.nan, math.nan
-    beta, cov, chi2 = _gls(y, np.column_stack([np.ones_like(a), a]), _block_diagonal([c for c in covs if c.size]))
+    beta, cov, chi2 = _gls(y, np.column_stack([np.ones_like(a), a]), _block_diagonal(covs))
     birge = math.sqrt(chi2 / (y.size - 2))
     return float(beta[1]), float(math.sqrt(max(cov[1, 1], 0.0)) * max(1.0, birge))

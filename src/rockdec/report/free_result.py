@@ -2,7 +2,8 @@
 (:func:`rockdec.free_rocking`, a :class:`rockdec.RestitutionEstimate` with ``test == "free"``).
 
 The document holds the pooled ``e`` and its interval, the impacts' spread of ``e`` with its
-interval and how many impacts returned more speed than they received, ``g`` (and ``nu``), one row per impact
+interval and how many impacts returned more speed than they received, the loss in flight
+(``c``, fitted or only tested), ``g`` (and ``nu``), one row per impact
 and one per release (where its analysis stopped and why), the trend of ``e`` with
 amplitude and the notes of the analysis (:mod:`rockdec.free.analysis`).
 """
@@ -62,6 +63,9 @@ def free_document(fit, sources: list[str], steps: list[float], sizes: list[int])
         "e_spread": json_number(fit.e_spread),
         "e_spread_interval": _pair(fit.e_spread_interval),
         "impacts_above_one": int(fit.impacts_above_one),
+        "flight_loss": json_number(fit.flight_loss),
+        "flight_loss_interval": _pair(fit.flight_loss_interval),
+        "loss_in_flight": bool(fit.loss_in_flight),
         "e_trend": json_number(fit.e_trend),
         "e_trend_se": json_number(fit.e_trend_se),
         "dt": float(steps[0]),
@@ -100,6 +104,10 @@ def free_text(doc: dict, verbose: bool = False) -> str:
         f"  {doc['samples']} samples at a step of {doc['dt']:.6g} s; flights fitted with the {doc['model']} model",
         f"  block's restoring acceleration g = nu^2 theta_cr = {g} rad/s^2 (read off the arcs{inner}; not gravity)",
     ]
+    if doc.get("flight_loss") is not None and doc.get("flight_loss_interval"):
+        c_low, c_high = doc["flight_loss_interval"]
+        lines.append(f"  loss in flight c = {doc['flight_loss']:.3g} per s (95 % interval [{c_low:.3g}, {c_high:.3g}]; "
+                     + ("fitted: e is the impacts' share)" if doc.get("loss_in_flight") else "not found: e from flights without loss)"))
     if doc.get("e_trend") is not None and doc.get("e_trend_se") is not None:
         lines.append(f"  trend of log e with the amplitude before the impact: {doc['e_trend']:+.3g} +- {doc['e_trend_se']:.2g} per rad "
                      "(the models predict none)")
@@ -147,6 +155,8 @@ def free_dataset(res):
                                                          "ancillary_variables": "e_spread_low e_spread_high"}),
             "e_spread_low": ((), nan(spread_low), {"units": "1", "long_name": "impact-to-impact spread, lower end of the 95 % confidence interval"}),
             "e_spread_high": ((), nan(spread_high), {"units": "1", "long_name": "impact-to-impact spread, upper end of the 95 % confidence interval"}),
+            "flight_loss": ((), nan(doc.get("flight_loss")), {"units": "s-1", "long_name": "loss in flight c of theta'' = -g sign(theta) - c theta'",
+                                                              "comment": "fitted" if doc.get("loss_in_flight") else "tested, not found"}),
             "impact_time": ("impact", column("time"), {"units": "s", "long_name": "time of the impact on its record's axis"}),
             "amplitude_before": ("impact", column("amplitude_before"), {"units": "rad", "long_name": "apex of the flight before the impact"}),
             "omega_before": ("impact", column("omega_before"), {"units": "rad s-1", "long_name": "angular velocity just before the impact"}),
