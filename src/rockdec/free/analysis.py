@@ -85,8 +85,8 @@ SCATTER_LEVEL = 0.95
 #: ideal block's ``c`` passes it by chance on about 2.5 % of records (tests/free/test_flight_loss.py).
 LOSS_Z = 1.96
 
-#: A trend of ``e`` with amplitude this many standard errors from zero is noted: both models
-#: hold ``e`` constant, so a trend is the block's own (or a model that misses).
+#: A trend of ``e`` with the impact speed this many standard errors from zero is noted: both
+#: models hold ``e`` constant, so a trend is the block's own (or a model that misses).
 TREND_Z = 3.0
 
 #: Residual scatter about the arcs, in units of the sensor noise, above which a note says
@@ -139,9 +139,11 @@ class FreeRockingFit:
     ``release_g`` (the fitted ``g`` of that release), ``stop_time`` (s, where the analysis
     stopped) and ``stop_reason`` (a sentence), ``residual_std`` (rad); the fitted impact
     times ``fitted_times`` (release time first) and ``fitted_q`` (``g`` or ``nu``) from which
-    :meth:`curve` redraws the arcs. Per record: ``noise_std`` (rad). ``e_trend``: the slope of
-    ``log e_i`` on ``amplitude_before`` (1/rad, both models predict 0) with its standard error
-    ``e_trend_se``. ``notes``: sentences for the reader.
+    :meth:`curve` redraws the arcs. Per record: ``noise_std`` (rad). ``e`` against the impact
+    speed, ``log e_i = log e_reference + e_trend log(S_i/reference_speed)``: ``e_trend`` (per
+    unit of log speed, both models predict 0) with its standard error ``e_trend_se``, and
+    ``e_reference`` with its ``e_reference_interval`` at ``reference_speed`` (rad/s, the
+    impacts' geometric mean landing speed). ``notes``: sentences for the reader.
     """
 
     model: str
@@ -179,6 +181,9 @@ class FreeRockingFit:
     noise_std: np.ndarray
     e_trend: float = math.nan
     e_trend_se: float = math.nan
+    e_reference: float = math.nan
+    e_reference_interval: tuple[float, float] = (math.nan, math.nan)
+    reference_speed: float = math.nan
     e_spread: float = math.nan
     e_spread_interval: tuple[float, float] = (math.nan, math.nan)
     impacts_above_one: int = 0
@@ -526,10 +531,13 @@ def _result(fits, seq_meta, notes, noises, model, theta_cr, damped, score) -> Fr
             notes.append(f"release {s + 1}: {int(mine.sum())} of its {mine.size} impacts return more speed than they receive "
                          "(ratio above 1), which a free block cannot do on average: a bounce, a second contact or the sensor; "
                          "look at this release's record.")
-    trend, trend_se = _trend(ys, blocks, cols["amp"])
+    trend, trend_se, at_reference, at_reference_se, reference_speed = _trend(ys, blocks, cols["wb"])
+    e_reference = math.exp(at_reference) if math.isfinite(at_reference) else math.nan
+    e_reference_interval = _interval(at_reference, at_reference_se, log=True)
     if abs(trend) > TREND_Z * trend_se:
-        notes.append(f"e changes with amplitude: log e grows by {trend:.3g} per rad of the apex before the impact "
-                     f"(+-{trend_se:.2g}), where the {model} model holds it constant.")
+        notes.append(f"e changes with the impact speed: e = {e_reference:.4f} [{e_reference_interval[0]:.4f}, {e_reference_interval[1]:.4f}] "
+                     f"at {reference_speed:.3g} rad/s (the impacts' geometric mean speed), and log e changes by {trend:.3g} +- {trend_se:.2g} "
+                     f"per unit of log speed, where the {model} model holds it constant; the pooled e is the impacts' mean.")
     q = np.array([d.g for d in damped] if with_loss else [f.q for f in fits])
     q_se = np.array([math.sqrt(max((d if with_loss else f).covariance[-2 if with_loss else -1, -2 if with_loss else -1], 0.0))
                      for f, d in zip(fits, damped or fits)])
@@ -557,7 +565,8 @@ def _result(fits, seq_meta, notes, noises, model, theta_cr, damped, score) -> Fr
         release_record=np.array([m[0] for m in seq_meta], dtype=int), release_g=np.asarray(release_g, dtype=float),
         stop_time=np.array([m[1] for m in seq_meta]), stop_reason=tuple(m[2] for m in seq_meta),
         residual_std=np.array([f.residual_std for f in fits]), fitted_times=tuple(f.times for f in fits), fitted_q=q,
-        noise_std=np.array(noises), e_trend=trend, e_trend_se=trend_se, e_spread=spread, e_spread_interval=tuple(spread_interval),
+        noise_std=np.array(noises), e_trend=trend, e_trend_se=trend_se, e_reference=e_reference,
+        e_reference_interval=e_reference_interval, reference_speed=reference_speed, e_spread=spread, e_spread_interval=tuple(spread_interval),
         impacts_above_one=int(above.sum()), flight_loss=loss, flight_loss_interval=_interval(loss, loss_se),
         loss_in_flight=with_loss, notes=tuple(notes),
     )
@@ -649,16 +658,19 @@ def _impact_mean(steps, covariances) -> _ImpactMean:
     return _ImpactMean(mu, se, math.sqrt(q0 / dof), dof, math.sqrt(tau2), (low, high), float(quantile))
 
 
-def _trend(steps, covariances, amplitudes):
-    """GLS slope of ``log e_i`` on the apex before each impact (1/rad) and its standard error
-    (widened by the Birge ratio above 1); NaN with fewer than three impacts or one amplitude.
-    ``steps`` and ``covariances`` are each release's ``log e_i`` and their covariance
-    (neighbours are correlated: ``D C D^T`` of the log speeds)."""
+def _trend(steps, covariances, speeds) -> tuple[float, float, float, float, float]:
+    """``log e_i = a + b log(S_i/S_ref)``, the impacts' ``log e`` on the log of the speed
+    landing at each impact about its geometric mean ``S_ref``, by GLS (standard errors
+    widened by the Birge ratio above 1): ``(b, se of b, a, se of a, S_ref)``; ``b`` NaN with
+    fewer than three impacts or one speed. ``steps`` and ``covariances`` are each release's
+    ``log e_i`` and their covariance (neighbours are correlated: ``D C D^T`` of the log speeds)."""
     y = np.concatenate(steps) if steps else np.empty(0)
     covs = [c for c in covariances if c.size]
-    a = np.asarray(amplitudes, dtype=float)
-    if y.size < 3 or np.ptp(a) == 0.0:
-        return math.nan, math.nan
-    beta, cov, chi2 = _gls(y, np.column_stack([np.ones_like(a), a]), _block_diagonal(covs))
-    birge = math.sqrt(chi2 / (y.size - 2))
-    return float(beta[1]), float(math.sqrt(max(cov[1, 1], 0.0)) * max(1.0, birge))
+    x = np.log(np.abs(np.asarray(speeds, dtype=float)))
+    if y.size < 3 or not np.all(np.isfinite(x)) or np.ptp(x) == 0.0:
+        return math.nan, math.nan, math.nan, math.nan, math.nan
+    reference = float(np.mean(x))
+    beta, cov, chi2 = _gls(y, np.column_stack([np.ones_like(x), x - reference]), _block_diagonal(covs))
+    widen = max(1.0, math.sqrt(chi2 / (y.size - 2)))
+    return (float(beta[1]), float(math.sqrt(max(cov[1, 1], 0.0)) * widen), float(beta[0]),
+            float(math.sqrt(max(cov[0, 0], 0.0)) * widen), math.exp(reference))

@@ -68,6 +68,9 @@ def free_document(fit, sources: list[str], steps: list[float], sizes: list[int])
         "loss_in_flight": bool(fit.loss_in_flight),
         "e_trend": json_number(fit.e_trend),
         "e_trend_se": json_number(fit.e_trend_se),
+        "e_reference": json_number(fit.e_reference),
+        "e_reference_interval": _pair(fit.e_reference_interval),
+        "reference_speed": json_number(fit.reference_speed),
         "dt": float(steps[0]),
         "records": list(sources),
         "samples": int(sum(sizes)),
@@ -109,8 +112,8 @@ def free_text(doc: dict, verbose: bool = False) -> str:
         lines.append(f"  loss in flight c = {doc['flight_loss']:.3g} per s (95 % interval [{c_low:.3g}, {c_high:.3g}]; "
                      + ("fitted: e is the impacts' share)" if doc.get("loss_in_flight") else "not found: e from flights without loss)"))
     if doc.get("e_trend") is not None and doc.get("e_trend_se") is not None:
-        lines.append(f"  trend of log e with the amplitude before the impact: {doc['e_trend']:+.3g} +- {doc['e_trend_se']:.2g} per rad "
-                     "(the models predict none)")
+        lines.append(f"  trend of log e with the log impact speed: {doc['e_trend']:+.3g} +- {doc['e_trend_se']:.2g} (the models predict "
+                     f"none); e = {doc['e_reference']:.4f} at {doc['reference_speed']:.3g} rad/s, the impacts' geometric mean speed")
     lines += [f"  release {j + 1} stops at {r['stop_time']:.6g} s: {r['stop_reason']}" for j, r in enumerate(releases)]
     if doc["warnings"]:
         lines += ["", *[f"warning: {w}" for w in doc["warnings"]]]
