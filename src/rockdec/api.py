@@ -18,8 +18,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from rockdec.cache import default_cache
-from rockdec.calibrate import calibration, inference
+from rockdec.cache import cache_folder
+from rockdec.calibrate import inference
 from rockdec.physics.record_model import check_filter_declared_with_model, declared_load, parse_sensor_filter, parse_sensor_noise
 from rockdec.record import records as records_mod
 from rockdec.report.result import RestitutionEstimate
@@ -124,10 +124,6 @@ def _arrays(theta, dt) -> list[tuple[np.ndarray, float, str]]:
 def _records(theta, dt) -> list[records_mod.Record]:
     """Every record of :func:`estimate`'s ``theta``, checked (:func:`rockdec.record.records.check_values`)."""
     return [records_mod.check_values(values, step, source) for values, step, source in _arrays(theta, dt)]
-
-
-def _cache(cache) -> Path:
-    return calibration.cache_folder(default_cache() if cache is None else cache)
 
 
 def estimate(theta, dt: float | None = None, *, g: float | None = None, load="auto", sensor_noise="auto", sensor_filter="auto",
@@ -237,7 +233,7 @@ def estimate_options(*, g=None, load="auto", sensor_noise="auto", sensor_filter=
         positive(g, "`g`", "give the restoring acceleration nu^2 theta_cr in rad/s^2, or leave it out")
     declared = {"load": declared_load(load), "sensor": parse_sensor_noise(sensor_noise), "sensor_filter": parse_sensor_filter(sensor_filter)}
     check_filter_declared_with_model(declared["sensor_filter"], declared["load"], declared["sensor"])
-    return declared, _cache(cache)
+    return declared, cache_folder(cache)
 
 
 def free_rocking(theta, dt: float | None = None, *, model: str = "simplified", theta_cr: float | None = None) -> RestitutionEstimate:

@@ -21,7 +21,7 @@ import traceback
 from pathlib import Path
 
 from rockdec import console
-from rockdec.cache import default_cache
+from rockdec.cache import VARIABLE
 from rockdec.report.glossary import GLOSSARY
 from rockdec._version import __version__
 from rockdec import engine
@@ -538,7 +538,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     est1.add_argument("--json", action="store_true", help="print one JSON object instead of the table")
     est1.add_argument("--plot", help="draw the signature and the calibration curve to this PNG or PDF")
-    est1.add_argument("--cache", default=str(default_cache()), help="folder of stored calibrations (default: %(default)s)")
+    est1.add_argument("--cache", help=f"folder of stored calibrations (default: ${VARIABLE}, else ~/.cache/rockdec/calibration on Linux)")
     est1.add_argument("--overwrite", action="store_true", help="replace --plot if it exists")
     est1.add_argument("--yes", action="store_true", help="go on with records that need more than 10 min")
     est1.set_defaults(func=cmd_estimate)
