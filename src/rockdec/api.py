@@ -387,6 +387,7 @@ def simulate(e: float, n_points: int, *, seed=0, model: str = "simplified", poin
     (5000, 0.85)
     """
     from rockdec.physics import run
+    from rockdec.physics.loading import check_seeds
     from rockdec.pipeline import config
 
     fields = {
@@ -403,7 +404,7 @@ def simulate(e: float, n_points: int, *, seed=0, model: str = "simplified", poin
             raise
         parameter = exc.field.rsplit(".", 1)[-1]
         raise InputError(f"`{parameter}`: {exc.problem}.") from None
-    seeds = np.atleast_1d(np.asarray(seed, dtype=np.int64))
+    seeds = check_seeds(seed)
     contract = run.calibrate(scene, amplitude=abs(theta0), theta0=theta0, theta_dot0=theta_dot0)
     ds = contract.dataset(seeds, n_points, chunk_seeds=scene["records"]["chunk_seeds"]).load()
     theta = ds["theta"]
