@@ -39,6 +39,10 @@ class SimulationWarning(UserWarning):
 #: Rocking models :func:`estimate` calibrates with.
 MODELS = ("simplified", "housner")
 
+#: The attributes of the time axis of a record in memory (:func:`simulate`, :func:`read_record`):
+#: seconds from its first sample, with no reference date, so a plot labels it ``[s]``.
+RELATIVE_TIME = {"units": "s", "standard_name": "time"}
+
 
 def _series_arrays(theta, dt: float | None, source: str) -> list[tuple[np.ndarray, float | None, str]]:
     """``(angles in rad, step in s or None, source)`` of each record of one input of
@@ -328,7 +332,7 @@ def read_record(path, *, variable: str = "theta", column: str = "theta", dt: flo
 
     recs = records_mod.read_records(path, column=column, variable=variable, dt=dt, fs=fs, checked=False)
     step = recs[0].dt
-    time = xr.DataArray(np.arange(recs[0].theta.size) * step, dims="time", attrs={"units": "s", "long_name": "time", "standard_name": "time"})
+    time = xr.DataArray(np.arange(recs[0].theta.size) * step, dims="time", attrs={**RELATIVE_TIME, "long_name": "time"})
     attrs = {"units": "rad", "long_name": "rocking angle", "source": str(path), "dt": step}
     if len(recs) == 1:
         return xr.DataArray(recs[0].theta, dims="time", coords={"time": time}, name="theta", attrs={**attrs, "source": recs[0].source})
@@ -372,7 +376,9 @@ def simulate(e: float, n_points: int, *, seed=0, model: str = "simplified", poin
     -------
     xarray.DataArray
         ``theta(time)`` (``theta(seed, time)`` for several seeds) in rad, with CF
-        attributes and the run's settings (``e``, ``dt``, ``sigma_y``, ...) as attributes.
+        attributes and the run's settings (``e``, ``dt``, ``sigma_y``, ...) as attributes;
+        ``time`` in s from the end of the burn-in (:data:`RELATIVE_TIME`, no reference date:
+        ``rockdec simulate``'s files give it one, as CF asks of a file).
 
     Warns
     -----
@@ -411,4 +417,5 @@ def simulate(e: float, n_points: int, *, seed=0, model: str = "simplified", poin
     for line in run.simulation_report(theta, contract, step_given=dt is not None):
         warnings.warn(line, SimulationWarning, stacklevel=2)
     theta.attrs = {**ds.attrs, **theta.attrs, "units": "rad", "dt": contract.dt}
+    theta["time"].attrs = {**RELATIVE_TIME, "long_name": ds["time"].attrs["long_name"]}
     return theta.isel(seed=0, drop=True) if np.ndim(seed) == 0 else theta
