@@ -106,9 +106,10 @@ def rounding(t: np.ndarray, single: bool = False) -> np.ndarray:
 
     The digits are those of each value's shortest decimal form (``repr``). Times written with
     a fixed number of decimals (``%.3f``) are all multiples of the finest last digit among
-    them; times written with a fixed number of significant digits (``%.10g``) have at most the
-    most significant digits among them. Both readings hold for any axis, and the wider of the
-    two roundings is each time's. ``single`` (the axis was stored as float32), or every value a
+    them, and most end on it; times written with a fixed number of significant digits
+    (``%.10g``) have at most the most significant digits among them, and most have that many.
+    The reading that more of the times fit sets their rounding (the decimals on a tie).
+    ``single`` (the axis was stored as float32), or every value a
     float32 or, written with 8 significant digits or more, a float32's shortest decimal form,
     adds the float32 spacing at that time (half for the rounding to float32, half for the
     shortest form).
@@ -126,10 +127,15 @@ def rounding(t: np.ndarray, single: bool = False) -> np.ndarray:
     nonzero = t != 0
     lead = np.full(t.size, np.nan)
     lead[nonzero] = np.floor(np.log10(np.abs(t[nonzero])))
-    fixed = 10.0 ** np.min(last)
+    finest = np.min(last)
     digits = np.max(lead[nonzero] - last[nonzero]) + 1 if nonzero.any() else 0.0
-    significant = np.where(nonzero, 10.0 ** (np.nan_to_num(lead) - digits + 1), 0.0)
-    bound = 0.5 * np.maximum(fixed, significant) + 2.0 * np.spacing(np.abs(t))
+    as_fixed = np.mean(last[nonzero] == finest) if nonzero.any() else 1.0
+    as_significant = np.mean(lead[nonzero] - last[nonzero] + 1 == digits) if nonzero.any() else 0.0
+    if as_fixed >= as_significant:
+        bound = np.full(t.size, 0.5 * 10.0**finest)
+    else:
+        bound = np.where(nonzero, 0.5 * 10.0 ** (np.nan_to_num(lead) - digits + 1), 0.5 * 10.0**finest)
+    bound += 2.0 * np.spacing(np.abs(t))
     as_single = t.astype(np.float32)
     if single or np.array_equal(as_single, t) or (digits >= 8 and all(str(v) == text for v, text in zip(as_single, texts))):
         bound += np.spacing(np.abs(as_single)).astype(np.float64)  # rounded to float32, then perhaps printed
