@@ -102,17 +102,16 @@ def _rounded_step(t: np.ndarray, step: np.ndarray, bound: np.ndarray, source: st
 
 def rounding(t: np.ndarray, single: bool = False) -> np.ndarray:
     """How far each time of ``t`` (float64) may lie from the value it was rounded from: half
-    the last digit it was written with, and half the float32 spacing when it was float32.
+    the last digit it was written with, and the float32 spacing when it went through float32.
 
     The digits are those of each value's shortest decimal form (``repr``). Times written with
     a fixed number of decimals (``%.3f``) are all multiples of the finest last digit among
     them, and most end on it; times written with a fixed number of significant digits
     (``%.10g``) have at most the most significant digits among them, and most have that many.
     The reading that more of the times fit sets their rounding (the decimals on a tie).
-    ``single`` (the axis was stored as float32), or every value a
-    float32 or, written with 8 significant digits or more, a float32's shortest decimal form,
-    adds the float32 spacing at that time (half for the rounding to float32, half for the
-    shortest form).
+    ``single`` (the axis was stored as float32), or every value a float32 or, written with 8
+    significant digits or more, a float32's shortest decimal form, adds the float32 spacing at
+    that time (half for the rounding to float32, half for the shortest form).
 
     Examples
     --------
