@@ -18,8 +18,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from rockdec.cache import default_cache
-from rockdec.calibrate import calibration, inference
+from rockdec.cache import cache_folder
+from rockdec.calibrate import inference
 from rockdec.physics.record_model import check_filter_declared_with_model, declared_load, parse_sensor_filter, parse_sensor_noise
 from rockdec.record import records as records_mod
 from rockdec.report.result import RestitutionEstimate
@@ -38,6 +38,10 @@ class SimulationWarning(UserWarning):
 
 #: Rocking models :func:`estimate` calibrates with.
 MODELS = ("simplified", "housner")
+
+#: The attributes of the time axis of a record in memory (:func:`simulate`, :func:`read_record`):
+#: seconds from its first sample, with no reference date, so a plot labels it ``[s]``.
+RELATIVE_TIME = {"units": "s", "standard_name": "time"}
 
 
 def _series_arrays(theta, dt: float | None, source: str) -> list[tuple[np.ndarray, float | None, str]]:
@@ -124,10 +128,6 @@ def _arrays(theta, dt) -> list[tuple[np.ndarray, float, str]]:
 def _records(theta, dt) -> list[records_mod.Record]:
     """Every record of :func:`estimate`'s ``theta``, checked (:func:`rockdec.record.records.check_values`)."""
     return [records_mod.check_values(values, step, source) for values, step, source in _arrays(theta, dt)]
-
-
-def _cache(cache) -> Path:
-    return calibration.cache_folder(default_cache() if cache is None else cache)
 
 
 def estimate(theta, dt: float | None = None, *, g: float | None = None, load="auto", sensor_noise="auto", sensor_filter="auto",
@@ -237,7 +237,7 @@ def estimate_options(*, g=None, load="auto", sensor_noise="auto", sensor_filter=
         positive(g, "`g`", "give the restoring acceleration nu^2 theta_cr in rad/s^2, or leave it out")
     declared = {"load": declared_load(load), "sensor": parse_sensor_noise(sensor_noise), "sensor_filter": parse_sensor_filter(sensor_filter)}
     check_filter_declared_with_model(declared["sensor_filter"], declared["load"], declared["sensor"])
-    return declared, _cache(cache)
+    return declared, cache_folder(cache)
 
 
 def free_rocking(theta, dt: float | None = None, *, model: str = "simplified", theta_cr: float | None = None) -> RestitutionEstimate:
@@ -332,7 +332,7 @@ def read_record(path, *, variable: str = "theta", column: str = "theta", dt: flo
 
     recs = records_mod.read_records(path, column=column, variable=variable, dt=dt, fs=fs, checked=False)
     step = recs[0].dt
-    time = xr.DataArray(np.arange(recs[0].theta.size) * step, dims="time", attrs={"units": "s", "long_name": "time", "standard_name": "time"})
+    time = xr.DataArray(np.arange(recs[0].theta.size) * step, dims="time", attrs={**RELATIVE_TIME, "long_name": "time"})
     attrs = {"units": "rad", "long_name": "rocking angle", "source": str(path), "dt": step}
     if len(recs) == 1:
         return xr.DataArray(recs[0].theta, dims="time", coords={"time": time}, name="theta", attrs={**attrs, "source": recs[0].source})
@@ -376,7 +376,9 @@ def simulate(e: float, n_points: int, *, seed=0, model: str = "simplified", poin
     -------
     xarray.DataArray
         ``theta(time)`` (``theta(seed, time)`` for several seeds) in rad, with CF
-        attributes and the run's settings (``e``, ``dt``, ``sigma_y``, ...) as attributes.
+        attributes and the run's settings (``e``, ``dt``, ``sigma_y``, ...) as attributes;
+        ``time`` in s from the end of the burn-in (:data:`RELATIVE_TIME`, no reference date:
+        ``rockdec simulate``'s files give it one, as CF asks of a file).
 
     Warns
     -----
@@ -391,6 +393,7 @@ def simulate(e: float, n_points: int, *, seed=0, model: str = "simplified", poin
     (5000, 0.85)
     """
     from rockdec.physics import run
+    from rockdec.physics.loading import check_seeds
     from rockdec.pipeline import config
 
     fields = {
@@ -407,11 +410,12 @@ def simulate(e: float, n_points: int, *, seed=0, model: str = "simplified", poin
             raise
         parameter = exc.field.rsplit(".", 1)[-1]
         raise InputError(f"`{parameter}`: {exc.problem}.") from None
-    seeds = np.atleast_1d(np.asarray(seed, dtype=np.int64))
+    seeds = check_seeds(seed)
     contract = run.calibrate(scene, amplitude=abs(theta0), theta0=theta0, theta_dot0=theta_dot0)
     ds = contract.dataset(seeds, n_points, chunk_seeds=scene["records"]["chunk_seeds"]).load()
     theta = ds["theta"]
     for line in run.simulation_report(theta, contract, step_given=dt is not None):
         warnings.warn(line, SimulationWarning, stacklevel=2)
     theta.attrs = {**ds.attrs, **theta.attrs, "units": "rad", "dt": contract.dt}
+    theta["time"].attrs = {**RELATIVE_TIME, "long_name": ds["time"].attrs["long_name"]}
     return theta.isel(seed=0, drop=True) if np.ndim(seed) == 0 else theta

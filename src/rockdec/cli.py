@@ -21,7 +21,7 @@ import traceback
 from pathlib import Path
 
 from rockdec import console
-from rockdec.cache import default_cache
+from rockdec.cache import VARIABLE
 from rockdec.report.glossary import GLOSSARY
 from rockdec._version import __version__
 from rockdec import engine
@@ -259,6 +259,7 @@ def cmd_signatures(args) -> None:
     from rockdec import io
     from rockdec.pipeline import signature_files
 
+    _not_an_input(args.out, "--out", [args.input])
     out = io.check_output(args.out, args.overwrite)
     scene = _validated(_with_options({}, args, SIGNATURE_OPTIONS), SIGNATURE_OPTIONS)
     counts = signature_files.signature_file(args.input, out, scene["signatures"], variable=args.variable, g=args.g,
@@ -270,6 +271,7 @@ def cmd_estimates(args) -> None:
     from rockdec import io
     from rockdec.pipeline import signature_files
 
+    _not_an_input(args.out, "--out", [args.input])
     out = io.check_output(args.out, args.overwrite)
     est = signature_files.estimate_file(args.input, out, fit_points=args.fit_points, weights=args.weights, overwrite=args.overwrite)
     for name in est["estimator"].values:
@@ -278,13 +280,31 @@ def cmd_estimates(args) -> None:
         print(f"{name:>4}: " + ", ".join(f"{v:.4f} +- {s:.4f}" for v, s in zip(value, err)))
 
 
+def _not_an_input(path: str, flag: str, inputs, what: str = "the input", output: str = "output") -> Path:
+    """Refuse an output ``path`` (of option ``flag``, naming the ``output``) that is one of the
+    files ``inputs``: the same name, or the same file by another spelling, through a symlink
+    (at ``path`` or in its folders) or a hard link. Returns ``path`` made absolute (a symlink
+    at ``path`` itself, not what it points at: the output replaces it, never writes through it)."""
+    target = Path(os.path.abspath(checks.path_name(path, flag)))
+    for source in inputs:
+        if target == Path(os.path.abspath(source)) or (target.exists() and _same_file(target, source)):
+            raise UsageError(f"{flag} '{path}' is {what} {source}; give the {output} a file name of its own.")
+    return target
+
+
+def _same_file(path: Path, other) -> bool:
+    """Whether ``path`` and ``other`` are one file; ``False`` when ``other`` cannot be looked at
+    (missing, a name too long): its reader says so."""
+    try:
+        return path.samefile(other)
+    except OSError:
+        return False
+
+
 def _plot_path(args) -> str:
     """``--plot``, checked before any work: a format rockdec draws, and not one of the records."""
-    plot = str(checks.path_name(args.plot, "--plot"))
-    target = Path(os.path.abspath(plot))  # a symlink itself, not what it points at: it is replaced, never written through
-    for record in args.records:
-        if target == Path(os.path.abspath(record)) or (target.exists() and not target.is_symlink() and target.samefile(record)):
-            raise UsageError(f"--plot '{plot}' is the record {record}; give the plot a file name of its own.")
+    plot = args.plot
+    target = _not_an_input(plot, "--plot", args.records, "the record", "plot")
     suffix = target.suffix.lower()
     if suffix not in PLOT_FORMATS:
         raise UsageError(
@@ -521,7 +541,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     est1.add_argument("--json", action="store_true", help="print one JSON object instead of the table")
     est1.add_argument("--plot", help="draw the signature and the calibration curve to this PNG or PDF")
-    est1.add_argument("--cache", default=str(default_cache()), help="folder of stored calibrations (default: %(default)s)")
+    est1.add_argument("--cache", help=f"folder of stored calibrations (default: ${VARIABLE}, else ~/.cache/rockdec/calibration on Linux)")
     est1.add_argument("--overwrite", action="store_true", help="replace --plot if it exists")
     est1.add_argument("--yes", action="store_true", help="go on with records that need more than 10 min")
     est1.set_defaults(func=cmd_estimate)

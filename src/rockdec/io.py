@@ -220,8 +220,13 @@ def _place(mine: Path, lock: Path, owner: str) -> None:
         if exc.errno not in _NO_HARD_LINKS:  # FileExistsError among them
             raise
         fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
-        os.write(fd, owner.encode())
-        os.close(fd)
+        try:
+            os.write(fd, owner.encode())
+        except OSError:
+            lock.unlink(missing_ok=True)  # a lock without its owner would read as stale
+            raise
+        finally:
+            os.close(fd)
 
 
 @contextlib.contextmanager
@@ -236,9 +241,12 @@ def _claim(path: Path):
     """
     lock = _lock_path(path)
     owner = f"{os.getpid()}\n"
-    mine = _new_partial(lock)
-    mine.write_text(owner)
     try:
+        mine = _new_partial(lock)
+    except OSError as exc:
+        raise _write_failure(exc, path) from None
+    try:
+        mine.write_text(owner)
         for attempt in range(2):
             try:
                 _place(mine, lock, owner)
@@ -249,6 +257,8 @@ def _claim(path: Path):
                 for stale in path.parent.glob(f".{path.name}.*.partial*"):
                     stale.unlink(missing_ok=True)
                 lock.unlink(missing_ok=True)
+    except OSError as exc:  # a full disk, a file size limit: the claim's own files go with it
+        raise _write_failure(exc, path) from None
     finally:
         mine.unlink(missing_ok=True)
     try:
@@ -319,7 +329,10 @@ def write_claimed(path: Path, write, overwrite: bool = False, keep_suffix: bool 
     when complete: renamed over it with ``overwrite``, else only if nothing took the name
     meanwhile (:func:`_place_new`). A symlink at ``path`` is replaced itself (with
     ``overwrite``), never written through."""
-    tmp = _new_partial(path, path.suffix if keep_suffix else "")
+    try:
+        tmp = _new_partial(path, path.suffix if keep_suffix else "")
+    except OSError as exc:
+        raise _write_failure(exc, path) from None
     try:
         write(tmp)
         if overwrite:

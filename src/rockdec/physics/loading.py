@@ -53,7 +53,7 @@ from numba.core import cgutils, types
 from numba.extending import intrinsic
 from numba.np.random._constants import fi_double, ki_double, wi_double, ziggurat_nor_inv_r, ziggurat_nor_r
 
-from rockdec.validate import InputError
+from rockdec.validate import InputError, is_whole, show
 
 SENSOR_STREAM = 1
 """Spawn key of a series' sensor-noise stream (the load's stream has none), so the sensor's
@@ -91,12 +91,41 @@ _PCG_MULTIPLIER = 0x2360ED051FC65DA44385DF649FCCF645
 _DOUBLE_UNIT = 1.0 / 9007199254740992.0
 
 
+#: Seeds are whole numbers in ``[0, MAX_SEED]`` (int64, the words :func:`stream_words` splits).
+MAX_SEED = 2**63 - 1
+
+
 def check_seeds(seeds) -> np.ndarray:
-    """``seeds`` as a 1-d int64 array; a negative seed raises :class:`rockdec.validate.InputError`."""
-    seeds = np.atleast_1d(np.asarray(seeds, dtype=np.int64))
-    if seeds.size and seeds.min() < 0:
-        raise InputError(f"seed {seeds.min()} is negative; give seeds >= 0")
-    return seeds
+    """``seeds`` (a whole number or a sequence of them) as a 1-d int64 array; raises
+    :class:`rockdec.validate.InputError` in one sentence for a seed that is not a whole number
+    (a float, a bool, text) or lies outside ``[0, MAX_SEED]``, and for a table of seeds.
+
+    Examples
+    --------
+    >>> check_seeds(3), check_seeds([0, 7]).dtype
+    (array([3]), dtype('int64'))
+    >>> check_seeds(2**70)
+    Traceback (most recent call last):
+    ...
+    rockdec.validate.InputError: seed 1.18e+21 is beyond 2**63 - 1; give seeds from 0 to 2**63 - 1.
+    """
+    array = np.atleast_1d(seeds if isinstance(seeds, np.ndarray) else np.asarray(seeds, dtype=object))
+    if array.ndim != 1:
+        raise InputError(f"seeds of shape {array.shape}: not one seed nor a sequence of them; give a whole number or a list of them.")
+    if array.dtype.kind == "i":  # at most MAX_SEED already
+        wrong = np.flatnonzero(array < 0)[:1] if array.size and array.min() < 0 else []
+    elif array.dtype.kind == "u":
+        wrong = np.flatnonzero(array > np.uint64(MAX_SEED))[:1]
+    else:
+        wrong = [i for i, seed in enumerate(array) if not (is_whole(seed) and 0 <= seed <= MAX_SEED)][:1]
+    for i in wrong:
+        seed = array[i].item() if isinstance(array[i], np.generic) else array[i]
+        if not is_whole(seed):
+            raise InputError(f"seed {show(seed)} is not a whole number; give whole seeds from 0 to 2**63 - 1.")
+        if seed < 0:
+            raise InputError(f"seed {show(seed)} is negative; give seeds >= 0.")
+        raise InputError(f"seed {show(seed)} is beyond 2**63 - 1; give seeds from 0 to 2**63 - 1.")
+    return np.asarray(array, dtype=np.int64)
 
 
 def stream_words(seeds, spawn: int = -1) -> np.ndarray:

@@ -13,11 +13,46 @@ from rockdec.timeaxis import RecordError, sampling_step
 TIME_NAMES = ("time", "t")
 
 
+def _kind(array: np.ndarray) -> str | None:
+    """What a MATLAB value that is not a real number array is (``None`` for one that is)."""
+    if array.dtype.kind == "O":
+        return "a cell array"
+    if array.dtype.names is not None:
+        return "a struct"
+    if array.dtype.kind in "US":
+        return "text"
+    if array.dtype.kind not in "fiu":
+        return f"{'complex' if array.dtype.kind == 'c' else array.dtype.name} values"
+    return None
+
+
 def _vector(value, path: Path, name: str) -> np.ndarray:
     array = np.asarray(value)
-    if array.dtype.kind not in "fiu" or array.ndim > 2 or (array.ndim == 2 and 1 not in array.shape):
-        raise RecordError(f"{path}: '{name}' holds a {array.dtype} array of shape {array.shape}; store a vector of numbers.")
+    kind = _kind(array)
+    if kind is not None:
+        fix = f"store the vector itself ({name} = {name}{{1}})" if array.dtype.kind == "O" else "store a vector of real numbers"
+        raise RecordError(f"{path}: '{name}' holds {kind} of size {'x'.join(map(str, array.shape))}, not a vector of real numbers; {fix}.")
+    if array.size == 0:
+        raise RecordError(f"{path}: '{name}' is empty; store its values.")
+    if array.ndim > 2 or (array.ndim == 2 and 1 not in array.shape):
+        raise RecordError(f"{path}: '{name}' is a {'x'.join(map(str, array.shape))} matrix; store a vector of numbers.")
     return array.astype(np.float64).ravel()
+
+
+def _step(data: dict, path: Path, name: str) -> float:
+    """The sampling step (s) a scalar ``dt`` (s) or ``fs`` (Hz) of the file gives, refused in
+    one sentence unless it is one real number > 0 with a finite step."""
+    array = np.asarray(data[name])
+    kind = _kind(array) or (None if array.size == 1 else f"{array.size} values")
+    unit = "s" if name == "dt" else "Hz"
+    if kind is not None:
+        raise RecordError(f"{path}: '{name}' holds {kind}, not one number; store {name} as a number of {unit}, or give `{name}`.")
+    value = float(array.ravel()[0])
+    step = value if name == "dt" else 1.0 / value if value else float("inf")
+    if not (np.isfinite(value) and value > 0 and np.isfinite(step) and step > 0):
+        raise RecordError(f"{path}: '{name}' is {value:g}, not a positive, finite number of {unit}"
+                          f"{'' if name == 'dt' else ' with a finite step 1/fs'}; store the file's {name} in {unit}, > 0, or give `{name}`.")
+    return step
 
 
 def read_mat(path: Path, variable: str, step: float | None) -> tuple[np.ndarray, float | None]:
@@ -46,7 +81,7 @@ def read_mat(path: Path, variable: str, step: float | None) -> tuple[np.ndarray,
                 if time.size != values.size:
                     raise RecordError(f"{path}: '{name}' has {time.size} values and '{variable}' {values.size}; store one time per sample.")
                 return values, sampling_step(time, str(path))
-        for name, to_step in (("dt", lambda x: x), ("fs", lambda x: 1.0 / x)):
-            if name in data and np.asarray(data[name]).size == 1:
-                return values, float(to_step(float(np.asarray(data[name]).ravel()[0])))
+        for name in ("dt", "fs"):
+            if name in data:
+                return values, _step(data, path, name)
     return values, step

@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 
 from rockdec.rdd import registry
 from rockdec.report.summary import beyond_note, pct, reads
-from rockdec.validate import InputError
+from rockdec.validate import InputError, in_range, is_finite_number, show
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -27,7 +27,7 @@ if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
-__all__ = ["ConfidenceInterval", "EstimateWarning", "RestitutionEstimate", "SCHEMA_VERSION", "schema"]
+__all__ = ["ConfidenceInterval", "EstimateWarning", "RestitutionEstimate", "SCHEMA_VERSION", "check_document", "schema"]
 
 #: Version of the JSON document (:meth:`RestitutionEstimate.to_dict`); a change of its keys
 #: or their meaning raises it.
@@ -86,6 +86,71 @@ def schema() -> dict:
     '1.0'
     """
     return json.loads(resources.files("rockdec").joinpath(SCHEMA_PATH).read_text(encoding="utf-8"))
+
+
+def check_document(doc) -> bool:
+    """Refuse a document :meth:`RestitutionEstimate.from_dict` cannot read as an estimate;
+    returns whether it is a free-rocking test's.
+
+    Its keys ``e``, ``interval``, ``warnings`` and ``estimators`` (``impacts`` for a
+    free-rocking test) must be there; ``schema_version``, when there, :data:`SCHEMA_VERSION`;
+    ``warnings`` (and ``warning_codes``) lists of strings, one code a warning; ``interval``
+    null or two numbers or nulls, ``low <= high``; ``e`` null (a declined estimate) or a
+    finite number inside its interval, in [0, 1] for the random test (> 0 for a free-rocking
+    test, whose fitted line of log impact speeds may read e above 1).
+
+    Raises
+    ------
+    InputError
+        Naming the field and what it may hold.
+
+    Examples
+    --------
+    >>> from rockdec.report.result import check_document
+    >>> check_document(res.to_dict())  # the random test's
+    False
+    >>> check_document({**res.to_dict(), "e": 1.7})
+    Traceback (most recent call last):
+    ...
+    rockdec.validate.InputError: `doc` e 1.7: outside [0, 1]; an estimate's e is null or a number in [0, 1] inside its interval.
+    """
+    if not isinstance(doc, dict):
+        raise InputError(f"`doc` is a {type(doc).__name__}, not an estimate's JSON document (a dict, RestitutionEstimate.to_dict).")
+    free = "impacts" in doc
+    missing = [key for key in ("e", "interval", "impacts" if free else "estimators", "warnings") if key not in doc]
+    if missing:
+        raise InputError(f"`doc` lacks {', '.join(missing)}: it is not an estimate's JSON document (RestitutionEstimate.to_dict).")
+    version = doc.get("schema_version", SCHEMA_VERSION)
+    if version != SCHEMA_VERSION:
+        raise InputError(f"`doc` schema_version {show(version)} is not {SCHEMA_VERSION!r}, the only version this rockdec reads; "
+                         "estimate the record again with this rockdec.")
+    for key in ("warnings", "warning_codes"):
+        value = doc.get(key) or []
+        if not isinstance(value, list) or not all(isinstance(item, str) for item in value):
+            raise InputError(f"`doc` {key} {_short(show(value))}: not a list of strings; give one string a warning, in a list.")
+    if doc.get("warning_codes") and len(doc["warning_codes"]) != len(doc["warnings"]):
+        raise InputError(f"`doc` has {len(doc['warning_codes'])} warning_codes for {len(doc['warnings'])} warnings; "
+                         "give one code a warning.")
+    pair = doc["interval"]
+    if pair is not None and not (isinstance(pair, list) and len(pair) == 2
+                                 and all(v is None or is_finite_number(v) for v in pair)):
+        raise InputError(f"`doc` interval {_short(show(pair))}: not null nor a pair [low, high] of finite numbers (or nulls); "
+                         "give the estimate's 95 % interval.")
+    low, high = pair or (None, None)
+    if low is not None and high is not None and low > high:
+        raise InputError(f"`doc` interval [{show(low)}, {show(high)}] is reversed; give it as [low, high], low <= high.")
+    e = doc["e"]
+    if e is None:
+        return free
+    allowed = "a number > 0 inside its interval" if free else "a number in [0, 1] inside its interval"
+    fix = f"an estimate's e is null or {allowed}"
+    if free:
+        in_range(e, "`doc` e", 0.0, lo_open=True, fix=fix)
+    else:
+        in_range(e, "`doc` e", 0.0, 1.0, fix=fix)
+    if low is None or high is None or not low <= e <= high:
+        raise InputError(f"`doc` e {show(e)} is outside its interval {show(pair)}; {fix}.")
+    return free
 
 
 def _interval(pair) -> ConfidenceInterval | None:
@@ -176,7 +241,7 @@ class RestitutionEstimate:
         Raises
         ------
         InputError
-            When ``doc`` is not such a document.
+            When ``doc`` is not such a document (:func:`check_document`).
 
         Examples
         --------
@@ -185,10 +250,7 @@ class RestitutionEstimate:
         >>> back.e == res.e and back.to_dict() == res.to_dict()
         True
         """
-        free = "impacts" in doc
-        missing = [key for key in ("e", "interval", "impacts" if free else "estimators", "warnings") if key not in doc]
-        if missing:
-            raise InputError(f"`doc` lacks {', '.join(missing)}: it is not an estimate's JSON document (RestitutionEstimate.to_dict).")
+        free = check_document(doc)
         doc = {key: copy.deepcopy(value) for key, value in doc.items() if key not in ADDED_KEYS}
         codes = doc.get("warning_codes") or ["warning"] * len(doc["warnings"])
         return cls(
