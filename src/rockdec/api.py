@@ -20,16 +20,18 @@ import numpy as np
 
 from rockdec.cache import cache_folder
 from rockdec.calibrate import inference
+from rockdec.physics.geometry import Block, parse_block
 from rockdec.physics.record_model import check_filter_declared_with_model, declared_load, parse_sensor_filter, parse_sensor_noise
 from rockdec.record import records as records_mod
 from rockdec.report.result import RestitutionEstimate
+from rockdec.report.summary import with_block
 from rockdec.timeaxis import RecordError, angle_factor
 from rockdec.validate import InputError, positive, show
 
 if TYPE_CHECKING:
     import xarray as xr
 
-__all__ = ["estimate", "estimate_options", "free_rocking", "read_record", "simulate"]
+__all__ = ["block_angle", "estimate", "estimate_options", "free_rocking", "read_record", "simulate"]
 
 class SimulationWarning(UserWarning):
     """A simulation that did not make what was asked: series that overturned, or a sampling
@@ -131,7 +133,8 @@ def _records(theta, dt) -> list[records_mod.Record]:
 
 
 def estimate(theta, dt: float | None = None, *, g: float | None = None, load="auto", sensor_noise="auto", sensor_filter="auto",
-             model: str = "simplified", theta_cr: float | None = None, cache=None, repair: bool = True) -> RestitutionEstimate:
+             model: str = "simplified", theta_cr: float | None = None, cache=None, repair: bool = True,
+             block=None) -> RestitutionEstimate:
     """Estimate the coefficient of restitution ``e`` of a rocking block from its random response.
 
     The record's Random Decrement signatures (paper eqs. 8, 19) give every estimator of
@@ -169,7 +172,8 @@ def estimate(theta, dt: float | None = None, *, g: float | None = None, load="au
     model : {"simplified", "housner"}
         The rocking model of the calibration: eq. 4, or Housner's eq. 2 (needs ``theta_cr``).
     theta_cr : float, optional
-        The block's critical angle in rad, for ``model="housner"``.
+        The block's critical angle in rad, for ``model="housner"`` (default with ``block``:
+        its ``atan(B/H)``).
     cache : str or path, optional
         Folder of stored calibrations; ``None``: :func:`rockdec.cache.default_cache` (shared with
         the command line).
@@ -178,6 +182,9 @@ def estimate(theta, dt: float | None = None, *, g: float | None = None, load="au
         and, when the record drifts, a zero-phase high-pass well below the rocking frequency
         removes the drift; the calibration's simulated records are repaired alike, and the
         result's ``repair`` says what was done. ``False``: estimate the record as given.
+    block : tuple of float, optional
+        The block's height and width ``(H, B)``, one unit: the report sets Housner's
+        ``e = 1 - 1.5 sin^2(atan(B/H))`` beside the measured one.
 
     Returns
     -------
@@ -198,12 +205,34 @@ def estimate(theta, dt: float | None = None, *, g: float | None = None, load="au
     >>> res.confidence_interval.low < 0.85 < res.confidence_interval.high
     True
     """
+    block, theta_cr = block_angle(block, model, theta_cr)
     declared, folder = estimate_options(g=g, load=load, sensor_noise=sensor_noise, sensor_filter=sensor_filter, model=model,
                                         theta_cr=theta_cr, cache=cache)
     if not isinstance(repair, bool):
         raise InputError(f"`repair` {show(repair)} is not True or False; give True to repair spikes and drift, False to leave the record as given.")
     outcome = inference.estimate(_records(theta, dt), cache_dir=folder, g=g, rocking=model, theta_cr=theta_cr, repair_records=repair, **declared)
-    return RestitutionEstimate.from_dict(outcome.document, analysis=outcome.analysis, belts=outcome.belts)
+    return RestitutionEstimate.from_dict(with_block(outcome.document, block), analysis=outcome.analysis, belts=outcome.belts)
+
+
+def block_angle(block, model: str, theta_cr: float | None) -> tuple[Block | None, float | None]:
+    """The block ``(H, B)`` as a :class:`~rockdec.physics.geometry.Block` and the critical
+    angle the Housner model takes: ``theta_cr`` if given (refused when it is not the block's
+    ``atan(B/H)``), else the block's under ``model="housner"``.
+
+    Examples
+    --------
+    >>> from rockdec.api import block_angle
+    >>> block, theta_cr = block_angle((0.6, 0.2), "housner", None)
+    >>> round(theta_cr, 4)
+    0.3218
+    """
+    block = parse_block(block)
+    if block is None:
+        return None, theta_cr
+    if theta_cr is not None and isinstance(theta_cr, int | float) and not math.isclose(theta_cr, block.theta_cr, rel_tol=1e-6):
+        raise InputError(f"`theta_cr` {show(theta_cr)} is not the block's atan(B/H) = {block.theta_cr:.6g} rad; give one of the two, "
+                         "or the block's true height and width.")
+    return block, (block.theta_cr if model == "housner" and theta_cr is None else theta_cr)
 
 
 def estimate_options(*, g=None, load="auto", sensor_noise="auto", sensor_filter="auto", model="simplified", theta_cr=None,
@@ -240,7 +269,8 @@ def estimate_options(*, g=None, load="auto", sensor_noise="auto", sensor_filter=
     return declared, cache_folder(cache)
 
 
-def free_rocking(theta, dt: float | None = None, *, model: str = "simplified", theta_cr: float | None = None) -> RestitutionEstimate:
+def free_rocking(theta, dt: float | None = None, *, model: str = "simplified", theta_cr: float | None = None,
+                 block=None) -> RestitutionEstimate:
     """Estimate ``e`` from a free-rocking test: the block tilted, released, rocking down to rest.
 
     The reference test laboratories run first. Each release and each impact (zero
@@ -261,7 +291,11 @@ def free_rocking(theta, dt: float | None = None, *, model: str = "simplified", t
     model : {"simplified", "housner"}
         The free flight between impacts.
     theta_cr : float, optional
-        The block's critical angle in rad (needed by ``"housner"``; gives ``nu``).
+        The block's critical angle in rad (needed by ``"housner"``; gives ``nu``; default
+        with ``block``: its ``atan(B/H)``).
+    block : tuple of float, optional
+        The block's height and width ``(H, B)``, one unit: the report sets Housner's ``e``
+        beside the measured one.
 
     Returns
     -------
@@ -285,12 +319,13 @@ def free_rocking(theta, dt: float | None = None, *, model: str = "simplified", t
     from rockdec.free.analysis import analyse_free_rocking
     from rockdec.report.free_result import free_document
 
+    block, theta_cr = block_angle(block, model, theta_cr)
     arrays = _arrays(theta, dt)
     values, steps = [a[0] for a in arrays], [a[1] for a in arrays]
     many = len(arrays) > 1
     fit = analyse_free_rocking(values if many else values[0], steps if many else steps[0], model=model, theta_cr=theta_cr)
     doc = free_document(fit, [a[2] for a in arrays], steps, [v.size for v in values])
-    return RestitutionEstimate.from_dict(doc, analysis=(fit, values if many else values[0], steps if many else steps[0]))
+    return RestitutionEstimate.from_dict(with_block(doc, block), analysis=(fit, values if many else values[0], steps if many else steps[0]))
 
 
 def read_record(path, *, variable: str = "theta", column: str = "theta", dt: float | None = None,

@@ -15,6 +15,7 @@ import math
 import numpy as np
 
 from rockdec._version import __version__
+from rockdec.report.summary import block_lines
 from rockdec.validate import json_number
 
 __all__ = ["free_dataset", "free_document", "free_text"]
@@ -114,6 +115,7 @@ def free_text(doc: dict, verbose: bool = False) -> str:
     if doc.get("e_trend") is not None and doc.get("e_trend_se") is not None:
         lines.append(f"  trend of log e with the log impact speed: {doc['e_trend']:+.3g} +- {doc['e_trend_se']:.2g} (the models predict "
                      f"none); e = {doc['e_reference']:.4f} at {doc['reference_speed']:.3g} rad/s, the impacts' geometric mean speed")
+    lines += block_lines(doc)
     lines += [f"  release {j + 1} stops at {r['stop_time']:.6g} s: {r['stop_reason']}" for j, r in enumerate(releases)]
     if doc["warnings"]:
         lines += ["", *[f"warning: {w}" for w in doc["warnings"]]]

@@ -12,7 +12,7 @@ import math
 
 from rockdec.rdd import registry
 
-__all__ = ["beyond_note", "pct", "reads", "text"]
+__all__ = ["beyond_note", "block_lines", "pct", "reads", "text", "with_block"]
 
 def _f(x, spec: str = ".4f") -> str:
     return "-" if x is None else format(x, spec)
@@ -186,7 +186,7 @@ def text(doc: dict, verbose: bool = False) -> str:
     lines += ["", "candidates (* reported):", *_table(doc, registry.CANDIDATES)]
     if verbose:
         lines += [f"  not chosen: {row['estimator']}: {row['why_not']}" for row in doc["selection"] if not row["holds"]]
-    lines += ["", *_record(doc)]
+    lines += ["", *_record(doc), *block_lines(doc)]
     if doc["warnings"]:
         lines += ["", *[f"warning: {w}" for w in doc["warnings"]]]
     if verbose:
@@ -201,3 +201,33 @@ def text(doc: dict, verbose: bool = False) -> str:
             for name, c in doc["diagnostics"].items():
                 lines.append(f"  {name}: {_f(c['statistic'], '.3g')} / {_f(c['threshold'], '.3g')}{'  FIRED' if c['fired'] else ''}")
     return "\n".join(lines)
+
+
+def with_block(doc: dict, block) -> dict:
+    """``doc`` with the block's geometry beside its ``e`` (unchanged without a ``block``,
+    a :class:`rockdec.physics.geometry.Block`): ``block`` holds its ``height`` and ``width``,
+    ``theta_cr`` (``atan(B/H)``, rad), Housner's ``housner_e`` and ``e_over_housner``.
+
+    Examples
+    --------
+    >>> from rockdec.physics.geometry import Block
+    >>> with_block({"e": 0.9}, Block(0.6, 0.2))["block"]["e_over_housner"]
+    1.0588235294117647
+    """
+    if block is None:
+        return doc
+    e = doc.get("e")
+    return {**doc, "block": {"height": float(block.height), "width": float(block.width), "theta_cr": block.theta_cr,
+                             "housner_e": block.housner_e, "e_over_housner": None if e is None else e / block.housner_e}}
+
+
+def block_lines(doc: dict) -> list[str]:
+    """The report's line on the block's geometry (none without one): Housner's ``e`` and the
+    measured one's ratio to it."""
+    block = doc.get("block")
+    if not block:
+        return []
+    ratio = "" if block["e_over_housner"] is None else f"; measured e / Housner's = {block['e_over_housner']:.3f}"
+    return [f"  block {block['height']:g} x {block['width']:g} (height x width): theta_cr = atan(B/H) = {block['theta_cr']:.4g} rad, "
+            f"Housner's e = 1 - 1.5 sin^2(theta_cr) = {block['housner_e']:.4f}{ratio}"]
+
