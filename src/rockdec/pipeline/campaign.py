@@ -10,9 +10,11 @@ row and the column (:class:`SheetError`).
 What each job of ``workflow/rules/campaign.smk`` runs:
 
 * :func:`simulate_step`: a record of known ``e`` for the demonstration (a row with ``simulate``);
-* :func:`plan_step`: the calibration a record's (or a block's pooled) estimate asks for, read
-  off the estimate's own first stages (:func:`calibration_request`), so the calibration is a
-  job of its own keyed by its content (:func:`rockdec.calibrate.calibration.settings_hash`);
+* :func:`plan_step`: the calibrations a record's (or a block's pooled) estimate reads, found
+  by running that estimate up to each calibration it asks for (:func:`plan`: the first plan
+  finds the records' as given, the plan on it, once built, the high-passed records' when the
+  repair decides on the high-pass), so each calibration is a job of its own keyed by its
+  content (:func:`rockdec.calibrate.calibration.settings_hash`);
 * :func:`calibration_step`: that calibration, into the cache ``rockdec estimate`` reads;
 * :func:`estimate_step`: the estimate of a record or of a block through :func:`estimate`,
   the one adapter to the public estimate (its JSON is what ``rockdec estimate --json``
@@ -445,32 +447,38 @@ def declared(opts: dict) -> dict:
             "sensor_filter": parse_sensor_filter(opts["sensor_filter"])}
 
 
-def calibration_request(records, opts: dict) -> dict | None:
-    """The settings of the calibration the estimate of ``records`` under ``opts`` asks for,
-    or ``None`` when it asks for none (the records are declined): its first two stages,
-    :func:`rockdec.calibrate.inference.analyse` and
-    :func:`rockdec.calibrate.inference.choose_model`."""
-    from rockdec.calibrate import inference
+def plan(rows: list[dict], opts: dict, cache=None, earlier: dict | None = None, records=None) -> dict:
+    """Which calibrations the estimate of ``rows`` (a record, or a block's records pooled;
+    ``records``, when read already) under ``opts`` reads, found by running that estimate
+    itself (:func:`rockdec.calibrate.inference.estimate`, with the options the public estimate
+    passes it), its repair's decisions included, allowed to read only the calibrations of the
+    ``earlier`` plan (from ``cache``) and stopped at the first it asks for beyond them
+    (:class:`rockdec.calibrate.inference.CalibrationNeeded`). The estimate reads at most two
+    (the records' as given and, when the repair high-passes them, the high-passed records'):
+    the plan without ``earlier`` finds the first, the plan on it, once built, the rest.
 
-    analysed = inference.analyse(records, g=opts.get("g"))
-    choice = inference.choose_model(analysed, rocking=opts["model"], theta_cr=opts.get("theta_cr"), **declared(opts))
-    return None if choice.declined else choice.cal_settings
+    Returns ``calibrations`` (file name in the cache -> settings, in the order the estimate
+    asks for them) and ``error``, the estimate's refusal in its sentence (``None`` when it
+    does not refuse the records). A plan that needs no calibration, or refuses, is final: the
+    plan on it is itself.
+    """
+    from rockdec.calibrate import calibration, inference
 
-
-def plan(rows: list[dict], opts: dict, records=None) -> dict:
-    """What the estimate of ``rows`` (a record, or a block's records pooled; ``records``, when
-    read already) needs: ``calibration`` (the file name in the cache, ``None`` for none),
-    ``settings`` and, when the estimate refuses the records, ``error`` (its sentence)."""
-    from rockdec.calibrate import calibration
-
+    if earlier is not None and (earlier["error"] or not earlier["calibrations"]):
+        return earlier
+    known = dict(earlier["calibrations"]) if earlier is not None else {}
+    done = {"calibrations": known, "error": None}
     if rows[0]["test"] == "free":
-        return {"calibration": None, "settings": None, "error": None}
+        return done
+    available = {name.removeprefix("calibration-").removesuffix(".nc") for name in known}
     try:
-        settings = calibration_request(read(rows) if records is None else records, opts)
+        inference.estimate(read(rows) if records is None else records, cache_dir=cache, g=opts.get("g"), rocking=opts["model"],
+                           theta_cr=opts.get("theta_cr"), available=available, **declared(opts))
+    except inference.CalibrationNeeded as need:
+        known[f"calibration-{calibration.settings_hash(need.settings)}.nc"] = need.settings
     except InputError as exc:
-        return {"calibration": None, "settings": None, "error": str(exc)}
-    name = None if settings is None else f"calibration-{calibration.settings_hash(settings)}.nc"
-    return {"calibration": name, "settings": settings, "error": None}
+        done["error"] = str(exc)
+    return done
 
 
 def build_calibration(settings: dict, cache) -> Path:
@@ -744,17 +752,13 @@ def _write_text(path: str, text: str) -> None:
     os.replace(partial, path)
 
 
-def plan_step(rows: list[dict], opts: dict, output: str) -> str:
-    """Rule ``campaign_plan``: :func:`plan` of ``rows`` written to ``output`` (JSON)."""
-    if rows[0]["test"] == "free":
-        done = {"calibration": None, "settings": None, "error": None}
-    else:
-        try:
-            done = plan(rows, opts)
-        except InputError as exc:
-            done = {"calibration": None, "settings": None, "error": str(exc)}
+def plan_step(rows: list[dict], opts: dict, cache, earlier: str | None, output: str) -> str:
+    """Rules ``campaign_first_plan`` (``earlier`` ``None``) and ``campaign_plan`` (``earlier``
+    the first plan's file, its calibrations built into ``cache``): :func:`plan` of ``rows``
+    written to ``output`` (JSON)."""
+    done = plan(rows, opts, cache, None if earlier is None else json.loads(Path(earlier).read_text()))
     _write_text(output, json.dumps(done, indent=2, sort_keys=True) + "\n")
-    return f"plan: {done['calibration'] or 'no calibration'}" + (f" ({done['error']})" if done["error"] else "")
+    return f"plan: {', '.join(done['calibrations']) or 'no calibration'}" + (f" ({done['error']})" if done["error"] else "")
 
 
 def calibration_step(settings: dict, output: str, threads: int) -> str:
@@ -779,10 +783,10 @@ def estimate_step(unit: str, rows: list[dict], opts: dict, cache, plan_file: str
 
     doc, result = estimate_unit(rows, opts, cache, api)
     if rows[0]["test"] != "free":
-        planned = json.loads(Path(plan_file).read_text())["calibration"]
+        planned = json.loads(Path(plan_file).read_text())["calibrations"]
         used = (doc.get("calibration") or {}).get("file")
-        if used != planned:  # the plan runs the estimate's own first stages: a mismatch is a bug, not the user's
-            raise RuntimeError(f"{unit}: the estimate used {used}, its plan asked for {planned}")
+        if used is not None and (used not in planned or not doc["calibration"]["cached"]):  # the plan runs this estimate: a bug
+            raise RuntimeError(f"{unit}: the estimate used {used}, its plan built {', '.join(planned) or 'none'}")
     _write_text(json_out, json.dumps(doc, indent=2) + "\n")
     ds = result.to_dataset() if result is not None else unit_dataset(unit, rows, doc)
     for key, value in io.provenance(step, {"rows": rows, "options": opts}, inputs=[row["path"] for row in rows]).items():
