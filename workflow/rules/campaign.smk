@@ -148,7 +148,7 @@ rule campaign_block:
     benchmark:
         "results/{campaign}/benchmarks/{unit}.tsv"
     wildcard_constraints:
-        unit="block_[A-Za-z][A-Za-z0-9_]*",
+        unit="block_[A-Za-z][A-Za-z0-9_]*(-free)?",
     threads: 1
     resources:
         mem_mb=2000,
