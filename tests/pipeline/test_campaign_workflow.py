@@ -81,10 +81,10 @@ def test_each_records_json_is_what_rockdec_estimate_prints_for_its_file(built, m
 
 
 def test_each_distinct_calibration_is_built_once_by_a_job_of_its_own(built):
-    plans = {p.stem: json.loads(p.read_text()) for p in (built["results"] / "plans").glob("*.json")}
-    assert plans["record_f1"]["calibration"] is None  # a free-rocking test needs none
-    wanted = {plan["calibration"] for unit, plan in plans.items() if unit != "record_f1"}
-    assert len(plans) == 5 and None not in wanted  # a1, a2, m1, f1 and block A
+    plans = {p.stem: json.loads(p.read_text()) for p in (built["results"] / "plans").glob("*.json") if not p.name.endswith(".first.json")}
+    assert plans["record_f1"]["calibrations"] == {}  # a free-rocking test needs none
+    wanted = {name for unit, plan in plans.items() for name in plan["calibrations"]}
+    assert len(plans) == 5 and all(plans[unit]["calibrations"] for unit in plans if unit != "record_f1")  # a1, a2, m1, f1 and block A
     assert built["log"].count("rule campaign_calibration:") == len(wanted)
     assert {p.name for p in built["cache"].glob("calibration-*.nc")} == wanted
     for path in (built["results"] / "estimates").glob("*.json"):
@@ -104,7 +104,7 @@ def test_adding_a_row_reruns_only_that_record_its_block_and_the_summaries(built)
         sheet.write_text(before)
     assert code == 0, out
     assert job_stats(out) == {
-        "campaign_simulate": 1, "campaign_plan": 2, "campaign_record": 1, "campaign_block": 1,
+        "campaign_simulate": 1, "campaign_first_plan": 2, "campaign_plan": 2, "campaign_record": 1, "campaign_block": 1,
         "campaign_table": 1, "campaign_figures": 1, "campaign_archive": 1, "campaign": 1,
     }, out
 
@@ -152,14 +152,16 @@ def test_the_archive_holds_exactly_what_its_manifest_lists_and_verifies(built):
 
 
 def test_the_slurm_profile_plans_a_job_per_record_block_and_calibration(built):
-    """Once the plans are made (they read the records), a dry run on the cluster profile lists a
-    job per record, per block and per calibration they ask for (into an empty cache here)."""
+    """Once the first plans are made (they read the records), a dry run on the cluster profile lists a
+    job per record, per block and per calibration they ask for, and the plans that read those
+    calibrations (into an empty cache here)."""
     empty = built["root"] / "empty_cache"
     code, out = snakemake(built["root"], "-n", "--profile", "profiles/slurm", "campaign",
                           "--config", f"campaign={{name: demo, sheet: config/records.tsv, cache: {empty}}}")
     assert code == 0, out
     stats = job_stats(out)
     assert stats["campaign_record"] == 4 and stats["campaign_block"] == 1 and stats["campaign_calibration"] == 4, out
+    assert stats["campaign_plan"] == 5 and "campaign_first_plan" not in stats, out
 
 
 def test_a_bad_sheet_stops_the_run_before_any_job_naming_row_and_column(built):
@@ -206,4 +208,4 @@ def test_the_demonstration_runs_from_an_empty_folder_with_the_workflow_elsewhere
                           "--configfile", str(REPO / "config" / "config.yaml"))
     assert code == 0, out
     stats = job_stats(out)
-    assert stats["campaign_simulate"] == 10 and stats["campaign_plan"] == 11, out  # ten records, block A pooled
+    assert stats["campaign_simulate"] == 10 and stats["campaign_first_plan"] == stats["campaign_plan"] == 11, out  # ten records, block A pooled

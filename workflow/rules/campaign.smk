@@ -47,9 +47,8 @@ checkpoint campaign_first_plan:
     params:
         rows=unit_rows,
         options=unit_options,
-        cache=CAMPAIGN_CACHE,
-    run:
-        in_snakemake.campaign(rule, log[0], params.rows, params.options, params.cache, None, output[0])
+    run:  # it reads no calibration, and so no cache
+        in_snakemake.campaign(rule, log[0], params.rows, params.options, None, None, output[0])
 
 
 checkpoint campaign_plan:
