@@ -45,26 +45,31 @@ def measured_record(path: Path) -> None:
     pd.DataFrame({"time": ds["time"].values, "theta": ds["theta"].values}).to_csv(path, index=False, float_format="%.10g")
 
 
-@pytest.fixture(scope="module")
-def built(tmp_path_factory):
-    """The workflow and the package copied (``<root>/rockdec``: the rules' modules are the
-    copy's), the campaign's sheet and its cache in the copy, ``snakemake campaign`` run once."""
-    root = tmp_path_factory.mktemp("campaign")
+def campaign_copy(root: Path, sheet: list[str]) -> dict:
+    """The workflow and the package copied into ``root`` (``<root>/rockdec``: the rules'
+    modules are the copy's), the campaign's ``sheet`` (lines) and its cache in the copy."""
     shutil.copy(REPO / "Snakefile", root)
     for folder in ("workflow", "config", "profiles"):
         shutil.copytree(REPO / folder, root / folder)
     # numba's caches come along (their index holds the sources' times, which the copy keeps):
     # compiling the kernels afresh for the copy would take longer than the campaign
     shutil.copytree(REPO / "src" / "rockdec", root / "rockdec", ignore=shutil.ignore_patterns("*.pyc"))
-    measured_record(root / "config" / "lab" / "m1.csv")
-    (root / "config" / "records.tsv").write_text("\n".join(SHEET) + "\n")
+    (root / "config" / "records.tsv").write_text("\n".join(sheet) + "\n")
     cache = root / "cache"
     config = root / "config" / "config.yaml"
     config.write_text(config.read_text().replace("campaign: {name: demo, sheet: config/records.tsv, cache: null}",
                                                  f"campaign: {{name: demo, sheet: config/records.tsv, cache: {cache}}}"))
-    code, log = snakemake(root, "campaign")
+    return {"root": root, "cache": cache, "results": root / "results" / "demo"}
+
+
+@pytest.fixture(scope="module")
+def built(tmp_path_factory):
+    """:func:`campaign_copy` of :data:`SHEET`, ``snakemake campaign`` run once."""
+    copy = campaign_copy(tmp_path_factory.mktemp("campaign"), SHEET)
+    measured_record(copy["root"] / "config" / "lab" / "m1.csv")
+    code, log = snakemake(copy["root"], "campaign")
     assert code == 0, log
-    return {"root": root, "log": log, "cache": cache, "results": root / "results" / "demo"}
+    return {**copy, "log": log}
 
 
 def test_each_records_json_is_what_rockdec_estimate_prints_for_its_file(built, monkeypatch, capsys):
@@ -209,3 +214,54 @@ def test_the_demonstration_runs_from_an_empty_folder_with_the_workflow_elsewhere
     assert code == 0, out
     stats = job_stats(out)
     assert stats["campaign_simulate"] == 10 and stats["campaign_first_plan"] == stats["campaign_plan"] == 11, out  # ten records, block A pooled
+
+
+#: A campaign of records the estimate repairs and one it refuses (:func:`repaired_records`).
+REPAIRED_SHEET = [
+    "record\tpath\tdt\ttrue_e",
+    "spiky\tlab/spiky.npy\t0.796\t0.9",
+    "drifting\tlab/drifting.npy\t0.796\t0.9",
+    "flat\tlab/flat.npy\t0.796\t",
+]
+
+
+def repaired_records(folder: Path) -> None:
+    """Three records of 6000 samples as ``.npy`` files in ``folder``: one of e = 0.9 (the
+    demonstration's recipe) with three spikes of 30 times its rms (the repair replaces them),
+    the same under a drift of one slow cycle of twice its rms (the records as given are
+    refused, the high-passed ones estimated), and a constant one (refused)."""
+    from rockdec.pipeline import campaign
+
+    row = {"record": "x", "true_e": 0.9, "dt": 0.796, "simulate": campaign.simulation("seed=4 n_points=6000")}
+    theta = campaign.simulated_record(row)["theta"].values
+    rms = float(np.sqrt(np.mean(theta**2)))
+    spiky = theta.copy()
+    spiky[[1000, 3000, 5000]] += 30 * rms
+    folder.mkdir(parents=True)
+    np.save(folder / "spiky.npy", spiky)
+    np.save(folder / "drifting.npy", theta + 2 * rms * np.sin(2 * np.pi * np.arange(theta.size) / theta.size))
+    np.save(folder / "flat.npy", np.zeros(theta.size))
+
+
+def test_records_the_repair_despikes_or_high_passes_and_a_refused_one_finish_the_campaign(tmp_path):
+    """Each estimate reads only calibrations its plans asked for and the workflow built (the
+    repair decides in the plans as in the estimate); the refused record is a row of the table
+    with its reason."""
+    copy = campaign_copy(tmp_path, REPAIRED_SHEET)
+    repaired_records(copy["root"] / "config" / "lab")
+    code, log = snakemake(copy["root"], "campaign")
+    assert code == 0, log
+    docs = {unit: json.loads((copy["results"] / "estimates" / f"record_{unit}.json").read_text()) for unit in ("spiky", "drifting", "flat")}
+    assert docs["spiky"]["repair"]["spikes_removed"] == 3 and docs["drifting"]["repair"]["highpass_corner_rocking"] is not None
+    planned = set()
+    for unit, doc in docs.items():
+        plan = json.loads((copy["results"] / "plans" / f"record_{unit}.json").read_text())
+        planned |= set(plan["calibrations"])
+        if unit != "flat":
+            assert doc["calibration"]["file"] in plan["calibrations"] and doc["calibration"]["cached"] is True, unit
+    assert {p.name for p in copy["cache"].glob("calibration-*.nc")} == planned  # no estimate built one
+    assert log.count("rule campaign_calibration:") == len(planned)
+    tab = pd.read_csv(copy["results"] / "estimates.csv", keep_default_na=False)
+    assert list(tab["record"]) == ["spiky", "drifting", "flat"]
+    flat = tab[tab["record"] == "flat"].iloc[0]
+    assert flat["e"] == "" and "the record is constant" in flat["reason"]

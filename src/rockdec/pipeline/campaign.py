@@ -238,12 +238,12 @@ def _completed(row: dict, sheet: Path, simulated: Path, fail) -> dict:
     from rockdec.physics.record_model import check_filter_declared_with_model, parse_sensor_filter, parse_sensor_noise
 
     props = schema()["properties"]
+    given_units = "units" in row
     row = {**{k: p["default"] for k, p in props.items() if "default" in p}, **row}
     row.setdefault("block", row["record"])
     if "dt" in row and "fs" in row:
         raise fail("fs", "both dt and fs are given; give the sampling as one of them")
     given = row.get("dt", 1.0 / row["fs"] if "fs" in row else None)
-    given_units = "units" in row
     if "simulate" in row:
         for column in ("true_e", "dt"):
             if column not in row:
