@@ -3,7 +3,8 @@ measured record (a CSV file) and a free-rocking test, records of 6000 samples so
 two each. Each record's JSON is what ``rockdec estimate --json`` prints for its file; each distinct
 calibration is built once, by a job of its own; a new row reruns only its record, its block
 and the summaries; the table, the NetCDF (CF), the figures and the verified archive; the
-cluster profile's plan; the code fingerprints (a module edited reruns what reaches it).
+cluster profile's plan; the code fingerprints (a module edited reruns what reaches it). And a
+campaign of records the estimate repairs (spikes, drift) beside one it refuses.
 """
 
 from __future__ import annotations

@@ -159,12 +159,18 @@ def read_sheet(sheet: str | Path, *, simulated: str | Path = "results/simulated"
     Each row's ``path`` is resolved against the sheet's folder (a row the workflow simulates
     gets ``<simulated>/<record>.nc``), defaults fill the empty cells (the schema's), ``dt`` is
     the step of the record (given, ``1/fs``, or read off the file's time axis: :func:`file_step`),
-    and ``block`` is the record's own id when none is given.
+    ``block`` is the record's own id when none is given, and ``units_in_file`` says whether the
+    file states its angle's units (else the row's ``units`` apply). A byte-order mark before
+    the header is left out. A step a record file's reader refuses (``fs`` 1e-320) is left to
+    the estimate, which refuses that record alone.
 
-    Raises :class:`SheetError` naming the row and the column: an empty sheet, an unknown or
+    Raises :class:`SheetError` naming the row and the column: an empty sheet, a sheet whose
+    columns are separated by commas, semicolons or spaces rather than tabs, an unknown or
     missing column, a value the schema refuses (an unknown unit, a negative ``dt``, an unknown
-    load ...), a duplicate id, a missing file, both ``dt`` and ``fs``, a step that disagrees with
-    the file's, no step at all, a block whose records differ in step or in their options.
+    load ...), an id longer than :data:`MAX_ID`, a duplicate id, a missing file, both ``dt`` and
+    ``fs``, a step that disagrees with the file's, no step at all, units that disagree with the
+    file's, a simulated record longer than :data:`MAX_SIMULATED_POINTS` or whose step a float
+    cannot hold, a block whose records differ in step or in their options.
 
     Examples
     --------
