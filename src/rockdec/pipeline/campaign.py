@@ -505,9 +505,9 @@ def declared(opts: dict) -> dict:
             "sensor_filter": parse_sensor_filter(opts["sensor_filter"])}
 
 
-def plan(rows: list[dict], opts: dict, cache=None, earlier: dict | None = None, records=None) -> dict:
-    """Which calibrations the estimate of ``rows`` (a record, or a block's records pooled;
-    ``records``, when read already) under ``opts`` reads, found by running that estimate
+def plan(rows: list[dict], opts: dict, cache=None, earlier: dict | None = None) -> dict:
+    """Which calibrations the estimate of ``rows`` (a record, or a block's records pooled)
+    under ``opts`` reads, found by running that estimate
     itself (:func:`rockdec.calibrate.inference.estimate`, with the options the public estimate
     passes it), its repair's decisions included, allowed to read only the calibrations of the
     ``earlier`` plan (from ``cache``) and stopped at the first it asks for beyond them
@@ -530,7 +530,7 @@ def plan(rows: list[dict], opts: dict, cache=None, earlier: dict | None = None, 
         return done
     available = {name.removeprefix("calibration-").removesuffix(".nc") for name in known}
     try:
-        inference.estimate(read(rows) if records is None else records, cache_dir=cache, g=opts.get("g"), rocking=opts["model"],
+        inference.estimate(read(rows), cache_dir=cache, g=opts.get("g"), rocking=opts["model"],
                            theta_cr=opts.get("theta_cr"), available=available, **declared(opts))
     except inference.CalibrationNeeded as need:
         known[f"calibration-{calibration.settings_hash(need.settings)}.nc"] = need.settings
