@@ -169,7 +169,7 @@ def test_a_free_rocking_row_says_the_analysis_is_not_available_where_rockdec_has
     rows = campaign.read_sheet(sheet(folder, "record\tpath\ttest", "a\tr1.csv\tfree"))
     doc, result = campaign.estimate_unit(rows, campaign.options(rows[0]), folder, SimpleNamespace())
     assert doc["e"] is None and doc["reason"] == campaign.FREE_UNAVAILABLE and result is None
-    assert campaign.plan(rows, campaign.options(rows[0]))["calibration"] is None
+    assert campaign.plan(rows, campaign.options(rows[0])) == {"calibrations": {}, "error": None}
 
 
 def test_a_free_rocking_rows_json_is_what_rockdec_estimate_test_free_prints(tmp_path, monkeypatch, capsys):
@@ -208,13 +208,16 @@ def test_the_plan_names_the_calibration_the_estimate_asks_for(simulated, tmp_pat
 
     monkeypatch.setattr(calibration, "_grid_point", fake_calibration.grid_point)
     opts = campaign.options(simulated[0])
-    planned = campaign.plan(simulated, opts)
-    assert planned["calibration"] == f"calibration-{calibration.settings_hash(planned['settings'])}.nc"
+    first = campaign.plan(simulated, opts, tmp_path)
+    ((name, settings),) = first["calibrations"].items()
+    assert name == f"calibration-{calibration.settings_hash(settings)}.nc"
     assert not list(tmp_path.iterdir())  # planning builds nothing
-    built = campaign.build_calibration(planned["settings"], tmp_path)
-    assert built.name == planned["calibration"]
+    assert campaign.build_calibration(settings, tmp_path).name == name
+    planned = campaign.plan(simulated, opts, tmp_path, first)
+    for more in planned["calibrations"].values():
+        campaign.build_calibration(more, tmp_path)
     doc, result = campaign.estimate_unit(simulated, opts, tmp_path, rockdec)
-    assert doc["calibration"]["file"] == planned["calibration"] and doc["calibration"]["cached"] is True
+    assert doc["calibration"]["file"] in planned["calibrations"] and doc["calibration"]["cached"] is True
     assert doc == result.to_dict()
 
 
@@ -225,9 +228,11 @@ def test_a_declared_filter_reaches_the_calibration_the_plan_names(simulated):
 
     row = {**simulated[0], "load": "white", "sensor_noise": "0", "sensor_filter": "butterworth:4:10:zero-phase"}
     planned = campaign.plan([row], campaign.options(row))
-    found = RecordModel.from_key(planned["settings"]["record_model"]).filter
+    (settings,) = planned["calibrations"].values()
+    found = RecordModel.from_key(settings["record_model"]).filter
     assert planned["error"] is None and (found.kind, found.order, found.zero_phase) == ("butterworth", 4, True)
-    assert RecordModel.from_key(campaign.plan(simulated, campaign.options(simulated[0]))["settings"]["record_model"]).filter is None
+    (plain,) = campaign.plan(simulated, campaign.options(simulated[0]))["calibrations"].values()
+    assert RecordModel.from_key(plain["record_model"]).filter is None
 
 
 def test_the_simulated_record_has_the_rows_step_and_its_true_e(simulated):

@@ -3,7 +3,8 @@ measured record (a CSV file) and a free-rocking test, records of 6000 samples so
 two each. Each record's JSON is what ``rockdec estimate --json`` prints for its file; each distinct
 calibration is built once, by a job of its own; a new row reruns only its record, its block
 and the summaries; the table, the NetCDF (CF), the figures and the verified archive; the
-cluster profile's plan; the code fingerprints (a module edited reruns what reaches it).
+cluster profile's plan; the code fingerprints (a module edited reruns what reaches it). And a
+campaign of records the estimate repairs (spikes, drift) beside one it refuses.
 """
 
 from __future__ import annotations
@@ -45,26 +46,31 @@ def measured_record(path: Path) -> None:
     pd.DataFrame({"time": ds["time"].values, "theta": ds["theta"].values}).to_csv(path, index=False, float_format="%.10g")
 
 
-@pytest.fixture(scope="module")
-def built(tmp_path_factory):
-    """The workflow and the package copied (``<root>/rockdec``: the rules' modules are the
-    copy's), the campaign's sheet and its cache in the copy, ``snakemake campaign`` run once."""
-    root = tmp_path_factory.mktemp("campaign")
+def campaign_copy(root: Path, sheet: list[str]) -> dict:
+    """The workflow and the package copied into ``root`` (``<root>/rockdec``: the rules'
+    modules are the copy's), the campaign's ``sheet`` (lines) and its cache in the copy."""
     shutil.copy(REPO / "Snakefile", root)
     for folder in ("workflow", "config", "profiles"):
         shutil.copytree(REPO / folder, root / folder)
     # numba's caches come along (their index holds the sources' times, which the copy keeps):
     # compiling the kernels afresh for the copy would take longer than the campaign
     shutil.copytree(REPO / "src" / "rockdec", root / "rockdec", ignore=shutil.ignore_patterns("*.pyc"))
-    measured_record(root / "config" / "lab" / "m1.csv")
-    (root / "config" / "records.tsv").write_text("\n".join(SHEET) + "\n")
+    (root / "config" / "records.tsv").write_text("\n".join(sheet) + "\n")
     cache = root / "cache"
     config = root / "config" / "config.yaml"
     config.write_text(config.read_text().replace("campaign: {name: demo, sheet: config/records.tsv, cache: null}",
                                                  f"campaign: {{name: demo, sheet: config/records.tsv, cache: {cache}}}"))
-    code, log = snakemake(root, "campaign")
+    return {"root": root, "cache": cache, "results": root / "results" / "demo"}
+
+
+@pytest.fixture(scope="module")
+def built(tmp_path_factory):
+    """:func:`campaign_copy` of :data:`SHEET`, ``snakemake campaign`` run once."""
+    copy = campaign_copy(tmp_path_factory.mktemp("campaign"), SHEET)
+    measured_record(copy["root"] / "config" / "lab" / "m1.csv")
+    code, log = snakemake(copy["root"], "campaign")
     assert code == 0, log
-    return {"root": root, "log": log, "cache": cache, "results": root / "results" / "demo"}
+    return {**copy, "log": log}
 
 
 def test_each_records_json_is_what_rockdec_estimate_prints_for_its_file(built, monkeypatch, capsys):
@@ -81,10 +87,10 @@ def test_each_records_json_is_what_rockdec_estimate_prints_for_its_file(built, m
 
 
 def test_each_distinct_calibration_is_built_once_by_a_job_of_its_own(built):
-    plans = {p.stem: json.loads(p.read_text()) for p in (built["results"] / "plans").glob("*.json")}
-    assert plans["record_f1"]["calibration"] is None  # a free-rocking test needs none
-    wanted = {plan["calibration"] for unit, plan in plans.items() if unit != "record_f1"}
-    assert len(plans) == 5 and None not in wanted  # a1, a2, m1, f1 and block A
+    plans = {p.stem: json.loads(p.read_text()) for p in (built["results"] / "plans").glob("*.json") if not p.name.endswith(".first.json")}
+    assert plans["record_f1"]["calibrations"] == {}  # a free-rocking test needs none
+    wanted = {name for unit, plan in plans.items() for name in plan["calibrations"]}
+    assert len(plans) == 5 and all(plans[unit]["calibrations"] for unit in plans if unit != "record_f1")  # a1, a2, m1, f1 and block A
     assert built["log"].count("rule campaign_calibration:") == len(wanted)
     assert {p.name for p in built["cache"].glob("calibration-*.nc")} == wanted
     for path in (built["results"] / "estimates").glob("*.json"):
@@ -104,7 +110,7 @@ def test_adding_a_row_reruns_only_that_record_its_block_and_the_summaries(built)
         sheet.write_text(before)
     assert code == 0, out
     assert job_stats(out) == {
-        "campaign_simulate": 1, "campaign_plan": 2, "campaign_record": 1, "campaign_block": 1,
+        "campaign_simulate": 1, "campaign_first_plan": 2, "campaign_plan": 2, "campaign_record": 1, "campaign_block": 1,
         "campaign_table": 1, "campaign_figures": 1, "campaign_archive": 1, "campaign": 1,
     }, out
 
@@ -152,14 +158,16 @@ def test_the_archive_holds_exactly_what_its_manifest_lists_and_verifies(built):
 
 
 def test_the_slurm_profile_plans_a_job_per_record_block_and_calibration(built):
-    """Once the plans are made (they read the records), a dry run on the cluster profile lists a
-    job per record, per block and per calibration they ask for (into an empty cache here)."""
+    """Once the first plans are made (they read the records), a dry run on the cluster profile lists a
+    job per record, per block and per calibration they ask for, and the plans that read those
+    calibrations (into an empty cache here)."""
     empty = built["root"] / "empty_cache"
     code, out = snakemake(built["root"], "-n", "--profile", "profiles/slurm", "campaign",
                           "--config", f"campaign={{name: demo, sheet: config/records.tsv, cache: {empty}}}")
     assert code == 0, out
     stats = job_stats(out)
     assert stats["campaign_record"] == 4 and stats["campaign_block"] == 1 and stats["campaign_calibration"] == 4, out
+    assert stats["campaign_plan"] == 5 and "campaign_first_plan" not in stats, out
 
 
 def test_a_bad_sheet_stops_the_run_before_any_job_naming_row_and_column(built):
@@ -206,4 +214,55 @@ def test_the_demonstration_runs_from_an_empty_folder_with_the_workflow_elsewhere
                           "--configfile", str(REPO / "config" / "config.yaml"))
     assert code == 0, out
     stats = job_stats(out)
-    assert stats["campaign_simulate"] == 10 and stats["campaign_plan"] == 11, out  # ten records, block A pooled
+    assert stats["campaign_simulate"] == 10 and stats["campaign_first_plan"] == stats["campaign_plan"] == 11, out  # ten records, block A pooled
+
+
+#: A campaign of records the estimate repairs and one it refuses (:func:`repaired_records`).
+REPAIRED_SHEET = [
+    "record\tpath\tdt\ttrue_e",
+    "spiky\tlab/spiky.npy\t0.796\t0.9",
+    "drifting\tlab/drifting.npy\t0.796\t0.9",
+    "flat\tlab/flat.npy\t0.796\t",
+]
+
+
+def repaired_records(folder: Path) -> None:
+    """Three records of 6000 samples as ``.npy`` files in ``folder``: one of e = 0.9 (the
+    demonstration's recipe) with three spikes of 30 times its rms (the repair replaces them),
+    the same under a drift of one slow cycle of twice its rms (the records as given are
+    refused, the high-passed ones estimated), and a constant one (refused)."""
+    from rockdec.pipeline import campaign
+
+    row = {"record": "x", "true_e": 0.9, "dt": 0.796, "simulate": campaign.simulation("seed=4 n_points=6000")}
+    theta = campaign.simulated_record(row)["theta"].values
+    rms = float(np.sqrt(np.mean(theta**2)))
+    spiky = theta.copy()
+    spiky[[1000, 3000, 5000]] += 30 * rms
+    folder.mkdir(parents=True)
+    np.save(folder / "spiky.npy", spiky)
+    np.save(folder / "drifting.npy", theta + 2 * rms * np.sin(2 * np.pi * np.arange(theta.size) / theta.size))
+    np.save(folder / "flat.npy", np.zeros(theta.size))
+
+
+def test_records_the_repair_despikes_or_high_passes_and_a_refused_one_finish_the_campaign(tmp_path):
+    """Each estimate reads only calibrations its plans asked for and the workflow built (the
+    repair decides in the plans as in the estimate); the refused record is a row of the table
+    with its reason."""
+    copy = campaign_copy(tmp_path, REPAIRED_SHEET)
+    repaired_records(copy["root"] / "config" / "lab")
+    code, log = snakemake(copy["root"], "campaign")
+    assert code == 0, log
+    docs = {unit: json.loads((copy["results"] / "estimates" / f"record_{unit}.json").read_text()) for unit in ("spiky", "drifting", "flat")}
+    assert docs["spiky"]["repair"]["spikes_removed"] == 3 and docs["drifting"]["repair"]["highpass_corner_rocking"] is not None
+    planned = set()
+    for unit, doc in docs.items():
+        plan = json.loads((copy["results"] / "plans" / f"record_{unit}.json").read_text())
+        planned |= set(plan["calibrations"])
+        if unit != "flat":
+            assert doc["calibration"]["file"] in plan["calibrations"] and doc["calibration"]["cached"] is True, unit
+    assert {p.name for p in copy["cache"].glob("calibration-*.nc")} == planned  # no estimate built one
+    assert log.count("rule campaign_calibration:") == len(planned)
+    tab = pd.read_csv(copy["results"] / "estimates.csv", keep_default_na=False)
+    assert list(tab["record"]) == ["spiky", "drifting", "flat"]
+    flat = tab[tab["record"] == "flat"].iloc[0]
+    assert flat["e"] == "" and "the record is constant" in flat["reason"]

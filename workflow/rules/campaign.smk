@@ -28,11 +28,37 @@ rule campaign_simulate:
         in_snakemake.campaign(rule, log[0], params.row, output[0])
 
 
-checkpoint campaign_plan:
-    """Which calibration the estimate of a record (or of a block's records pooled) needs: the
-    engine's own settings, read by running it up to that point (rockdec.pipeline.campaign.plan)."""
+checkpoint campaign_first_plan:
+    """The first calibration the estimate of a record (or of a block's records pooled) reads:
+    the estimate itself, run up to the first calibration it asks for (rockdec.pipeline.campaign.plan)."""
     input:
         records=unit_records,
+        code=CAMPAIGN_CODE,
+    output:
+        "results/{campaign}/plans/{unit}.first.json",
+    log:
+        "results/{campaign}/logs/first_plan_{unit}.log",
+    benchmark:
+        "results/{campaign}/benchmarks/first_plan_{unit}.tsv"
+    threads: 1
+    resources:
+        mem_mb=2000,
+        runtime=10,
+    params:
+        rows=unit_rows,
+        options=unit_options,
+    run:  # it reads no calibration, and so no cache
+        in_snakemake.campaign(rule, log[0], params.rows, params.options, None, None, output[0])
+
+
+checkpoint campaign_plan:
+    """Every calibration the estimate reads: the estimate run again on the first plan's
+    calibration, its repair deciding whether it reads the high-passed records' too (the
+    first plan as is when it needs no calibration)."""
+    input:
+        records=unit_records,
+        first="results/{campaign}/plans/{unit}.first.json",
+        calibration=first_calibration,
         code=CAMPAIGN_CODE,
     output:
         "results/{campaign}/plans/{unit}.json",
@@ -47,8 +73,9 @@ checkpoint campaign_plan:
     params:
         rows=unit_rows,
         options=unit_options,
+        cache=CAMPAIGN_CACHE,
     run:
-        in_snakemake.campaign(rule, log[0], params.rows, params.options, output[0])
+        in_snakemake.campaign(rule, log[0], params.rows, params.options, params.cache, input.first, output[0])
 
 
 rule campaign_calibration:
@@ -120,7 +147,7 @@ rule campaign_block:
     benchmark:
         "results/{campaign}/benchmarks/{unit}.tsv"
     wildcard_constraints:
-        unit="block_[A-Za-z][A-Za-z0-9_]*",
+        unit="block_[A-Za-z][A-Za-z0-9_]*(-free)?",
     threads: 1
     resources:
         mem_mb=2000,

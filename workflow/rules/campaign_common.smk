@@ -66,24 +66,34 @@ def unit_records(wildcards):
     return [row["path"] for row in CAMPAIGN_UNITS[wildcards.unit]]
 
 
+def _calibrations(plan_file):
+    """The calibration files a plan (rockdec.pipeline.campaign.plan) names, in the cache."""
+    return [f"{CAMPAIGN_CACHE}/{name}" for name in json.loads(Path(plan_file).read_text())["calibrations"]]
+
+
+def first_calibration(wildcards):
+    """The calibration the estimate of a record or block asks for first, once its first plan
+    is made (none for a record the estimate declines, refuses, or a free-rocking test)."""
+    return _calibrations(checkpoints.campaign_first_plan.get(**wildcards).output[0])
+
+
 def planned_calibration(wildcards):
-    """The calibration file a record's or block's estimate reads, once its plan is made
-    (none for a record the estimate declines, refuses, or a free-rocking test)."""
-    plan = json.loads(Path(checkpoints.campaign_plan.get(**wildcards).output[0]).read_text())
-    return [f"{CAMPAIGN_CACHE}/{plan['calibration']}"] if plan["calibration"] else []
+    """Every calibration the estimate of a record or block reads, once its plan is made."""
+    return _calibrations(checkpoints.campaign_plan.get(**wildcards).output[0])
 
 
 def calibration_settings(wildcards):
-    """The settings of the calibration ``calhash``, from the plan of a record or block that asks
+    """The settings of the calibration ``calhash``, from a plan of a record or block that asks
     for it (the calibration job's params: the same settings whichever plan they are read from).
     Read from the plans on disk: the job joins the run only once a plan that asks for it is made."""
     name = f"calibration-{wildcards.calhash}.nc"
     for unit in CAMPAIGN_UNITS:
-        path = Path(f"results/{CAMPAIGN}/plans/{unit}.json")
-        if path.is_file():
-            plan = json.loads(path.read_text())
-            if plan["calibration"] == name:
-                return plan["settings"]
+        for stage in ("first.json", "json"):
+            path = Path(f"results/{CAMPAIGN}/plans/{unit}.{stage}")
+            if path.is_file():
+                plan = json.loads(path.read_text())
+                if name in plan["calibrations"]:
+                    return plan["calibrations"][name]
     raise ValueError(f"no plan of the campaign '{CAMPAIGN}' asks for {name}")
 
 

@@ -692,6 +692,17 @@ def choose_model(
     return ModelChoice(measurement, why_not, measuring, model, sources, cal_settings, declined, found, notes)
 
 
+class CalibrationNeeded(Exception):
+    """The estimate asks for a calibration outside those it may read (``available`` of
+    :func:`estimate`); ``settings`` are that calibration's. What a planner catches to learn
+    which calibrations an estimate reads, its repair's decisions included, before any is built
+    (:func:`rockdec.pipeline.campaign.plan`)."""
+
+    def __init__(self, settings: dict):
+        super().__init__(f"calibration-{calibration.settings_hash(settings)}.nc")
+        self.settings = settings
+
+
 class Calibrated(NamedTuple):
     """The calibration of the records (stage 3 of :func:`estimate`): ``cal`` (the stored
     simulated sets), whether it came from the cache, the seconds it took, the factor on
@@ -712,11 +723,14 @@ class Calibrated(NamedTuple):
         return int(self.cal["raw"].sizes["e_true"] * self.cal["raw"].sizes["set"])
 
 
-def calibrate(analysed: Analysed, choice: ModelChoice, cache_dir) -> Calibrated:
+def calibrate(analysed: Analysed, choice: ModelChoice, cache_dir, available=None) -> Calibrated:
     """Stage 3 of :func:`estimate`: get the calibration of ``choice`` from ``cache_dir``
     or build and store it (:func:`rockdec.calibrate.calibration.load_or_build`), and its
-    belts."""
+    belts. ``available``: the settings hashes of the calibrations it may read (``None``: any);
+    one outside them raises :class:`CalibrationNeeded`, before the cache is read."""
     cal_settings = choice.cal_settings
+    if available is not None and calibration.settings_hash(cal_settings) not in available:
+        raise CalibrationNeeded(cal_settings)
     scale = calibration.spread_scale(cal_settings, analysed.samples)
     simulated = sum(cal_settings["lengths"])
     shortened = (
@@ -1049,7 +1063,7 @@ def estimate(
     records: list[Record], *, cache_dir, g: float | None = None, settings: dict | None = None, model: RecordModel | None = None,
     load: Load | str | None = None, sensor: SensorNoise | None = None, rocking: str | None = None, theta_cr: float | None = None,
     sensor_filter: SensorFilter | str | None = "auto",
-    repair_records: bool = True,
+    repair_records: bool = True, available=None,
 ) -> Outcome:
     """Calibrated estimates of ``e`` from ``records`` of one block (pooled), in named stages,
     after the records' repair.
@@ -1090,9 +1104,15 @@ def estimate(
     ``e``, ``interval``, ``coverage``, ``triggers``, ``notes``, ``calibrated_range``,
     ``beyond``), ``warnings`` and ``warning_codes`` (:class:`Note`), ``diagnostics``,
     ``rockdec_version``, ``calibration`` and ``repair`` (:func:`repair_report`).
+
+    ``available``: the settings hashes of the calibrations the estimate may read (``None``:
+    any, built when absent); the first it asks for outside them raises
+    :class:`CalibrationNeeded`. The estimate reads at most two: that of the records as given
+    (spikes replaced) and, when the repair decides on the high-pass, that of the high-passed
+    records.
     """
     options = dict(cache_dir=cache_dir, g=g, settings=settings, model=model, load=load, sensor=sensor, rocking=rocking, theta_cr=theta_cr,
-                   sensor_filter=sensor_filter)
+                   sensor_filter=sensor_filter, available=available)
     records = list(records)
     if not repair_records:
         return estimate_once(records, None, None, False, **options)
@@ -1145,12 +1165,13 @@ def estimate_once(
     records: list[Record], repaired: dict | None, done: repair.Repair | None, enabled: bool, why: str | None = None, *, cache_dir,
     g: float | None = None, settings: dict | None = None, model: RecordModel | None = None, load: Load | str | None = None,
     sensor: SensorNoise | None = None, rocking: str | None = None, theta_cr: float | None = None,
-    sensor_filter: SensorFilter | str | None = "auto",
+    sensor_filter: SensorFilter | str | None = "auto", available=None,
 ) -> Outcome:
     """One estimate of :func:`estimate` on ``records`` as they are (already repaired as
     ``repaired`` says, :func:`rockdec.record.repair.settings`, with ``done`` what the repair
     did, ``why`` in words; ``enabled``: whether the repair was on), in the stages
-    :func:`estimate` lists; the calibration's sets are repaired alike."""
+    :func:`estimate` lists; the calibration's sets are repaired alike (``available``:
+    :func:`calibrate`)."""
     analysed = analyse(records, g=g, settings=settings)
     report = repair_report(done, analysed.dt, enabled, why)
     choice = choose_model(analysed, model=model, load=load, sensor=sensor, rocking=rocking, theta_cr=theta_cr, sensor_filter=sensor_filter,
@@ -1159,7 +1180,7 @@ def estimate_once(
         per, selection = declined_rows(analysed)
         doc = document(analysed, choice, None, per, (None, selection[1], choice.declined), None, [*analysed.notes, *choice.notes], {}, report)
         return Outcome(doc, analysed.analysis, {})
-    calibrated = calibrate(analysed, choice, cache_dir)
+    calibrated = calibrate(analysed, choice, cache_dir, available)
     per = correct(analysed, calibrated)
     selection = select(per, calibrated.n_sets, calibrated.belts)
     impossible = gains_speed(analysed, calibrated)

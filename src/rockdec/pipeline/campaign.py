@@ -10,9 +10,11 @@ row and the column (:class:`SheetError`).
 What each job of ``workflow/rules/campaign.smk`` runs:
 
 * :func:`simulate_step`: a record of known ``e`` for the demonstration (a row with ``simulate``);
-* :func:`plan_step`: the calibration a record's (or a block's pooled) estimate asks for, read
-  off the estimate's own first stages (:func:`calibration_request`), so the calibration is a
-  job of its own keyed by its content (:func:`rockdec.calibrate.calibration.settings_hash`);
+* :func:`plan_step`: the calibrations a record's (or a block's pooled) estimate reads, found
+  by running that estimate up to each calibration it asks for (:func:`plan`: the first plan
+  finds the records' as given, the plan on it, once built, the high-passed records' when the
+  repair decides on the high-pass), so each calibration is a job of its own keyed by its
+  content (:func:`rockdec.calibrate.calibration.settings_hash`);
 * :func:`calibration_step`: that calibration, into the cache ``rockdec estimate`` reads;
 * :func:`estimate_step`: the estimate of a record or of a block through :func:`estimate`,
   the one adapter to the public estimate (its JSON is what ``rockdec estimate --json``
@@ -52,6 +54,21 @@ STEP_RTOL = 1e-6
 #: Lines of a CSV file :func:`file_step` reads to find its step (its first rows: the check
 #: before any job reads headers, never whole records).
 STEP_LINES = 2000
+
+#: Characters a record's or a block's id may have at most: its estimate's files and logs are
+#: named by it (``first_plan_block_<id>-free.log``), within the 255 bytes of a file name.
+MAX_ID = 64
+
+#: Samples a record the workflow simulates (``simulate``) may have at most: the longest
+#: records whose interval's coverage was measured,
+#: :data:`rockdec.calibrate.inference.LONG_RATIO` times the calibration's longest simulated
+#: records (:data:`rockdec.calibrate.calibration.LENGTH_CAP`); a longer one takes minutes to
+#: analyse, and its estimate is warned that its coverage was not measured.
+MAX_SIMULATED_POINTS = 20_000_000
+
+#: Separators a sheet's header is not split by, which a sheet written by a spreadsheet or by
+#: hand may hold instead of tabs, in words.
+OTHER_SEPARATORS = {",": "commas", ";": "semicolons", " ": "spaces"}
 
 #: Options the records of one block must share: their pooled estimate takes one of each.
 BLOCK_OPTIONS = ("load", "sensor_noise", "sensor_filter", "model", "theta_cr", "g")
@@ -113,7 +130,7 @@ def _rows(sheet: Path) -> tuple[list[str], list[tuple[int, list[str]]]]:
     """The header and the data rows (numbered from 1, comments and blank lines skipped) of a
     tab-separated sheet."""
     try:
-        text = sheet.read_text(encoding="utf-8")
+        text = sheet.read_text(encoding="utf-8-sig")  # a byte-order mark is not part of the first column's name
     except FileNotFoundError:
         raise SheetError(f"records sheet '{sheet}' does not exist; set campaign.sheet in the config to your sheet's path.") from None
     except (OSError, UnicodeDecodeError) as exc:
@@ -123,7 +140,17 @@ def _rows(sheet: Path) -> tuple[list[str], list[tuple[int, list[str]]]]:
         raise SheetError(f"records sheet '{sheet}' is empty; give a header line (record, path, ...) and one row per record.")
     table = list(csv.reader(lines, delimiter="\t"))
     header = [name.strip() for name in table[0]]
+    other = _separated(header[0]) if len(header) == 1 else None
+    if other:
+        raise SheetError(f"records sheet '{sheet}': its header '{header[0]}' is one column whose names are separated by {other}; "
+                         "separate the columns by tabs.")
     return header, list(enumerate(table[1:], start=1))
+
+
+def _separated(cell: str) -> str | None:
+    """The separator other than a tab (:data:`OTHER_SEPARATORS`, in words) that splits the
+    cell ``cell``, or ``None``."""
+    return next((words for sep, words in OTHER_SEPARATORS.items() if sep in cell.strip()), None)
 
 
 def read_sheet(sheet: str | Path, *, simulated: str | Path = "results/simulated") -> list[dict]:
@@ -132,12 +159,18 @@ def read_sheet(sheet: str | Path, *, simulated: str | Path = "results/simulated"
     Each row's ``path`` is resolved against the sheet's folder (a row the workflow simulates
     gets ``<simulated>/<record>.nc``), defaults fill the empty cells (the schema's), ``dt`` is
     the step of the record (given, ``1/fs``, or read off the file's time axis: :func:`file_step`),
-    and ``block`` is the record's own id when none is given.
+    ``block`` is the record's own id when none is given, and ``units_in_file`` says whether the
+    file states its angle's units (else the row's ``units`` apply). A byte-order mark before
+    the header is left out. A step a record file's reader refuses (``fs`` 1e-320) is left to
+    the estimate, which refuses that record alone.
 
-    Raises :class:`SheetError` naming the row and the column: an empty sheet, an unknown or
+    Raises :class:`SheetError` naming the row and the column: an empty sheet, a sheet whose
+    columns are separated by commas, semicolons or spaces rather than tabs, an unknown or
     missing column, a value the schema refuses (an unknown unit, a negative ``dt``, an unknown
-    load ...), a duplicate id, a missing file, both ``dt`` and ``fs``, a step that disagrees with
-    the file's, no step at all, a block whose records differ in step or in their options.
+    load ...), an id longer than :data:`MAX_ID`, a duplicate id, a missing file, both ``dt`` and
+    ``fs``, a step that disagrees with the file's, no step at all, units that disagree with the
+    file's, a simulated record longer than :data:`MAX_SIMULATED_POINTS` or whose step a float
+    cannot hold, a block whose records differ in step or in their options.
 
     Examples
     --------
@@ -171,6 +204,9 @@ def read_sheet(sheet: str | Path, *, simulated: str | Path = "results/simulated"
     for number, cells in rows:
         if len(cells) > len(header):
             raise _fail(sheet, number, None, None, f"{len(cells)} cells for {len(header)} columns; separate the cells by tabs, one per column")
+        if len(cells) == 1 < len(header) and _separated(cells[0]):
+            raise _fail(sheet, number, None, None, f"one cell for {len(header)} columns, separated by {_separated(cells[0])}; "
+                                                   "separate the columns by tabs")
         record = cells[0].strip() if header[0] == "record" and cells else None
 
         def fail(column, problem, number=number):
@@ -183,6 +219,10 @@ def read_sheet(sheet: str | Path, *, simulated: str | Path = "results/simulated"
                 raw[name] = text
                 row[name] = _typed(text, props[name], lambda problem, name=name: fail(name, problem))
         record = row.get("record")
+        for column in ("record", "block"):
+            if len(row.get(column, "")) > MAX_ID:
+                raise fail(column, f"an id of {len(row[column])} characters ('{row[column][:12]}...'), more than the {MAX_ID} an id may have "
+                                   "(its estimate's files are named by it); give a shorter id")
         errors = sorted(validator.iter_errors(row), key=lambda err: (header.index(err.path[0]) if err.path else -1))
         if errors:
             err = errors[0]
@@ -204,6 +244,7 @@ def _completed(row: dict, sheet: Path, simulated: Path, fail) -> dict:
     from rockdec.physics.record_model import check_filter_declared_with_model, parse_sensor_filter, parse_sensor_noise
 
     props = schema()["properties"]
+    given_units = "units" in row
     row = {**{k: p["default"] for k, p in props.items() if "default" in p}, **row}
     row.setdefault("block", row["record"])
     if "dt" in row and "fs" in row:
@@ -217,6 +258,11 @@ def _completed(row: dict, sheet: Path, simulated: Path, fail) -> dict:
             raise fail("path", "a row the workflow simulates (simulate) writes its own file; leave path empty")
         row["path"] = str(simulated / f"{row['record']}.nc")
         row["simulate"] = simulation(row["simulate"], fail)
+        span = (row["simulate"]["n_points"] - 1) * row["dt"]
+        if not (row["dt"] >= np.finfo(np.float64).tiny and math.isfinite(span) and np.spacing(span) <= 0.5 * row["dt"]):
+            raise fail("dt", f"a step of {row['dt']:g} s over {row['simulate']['n_points']} samples gives time stamps a float cannot "
+                             "tell apart or hold; give a step like the demonstration's 0.8 s")
+        row["units_in_file"] = True  # the simulated record's angle is stored in rad
     else:
         if "path" not in row:
             raise fail("path", "empty; give the record's file (absolute, or relative to the sheet's folder)")
@@ -229,8 +275,9 @@ def _completed(row: dict, sheet: Path, simulated: Path, fail) -> dict:
             own, units = file_step(path, row["variable"], row["column"])
         except timeaxis.RecordError as exc:
             raise fail("path", str(exc).rstrip(".")) from None
-        if units is not None and timeaxis.angle_factor(units, str(path), row["variable"]) != timeaxis.ANGLE_UNITS[row["units"]]:
+        if units is not None and given_units and timeaxis.angle_factor(units, str(path), row["variable"]) != timeaxis.ANGLE_UNITS[row["units"]]:
             raise fail("units", f"'{row['units']}' differs from the file's own units '{units}'; leave units empty or give the file's")
+        row["units_in_file"] = units is not None
         if own is not None and given is not None and abs(given - own) > STEP_RTOL * own:
             raise fail("dt" if "dt" in row else "fs", f"a step of {given:g} s disagrees with the file's time axis ({own:g} s); leave it empty or correct it")
         if own is None and given is None:
@@ -293,14 +340,26 @@ def simulation(text: str, fail=None) -> dict:
     {'seed': 3, 'n_points': 200000, 'noise': 0.03, 'corner': None, 'theta0': None}
     """
     out = {"seed": None, "n_points": 200000, "noise": 0.0, "corner": None, "theta0": None}
+    problem = None
     for part in text.split():
         key, _, value = part.partition("=")
-        out[key] = int(float(value)) if key in ("seed", "n_points") else float(value)
-    if out["n_points"] < 1000 or out["noise"] < 0 or (out["corner"] is not None and out["corner"] <= 0):
+        try:
+            out[key] = float(value)
+        except ValueError:
+            problem = f"'{text}': {key}={value} is not a number; fix the recipe"
+            continue
+        if not math.isfinite(out[key]):
+            problem = f"'{text}': {key}={value} is not a finite number; fix the recipe"
+    if problem is None and out["n_points"] > MAX_SIMULATED_POINTS:
+        problem = (f"'{text}' asks for {out['n_points']:.3g} samples, more than the {MAX_SIMULATED_POINTS:.0e} of the longest records "
+                   f"whose interval's coverage was measured; give n_points <= {MAX_SIMULATED_POINTS}")
+    if problem is None and (out["n_points"] < 1000 or out["noise"] < 0 or (out["corner"] is not None and out["corner"] <= 0)):
         problem = f"'{text}' asks for fewer than 1000 samples, a negative noise or a corner <= 0; fix the recipe"
+    if problem is not None:
         if fail is None:
             raise SheetError(problem + ".")
         raise fail("simulate", problem)
+    out["seed"], out["n_points"] = int(out["seed"]), int(out["n_points"])
     return out
 
 
@@ -344,7 +403,7 @@ def file_step(path: str | Path, variable: str = "theta", column: str = "theta") 
         except OSError as exc:
             raise timeaxis.RecordError(f"'{path.name}' is not a readable NetCDF file ({exc.strerror or exc})") from None
     if suffix in (".csv", ".txt"):
-        with open(path, encoding="utf-8", errors="replace") as f:
+        with open(path, encoding="utf-8-sig", errors="replace") as f:  # as the reader, a byte-order mark left out
             lines = [line for _, line in zip(range(STEP_LINES), f) if line.strip() and not line.lstrip().startswith("#")]
         if not lines:
             raise timeaxis.RecordError(f"'{path.name}' is empty")
@@ -368,13 +427,14 @@ def file_step(path: str | Path, variable: str = "theta", column: str = "theta") 
 
 def units(rows: list[dict]) -> dict[str, list[dict]]:
     """The campaign's estimates: ``record_<id>`` for each record, ``block_<name>`` for each
-    block of two or more random-response records and ``block_<name>_free`` for each block of
-    two or more free-rocking tests, each mapped to its rows (the records it pools)."""
+    block of two or more random-response records and ``block_<name>-free`` for each block of
+    two or more free-rocking tests (an id holds no ``-``: no block's name is another's free
+    tests'), each mapped to its rows (the records it pools)."""
     out = {f"record_{row['record']}": [row] for row in rows}
     blocks: dict[tuple, list[dict]] = {}
     for row in rows:
         blocks.setdefault((row["block"], row["test"] == "free"), []).append(row)
-    out.update({f"block_{name}" + ("_free" if free else ""): members for (name, free), members in blocks.items() if len(members) > 1})
+    out.update({f"block_{name}" + ("-free" if free else ""): members for (name, free), members in blocks.items() if len(members) > 1})
     return out
 
 
@@ -404,10 +464,10 @@ def _given_step(row: dict) -> float | None:
 
 
 def _angle_factor(row: dict) -> float:
-    """The factor from the row's ``units`` to rad for a CSV or ``.npy`` file (a NetCDF file's
-    ``units`` attribute is read by the reader itself)."""
-    netcdf = Path(row["path"]).suffix.lower() in (".nc", ".nc4", ".netcdf")
-    return 1.0 if netcdf else timeaxis.ANGLE_UNITS[row["units"]]
+    """The factor from the row's ``units`` to rad for a file that does not state its angle's
+    units (a CSV or ``.npy`` file, a NetCDF variable without a ``units`` attribute); 1 for one
+    that does, which the reader scales itself (``units_in_file``, :func:`read_sheet`)."""
+    return 1.0 if row["units_in_file"] else timeaxis.ANGLE_UNITS[row["units"]]
 
 
 def estimate(rows: list[dict], opts: dict, cache, api):
@@ -445,32 +505,38 @@ def declared(opts: dict) -> dict:
             "sensor_filter": parse_sensor_filter(opts["sensor_filter"])}
 
 
-def calibration_request(records, opts: dict) -> dict | None:
-    """The settings of the calibration the estimate of ``records`` under ``opts`` asks for,
-    or ``None`` when it asks for none (the records are declined): its first two stages,
-    :func:`rockdec.calibrate.inference.analyse` and
-    :func:`rockdec.calibrate.inference.choose_model`."""
-    from rockdec.calibrate import inference
+def plan(rows: list[dict], opts: dict, cache=None, earlier: dict | None = None) -> dict:
+    """Which calibrations the estimate of ``rows`` (a record, or a block's records pooled)
+    under ``opts`` reads, found by running that estimate
+    itself (:func:`rockdec.calibrate.inference.estimate`, with the options the public estimate
+    passes it), its repair's decisions included, allowed to read only the calibrations of the
+    ``earlier`` plan (from ``cache``) and stopped at the first it asks for beyond them
+    (:class:`rockdec.calibrate.inference.CalibrationNeeded`). The estimate reads at most two
+    (the records' as given and, when the repair high-passes them, the high-passed records'):
+    the plan without ``earlier`` finds the first, the plan on it, once built, the rest.
 
-    analysed = inference.analyse(records, g=opts.get("g"))
-    choice = inference.choose_model(analysed, rocking=opts["model"], theta_cr=opts.get("theta_cr"), **declared(opts))
-    return None if choice.declined else choice.cal_settings
+    Returns ``calibrations`` (file name in the cache -> settings, in the order the estimate
+    asks for them) and ``error``, the estimate's refusal in its sentence (``None`` when it
+    does not refuse the records). A plan that needs no calibration, or refuses, is final: the
+    plan on it is itself.
+    """
+    from rockdec.calibrate import calibration, inference
 
-
-def plan(rows: list[dict], opts: dict, records=None) -> dict:
-    """What the estimate of ``rows`` (a record, or a block's records pooled; ``records``, when
-    read already) needs: ``calibration`` (the file name in the cache, ``None`` for none),
-    ``settings`` and, when the estimate refuses the records, ``error`` (its sentence)."""
-    from rockdec.calibrate import calibration
-
+    if earlier is not None and (earlier["error"] or not earlier["calibrations"]):
+        return earlier
+    known = dict(earlier["calibrations"]) if earlier is not None else {}
+    done = {"calibrations": known, "error": None}
     if rows[0]["test"] == "free":
-        return {"calibration": None, "settings": None, "error": None}
+        return done
+    available = {name.removeprefix("calibration-").removesuffix(".nc") for name in known}
     try:
-        settings = calibration_request(read(rows) if records is None else records, opts)
+        inference.estimate(read(rows), cache_dir=cache, g=opts.get("g"), rocking=opts["model"],
+                           theta_cr=opts.get("theta_cr"), available=available, **declared(opts))
+    except inference.CalibrationNeeded as need:
+        known[f"calibration-{calibration.settings_hash(need.settings)}.nc"] = need.settings
     except InputError as exc:
-        return {"calibration": None, "settings": None, "error": str(exc)}
-    name = None if settings is None else f"calibration-{calibration.settings_hash(settings)}.nc"
-    return {"calibration": name, "settings": settings, "error": None}
+        done["error"] = str(exc)
+    return done
 
 
 def build_calibration(settings: dict, cache) -> Path:
@@ -564,7 +630,7 @@ def unit_dataset(name: str, rows: list[dict], doc: dict):
             for field, value in _numbers(sub).items():
                 per[dim].setdefault(f"{dim}_{field}", {})[key] = value
     rest = {k: v for k, v in doc.items() if k not in _BY and k not in ("selection",)}
-    for field, value in _numbers(rest).items():
+    for field, value in {"e": math.nan, **_numbers(rest)}.items():  # a refused record's null e too
         data[field] = (("record",), [value], {"units": _units(field)})
     for dim, fields in per.items():
         keys = sorted({key for values in fields.values() for key in values})
@@ -744,17 +810,13 @@ def _write_text(path: str, text: str) -> None:
     os.replace(partial, path)
 
 
-def plan_step(rows: list[dict], opts: dict, output: str) -> str:
-    """Rule ``campaign_plan``: :func:`plan` of ``rows`` written to ``output`` (JSON)."""
-    if rows[0]["test"] == "free":
-        done = {"calibration": None, "settings": None, "error": None}
-    else:
-        try:
-            done = plan(rows, opts)
-        except InputError as exc:
-            done = {"calibration": None, "settings": None, "error": str(exc)}
+def plan_step(rows: list[dict], opts: dict, cache, earlier: str | None, output: str) -> str:
+    """Rules ``campaign_first_plan`` (``earlier`` ``None``) and ``campaign_plan`` (``earlier``
+    the first plan's file, its calibrations built into ``cache``): :func:`plan` of ``rows``
+    written to ``output`` (JSON)."""
+    done = plan(rows, opts, cache, None if earlier is None else json.loads(Path(earlier).read_text()))
     _write_text(output, json.dumps(done, indent=2, sort_keys=True) + "\n")
-    return f"plan: {done['calibration'] or 'no calibration'}" + (f" ({done['error']})" if done["error"] else "")
+    return f"plan: {', '.join(done['calibrations']) or 'no calibration'}" + (f" ({done['error']})" if done["error"] else "")
 
 
 def calibration_step(settings: dict, output: str, threads: int) -> str:
@@ -779,10 +841,10 @@ def estimate_step(unit: str, rows: list[dict], opts: dict, cache, plan_file: str
 
     doc, result = estimate_unit(rows, opts, cache, api)
     if rows[0]["test"] != "free":
-        planned = json.loads(Path(plan_file).read_text())["calibration"]
+        planned = json.loads(Path(plan_file).read_text())["calibrations"]
         used = (doc.get("calibration") or {}).get("file")
-        if used != planned:  # the plan runs the estimate's own first stages: a mismatch is a bug, not the user's
-            raise RuntimeError(f"{unit}: the estimate used {used}, its plan asked for {planned}")
+        if used is not None and used not in planned:  # the plans run this estimate: a mismatch is a bug, not the user's
+            raise RuntimeError(f"{unit}: the estimate used {used}, its plan built {', '.join(planned) or 'none'}")
     _write_text(json_out, json.dumps(doc, indent=2) + "\n")
     ds = result.to_dataset() if result is not None else unit_dataset(unit, rows, doc)
     for key, value in io.provenance(step, {"rows": rows, "options": opts}, inputs=[row["path"] for row in rows]).items():

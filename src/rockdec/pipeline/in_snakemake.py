@@ -145,17 +145,17 @@ CAMPAIGN_STARTS = ("dask", "dask.array", "dask.threaded", "rockdec.calibrate.inf
 
 
 def campaign(rule: str, log: str, *args, api=None) -> None:
-    """Rules ``campaign_simulate``, ``campaign_plan``, ``campaign_calibration``,
+    """Rules ``campaign_simulate``, ``campaign_first_plan``, ``campaign_plan``, ``campaign_calibration``,
     ``campaign_record`` and ``campaign_block``: the :mod:`rockdec.pipeline.campaign` step of
-    that name (``campaign_plan`` runs ``plan_step``; the record and block rules
-    ``estimate_step``) on ``*args``, inside the Snakemake process: a record's plan and estimate
+    that name (``campaign_first_plan`` and ``campaign_plan`` run ``plan_step``; the record and
+    block rules ``estimate_step``) on ``*args``, inside the Snakemake process: a record's plan and estimate
     take a fraction of a second once the estimate's modules are loaded, which a script would
     load again for each. Steps run side by side on Snakemake's threads (the numba kernels
     and the calibration's Dask threads release the GIL) and hold the HDF5 locks only to read
     and write files. Logged as :func:`step` logs. ``api``: the package's front door (the
     ``rockdec`` module), which the estimate steps call and the workflow hands in; its modules
     load on first use, here one thread at a time (:data:`_IMPORTS`)."""
-    name = {"campaign_record": "estimate", "campaign_block": "estimate"}.get(rule, rule.removeprefix("campaign_"))
+    name = {"campaign_record": "estimate", "campaign_block": "estimate", "campaign_first_plan": "plan"}.get(rule, rule.removeprefix("campaign_"))
 
     def work():
         _load(CAMPAIGN_STARTS)
