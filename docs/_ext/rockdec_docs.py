@@ -122,7 +122,8 @@ def load_estimate_schema() -> dict:
 def estimate_kinds(schema: dict) -> dict[str, dict]:
     """The documents the estimate's schema allows, by test (``random``, ``free``), each a
     schema of its own (with the definitions it refers to)."""
-    return {name: {**node, "$defs": schema.get("$defs", {})} for name, node in schema.get("$defs", {}).items()}
+    tests = [entry["$ref"].rsplit("/", 1)[-1] for entry in schema.get("oneOf", [])]
+    return {name: {**schema["$defs"][name], "$defs": schema.get("$defs", {})} for name in tests}
 
 
 def estimate_json_markdown(schema: dict) -> str:

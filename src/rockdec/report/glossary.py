@@ -45,6 +45,10 @@ GLOSSARY = """glossary:
   repaired   what was mended before the estimate: spikes replaced by the line through
              their neighbours, a drifting zero removed by a high-pass well below the
              rocking frequency; the calibration's records are mended alike (--no-repair: off)
+  e_spread   free test: the standard deviation of the per-impact e about the block's
+  flight_loss  free test: c of theta'' = -g sign(theta) - c theta' (1/s), the loss
+             between impacts; fitted when its test finds it
+  Housner's e  1 - 1.5 sin^2(atan(B/H)) of a block H high and B wide (--block H,B)
   sigma_Y    the rms angle of the record
   g          the block's restoring acceleration nu^2 theta_cr (rad/s^2, eq. 4), read
              off the record; not the acceleration of gravity"""
