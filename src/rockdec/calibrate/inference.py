@@ -109,13 +109,13 @@ def stage_seconds(samples: int, csv: bool, g_given: bool, cores: int = 2, record
     :func:`rockdec.calibrate.calibration.simulated_lengths`, and beyond it the step search's
     pilot sets of that length), from :data:`CSV_SECONDS` and the other constants of the
     model; each record beyond the first adds :data:`RECORD_SECONDS` in every simulated set
-    and each pair of records :data:`PAIR_SECONDS`; several records are analysed once more,
-    each alone (:func:`check_pooled`)."""
+    and each pair of records :data:`PAIR_SECONDS`; several records are analysed twice more,
+    each alone (:func:`own_scales`, :func:`check_pooled`)."""
     simulated = sum(calibration.simulated_lengths([samples]))
     sets = calibration_sets(samples)
     return {
         "reading": samples * CSV_SECONDS * csv,
-        "analysing": samples * ANALYSIS_SECONDS * (1 + g_given + (records > 1)) + records * (records - 1) / 2 * PAIR_SECONDS,
+        "analysing": samples * ANALYSIS_SECONDS * (1 + g_given + 2 * (records > 1)) + records * (records - 1) / 2 * PAIR_SECONDS,
         "calibrating": simulated * sets * CALIBRATION_SECONDS / cores + (records - 1) * sets * RECORD_SECONDS,
     }
 
@@ -556,7 +556,9 @@ class Analysed(NamedTuple):
 
     ``own``: the analysis with the records' own ``g`` (``None`` when it cannot be read and
     ``g`` is given); ``analysis``: the one the estimates come from (with the given ``g``,
-    else ``own``); ``g``: as given (rad/s^2) or ``None``; ``notes``: :class:`Note` s so far."""
+    else ``own``); ``g``: as given (rad/s^2) or ``None``; ``notes``: :class:`Note` s so far;
+    ``scales_apart``: why records given together, their own ``g`` too far apart for one block,
+    are declined (:func:`rockdec.calibrate.consistency.scales_apart`), else ``None``."""
 
     records: tuple
     dt: float
@@ -566,6 +568,7 @@ class Analysed(NamedTuple):
     analysis: measured.Analysis
     g: float | None
     notes: tuple
+    scales_apart: str | None = None
 
     @property
     def own_points_per_cycle(self) -> float:
@@ -579,6 +582,8 @@ def analyse(records: list[Record], *, g: float | None = None, settings: dict | N
 
     Refuses (:class:`RecordError`) records given twice (also in disguise: an offset, a sign, a
     scale or an overlap, :func:`rockdec.record.sameness.same_data`), records at different steps, records
+    given together in different units (their own ``g``, :func:`own_scales`, apart by
+    :data:`rockdec.calibrate.consistency.UNITS_RATIO` or more), records
     the analysis cannot read, records that do not look like rocking
     (:func:`rockdec.rdd.measured.rocking_shape`) and a given ``g`` off the records' own by
     more than :data:`G_FACTOR`.
@@ -589,6 +594,9 @@ def analyse(records: list[Record], *, g: float | None = None, settings: dict | N
     copied = same_data(records)
     if copied:
         raise RecordError(copied)
+    apart = consistency.scales_apart([r.source for r in records], *own_scales(records, dt, settings)) if len(records) > 1 else None
+    if apart is not None and apart.kind == "units":
+        raise RecordError(f"{apart.message}.")
     names = ", ".join(r.source for r in records)
     samples = int(sum(r.theta.size for r in records))
     stages = stage_seconds(samples, False, g is not None, records=len(records))
@@ -610,7 +618,26 @@ def analyse(records: list[Record], *, g: float | None = None, settings: dict | N
     shape = measured.rocking_shape(own if own is not None else analysis)
     if shape:
         raise RecordError(f"{names} does not look like a rocking record: {shape}; e is estimated only for rocking records.")
-    return Analysed(tuple(records), dt, samples, settings, own, analysis, g, tuple(notes))
+    return Analysed(tuple(records), dt, samples, settings, own, analysis, g, tuple(notes), None if apart is None else apart.message)
+
+
+def own_scales(records: list[Record], dt: float, settings: dict) -> tuple[list[float], list[float]]:
+    """Each record's ``sigma_Y`` and its own ``g``, read alone
+    (:func:`rockdec.rdd.measured.analyse` without a given ``g``), for
+    :func:`rockdec.calibrate.consistency.scales_apart`: NaN for a record whose analysis alone
+    fails, has fewer than three triggers of a kind or does not look like rocking
+    (:func:`rockdec.rdd.measured.rocking_shape`), whose ``g`` is then not its block's."""
+    sigmas, gs = [], []
+    for r in records:
+        sigmas.append(float(np.nanstd(r.theta)))
+        try:
+            alone = measured.analyse([r.theta], dt, settings)
+        except ValueError:
+            gs.append(math.nan)
+            continue
+        readable = min(int(alone.count["a"][-1]), int(alone.count["v"][-1])) >= 3 and measured.rocking_shape(alone) is None
+        gs.append(float(alone.raw[measured.G_NAME]) if readable else math.nan)
+    return sigmas, gs
 
 
 class ModelChoice(NamedTuple):
@@ -655,8 +682,9 @@ def choose_model(
     drift) unless declared, check them for a filter after the block unless one (or none) is
     declared (:func:`rockdec.record.record_measure.rolloff`), choose what the calibration
     simulates (:func:`record_model`), note declared parts the records contradict
-    (:func:`declared_contradictions`) and whether the records must be declined
-    (:func:`filter_decline`, :func:`colour_decline`, or a part left to measure that cannot
+    (:func:`declared_contradictions`) and whether the records must be declined (records
+    given together whose own ``g`` lie too far apart, :attr:`Analysed.scales_apart`;
+    :func:`filter_decline`, :func:`colour_decline`, or a part left to measure that cannot
     be). Housner's model (eq. 2) needs ``theta_cr``, and only it. ``repaired``: the repair
     the records had (:func:`rockdec.record.repair.settings`), which the calibration's sets
     get too."""
@@ -678,7 +706,9 @@ def choose_model(
     cal_settings = calibration.calibration_settings(
         [r.theta.size for r in analysed.records], analysed.analysis.points_per_cycle, analysed.settings, model, ratio, repaired,
     )
-    if measuring and measurement is None:  # a part left to measure cannot be: no calibration is known to fit
+    if analysed.scales_apart:
+        declined = analysed.scales_apart
+    elif measuring and measurement is None:  # a part left to measure cannot be: no calibration is known to fit
         declined = (
             f"the record model could not be measured ({why_not}), so whether sensor noise or a coloured load moves e "
             "here is not known; declare them (`load` and `sensor_noise`; `load` white with `sensor_noise` 0 is the paper's "

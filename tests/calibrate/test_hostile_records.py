@@ -1,0 +1,121 @@
+"""Records that once gave a confident wrong ``e`` with no warning: records pooled at
+different scales (units), a logger's held samples, integer counts, a base record sampled
+more coarsely than the rocking record. Each is refused, declined, warned or answered right
+before any calibration is built (or with the fake calibration of ``tests/fake_calibration.py``)."""
+
+from __future__ import annotations
+
+import math
+import re
+
+import numpy as np
+import pytest
+
+from rockdec.calibrate import calibration, consistency, inference
+from rockdec.physics import simulate
+from rockdec.record.records import Record, RecordError
+
+from conftest import calibrated_step
+from test_hostile import hostile, marked, refused
+
+E, G, SIGMA_P = 0.85, 1.0, 0.003
+
+
+@pytest.fixture(scope="module")
+def block():
+    """Six records of one block (e = 0.85, g = 1 rad/s^2, 20,000 samples each, their own seeds)
+    at one step, and that step; two more at twice the load."""
+    cal = calibrated_step(E, G, SIGMA_P)
+    dt, burn = cal["dt"], cal["burn_in"]
+    theta = simulate.simulate_block(list(range(21, 27)), 20_000, dt=dt, g=G, e=E, sigma_p=SIGMA_P, burn_in=burn)[0]
+    louder = simulate.simulate_block([31, 32], 20_000, dt=dt, g=G, e=E, sigma_p=2 * SIGMA_P, burn_in=burn)[0]
+    return {"theta": theta, "louder": louder, "dt": dt}
+
+
+@pytest.fixture
+def fake_cal(monkeypatch, tmp_path):
+    """A calibration without simulation (``tests/fake_calibration.py``)."""
+    import fake_calibration
+
+    monkeypatch.setattr(calibration, "_grid_point", fake_calibration.grid_point)
+    return tmp_path / "calibration"
+
+
+def _csv(path, theta, dt):
+    np.savetxt(path, np.c_[np.arange(theta.size) * dt, theta], delimiter=",", header="time,theta", comments="", fmt="%.12g")
+    return path
+
+
+#: The scale of each record of a pair given together: one of them in other units.
+UNITS = {
+    "rad and degrees": (1.0, 180.0 / math.pi, "as degrees against rad give"),
+    "degrees and rad": (180.0 / math.pi, 1.0, "as degrees against rad give"),
+    "rad and mrad": (1.0, 1e3, "as mrad against rad"),
+    "rad and µrad": (1.0, 1e6, "as µrad against rad give"),
+    "degrees and mrad": (180.0 / math.pi, 1e3, "as mrad against degrees give"),
+}
+
+
+@pytest.mark.parametrize("first, second, named", marked(UNITS, "units"))
+def test_records_pooled_in_different_units_are_refused_before_any_calibration(block, tmp_path, capsys, first, second, named):
+    """Two records of one block, one of them in degrees (or mrad, µrad): the one in the larger
+    unit alone set the trigger levels, and the pooled interval was calibrated for both
+    records' samples (0.896 [0.873, 0.915] for 0.85). Their own g lie the units' factor apart."""
+    a = _csv(tmp_path / "a.csv", first * block["theta"][0], block["dt"])
+    b = _csv(tmp_path / "b.csv", second * block["theta"][1], block["dt"])
+    out = tmp_path / "out"
+    out.mkdir()
+    refused(["estimate", str(a), str(b), "--cache", str(tmp_path / "cache"), "--plot", str(out / "e.png")], out, capsys,
+            ["the records seem to be in different units", "give them in one unit (rad)", named, "sigma_Y"])
+    assert not (tmp_path / "cache").exists()
+
+
+@hostile("units", "refused")
+def test_the_api_refuses_a_list_of_records_in_different_units(block, tmp_path):
+    import rockdec
+
+    with pytest.raises(RecordError, match="different units"):
+        rockdec.estimate([block["theta"][0], np.degrees(block["theta"][1])], dt=block["dt"], cache=tmp_path)
+    assert not any(tmp_path.iterdir())
+
+
+@hostile("wrong answers", "refused")
+def test_records_whose_own_g_lie_apart_beyond_one_blocks_are_declined_naming_each(block, fake_cal):
+    """A record of a block whose g is 6 times the other's (the same motion at 6 times the
+    angle): e is declined before any calibration, each record's own g named."""
+    recs = [Record(block["theta"][0], block["dt"], "a.csv"), Record(6.0 * block["theta"][1], block["dt"], "b.csv")]
+    doc = inference.estimate(recs, cache_dir=fake_cal, load="white", sensor=inference.NO_NOISE).document
+    assert doc["e"] is None and doc["calibration"]["file"] is None
+    ratio, a, b = map(float, re.search(r"read g alone ([0-9.]+) times apart \(a\.csv ([0-9.]+), b\.csv ([0-9.]+) rad/s\^2\)",
+                                       doc["reason"]).groups())
+    assert 0.5 < a < 2.0 and b / a == pytest.approx(ratio, rel=0.01) and 4.0 < ratio < 10.0, doc["reason"]
+    assert f"beyond the {consistency.G_FACTOR:g}" in doc["reason"]
+
+
+@hostile("wrong answers", "answered")
+def test_records_of_one_block_pass_the_scales_check_at_one_load_and_at_twice_the_load(block):
+    """Six records at one load (15 pairs) and two at twice the load, whose sigma_Y lie several
+    times apart: g is one block's constant, and no pair is declined or refused."""
+    sigmas, gs = inference.own_scales([Record(y, block["dt"], "r") for y in [*block["theta"], *block["louder"]]], block["dt"],
+                                      dict(inference.measured.DEFAULT_SETTINGS))
+    assert np.all(np.isfinite(gs))
+    assert max(sigmas[6:]) / min(sigmas[:6]) > 2.0  # the louder records' amplitude
+    for i in range(len(gs)):
+        for j in range(i + 1, len(gs)):
+            assert consistency.scales_apart(["a", "b"], [sigmas[i], sigmas[j]], [gs[i], gs[j]]) is None, (i, j, gs)
+    analysed = inference.analyse([Record(block["theta"][0], block["dt"], "a"), Record(block["louder"][0], block["dt"], "b")])
+    assert analysed.scales_apart is None
+
+
+def test_the_scales_check_names_the_units_from_the_ratio_of_g():
+    """Closed forms: a ratio within UNITS_NEAR of a units factor names it; beyond the factor
+    of one block, under UNITS_RATIO, it is a decline; within it nothing; unread g is left out."""
+    for factor, words in consistency.UNITS.items():
+        out = consistency.scales_apart(["a", "b"], [1.0, factor], [2.0, 2.0 * factor * 1.2])
+        assert out.kind == "units" and words in out.message
+    assert consistency.scales_apart(["a", "b"], [1.0, 1.0], [1.0, 0.5 / consistency.UNITS_RATIO]).kind == "units"
+    assert "as " not in consistency.scales_apart(["a", "b"], [1.0, 1.0], [1.0, 300.0]).message.split("times")[-1]
+    assert consistency.scales_apart(["a", "b"], [1.0, 1.0], [1.0, consistency.G_FACTOR * 1.01]).kind == "blocks"
+    assert consistency.scales_apart(["a", "b"], [1.0, 9.0], [1.0, consistency.G_FACTOR * 0.99]) is None
+    assert consistency.scales_apart(["a", "b", "c"], [1.0, 1.0, 1.0], [1.0, math.nan, 100.0]).kind == "units"
+    assert consistency.scales_apart(["a", "b"], [1.0, 1.0], [1.0, math.nan]) is None
