@@ -119,3 +119,39 @@ def test_the_scales_check_names_the_units_from_the_ratio_of_g():
     assert consistency.scales_apart(["a", "b"], [1.0, 9.0], [1.0, consistency.G_FACTOR * 0.99]) is None
     assert consistency.scales_apart(["a", "b", "c"], [1.0, 1.0, 1.0], [1.0, math.nan, 100.0]).kind == "units"
     assert consistency.scales_apart(["a", "b"], [1.0, 1.0], [1.0, math.nan]) is None
+
+
+def _hold(theta: np.ndarray, h: int) -> np.ndarray:
+    """``theta`` as a logger that holds each value for ``h`` samples writes it."""
+    out = theta.copy()
+    for i in range(1, h):
+        out[i::h] = theta[0::h][: out[i::h].size]
+    return out
+
+
+HOLDS = {f"hold of {h}": (h, nth) for h, nth in ((2, "2nd"), (3, "3rd"), (4, "4th"))}
+
+
+@pytest.mark.parametrize("h, nth", marked(HOLDS, "wrong answers"))
+def test_a_record_whose_logger_held_each_value_is_refused_naming_the_true_rate(block, tmp_path, capsys, h, nth):
+    """y[1::2] = y[0::2] answered 0.772 [0.679, 0.843] for 0.85 (3 of 7 seeds answered, all
+    low). The hold is named with the rate the record was truly sampled at."""
+    path = _csv(tmp_path / "held.csv", _hold(block["theta"][0], h), block["dt"])
+    out = tmp_path / "out"
+    out.mkdir()
+    refused(["estimate", str(path), "--cache", str(tmp_path / "cache"), "--plot", str(out / "e.png")], out, capsys,
+            [f"the record repeats every {nth} sample", f"each value held for {h} samples", "a logger holding its value",
+             f"every {nth} sample from sample 0", f"a step of {h * block['dt']:.6g} s"])
+
+
+@hostile("wrong answers", "answered")
+def test_records_quantised_to_counts_are_not_taken_for_held_ones(block):
+    """Integer counts at a resolution of sigma_Y / 200 down to / 5 hold some values at the
+    turning points, alike at every phase: six records, none refused; held, each is found."""
+    from rockdec.record.records import held
+
+    for y in block["theta"]:
+        for lsb in (200, 20, 5):
+            counts = np.round(y / (np.std(y) / lsb))
+            assert held(Record(counts, block["dt"], "r")) is None, lsb
+            assert "held for 2 samples" in held(Record(_hold(counts, 2), block["dt"], "r"))

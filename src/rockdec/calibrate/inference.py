@@ -37,7 +37,7 @@ from rockdec.calibrate import belt, calibration, consistency
 from rockdec.record import diagnostics, repair
 from rockdec.rdd import measured, registry
 from rockdec.physics.record_model import NO_NOISE, WHITE, Load, RecordModel, SensorFilter, SensorNoise, check_filter_declared_with_model, parse_load
-from rockdec.record.records import Record, RecordError, distinct, same_step
+from rockdec.record.records import Record, RecordError, distinct, held, same_step
 from rockdec.record.sameness import same_data
 from rockdec.validate import InputError, json_number
 
@@ -581,7 +581,8 @@ def analyse(records: list[Record], *, g: float | None = None, settings: dict | N
     estimator extrapolated to a zero window, :func:`rockdec.rdd.measured.analyse`).
 
     Refuses (:class:`RecordError`) records given twice (also in disguise: an offset, a sign, a
-    scale or an overlap, :func:`rockdec.record.sameness.same_data`), records at different steps, records
+    scale or an overlap, :func:`rockdec.record.sameness.same_data`), records at different steps, a
+    record that holds each value for several samples (:func:`rockdec.record.records.held`), records
     given together in different units (their own ``g``, :func:`own_scales`, apart by
     :data:`rockdec.calibrate.consistency.UNITS_RATIO` or more), records
     the analysis cannot read, records that do not look like rocking
@@ -591,6 +592,7 @@ def analyse(records: list[Record], *, g: float | None = None, settings: dict | N
     settings = {**measured.DEFAULT_SETTINGS, **(settings or {})}
     records = distinct(records)
     dt = same_step(records)
+    refuse_held(records)
     copied = same_data(records)
     if copied:
         raise RecordError(copied)
@@ -619,6 +621,17 @@ def analyse(records: list[Record], *, g: float | None = None, settings: dict | N
     if shape:
         raise RecordError(f"{names} does not look like a rocking record: {shape}; e is estimated only for rocking records.")
     return Analysed(tuple(records), dt, samples, settings, own, analysis, g, tuple(notes), None if apart is None else apart.message)
+
+
+def refuse_held(records: list[Record]) -> None:
+    """Refuse (:class:`RecordError`) the first record that holds each value for several samples
+    (:func:`rockdec.record.records.held`): its signatures read the hold as rocking, and the
+    repair's high-pass, which smooths the hold away, does not give back the samples the logger
+    did not take."""
+    for r in records:
+        hold = held(r)
+        if hold:
+            raise RecordError(hold)
 
 
 def own_scales(records: list[Record], dt: float, settings: dict) -> tuple[list[float], list[float]]:
@@ -1084,7 +1097,8 @@ def estimate(
     """Calibrated estimates of ``e`` from ``records`` of one block (pooled), in named stages,
     after the records' repair.
 
-    Repair (``repair_records``, :mod:`rockdec.record.repair`): spikes are replaced before
+    A record that holds each value for several samples is refused first
+    (:func:`refuse_held`). Repair (``repair_records``, :mod:`rockdec.record.repair`): spikes are replaced before
     anything else (:func:`rockdec.record.repair.find_spikes`); when a check of :data:`REPAIRING_CHECKS` fires (or the
     record model measures drift) the records are high-passed and estimated again. Each
     repaired estimate has a calibration whose simulated sets were repaired alike. Records
@@ -1124,6 +1138,7 @@ def estimate(
     options = dict(cache_dir=cache_dir, g=g, settings=settings, model=model, load=load, sensor=sensor, rocking=rocking, theta_cr=theta_cr,
                    sensor_filter=sensor_filter)
     records = list(records)
+    refuse_held(records)  # before the repair, whose high-pass would hide the hold
     if not repair_records:
         return estimate_once(records, None, None, False, **options)
     thetas = [r.theta for r in records]
