@@ -155,3 +155,52 @@ def test_records_quantised_to_counts_are_not_taken_for_held_ones(block):
             counts = np.round(y / (np.std(y) / lsb))
             assert held(Record(counts, block["dt"], "r")) is None, lsb
             assert "held for 2 samples" in held(Record(_hold(counts, 2), block["dt"], "r"))
+
+
+def _base_csv(path, dt, n=20_000, seed=3):
+    """A base-acceleration record, white noise at a step ``dt`` (s)."""
+    accel = np.random.default_rng(seed).standard_normal(n)
+    np.savetxt(path, np.c_[np.arange(n) * dt, accel], delimiter=",", header="time,acceleration", comments="", fmt="%.10g")
+    return path
+
+
+@pytest.fixture(scope="module")
+def analysed_block(block):
+    return inference.analyse([Record(block["theta"][0], block["dt"], "rec.csv")])
+
+
+@hostile("wrong answers", "warned")
+@pytest.mark.parametrize("coarser", [2, 5.6])
+def test_a_base_record_sampled_more_coarsely_than_the_rocking_record_is_warned(analysed_block, block, tmp_path, coarser):
+    """A base record at 5.6 times the rocking record's step stops its spectrum at 6.7 rocking
+    frequencies; the calibration drew no load above it, and the interval came out 2.4 times
+    too narrow with no warning. The warning names where the spectrum stops (the base record's
+    Nyquist frequency in rocking frequencies, N / (2 x coarser)) and the rocking record's."""
+    base = _base_csv(tmp_path / "ground.csv", coarser * block["dt"])
+    choice = inference.choose_model(analysed_block, load=f"base:{base}", sensor=inference.NO_NOISE)
+    ppc = analysed_block.analysis.points_per_cycle
+    notes = [n.message for n in choice.notes if n.code == "base_short"]
+    assert len(notes) == 1 and choice.declined is None
+    top = ppc / (2 * coarser)
+    assert f"stops at its Nyquist frequency, {top:.3g} times the rocking frequency" in notes[0], (notes, top)
+    assert f"below the rocking record's {ppc / 2:.3g}" in notes[0] and f"sampled {coarser:.3g} times as finely" in notes[0]
+    assert "base_short" in inference.NOTE_CODES
+    assert choice.model.load.frequency[-1] == pytest.approx(top, rel=1e-9)  # the table's last row: where the calibration's load stops
+
+
+@hostile("wrong answers", "answered")
+@pytest.mark.parametrize("finer", [1, 2])
+def test_a_base_record_sampled_as_finely_as_the_rocking_record_is_not_warned(analysed_block, block, tmp_path, finer):
+    base = _base_csv(tmp_path / "ground.csv", block["dt"] / finer)
+    choice = inference.choose_model(analysed_block, load=f"base:{base}", sensor=inference.NO_NOISE)
+    assert not [n for n in choice.notes if n.code == "base_short"]
+    assert choice.model.load.frequency[-1] >= analysed_block.analysis.points_per_cycle / 2 * (1 - 1e-9)
+
+
+def test_the_calibrations_load_holds_no_power_above_the_tables_last_row():
+    """What base_short warns of: spectral_gain sets S = 0 above the table's last frequency."""
+    from rockdec.physics.loading import ImpulseSpectrum, spectral_gain
+
+    gain = spectral_gain(ImpulseSpectrum((0.01, 0.1), (1.0, 1.0)), 1000)
+    bins = np.arange(gain.size) / 1000
+    assert np.all(gain[bins > 0.1] == 0.0) and np.all(gain[(bins >= 0.01) & (bins <= 0.1)] > 0.0)

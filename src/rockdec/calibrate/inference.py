@@ -478,6 +478,38 @@ def declared_contradictions(measurement, model: RecordModel, sources: dict, poin
     return tuple(notes)
 
 
+def base_short(model: RecordModel, sources: dict, points_per_cycle: float) -> tuple:
+    """A :class:`Note` (``base_short``) when the declared load is a base record's spectrum
+    (:func:`rockdec.physics.record_model.read_base_record`) that stops below the rocking
+    record's Nyquist frequency, ``points_per_cycle / 2`` rocking frequencies (the analysis's
+    samples per cycle): the table ends at the base record's own Nyquist frequency, and the
+    calibration, which simulates at the rocking record's sampling, draws no load above the
+    table's last row (:func:`rockdec.physics.loading.spectral_gain`), a smoother load than the
+    base gave if it moved faster than its record shows; an empty tuple otherwise. A spectrum
+    table (``spectrum:FILE``) states where the power is and is not checked."""
+    load = model.load
+    if sources.get("load") != "declared" or load.kind != "spectrum" or not load.source.startswith(BASE_SOURCE):
+        return ()
+    top, needed = float(load.frequency[-1]), points_per_cycle / 2.0
+    if top >= (1.0 - BASE_NYQUIST_TOLERANCE) * needed:
+        return ()
+    return (Note("base_short", (
+        f"the base record's spectrum stops at its Nyquist frequency, {top:.3g} times the rocking frequency, below the rocking "
+        f"record's {needed:.3g}: the calibration simulates no load above {top:.3g}, which makes the interval too narrow if "
+        f"the base moved faster than its record shows; give a base record sampled {needed / top:.3g} times as finely (as the "
+        "rocking record is), or the load's spectrum up to the rocking record's Nyquist frequency as a table (`load` spectrum:FILE)"
+    )),)
+
+
+#: How a base record's load reads its ``source`` (:func:`rockdec.physics.record_model.read_base_record`).
+BASE_SOURCE = "base record"
+
+#: Relative shortfall of a base record's last spectral row below the rocking record's Nyquist
+#: frequency that :func:`base_short` lets pass: a base record at the rocking record's step ends
+#: exactly at it, up to rounding.
+BASE_NYQUIST_TOLERANCE = 1e-3
+
+
 def coverage_floor(n_sets: int) -> float:
     """Lowest calibrated coverage (:func:`rockdec.calibrate.belt.calibration_coverage`) at which an
     interval is taken to hold 95 %: the lower end of the binomial band
@@ -548,6 +580,7 @@ NOTE_CODES = {
     "pooled_unchecked": "a record given with others could not be analysed alone, so it was not checked against them",
     "noise_contradicted": "the declared sensor noise is not what the records show, beyond the measurement's error",
     "load_contradicted": "the declared load is not what the records show, beyond the measurement's error",
+    "base_short": "a declared base record's spectrum stops below the rocking record's Nyquist frequency",
 }
 
 
@@ -695,7 +728,8 @@ def choose_model(
     drift) unless declared, check them for a filter after the block unless one (or none) is
     declared (:func:`rockdec.record.record_measure.rolloff`), choose what the calibration
     simulates (:func:`record_model`), note declared parts the records contradict
-    (:func:`declared_contradictions`) and whether the records must be declined (records
+    (:func:`declared_contradictions`) and a base record whose spectrum stops short
+    (:func:`base_short`), and whether the records must be declined (records
     given together whose own ``g`` lie too far apart, :attr:`Analysed.scales_apart`;
     :func:`filter_decline`, :func:`colour_decline`, or a part left to measure that cannot
     be). Housner's model (eq. 2) needs ``theta_cr``, and only it. ``repaired``: the repair
@@ -731,7 +765,8 @@ def choose_model(
         declined = filter_decline(found) or colour_decline(
             model, sources, measurement, analysed.analysis.points_per_cycle, analysed.own_points_per_cycle,
         )
-    notes = declared_contradictions(measurement, model, sources, analysed.analysis.points_per_cycle)
+    notes = (*declared_contradictions(measurement, model, sources, analysed.analysis.points_per_cycle),
+             *base_short(model, sources, analysed.analysis.points_per_cycle))
     return ModelChoice(measurement, why_not, measuring, model, sources, cal_settings, declined, found, notes)
 
 
