@@ -204,3 +204,28 @@ def test_the_calibrations_load_holds_no_power_above_the_tables_last_row():
     gain = spectral_gain(ImpulseSpectrum((0.01, 0.1), (1.0, 1.0)), 1000)
     bins = np.arange(gain.size) / 1000
     assert np.all(gain[bins > 0.1] == 0.0) and np.all(gain[(bins >= 0.01) & (bins <= 0.1)] > 0.0)
+
+
+@hostile("wrong answers", "warned")
+def test_integer_counts_too_coarse_for_the_impacts_leave_the_filter_check_out_with_a_warning(block):
+    """Counts of sigma_Y / 200 (an encoder's integers): the one-sample velocities at the
+    impacts are a few tens of counts, their ratios snap the median of the check ``filtered``
+    to a ratio of integers (0 at e near 1), and at e = 0.95 it fired on 4 of 12 clean records
+    rounded so (1 of 12 unrounded): e declined for nothing. The check now leaves such records
+    out, with a warning naming the resolution; finer counts keep it, at the unrounded value."""
+    from rockdec.record import diagnostics
+
+    def sharpness(y):
+        return diagnostics.impact_sharpness(diagnostics.sums([y]), None)
+
+    for i, y in enumerate(block["theta"]):
+        sigma = np.std(y)
+        coarse, fine = np.round(y / (sigma / 200)), np.round(y / (sigma / 20_000))
+        assert diagnostics.resolution(coarse) == 1.0 and diagnostics.resolution(y) == 0.0
+        assert diagnostics.impact_steps(coarse) < diagnostics.IMPACT_MIN_STEPS <= diagnostics.impact_steps(fine)
+        assert math.isnan(sharpness(coarse)) and sharpness(fine) == pytest.approx(sharpness(y), abs=0.005)
+        (note,) = inference.unresolved_impacts([Record(coarse, block["dt"], f"r{i}.csv")])
+        assert note.code == "filtered_unchecked" and note.message.startswith(f"r{i}.csv is quantised to steps of 1,")
+        assert "was not checked for a low-pass filter" in note.message
+        assert inference.unresolved_impacts([Record(y, block["dt"], "r"), Record(fine, block["dt"], "f")]) == []
+    assert "filtered_unchecked" in inference.NOTE_CODES

@@ -167,11 +167,31 @@ def diagnose(
     calibration ``cal`` near ``e`` and its 95 % ``interval`` (:func:`checks_place`;
     ``length_ratio``: the records' length over the calibration's records'; ``replaced``: the
     samples the repair replaced, per record, which the spikes statistic leaves out): a :class:`Note`
-    (its code the check's name) for each check that fired, and per check ``{"statistic", "threshold", "fired"}`` (JSON-able)."""
+    (its code the check's name) for each check that fired and the ``filtered_unchecked`` ones of
+    :func:`unresolved_impacts`, and per check ``{"statistic", "threshold", "fired"}`` (JSON-able)."""
     level = settings.get("level", measured.DEFAULT_SETTINGS["level"])
     outcomes = diagnostics.evaluate([r.theta for r in records], analysis, cal, e, interval, level, length_ratio, replaced)
     notes = [Note(name, o.message) for name, o in outcomes.items() if o.fired]
+    notes.extend(unresolved_impacts(records))
     return notes, {name: {"statistic": json_number(o.statistic), "threshold": json_number(o.threshold), "fired": o.fired} for name, o in outcomes.items()}
+
+
+def unresolved_impacts(records: list[Record]) -> list:
+    """A ``filtered_unchecked`` :class:`Note` for each record quantised so coarsely that the
+    check ``filtered`` cannot read its impacts (its one-sample velocities at the fast zero
+    crossings fewer than :data:`rockdec.record.diagnostics.IMPACT_MIN_STEPS` steps of its
+    resolution, :func:`rockdec.record.diagnostics.impact_steps`), which the check leaves out."""
+    notes = []
+    for r in records:
+        steps = diagnostics.impact_steps(r.theta)
+        if steps < diagnostics.IMPACT_MIN_STEPS:
+            notes.append(Note("filtered_unchecked", (
+                f"{r.source} is quantised to steps of {diagnostics.resolution(r.theta):.4g}, and its impacts' one-sample velocities "
+                f"span {steps:.0f} of them, fewer than the {diagnostics.IMPACT_MIN_STEPS} the check `filtered` needs to read an "
+                "impact's cut of the velocity (a ratio of a few counts): it was not checked for a low-pass filter after the block; "
+                "declare the logger's filter if it has one (`sensor_filter`), or record at a finer resolution"
+            )))
+    return notes
 
 
 def _spike(records: list[Record]) -> str | None:
@@ -581,6 +601,7 @@ NOTE_CODES = {
     "noise_contradicted": "the declared sensor noise is not what the records show, beyond the measurement's error",
     "load_contradicted": "the declared load is not what the records show, beyond the measurement's error",
     "base_short": "a declared base record's spectrum stops below the rocking record's Nyquist frequency",
+    "filtered_unchecked": "a record is quantised too coarsely for the check filtered to read its impacts; it was not checked",
 }
 
 
