@@ -85,7 +85,7 @@ def main(argv=None) -> None:
         declined = sum(o is not None and o.kind == "blocks" for o in out)
         refused = sum(o is not None and o.kind == "units" for o in out)
         print(f"n {n}: {len(out)} pairs, declined {declined / len(out):.4f}, refused {refused / len(out):.4f}")
-    print("one block at loads k times apart (first seed's record against the other's), and a record against itself in other units")
+    print("one block at loads k times apart (first seed's record against the other's), and pairs whose second record is in other units")
     for n in (2000, 20000):
         base, dt = records("project", list(range(500, 530)), n, 0.85, 75.0)
         for k in (2.0, 3.0):

@@ -77,7 +77,9 @@ G_FACTOR = 4.0
 
 #: Records whose own ``g`` differ by this factor or more are refused as given in different
 #: units (:func:`scales_apart`): no pair of one block reached it in the measurement of
-#: :data:`G_FACTOR`, and every mix of rad, degrees, mrad and µrad lies beyond it.
+#: :data:`G_FACTOR`; of 260 pairs of independent records (2,000 and 20,000 samples) whose
+#: second is in degrees, mrad, µrad or (against degrees) mrad, or whose first is in degrees,
+#: all were refused but one of mrad against degrees at 2,000 samples, which was declined.
 UNITS_RATIO = 10.0
 
 #: Ratios of one angle in two units, and the units they tell apart (a ratio within
