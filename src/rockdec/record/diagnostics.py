@@ -108,8 +108,8 @@ IMPACT_WIDE = 4
 #: fast zero crossings must span for :func:`impact_ratios` to read them (:func:`impact_steps`):
 #: records of ``e`` 0.7-0.95 at 40-120 samples per cycle rounded to counts of ``sigma_Y`` / 50
 #: to / 2,000 move the statistic of ``filtered`` off the unrounded record's by up to 0.17 at 4
-#: steps, 0.05 at 10-20 and at most 0.03 from 24 on, 0.01 from 95 on, against a spread of
-#: 0.006-0.01 of clean records (20 seeds a cell, ``tests/calibrate/test_hostile_records.py``).
+#: steps, 0.054 at 10-29 and at most 0.011 from 42 on, against a spread of 0.006-0.01 among
+#: clean records (20 records a cell, ``benchmarks/quantised_records.py``).
 IMPACT_MIN_STEPS = 50
 
 #: What a record that shows a filter after the block should do: the end of ``filtered``'s

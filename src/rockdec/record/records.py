@@ -301,7 +301,8 @@ def check_values(theta, dt: float, source: str) -> Record:
 #: 0.03 of each other. On 960 records (those cells, 1,000 and 20,000 samples, the project's
 #: simulator and the independent one of the tests) none fired, as given or quantised to a
 #: resolution of ``sigma_Y`` / 200, / 20, / 5 or / 2; holds of 2, 3 and 4 samples were all
-#: found down to ``sigma_Y`` / 20, all but 3 of 2,880 at ``sigma_Y`` / 5.
+#: found down to ``sigma_Y`` / 20, all but 3 of 2,880 at ``sigma_Y`` / 5
+#: (``benchmarks/quantised_records.py``).
 MAX_HOLD, HOLD_SHARE, HOLD_OTHER = 16, 0.95, 0.75
 
 
