@@ -29,6 +29,16 @@ times the one at 0.85, and the test read there missed such pairs
 (``benchmarks/pooled_consistency.py``); their own mean lies between them. The records'
 own values also say where each lies (:func:`reads`), which the message names.
 
+Before any of this, the records' scales are compared (:func:`scales_apart`): ``g`` (the
+restoring acceleration, rad/s^2) is one block's constant, and each record reads its own off
+its free response (:func:`rockdec.rdd.measured.analyse` of the record alone). A record in
+degrees (or mrad) beside one in rad reads ``g`` 57.3 (1000) times the other's, and pooled,
+the first's triggers, at a level from the pooled ``sigma_Y``, are the only ones: an interval
+calibrated for both records' samples on the triggers of one. The records' ``sigma_Y`` do not
+tell it: at one load independent records of one block differ in ``sigma_Y`` up to 20 times
+at 2,000 samples, and records of one block at loads 2-3 times apart (which pool today)
+differ by 3-300 times, while their ``g`` agree.
+
 The threshold is the :data:`LEVEL` quantile of ``chi^2_{k-1}`` (:func:`threshold`); its
 false-alarm rate on pairs of records of one block and its detection rate on pairs of two
 blocks are measured by ``benchmarks/pooled_consistency.py``.
@@ -55,6 +65,94 @@ import numpy as np
 #: block and of two blocks at each level: ``benchmarks/pooled_consistency.py``
 #: (docs/explanation/method/warnings.md, "Records given together").
 LEVEL = 0.999
+
+
+#: Records of one block whose own ``g`` differ by more than this factor are declined
+#: (:func:`scales_apart`): independent pairs of records of one block at one load, each read
+#: alone, exceed it on 0.07 % of pairs of 1,000 samples, 0.01 % of 2,000 and none of 5,000 to
+#: 200,000 (at ``e`` 0.6, 0.85, 0.95 and 25 and 75 samples per cycle, the project's simulator and
+#: the independent one of the tests, 21,240 pairs a length; ``benchmarks/pooled_scales.py``);
+#: records of one block at loads 2-3 times apart (``sigma_Y`` 3-300 times apart) pass.
+G_FACTOR = 4.0
+
+#: Records whose own ``g`` differ by this factor or more are refused as given in different
+#: units (:func:`scales_apart`): no pair of one block reached it in the measurement of
+#: :data:`G_FACTOR`; of 260 pairs of independent records (2,000 and 20,000 samples) whose
+#: second is in degrees, mrad, µrad or (against degrees) mrad, or whose first is in degrees,
+#: all were refused but one of mrad against degrees at 2,000 samples, which was declined.
+UNITS_RATIO = 10.0
+
+#: Ratios of one angle in two units, and the units they tell apart (a ratio within
+#: :data:`UNITS_NEAR` of one is named).
+UNITS = {
+    180.0 / math.pi: "degrees against rad",
+    1e3 * math.pi / 180.0: "mrad against degrees",
+    1e3: "mrad against rad (or mdeg against degrees)",
+    1e6: "µrad against rad",
+}
+
+#: Relative distance of a ``g`` ratio from a ratio of :data:`UNITS` within which it is named.
+UNITS_NEAR = 0.25
+
+
+class Scales(NamedTuple):
+    """The outcome of :func:`scales_apart`: ``kind`` ``"units"`` (refused) or ``"blocks"``
+    (declined), and the sentence."""
+
+    kind: str
+    message: str
+
+
+def scales_apart(sources, sigmas, gs) -> Scales | None:
+    """Whether records given together read ``g`` too far apart to be of one block in one unit
+    (module docstring), or ``None``.
+
+    The records with a finite ``g`` are compared, the largest against the smallest: a ratio of
+    :data:`UNITS_RATIO` or more is ``"units"`` (the ratio of :data:`UNITS` nearest it named
+    when within :data:`UNITS_NEAR`), one beyond :data:`G_FACTOR` ``"blocks"``; each names
+    every record's ``g`` (and, for units, ``sigma_Y`` against the smallest's).
+
+    Parameters
+    ----------
+    sources : sequence of str
+        The records' names.
+    sigmas : sequence of float
+        Each record's ``sigma_Y`` (its units).
+    gs : sequence of float
+        Each record's own ``g`` (its units per s^2; NaN: not read, left out).
+
+    Returns
+    -------
+    Scales or None
+
+    Examples
+    --------
+    >>> scales_apart(["a.csv", "b.csv"], [0.003, 0.17], [1.0, 57.5]).message
+    "the records seem to be in different units (b.csv's g reads 57.5 times a.csv's and its sigma_Y 56.7 times, as degrees against rad give): give them in one unit (rad)"
+    >>> scales_apart(["a.csv", "b.csv"], [0.003, 0.009], [1.0, 1.3]) is None
+    True
+    """
+    g = np.asarray(gs, dtype=float)
+    ok = np.flatnonzero(np.isfinite(g) & (g > 0.0))
+    if ok.size < 2:
+        return None
+    low, high = int(ok[np.argmin(g[ok])]), int(ok[np.argmax(g[ok])])
+    ratio = float(g[high] / g[low])
+    if ratio <= G_FACTOR:
+        return None
+    if ratio >= UNITS_RATIO:
+        factor = min(UNITS, key=lambda f: abs(math.log(ratio / f)))
+        named = f", as {UNITS[factor]} give" if abs(ratio / factor - 1.0) <= UNITS_NEAR else ""
+        return Scales("units", (
+            f"the records seem to be in different units ({sources[high]}'s g reads {ratio:.3g} times {sources[low]}'s and its "
+            f"sigma_Y {sigmas[high] / sigmas[low]:.3g} times{named}): give them in one unit (rad)"
+        ))
+    readings = ", ".join(f"{sources[i]} {g[i]:.3g}" for i in ok)
+    return Scales("blocks", (
+        f"the records given together read g alone {ratio:.3g} times apart ({readings} rad/s^2), beyond the {G_FACTOR:g} within "
+        "which records of one block agree: they are not of one block, or one is not in rad; estimate each record alone, "
+        "or pool only records of one block"
+    ))
 
 
 class Consistency(NamedTuple):

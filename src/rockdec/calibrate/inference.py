@@ -37,7 +37,7 @@ from rockdec.calibrate import belt, calibration, consistency
 from rockdec.record import diagnostics, repair
 from rockdec.rdd import measured, registry
 from rockdec.physics.record_model import NO_NOISE, WHITE, Load, RecordModel, SensorFilter, SensorNoise, check_filter_declared_with_model, parse_load
-from rockdec.record.records import Record, RecordError, distinct, same_step
+from rockdec.record.records import Record, RecordError, distinct, held, same_step
 from rockdec.record.sameness import same_data
 from rockdec.validate import InputError, json_number
 
@@ -109,13 +109,13 @@ def stage_seconds(samples: int, csv: bool, g_given: bool, cores: int = 2, record
     :func:`rockdec.calibrate.calibration.simulated_lengths`, and beyond it the step search's
     pilot sets of that length), from :data:`CSV_SECONDS` and the other constants of the
     model; each record beyond the first adds :data:`RECORD_SECONDS` in every simulated set
-    and each pair of records :data:`PAIR_SECONDS`; several records are analysed once more,
-    each alone (:func:`check_pooled`)."""
+    and each pair of records :data:`PAIR_SECONDS`; several records are analysed twice more,
+    each alone (:func:`own_scales`, :func:`check_pooled`)."""
     simulated = sum(calibration.simulated_lengths([samples]))
     sets = calibration_sets(samples)
     return {
         "reading": samples * CSV_SECONDS * csv,
-        "analysing": samples * ANALYSIS_SECONDS * (1 + g_given + (records > 1)) + records * (records - 1) / 2 * PAIR_SECONDS,
+        "analysing": samples * ANALYSIS_SECONDS * (1 + g_given + 2 * (records > 1)) + records * (records - 1) / 2 * PAIR_SECONDS,
         "calibrating": simulated * sets * CALIBRATION_SECONDS / cores + (records - 1) * sets * RECORD_SECONDS,
     }
 
@@ -167,11 +167,31 @@ def diagnose(
     calibration ``cal`` near ``e`` and its 95 % ``interval`` (:func:`checks_place`;
     ``length_ratio``: the records' length over the calibration's records'; ``replaced``: the
     samples the repair replaced, per record, which the spikes statistic leaves out): a :class:`Note`
-    (its code the check's name) for each check that fired, and per check ``{"statistic", "threshold", "fired"}`` (JSON-able)."""
+    (its code the check's name) for each check that fired and the ``filtered_unchecked`` ones of
+    :func:`unresolved_impacts`, and per check ``{"statistic", "threshold", "fired"}`` (JSON-able)."""
     level = settings.get("level", measured.DEFAULT_SETTINGS["level"])
     outcomes = diagnostics.evaluate([r.theta for r in records], analysis, cal, e, interval, level, length_ratio, replaced)
     notes = [Note(name, o.message) for name, o in outcomes.items() if o.fired]
+    notes.extend(unresolved_impacts(records))
     return notes, {name: {"statistic": json_number(o.statistic), "threshold": json_number(o.threshold), "fired": o.fired} for name, o in outcomes.items()}
+
+
+def unresolved_impacts(records: list[Record]) -> list:
+    """A ``filtered_unchecked`` :class:`Note` for each record quantised so coarsely that the
+    check ``filtered`` cannot read its impacts (its one-sample velocities at the fast zero
+    crossings fewer than :data:`rockdec.record.diagnostics.IMPACT_MIN_STEPS` steps of its
+    resolution, :func:`rockdec.record.diagnostics.impact_steps`), which the check leaves out."""
+    notes = []
+    for r in records:
+        steps = diagnostics.impact_steps(r.theta)
+        if steps < diagnostics.IMPACT_MIN_STEPS:
+            notes.append(Note("filtered_unchecked", (
+                f"{r.source} is quantised to steps of {diagnostics.resolution(r.theta):.4g}, and its impacts' one-sample velocities "
+                f"span {steps:.0f} of them, fewer than the {diagnostics.IMPACT_MIN_STEPS} the check `filtered` needs to read an "
+                "impact's cut of the velocity (a ratio of a few counts): it was not checked for a low-pass filter after the block; "
+                "declare the logger's filter if it has one (`sensor_filter`), or record at a finer resolution"
+            )))
+    return notes
 
 
 def _spike(records: list[Record]) -> str | None:
@@ -478,6 +498,38 @@ def declared_contradictions(measurement, model: RecordModel, sources: dict, poin
     return tuple(notes)
 
 
+def base_short(model: RecordModel, sources: dict, points_per_cycle: float) -> tuple:
+    """A :class:`Note` (``base_short``) when the declared load is a base record's spectrum
+    (:func:`rockdec.physics.record_model.read_base_record`) that stops below the rocking
+    record's Nyquist frequency, ``points_per_cycle / 2`` rocking frequencies (the analysis's
+    samples per cycle): the table ends at the base record's own Nyquist frequency, and the
+    calibration, which simulates at the rocking record's sampling, draws no load above the
+    table's last row (:func:`rockdec.physics.loading.spectral_gain`), a smoother load than the
+    base gave if it moved faster than its record shows; an empty tuple otherwise. A spectrum
+    table (``spectrum:FILE``) states where the power is and is not checked."""
+    load = model.load
+    if sources.get("load") != "declared" or load.kind != "spectrum" or not load.source.startswith(BASE_SOURCE):
+        return ()
+    top, needed = float(load.frequency[-1]), points_per_cycle / 2.0
+    if top >= (1.0 - BASE_NYQUIST_TOLERANCE) * needed:
+        return ()
+    return (Note("base_short", (
+        f"the base record's spectrum stops at its Nyquist frequency, {top:.3g} times the rocking frequency, below the rocking "
+        f"record's {needed:.3g}: the calibration simulates no load above {top:.3g}, which makes the interval too narrow if "
+        f"the base moved faster than its record shows; give a base record sampled {needed / top:.3g} times as finely (as the "
+        "rocking record is), or the load's spectrum up to the rocking record's Nyquist frequency as a table (`load` spectrum:FILE)"
+    )),)
+
+
+#: How a base record's load reads its ``source`` (:func:`rockdec.physics.record_model.read_base_record`).
+BASE_SOURCE = "base record"
+
+#: Relative shortfall of a base record's last spectral row below the rocking record's Nyquist
+#: frequency that :func:`base_short` lets pass: a base record at the rocking record's step ends
+#: exactly at it, up to rounding.
+BASE_NYQUIST_TOLERANCE = 1e-3
+
+
 def coverage_floor(n_sets: int) -> float:
     """Lowest calibrated coverage (:func:`rockdec.calibrate.belt.calibration_coverage`) at which an
     interval is taken to hold 95 %: the lower end of the binomial band
@@ -548,6 +600,8 @@ NOTE_CODES = {
     "pooled_unchecked": "a record given with others could not be analysed alone, so it was not checked against them",
     "noise_contradicted": "the declared sensor noise is not what the records show, beyond the measurement's error",
     "load_contradicted": "the declared load is not what the records show, beyond the measurement's error",
+    "base_short": "a declared base record's spectrum stops below the rocking record's Nyquist frequency",
+    "filtered_unchecked": "a record is quantised too coarsely for the check filtered to read its impacts; it was not checked",
 }
 
 
@@ -556,7 +610,9 @@ class Analysed(NamedTuple):
 
     ``own``: the analysis with the records' own ``g`` (``None`` when it cannot be read and
     ``g`` is given); ``analysis``: the one the estimates come from (with the given ``g``,
-    else ``own``); ``g``: as given (rad/s^2) or ``None``; ``notes``: :class:`Note` s so far."""
+    else ``own``); ``g``: as given (rad/s^2) or ``None``; ``notes``: :class:`Note` s so far;
+    ``scales_apart``: why records given together, their own ``g`` too far apart for one block,
+    are declined (:func:`rockdec.calibrate.consistency.scales_apart`), else ``None``."""
 
     records: tuple
     dt: float
@@ -566,6 +622,7 @@ class Analysed(NamedTuple):
     analysis: measured.Analysis
     g: float | None
     notes: tuple
+    scales_apart: str | None = None
 
     @property
     def own_points_per_cycle(self) -> float:
@@ -578,7 +635,10 @@ def analyse(records: list[Record], *, g: float | None = None, settings: dict | N
     estimator extrapolated to a zero window, :func:`rockdec.rdd.measured.analyse`).
 
     Refuses (:class:`RecordError`) records given twice (also in disguise: an offset, a sign, a
-    scale or an overlap, :func:`rockdec.record.sameness.same_data`), records at different steps, records
+    scale or an overlap, :func:`rockdec.record.sameness.same_data`), records at different steps, a
+    record that holds each value for several samples (:func:`rockdec.record.records.held`), records
+    given together in different units (their own ``g``, :func:`own_scales`, apart by
+    :data:`rockdec.calibrate.consistency.UNITS_RATIO` or more), records
     the analysis cannot read, records that do not look like rocking
     (:func:`rockdec.rdd.measured.rocking_shape`) and a given ``g`` off the records' own by
     more than :data:`G_FACTOR`.
@@ -586,9 +646,13 @@ def analyse(records: list[Record], *, g: float | None = None, settings: dict | N
     settings = {**measured.DEFAULT_SETTINGS, **(settings or {})}
     records = distinct(records)
     dt = same_step(records)
+    refuse_held(records)
     copied = same_data(records)
     if copied:
         raise RecordError(copied)
+    apart = consistency.scales_apart([r.source for r in records], *own_scales(records, dt, settings)) if len(records) > 1 else None
+    if apart is not None and apart.kind == "units":
+        raise RecordError(f"{apart.message}.")
     names = ", ".join(r.source for r in records)
     samples = int(sum(r.theta.size for r in records))
     stages = stage_seconds(samples, False, g is not None, records=len(records))
@@ -610,7 +674,37 @@ def analyse(records: list[Record], *, g: float | None = None, settings: dict | N
     shape = measured.rocking_shape(own if own is not None else analysis)
     if shape:
         raise RecordError(f"{names} does not look like a rocking record: {shape}; e is estimated only for rocking records.")
-    return Analysed(tuple(records), dt, samples, settings, own, analysis, g, tuple(notes))
+    return Analysed(tuple(records), dt, samples, settings, own, analysis, g, tuple(notes), None if apart is None else apart.message)
+
+
+def refuse_held(records: list[Record]) -> None:
+    """Refuse (:class:`RecordError`) the first record that holds each value for several samples
+    (:func:`rockdec.record.records.held`): its signatures read the hold as rocking, and the
+    repair's high-pass, which smooths the hold away, does not give back the samples the logger
+    did not take."""
+    for r in records:
+        hold = held(r)
+        if hold:
+            raise RecordError(hold)
+
+
+def own_scales(records: list[Record], dt: float, settings: dict) -> tuple[list[float], list[float]]:
+    """Each record's ``sigma_Y`` and its own ``g``, read alone
+    (:func:`rockdec.rdd.measured.analyse` without a given ``g``), for
+    :func:`rockdec.calibrate.consistency.scales_apart`: NaN for a record whose analysis alone
+    fails, has fewer than three triggers of a kind or does not look like rocking
+    (:func:`rockdec.rdd.measured.rocking_shape`), whose ``g`` is then not its block's."""
+    sigmas, gs = [], []
+    for r in records:
+        sigmas.append(float(np.nanstd(r.theta)))
+        try:
+            alone = measured.analyse([r.theta], dt, settings)
+        except ValueError:
+            gs.append(math.nan)
+            continue
+        readable = min(int(alone.count["a"][-1]), int(alone.count["v"][-1])) >= 3 and measured.rocking_shape(alone) is None
+        gs.append(float(alone.raw[measured.G_NAME]) if readable else math.nan)
+    return sigmas, gs
 
 
 class ModelChoice(NamedTuple):
@@ -655,8 +749,10 @@ def choose_model(
     drift) unless declared, check them for a filter after the block unless one (or none) is
     declared (:func:`rockdec.record.record_measure.rolloff`), choose what the calibration
     simulates (:func:`record_model`), note declared parts the records contradict
-    (:func:`declared_contradictions`) and whether the records must be declined
-    (:func:`filter_decline`, :func:`colour_decline`, or a part left to measure that cannot
+    (:func:`declared_contradictions`) and a base record whose spectrum stops short
+    (:func:`base_short`), and whether the records must be declined (records
+    given together whose own ``g`` lie too far apart, :attr:`Analysed.scales_apart`;
+    :func:`filter_decline`, :func:`colour_decline`, or a part left to measure that cannot
     be). Housner's model (eq. 2) needs ``theta_cr``, and only it. ``repaired``: the repair
     the records had (:func:`rockdec.record.repair.settings`), which the calibration's sets
     get too."""
@@ -678,7 +774,9 @@ def choose_model(
     cal_settings = calibration.calibration_settings(
         [r.theta.size for r in analysed.records], analysed.analysis.points_per_cycle, analysed.settings, model, ratio, repaired,
     )
-    if measuring and measurement is None:  # a part left to measure cannot be: no calibration is known to fit
+    if analysed.scales_apart:
+        declined = analysed.scales_apart
+    elif measuring and measurement is None:  # a part left to measure cannot be: no calibration is known to fit
         declined = (
             f"the record model could not be measured ({why_not}), so whether sensor noise or a coloured load moves e "
             "here is not known; declare them (`load` and `sensor_noise`; `load` white with `sensor_noise` 0 is the paper's "
@@ -688,7 +786,8 @@ def choose_model(
         declined = filter_decline(found) or colour_decline(
             model, sources, measurement, analysed.analysis.points_per_cycle, analysed.own_points_per_cycle,
         )
-    notes = declared_contradictions(measurement, model, sources, analysed.analysis.points_per_cycle)
+    notes = (*declared_contradictions(measurement, model, sources, analysed.analysis.points_per_cycle),
+             *base_short(model, sources, analysed.analysis.points_per_cycle))
     return ModelChoice(measurement, why_not, measuring, model, sources, cal_settings, declined, found, notes)
 
 
@@ -1068,7 +1167,8 @@ def estimate(
     """Calibrated estimates of ``e`` from ``records`` of one block (pooled), in named stages,
     after the records' repair.
 
-    Repair (``repair_records``, :mod:`rockdec.record.repair`): spikes are replaced before
+    A record that holds each value for several samples is refused first
+    (:func:`refuse_held`). Repair (``repair_records``, :mod:`rockdec.record.repair`): spikes are replaced before
     anything else (:func:`rockdec.record.repair.find_spikes`); when a check of :data:`REPAIRING_CHECKS` fires (or the
     record model measures drift) the records are high-passed and estimated again. Each
     repaired estimate has a calibration whose simulated sets were repaired alike. Records
@@ -1114,6 +1214,7 @@ def estimate(
     options = dict(cache_dir=cache_dir, g=g, settings=settings, model=model, load=load, sensor=sensor, rocking=rocking, theta_cr=theta_cr,
                    sensor_filter=sensor_filter, available=available)
     records = list(records)
+    refuse_held(records)  # before the repair, whose high-pass would hide the hold
     if not repair_records:
         return estimate_once(records, None, None, False, **options)
     thetas = [r.theta for r in records]
