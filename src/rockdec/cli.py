@@ -75,7 +75,7 @@ FLAGS = {
     "overwrite": "--overwrite", "burn_in": "--burn-in", "theta0": "--theta0", "points_per_cycle": "--points-per-cycle",
     "e": "--e", "nu": "--nu", "sigma_p": "--sigma-p", "n_points": "--n-points", "theta": "the record",
     "group_size": "--group-size", "n_periods": "--n-periods", "fit_points": "--fit-points", "weights": "--weights",
-    "repair": "--no-repair",
+    "repair": "--no-repair", "block": "--block",
 }
 
 
@@ -352,20 +352,21 @@ def cmd_estimate(args) -> None:
             from rockdec.free import NO_RECORD_MODEL
 
             raise UsageError(f"{', '.join(unused)}: {NO_RECORD_MODEL}; leave them out.")
-    else:
+    _, theta_cr = api.block_angle(args.block, args.model, args.theta_cr)  # refused before any record is read
+    if not free:
         api.estimate_options(g=args.g, load=args.load, sensor_noise=args.sensor_noise, sensor_filter=args.sensor_filter, model=args.model,
-                             theta_cr=args.theta_cr, cache=args.cache)  # refused before any record is read
+                             theta_cr=theta_cr, cache=args.cache)
     with contextlib.ExitStack() as stack:
         plot = stack.enter_context(io.claimed(_plot_path(args), args.overwrite)) if args.plot else None
         seconds = 0.0 if free else _check_estimate_size(args)
         theta = [rockdec.read_record(path, column=args.column, variable=args.variable, dt=args.dt, fs=args.fs) for path in args.records]
         if free:
-            res = rockdec.free_rocking(theta, model=args.model, theta_cr=args.theta_cr)
+            res = rockdec.free_rocking(theta, model=args.model, theta_cr=args.theta_cr, block=args.block)
         else:
             log.info(f"estimate: {len(args.records)} file(s) (up to {console.about(seconds)} when their calibration must be built)")
             with console.progress("calibrating"):  # a bar only while a calibration missing from the cache is built
                 res = rockdec.estimate(theta, g=args.g, load=args.load, sensor_noise=args.sensor_noise, sensor_filter=args.sensor_filter,
-                                       model=args.model, theta_cr=args.theta_cr, cache=args.cache, repair=args.repair)
+                                       model=args.model, theta_cr=args.theta_cr, cache=args.cache, repair=args.repair, block=args.block)
         if plot is not None:
             from rockdec.report import figures
 
@@ -528,7 +529,10 @@ def build_parser() -> argparse.ArgumentParser:
         "--model", default="simplified", choices=("simplified", "housner"),
         help="rocking model of the calibration: simplified (eq. 4) or housner (eq. 2, needs --theta-cr) (default: %(default)s)",
     )
-    est1.add_argument("--theta-cr", type=float, help="critical angle in rad, for --model housner (nu^2 = g/theta_cr)")
+    est1.add_argument("--theta-cr", type=float, help="critical angle in rad, for --model housner (nu^2 = g/theta_cr; default with "
+                      "--block: atan(B/H))")
+    est1.add_argument("--block", metavar="H,B", help="the block's height and width, one unit: the report sets Housner's e = 1 - 1.5 "
+                      "sin^2(atan(B/H)) beside the measured e")
     est1.add_argument(
         "--test", choices=("random", "free"), default="random",
         help="random: the block's random response (Random Decrement, calibrated); free: a free-rocking test, the block "

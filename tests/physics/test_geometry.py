@@ -81,3 +81,24 @@ def test_the_random_tests_document_carries_the_block():
     doc = with_block({"e": None}, Block(1.0, 0.25))
     assert doc["block"]["e_over_housner"] is None and np.isclose(doc["block"]["housner_e"], 1 - 1.5 * 0.25**2 / (1 + 0.25**2))
     assert "measured e" not in block_lines(doc)[0] and "Housner's e" in block_lines(doc)[0]
+
+
+@pytest.mark.parametrize("argv, words", [
+    pytest.param(["--block", "0.6"], ["--block", "H,B"], id="one number", marks=hostile("numbers", "refused")),
+    pytest.param(["--block", "0.6,0.2", "--model", "housner", "--theta-cr", "0.1"], ["--theta-cr", "atan(B/H)"], id="other angle",
+                 marks=hostile("numbers", "refused")),
+])
+def test_the_command_refuses_a_bad_block_before_reading_the_record(tmp_path, capsys, argv, words):
+    from rockdec.cli import main
+
+    code = main(["estimate", str(tmp_path / "absent.csv"), "--test", "free", *argv])
+    err = capsys.readouterr().err
+    assert code == 2 and all(w in err for w in words) and "absent" not in err, err
+
+
+def test_the_command_prints_housners_e(tmp_path, release, capsys):
+    from rockdec.cli import main
+
+    release.to_netcdf(tmp_path / "release.nc")
+    assert main(["estimate", str(tmp_path / "release.nc"), "--test", "free", "--block", "0.6,0.2", "--model", "housner"]) == 0
+    assert "Housner's e = 1 - 1.5 sin^2(theta_cr) = 0.8500" in capsys.readouterr().out

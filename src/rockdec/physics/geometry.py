@@ -65,7 +65,7 @@ def parse_block(value) -> Block | None:
         except ValueError:
             numbers = []
         if len(numbers) != 2:
-            raise InputError(f"block {value!r} is not a height and a width; give them as H,B in one unit (e.g. 0.6,0.2).")
+            raise InputError(f"`block` {value!r} is not a height and a width; give them as H,B in one unit (e.g. 0.6,0.2).")
         return Block(*numbers)
     try:
         height, width = value
