@@ -16,7 +16,9 @@ The functions a user calls:
 - :func:`read_record` -- read a record from CSV, ``.npy``, NetCDF or MATLAB ``.mat``;
 - :func:`simulate` -- a record of known ``e``, simulated exactly;
 - :class:`InputError`, :class:`RecordError` -- what is refused, in one sentence naming the
-  parameter and the fix.
+  parameter and the fix;
+- :class:`SimulationWarning`, :class:`ModelValidityWarning`, :class:`NoTriggerWarning` -- the
+  Python warnings rockdec raises.
 
 Example::
 
@@ -37,8 +39,11 @@ __all__ = [
     "ConfidenceInterval",
     "EstimateWarning",
     "InputError",
+    "ModelValidityWarning",
+    "NoTriggerWarning",
     "RecordError",
     "RestitutionEstimate",
+    "SimulationWarning",
     "__version__",
     "estimate",
     "free_rocking",
@@ -57,6 +62,9 @@ _HOMES = {
     "EstimateWarning": "rockdec.report.result",
     "InputError": "rockdec.validate",
     "RecordError": "rockdec.timeaxis",
+    "SimulationWarning": "rockdec.warning_types",
+    "ModelValidityWarning": "rockdec.warning_types",
+    "NoTriggerWarning": "rockdec.warning_types",
 }
 
 

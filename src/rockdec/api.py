@@ -27,16 +27,12 @@ from rockdec.report.result import RestitutionEstimate
 from rockdec.report.summary import with_block
 from rockdec.timeaxis import RecordError, angle_factor
 from rockdec.validate import InputError, positive, show
+from rockdec.warning_types import SimulationWarning
 
 if TYPE_CHECKING:
     import xarray as xr
 
 __all__ = ["block_angle", "estimate", "estimate_options", "free_rocking", "read_record", "simulate"]
-
-class SimulationWarning(UserWarning):
-    """A simulation that did not make what was asked: series that overturned, or a sampling
-    off the requested samples per cycle (:func:`rockdec.physics.run.simulation_report`)."""
-
 
 #: Rocking models :func:`estimate` calibrates with.
 MODELS = ("simplified", "housner")

@@ -27,6 +27,7 @@ import xarray as xr
 
 from rockdec.physics import simulate
 from rockdec import validate as checks
+from rockdec.warning_types import ModelValidityWarning
 from rockdec.physics.housner import choose_model
 from rockdec.physics.models import MODEL_PEAK_SIGMAS, period_from_g, restoring_acceleration
 from rockdec.physics.record_model import (
@@ -246,7 +247,7 @@ def model_for(requested: str, sigma_y: float, theta_cr: float) -> tuple[str, str
     if requested == "auto":
         return chosen, f"auto: {why}"
     if requested == "simplified" and chosen == "housner":
-        warnings.warn(f"the simplified model is outside its validity region: {why}", RuntimeWarning, stacklevel=3)
+        warnings.warn(f"the simplified model is outside its validity region: {why}", ModelValidityWarning, stacklevel=3)
         return requested, f"requested; outside its validity: {why}"
     return requested, "requested"
 

@@ -73,6 +73,7 @@ from rockdec._version import __version__
 from rockdec import validate as checks
 from rockdec.physics.models import period_from_g
 from rockdec.timeaxis import sampling_step
+from rockdec.warning_types import NoTriggerWarning
 
 if TYPE_CHECKING:  # annotations only: xarray loads where a function needs it
     import xarray as xr
@@ -98,10 +99,6 @@ DEFAULT_WINDOWS = (0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0)
 TRIGGERS = ("a", "v")
 SUM_VARS = ("signature_sum", "count", "skipped")
 """The variables of a cube that pool by adding (:func:`pool`); the rest derive from them."""
-
-
-class NoTriggerWarning(RuntimeWarning):
-    """A window caught no trigger, so its signature is NaN."""
 
 
 class SignatureSums(NamedTuple):
