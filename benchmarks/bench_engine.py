@@ -33,7 +33,7 @@ def main() -> None:
     scene = config.scene(config.load(), "large")
     rec, first = layout.part_records(scene["records"], args.part)
     readings = layout.compared_readings(scene["estimates"])
-    contract = run.calibrate(scene)
+    contract = run.from_scene(scene)
     n_series = rec["replicates"] * rec["series_per_replicate"]
     print(f"one job of scene large: {rec['replicates']} replicates x {rec['series_per_replicate']} series x "
           f"{rec['n_points']} points ({n_series} series, burn-in {contract.burn_in} steps each)")

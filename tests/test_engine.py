@@ -84,7 +84,7 @@ def small():
             "signatures": {"windows": [0.5, 1.0]},
         }
     )
-    return scene, run.calibrate(scene)
+    return scene, run.from_scene(scene)
 
 
 def cubes_on(scene, contract, scheduler, monkeypatch):

@@ -62,7 +62,7 @@ def test_series_files_opened_together_keep_the_replicate_of_every_series(tmp_pat
         {"excitation": {"dt": 0.0034, "burn_in": 10}, "records": {"n_points": 50, "replicates": 2, "series_per_replicate": 3, "chunk_seeds": 2, "store_series": "all"},
          "estimates": {"compare_readings": False}}
     )
-    contract = run.calibrate(scene)
+    contract = run.from_scene(scene)
     paths = layout.replicate_files(tmp_path, scene["records"])
     (tmp_path / "series").mkdir()
     for r, path in enumerate(paths):

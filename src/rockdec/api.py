@@ -425,28 +425,42 @@ def simulate(e: float, n_points: int, *, seed=0, model: str = "simplified", poin
     """
     from rockdec.physics import run
     from rockdec.physics.loading import check_seeds
-    from rockdec.pipeline import config
 
-    fields = {
-        "model": model,
-        "system": {k: v for k, v in {"e": e, "nu": nu, "theta_cr": theta_cr}.items() if v is not None},
-        "excitation": {k: v for k, v in {"sigma_p": sigma_p, "points_per_cycle": points_per_cycle, "dt": dt, "burn_in": burn_in}.items()
-                       if v is not None},
-        "records": {"n_points": n_points},
-    }
-    try:
-        scene = config.validate_scene(fields)
-    except config.ConfigError as exc:
-        if exc.field is None:
-            raise
-        parameter = exc.field.rsplit(".", 1)[-1]
-        raise InputError(f"`{parameter}`: {exc.problem}.") from None
+    settings = _simulation_settings(e=e, n_points=n_points, model=model, points_per_cycle=points_per_cycle, dt=dt, nu=nu,
+                                    theta_cr=theta_cr, sigma_p=sigma_p, burn_in=burn_in, theta0=theta0, theta_dot0=theta_dot0)
     seeds = check_seeds(seed)
-    contract = run.calibrate(scene, amplitude=abs(theta0), theta0=theta0, theta_dot0=theta_dot0)
-    ds = contract.dataset(seeds, n_points, chunk_seeds=scene["records"]["chunk_seeds"]).load()
+    contract = run.search(**settings, amplitude=abs(theta0))
+    ds = contract.dataset(seeds, n_points).load()
     theta = ds["theta"]
     for line in run.simulation_report(theta, contract, step_given=dt is not None):
         warnings.warn(line, SimulationWarning, stacklevel=2)
     theta.attrs = {**ds.attrs, **theta.attrs, "units": "rad", "dt": contract.dt}
     theta["time"].attrs = {**RELATIVE_TIME, "long_name": ds["time"].attrs["long_name"]}
     return theta.isel(seed=0, drop=True) if np.ndim(seed) == 0 else theta
+
+
+def _simulation_settings(*, e, n_points, model, points_per_cycle, dt, nu, theta_cr, sigma_p, burn_in, theta0, theta_dot0) -> dict:
+    """:func:`simulate`'s parameters checked, each refusal naming the parameter, as
+    :func:`rockdec.physics.run.search` takes them (its defaults for those not given)."""
+    from rockdec.physics import run
+    from rockdec.validate import in_range, integer
+
+    if model not in ("simplified", "housner", "auto"):
+        raise InputError(f"`model` {show(model)} is not a rocking model; give simplified, housner or auto.")
+    integer(n_points, "`n_points`", 2, "give the samples per series, at least 2")
+    given = {
+        "e": in_range(e, "`e`", 0.0, 1.0, "give the coefficient of restitution, from 0 to 1"),
+        "nu": None if nu is None else positive(nu, "`nu`", "give the frequency parameter in rad/s, > 0"),
+        "theta_cr": None if theta_cr is None else positive(theta_cr, "`theta_cr`", "give the critical angle in rad, > 0"),
+        "sigma_p": None if sigma_p is None else positive(sigma_p, "`sigma_p`", "give the impulses' std in rad/s, >= 0 (0: a free response)",
+                                                         allow_zero=True),
+        "points_per_cycle": in_range(points_per_cycle, "`points_per_cycle`", 2.0, math.inf, "give more than 2 samples per cycle",
+                                     lo_open=True),
+        "dt": None if dt is None else positive(dt, "`dt`", "give the time step in s, > 0, or leave it out"),
+        "burn_in": None if burn_in is None else integer(burn_in, "`burn_in`", 0, "give the steps to discard, >= 0, or leave it out"),
+        "theta0": in_range(theta0, "`theta0`", fix="give the initial angle in rad"),
+        "theta_dot0": in_range(theta_dot0, "`theta_dot0`", fix="give the initial angular velocity in rad/s"),
+    }
+    return {"model": model, **{k: v for k, v in given.items() if v is not None}} | {
+        k: run.DEFAULTS[k] for k in ("nu", "theta_cr", "sigma_p") if given[k] is None}
+

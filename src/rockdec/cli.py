@@ -229,7 +229,7 @@ def cmd_simulate(args) -> None:
     n_seeds = sum(stop - start for start, stop in seed_ranges(args.seeds)) if args.seeds is not None else None
     _check_simulation_size(scene, n_seeds or layout.scene_seeds(scene["records"]).size, out, args.yes, seeds_text=args.seeds)
     seeds = parse_seeds(args.seeds) if args.seeds is not None else layout.scene_seeds(scene["records"]).ravel()
-    contract = run.calibrate(scene, amplitude=abs(args.theta0), theta0=args.theta0, theta_dot0=args.theta_dot0)
+    contract = run.from_scene(scene, amplitude=abs(args.theta0), theta0=args.theta0, theta_dot0=args.theta_dot0)
     if contract.model == "housner" and abs(args.theta0) >= contract.theta_cr:
         raise UsageError(
             f"--theta0 {checks.show(args.theta0)} is beyond the critical angle {checks.show(contract.theta_cr)} rad, where the "

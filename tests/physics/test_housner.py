@@ -422,10 +422,10 @@ def test_scene_records_which_model_ran_and_why():
     from rockdec.physics import run
 
     small = config.validate_scene({"model": "auto"})
-    contract = run.calibrate(small)
+    contract = run.from_scene(small)
     assert contract.model == "simplified" and contract.model_reason.startswith("auto:")
     forced = config.validate_scene({"model": "housner"})
-    housner_run = run.calibrate(forced)
+    housner_run = run.from_scene(forced)
     assert housner_run.model == "housner" and housner_run.model_reason == "requested"
     ds = housner_run.dataset([3, 4, 5], 6000)
     assert ds.attrs["model"] == "housner"

@@ -95,7 +95,7 @@ def test_pole_path_keeps_its_series_bit_for_bit():
         simulate.integrate(impulses, 0.36, 1.0, 0.9, 0.0, 0.0, burn, theta, omega, grid)
         np.testing.assert_array_equal(simulate.simulate_block([seed], n, grid_impacts=grid, pole=c, **kw)[0][0], theta)
     scene = {"model": "simplified", "excitation": {"dt": 0.01, "burn_in": 500, "load": {"kind": "lowpass", "corner": 2.0}}}
-    contract = run.calibrate(config.validate_scene(scene), pilot=SMALL_PILOT)
+    contract = run.from_scene(config.validate_scene(scene), pilot=SMALL_PILOT)
     ref = simulate.simulate_block([seed], n, dt=contract.dt, g=contract.g, e=contract.e, sigma_p=contract.sigma_p,
                                   burn_in=contract.burn_in, pole=contract.pole)[0][0]
     np.testing.assert_array_equal(contract.dataset([seed], n)["theta"].values[0], ref)
@@ -133,7 +133,7 @@ def test_secant_step_exponent_is_a_fit_over_recent_pilots():
 def housner_spectrum_run():
     table = lowpass_table(Load("lowpass", 1.0).pole(N_CYCLE), rows=200).to_dict()
     scene = config.validate_scene({"model": "housner", "excitation": {"load": table}})
-    return run.calibrate(scene, pilot=SMALL_PILOT)
+    return run.from_scene(scene, pilot=SMALL_PILOT)
 
 
 def test_housner_honours_a_spectrum_load():

@@ -62,7 +62,7 @@ def test_record_model_round_trips_through_attributes_and_key():
 
 def housner_lowpass_run():
     scene = config.validate_scene({"model": "housner", "excitation": {"load": {"kind": "lowpass", "corner": 1.0}}})
-    return run.calibrate(scene, pilot=SMALL_PILOT)
+    return run.from_scene(scene, pilot=SMALL_PILOT)
 
 
 def impulses_of(theta, theta_dot, contract):
@@ -81,7 +81,7 @@ def test_housner_scene_with_lowpass_load_simulates_coloured_impulses():
     p = impulses_of(ds["theta"].values[0], ds["theta_dot"].values[0], contract)
     assert p.std() == pytest.approx(contract.sigma_p, rel=0.1)
     assert np.corrcoef(p[1:], p[:-1])[0, 1] == pytest.approx(contract.pole, abs=0.02)
-    white = run.with_model(run.calibrate(config.validate_scene({"model": "simplified"}), pilot=SMALL_PILOT), "housner", SMALL_PILOT)
+    white = run.with_model(run.from_scene(config.validate_scene({"model": "simplified"}), pilot=SMALL_PILOT), "housner", SMALL_PILOT)
     ds = white.dataset([3], 20_000).load()
     p = impulses_of(ds["theta"].values[0], ds["theta_dot"].values[0], white)
     assert abs(np.corrcoef(p[1:], p[:-1])[0, 1]) < 0.03
@@ -110,7 +110,7 @@ def test_run_json_and_every_product_name_the_load(tmp_path):
 def test_white_load_series_are_plain_normal_impulses_through_the_kernel():
     """White: the series of a run are its seed's standard normal draws times sigma_p through
     the integrator, bit for bit (seed-stable, whatever the record model machinery)."""
-    contract = run.calibrate(config.validate_scene({"model": "simplified"}), pilot=SMALL_PILOT)
+    contract = run.from_scene(config.validate_scene({"model": "simplified"}), pilot=SMALL_PILOT)
     n, seed = 3000, 11
     impulses = contract.sigma_p * series_rng(seed).standard_normal(contract.burn_in + n - 1)
     theta, omega = np.empty(n), np.empty(n)
@@ -125,8 +125,8 @@ def test_white_load_series_are_plain_normal_impulses_through_the_kernel():
 
 def test_sensor_noise_is_added_to_the_angle_from_its_own_stream():
     scene = config.validate_scene({"model": "simplified", "excitation": {"sensor_noise": {"std": 0.1}}})
-    noisy = run.calibrate(scene, pilot=SMALL_PILOT)
-    clean = run.calibrate(config.validate_scene({"model": "simplified"}), pilot=SMALL_PILOT)
+    noisy = run.from_scene(scene, pilot=SMALL_PILOT)
+    clean = run.from_scene(config.validate_scene({"model": "simplified"}), pilot=SMALL_PILOT)
     assert noisy.dt == clean.dt and noisy.sensor_std == pytest.approx(0.1 * noisy.sigma_y)
     a, b = noisy.dataset([5], 50_000).load(), clean.dataset([5], 50_000).load()
     np.testing.assert_array_equal(a["theta_dot"].values, b["theta_dot"].values)

@@ -33,7 +33,7 @@ def test_calibrate_writes_the_run_of_the_physics_and_logs_it_between_its_start_a
     log, out = tmp_path / "calibrate.log", tmp_path / "run.json"
     in_snakemake.calibrate(str(log), PHYSICS, str(out))
     contract = run.Run.read(out)
-    assert contract == run.calibrate(PHYSICS)
+    assert contract == run.from_scene(PHYSICS)
     lines = log.read_text().splitlines()
     assert lines[:2] == ["calibrate: started", f"run: {contract}"]
     assert re.fullmatch(r"calibrate: done in [\d.]+ s", lines[2]) and len(lines) == 3
@@ -61,7 +61,7 @@ def test_a_bad_setting_leaves_its_sentence_in_the_calibrate_log_and_is_raised(tm
 @pytest.mark.parametrize("engine", ["threads", "processes:2"])
 def test_stored_series_are_the_simulators_series_of_the_stored_seeds_as_float32_on_any_engine(tmp_path, monkeypatch, engine):
     monkeypatch.setenv("ROCKDEC_DASK_SCHEDULER", engine)  # in Snakemake's process: never a worker process
-    contract = run.calibrate(PHYSICS)
+    contract = run.from_scene(PHYSICS)
     contract.write(tmp_path / "run.json")
     rec = SCENE["records"]
     in_snakemake.step("stored_series", str(tmp_path / "s.log"), str(tmp_path / "run.json"), str(tmp_path / "s.nc"), rec)
@@ -117,7 +117,7 @@ class Named(list):
 
 
 def test_the_signature_pass_on_two_threads_writes_the_one_thread_cubes_bit_for_bit_and_logs_its_label(tmp_path):
-    contract = run.calibrate(PHYSICS)
+    contract = run.from_scene(PHYSICS)
     contract.write(tmp_path / "run.json")
     rec = {**SCENE["records"], "replicates": 2, "series_per_replicate": 12, "chunk_seeds": 5}  # chunks straddle replicates
     readings = ["pooled", "per_series", "groups_of_10"]
@@ -140,7 +140,7 @@ def test_the_signature_pass_on_two_threads_writes_the_one_thread_cubes_bit_for_b
 
 
 def test_a_signal_stops_the_signature_pass_before_it_writes_and_says_so_in_its_log(tmp_path):
-    contract = run.calibrate(PHYSICS)
+    contract = run.from_scene(PHYSICS)
     contract.write(tmp_path / "run.json")
     settings = {"signatures": SCENE["signatures"], "readings": ["pooled"], "fit_points": SCENE["estimates"]["fit_points"]}
     inputs = Named(run=str(tmp_path / "run.json"), series=[], cubes=[], curves=[])

@@ -49,7 +49,7 @@ def tiny():
     scene = config.scene(config.load(), "tiny")
     scene["records"].update(replicates=2, series_per_replicate=20, chunk_seeds=8, n_points=4000)
     scene["excitation"].update(dt=0.0034, burn_in=2000)
-    return scene, run.calibrate(scene)
+    return scene, run.from_scene(scene)
 
 
 def test_one_pass_gives_each_reading_as_its_own_pass_does(tiny):
@@ -131,7 +131,7 @@ def reduced_paper():
     cfg = config.load()
     scene = config.scene(cfg, "paper")
     scene["records"].update(replicates=8, series_per_replicate=150, chunk_seeds=150)
-    contract = run.calibrate(scene)
+    contract = run.from_scene(scene)
     cube = replicates.scene_cubes(contract, scene["records"], scene["signatures"], ["pooled"], threads=2)["pooled"]
     return replicates.replicate_estimates(cube, fit_points=scene["estimates"]["fit_points"], weights=scene["estimates"]["weights"])
 

@@ -21,7 +21,7 @@ def stored(tmp_path_factory):
             "signatures": {"windows": [0.5, 1.0]},
         }
     )
-    contract = run.calibrate(scene)
+    contract = run.from_scene(scene)
     folder = tmp_path_factory.mktemp("scene")
     paths = layout.replicate_files(folder, scene["records"])
     (folder / "series").mkdir()

@@ -159,52 +159,74 @@ def _required() -> dict:
     return {f.name: f for f in dataclasses.fields(Run) if f.default is dataclasses.MISSING}
 
 
-def calibrate(scene: dict, amplitude: float = 0.0, theta0: float = 0.0, theta_dot0: float = 0.0, pilot: dict | None = None) -> Run:
-    """The run of a scene's ``model``, ``system`` and ``excitation`` sections: the one way from
-    settings (a scene, or a command line made into one) to a :class:`Run`.
+#: The defaults of a run's settings, as the scenes' schema gives them (src/rockdec/scene_schema.yaml;
+#: tests/physics/test_run_settings.py holds the two equal): model, ``nu`` (rad/s), ``theta_cr`` (rad),
+#: ``sigma_p`` (rad/s) and the samples per cycle at ``sigma_Y`` (eq. 5).
+DEFAULTS = {"model": "auto", "nu": 2.0, "theta_cr": 0.25, "sigma_p": 0.003, "points_per_cycle": 75.0}
 
-    ``dt`` comes from the scene or from the step search :func:`rockdec.physics.simulate.calibrate_dt`
-    under the scene's load (``pilot``: its sizes, :data:`PILOT`); the burn-in from the
-    scene or :func:`rockdec.physics.simulate.default_burn_in`. Stationary statistics are measured
-    by a pilot at that step, with the model that runs (``auto`` chooses by the amplitude,
+
+def from_scene(scene: dict, amplitude: float = 0.0, theta0: float = 0.0, theta_dot0: float = 0.0, pilot: dict | None = None) -> Run:
+    """The run of a validated scene's ``model``, ``system`` and ``excitation`` sections
+    (:func:`rockdec.pipeline.config.validate_scene`): :func:`search` of their settings."""
+    system, exc = scene["system"], scene["excitation"]
+    return search(e=system["e"], model=scene["model"], nu=system["nu"], theta_cr=system["theta_cr"], sigma_p=exc["sigma_p"],
+                  points_per_cycle=exc["points_per_cycle"], dt=exc["dt"], burn_in=exc["burn_in"], load=Load.from_dict(exc.get("load")),
+                  sensor=SensorNoise.from_dict(exc.get("sensor_noise")), amplitude=amplitude, theta0=theta0, theta_dot0=theta_dot0,
+                  pilot=pilot)
+
+
+def search(*, e: float, model: str = DEFAULTS["model"], nu: float = DEFAULTS["nu"], theta_cr: float = DEFAULTS["theta_cr"],
+           sigma_p: float = DEFAULTS["sigma_p"], points_per_cycle: float = DEFAULTS["points_per_cycle"], dt: float | None = None,
+           burn_in: int | None = None, load: Load = WHITE, sensor: SensorNoise = NO_NOISE, amplitude: float = 0.0,
+           theta0: float = 0.0, theta_dot0: float = 0.0, pilot: dict | None = None) -> Run:
+    """The :class:`Run` of these settings (checked by the caller): the one way from settings
+    (a scene, the library's :func:`rockdec.simulate`, a command line) to a run.
+
+    ``dt`` as given or from the step search :func:`rockdec.physics.simulate.calibrate_dt`
+    under ``load`` (``pilot``: its sizes, :data:`PILOT`); the burn-in as given or
+    :func:`rockdec.physics.simulate.default_burn_in`. Stationary statistics are measured by a
+    pilot at that step, with the model that runs (``auto`` chooses by the amplitude,
     :func:`model_for`; :func:`with_model`). Without noise (``sigma_p = 0``, a free response
     from ``theta0``) there is no ``sigma_Y``: the step then gives ``points_per_cycle``
-    samples per cycle at ``amplitude`` (eq. 5), no burn-in. ``scene["model"]`` may also be
+    samples per cycle at ``amplitude`` (eq. 5), no burn-in. ``model`` may also be
     ``"fixed_step"`` (the grid-impact integrator, for the speed/accuracy study).
+
+    Examples
+    --------
+    >>> run = search(e=0.85, sigma_p=0.0, theta0=0.01, amplitude=0.01)
+    >>> run.model, run.burn_in, round(run.g, 6)
+    ('simplified', 0, 1.0)
     """
-    system, exc = scene["system"], scene["excitation"]
-    g = restoring_acceleration(system["nu"], system["theta_cr"])
-    e, sigma_p = system["e"], exc["sigma_p"]
-    load, sensor = Load.from_dict(exc.get("load")), SensorNoise.from_dict(exc.get("sensor_noise"))
+    g = restoring_acceleration(nu, theta_cr)
     pilot = {**PILOT, **(pilot or {})}
-    draw = load.draw_options(exc["points_per_cycle"])
+    draw = load.draw_options(points_per_cycle)
     if sigma_p == 0.0:
-        if exc["dt"] is None and amplitude <= 0.0:
+        if dt is None and amplitude <= 0.0:
             raise checks.InputError("a free response (sigma_p = 0) needs `theta0` > 0 to set the step, or `dt`")
-        dt = exc["dt"] if exc["dt"] is not None else float(period_from_g(abs(amplitude), g)) / exc["points_per_cycle"]
+        step = dt if dt is not None else float(period_from_g(abs(amplitude), g)) / points_per_cycle
         nan = math.nan
-        cal = {"dt": dt, "burn_in": 0, "sigma_y": nan, "sigma_ydot": nan, "points_per_cycle": nan}
-    elif exc["dt"] is None:
+        cal = {"dt": step, "burn_in": 0, "sigma_y": nan, "sigma_ydot": nan, "points_per_cycle": nan}
+    elif dt is None:
         cal = simulate.calibrate_dt(
-            e=e, g=g, sigma_p=sigma_p, points_per_cycle=exc["points_per_cycle"], **draw,
+            e=e, g=g, sigma_p=sigma_p, points_per_cycle=points_per_cycle, **draw,
             iterations=simulate.STEP_ITERATIONS[load.kind], **pilot,
         )
     else:
-        burn_in = exc["burn_in"] if exc["burn_in"] is not None else simulate.default_burn_in(e, exc["points_per_cycle"])
+        burn = burn_in if burn_in is not None else simulate.default_burn_in(e, points_per_cycle)
         theta, _ = simulate.simulate_block(
-            _statistics_seeds(pilot), pilot["pilot_points"], dt=exc["dt"], g=g, e=e, sigma_p=sigma_p, burn_in=burn_in, **draw
+            _statistics_seeds(pilot), pilot["pilot_points"], dt=dt, g=g, e=e, sigma_p=sigma_p, burn_in=burn, **draw
         )
-        cal = {"dt": exc["dt"], "burn_in": burn_in, **simulate.pilot_statistics(theta, exc["dt"], g)}
-    if exc["burn_in"] is not None:
-        cal["burn_in"] = exc["burn_in"]
-    model, reason = model_for(scene["model"], cal["sigma_y"], system["theta_cr"])
+        cal = {"dt": dt, "burn_in": burn, **simulate.pilot_statistics(theta, dt, g)}
+    if burn_in is not None:
+        cal["burn_in"] = burn_in
+    chosen, reason = model_for(model, cal["sigma_y"], theta_cr)
     simplified = Run(
-        model="simplified", e=e, nu=system["nu"], theta_cr=system["theta_cr"], sigma_p=sigma_p, dt=cal["dt"],
+        model="simplified", e=e, nu=nu, theta_cr=theta_cr, sigma_p=sigma_p, dt=cal["dt"],
         burn_in=int(cal["burn_in"]), sigma_y=cal["sigma_y"], sigma_ydot=cal["sigma_ydot"],
-        points_per_cycle=cal["points_per_cycle"], points_per_cycle_target=float(exc["points_per_cycle"]),
+        points_per_cycle=cal["points_per_cycle"], points_per_cycle_target=float(points_per_cycle),
         model_reason=reason, theta0=float(theta0), theta_dot0=float(theta_dot0), load=load, sensor=sensor,
     )
-    return with_model(simplified, model, pilot)
+    return with_model(simplified, chosen, pilot)
 
 
 def _statistics_seeds(pilot: dict) -> np.ndarray:

@@ -71,7 +71,7 @@ STEP_ITERATIONS = {"white": 3, "lowpass": 12, "spectrum": 12}
 SECANT_POINTS, SECANT_EXPONENTS = 3, (1.0, 10.0)
 
 #: Series of the pilot that measures the statistics at a given step, or under a model other
-#: than the one the step search ran (:func:`rockdec.physics.run.calibrate`), of :data:`PILOT_POINTS`.
+#: than the one the step search ran (:func:`rockdec.physics.run.from_scene`), of :data:`PILOT_POINTS`.
 STATISTICS_PILOT_SERIES = 64
 
 #: Largest default burn-in, in steps; beyond it the caller must choose one.

@@ -238,7 +238,7 @@ def signatures(rule: str, log: str, inputs, outputs, records: dict, settings: di
 
 def calibrate(log: str, physics: dict, output: str) -> None:
     """Rule ``calibrate``: the run contract of a scene's ``physics`` (its ``model``, ``system``
-    and ``excitation`` sections; :func:`rockdec.physics.run.calibrate`) written to ``output``
+    and ``excitation`` sections; :func:`rockdec.physics.run.from_scene`) written to ``output``
     (``run.json``), logged as :func:`step` logs, with the contract on a line of its own.
 
     Pilot simulations and a JSON file: no HDF5, so it takes no :data:`_STEP_LOCK`. Then the
@@ -249,7 +249,7 @@ def calibrate(log: str, physics: dict, output: str) -> None:
     def work():
         from rockdec.physics import run
 
-        contract = run.calibrate(physics)
+        contract = run.from_scene(physics)
         contract.write(output)
         return f"run: {contract}"
 

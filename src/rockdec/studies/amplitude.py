@@ -33,13 +33,13 @@ def noise_for_ratios(scene: dict, ratios) -> list[float]:
     With ``dt`` calibrated to ``N`` points per cycle the scale law gives ``sigma_p`` in closed
     form (:func:`rockdec.physics.models.noise_for_amplitude`), and its number ``c`` does not depend
     on ``sigma_p`` (scale invariance, docs/method.md §3.4); ``c`` is measured once from the
-    simplified model's run at the scene's own noise (:func:`rockdec.physics.run.calibrate`). The law
+    simplified model's run at the scene's own noise (:func:`rockdec.physics.run.from_scene`). The law
     is the white load's: a coloured load is refused.
     """
     system, exc = scene["system"], scene["excitation"]
     if Load.from_dict(exc.get("load")).kind != "white":
         raise InputError("the amplitude sweep sets the noise by the white-noise scale law; give the scene a white load")
-    contract = run.calibrate({**scene, "model": "simplified", "excitation": {**exc, "dt": None}})
+    contract = run.from_scene({**scene, "model": "simplified", "excitation": {**exc, "dt": None}})
     c = scale_constant(contract.sigma_y, contract.dt, contract.g, exc["sigma_p"])
     return [noise_for_amplitude(c, r * system["theta_cr"], contract.g, exc["points_per_cycle"]) for r in ratios]
 
@@ -56,7 +56,7 @@ def sweep(scene: dict, ratios=RATIOS, threads: int = 1) -> xr.Dataset:
         base = copy.deepcopy(scene)
         base["excitation"]["sigma_p"] = sigma_p
         for model in MODELS:
-            contract = run.calibrate({**base, "model": model})
+            contract = run.from_scene({**base, "model": model})
             cube = replicates.scene_cubes(contract, base["records"], base["signatures"], [reading], threads=threads)[reading]
             est = replicates.replicate_estimates(cube, fit_points=options["fit_points"], weights=options["weights"])
             skipped = float(cube["skipped"].sel(trigger="a").isel(window=-1).sum())

@@ -177,14 +177,14 @@ def variant_scene(scene: dict, settings: dict) -> dict:
 
 
 def _calibrate(scene: dict, points_per_cycle: float, simulators: set, pilot: dict) -> dict:
-    """The run at one density, per simulator (:func:`rockdec.physics.run.calibrate` of the scene at
+    """The run at one density, per simulator (:func:`rockdec.physics.run.from_scene` of the scene at
     that density, then :func:`rockdec.physics.run.with_model` for the fixed-step integrator), and the
     CPU s of this thread: ``{simulator: (run, cpu_s)}``."""
     start = time.thread_time()
     at_density = copy.deepcopy(scene)
     at_density["model"] = "simplified"
     at_density["excitation"].update(points_per_cycle=points_per_cycle, dt=None)
-    exact = run.calibrate(at_density, pilot=pilot)
+    exact = run.from_scene(at_density, pilot=pilot)
     out = {"exact": exact}
     if fixed_step.KIND in simulators:
         out[fixed_step.KIND] = run.with_model(exact, "fixed_step", pilot)
