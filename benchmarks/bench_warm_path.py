@@ -105,7 +105,7 @@ def main() -> None:
             for t, src in trees.items():
                 runs[t].append(child(estimate_command(csv, cache), src))
             runs["plain"].append(child(["-c", PLAIN, str(csv), str(TESTS)], trees["this"]))
-    print(f"record: {csv} ({args.record and 'given' or f'{args.samples} samples, simulated'}); medians of {args.repeat} rounds")
+    print(f"record: {args.record or f'{args.samples} samples simulated at e = 0.85, CSV'}; medians of {args.repeat} rounds")
     print(f"load average at the end: {' '.join(f'{x:.1f}' for x in os.getloadavg())} on {os.cpu_count()} cores\n")
     print("| command, fresh interpreter | wall s | CPU s | wall / plain (paired) | CPU / plain (paired) |\n|---|---:|---:|---:|---:|")
     for t in (*trees, "plain"):
