@@ -79,7 +79,7 @@ def answer(out: str) -> str:
     """The JSON of ``rockdec estimate --json`` without the calibration's file name and load
     time, as canonical text."""
     doc = json.loads(out)
-    for key in ("file", "cached", "seconds"):
+    for key in ("file", "seconds"):
         doc["calibration"].pop(key, None)
     return json.dumps(doc, indent=2)
 
