@@ -291,6 +291,33 @@ def test_workflow_passes_its_scene_and_every_other_option_to_snakemake(tmp_path,
     assert not (tmp_path / "results").exists()  # a dry run writes nothing
 
 
+#: Libraries a warm ``rockdec estimate`` has no use for: each takes about as long to import as the estimate's analysis.
+NOT_ON_THE_WARM_PATH = ("xarray", "pandas", "dask", "distributed", "matplotlib", "jsonschema", "scipy.stats", "scipy.signal")
+
+
+def test_a_warm_estimate_of_a_csv_record_loads_no_library_it_does_not_use(tmp_path, capsys, monkeypatch):
+    """A CSV record's calibration built here (a fake one); ``rockdec estimate --json`` in a fresh
+    interpreter then reads it from the cache, reads the record, repairs it, measures its
+    model and answers without importing any of :data:`NOT_ON_THE_WARM_PATH`."""
+    import rockdec
+    from rockdec.calibrate import calibration
+
+    monkeypatch.setattr(calibration, "_grid_point", fake_calibration.grid_point)
+    theta = rockdec.simulate(0.85, 20_000, seed=1)
+    record = tmp_path / "r.csv"
+    np.savetxt(record, np.c_[theta["time"].values, theta.values], delimiter=",", header="time,theta", comments="", fmt="%.10g")
+    args = ["estimate", str(record), "--cache", str(tmp_path / "cache"), "--json"]
+    assert main(args) == 0
+    built = json.loads(capsys.readouterr().out)
+    probe = (f"import json, sys; from rockdec.cli import main; code = main({args!r}); "
+             f"print(json.dumps([code, sorted(set({NOT_ON_THE_WARM_PATH!r}) & set(sys.modules))]), file=sys.stderr)")
+    proc = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=300)
+    code, loaded = json.loads(proc.stderr.strip().splitlines()[-1])
+    warm = json.loads(proc.stdout)
+    assert code == 0 and warm["calibration"]["cached"] is True and warm["e"] == built["e"], proc.stderr[-2000:]
+    assert loaded == []
+
+
 def test_calibrating_is_announced_only_when_a_calibration_is_built(tmp_path, capsys, monkeypatch):
     from rockdec import __version__
     from rockdec.calibrate import calibration

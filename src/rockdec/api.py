@@ -45,6 +45,8 @@ RELATIVE_TIME = {"units": "s", "standard_name": "time"}
 def _series_arrays(theta, dt: float | None, source: str) -> list[tuple[np.ndarray, float | None, str]]:
     """``(angles in rad, step in s or None, source)`` of each record of one input of
     :func:`estimate` or :func:`free_rocking` (not yet checked as a record)."""
+    if isinstance(theta, records_mod.Record):  # as rockdec.record.records.read_records reads it: no pandas, no xarray
+        return [(theta.theta, theta.dt, theta.source)]
     import pandas as pd
     import xarray as xr
 

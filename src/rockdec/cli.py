@@ -340,6 +340,7 @@ def cmd_estimate(args) -> None:
 
     import rockdec
     from rockdec import api, io
+    from rockdec.record import records
 
     for path in args.records:
         checks.path_name(path, "record")
@@ -359,7 +360,8 @@ def cmd_estimate(args) -> None:
     with contextlib.ExitStack() as stack:
         plot = stack.enter_context(io.claimed(_plot_path(args), args.overwrite)) if args.plot else None
         seconds = 0.0 if free else _check_estimate_size(args)
-        theta = [rockdec.read_record(path, column=args.column, variable=args.variable, dt=args.dt, fs=args.fs) for path in args.records]
+        theta = [record for path in args.records
+                 for record in records.read_records(path, column=args.column, variable=args.variable, dt=args.dt, fs=args.fs, checked=False)]
         if free:
             res = rockdec.free_rocking(theta, model=args.model, theta_cr=args.theta_cr, block=args.block)
         else:

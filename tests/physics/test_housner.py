@@ -421,11 +421,12 @@ def test_scene_records_which_model_ran_and_why():
     from rockdec.pipeline import config
     from rockdec.physics import run
 
+    pilot = {"pilot_seeds": 32, "pilot_points": 20_000}  # a smaller step search: the choice and the attributes are read, not the step
     small = config.validate_scene({"model": "auto"})
-    contract = run.from_scene(small)
+    contract = run.from_scene(small, pilot=pilot)
     assert contract.model == "simplified" and contract.model_reason.startswith("auto:")
     forced = config.validate_scene({"model": "housner"})
-    housner_run = run.from_scene(forced)
+    housner_run = run.from_scene(forced, pilot=pilot)
     assert housner_run.model == "housner" and housner_run.model_reason == "requested"
     ds = housner_run.dataset([3, 4, 5], 6000)
     assert ds.attrs["model"] == "housner"

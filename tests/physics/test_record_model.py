@@ -3,6 +3,7 @@ the run into every simulator and every product, and the white load unchanged."""
 
 from __future__ import annotations
 
+import functools
 import json
 import math
 
@@ -60,7 +61,9 @@ def test_record_model_round_trips_through_attributes_and_key():
     assert RecordModel.from_key(json.loads(json.dumps(model.key()))) == model
 
 
+@functools.cache
 def housner_lowpass_run():
+    """The Housner scene under a low-pass load at corner 1, its step searched once for the module's tests."""
     scene = config.validate_scene({"model": "housner", "excitation": {"load": {"kind": "lowpass", "corner": 1.0}}})
     return run.from_scene(scene, pilot=SMALL_PILOT)
 

@@ -306,3 +306,29 @@ def test_the_asymmetry_reads_a_lean_about_the_impact_level(pole):
             assert b < 0.1 or got.value == pytest.approx(-b, abs=0.02)
             assert rm.measure(-theta, step["dt"]).asymmetry.value == pytest.approx(-got.value, rel=1e-6)
             assert abs(got.value) == pytest.approx(diagnostics.asymmetry(diagnostics.sums([theta]), None), abs=0.001)
+
+
+@pytest.mark.parametrize("n, gaps", [(300, 0), (5_000, 7), (40_000, 30), (40_000, 0)])
+def test_second_difference_spectra_are_scipys_spectrogram_to_the_bit(n, gaps):
+    """The roll-off's periodograms are scipy.signal.spectrogram's (its default periodic Tukey
+    window of 0.25, each segment less its mean, half overlap) to the last bit, and a segment
+    is left out exactly when scipy's spectrogram of the NaN mask has power in it; two records
+    of one step, one with gaps, pooled (segments of an eighth of the longer up to 1024)."""
+    from scipy import signal
+
+    rng = np.random.default_rng(n + gaps)
+    records = [np.cumsum(np.cumsum(rng.standard_normal(size))) for size in (n, n // 2 + 3)]
+    records[0][rng.choice(n, gaps, replace=False)] = np.nan
+    frequency, spectra = rm.second_difference_spectra(records)
+    size = (frequency.size - 1) * 2
+    assert np.array_equal(rm.periodic_tukey(size), signal.windows.tukey(size, 0.25, sym=False))
+    expected = []
+    for y in records:
+        d = np.diff(y, 2)
+        f, _, s = signal.spectrogram(np.nan_to_num(d), nperseg=size, noverlap=size // 2, detrend="constant")
+        bad = signal.spectrogram(np.isnan(d).astype(float), nperseg=size, noverlap=size // 2, detrend=False)[2].any(axis=0)
+        expected.append(s[:, ~bad].T)
+    expected = np.concatenate(expected)
+    assert np.array_equal(frequency, f) and spectra.shape == expected.shape
+    assert np.array_equal(spectra.view(np.uint64), expected.view(np.uint64))
+    assert gaps == 0 or spectra.shape[0] < sum(1 + (y.size - 2 - size) // (size - size // 2) for y in records)

@@ -159,3 +159,16 @@ def test_a_check_left_fired_by_the_repair_declines_e_when_its_defect_moves_e(che
         assert f"{check}: the {check} message" in out["reason"] and "after the repair" in out["reason"]
     else:
         assert out == doc
+
+
+@pytest.mark.parametrize("gaps", [0, 40])
+def test_the_robust_scale_is_scipys_median_absolute_deviation(clean, gaps):
+    """The scale of the second differences is 1.4826 times their median absolute deviation as
+    scipy.stats computes it, to the bit, with NaN samples (their differences left out)."""
+    from scipy.stats import median_abs_deviation
+
+    y = clean[0].copy()
+    y[np.random.default_rng(5).choice(y.size, gaps, replace=False)] = np.nan
+    d = np.diff(y, 2)
+    assert repair.second_difference_scale(y) == repair.MAD_TO_SD * float(median_abs_deviation(d[np.isfinite(d)]))
+    assert np.isnan(repair.second_difference_scale(np.full(50, np.nan)))

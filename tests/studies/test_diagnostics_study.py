@@ -105,8 +105,9 @@ def test_the_workflow_parts_together_give_the_rows_of_one_run_of_all(monkeypatch
 def test_a_run_of_one_e_gives_the_rows_a_run_of_all_gives_it(monkeypatch):
     """The workflow runs the study one ``e`` a job: the records of an ``e`` draw the seeds of
     its place in DIAGNOSTICS_E, whichever values a run holds; an ``e`` that is not the study's is
-    refused in one sentence that names where the values live. (The simulation and the
-    estimates are stood in for: only the cells and their seeds are read.)"""
+    refused in one sentence that names where the values live. (The step search, the
+    simulation and the estimates are stood in for: only the cells and their seeds are read.)"""
+    monkeypatch.setattr(ds, "_step", lambda *args: {"dt": 1.0, "burn_in": 0, "pole": 0.0})
     monkeypatch.setattr(ds, "_cell", lambda *args: [(None, 0.0, 0.0)] * len(args[4]))
     monkeypatch.setattr(ds, "_estimates", lambda *args: [None] * len(args[4]))
     small = {"n_records": 3, "noise_levels": (0.0,), "corners": (0.0,), "defects": {}}

@@ -238,13 +238,50 @@ ROLLOFF_Z = 3.0
 ROLLOFF_GROUPS = 10
 
 
+def periodic_tukey(size: int, alpha: float = 0.25) -> np.ndarray:
+    """The periodic (DFT-even) Tukey window of ``size`` samples with a taper of ``alpha``,
+    as ``scipy.signal.windows.tukey(size, alpha, sym=False)`` computes it (``size`` > 1,
+    0 < ``alpha`` < 1).
+
+    Examples
+    --------
+    >>> periodic_tukey(8, 0.5).tolist()
+    [0.0, 0.5, 1.0, 1.0, 1.0, 1.0, 1.0, 0.5]
+    """
+    m = size + 1
+    n = np.arange(0, m, dtype=np.float64)
+    width = int(math.floor(alpha * (m - 1) / 2.0))
+    n1, n2, n3 = n[0 : width + 1], n[width + 1 : m - width - 1], n[m - width - 1 :]
+    w1 = 0.5 * (1 + np.cos(np.pi * (-1 + 2.0 * n1 / alpha / (m - 1))))
+    w3 = 0.5 * (1 + np.cos(np.pi * (-2.0 / alpha + 1 + 2.0 * n3 / alpha / (m - 1))))
+    return np.concatenate((w1, np.ones(n2.shape), w3))[:-1]
+
+
+def _periodograms(x: np.ndarray, size: int) -> np.ndarray:
+    """``(frequency, segment)``: the one-sided density periodograms of ``x`` in segments of
+    ``size`` samples overlapping by half, each less its mean and under
+    :func:`periodic_tukey` of 0.25: the steps of ``scipy.signal.spectrogram(x,
+    nperseg=size, noverlap=size // 2)`` in its order (the same floats), without the import
+    of ``scipy.signal``, which takes longer than a warm estimate's analysis."""
+    window = periodic_tukey(size)
+    segments = np.lib.stride_tricks.sliding_window_view(x, size)[:: size - size // 2]
+    segments = segments - np.mean(segments, -1, keepdims=True)
+    spectra = np.fft.rfft(window * segments, n=size)
+    spectra = np.conjugate(spectra) * spectra
+    spectra *= 1.0 / (window * window).sum()
+    spectra[..., 1:-1] *= 2
+    return np.moveaxis(spectra.real, -1, -2)
+
+
 def second_difference_spectra(records) -> tuple[np.ndarray, np.ndarray]:
-    """``(frequency, spectra)``: the Hann-windowed periodograms ``(segment, frequency)`` of the
-    second differences of ``records`` (1-D arrays, NaN allowed) in segments overlapping by
-    half (:func:`scipy.signal.spectrogram`), each of :data:`ROLLOFF_SEGMENT` samples or, for
+    """``(frequency, spectra)``: the periodograms ``(segment, frequency)`` of the second
+    differences of ``records`` (1-D arrays, NaN allowed) in segments overlapping by half,
+    each less its mean and under a periodic Tukey window of 0.25 (:func:`_periodograms`,
+    ``scipy.signal.spectrogram``'s defaults), each of :data:`ROLLOFF_SEGMENT` samples or, for
     shorter records, the power of two at or below an eighth of the longest (at least 16);
-    frequency in cycles per sample. Segments touching a NaN are left out; records shorter
-    than a segment give none, and none is made when the longest has fewer than 66 samples.
+    frequency in cycles per sample. Segments holding a NaN where the window is not 0 are
+    left out; records shorter than a segment give none, and none is made when the longest
+    has fewer than 66 samples.
 
     Examples
     --------
@@ -254,8 +291,6 @@ def second_difference_spectra(records) -> tuple[np.ndarray, np.ndarray]:
     >>> spectra.shape, float(frequency[-1])
     ((38, 513), 0.5)
     """
-    from scipy import signal
-
     records = [np.asarray(y, dtype=np.float64).ravel() for y in records]
     longest = max((y.size - 2 for y in records), default=0)
     if longest < 64:
@@ -266,8 +301,10 @@ def second_difference_spectra(records) -> tuple[np.ndarray, np.ndarray]:
         d = np.diff(y, 2)
         if d.size < size:
             continue
-        frequency, _, s = signal.spectrogram(np.nan_to_num(d), nperseg=size, noverlap=size // 2, detrend="constant")
-        bad = signal.spectrogram(np.isnan(d).astype(float), nperseg=size, noverlap=size // 2, detrend=False)[2].any(axis=0)
+        frequency = np.fft.rfftfreq(size)
+        s = _periodograms(np.nan_to_num(d), size)
+        gaps = np.lib.stride_tricks.sliding_window_view(np.isnan(d), size)[:: size - size // 2]
+        bad = (gaps & (periodic_tukey(size) > 0.0)).any(axis=1)
         spectra.append(s[:, ~bad].T)
     return (frequency, np.concatenate(spectra)) if spectra else (np.empty(0), np.empty((0, 0)))
 

@@ -95,7 +95,7 @@ def _plain_columns(path: Path, sep: str, column: str) -> dict[str, np.ndarray] |
         return None
     if values.shape[1] != len(names) or not values.size or not np.isfinite(values).all():
         return None
-    return dict(zip(names, values.T))
+    return dict(zip(names, np.ascontiguousarray(values.T)))  # each column's samples side by side, as the kernels read them
 
 
 def _read_csv(path: Path, column: str, step: float | None) -> tuple[np.ndarray, float]:

@@ -144,9 +144,7 @@ def second_difference_scale(y: np.ndarray) -> float:
     d = d[np.isfinite(d)]
     if not d.size:
         return float("nan")
-    from scipy.stats import median_abs_deviation
-
-    return MAD_TO_SD * float(median_abs_deviation(d))
+    return MAD_TO_SD * float(np.median(np.abs(d - np.median(d))))
 
 
 def find_spikes(y, z: float = SPIKE_Z) -> np.ndarray:
