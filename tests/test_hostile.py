@@ -208,7 +208,7 @@ def test_internal_error_is_one_line_and_debug_shows_the_traceback(tmp_path, caps
     def broken(*args, **kwargs):
         raise KeyError("boom")
 
-    monkeypatch.setattr(run, "calibrate", broken)
+    monkeypatch.setattr(run, "from_scene", broken)
     argv = ["simulate", "--out", str(tmp_path / "o.nc"), *FAST]
     assert main(argv) == 1
     err = capsys.readouterr().err
