@@ -59,6 +59,12 @@ if TYPE_CHECKING:  # annotations only: xarray loads where a function needs it
 
     from rockdec.calibrate import ncread
 
+__all__ = [
+    "Belt", "Corrected", "GCV_GAMMA", "QUANTILE_BANDWIDTH", "Z95", "belt", "belts",
+    "calibration_coverage", "correct", "correct_g", "fit", "g_band", "g_calibration_coverage",
+    "g_interval", "g_intervals", "held_e", "held_es", "intervals", "width_at",
+]
+
 #: Two-sided normal quantile of the 95 % interval.
 Z95 = 1.959963984540054
 

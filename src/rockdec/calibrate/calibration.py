@@ -75,6 +75,14 @@ from rockdec.validate import InputError
 if TYPE_CHECKING:  # annotations only: xarray loads where a function needs it
     import xarray as xr
 
+__all__ = [
+    "CALIBRATION_SEED_OFFSET", "E_GRID", "E_GRID_LONG", "FILTER_BIN", "LENGTH_CAP", "NAMES", "NOISE_BIN",
+    "PAPER", "PILOT_SETS", "POLE_BIN", "PPC_BIN", "PPC_BIN_LONG", "RATIO_BIN", "SEED_STRIDE",
+    "SETS_PER_E", "SETS_PER_E_CAPPED", "SET_PPC_TOLERANCE", "SET_STEP_TRIES", "STALE_S", "binned_model",
+    "build", "calibration_settings", "grid_tasks", "load_or_build", "pipeline_fingerprint", "ppc_key",
+    "seed_base", "sets_per_e", "settings_hash", "simulated_lengths", "spread_scale", "step_for",
+]
+
 log = logging.getLogger(__name__)
 
 #: True ``e`` of the calibration grid: about evenly spaced in ``log(1 - e)``, in which the

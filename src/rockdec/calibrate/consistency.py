@@ -57,6 +57,11 @@ from typing import NamedTuple
 
 import numpy as np
 
+__all__ = [
+    "G_FACTOR", "LEVEL", "UNITS", "UNITS_RATIO", "check", "reads", "record_spreads", "scales_apart",
+    "spread_at", "statistic", "threshold",
+]
+
 #: Share of the ``chi^2_{k-1}`` distribution below the threshold (:func:`threshold`): a pool
 #: of records of one block whose raw values were normal with the belt's spread would fire on
 #: ``1 - LEVEL`` of pools. Far stricter than 95 % because neither holds at low ``e``: a single

@@ -51,6 +51,8 @@ import math
 
 import numba
 
+__all__ = ["KIND", "step"]
+
 #: Name of this simulator in tables (``"exact"`` is :mod:`rockdec.physics.simulate`).
 KIND = "fixed_step"
 

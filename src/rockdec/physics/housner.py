@@ -56,6 +56,8 @@ from rockdec import validate as checks
 from rockdec.physics.models import MODEL_TOLERANCE, amplitude_limit, check_finite_series, check_run, period_mismatch
 from rockdec.physics.loading import draw_impulses, series_rng
 
+__all__ = ["choose_model", "housner_flight", "integrate_housner", "simulate_block_housner"]
+
 #: Bounces from ``theta = 0`` with ``w/c`` at most this are counted in closed form.
 _SERIES_RATIO = 0.5
 #: Relative size below which a term of the bounce-time series is dropped.

@@ -55,6 +55,12 @@ from numba.np.random._constants import fi_double, ki_double, wi_double, ziggurat
 
 from rockdec.validate import InputError, is_whole, show
 
+__all__ = [
+    "ImpulseSpectrum", "SENSOR_STREAM", "WRAP_TOLERANCE", "add_sensor_noise", "check_load", "check_seeds",
+    "draw_impulses", "draw_series", "embedding_size", "low_pass", "sensor_rng", "series_rng",
+    "spectral_gain", "stream_words",
+]
+
 SENSOR_STREAM = 1
 """Spawn key of a series' sensor-noise stream (the load's stream has none), so the sensor's
 noise never shares random numbers with the load."""

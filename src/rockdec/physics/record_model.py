@@ -53,6 +53,13 @@ from pathlib import Path
 
 from rockdec import validate as checks
 
+__all__ = [
+    "Load", "NO_NOISE", "PAPER", "POLE_RATE_RANGE", "RecordModel", "SensorFilter", "SensorNoise", "WHITE",
+    "carried_attrs", "check_filter_declared_with_model", "declared_load", "load_attrs", "load_from_attrs",
+    "parse_load", "parse_sensor_filter", "parse_sensor_noise", "read_base_record", "sensor_attrs",
+    "sensor_from_attrs",
+]
+
 LOAD_KINDS = ("white", "lowpass", "spectrum")
 
 #: The range of ``2 pi corner / points_per_cycle`` (the low-pass pole's ``-log``) in which the

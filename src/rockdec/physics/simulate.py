@@ -45,6 +45,12 @@ from rockdec import validate as checks
 from rockdec.physics.loading import add_sensor_noise, check_load, check_seeds, draw_impulses, draw_series, series_rng, stream_words
 from rockdec.physics.models import SCALE_CONSTANT_GUESS, check_finite_series, check_run, period_from_g, scale_constant, step_for_density
 
+__all__ = [
+    "PILOT_POINTS", "PILOT_SEED_OFFSET", "PILOT_SERIES", "STATISTICS_PILOT_SERIES", "STEP_ITERATIONS",
+    "calibrate_dt", "default_burn_in", "flight", "integrate", "pilot_statistics", "secant_step",
+    "simulate_block", "simulate_model", "simulation_dataset",
+]
+
 #: Largest number of correction steps when the closed-form flight count is off by rounding.
 _COUNT_FIX = 4
 

@@ -44,6 +44,8 @@ import traceback
 from rockdec import locks
 from rockdec.validate import InputError
 
+__all__ = ["Stopped", "calibrate", "campaign", "draw", "end_of_run", "signatures", "step", "stop_on_signals"]
+
 #: What the signature pass and the light steps import as they start (Dask, its threaded
 #: scheduler and array, the pass's and the steps' modules): :func:`calibrate` imports them
 #: once the run contract is written, before Snakemake starts any rule that reads the

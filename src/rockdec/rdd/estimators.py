@@ -54,6 +54,13 @@ from rockdec.rdd.signatures import TRIGGERS, free_response, mean_signature
 if TYPE_CHECKING:  # annotations only: xarray loads where a function needs it
     import xarray as xr
 
+__all__ = [
+    "COLUMNS", "DEFAULT_FIT_POINTS", "ESTIMATORS", "Estimate", "FLAT_ULPS", "G_NAME", "HalfCycle",
+    "LOCAL_ESTIMATORS", "MIN_FIT_POINTS", "estimate_all", "estimate_cube", "extrapolate",
+    "extrapolate_to_zero", "extrapolation_weights", "half_cycle", "window_cube", "window_estimates",
+    "zero_window",
+]
+
 LOCAL_ESTIMATORS = ("e1", "e2", "e3", "e4")
 """The estimators of eq. 27, computed from one set of half-cycle fits (:func:`_local_measures`)."""
 

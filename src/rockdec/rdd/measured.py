@@ -39,6 +39,8 @@ from rockdec.rdd import estimators, fits, registry, signatures
 from rockdec.rdd.estimators import G_NAME
 from rockdec.physics.models import period_from_g
 
+__all__ = ["Analysis", "DEFAULT_SETTINGS", "G_NAME", "analyse", "rocking_shape"]
+
 #: Settings of the analysis and their defaults (the workflow's scene defaults, see the schema).
 DEFAULT_SETTINGS = {
     "level": 2.0,

@@ -81,7 +81,10 @@ if TYPE_CHECKING:  # annotations only: xarray loads where a function needs it
 __all__ = [
     "DEFAULT_WINDOWS",
     "NoTriggerWarning",
+    "SUM_VARS",
     "SignatureSums",
+    "TRIGGERS",
+    "check_lag_range",
     "crossing_sums",
     "extremum_sums",
     "free_response",

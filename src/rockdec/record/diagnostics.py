@@ -70,6 +70,13 @@ from numba import njit
 
 from rockdec.rdd import fits
 
+__all__ = [
+    "CHECKS", "FILTER_HELP", "IMPACT_MIN_STEPS", "MIN_SEGMENTS", "QUANTILE", "REGISTRY", "asymmetry",
+    "evaluate", "impact_level", "impact_ratios", "impact_sharpness", "impact_sides", "impact_steps",
+    "judge", "length_threshold", "nonstationarity", "null", "resolution", "segments", "side_sums",
+    "spikes", "statistics", "sums", "thresholds",
+]
+
 #: Share of the null (:func:`null`, near the record's ``e``) below a ``"high"`` threshold; a
 #: check fires on ``1 - QUANTILE`` of clean records in expectation (its rate on each cell:
 #: the diagnostics study, ``snakemake --cores 2 diagnostics``; docs/explanation/constants.md).

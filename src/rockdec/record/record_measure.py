@@ -163,6 +163,13 @@ from rockdec import validate as checks
 from rockdec.physics.models import period_from_g
 from rockdec.record import diagnostics
 
+__all__ = [
+    "MAX_LAG", "MAX_POLE", "MeasuredModel", "NOISE_FLOOR", "Quantity", "ROLLOFF_FLOOR", "Rolloff",
+    "SHAPE_SPANS", "SPANS", "WHITE_SHAPE", "fit_structure", "measure", "mixed_autocovariance",
+    "pole_of_shape", "rolloff", "second_differences", "shape_of_pole", "shape_ratio", "span_differences",
+    "structure_model",
+]
+
 #: Spans ``L`` of the structure function ``S(L)`` that the fit uses.
 SPANS = (1, 2, 3, 4, 6, 8)
 

@@ -35,6 +35,11 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+__all__ = [
+    "HIGHPASS_CORNER", "Repair", "SPIKE_Z", "apply", "cycle_samples", "find_spikes", "highpass",
+    "settings",
+]
+
 #: Robust z of a spike's second difference: the sample's own beyond ``2 SPIKE_Z`` scales,
 #: a neighbour's of the other sign beyond ``SPIKE_Z`` (module docstring); Gaussian second
 #: differences pass both practically never. Evidence of no false spike on clean records:

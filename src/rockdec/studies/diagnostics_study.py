@@ -56,6 +56,11 @@ from rockdec.pipeline.layout import DIAGNOSTICS_COLOURED_NOISE, DIAGNOSTICS_CORN
 from rockdec.record.records import Record
 from rockdec.validate import InputError
 
+__all__ = [
+    "DEFECTS", "POINTS_PER_CYCLE", "Record", "add_defect", "digest", "digest_markdown", "record", "run",
+    "simulate", "summary",
+]
+
 #: Seeds of the study's records start here (apart from scenes, pilots, calibrations and
 #: the other studies); the pilots that place a coloured load's records (:func:`_step`)
 #: start ``PILOT_SEEDS`` further on, beyond every cell's records.

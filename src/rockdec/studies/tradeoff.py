@@ -69,6 +69,11 @@ from rockdec.physics import fixed_step, run
 from rockdec.report import tables
 from rockdec.physics.run import Run
 
+__all__ = [
+    "ACCURACY_CLASSES", "CRITERIA", "KNOBS", "SETTING_COLUMNS", "base_settings", "configurations",
+    "knob_settings", "pareto_front", "recommend", "run_study", "study_table", "variant_scene",
+]
+
 KNOBS = {
     "points_per_cycle": (5, 10, 20, 35, 75, 150, 300, 1000),
     "n_points": (1500, 3000, 6000, 12000),
