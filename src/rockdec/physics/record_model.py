@@ -1,25 +1,20 @@
 """The record model: what makes a record besides the block's ``e`` -- the load and the sensor.
 
-:class:`Load`
-    the velocity impulses of eqs. 21-24: ``white`` (the paper's), ``lowpass`` (through a
-    first-order low-pass filter, its ``corner`` in rocking frequencies ``1/T(sigma_Y)``,
-    eq. 5; the open question of paper §6), ``spectrum`` (a tabulated one-sided PSD, rows in
-    rocking frequencies or in Hz, :func:`read_spectrum_table`) or ``base`` (a measured base
-    acceleration, :func:`read_base_record`, drawn as the spectrum load of its Welch estimate).
-:class:`SensorNoise`
-    white noise on the recorded angle, in units of ``sigma_Y`` or in rad.
-:class:`SensorFilter`
-    a low-pass filter after the block (``butterworth`` of order 1-8 or ``rc``, ``causal`` or
-    ``zero_phase``), which the calibration applies before the noise (:meth:`SensorFilter.apply`).
-:class:`RecordModel`
-    the rocking model (``simplified``, eq. 4, or ``housner``, eq. 2), the load, the noise and
-    the filter together: what a scene or a record's measurement states, what
-    :class:`rockdec.physics.run.Run` carries and the calibration's cache key names.
-
-Each type is frozen, checks itself when built (:class:`rockdec.validate.InputError`) and is
-written to and read from flat file attributes by one pair of functions (:func:`load_attrs`,
-:func:`load_from_attrs`, :func:`sensor_attrs`, :func:`sensor_from_attrs`). Imports nothing
-heavy (the file readers import NumPy, SciPy, xarray when called).
+:class:`Load` is the velocity impulses of eqs. 21-24: ``white`` (the paper's), ``lowpass``
+(a first-order low-pass filter, its ``corner`` in rocking frequencies ``1/T(sigma_Y)``,
+eq. 5; the open question of paper §6), ``spectrum`` (a tabulated one-sided PSD, in rocking
+frequencies or Hz, :func:`read_spectrum_table`) or ``base`` (a measured base acceleration,
+:func:`read_base_record`, drawn as the spectrum load of its Welch estimate).
+:class:`SensorNoise` is white noise on the recorded angle (in ``sigma_Y`` or rad),
+:class:`SensorFilter` a low-pass filter after the block (``butterworth`` of order 1-8 or
+``rc``, ``causal`` or ``zero_phase``; :meth:`SensorFilter.apply`), and :class:`RecordModel`
+the rocking model (eq. 4 or eq. 2), the load, the noise and the filter together: what a
+scene or a record's measurement states, what :class:`rockdec.physics.run.Run` carries and
+the calibration's cache key names. Each type is frozen, checks itself when built
+(:class:`rockdec.validate.InputError`) and is written to and read from flat file attributes
+by one pair of functions (:func:`load_attrs`, :func:`load_from_attrs`, :func:`sensor_attrs`,
+:func:`sensor_from_attrs`). Imports nothing heavy (the readers import NumPy, SciPy, xarray
+when called).
 
 Explanation: docs/explanation/method/simulation.md (§3.1 Loading);
 docs/how-to/record-model.md (declaring a load, noise, filter).
