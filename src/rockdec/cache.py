@@ -7,6 +7,8 @@ from pathlib import Path
 
 from rockdec.validate import InputError, path_name
 
+__all__ = ["VARIABLE", "cache_folder", "default_cache"]
+
 #: The environment variable that names the calibration folder.
 VARIABLE = "ROCKDEC_CACHE"
 

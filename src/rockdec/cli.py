@@ -28,6 +28,8 @@ from rockdec import engine
 from rockdec.rdd import fits
 from rockdec import validate as checks
 
+__all__ = ["FLAGS", "MAX_SECONDS", "build_parser", "main"]
+
 log = logging.getLogger(__name__)
 
 #: Scene fields set by ``simulate`` options: option -> path of the field in the scene.

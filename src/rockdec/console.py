@@ -13,6 +13,8 @@ import contextlib
 import logging
 import sys
 
+__all__ = ["about", "configured", "duration", "progress"]
+
 #: The logger every module of the package writes its messages to (children: rockdec.<module>).
 LOGGER = "rockdec"
 

@@ -29,6 +29,8 @@ import sys
 
 from rockdec.validate import InputError
 
+__all__ = ["SchedulerError", "VARIABLE", "compute", "compute_in_place", "session", "setting"]
+
 #: The environment variable that names the engine.
 VARIABLE = "ROCKDEC_DASK_SCHEDULER"
 

@@ -32,6 +32,11 @@ from rockdec.validate import InputError, file_kind, path_name
 if TYPE_CHECKING:  # annotations only: xarray loads where a function needs it
     import xarray as xr
 
+__all__ = [
+    "OutputError", "PAPER_TITLE", "TITLES", "check_output", "claimed", "git_commit", "git_dirty",
+    "open_dataset", "provenance", "sha256", "write_claimed", "write_netcdf",
+]
+
 #: Largest magnitude a float32 variable can store without becoming inf.
 FLOAT32_MAX = float(np.finfo(np.float32).max)
 

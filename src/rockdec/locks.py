@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import threading
 
+__all__ = ["HDF5"]
+
 #: One user of HDF5 files at a time in a process: the HDF5 library under netCDF4 is not safe
 #: to use from two threads at once (the workflow's in-process steps and the campaign's).
 HDF5 = threading.Lock()

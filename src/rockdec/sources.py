@@ -16,6 +16,8 @@ import re
 from importlib.util import find_spec
 from pathlib import Path
 
+__all__ = ["fingerprint_file", "package_sources"]
+
 
 def _rockdec_imports(path: Path) -> tuple[str, ...]:
     """The ``rockdec`` modules a source file imports, anywhere in it (absolute imports).

@@ -11,6 +11,8 @@ import numpy as np
 
 from rockdec.validate import InputError
 
+__all__ = ["ANGLE_UNITS", "RecordError", "angle_factor", "sampling_step", "time_factor"]
+
 #: Relative tolerance on the spacing of a time axis read as uniform without looking at its
 #: digits (each step within it of the median step).
 TIME_RTOL = 1e-3

@@ -15,6 +15,12 @@ import math
 import numbers
 import re
 
+__all__ = [
+    "InputError", "MAX_NAME_BYTES", "SQUARE_RANGE", "file_kind", "finite", "identifier", "in_range",
+    "integer", "is_finite_number", "is_number", "is_whole", "json_number", "memory", "path_name",
+    "positive", "show",
+]
+
 #: A plain identifier: ASCII letter first, then letters, digits or underscores.
 IDENTIFIER = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
 

@@ -1,51 +1,20 @@
 """The confidence belt: a calibration (:mod:`rockdec.calibrate.calibration`) turned into a
-bias-corrected ``e`` and its 95 % interval, and ``g``'s.
+bias-corrected ``e`` and its 95 % interval, and ``g``'s (a Neyman construction).
 
-Neyman construction. At each true ``e`` the raw estimate scatters about a mean ``m(e)``
-with a spread ``s(e)`` and a shape of its own; all three come from the calibration's grid
-of ``e`` (:func:`fit`):
+:func:`fit` reads, across the calibration's grid of ``e``, the mean ``m(e)`` of the raw
+estimate (its bias smoothed by a weighted cubic smoothing spline along one of
+:data:`MEAN_VARIABLES`, chosen by generalised cross-validation, :data:`GCV_GAMMA`), its
+spread ``s(e)`` (the same smoother in ``log(1 - e)``), both past the sets beyond
+:data:`FENCE`, and the band's 2.5 % and 97.5 % quantiles ``q_low``, ``q_high`` in units of
+the spread (pooled over :data:`QUANTILE_BANDWIDTH`). The band at ``e`` is
+``m(e) + [q_low, q_high] sqrt(s(e)^2 + var m(e))``; :func:`correct` solves ``m(e) = x``, and
+the interval is every ``e`` whose band holds ``x`` (:func:`intervals`). ``g`` is corrected
+by the calibration's mean ratio at the corrected ``e`` (:func:`correct_g`), its interval from
+the belt of the sets' corrected ``g`` (:func:`g_band`, :func:`g_interval`). Kept apart from
+the calibration so that a change here never makes stored calibrations stale. Whether it
+covers: :mod:`rockdec.studies.belt_study`, :mod:`rockdec.studies.coverage`.
 
-- ``m``: the means of the grid points, smoothed as the bias ``m(e) - e`` by a weighted
-  cubic smoothing spline (weights: sets over spread squared) along ``e``, ``log(1 - e)``
-  or ``1/e``, whichever cross-validates best (:data:`MEAN_VARIABLES`), its smoothing
-  chosen by generalised cross-validation (:func:`_smooth`): from a straight line to a
-  curve through every point, as the points say (a fixed cubic misses the simulated mean
-  near ``e = 0.95`` by more than the spread of a long record: ``rockdec.studies.belt_study``).
-- ``log s``: the same smoother through the spreads of the grid points, in
-  ``u = log(1 - e)`` (the spread shrinks like a power of ``1 - e`` as ``e -> 1``, with
-  bends between 0.7 and 0.98 that a quadratic in ``u`` misses: ``rockdec.studies.belt_study``).
-- both read past the sets that fail wildly: a grid point's mean and spread leave out the
-  raw values beyond its fences (:data:`FENCE` interquartile ranges past its quartiles),
-  which a normal or moderately skewed estimator never reaches; those values still count
-  in the band's quantiles below, so they widen the band as often as they happen.
-- the band's ends: the 2.5 % and 97.5 % quantiles ``q_low``, ``q_high`` of the sets'
-  scatter about their own point's mean in units of the fitted spread, pooled over
-  neighbouring grid points (Gaussian kernel of :data:`QUANTILE_BANDWIDTH` in ``u``). A
-  skewed estimator (``e_v`` at 20,000 samples and low ``e``: skewness +1) gets a skewed
-  band; the pooled quantiles also take up what the spread curve misses locally.
-
-The 95 % band at ``e`` is ``m(e) + [q_low, q_high] sqrt(s(e)^2 + var m(e))`` (``var m``
-the variance of the fitted mean, from the smoother's hat matrix and the points' scatter
-about it, so a small calibration widens the interval rather than shifting it unseen).
-The corrected estimate solves ``m(e) = x`` for the observed ``x``; the 95 % interval is
-every ``e`` whose band holds ``x``. A belt is inverted at the observed value, so it covers
-the truth as often as the simulated scatter says, whatever the bias; a parametric
-bootstrap would need fresh simulations around each record, where the belt's grid is
-cached and serves every record with the same settings. Whether it holds is measured, not
-assumed: :mod:`rockdec.studies.belt_study` on calibration record sets of other seeds,
-:mod:`rockdec.studies.coverage` on records of its own route, and
-:func:`rockdec.studies.coverage.fresh_coverage` on many more records through a cell's own
-calibrations (what one calibration's error does to every record it serves, apart from the
-sample of a cell's records).
-
-``g``: the calibration stores ``g`` over the true ``g`` per set. A record's ``g`` is
-corrected by the mean ratio at its corrected ``e`` (:func:`correct_g`); its 95 % interval
-comes from the belt of the calibration's own sets' corrected ``g`` over their true ``g``
-(:func:`g_band`), which holds the scatter of ``g`` at a given ``e`` and the error of the
-corrected ``e`` it was divided by (:func:`g_interval`).
-
-Kept apart from :mod:`rockdec.calibrate.calibration` so that a change here never makes the stored
-calibrations stale (their name hashes the source of the modules that build them).
+Explanation: docs/explanation/method/measured-record.md (the confidence belt, ``g``'s interval).
 """
 
 from __future__ import annotations
@@ -58,6 +27,12 @@ if TYPE_CHECKING:  # annotations only: xarray loads where a function needs it
     import xarray as xr
 
     from rockdec.calibrate import ncread
+
+__all__ = [
+    "Belt", "Corrected", "GCV_GAMMA", "QUANTILE_BANDWIDTH", "Z95", "belt", "belts",
+    "calibration_coverage", "correct", "correct_g", "fit", "g_band", "g_calibration_coverage",
+    "g_interval", "g_intervals", "held_e", "held_es", "intervals", "width_at",
+]
 
 #: Two-sided normal quantile of the 95 % interval.
 Z95 = 1.959963984540054

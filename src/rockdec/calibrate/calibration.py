@@ -1,43 +1,24 @@
 """Calibration by simulation: how each estimator of ``e`` scatters about the truth, for a measured record.
 
-Why. Every estimator of eqs. 25-27 is biased by an amount that depends on ``e`` and on
-how the record was sampled, and the standard error of the zero-window line understates
-the real spread 3.5-5 times (the nested windows share their triggers and neighbouring
-lags are correlated). Both are measured here instead, on records simulated exactly like
-the measured one.
+Every estimator of eqs. 25-27 is biased by an amount that depends on ``e`` and the
+sampling, and the zero-window line's standard error understates the spread, so both are
+measured on records simulated like the measured one. Under eq. 4 the statistics depend only
+on ``e``, the samples per cycle at ``sigma_Y`` (eq. 5) and the record model
+(:func:`binned_model`): :func:`build` simulates, at each ``e`` of :data:`E_GRID`,
+:data:`SETS_PER_E` record sets (:func:`sets_per_e`) of the records' lengths (beyond
+:data:`LENGTH_CAP`: :data:`E_GRID_LONG`, :func:`simulated_lengths`, :func:`spread_scale`),
+``g = sigma_p = 1``, at the step (:func:`step_for`) where the analysis reads the record's
+samples per cycle; it stores every estimator's zero-window value, ``g`` and every check's
+statistic per set. The belt is :mod:`rockdec.calibrate.belt`.
 
-What fixes the statistics. In eq. 4 with white impulses the stationary response depends
-only on ``e`` and one dimensionless step (equivalently the samples per cycle at amplitude
-``sigma_Y``, eq. 5); a low-pass load adds its pole per sample, sensor noise its level in
-``sigma_Y``, Housner's model (eq. 2) the ratio ``sigma_Y / theta_cr`` (the record model,
-:func:`binned_model`). So the calibration simulates, for each ``e`` of a grid
-(:data:`E_GRID`), :data:`SETS_PER_E` sets of records (:func:`sets_per_e`) with the measured
-records' lengths (records of more than :data:`LENGTH_CAP` samples in all:
-:data:`SETS_PER_E_CAPPED` sets of that many samples on the denser grid
-:data:`E_GRID_LONG`, the belt's spread scaled to the records' length:
-:func:`simulated_lengths`, :func:`spread_scale`), ``g = 1`` and ``sigma_p = 1``
-(scale-free), at the step for which the analysis
-(:func:`rockdec.rdd.measured.analyse`) reads the same samples per cycle off the simulated
-records as it reads off the measured ones; then it runs the identical analysis on each
-set and stores every estimator's zero-window value, and ``g``'s, per set, with every
-check's statistic (:mod:`rockdec.record.diagnostics`), from which the warnings take their thresholds.
+:func:`load_or_build` stores it as NetCDF under a name hashed from its settings and the
+pipeline's source (:func:`settings_hash`, :func:`pipeline_fingerprint`), trusts a file only
+when its values match the SHA-256 it carries (else rebuilds it with a note), and builds one
+at a time: the builder holds ``calibration-<hash>.building`` and touches it every
+:data:`HEARTBEAT_S` seconds; a lock untouched for :data:`STALE_S` seconds is taken over.
 
-The belt built on these values, and its inversion, are in :mod:`rockdec.calibrate.belt`.
-
-The calibration is stored as NetCDF under a name hashed from everything it depends on, and
-reused; the name also hashes the source of the pipeline (:func:`pipeline_fingerprint`).
-A stored file is trusted only when its settings hash to its name and the SHA-256 of its
-values matches the one it carries (:func:`_read_checked`); a damaged, truncated or
-edited file is rebuilt with a note, never fatal.
-
-One build at a time: the builder holds ``calibration-<hash>.building`` (created
-exclusively, holding host name, process id and start time) and touches it every
-:data:`HEARTBEAT_S` seconds; another run on the same settings waits for the file instead
-of building it too. A lock not touched for :data:`STALE_S` seconds belongs to a run that
-died (on any node of a shared disk: the rule reads the file's mtime, not the process
-table) and is taken over; so is a lock whose time stamp has not changed over
-:data:`STALE_S` seconds of waiting (a stamp in the future), and at once a lock of a
-process of this host that has ended. A SIGTERM or Ctrl-C during the build removes the lock.
+Explanation: docs/explanation/method/measured-record.md (calibration by simulation, long
+records); the cache: docs/how-to/own-record.md.
 """
 
 from __future__ import annotations
@@ -74,6 +55,14 @@ from rockdec.validate import InputError
 
 if TYPE_CHECKING:  # annotations only: xarray loads where a function needs it
     import xarray as xr
+
+__all__ = [
+    "CALIBRATION_SEED_OFFSET", "E_GRID", "E_GRID_LONG", "FILTER_BIN", "LENGTH_CAP", "NAMES", "NOISE_BIN",
+    "PAPER", "PILOT_SETS", "POLE_BIN", "PPC_BIN", "PPC_BIN_LONG", "RATIO_BIN", "SEED_STRIDE",
+    "SETS_PER_E", "SETS_PER_E_CAPPED", "SET_PPC_TOLERANCE", "SET_STEP_TRIES", "STALE_S", "binned_model",
+    "build", "calibration_settings", "grid_tasks", "load_or_build", "pipeline_fingerprint", "ppc_key",
+    "seed_base", "sets_per_e", "settings_hash", "simulated_lengths", "spread_scale", "step_for",
+]
 
 log = logging.getLogger(__name__)
 

@@ -1,53 +1,21 @@
 """Whether records given together are consistent with one coefficient of restitution.
 
-Records pooled by :func:`rockdec.calibrate.inference.estimate` are taken to be of one block:
-their triggers add into one signature per window and one ``e`` is calibrated for them
-all. Records of two blocks (or of one block whose ``e`` changed between tests) pool into
-an ``e`` that holds neither. This module tests that assumption; the estimate calls it in
-its stage :func:`rockdec.calibrate.inference.check_pooled`.
+Records pooled by :func:`rockdec.calibrate.inference.estimate` are taken to be of one block;
+this module tests it, for the stage :func:`rockdec.calibrate.inference.check_pooled` (no
+equation of the paper: Cochran's test of homogeneity). First the scales
+(:func:`scales_apart`): ``g`` is one block's constant, so records whose own ``g`` lie
+:data:`G_FACTOR` times apart are not of one block, :data:`UNITS_RATIO` times not in one unit
+(:data:`UNITS`). Then record ``i`` of ``n_i`` samples, analysed alone, gives the raw value
+``x_i``, and (:func:`record_spreads`, :func:`centre`, :func:`statistic`)::
 
-The test (no equation of the paper: a test of homogeneity, Cochran's ``Q``). Record ``i``
-of ``n_i`` samples, analysed alone (:func:`rockdec.rdd.measured.analyse`), gives the raw
-zero-window value ``x_i`` of the reported estimator. Under the null, one ``e`` for every
-record, ``x_i`` scatters about the belt's mean ``m(e)`` with the belt's spread at the
-length of the calibration's simulated record sets, ``s(e)`` at ``N`` samples, scaled to the
-record's length (the spread falls as ``1/sqrt(length)``, which is how the belt of records
-longer than the calibration's is scaled too,
-:func:`rockdec.calibrate.calibration.spread_scale`)::
+    s_i = s(e_w) sqrt(N / n_i),   x_w = sum(n_i x_i) / sum(n_i),
+    Q   = sum((x_i - x_w)^2 / s_i^2)  ~  chi^2 with k - 1 degrees of freedom,
 
-    s_i = s(e) sqrt(N / n_i),   w_i = 1 / s_i^2  (proportional to n_i),
-    x_w = sum(n_i x_i) / sum(n_i),
-    Q   = sum(w_i (x_i - x_w)^2)  ~  chi^2 with k - 1 degrees of freedom (k records).
+``s`` the belt's spread at the calibration's length ``N``, read where its mean takes ``x_w``
+(:func:`spread_at`); :func:`threshold` is its :data:`LEVEL` quantile, :func:`check` the test,
+:func:`reads` the ``e`` each record reads alone. Its rates: ``benchmarks/pooled_consistency.py``, ``benchmarks/pooled_scales.py``.
 
-``Q`` compares the records with each other, not with ``m(e)``: the error of the
-calibration's mean curve, and any bias that the records share, cancel; only the spread is
-read off the belt, at ``e_w``, where the mean curve takes ``x_w`` (:func:`reads`; the end
-of the curve nearest ``x_w`` beyond it). Not at the pooled records' corrected ``e``: records
-of two blocks at ``e`` = 0.85 and 0.6 (one step, so the second has a smaller amplitude and
-fewer samples per cycle) pool into an ``e`` near the lower one, where the spread is several
-times the one at 0.85, and the test read there missed such pairs
-(``benchmarks/pooled_consistency.py``); their own mean lies between them. The records'
-own values also say where each lies (:func:`reads`), which the message names.
-
-Before any of this, the records' scales are compared (:func:`scales_apart`): ``g`` (the
-restoring acceleration, rad/s^2) is one block's constant, and each record reads its own off
-its free response (:func:`rockdec.rdd.measured.analyse` of the record alone). A record in
-degrees (or mrad) beside one in rad reads ``g`` 57.3 (1000) times the other's, and pooled,
-the first's triggers, at a level from the pooled ``sigma_Y``, are the only ones: an interval
-calibrated for both records' samples on the triggers of one. The records' ``sigma_Y`` do not
-tell it: at one load independent records of one block differ in ``sigma_Y`` up to 20 times
-at 2,000 samples, and records of one block at loads 2-3 times apart (which pool today)
-differ by 3-300 times, while their ``g`` agree.
-
-The threshold is the :data:`LEVEL` quantile of ``chi^2_{k-1}`` (:func:`threshold`); its
-false-alarm rate on pairs of records of one block and its detection rate on pairs of two
-blocks are measured by ``benchmarks/pooled_consistency.py``.
-
-Limits. Every record is taken to share the mean ``m(e)`` of the pooled records' belt: a
-record much shorter than the others, or read at other samples per cycle, has a bias of its
-own, which the test counts as disagreement (measured on records of equal length only). The
-raw values are taken as normal; where they are not (``e_v`` at low ``e``), the point
-:data:`LEVEL` absorbs it.
+Explanation: docs/explanation/method/warnings.md (records given together).
 """
 
 from __future__ import annotations
@@ -56,6 +24,11 @@ import math
 from typing import NamedTuple
 
 import numpy as np
+
+__all__ = [
+    "G_FACTOR", "LEVEL", "UNITS", "UNITS_RATIO", "check", "reads", "record_spreads", "scales_apart",
+    "spread_at", "statistic", "threshold",
+]
 
 #: Share of the ``chi^2_{k-1}`` distribution below the threshold (:func:`threshold`): a pool
 #: of records of one block whose raw values were normal with the belt's spread would fire on

@@ -46,6 +46,15 @@ from rockdec.rdd.registry import DEFAULT_ESTIMATOR
 if TYPE_CHECKING:
     from rockdec.record import record_measure
 
+__all__ = [
+    "ANALYSIS_SECONDS", "Analysed", "CALIBRATION_SECONDS", "COLOUR_CORNER_FLOOR", "COLOUR_CORNER_Z",
+    "CalibrationNeeded", "LONG_RATIO", "NOTE_CODES", "NO_NOISE", "Outcome", "PAIR_SECONDS",
+    "RECORD_SECONDS", "SIDE_G_SHARE", "analyse", "beyond", "calibration_sets", "check_pooled",
+    "checks_place", "choose_model", "colour_decline", "cost", "coverage_floor", "declared_contradictions",
+    "decline_unrepaired", "diagnose", "estimate", "filter_decline", "measure_model", "own_scales",
+    "record_model", "select", "stage_seconds", "unresolved_impacts",
+]
+
 log = logging.getLogger(__name__)
 
 #: Records more than this many times as long as the calibration's simulated records are warned

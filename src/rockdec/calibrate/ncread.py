@@ -16,6 +16,8 @@ from typing import NamedTuple
 
 import numpy as np
 
+__all__ = ["Stored", "read"]
+
 
 class Variable(NamedTuple):
     """One variable: its ``dims``, ``values`` and ``attrs``, and the file it came from (for ``sel``)."""

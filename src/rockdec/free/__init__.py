@@ -7,6 +7,8 @@ free flight, and :mod:`rockdec.free.analysis` reads ``e`` per impact and pooled
 (:func:`rockdec.free.analysis.analyse_free_rocking`, the one entry point).
 """
 
+__all__ = ["NO_RECORD_MODEL"]
+
 #: Why a free-rocking test takes no ``g``, load, sensor noise or sensor filter (the command
 #: line and the campaign sheet refuse them with it).
 NO_RECORD_MODEL = "the free-rocking test reads g off its arcs and needs no record model"

@@ -39,6 +39,8 @@ from rockdec.free.impacts import CROSSING_BAND_SIGMAS, find_crossings, find_sequ
 from rockdec.physics.models import MODEL_TOLERANCE, MODELS, amplitude_limit
 from rockdec.timeaxis import RecordError, sampling_step
 
+__all__ = ["FreeRockingFit", "analyse_free_rocking"]
+
 #: Confidence level of the intervals.
 CONFIDENCE = 0.95
 

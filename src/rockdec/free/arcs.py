@@ -28,6 +28,8 @@ from scipy import optimize
 
 from rockdec.physics.models import MODELS
 
+__all__ = ["FIT_TOLERANCE", "SequenceFit", "fit_sequence", "log_speeds", "shape"]
+
 #: Tolerances of the least-squares fit (relative changes of the cost, the parameters and the
 #: gradient): tight, so that a noise-free record gives its impact times to rounding.
 FIT_TOLERANCE = 1e-14

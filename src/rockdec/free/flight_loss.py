@@ -24,7 +24,10 @@ from scipy import optimize
 
 from rockdec.free import arcs
 
-__all__ = ["DampedFit", "fall_height", "flight_height", "fit_sequence", "impact_speeds", "log_ratios", "loss_score", "speeds"]
+__all__ = [
+    "DampedFit", "SERIES_BELOW", "fall_height", "fit_sequence", "flight_height", "impact_speeds",
+    "log_ratios", "loss_score", "speeds",
+]
 
 #: Below this ``|c T|`` the heights and speeds are read from their power series in ``c``
 #: (truncation below 1e-17 of the height), above it from the exponentials (rounding below

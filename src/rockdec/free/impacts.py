@@ -26,6 +26,8 @@ import numpy as np
 
 from rockdec.timeaxis import RecordError
 
+__all__ = ["CROSSING_BAND_SIGMAS", "find_crossings", "find_sequences", "noise_std"]
+
 #: Half-band of the crossing detector, in sensor-noise standard deviations: a crossing counts
 #: once the angle is this far past zero, so that white noise (a 4-sigma excursion on both
 #: sides in a row is rarer than 1 in 10^8 samples) gives no extra crossings at an impact.

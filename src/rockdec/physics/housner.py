@@ -1,48 +1,20 @@
 """Linearized Housner rocking model (paper eqs. 1-3, 6), simulated exactly between impulses.
 
-Model. For a slender block (small ``theta_cr``) the equations of motion of eq. 1 are
-linearized in ``theta_cr - |theta|`` (``sin x ~ x``, ``cos x ~ 1``) but not in
-``theta/theta_cr``, which gives ``theta'' = nu^2 (theta - theta_cr s) + F(t)`` with
-``s = sign(theta)``, the equation whose free solution is eq. 2. On one side
-the distance to the critical angle, ``y = theta_cr - |theta|``, obeys ``y'' = nu^2 y``, so the
-free motion is ``y(t) = A exp(nu t) + B exp(-nu t)``. From rest at ``theta0`` this is eq. 2,
-``theta(t) = theta_cr - (theta_cr - theta0) cosh(nu t)``, and four quarter periods give eq. 3.
-At every zero crossing the angular velocity is multiplied by ``e`` (eq. 6). The block falls
-over when ``|theta|`` reaches ``theta_cr``. For ``theta/theta_cr -> 0`` the model tends to
-the simplified one (eq. 4, :mod:`rockdec.physics.simulate`) with ``g = nu^2 theta_cr``.
+On each side of zero ``theta'' = nu^2 (theta - theta_cr sign(theta)) + F(t)``, whose free
+solution from rest is eq. 2 and whose period is eq. 3; every zero crossing multiplies the
+angular velocity by ``e`` (eq. 6), and the block falls over when ``|theta|`` reaches
+``theta_cr``. For ``theta/theta_cr -> 0`` it tends to the simplified model (eq. 4,
+:mod:`rockdec.physics.simulate`) with ``g = nu^2 theta_cr``. The load is exactly that of
+:func:`rockdec.physics.simulate.simulate_block` (eqs. 21-24 with ``cosh``/``sinh`` arcs for
+the parabolas), so both models fed one seed see one load.
 
-Units: angles in rad, ``nu`` in rad/s, times in s, angular velocities in rad/s.
+:func:`housner_flight` advances a state exactly (the chattering limit summed in closed form),
+:func:`integrate_housner` and :func:`simulate_block_housner` run series, :func:`choose_model`
+picks the model a scene runs. Units: rad, rad/s, s. Sampling as in
+:mod:`rockdec.physics.simulate`: ``theta[n]`` is the angle at ``t = n dt``, ``theta_dot[n]``
+the velocity just after the impulse applied then.
 
-Loading: exactly as :func:`rockdec.physics.simulate.simulate_block` (eqs. 21-24 with the parabola
-replaced by the ``cosh``/``sinh`` arcs): velocity impulses ``p_n ~ N(0, sigma_p^2)``, white,
-low-pass filtered or of a given spectrum (:func:`rockdec.physics.loading.draw_impulses`), are added at the end of every
-step, so both models fed the same seed see the same load.
-
-How :func:`housner_flight` advances a state exactly (writing ``h = |theta|`` the height above
-zero, ``u`` the speed away from zero, ``c = nu theta_cr``):
-
-* the next event follows from the sign of ``2 nu A = nu (theta_cr - h) - u``. If it is
-  positive the block comes back: ``theta = 0`` is the root ``z = exp(nu t) > 1`` of
-  ``A z^2 - theta_cr z + B = 0``, written as ``t = log1p(N/(2 nu A))/nu`` with
-  ``N = nu h + W + u`` (``W`` the impact speed, from the energy); when ``u < 0`` the sum
-  ``W + u`` is rewritten as ``nu^2 h (2 theta_cr - h)/(W - u)``, so nothing cancels. If it
-  is negative the block reaches ``theta_cr`` (overturns) at
-  ``t = log1p(2 nu y/(u - nu y))/(2 nu)``; if it is zero it creeps towards the unstable
-  equilibrium at ``theta_cr`` forever;
-* a bounce from ``theta = 0`` with speed ``w < c`` lasts ``(2/nu) atanh(w/c)`` and lands
-  with speed ``w`` again; restitution makes the next one start at ``e w``. The bounce times
-  are not a geometric series (they are for the parabolas of eq. 4), but their sum is one
-  per power of ``w/c``: ``sum_k atanh(e^k r) = sum_j r^(2j+1)/(2j+1) (1 - e^((2j+1)K))/
-  (1 - e^(2j+1))``. For ``r = w/c <= 1/2`` this series converges fast, gives the rest time
-  (``K -> inf``) and, solved for ``K`` by Newton's method in ``q = e^K``, the number of whole
-  bounces that fit in the time left; larger bounces (each longer than
-  ``(2/nu) atanh(1/2)``) are taken one at a time. So the chattering (Zeno) limit is exact
-  to rounding, not only to ``O(theta/theta_cr)``, and no loop runs over impacts unboundedly;
-* ``e = 1``: bounces of equal length, counted by one division; ``e = 0``: rest at the first
-  impact.
-
-Sampling convention (as in :mod:`rockdec.physics.simulate`): ``theta[n]`` is the angle at
-``t = n dt`` and ``theta_dot[n]`` the velocity just after the impulse applied at that instant.
+Explanation: docs/explanation/method/models.md (the exact flight: §2.1).
 """
 
 from __future__ import annotations
@@ -55,6 +27,8 @@ import numpy as np
 from rockdec import validate as checks
 from rockdec.physics.models import MODEL_TOLERANCE, amplitude_limit, check_finite_series, check_run, period_mismatch
 from rockdec.physics.loading import draw_impulses, series_rng
+
+__all__ = ["choose_model", "housner_flight", "integrate_housner", "simulate_block_housner"]
 
 #: Bounces from ``theta = 0`` with ``w/c`` at most this are counted in closed form.
 _SERIES_RATIO = 0.5

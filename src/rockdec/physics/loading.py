@@ -1,43 +1,18 @@
 """The random streams of a series: its load, discrete white noise as velocity impulses (paper
 §4), and the noise of the sensor that records its angle; one pair of streams per seed.
 
-Coloured load (the open question of paper §6): the impulses pass a first-order low-pass
-filter, ``p_n = c p_{n-1} + sqrt(1 - c^2) w_n`` with ``w_n`` the white impulses, which keeps
-their standard deviation ``sigma_p``, gives them the autocorrelation ``c^m`` at lag ``m``
-and puts the corner at ``f_c = -ln(c) / (2 pi dt)``; :meth:`rockdec.physics.record_model.Load.pole`
-gives ``c`` for a corner set in rocking frequencies.
+Every simulator (simplified, Housner, fixed step) draws its impulses here
+(:func:`draw_impulses`), so one seed means one load whatever the model: white, low-pass
+(``p_n = c p_{n-1} + sqrt(1 - c^2) w_n``, corner ``f_c = -ln(c)/(2 pi dt)``, the open question
+of paper §6; :func:`low_pass`) or of a given spectrum (:class:`ImpulseSpectrum`, by circulant
+embedding of :func:`embedding_size` ``M`` samples with the gains :func:`spectral_gain`
+``sqrt(S(k/M))``). The streams are NumPy's (``SeedSequence(seed)``, PCG64,
+:func:`series_rng`, :func:`sensor_rng`); the compiled kernels (:func:`draw_series`,
+:func:`add_sensor_noise`) draw the same numbers bit for bit (:func:`stream_words`, PCG64
+and its ziggurat in LLVM), so a block of series is drawn and integrated without Python
+between series.
 
-Load of a given spectrum (:class:`ImpulseSpectrum`, a table of the one-sided power spectral
-density in cycles per step; only its shape matters): circulant embedding. The series of
-``n`` impulses is the first ``n`` samples of a periodic one of ``M`` samples: ``M``
-standard normal numbers of the series' stream, transformed, multiplied by the gain
-``sqrt(S(k/M))`` of each frequency bin, transformed back. The gains are scaled so that the
-mean of ``S`` over the ``M`` bins is 1, so the impulses have the standard deviation
-``sigma_p`` and, at lag ``m < n``, the autocorrelation ``sum_k S(k/M) cos(2 pi k m/M) / M``,
-the inverse transform of the spectrum, up to the wrap-around ``r(M - m)``.
-:func:`embedding_size` makes that term smaller than :data:`WRAP_TOLERANCE`: ``M`` is the next
-fast length (``scipy.fft.next_fast_len``) of ``n + L``, ``L`` the lag (at most ``n``) beyond
-which the autocorrelation stays below it, so a short correlation costs little more than
-``n`` numbers and a long one at most ``2n``.
-``S`` between the table's rows is interpolated linearly in ``log f``; a row at ``f = 0`` sets
-the constant bin and is joined to the first positive row linearly in ``f``; outside the table
-``S = 0`` (the table states where the power is), and rows above the Nyquist frequency
-(half a cycle per step) are not drawn. A spectrum is drawn for the whole series at once.
-
-Every simulator (the simplified model, the Housner model, the fixed-step integrator) draws
-its impulses here, so one seed means one load whatever the model.
-
-The streams are NumPy's: ``SeedSequence(seed)`` seeds a PCG64 generator, whose
-``standard_normal`` draws the numbers (:func:`series_rng`, :func:`sensor_rng`). The same
-streams also run inside the compiled kernels (:func:`draw_series`, :func:`add_sensor_noise`):
-NumPy's ``SeedSequence`` hashing on uint64 arrays, all the seeds of a block at once
-(:func:`stream_words`), then PCG64's seeding, its step (128-bit multiply-add, XSL-RR output)
-and its ziggurat normal sampler with NumPy's tables in LLVM (:func:`_normals`), operation for
-operation, so the numbers are NumPy's bit for bit (tested on seeds of every width and both
-streams). A kernel then draws and integrates a whole block of series without Python between
-series: no generator objects are built and the GIL stays released. The sampler is LLVM
-rather than numba-typed Python because numba's typing and lowering of it would cost a fresh
-install about as much compile time as the integrator's own (``benchmarks/bench_compile.py``).
+Explanation: docs/explanation/method/simulation.md (§3.1 Loading).
 """
 
 from __future__ import annotations
@@ -54,6 +29,12 @@ from numba.extending import intrinsic
 from numba.np.random._constants import fi_double, ki_double, wi_double, ziggurat_nor_inv_r, ziggurat_nor_r
 
 from rockdec.validate import InputError, is_whole, show
+
+__all__ = [
+    "ImpulseSpectrum", "SENSOR_STREAM", "WRAP_TOLERANCE", "add_sensor_noise", "check_load", "check_seeds",
+    "draw_impulses", "draw_series", "embedding_size", "low_pass", "sensor_rng", "series_rng",
+    "spectral_gain", "stream_words",
+]
 
 SENSOR_STREAM = 1
 """Spawn key of a series' sensor-noise stream (the load's stream has none), so the sensor's

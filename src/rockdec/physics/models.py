@@ -13,6 +13,13 @@ import numpy as np
 
 from rockdec import validate as checks
 
+__all__ = [
+    "MODELS", "MODEL_PEAK_SIGMAS", "MODEL_TOLERANCE", "SCALE_CONSTANT_GUESS", "amplitude_limit",
+    "auto_switch_ratio", "check_finite_series", "check_run", "noise_for_amplitude", "period_from_g",
+    "period_housner", "period_mismatch", "period_simplified", "restoring_acceleration", "scale_constant",
+    "step_for_density",
+]
+
 MODELS = ("simplified", "housner")
 """The rocking models: simplified (eq. 4) and linearized Housner (eq. 2)."""
 

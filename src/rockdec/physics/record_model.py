@@ -1,48 +1,23 @@
 """The record model: what makes a record besides the block's ``e`` -- the load and the sensor.
 
-:class:`Load`
-    the velocity impulses of eqs. 21-24: ``white`` (independent, the paper's load),
-    ``lowpass`` (white impulses through a first-order low-pass filter,
-    :func:`rockdec.physics.loading.draw_impulses`) with its ``corner`` in units of the rocking
-    frequency ``1/T(sigma_Y)`` (eq. 5), the open question of paper §6, or ``spectrum``: a
-    tabulated one-sided power spectral density of the impulses (rows ``frequency``, ``psd``).
-:class:`SensorNoise`
-    white noise added to the recorded angle, its standard deviation in units of
-    ``sigma_Y`` (``units="sigma_y"``) or in rad (``units="rad"``).
-:class:`SensorFilter`
-    a low-pass filter after the block (a logger's anti-alias filter, a sensor's bandwidth,
-    an analyst's smoothing): ``butterworth`` of order 1-8 or a first-order ``rc``, its
-    ``corner`` in rocking frequencies ``1/T(sigma_Y)`` (eq. 5, like a low-pass load's) or in
-    Hz (placed against the record's rocking frequency, like a spectrum table), run
-    forward only (``causal``, as an instrument does) or forward and back (``zero_phase``,
-    as ``scipy.signal.filtfilt`` does). The calibration filters its simulated angle with it
-    before the sensor noise is added (:meth:`SensorFilter.apply`).
-:class:`RecordModel`
-    the rocking model (``simplified``, eq. 4, or ``housner``, eq. 2, whose geometry
-    ``nu``, ``theta_cr`` the run holds), the load, the sensor noise and the sensor filter together: what a
-    scene (``excitation.load``, ``excitation.sensor_noise``) or a measurement of a record
-    states, what :class:`rockdec.physics.run.Run` carries and the calibration's cache key names.
+:class:`Load` is the velocity impulses of eqs. 21-24: ``white`` (the paper's), ``lowpass``
+(a first-order low-pass filter, its ``corner`` in rocking frequencies ``1/T(sigma_Y)``,
+eq. 5; the open question of paper §6), ``spectrum`` (a tabulated one-sided PSD, in rocking
+frequencies or Hz, :func:`read_spectrum_table`) or ``base`` (a measured base acceleration,
+:func:`read_base_record`, drawn as the spectrum load of its Welch estimate).
+:class:`SensorNoise` is white noise on the recorded angle (in ``sigma_Y`` or rad),
+:class:`SensorFilter` a low-pass filter after the block (``butterworth`` of order 1-8 or
+``rc``, ``causal`` or ``zero_phase``; :meth:`SensorFilter.apply`), and :class:`RecordModel`
+the rocking model (eq. 4 or eq. 2), the load, the noise and the filter together: what a
+scene or a record's measurement states, what :class:`rockdec.physics.run.Run` carries and
+the calibration's cache key names. Each type is frozen, checks itself when built
+(:class:`rockdec.validate.InputError`) and is written to and read from flat file attributes
+by one pair of functions (:func:`load_attrs`, :func:`load_from_attrs`, :func:`sensor_attrs`,
+:func:`sensor_from_attrs`). Imports nothing heavy (the readers import NumPy, SciPy, xarray
+when called).
 
-A spectrum load. Its frequencies are stored in rocking frequencies ``1/T(sigma_Y)`` (eq. 5),
-like ``lowpass``'s corner, so a scene stays scale-free: at ``N`` samples per cycle a row at
-``f`` lies at ``f/N`` cycles per step (:meth:`Load.draw_options`). Only the shape of ``psd``
-matters: ``sigma_p`` sets the level, and the impulses are drawn with exactly that variance
-(:func:`rockdec.physics.loading.draw_impulses`, circulant embedding). A table measured on a rig is in
-Hz (:func:`read_spectrum_table`, column ``frequency_hz``) and is placed against the rocking
-frequency of the record it goes with, ``f_rock = 1/(dt N_cycle)`` Hz: ``f/f_rock = f dt N_cycle``.
-
-A measured base-excitation record (``base``, :func:`read_base_record`): a base acceleration
-``a(t)`` (CSV ``time, acceleration`` or NetCDF) enters the rocking equation as the load
-(``F(t) ~ a(t)``, the impulses ``~ a dt``), so the load's spectrum is the record's. A
-calibration needs many independent realisations of the load, not the one record, so a base
-record becomes a spectrum load: its Welch estimate, placed against the rocking frequency.
-Every series drawn from it is a phase-randomised Gaussian surrogate of the record (random
-phases and amplitudes under its spectrum); what the record holds beyond its spectrum (its
-peaks' non-Gaussian shape, a change of level along it) is not carried over.
-
-Each type is frozen, checks itself when built (:class:`rockdec.validate.InputError`, one
-sentence) and is written to and read from flat file attributes by one pair of functions.
-Imports nothing heavy (the file readers import NumPy, SciPy, xarray when called).
+Explanation: docs/explanation/method/simulation.md (§3.1 Loading);
+docs/how-to/record-model.md (declaring a load, noise, filter).
 """
 
 from __future__ import annotations
@@ -52,6 +27,13 @@ import math
 from pathlib import Path
 
 from rockdec import validate as checks
+
+__all__ = [
+    "Load", "NO_NOISE", "PAPER", "POLE_RATE_RANGE", "RecordModel", "SensorFilter", "SensorNoise", "WHITE",
+    "carried_attrs", "check_filter_declared_with_model", "declared_load", "load_attrs", "load_from_attrs",
+    "parse_load", "parse_sensor_filter", "parse_sensor_noise", "read_base_record", "sensor_attrs",
+    "sensor_from_attrs",
+]
 
 LOAD_KINDS = ("white", "lowpass", "spectrum")
 

@@ -42,6 +42,11 @@ from rockdec.physics.record_model import (
     sensor_from_attrs,
 )
 
+__all__ = [
+    "PILOT", "PPC_TOLERANCE", "Run", "calibrate", "model_for", "overturned", "points_per_cycle_shortfall",
+    "simulation_report", "with_model",
+]
+
 #: Pilot sizes of the step search (:func:`rockdec.physics.simulate.calibrate_dt`), the defaults of
 #: :func:`calibrate`'s ``pilot``.
 PILOT = {"pilot_seeds": simulate.PILOT_SERIES, "pilot_points": simulate.PILOT_POINTS}

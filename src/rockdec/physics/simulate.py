@@ -1,34 +1,20 @@
 """Exact event-driven simulation of the simplified rocking model (paper eqs. 4, 6, 21-24).
 
-Model: ``theta'' = -g sign(theta) + F(t)`` with ``g = nu^2 theta_cr`` (eq. 4); at every zero
-crossing the angular velocity is multiplied by ``e`` (eq. 6). The load is discrete white
-noise applied as velocity impulses ``p_n ~ N(0, sigma_p^2)`` at the end of every step, so
-between impulses the motion is a parabola and is integrated exactly (eqs. 21-24). The
-impulses may be coloured (``pole``: low-pass filtered; ``spectrum``: of a tabulated spectrum;
-:func:`rockdec.physics.loading.draw_impulses`), the same for every simulator here.
+``theta'' = -g sign(theta) + F(t)`` with ``g = nu^2 theta_cr`` (eq. 4), the angular velocity
+multiplied by ``e`` at every zero crossing (eq. 6), the load velocity impulses
+``p_n ~ N(0, sigma_p^2)`` at the end of every step (white, low-pass or of a spectrum:
+:func:`rockdec.physics.loading.draw_impulses`), so between impulses the motion is a parabola,
+integrated exactly (eqs. 21-24). :func:`flight` also handles what the printed scheme leaves
+out: several crossings in one step, the chattering limit in closed form, a crossing root that
+never cancels, ``e = 1`` and ``e = 0``. Sampling: ``theta[n]`` is the angle at ``t = n dt``,
+``theta_dot[n]`` the velocity just after the impulse applied then (eq. 21).
 
-What the paper's scheme leaves out and :func:`flight` handles:
+:func:`integrate` and :func:`simulate_block` run series, :func:`simulate_model` the model a
+run names, :func:`simulation_dataset` adds labels and Dask; :func:`calibrate_dt` and
+:func:`secant_step` are the step search (its constants here and in
+:mod:`rockdec.physics.models`), :func:`default_burn_in` the burn-in.
 
-* several zero crossings inside one step: after an impact the body flies back towards
-  zero with speed ``e V`` and may land again before the step ends;
-* the chattering (Zeno) limit: successive flight times ``2 e^k V / g`` form a geometric
-  series; when its sum ``2 e V / (g (1 - e))`` ends inside the step the body comes to rest
-  at ``theta = 0, theta' = 0``. The number of whole flights that fit in the remaining time
-  is found in closed form, so no loop runs over impacts and nothing divides by zero;
-* the time to the next crossing is the root of ``h + u t - g t^2/2 = 0`` (``h = |theta|``,
-  ``u`` the velocity away from zero), taken as ``(u + sqrt(D))/g`` when ``u >= 0`` and
-  ``2h / (sqrt(D) - u)`` when ``u < 0``, which never subtracts nearly equal numbers;
-* ``e = 1`` (no loss, flights never shrink) and ``e = 0`` (plastic impact: rest at once).
-
-Sampling convention: ``theta[n]`` is the angle at ``t = n dt`` and ``theta_dot[n]`` the
-velocity just after the impulse applied at that instant (eq. 21).
-
-Kernels take and return NumPy arrays; :func:`simulate_model` runs the model a run names,
-:func:`simulation_dataset` adds labels and Dask. :func:`calibrate_dt` is the step search, its
-constants (:data:`PILOT_SERIES`, :data:`PILOT_POINTS`, :data:`STEP_ITERATIONS`,
-:data:`STATISTICS_PILOT_SERIES`, :data:`SECANT_POINTS`, :data:`SECANT_EXPONENTS`,
-:data:`rockdec.physics.models.SCALE_CONSTANT_GUESS`) have their home
-here and in :mod:`rockdec.physics.models`.
+Explanation: docs/explanation/method/simulation.md (§3.2-3.4).
 """
 
 from __future__ import annotations
@@ -44,6 +30,12 @@ from rockdec.physics.housner import simulate_block_housner
 from rockdec import validate as checks
 from rockdec.physics.loading import add_sensor_noise, check_load, check_seeds, draw_impulses, draw_series, series_rng, stream_words
 from rockdec.physics.models import SCALE_CONSTANT_GUESS, check_finite_series, check_run, period_from_g, scale_constant, step_for_density
+
+__all__ = [
+    "PILOT_POINTS", "PILOT_SEED_OFFSET", "PILOT_SERIES", "STATISTICS_PILOT_SERIES", "STEP_ITERATIONS",
+    "calibrate_dt", "default_burn_in", "flight", "integrate", "pilot_statistics", "secant_step",
+    "simulate_block", "simulate_model", "simulation_dataset",
+]
 
 #: Largest number of correction steps when the closed-form flight count is off by rounding.
 _COUNT_FIX = 4

@@ -36,6 +36,11 @@ from rockdec import io
 from rockdec.pipeline import layout
 from rockdec.validate import MAX_NAME_BYTES, InputError
 
+__all__ = [
+    "ArchiveError", "CRATE", "MANIFEST", "check_manifest", "check_rebuild_target", "read_manifest",
+    "rebuild", "same_data", "verify", "write_archive",
+]
+
 MANIFEST = "manifest.json"
 CRATE = "ro-crate-metadata.json"
 

@@ -44,6 +44,13 @@ from rockdec import locks, timeaxis
 from rockdec.free import NO_RECORD_MODEL
 from rockdec.validate import InputError
 
+__all__ = [
+    "FREE_UNAVAILABLE", "MAX_ID", "MAX_SIMULATED_POINTS", "SheetError", "build_calibration", "comparison",
+    "declared", "estimate_step", "estimate_unit", "file_step", "markdown", "options", "plan", "plan_step",
+    "read", "read_sheet", "simulate_step", "simulated_record", "simulation", "summary_dataset", "table",
+    "table_step", "unit_dataset", "units",
+]
+
 #: The sheet's JSON Schema, a data file of the package: its properties are the sheet's columns.
 SCHEMA_FILE = "records_schema.yaml"
 

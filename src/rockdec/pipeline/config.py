@@ -24,6 +24,11 @@ from rockdec.rdd.fits import DEFAULT_FIT_POINTS, min_points_per_cycle
 from rockdec.physics.models import SCALE_CONSTANT_GUESS, restoring_acceleration, step_for_density
 from rockdec.physics.record_model import Load
 
+__all__ = [
+    "ConfigError", "DEFAULT_PATH", "OVERRIDE_SOURCE", "apply_overrides", "check_yaml11", "load",
+    "read_yaml", "scene", "validate", "validate_scene",
+]
+
 #: The config file the workflow reads unless told otherwise.
 DEFAULT_PATH = "config/config.yaml"
 

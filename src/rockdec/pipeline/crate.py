@@ -30,6 +30,8 @@ from rocrate.rocrate import ROCrate
 
 from rockdec.io import PAPER_TITLE
 
+__all__ = ["crate_from_manifest", "differences", "profile_problems"]
+
 RO_CRATE_VERSION = "1.1"
 WORKFLOW_RUN_CONTEXT = "https://w3id.org/ro/terms/workflow-run/context"
 

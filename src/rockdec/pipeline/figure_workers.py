@@ -37,6 +37,8 @@ from pathlib import Path
 
 from rockdec.validate import InputError
 
+__all__ = ["PROCESSES", "WorkerError", "close", "draw"]
+
 #: Worker processes: two cores draw the figures that wait for the signature pass (the
 #: workflow sets one under ``--cores 1``, workflow/rules/common.smk).
 PROCESSES = 2

@@ -2,33 +2,19 @@
 signature pass, the stored series (every series too, under ``store_series: all``) and
 their signature, the tables and the figures.
 
-``calibrate`` (a second of pilot simulations), ``stored_series``, ``series``, ``stored_signature``,
-``estimates`` and ``table_readings`` take a fraction of a second to a few seconds each once
-NumPy, numba and xarray are loaded, so they are ``run:`` rules calling :func:`calibrate`
-and :func:`step` (the workflow's default profile runs those in threads of the Snakemake
-process, ``force-use-threads``) and load those libraries once a run instead of starting
-Python for each. The signature pass (:func:`signatures`, rules ``signatures`` and
-``signature_part``) runs there too, on the Dask threads of its rule's ``threads``: it finds
-the simulator's kernels and the pass's modules loaded by :func:`calibrate`, where a script
-would start Python and load them again on the run's longest path. The paper's figure rules
-are ``run:`` rules too, calling :func:`draw`, which hands each figure to one of two worker
-processes that load matplotlib once a run (:mod:`rockdec.pipeline.figure_workers`). The
-other compute rules stay scripts (:mod:`rockdec.pipeline.job`).
-A rule's code input names the modules its function reaches (:func:`rockdec.sources.package_sources`
-of those modules, beside this file), not this module's, so that editing a figure never
-reruns the pass.
+The light steps are ``run:`` rules calling :func:`calibrate` and :func:`step` in threads of
+the Snakemake process (``force-use-threads``), so NumPy, numba and xarray load once a run;
+the signature pass (:func:`signatures`) runs there on its rule's Dask threads, and the
+figure rules call :func:`draw`, which hands each figure to a worker process
+(:mod:`rockdec.pipeline.figure_workers`); :func:`campaign` runs a campaign's steps. The
+other compute rules stay scripts (:mod:`rockdec.pipeline.job`). :func:`stop_on_signals`
+makes SIGTERM and SIGINT stop the pass (:class:`Stopped`) as they stop a script job;
+:func:`calibrate` imports what the pass and the steps start with (:data:`STARTS`) before
+they start, and the tables' libraries beside the pass (:data:`PRELOAD`), so no two threads
+import Dask at once; :func:`end_of_run` ends the run without delay.
 
-A signal stops the pass as it stops a script job: the Snakefile's ``onstart`` calls
-:func:`stop_on_signals`, so SIGTERM and SIGINT (Ctrl-C) also set :data:`_STOP`, which the
-pass reads before each Dask task and before writing; it then fails, and Snakemake deletes
-its outputs. The light steps take a second or less and finish.
-
-Imports: threads of one process that import a package with circular imports (Dask) at the
-same time, entering it at different modules, can see it half initialized and fail. So the
-libraries the pass and the steps start with are imported by :func:`calibrate` before any
-rule that reads its contract starts (:data:`STARTS`), those of the tables in one thread
-beside the pass (:data:`PRELOAD`), and the pass and the steps wait for that thread before
-they use them (:func:`_load`).
+Explanation: docs/development/benchmarks.md (the run inside the Snakemake process);
+docs/how-to/paper.md (stopping a run).
 """
 
 from __future__ import annotations
@@ -43,6 +29,8 @@ import traceback
 
 from rockdec import locks
 from rockdec.validate import InputError
+
+__all__ = ["Stopped", "calibrate", "campaign", "draw", "end_of_run", "signatures", "step", "stop_on_signals"]
 
 #: What the signature pass and the light steps import as they start (Dask, its threaded
 #: scheduler and array, the pass's and the steps' modules): :func:`calibrate` imports them

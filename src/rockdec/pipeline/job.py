@@ -36,6 +36,8 @@ from pathlib import Path
 
 from rockdec.validate import InputError
 
+__all__ = ["progress", "run"]
+
 #: Seconds an orphaned job is given to stop after SIGTERM before it is killed.
 STOP_WAIT_S = 10.0
 

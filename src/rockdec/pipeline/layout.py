@@ -11,6 +11,14 @@ from pathlib import Path
 
 import numpy as np
 
+__all__ = [
+    "COVERAGE_CASES", "COVERAGE_CONDITIONS", "COVERAGE_E", "COVERAGE_SIMULATORS",
+    "DIAGNOSTICS_COLOURED_NOISE", "DIAGNOSTICS_CORNERS", "DIAGNOSTICS_E", "DIAGNOSTICS_NOISE",
+    "DIAGNOSTICS_PARTS", "FIGURES", "FIGURE_SERIES", "READINGS", "compared_readings", "diagnostics_noise",
+    "part_records", "replicate_files", "scene_seeds", "signature_parts", "simulation_seeds", "stores_all",
+    "workflow_sources",
+]
+
 FIGURES = ("fig1b", "fig2", "fig3", "fig4", "fig_ev")
 """The paper's figures a scene draws (fig. 2 only when it stores series), and ``fig_ev``."""
 

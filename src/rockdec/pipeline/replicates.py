@@ -36,6 +36,12 @@ from rockdec.pipeline.layout import READINGS, scene_seeds
 from rockdec.physics.record_model import carried_attrs
 from rockdec.physics.run import Run
 
+__all__ = [
+    "READINGS", "extrapolated", "gathered", "pass_units", "reading_curves", "reading_groups",
+    "readings_estimates", "replicate_curves", "replicate_estimates", "scene_cubes", "scene_estimates",
+    "scene_signatures", "series_dim", "variant_cubes",
+]
+
 PER_SERIES_LIMIT = 100
 """Series per replicate in the ``per_series`` reading (the paper's 100 values a point)."""
 

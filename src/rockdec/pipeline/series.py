@@ -29,6 +29,8 @@ from rockdec import io
 from rockdec.pipeline.layout import scene_seeds
 from rockdec.physics.run import Run
 
+__all__ = ["as_recorded", "stored_theta", "write_replicate"]
+
 def replicate_dataset(run: Run, records: dict, replicate: int) -> xr.Dataset:
     """Lazy ``theta(seed, time)`` of every series of one replicate, as the scene simulates them.
 

@@ -17,6 +17,11 @@ from pathlib import Path
 
 from rockdec import io
 
+__all__ = [
+    "estimates", "fig1b", "fig2", "fig3", "fig4", "fig_ev", "series", "stored_series", "stored_signature",
+    "table_readings",
+]
+
 Paths = Sequence[str | Path]
 
 

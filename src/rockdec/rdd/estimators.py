@@ -1,39 +1,23 @@
 """Estimators of the coefficient of restitution ``e`` from RDD signatures (paper §5).
 
-Inputs
-    ``r``: a free-response estimate, ``r[k]`` at lag ``tau = k*dt`` (``k = 0..L``), the even
-    part of a two-sided ``D_a`` signature (eq. 19); ``r[0] > 0`` is the trigger level.
-    Ideally (eqs. 4, 6) it is the free rocking response from ``(a, 0)``: the parabola
-    ``a - g tau^2/2`` down to the first zero crossing ``t1 = sqrt(2a/g)``, the velocity
-    multiplied by ``e`` at every crossing, the first minimum ``-e^2 a`` at ``t2 = (1+e) t1``.
-    ``d``: a two-sided ``D_v`` signature (eq. 19), ``2L+1`` lags, lag 0 at index ``L``.
+Inputs: ``r``, the free-response estimate (the even part of a two-sided ``D_a`` signature,
+eq. 19; ideally the parabola ``a - g tau^2/2`` to ``t1 = sqrt(2a/g)``, then ``-e^2 a`` at
+``t2 = (1 + e) t1``), and ``d``, a two-sided ``D_v`` signature (lag 0 at index ``L``). The
+estimators, each an :class:`Estimate` (a value, and why when it is NaN): ``e_g`` (global
+logarithmic decrement, eqs. 25, 7), ``e_0`` (first maximum and minimum, eq. 26), ``e1..e4``
+(local fits on the first half cycle, eq. 27, :func:`half_cycle`), ``e_v`` (the slope ratio
+through the impact of ``D_v``, eq. 6), and ``g = 2 c1/t1^2`` (eq. 4) from the fits
+(:data:`COLUMNS`). The numba kernels never raise on bad data: a NaN carries a reason code.
+:func:`estimate_all` runs them on one signature, :func:`estimate_cube` on labelled blocks.
 
-Estimators (each returns :class:`Estimate`: a value and, when the value is NaN, why)
-    ``e_g``  global logarithmic decrement over all extremes, eqs. 25 and 7;
-    ``e_0``  first maximum and first minimum, eq. 26;
-    ``e1..e4`` local second-order fits on the first half cycle, eq. 27 (``e4`` corrected);
-    ``e_v``  slope ratio through the impact at lag 0 of ``D_v`` (eq. 6).
-Then :func:`extrapolate_to_zero` takes an estimator over the window sizes ``da`` of eq. 19
-to zero window by weighted least squares (§5).
+The analysis core every analysis runs (the workflow, ``rockdec estimates``,
+:func:`rockdec.rdd.measured.analyse`, so ``rockdec estimate`` and the calibration):
+:func:`window_estimates` (pooled sums to every column at every window) and
+:func:`zero_window` (the weighted extrapolation to zero window, :func:`extrapolation_weights`;
+:func:`extrapolate_to_zero`), labelled by :func:`window_cube` and :func:`extrapolate`.
+Units: rad, s, rad/s; every ``e`` is dimensionless.
 
-Kernels are numba functions on NumPy arrays that never raise on bad data: a NaN comes with
-an integer reason code (:data:`_REASONS`). :func:`_estimate_rows` runs every estimator on
-a batch of signatures ``r[n, lag_pos]``, ``d[n, lag]`` and writes each into its column of
-:mod:`rockdec.rdd.registry`, then ``g = 2 c1/t1^2`` (eq. 4) from the fits of eq. 27
-(:data:`COLUMNS`); :func:`estimate_cube` (labelled, xarray/Dask) hands it whole blocks of
-signatures and keeps the values, :func:`estimate_all` hands it one signature and turns the
-codes into reasons; :func:`half_cycle` (the fits of eq. 27) calls the same kernels.
-:func:`extrapolate` is batched NumPy over every row at once.
-
-The analysis core, which every analysis of records runs (the workflow, ``rockdec
-estimates``, :func:`rockdec.rdd.measured.analyse` and so ``rockdec estimate`` and the
-calibration): :func:`window_estimates` takes pooled signature sums and counts of both
-triggers to every column at every window, :func:`zero_window` extrapolates every estimator
-with the weights of :func:`extrapolation_weights`; :func:`window_cube` and
-:func:`extrapolate` are their labelled wrappers (``xr.apply_ufunc``, Dask-parallel).
-
-Units: ``r`` and ``d`` in rad, ``dt`` and the fitted times in s, slopes in rad/s; every
-``e`` estimate is dimensionless.
+Explanation: docs/explanation/method/estimators.md, docs/explanation/method/extrapolation.md.
 """
 
 from __future__ import annotations
@@ -53,6 +37,13 @@ from rockdec.rdd.signatures import TRIGGERS, free_response, mean_signature
 
 if TYPE_CHECKING:  # annotations only: xarray loads where a function needs it
     import xarray as xr
+
+__all__ = [
+    "COLUMNS", "DEFAULT_FIT_POINTS", "ESTIMATORS", "Estimate", "FLAT_ULPS", "G_NAME", "HalfCycle",
+    "LOCAL_ESTIMATORS", "MIN_FIT_POINTS", "estimate_all", "estimate_cube", "extrapolate",
+    "extrapolate_to_zero", "extrapolation_weights", "half_cycle", "window_cube", "window_estimates",
+    "zero_window",
+]
 
 LOCAL_ESTIMATORS = ("e1", "e2", "e3", "e4")
 """The estimators of eq. 27, computed from one set of half-cycle fits (:func:`_local_measures`)."""

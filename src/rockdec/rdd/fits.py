@@ -4,6 +4,8 @@ Imports nothing: the configuration (and so the Snakefile) checks a scene's sampl
 these numbers without loading numba or xarray.
 """
 
+__all__ = ["DEFAULT_FIT_POINTS", "MIN_FIT_POINTS", "min_points_per_cycle"]
+
 MIN_FIT_POINTS = 3
 """Fewest points of any second-order fit: three coefficients need three points (with three
 the fit interpolates). Fits that would get fewer give NaN, ``"fewer than 3 points for a fit"``."""

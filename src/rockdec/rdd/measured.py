@@ -1,32 +1,21 @@
 """The analysis of one measured record (or several records of one block), end to end.
 
-One function, :func:`analyse`, takes zero-mean-able rocking records sampled at ``dt`` and
-returns every estimator of ``e`` at zero window (eqs. 25-27, ``e_v``), the restoring
-acceleration ``g`` read off the signature, and the sampling density. The calibration
-(:mod:`rockdec.calibrate.calibration`) runs this very function on simulated records, so whatever
-the pipeline does to a measured record it also does to the records that calibrate it.
+:func:`analyse` takes rocking records sampled at ``dt`` and returns every estimator of ``e``
+at zero window (eqs. 25-27, ``e_v``), the restoring acceleration ``g`` read off the
+signature and the sampling density, as an :class:`Analysis`. The calibration runs this very
+function on simulated records, so whatever it does to a measured record it also does to the
+records that calibrate it. Each record loses its mean; ``sigma_Y`` and ``sigma_Ydot`` are
+pooled; a first ``D_a`` signature locates the free response's first zero crossing ``t1``,
+and ``g = 2 r(0)/t1^2`` (the free flight ``a - g tau^2/2`` of eq. 4) sizes the lag range
+(``n_periods`` periods at ``a``, eq. 5) and the samples per cycle. The triggers of all
+records pool into one signature per window at one trigger level, and from the pooled sums
+on the analysis is the workflow's core (:func:`rockdec.rdd.estimators.window_estimates`,
+:func:`rockdec.rdd.estimators.zero_window`). The reported ``g = 2 c1/t1^2`` takes ``c1``,
+``t1`` from the fits of eq. 27 at the largest window (the least noisy); its window bias is
+calibrated away like ``e``'s. :func:`rocking_shape` says why a free response does not look
+like rocking.
 
-Steps
-    1. Each record loses its own mean; ``sigma_Y`` (of the angle) and ``sigma_Ydot`` (of the
-       sampled slope ``diff(y)/dt``) are pooled over all records, NaN left out.
-    2. ``g`` is not needed in advance. A first ``D_a`` signature (largest window), with a
-       lag range of four mean zero-crossing intervals (doubled, up to half the shortest
-       record, until the free response crosses zero), locates the first zero crossing
-       ``t1`` of the free-response estimate. From ``(a, 0)`` the free flight of eq. 4 is
-       ``a - g tau^2/2``, so ``t1 = sqrt(2a/g)`` and ``g = 2 r(0) / t1^2``; this rough ``g``
-       (``t1`` interpolated between samples) sizes the lag range and the samples per cycle.
-    3. The definitive signatures use the lag range of ``n_periods`` rocking periods at
-       amplitude ``a`` with that ``g`` (eq. 5); every estimator is computed at every window
-       and extrapolated to zero window (weighted least squares, paper §5). The reported
-       ``g = 2 c1/t1^2`` takes ``c1`` and ``t1`` from the fits of eq. 27 at the largest window, where most triggers make it least noisy (half the
-       spread of its zero-window extrapolation); its window bias is calibrated away
-       like the bias of the estimators of ``e``.
-
-The triggers of all records pool into one signature per window (sums and counts add), at
-one trigger level from the pooled ``sigma_Y`` (:func:`rockdec.rdd.signatures.trigger_levels`).
-From the pooled sums and counts on, the analysis is the workflow's: the one core of
-:func:`rockdec.rdd.estimators.window_estimates` (every estimator and ``g`` at every window) and
-:func:`rockdec.rdd.estimators.zero_window` (the extrapolation and its weights).
+Explanation: docs/explanation/method/measured-record.md (``g`` from the record).
 """
 
 from __future__ import annotations
@@ -38,6 +27,8 @@ import numpy as np
 from rockdec.rdd import estimators, fits, registry, signatures
 from rockdec.rdd.estimators import G_NAME
 from rockdec.physics.models import period_from_g
+
+__all__ = ["Analysis", "DEFAULT_SETTINGS", "G_NAME", "analyse", "rocking_shape"]
 
 #: Settings of the analysis and their defaults (the workflow's scene defaults, see the schema).
 DEFAULT_SETTINGS = {

@@ -15,6 +15,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+__all__ = ["BY_RANK", "CANDIDATES", "DEFAULT_ESTIMATOR", "ESTIMATORS", "REGISTRY", "spec", "trigger"]
+
 
 @dataclass(frozen=True)
 class EstimatorSpec:

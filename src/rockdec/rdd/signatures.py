@@ -1,64 +1,20 @@
 """Random Decrement signatures of a rocking record (paper §3, eqs. 8, 18-20).
 
-A signature (eq. 8) averages record segments ``y(t_i + tau)`` over trigger times
-``t_i``; here it is two-sided, ``tau = -L dt .. +L dt`` (``2L + 1`` lags, index ``L`` is
-``tau = 0``). Two triggers, both from eq. 19:
+A signature (eq. 8) averages two-sided record segments ``y(t_i + tau)``,
+``tau = -L dt .. +L dt`` (index ``L`` is ``tau = 0``), over trigger times ``t_i`` of eq. 19:
+``D_a``, the extremum trigger (a sampled maximum within ``[a - da, a + da]``), and ``D_v``,
+the zero-crossing trigger (the pre-impact velocity, from the parabola through the three
+incoming samples, within ``[v - dv, v + dv]``, the segment interpolated to the chord root).
+The nested windows are filled in one pass, and the kernels return *sums* and *counts*, so
+signatures pool exactly by adding (over series, seeds, groups or time chunks).
 
-``D_a`` -- extremum trigger (first line of eq. 19)
-    ``y(t_i)`` within ``[a - da, a + da]`` and ``y'(t_i) = 0``. On samples, ``y' = 0`` is
-    read as a sampled local maximum, ``y[i-1] < y[i] >= y[i+1]``. **Tie rule**: the left
-    comparison is strict and the right one is not, so a flat top of equal samples
-    triggers once, at its first sample, and a constant stretch (all zeros, a body at
-    rest) never triggers; a rise, a run of equal samples and a further rise also
-    triggers once (ties only occur in quantized records). With ``both_signs`` the mirror
-    rule ``y[i-1] > y[i] <= y[i+1]`` also accepts local minima within
-    ``[-a - da, -a + da]``, whose segments are added with their sign flipped; the two
-    rules are exact mirrors, so ``-y`` gives the same signature as ``y``. A sampled
-    extremum also selects negative curvature: for a Gaussian process the signature then
-    differs from ``a R(tau) / sigma^2`` (eqs. 9, 10 with ``v = 0``) by a few per cent of
-    ``a`` (the tests compute the exact value).
-
-``D_v`` -- zero-crossing trigger (second line of eq. 19, the follow-up of paper §6)
-    ``y`` crosses zero between samples ``i`` and ``i + 1``: upward when
-    ``y[i] < 0 <= y[i+1]`` (with ``both_signs`` also downward, ``y[i] > 0 >= y[i+1]``,
-    sign-flipped). The crossing time is the root of the chord through the two samples,
-    ``t_c = t_i + f dt`` with ``f = y[i] / (y[i] - y[i+1])`` in ``(0, 1]``.
-    **Velocity**: a rocking record is smooth between impacts and its velocity jumps by the
-    factor ``e`` at every zero crossing (eq. 6), so a difference straddling the crossing
-    mixes the two sides. ``v`` is the *pre-impact* (incoming) velocity: the derivative at
-    ``t_c`` of the parabola through the three incoming samples ``y[i-2], y[i-1], y[i]``
-    (one-sided, second order; exact for the piecewise-parabolic free response of eq. 4).
-    The trigger condition is ``s v_in`` in ``[v - dv, v + dv]``, ``s = +1`` for an upward
-    and ``-1`` for a downward crossing.
-    **Segment**: linear interpolation at ``t_c + k dt``, i.e.
-    ``(1 - f) y[i+k] + f y[i+k+1]``. Interpolation (rather than the nearest sample) keeps
-    ``tau = 0`` exactly at the crossing, so the kink of the signature, whose one-sided
-    slopes are in the ratio ``e``, stays at lag 0 instead of being smeared over one step.
-    For ``k != 0`` the two interpolated samples lie on one side of the crossing; the
-    error is ``O(dt^2)`` (``-y'' f (1 - f) dt^2 / 2``: a constant offset along one
-    parabolic arc). At ``k = 0`` the chord root gives exactly ``0``, which is stored as
-    an exact zero. The kink bends the chord, so its root lies within
-    ``(1 - e) dt / (4 e)`` of the true crossing; that moves each one-sided slope at
-    lag 0 by at most ``g`` times this shift (relative error ``O((1 - e) / N)`` with ``N``
-    samples per cycle).
-
-Only triggers whose whole segment lies inside the record count (the record's ends are
-never triggers). A trigger whose segment holds a NaN is not added; it is counted in
-``skipped`` instead. Samples next to a NaN cannot be classified (the comparisons fail),
-so they are neither triggers nor skipped.
-
-All window sizes in one pass: the half-widths ``da_1 <= ... <= da_W`` are nested, so each
-trigger is added once, into the bin of the smallest window that holds it, and a cumulative
-sum over the window axis finishes the job. Kernels return *sums* and *counts*, so
-signatures pool exactly by adding (docs/method.md §4.4): over series, seeds, groups or time
-chunks. The adding of series into groups is done inside the kernels (``rows_to``: each
-series adds its segments into its group's row, and the cumulative sum over the windows runs
-once per group), so a grouped cube never holds per-series sums.
-
-Layers: NumPy/numba kernels (:func:`extremum_sums`, :func:`crossing_sums`, both at once:
+Layers: the NumPy/numba kernels (:func:`extremum_sums`, :func:`crossing_sums`, both at once
 :func:`trigger_sums`), small helpers (:func:`trigger_levels`, :func:`lag_samples`,
-:func:`free_response`, :func:`pool`) and the xarray/Dask wrapper :func:`signature_cube`. The
-estimators read the sums and counts (:func:`rockdec.rdd.estimators.window_estimates`).
+:func:`free_response`, :func:`pool`) and the xarray/Dask wrapper :func:`signature_cube`; the
+estimators read the sums (:func:`rockdec.rdd.estimators.window_estimates`).
+
+Explanation: docs/explanation/method/signatures.md (the tie rule, the crossing's velocity
+and interpolation, gaps: §4.5).
 """
 
 from __future__ import annotations
@@ -81,7 +37,10 @@ if TYPE_CHECKING:  # annotations only: xarray loads where a function needs it
 __all__ = [
     "DEFAULT_WINDOWS",
     "NoTriggerWarning",
+    "SUM_VARS",
     "SignatureSums",
+    "TRIGGERS",
+    "check_lag_range",
     "crossing_sums",
     "extremum_sums",
     "free_response",

@@ -3,60 +3,17 @@
 Every check is a :class:`Check`: its name, the defect it names, a cheap dimensionless
 statistic of the records and their analysis (:func:`rockdec.rdd.measured.analyse`), the side
 on which a large (``"high"``) or small (``"low"``) value is suspicious, its one-sentence
-message, and how its threshold is set. :data:`REGISTRY` lists them; the calibration
-(:mod:`rockdec.calibrate.calibration`) and ``rockdec estimate`` (:func:`rockdec.calibrate.inference.diagnose`)
-read it, and so do the study (:mod:`rockdec.studies.diagnostics_study`) and the docs.
+message, and how its threshold is set. :data:`REGISTRY` lists them; the calibration, ``rockdec
+estimate`` (:func:`rockdec.calibrate.inference.diagnose`), the study and the docs read it.
+:func:`statistics` computes every statistic (one compiled pass, :func:`sums`; :func:`spikes`;
+:func:`impact_ratios`); the calibration stores them on its simulated record sets, and
+:func:`thresholds` takes the :data:`QUANTILE` quantile of the null (:func:`null`) of the grid
+points about the record's interval of ``e``; ``coarse_sampling`` and ``few_triggers``
+(:func:`segments`, :data:`MIN_SEGMENTS`) have structural floors instead; :func:`judge` fires
+them. Their false-alarm and detection rates: :mod:`rockdec.studies.diagnostics_study`.
 
-Thresholds. A warning is a claim, so it is set like an interval: from the simulations that
-calibrate ``e``. The calibration computes every statistic (:func:`statistics`) on each of
-its simulated record sets, which have the measured records' lengths and sampling and are
-clean (the record model the calibration simulates, nothing else), and stores them as
-``diagnostic(e_true, set, check)``. :func:`thresholds` takes the :data:`QUANTILE` quantile
-of a ``"high"`` check (``1 - QUANTILE`` of a ``"low"`` one) of the null (:func:`null`) of
-the grid points inside the record's 95 % interval of ``e`` and the nearest grid point
-beyond each end of it (:func:`_near`; a statistic that moves with ``e``, as ``filtered`` does
-at low ``e``, is then read against points that bracket the truth): each point's own location and scale, the shape of the
-tail read off every set of the calibration (a tail quantile of the near points' few hundred
-sets alone rests on their few largest values and fires too often on clean records; the
-pooled null's false alarms, also under a low-pass load whose model is measured off the
-record, are what :mod:`rockdec.studies.diagnostics_study` measures). Pooling over the interval takes the widest null of
-the ``e`` the record allows. The asymmetry reads it otherwise (its :class:`Check`'s ``null_model``
-``"widest"``): a clean record's value is about ``|N(0, s(e))|``, whose logarithm has the
-same spread at every ``e`` while ``s`` falls with ``e``, so each grid point about ``e`` gets
-its own null, its location its own and its spread the grid's, and the loosest of their
-thresholds holds (a location pooled over the grid would let one calibration's few sets
-at one point set every record's threshold). A record ``rockdec estimate`` reports no ``e`` for is checked
-where its estimators place it (:func:`rockdec.calibrate.inference.checks_place`: the median
-of the candidates' corrected values, the end of the calibrated range for a raw value beyond
-it, without an interval): at ``e = 0.98`` the raw values of some records lie above the
-range, and the strictest grid point (low ``e`` for the nonstationary z, which grows with
-``e``) would fire that check on many such clean records. A record that no
-estimator places gets the strictest threshold of any grid point: pooling every ``e`` would
-give it the widest null and let the records a defect has damaged most pass. The
-statistics are scale-free (the calibration has ``g = sigma_p = 1``) and read the sensor
-noise of the record's model as the calibration simulates it: each is a ratio, a z score or
-a share, and none grows with the noise level (the calibration simulates the noise on bins
-10 % wide). One compiled pass over each record (:func:`sums`) and one quantile of its
-distances off the neighbours' line (:func:`spikes`) give what they read, and the record's
-median, a histogram of levels and two passes over its sides the asymmetry (:func:`_sides`);
-the velocities on either side of its zero crossings give ``filtered`` (:func:`impact_ratios`).
-
-Two checks are the exception, their thresholds structural (:class:`Check`'s ``floor``): the
-calibration's records say nothing about them. ``coarse_sampling``: the calibration copies
-the record's sampling; its threshold is the floor of the local fits of eq. 27
-(:func:`rockdec.rdd.fits.min_points_per_cycle`). ``few_triggers``: the calibration's records
-have the records' lengths and no gaps, so gaps (NaN) leave the record fewer triggers than
-they had, and its signatures a wider spread than the interval allows for. The statistic is
-the share of the trigger positions whose segment the gaps leave whole (:func:`segments`):
-1 for every record without NaN, so it fires on no clean record whatever its load, noise or
-``e``, and it fires below :data:`MIN_SEGMENTS`. A count of the triggers against the
-calibration's sets would read gaps too, but the count of a clean record follows its
-samples per cycle and its load's corner, which the calibration reads off the record, so
-under a low-pass load at high ``e`` the records that share a calibration scatter widely
-about its sets' count and such a check would fire on clean records.
-
-The false-alarm and detection rates of each check, on records simulated apart from any
-calibration, are measured by :mod:`rockdec.studies.diagnostics_study` (docs: How often the warnings fire).
+Explanation: docs/explanation/method/warnings.md (thresholds from the calibration, the
+asymmetry's null, structural checks).
 """
 
 from __future__ import annotations
@@ -69,6 +26,13 @@ import numpy as np
 from numba import njit
 
 from rockdec.rdd import fits
+
+__all__ = [
+    "CHECKS", "FILTER_HELP", "IMPACT_MIN_STEPS", "MIN_SEGMENTS", "QUANTILE", "REGISTRY", "asymmetry",
+    "evaluate", "impact_level", "impact_ratios", "impact_sharpness", "impact_sides", "impact_steps",
+    "judge", "length_threshold", "nonstationarity", "null", "resolution", "segments", "side_sums",
+    "spikes", "statistics", "sums", "thresholds",
+]
 
 #: Share of the null (:func:`null`, near the record's ``e``) below a ``"high"`` threshold; a
 #: check fires on ``1 - QUANTILE`` of clean records in expectation (its rate on each cell:

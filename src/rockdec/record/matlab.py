@@ -9,6 +9,8 @@ import numpy as np
 
 from rockdec.timeaxis import RecordError, sampling_step
 
+__all__ = ["read_mat"]
+
 #: Names of a time vector looked for in a ``.mat`` file, in order.
 TIME_NAMES = ("time", "t")
 

@@ -1,155 +1,20 @@
-"""A record's own model, measured from the record: sensor noise, load colour, drift.
+"""A record's own model, measured from the record: sensor noise, load colour, drift, a filter.
 
-Why. The calibration of :mod:`rockdec.calibrate.calibration` simulates the paper's idealised record:
-white velocity impulses (§4), a noise-free sensor, a stationary response. A rig adds a
-sensor-noise floor, a load that is not white and slow drift. This module measures those
-from the record itself, each with a standard error, so that a calibration can simulate
-the record's own model.
+:func:`measure` reads what the paper's idealised record lacks, each with a delete-one-block
+jackknife error (:data:`JACKKNIFE_BLOCKS`), into the :class:`MeasuredModel` a calibration
+simulates. Between impacts the simplified model (eq. 4) moves on parabolas (eqs. 21-24), so
+the kept second differences (:func:`second_differences`) are
+``d_k = p_k dt - g dt^2 sgn(y[k])``: their side means give ``g``, their autocorrelation
+``r(m) = A alpha^m + (1 - A) h(m)/6`` (:func:`mixed_autocovariance`) and structure function
+``S(L) = sigma_p^2 dt^2 V_L(alpha) + 6 sigma_n^2`` (:func:`fit_structure`) the sensor noise
+``sigma_n`` and the load's pole ``alpha``, its corner ``f_c = -ln(alpha)/(2 pi dt)`` in units
+of ``1/T(sigma_Y)`` (eq. 5); the noise-free shape ratio ``Q`` (:func:`shape_ratio`,
+:func:`pole_of_shape`) reads the pole beneath noise; von Neumann's ratio of block means the
+drift; :func:`rolloff` the spectral slope that shows a low-pass filter after the block.
 
-Second differences. Between impacts the simplified model (eq. 4) moves on parabolas
-(eqs. 21-24): with ``y[k]`` the angle at ``t = k dt`` and ``p_k`` the velocity impulse
-applied at that instant, three samples on one side of zero give
-
-    d_k = y[k+1] - 2 y[k] + y[k-1] = p_k dt - g dt^2 sgn(y[k]).
-
-A triple is kept when its samples have one sign and the samples two steps before and
-after it lie beyond a margin on that side (:func:`second_differences`): an impact inside
-the triple, a flight that crosses zero and returns between samples (the chatter of a
-block near rest), and a crossing hidden by sensor noise are all left out, and because
-the guard samples carry noise independent of the triple's own, the choice does not
-select the noise ``d`` holds (choosing by the triple's own samples biases ``g`` low under
-sensor noise). The margin, several ``g dt^2`` and several
-``sigma_n``, is measured on a first pass without it and refined twice. Each side's mean
-``-g dt^2 sgn(y)`` is removed, which also measures ``g``:
-``g = (mean_- - mean_+) / (2 dt^2)``. The autocorrelation ``r(m)`` of what remains
-(over pairs of kept second differences ``m`` steps apart) separates three loads:
-
-* white impulses: ``r(m) = 0`` for ``m >= 1``;
-* white sensor noise ``n`` of variance ``sigma_n^2`` on the sampled angle adds
-  ``n[k+1] - 2 n[k] + n[k-1]``, a moving average of order 2 whose autocovariance is
-  ``sigma_n^2 h(m)`` with ``h(0) = 6``, ``h(1) = -4``, ``h(2) = 1``, ``h(m >= 3) = 0``;
-* a first-order low-pass load of pole ``alpha`` per sample
-  (``p_k = alpha p_{k-1} + sqrt(1 - alpha^2) w_k``, :mod:`rockdec.physics.loading`) keeps the
-  variance ``sigma_p^2`` and has autocorrelation ``alpha^m``.
-
-Impulses and noise are independent, so the autocovariance of ``d`` is
-``sigma_p^2 dt^2 alpha^|m| + sigma_n^2 h(m)``, and with ``q = sigma_n^2 / (sigma_p^2 dt^2)``
-and ``A = 1/(1 + 6 q)`` (the share of the impulses in the variance of ``d``)
-
-    r(m) = (alpha^m + q h(m)) / (1 + 6 q) = A alpha^m + (1 - A) h(m) / 6,   m >= 1.
-
-White noise alone (``A = 0``) gives ``r(1) = -2/3``, ``r(2) = 1/6``; white impulses with
-noise (``alpha = 0``) give ``r(1) = -4q/(1 + 6q)``, ``r(2) = q/(1 + 6q)``; a coloured load
-without noise (``A = 1``) gives ``r(m) = alpha^m`` (:func:`mixed_autocovariance`).
-
-The fit. A sensor noise of 2 % of ``sigma_Y`` already outweighs the impulses in ``d``
-hundreds of times under a low-pass load (``A`` near ``1e-3``), so a fit to ``r(1..M)``
-cannot see the colour beneath it. The span-``L`` second difference
-``y[k+L] - 2 y[k] + y[k-L]`` is the sum of ``d`` with triangle weights
-``w = 1, 2, .., L, .., 2, 1``; its variance, the structure function, grows with ``L``
-for the impulses and not for the noise:
-
-    S(L) = sigma_p^2 dt^2 V_L(alpha) + 6 sigma_n^2,   V_L(alpha) = sum_ij w_i w_j alpha^|i-j|,
-
-``V_L(0) = L (2 L^2 + 1) / 3`` for a white load and about ``L^4`` for a load correlated
-over more than ``L`` steps. ``S(L)`` is computed from the autocovariance of the kept
-``d`` (:func:`structure_function`, spans :data:`SPANS`), so the triples are chosen once,
-and :func:`fit_structure` fits ``(sigma_p^2 dt^2, sigma_n^2, alpha)`` in relative least
-squares: for a given ``alpha`` linear in the two variances, ``alpha`` by a grid then a
-golden-section search between its neighbours. The variances are not held positive and ``alpha`` may be
-negative, so that on a white noise-free record they scatter about 0 and their z scores
-are near normal; the reported ``sigma_n``, ``sigma_p`` clip them at 0. Then
-
-    f_c = -ln(alpha) / (2 pi dt)   (the corner of :mod:`rockdec.physics.loading`),
-
-and the corner in units of the rocking frequency is ``f_c T(sigma_Y)`` with
-``T(sigma_Y) = 4 sqrt(2 sigma_Y / g)`` (eq. 5), ``g`` from the side means and ``sigma_Y``
-the record's standard deviation with the noise variance taken out. Spans up to 8 are
-used: under a low-pass load the block's side follows the load, so removing the side
-means leaves a slow remainder that lengthens the tail of ``r(m)`` beyond ``alpha^m``, and
-longer spans weigh that tail more (they bias ``alpha`` upward).
-
-The shape beneath noise. ``S(L)`` summed from the autocovariance mixes pairs of kept
-second differences that no window holds whole, so its noise does not cancel exactly and its
-error grows with ``L``, enough beneath a few per cent of noise to read a white record's
-load as coloured with a large ``z`` (the coverage study's "corner read" column).
-:func:`span_differences` reads the span-``L`` differences off the windows whose every second
-difference is kept (one side, no impact), where the noise is ``n[k+L] - 2 n[k] + n[k-L]``
-exactly; each side's mean is removed (it holds ``-g dt^2 L^2``). With their variances at
-:data:`SHAPE_SPANS` ``(4, 8, 16)`` the shape ratio
-
-    Q = (S(16) - S(8)) / (S(8) - S(4)) = (V_16(alpha) - V_8(alpha)) / (V_8(alpha) - V_4(alpha))
-
-does not hold the noise at all (:func:`shape_ratio`): 7.97 for a white load, 9.66 at a
-corner of 3 rocking frequencies and 12.4 at a corner of 1 (75 samples per cycle), 16 as
-``alpha -> 1`` (:func:`shape_of_pole`); it is nearly flat for ``alpha < 0.5``, so it tells
-the low corners that matter, not a weak colour. On a noisy record the pole and the corner
-are read off ``Q`` (:func:`pole_of_shape`), and the fit keeps the two variances.
-
-Drift. A slow offset does not change second differences (a trend's are of order
-``dt^2`` times its curvature); it shows in the means of consecutive blocks of the
-record. The statistic is von Neumann's ratio of the block means, ``eta = sum (b_{i+1} -
-b_i)^2 / sum (b_i - mean b)^2``: about 2 when block means are independent (a stationary
-record whose blocks are many correlation times long), well below 2 when a smooth drift
-dominates them. ``drift_z = (2 - eta) / sd0`` with ``sd0^2 = 4 (B - 2) / (B^2 - 1)`` (its
-null spread for ``B`` independent normal blocks); its measured null distribution on
-simulated records is in docs/method.md. When drift is detected the second differences
-are read off the record less the piecewise-linear line through its block means, so that
-the drift does not move the zero the sides are read from (not otherwise: under a
-low-pass load the block means of a stationary record are large, and taking them out
-would distort the excursions the colour is read from). The asymmetry of the two sides' ``g`` (a leaning
-block) is reported beside it, read as the asymmetry check reads it (:func:`_asymmetry`): about each
-record's impact level, which a lean moves away from the record's mean.
-
-A filter after the block. A low-pass filter between the block and the record (a logger's
-anti-alias filter, a sensor's bandwidth, an analyst's smoothing) rounds what the block itself
-cannot round: the acceleration steps at every zero crossing (the sign of the restoring term,
-eq. 4) and the velocity jumps at every impact (eq. 6). The spectrum of the second
-differences then falls faster above the filter's corner than the record's own load, noise
-and impacts let it. How fast an unfiltered record falls is not one number: flat under a white
-load, rising under sensor noise, and under a low-pass load near and, at high ``e`` (small
-impacts), somewhat beyond ``f^-2``. So two checks read it. Here, before any calibration,
-:func:`rolloff` reads the log-log slope of the Welch spectrum of the second differences over
-the octaves :data:`ROLLOFF_BANDS` (rocking frequencies, those below
-:data:`ROLLOFF_TOP` of the samples per cycle), its standard error
-by the delete-one-group jackknife over the Welch segments, and the steepest band's standard
-errors below :data:`ROLLOFF_FLOOR`, a slope no unfiltered record reaches: :data:`ROLLOFF_Z` of
-them show a steep filter (Butterworth of order 2 and up above its corner) without the cost of
-a calibration. A gentle filter (a first-order RC stage) adds at most ``f^-2`` and its record
-is read as a low-pass load of about its corner; the check ``filtered`` of
-:mod:`rockdec.record.diagnostics` compares the record's steepest band with the calibration's
-records, which share its load, noise and ``e`` and have no filter. Both rates on unfiltered
-and filtered records: ``benchmarks/filter_study.py``. Sensor noise added after the filter
-lifts the spectrum where it dominates and can hide a filter there.
-
-Standard errors. The records are cut into :data:`JACKKNIFE_BLOCKS` consecutive blocks; every
-quantity is a function of sums over triples and pairs, which add over blocks, so each
-is recomputed with one block left out and the delete-one-block jackknife gives its
-standard error. This holds for correlated second differences (a coloured load) where a
-count-based ``1/sqrt(N)`` would not.
-
-Detection. ``noisy``: ``sigma_n^2`` exceeds :data:`DETECT_Z` standard errors and
-``sigma_n / sigma_Y`` exceeds :data:`NOISE_FLOOR`; ``coloured``: ``alpha`` exceeds
-:data:`DETECT_Z` standard errors, or on a noisy record ``Q`` exceeds a white load's by
-:data:`COLOUR_Z_NOISY` standard errors; ``drifting``: ``drift_z`` exceeds :data:`DRIFT_Z`.
-These say the defect is present, not that it moves ``e``; the rates are measured by
-:mod:`rockdec.studies.record_measure_study` and ``benchmarks/colour_detection.py``. A noisy
-record whose ``Q`` is not shown coloured may still leave a low corner possible
-(:meth:`MeasuredModel.shape_corner_low`), which :func:`rockdec.calibrate.inference.colour_decline`
-declines.
-
-The side means' ``g``. Under a load slow against the rocking the block's side follows the load,
-each side's mean second difference holds part of the load and ``g`` read off the side means
-falls below the ``g`` the signature reads (:meth:`MeasuredModel.side_g_share`). There the
-record can sit far from zero nearly all the time (at a corner of 0.5 rocking frequencies and
-``e = 0.6``, 190,000 of 200,000 triples kept, against 30,000 on a record that chatters near
-rest), and the fit splits the second differences into a fast part it books as noise (its
-variance 10-60 errors above 0 but 1-4e-4 of ``sigma_Y``, beneath :data:`NOISE_FLOOR`) and a
-pole of 0.82-0.87 against the true 0.959, leaving ``r(m)`` at lags 8-14 several errors above
-the fit: a corner of 2.5-4.2 rocking frequencies read for a true 0.5-0.8, with an error of
-0.2-0.7. The corner is misread, not its error too small; the share of ``g`` (0.36-0.53 on
-those records, 0.81-1.01 at a corner of 3) tells them apart
-(:data:`rockdec.calibrate.inference.SIDE_G_SHARE`).
+Explanation: docs/explanation/method/record-model.md; the constants' evidence:
+docs/explanation/constants.md; how well it reads: :mod:`rockdec.studies.record_measure_study`,
+``benchmarks/colour_detection.py``, ``benchmarks/filter_study.py``.
 """
 
 from __future__ import annotations
@@ -162,6 +27,13 @@ import numpy as np
 from rockdec import validate as checks
 from rockdec.physics.models import period_from_g
 from rockdec.record import diagnostics
+
+__all__ = [
+    "MAX_LAG", "MAX_POLE", "MeasuredModel", "NOISE_FLOOR", "Quantity", "ROLLOFF_FLOOR", "Rolloff",
+    "SHAPE_SPANS", "SPANS", "WHITE_SHAPE", "fit_structure", "measure", "mixed_autocovariance",
+    "pole_of_shape", "rolloff", "second_differences", "shape_of_pole", "shape_ratio", "span_differences",
+    "structure_model",
+]
 
 #: Spans ``L`` of the structure function ``S(L)`` that the fit uses.
 SPANS = (1, 2, 3, 4, 6, 8)

@@ -21,6 +21,11 @@ from rockdec import timeaxis
 from rockdec.timeaxis import RecordError, angle_factor, time_factor
 from rockdec.validate import SQUARE_RANGE, file_kind, path_name, show
 
+__all__ = [
+    "HOLD_SHARE", "MIN_SAMPLES", "Record", "RecordError", "angle_factor", "check_values", "distinct",
+    "held", "read_records", "record_size", "same_step", "sampling_step", "time_factor",
+]
+
 #: Largest fraction of NaN samples a record may hold.
 MAX_NAN_FRACTION = 0.1
 

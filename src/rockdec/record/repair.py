@@ -1,31 +1,24 @@
 """Repair of a measured record before its estimate: spikes are replaced, drift is filtered out.
 
 Two defects of a rig's record are repaired rather than reported (the checks ``spikes`` and
-``drift`` of :mod:`rockdec.record.diagnostics` find them):
+``drift`` of :mod:`rockdec.record.diagnostics` find them), by :func:`apply`:
 
-* Spikes (isolated wrong samples, :func:`find_spikes`) are replaced by the straight line
-  through their neighbours (:func:`fill`). Made gaps (NaN) instead, as the analysis skips
-  them, every trigger whose segment (some hundreds of samples) holds one would be lost, and
-  a per cent of spikes would leave few triggers (``benchmarks/repair_study.py``). The line
-  misses the true sample by half its second difference, the size of the load's impulse on
-  one step, far below a spike.
-  A spike of height ``a`` at sample ``k`` leaves the second differences
-  ``d[k] = y[k+1] - 2 y[k] + y[k-1]`` the pattern ``(a, -2a, a)`` at ``k-1, k, k+1``. An
-  impact (eq. 6) is a kink: it moves one or two second differences, both of one sign, so
-  a sample is a spike only when its second difference is the largest of its three
-  neighbours, beyond ``2 SPIKE_Z s``, and a neighbour's is of the other sign and beyond
-  ``SPIKE_Z s``; ``s`` is the robust scale (1.4826 times the median absolute deviation) of
-  the record's second differences, which the load's impulses and the sensor noise set and
-  which spikes of up to a few per cent of the samples leave where it is.
-* A drifting zero is removed by a zero-phase high-pass (:func:`highpass`: a Butterworth
-  filter of order :data:`HIGHPASS_ORDER` run forwards and backwards) with its corner at
-  :data:`HIGHPASS_CORNER` rocking frequencies (``1/T(sigma_Y)``, eq. 5; the record's
-  samples per cycle place it per sample), well below the rocking frequency.
+* Spikes (:func:`find_spikes`): a spike of height ``a`` at sample ``k`` leaves the second
+  differences ``d[k] = y[k+1] - 2 y[k] + y[k-1]`` the pattern ``(a, -2a, a)``, where an
+  impact (eq. 6) moves one or two of one sign; a sample is a spike when its second
+  difference is the largest of its three, beyond ``2 SPIKE_Z s``, and a neighbour's of the
+  other sign beyond ``SPIKE_Z s`` (``s`` the robust scale, :func:`second_difference_scale`).
+  It is replaced by the line through its neighbours (:func:`fill`), not made a gap: a gap
+  costs every trigger whose segment holds it.
+* A drifting zero is removed by a zero-phase Butterworth high-pass (:func:`highpass`, order
+  :data:`HIGHPASS_ORDER`) at :data:`HIGHPASS_CORNER` rocking frequencies (eq. 5).
 
-The calibration (:mod:`rockdec.calibrate.calibration`) applies the same :func:`apply` to each
-of its simulated sets, so the belt carries whatever bias the repair leaves, and the repair
-enters the calibration's settings (its cache key). Evidence for the constants:
-``benchmarks/repair_study.py`` (docs/explanation/constants.md).
+The calibration applies the same :func:`apply` to its simulated sets, so the belt carries the
+bias the repair leaves, and the repair enters its settings (:func:`settings`). Evidence for
+the constants: ``benchmarks/repair_study.py``.
+
+Explanation: docs/how-to/own-record.md (spikes and drift are repaired first);
+docs/explanation/constants.md (the repair's constants).
 """
 
 from __future__ import annotations
@@ -34,6 +27,11 @@ from typing import NamedTuple
 
 import numpy as np
 from numba import njit
+
+__all__ = [
+    "HIGHPASS_CORNER", "Repair", "SPIKE_Z", "apply", "cycle_samples", "find_spikes", "highpass",
+    "settings",
+]
 
 #: Robust z of a spike's second difference: the sample's own beyond ``2 SPIKE_Z`` scales,
 #: a neighbour's of the other sign beyond ``SPIKE_Z`` (module docstring); Gaussian second

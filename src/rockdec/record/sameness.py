@@ -18,6 +18,8 @@ import numpy as np
 
 from rockdec.record.records import MIN_SAMPLES
 
+__all__ = ["MIN_OVERLAP", "SAME_CORRELATION", "same_data"]
+
 #: Smallest ``|r|`` over an overlap that marks two records as the same data. Independent
 #: records of one block stay well below it at the shortest overlap (``tests/record/test_sameness.py``
 #: checks them); a copy with white noise of standard deviation ``q`` (in units of the

@@ -17,7 +17,7 @@ from matplotlib.figure import Figure
 
 from rockdec.report.figures import _new_figure
 
-__all__ = ["FIGURES", "forest", "record_model", "diagnostics"]
+__all__ = ["FIGURES", "diagnostics", "forest", "record_model"]
 
 
 def _positions(ds: xr.Dataset) -> tuple[np.ndarray, list[str]]:

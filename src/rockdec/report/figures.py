@@ -45,7 +45,10 @@ from rockdec.physics.models import period_from_g  # noqa: E402
 # a record's plot are fresh processes, and these imports would double their
 # start-up time for the figures that do not need them.
 
-__all__ = ["fig1b", "fig2", "fig3", "fig4", "fig_ev", "fig_record", "free_rocking", "save"]
+__all__ = [
+    "TARGET_STYLE", "fig1b", "fig2", "fig3", "fig4", "fig_amplitude", "fig_ev", "fig_record",
+    "free_rocking", "save",
+]
 
 WINDOW_LABEL = r"relative window size $\Delta a/\Delta a_{max}$"
 TARGET_STYLE = {"color": "k", "ls": "--", "lw": 1.0}

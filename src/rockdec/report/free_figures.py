@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
+__all__ = ["plot_free_rocking"]
+
 
 def plot_free_rocking(fit, theta, dt, ax=None):
     """Draw a free-rocking record with its fitted arcs (eqs. 2, 4) and ``e`` per impact (eq. 6).

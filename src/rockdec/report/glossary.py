@@ -1,5 +1,7 @@
 """The words of an estimate's report (:mod:`rockdec.report.summary`), for ``rockdec estimate --help`` and the docs."""
 
+__all__ = ["GLOSSARY"]
+
 #: The words of the report (the command's ``--help`` and the docs' glossary show it).
 GLOSSARY = """glossary:
   e          coefficient of restitution: the share of its angular velocity the block keeps

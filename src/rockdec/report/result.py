@@ -241,7 +241,7 @@ class RestitutionEstimate:
         Raises
         ------
         InputError
-            When ``doc`` is not such a document (:func:`check_document`).
+            When ``doc`` is not such a document (``rockdec.report.result.check_document``).
 
         Examples
         --------

@@ -20,6 +20,11 @@ import xarray as xr
 from rockdec.calibrate.belt import Z95
 from rockdec.rdd.registry import BY_RANK
 
+__all__ = [
+    "MISSING", "PAPER", "PAPER_E_TARGET", "STATISTICS", "bias_row", "summary_table", "to_markdown",
+    "tradeoff_markdown", "with_alternative", "write_table",
+]
+
 PAPER = {
     "e_g": (0.8083, np.nan),
     "e_0": (0.9626, np.nan),

@@ -23,6 +23,8 @@ from rockdec.physics.models import MODELS, noise_for_amplitude, scale_constant
 from rockdec.physics.record_model import Load
 from rockdec.validate import InputError
 
+__all__ = ["sweep", "sweep_table"]
+
 RATIOS = (0.002, 0.005, 0.01, 0.02, 0.03, 0.05)
 """``sigma_Y / theta_cr`` of the sweep; eqs. 3 and 5 differ by 2 % near 3 sigma_Y = 0.047 theta_cr."""
 

@@ -23,6 +23,8 @@ from rockdec.calibrate import belt, calibration
 from rockdec import engine
 from rockdec.rdd import measured, registry
 
+__all__ = ["SEED_STRIDE", "TEST_E", "pool", "study"]
+
 #: Seed bases of the test bed: the calibration's, moved by multiples of this (far apart
 #: from the calibration's own seeds, the study's and the scenes').
 SEED_STRIDE = 2**50

@@ -49,6 +49,15 @@ from rockdec.physics.models import SCALE_CONSTANT_GUESS, period_from_g, step_for
 from rockdec.physics.record_model import PAPER, Load, RecordModel
 from rockdec.record.records import Record, RecordError
 
+__all__ = [
+    "BAND_MIN_ANSWERED", "BIAS_RATIO", "CELL_SEEDS", "COVERAGE_BAND", "MAD_NORMAL", "MEASURED", "NOMINAL",
+    "PILOT_SEEDS", "POINTS_PER_CYCLE", "SHARPNESS_BAND", "STAGE_TOLERANCE", "STUDY_SEED_OFFSET",
+    "band_chance", "band_markdown", "band_probability", "calibration_error", "estimate_record",
+    "fresh_calibrations", "fresh_coverage", "fresh_markdown", "fresh_summary", "in_band",
+    "in_sharpness_band", "kernel_records", "kurtosis_about", "markdown", "recorrect", "run_cell",
+    "sharpness", "sharpness_probability", "simulator_of", "stage", "summary", "table",
+]
+
 #: Seeds of the study's records start here (apart from calibration and pilot seeds).
 STUDY_SEED_OFFSET = 2**60
 

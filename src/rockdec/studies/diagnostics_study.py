@@ -1,40 +1,22 @@
 """Are the warnings of ``rockdec estimate`` right? False alarms and detections of each check.
 
-Records of known ``e`` are simulated apart from any calibration (``g = sigma_p = 1``, the
-step calibrated to :data:`POINTS_PER_CYCLE` samples per cycle at ``sigma_Y``, eq. 5; seeds
-from :data:`STUDY_SEED_OFFSET`), with or without one defect of a given size
-(:data:`DEFECTS`), each at every sensor noise level of :data:`rockdec.pipeline.layout.DIAGNOSTICS_NOISE` (white, a share
-of the clean record's rms, as the calibration simulates it) and under every load of
-:data:`rockdec.pipeline.layout.DIAGNOSTICS_CORNERS` (white impulses, or low-pass filtered with the corner at a given number of
-rocking frequencies: the step and pole of :func:`rockdec.studies.coverage.stage`, which
-places the records' own samples per cycle and the corner; under it, the noise levels of
-``DIAGNOSTICS_COLOURED_NOISE`` and the defects of :data:`COLOURED_DEFECTS`), and each goes through
-``rockdec estimate`` itself (:func:`rockdec.calibrate.inference.estimate`): the record model
-measured off the record (:mod:`rockdec.record.record_measure`), the calibration for that
-model, its length and its sampling (:mod:`rockdec.calibrate.calibration`, shared by records
-in one bin), the corrected ``e`` and interval of the estimator it selects (none when it
-gives none), and every check of :mod:`rockdec.record.diagnostics` against the
-calibration's thresholds.
+Records of known ``e`` are simulated apart from any calibration (``g = sigma_p = 1``,
+:data:`POINTS_PER_CYCLE` samples per cycle at ``sigma_Y``, eq. 5; seeds from
+:data:`STUDY_SEED_OFFSET`; :func:`simulate`, :func:`record`), clean or with one defect of
+:data:`DEFECTS` (:func:`add_defect`), at every noise level and load of
+:mod:`rockdec.pipeline.layout` (``DIAGNOSTICS_NOISE``, ``DIAGNOSTICS_CORNERS``,
+``DIAGNOSTICS_COLOURED_NOISE``, :data:`COLOURED_DEFECTS`), and go through ``rockdec
+estimate`` itself (:func:`rockdec.calibrate.inference.estimate`, :func:`run`). The defects,
+on the clean records' seeds so the shift of ``e`` is read record by record:
+``nonstationary`` (the impulses' standard deviation ramped from ``1 - m`` to ``1 + m``),
+``drift`` (a trend from ``-D/2`` to ``+D/2`` in ``sigma_Y``), ``spikes`` (one sample in
+:data:`SPIKE_EVERY` set to ``+-k sigma_Y``), ``asymmetry`` (impulses of mean ``b g dt``: the
+block feels ``g (1 -+ b)`` on its sides), ``few_triggers`` (gaps of :data:`GAP` samples),
+``coarse_sampling``. A defect *matters* when it moves the corrected ``e`` by more than half
+the median 95 % interval; :func:`summary` and :func:`digest` give per check and cell the
+false-alarm rate on the clean records and, per size, the shift and the detection rate.
 
-The defects, each on the same seeds (and sensor noise) as the clean records, so the shift
-of ``e`` is read record by record:
-
-* ``nonstationary``: the impulses' standard deviation ramps linearly from ``1 - m`` to
-  ``1 + m`` along the record (``m`` the size);
-* ``drift``: a linear trend from ``-D/2`` to ``+D/2`` added (``D`` in ``sigma_Y``);
-* ``spikes``: one sample in :data:`SPIKE_EVERY` replaced by ``+-k sigma_Y`` (``k`` the size);
-* ``asymmetry``: impulses with mean ``b g dt`` per step (added to the filtered load under
-  a coloured one), a constant push that leaves the block ``g (1 - b)`` on one side and
-  ``g (1 + b)`` on the other (a leaning block);
-* ``few_triggers``: a share of the record lost in gaps (NaN) of :data:`GAP` samples;
-* ``coarse_sampling``: the records sampled at fewer samples per cycle (their own
-  calibration; no pairing, the shift is read against the clean records' mean).
-
-A defect *matters* at a size when it moves the corrected ``e`` by more than half the
-median 95 % interval (median over records of the paired shift). :func:`summary` gives per
-check, ``e``, noise level and load the false-alarm rate on the clean records and, per size, the shift, half
-the interval, and the detection rate (the share of defective records on which the
-check fires).
+Explanation: docs/explanation/studies/diagnostics.md; the checks: docs/explanation/method/warnings.md.
 """
 
 from __future__ import annotations
@@ -55,6 +37,11 @@ from rockdec.physics.simulate import calibrate_dt, integrate
 from rockdec.pipeline.layout import DIAGNOSTICS_COLOURED_NOISE, DIAGNOSTICS_CORNERS, DIAGNOSTICS_E, DIAGNOSTICS_NOISE, diagnostics_noise
 from rockdec.record.records import Record
 from rockdec.validate import InputError
+
+__all__ = [
+    "DEFECTS", "POINTS_PER_CYCLE", "Record", "add_defect", "digest", "digest_markdown", "record", "run",
+    "simulate", "summary",
+]
 
 #: Seeds of the study's records start here (apart from scenes, pilots, calibrations and
 #: the other studies); the pilots that place a coloured load's records (:func:`_step`)

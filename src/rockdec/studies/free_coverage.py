@@ -28,6 +28,11 @@ from rockdec.physics.models import period_from_g, period_housner
 from rockdec.physics.simulate import simulate_model
 from rockdec.timeaxis import RecordError
 
+__all__ = [
+    "GRID_DENSITY", "GRID_E", "GRID_MODELS", "GRID_NOISE", "GRID_RECORDS", "HOLD_SAMPLES", "free_record",
+    "markdown", "record_density", "run_cell", "run_grid",
+]
+
 #: Release angle over ``theta_cr`` of the Housner cells: where eqs. 3 and 5 differ by about
 #: 13 %, so the parabola would not do.
 HOUSNER_RATIO = 0.3

@@ -29,6 +29,8 @@ from rockdec.physics.models import period_from_g
 from rockdec.physics.record_model import Load
 from rockdec.validate import InputError
 
+__all__ = ["run"]
+
 #: ``name: (noise share of sigma_Y, corner in rocking frequencies or None for white,
 #: linear drift from start to end of the record in sigma_Y)``.
 CONDITIONS = {

@@ -16,6 +16,8 @@ from rockdec.pipeline import replicates
 from rockdec.report import tables
 from rockdec.physics.run import Run
 
+__all__ = ["CHOICES", "choice_estimates", "choice_table"]
+
 CHOICES = {
     "lag range 1.5 periods": ("n_periods", 1.5),
     "lag range 3.5 periods": ("n_periods", 3.5),

@@ -1,54 +1,19 @@
 """Speed against accuracy: what each knob of a scene costs and what it buys.
 
-Every knob of :data:`KNOBS` is moved one at a time away from a base scene (the
-``tradeoff`` scene of ``config/config.yaml``); each resulting *configuration* is run end to
-end (simulation, signature cube, estimates and zero-window extrapolation, for every
-replicate of the scene) and measured twice:
+Every knob of :data:`KNOBS` is moved one at a time away from a base scene (the ``tradeoff``
+scene of ``config/config.yaml``, :func:`base_settings`, :func:`configurations`); each
+configuration is run end to end for every replicate (:func:`run_study`) and measured twice:
+its **cost** in CPU seconds of the process (the step calibration of a density reported
+apart, ``calibration_cpu_s``) and the **accuracy** of each estimator against the scene's
+``e`` (:func:`rockdec.report.tables.bias_row`: ``bias``, ``std``, ``rmse`` and
+``ci95 = |bias| + 1.96 std``). :func:`pareto_front` and :func:`recommend` pick among the
+configurations run; the table is :func:`study_table`, its Markdown
+:func:`rockdec.report.tables.tradeoff_markdown`, its plot
+:func:`rockdec.studies.figures.pareto_figure`. The model is always the simplified one
+(eq. 4), whose response depends only on ``e`` and the sampling density.
 
-* **cost**: CPU seconds of the process (:func:`time.process_time`, all threads summed, so
-  it does not depend on how many cores ran it) from building the lazy graph to the
-  extrapolated estimates. The step calibration of a sampling density (:func:`rockdec.
-  simulate.calibrate_dt`, a one-off per density, cached within the run) is reported apart,
-  as ``calibration_cpu_s``. ``cpu_s_per_replicate`` is the cost of one estimate of ``e``.
-* **accuracy** of each estimator over the replicates, against the scene's ``e``
-  (:func:`rockdec.report.tables.bias_row`): ``bias = mean - e``, ``std`` (``ddof = 1``) and
-  ``rmse = sqrt(mean((x - e)^2))``, so that ``rmse^2 = bias^2 + std^2 (n - 1)/n`` exactly,
-  and ``ci95 = |bias| + 1.96 std``: an estimate of one replicate lies within ``+-ci95`` of
-  the true ``e`` in about 95 % of the cases (normal errors).
-
-The Markdown of the study is :func:`rockdec.report.tables.tradeoff_markdown`, its Pareto plot
-:func:`rockdec.studies.figures.pareto_figure`; this module runs the study and reduces it to data.
-
-Choices written down here (the issue leaves them open):
-
-* *Points per cycle* (``dt``) is moved at a fixed record **duration**: a series keeps the
-  base scene's number of rocking cycles at amplitude ``sigma_Y`` (``n_points`` scales with
-  the density), so the knob measures sampling alone, not more data. Likewise the burn-in
-  keeps its duration (in cycles, :func:`rockdec.physics.simulate.default_burn_in`). The ``e_v``
-  slope fits keep the scene's ``fit_points`` *in samples*: scaling them to keep their
-  duration was tried and is worse (at 150 and 300 points per cycle the ``e_v`` bias went
-  from -0.001 with 5 points to +0.004 with 10 and 20; ``D_v`` is smooth only close to
-  the impact), while at 10-35 points per cycle neither choice is clearly better.
-* *Points per series* is counted at the base density; the burn-in stays as it is.
-* *Number of window sizes* ``n`` uses the evenly spaced relative windows
-  ``1/n, 2/n, ..., 1`` (the scene's own list when ``n`` is its length).
-* *Simulator*: ``"exact"`` (:mod:`rockdec.physics.simulate`) or ``"fixed_step"``
-  (:mod:`rockdec.physics.fixed_step`) at the same ``dt`` (calibrated on the exact model). The
-  analysis of a fixed-step record uses that record's own stationary statistics
-  (``sigma_Y`` and ``sigma_Ydot`` from a fixed-step pilot), as an analyst of those data
-  would. ``fixed_step_points_per_cycle`` (not in the issue's list) moves the density of
-  the fixed-step simulator too: whether a finer step cures its bias, and at what price.
-
-The model is always the simplified one (eq. 4), whatever the scene's ``model`` (``auto``
-would switch to Housner at the large amplitudes that a fine step reaches at the same
-``sigma_p``: ``3 sigma_Y/theta_cr = 0.33`` at 1000 points per cycle). Under eq. 4 the
-stationary response depends only on ``e`` and the sampling density (docs/method.md §3.4), so each
-configuration stands for every ``sigma_p`` and ``theta_cr``, small amplitudes included;
-a scene that asks for the Housner model is refused.
-
-Every configuration uses the scene's seeds (``first_seed`` on), so configurations that
-share a simulation also share its series. Moving one knob at a time cannot find the best
-*combination*: :func:`recommend` only picks among the configurations run.
+Explanation: docs/explanation/studies/beyond.md (speed against accuracy: the measures and
+the choices the study makes).
 """
 
 from __future__ import annotations
@@ -68,6 +33,11 @@ from rockdec.pipeline import replicates
 from rockdec.physics import fixed_step, run
 from rockdec.report import tables
 from rockdec.physics.run import Run
+
+__all__ = [
+    "ACCURACY_CLASSES", "CRITERIA", "KNOBS", "SETTING_COLUMNS", "base_settings", "configurations",
+    "knob_settings", "pareto_front", "recommend", "run_study", "study_table", "variant_scene",
+]
 
 KNOBS = {
     "points_per_cycle": (5, 10, 20, 35, 75, 150, 300, 1000),
