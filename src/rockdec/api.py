@@ -410,7 +410,7 @@ def simulate(e: float, n_points: int, *, seed=0, model: str = "simplified", poin
     xarray.DataArray
         ``theta(time)`` (``theta(seed, time)`` for several seeds) in rad, with CF
         attributes and the run's settings (``e``, ``dt``, ``sigma_y``, ...) as attributes;
-        ``time`` in s from the end of the burn-in (:data:`RELATIVE_TIME`, no reference date:
+        ``time`` in s from the end of the burn-in (``RELATIVE_TIME``, no reference date:
         ``rockdec simulate``'s files give it one, as CF asks of a file).
 
     Warns

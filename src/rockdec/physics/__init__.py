@@ -33,8 +33,8 @@ _MODULES = {
         "parse_sensor_noise", "read_base_record", "sensor_attrs", "sensor_from_attrs",
     ),
     "run": (
-        "PILOT", "PPC_TOLERANCE", "Run", "calibrate", "model_for", "overturned",
-        "points_per_cycle_shortfall", "simulation_report", "with_model",
+        "DEFAULTS", "PILOT", "PPC_TOLERANCE", "Run", "from_scene", "model_for", "overturned",
+        "points_per_cycle_shortfall", "search", "simulation_report", "with_model",
     ),
     "simulate": (
         "PILOT_POINTS", "PILOT_SEED_OFFSET", "PILOT_SERIES", "STATISTICS_PILOT_SERIES",

@@ -43,12 +43,12 @@ from rockdec.physics.record_model import (
 )
 
 __all__ = [
-    "PILOT", "PPC_TOLERANCE", "Run", "calibrate", "model_for", "overturned", "points_per_cycle_shortfall",
+    "DEFAULTS", "PILOT", "PPC_TOLERANCE", "Run", "from_scene", "model_for", "overturned", "points_per_cycle_shortfall", "search",
     "simulation_report", "with_model",
 ]
 
 #: Pilot sizes of the step search (:func:`rockdec.physics.simulate.calibrate_dt`), the defaults of
-#: :func:`calibrate`'s ``pilot``.
+#: :func:`search`'s ``pilot``.
 PILOT = {"pilot_seeds": simulate.PILOT_SERIES, "pilot_points": simulate.PILOT_POINTS}
 
 
