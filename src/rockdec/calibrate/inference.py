@@ -1037,24 +1037,39 @@ def repair_report(done: repair.Repair | None, dt: float, enabled: bool, why: str
             "repaired": bool(spikes or corner is not None), "why": why}
 
 
+def filter_declared(doc: dict) -> str | None:
+    """What ``doc``'s records were declared to pass through: ``"filter"`` (a filter the
+    calibration simulated), ``"none"`` (declared unfiltered) or ``None`` (not declared)."""
+    model = doc.get("record_model") or {}
+    if model.get("sources", {}).get("sensor_filter") != "declared":
+        return None
+    return "none" if (model.get("simulated") or {}).get("sensor_filter") is None else "filter"
+
+
 def declining_fired(doc: dict) -> list[str]:
     """The checks of :data:`DECLINING_CHECKS` that fired in ``doc`` and decline ``e``: all but a
-    ``filtered`` whose records' filter (or its absence) was declared, which only warns."""
-    declared = (doc.get("record_model") or {}).get("sources", {}).get("sensor_filter") == "declared"
+    ``filtered`` whose records' filter was declared (and simulated), which only warns. Declared
+    unfiltered, ``filtered`` still declines: a soft contact blunts the impacts as a filter does
+    and no declaration models it (:data:`rockdec.record.diagnostics.BLUNTED_HELP`)."""
+    declared = filter_declared(doc) == "filter"
     return [name for name in DECLINING_CHECKS if doc["diagnostics"].get(name, {}).get("fired") and not (name == "filtered" and declared)]
 
 
 def decline_unrepaired(doc: dict) -> dict:
     """``doc`` with ``e`` declined when a check of :data:`DECLINING_CHECKS` fired on the
-    records as estimated (after any repair): ``reason`` names the check and its message. A
-    ``filtered`` that fired warns only when the records' filter (or its absence) was declared."""
+    records as estimated (after any repair): ``reason`` names the check and its message (first,
+    for ``filtered`` on records declared unfiltered, that the declaration does not model a soft
+    contact). A ``filtered`` that fired warns only when the records' filter was declared."""
     fired = declining_fired(doc)
     if doc["e"] is None or not fired:
         return doc
     messages = {code: message for code, message in zip(doc["warning_codes"], doc["warnings"])}
     defects = "; ".join(f"{name}: {messages.get(name, name)}" for name in fired)
     repaired = " after the repair" if doc["repair"]["repaired"] else ""
-    reason = (f"the records show a defect that moves e by more than its interval and that{repaired} is still there ({defects}); "
+    unfiltered = ("`sensor_filter` none was declared, but the impacts are blunted as a filter or a soft contact blunts them, "
+                  "and none does not model a soft contact, which rockdec cannot calibrate; "
+                  if "filtered" in fired and filter_declared(doc) == "none" else "")
+    reason = (f"{unfiltered}the records show a defect that moves e by more than its interval and that{repaired} is still there ({defects}); "
               "e is declined rather than given with an interval that does not hold")
     return {**doc, "e": None, "interval": [None, None], "coverage": None, "estimator": None, "reason": reason}
 
