@@ -1012,7 +1012,7 @@ def _reads(b: belt.Belt, raw: float) -> str:
 #: Checks whose defect moves ``e`` by more than half its interval and which the repair
 #: (:mod:`rockdec.record.repair`) did not remove when they still fire after it: a load whose
 #: strength changes, a block that leans, drift or spikes the repair left, a filter after the
-#: block that was not declared. Any of them fired declines ``e`` (:func:`decline_unrepaired`),
+#: block that was not declared or a soft contact (``filtered``). Any of them fired declines ``e`` (:func:`decline_unrepaired`),
 #: rather than print an interval beside a warning that the record is broken (evidence:
 #: ``benchmarks/repair_study.py``, ``benchmarks/filter_study.py``, docs/explanation/constants.md).
 DECLINING_CHECKS = ("filtered", "nonstationary", "drift", "spikes", "asymmetry")
@@ -1091,7 +1091,7 @@ def estimate(
     measures drift, are high-passed and tried again too (a drift of a few ``sigma_Y`` can
     hide the rocking); when that does not help, the first refusal or decline stands. A check of
     :data:`DECLINING_CHECKS` that fires on the records as estimated declines ``e``
-    (:func:`decline_unrepaired`); ``filtered`` (a filter after the block, not declared) fired on
+    (:func:`decline_unrepaired`); ``filtered`` (a filter after the block or a soft contact, no filter declared) fired on
     the records as given declines ``e`` without the high-pass, which cannot remove a filter
     and moves the zero crossings off the impacts that the check reads, unless the records
     drift (the ``drift`` check fired, or the record model measures drift): a drifting zero
