@@ -15,9 +15,11 @@ import pytest
 
 import rockdec
 from rockdec.calibrate import calibration, inference
+from rockdec.physics.record_model import SensorFilter
 from rockdec.physics.simulate import simulate_block
 from rockdec.rdd import measured
 from rockdec.record import diagnostics
+from rockdec.record.records import Record
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from rocking_reference import flight_reference  # noqa: E402
@@ -114,6 +116,7 @@ def test_a_soft_contact_is_declined_naming_both_causes(small_calibrations, senso
     assert doc["e"] is None and doc["interval"] == [None, None]
     assert "filtered: " in doc["reason"] and "soft contact" in doc["reason"] and "low-pass filter" in doc["reason"]
     assert doc["reason"].startswith("`sensor_filter` none was declared") == (sensor_filter == "none")
+    assert not doc["record_model"]["measured"]["detected"]["colour"] and "point to a soft contact" in doc["reason"]
 
 
 @pytest.mark.parametrize("make", ["generator", "kernel"])
@@ -127,17 +130,44 @@ def test_a_clean_record_declared_unfiltered_is_answered(small_calibrations, make
     assert doc["e"] is not None and doc["interval"][0] <= E <= doc["interval"][1]
 
 
-@pytest.mark.parametrize("simulated, declined", [(None, True), ({"kind": "rc", "order": 1, "corner": 5.0}, False)],
-                         ids=["declared none", "declared a filter"])
-def test_a_fired_filter_check_declined_unless_a_filter_was_simulated(simulated, declined):
+@pytest.mark.parametrize("source, simulated, colour, declined, starts", [
+    ("declared", None, True, True, "`sensor_filter` none was declared"),
+    ("declared", None, False, True, "`sensor_filter` none was declared"),
+    ("measured (none shown)", None, False, True, "the load measures white"),
+    ("measured (none shown)", None, True, True, "the records show a defect"),
+    ("declared", {"kind": "rc", "order": 1, "corner": 5.0}, False, False, None),
+], ids=["declared none", "declared none, white", "checked, white", "checked, coloured", "declared a filter"])
+def test_a_fired_filter_check_declines_unless_a_filter_was_simulated(source, simulated, colour, declined, starts):
     """Declared unfiltered, a fired ``filtered`` declines ``e`` (a soft contact, which no
-    declaration models), the reason saying so first; a declared filter that the calibration
-    simulated leaves it a warning."""
+    declaration models), the reason saying so first; a load measured white points to a soft
+    contact; a declared filter that the calibration simulated leaves it a warning."""
     doc = {"e": 0.97, "interval": [0.95, 0.99], "coverage": 0.95, "estimator": "e_v", "reason": None,
            "diagnostics": {"filtered": {"fired": True}}, "warning_codes": ["filtered"], "warnings": ["the impacts' velocity jumps are spread"],
            "repair": {"repaired": False},
-           "record_model": {"sources": {"sensor_filter": "declared"}, "simulated": {} if simulated is None else {"sensor_filter": simulated}}}
+           "record_model": {"sources": {"sensor_filter": source}, "simulated": {} if simulated is None else {"sensor_filter": simulated},
+                            "measured": {"detected": {"colour": colour}}}}
     out = inference.decline_unrepaired(doc)
-    assert (out["e"] is None) == declined and inference.filter_declared(doc) == ("none" if simulated is None else "filter")
-    assert not declined or out["reason"].startswith("`sensor_filter` none was declared") and "soft contact" in out["reason"]
+    assert (out["e"] is None) == declined
+    assert inference.filter_declared(doc) == (None if source != "declared" else "none" if simulated is None else "filter")
     assert declined or out == doc
+    if declined:
+        assert out["reason"].startswith(starts) and ("point to a soft contact" in out["reason"]) == (not colour)
+        assert "filtered: the impacts' velocity jumps are spread" in out["reason"]
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_a_first_order_filter_colours_a_white_load_and_a_soft_contact_does_not(seed):
+    """The premise of the soft-contact hint: on white-load records, a contact of 1.5 or 3
+    samples leaves the load read white, while a first-order filter after the block (causal at
+    5 rocking frequencies, zero-phase at 20: gentle enough to pass the roll-off check) makes it
+    read low-pass."""
+    def read(y):
+        choice = inference.choose_model(inference.analyse([Record(y, DT, "record")]))
+        return choice.declined is None, choice.measurement.coloured
+
+    for contact in (1.5, 3.0):
+        assert read(soft_record(seed, 40_000, contact=contact, e=E)) == (True, False)
+    y = soft_record(seed, 40_000, contact=0, e=E)
+    ppc = measured.analyse([y], DT).points_per_cycle
+    for found in (SensorFilter("rc", 1, 5.0, False), SensorFilter("rc", 1, 20.0, True)):
+        assert read(found.apply(y, ppc)) == (True, True), found.text()

@@ -1055,22 +1055,36 @@ def declining_fired(doc: dict) -> list[str]:
     return [name for name in DECLINING_CHECKS if doc["diagnostics"].get(name, {}).get("fired") and not (name == "filtered" and declared)]
 
 
+def blunted_cause(doc: dict) -> str:
+    """What ``doc``'s reason says first when ``filtered`` declines ``e`` (else ``""``): on records
+    declared unfiltered, that none does not model a soft contact; and when the record model
+    measured the load white (no colour detected), that the blunting points to a soft
+    contact: a first-order filter after the block, gentle enough to pass the roll-off check,
+    makes a white load read low-pass, while a soft contact leaves the load as it is
+    (tests/calibrate/test_soft_contact.py)."""
+    if "filtered" not in declining_fired(doc):
+        return ""
+    detected = ((doc.get("record_model") or {}).get("measured") or {}).get("detected") or {}
+    white = detected.get("colour") is False
+    return (("`sensor_filter` none was declared, but the impacts are blunted as a filter or a soft contact blunts them, "
+             "and none does not model a soft contact, which rockdec cannot calibrate; " if filter_declared(doc) == "none" else "")
+            + ("the load measures white, which a low-pass filter after the block would make read low-pass, so the blunted "
+               "impacts point to a soft contact; " if white else ""))
+
+
 def decline_unrepaired(doc: dict) -> dict:
     """``doc`` with ``e`` declined when a check of :data:`DECLINING_CHECKS` fired on the
-    records as estimated (after any repair): ``reason`` names the check and its message (first,
-    for ``filtered`` on records declared unfiltered, that the declaration does not model a soft
-    contact). A ``filtered`` that fired warns only when the records' filter was declared."""
+    records as estimated (after any repair): ``reason`` names the check and its message, after
+    what :func:`blunted_cause` says of a fired ``filtered``. A ``filtered`` that fired warns
+    only when the records' filter was declared."""
     fired = declining_fired(doc)
     if doc["e"] is None or not fired:
         return doc
     messages = {code: message for code, message in zip(doc["warning_codes"], doc["warnings"])}
     defects = "; ".join(f"{name}: {messages.get(name, name)}" for name in fired)
     repaired = " after the repair" if doc["repair"]["repaired"] else ""
-    unfiltered = ("`sensor_filter` none was declared, but the impacts are blunted as a filter or a soft contact blunts them, "
-                  "and none does not model a soft contact, which rockdec cannot calibrate; "
-                  if "filtered" in fired and filter_declared(doc) == "none" else "")
-    reason = (f"{unfiltered}the records show a defect that moves e by more than its interval and that{repaired} is still there ({defects}); "
-              "e is declined rather than given with an interval that does not hold")
+    reason = (f"{blunted_cause(doc)}the records show a defect that moves e by more than its interval and that{repaired} is still "
+              f"there ({defects}); e is declined rather than given with an interval that does not hold")
     return {**doc, "e": None, "interval": [None, None], "coverage": None, "estimator": None, "reason": reason}
 
 
