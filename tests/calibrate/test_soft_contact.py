@@ -105,12 +105,13 @@ def small_calibrations(tmp_path_factory):
 
 @pytest.mark.hostile("wrong answers", "refused")
 @pytest.mark.parametrize("sensor_filter", ["auto", "none"])
-def test_a_soft_contact_is_declined_naming_both_causes(small_calibrations, sensor_filter):
-    """A contact of 3 samples at ``e = 0.9``: ``filtered`` fires; checked for a filter, ``e``
-    is declined naming a filter and a soft contact; declared unfiltered (the advice a filter's
-    decline once ended with, which gave ``e`` about 0.97, confidently), it is declined too,
-    the reason first saying that none does not model a soft contact."""
-    y = soft_record(7, 40_000, contact=3, e=E)
+@pytest.mark.parametrize("contact, e", [(3.0, 0.9), (1.5, 0.9), (3.0, 0.8)], ids=["3 samples", "1.5 samples", "3 samples, e 0.8"])
+def test_a_soft_contact_is_declined_naming_both_causes(small_calibrations, sensor_filter, contact, e):
+    """A contact of 3 or 1.5 samples: ``filtered`` fires; checked for a filter, ``e`` is
+    declined naming a filter and a soft contact; declared unfiltered (the advice a filter's
+    decline once ended with, which gave ``e`` about 0.97 for 0.9, confidently), it is declined
+    too, the reason first saying that none does not model a soft contact."""
+    y = soft_record(7, 40_000, contact=contact, e=e)
     doc = rockdec.estimate(y, DT, sensor_filter=sensor_filter, cache=small_calibrations).to_dict()
     assert doc["diagnostics"]["filtered"]["fired"]
     assert doc["e"] is None and doc["interval"] == [None, None]

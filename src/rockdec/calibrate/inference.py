@@ -1066,8 +1066,8 @@ def blunted_cause(doc: dict) -> str:
         return ""
     detected = ((doc.get("record_model") or {}).get("measured") or {}).get("detected") or {}
     white = detected.get("colour") is False
-    return (("`sensor_filter` none was declared, but the impacts are blunted as a filter or a soft contact blunts them, "
-             "and none does not model a soft contact, which rockdec cannot calibrate; " if filter_declared(doc) == "none" else "")
+    return (("`sensor_filter` none was declared, but the impacts are blunted and none does not model a soft contact, which "
+             "rockdec cannot calibrate; " if filter_declared(doc) == "none" else "")
             + ("the load measures white, which a low-pass filter after the block would make read low-pass, so the blunted "
                "impacts point to a soft contact; " if white else ""))
 
