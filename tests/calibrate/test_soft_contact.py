@@ -172,3 +172,17 @@ def test_a_first_order_filter_colours_a_white_load_and_a_soft_contact_does_not(s
     ppc = measured.analyse([y], DT).points_per_cycle
     for found in (SensorFilter("rc", 1, 5.0, False), SensorFilter("rc", 1, 20.0, True)):
         assert read(found.apply(y, ppc)) == (True, True), found.text()
+
+
+@pytest.mark.hostile("wrong answers", "refused")
+@pytest.mark.parametrize("found", [SensorFilter("butterworth", 4, 5.0, True), SensorFilter("rc", 1, 5.0, False)], ids=lambda f: f.text())
+def test_a_filtered_record_declared_unfiltered_is_declined(small_calibrations, found):
+    """A filter after the block that the user declares absent: the roll-off check is skipped
+    (declared), the calibration simulates unfiltered records, and ``filtered`` fires; it
+    declines ``e`` (it once only warned beside an interval that could miss), the reason
+    saying that none was declared."""
+    y = simulate_block([13], 40_000, dt=DT, g=1.0, e=E, sigma_p=1.0, burn_in=BURN_IN)[0][0]
+    z = found.apply(y, measured.analyse([y], DT).points_per_cycle)
+    doc = rockdec.estimate(z, DT, sensor_filter="none", cache=small_calibrations).to_dict()
+    assert doc["diagnostics"]["filtered"]["fired"] and doc["e"] is None
+    assert doc["reason"].startswith("`sensor_filter` none was declared") and "low-pass filter" in doc["reason"]
