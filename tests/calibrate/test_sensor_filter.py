@@ -231,7 +231,7 @@ def test_a_fired_filter_check_declines_unless_the_filter_was_declared(source, de
     doc = {"e": 0.9, "interval": [0.88, 0.92], "coverage": 0.95, "estimator": "e_0", "reason": None,
            "diagnostics": {"filtered": {"fired": True}, "drift": {"fired": False}}, "warning_codes": ["filtered"],
            "warnings": ["the impacts' velocity jumps are spread"], "repair": {"repaired": False},
-           "record_model": {"sources": {"sensor_filter": source}, "simulated": {"sensor_filter": {"kind": "rc"}}}}
+           "record_model": {"sources": {"sensor_filter": source}}}
     out = inference.decline_unrepaired(doc)
     assert (out["e"] is None) == declined and (out["interval"] == [None, None]) == declined
     assert not declined or "filtered: the impacts' velocity jumps are spread" in out["reason"]
@@ -242,7 +242,7 @@ def test_a_filter_shown_on_the_records_as_given_is_not_high_passed(monkeypatch, 
     """A causal filter rings after each impact and can fire ``spikes`` beside ``filtered``;
     the high-pass that spikes would start cannot remove a filter and moves the zero crossings
     off the impacts, so an undeclared filter declines ``e`` on the records as given, its reason
-    first. A declared filter (simulated), ``filtered`` only warns and the repair goes on."""
+    first. Declared, ``filtered`` only warns and the repair goes on."""
     calls = []
 
     def once(records, *args, **kwargs):
@@ -251,7 +251,7 @@ def test_a_filter_shown_on_the_records_as_given_is_not_high_passed(monkeypatch, 
                "calibration": {"file": "calibration-x.nc"}, "points_per_cycle": 75.0,
                "diagnostics": {"filtered": {"fired": True}, "spikes": {"fired": True}}, "warning_codes": ["spikes", "filtered"],
                "warnings": ["a sample stands far off", "the impacts' velocity jumps are spread"], "repair": {"repaired": bool(calls[1:])},
-               "record_model": {"sources": {"sensor_filter": source}, "simulated": {"sensor_filter": {"kind": "rc"}}}}
+               "record_model": {"sources": {"sensor_filter": source}}}
         return inference.Outcome(doc, None, {})
 
     monkeypatch.setattr(inference, "estimate_once", once)

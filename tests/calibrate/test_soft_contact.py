@@ -131,25 +131,23 @@ def test_a_clean_record_declared_unfiltered_is_answered(small_calibrations, make
     assert doc["e"] is not None and doc["interval"][0] <= E <= doc["interval"][1]
 
 
-@pytest.mark.parametrize("source, simulated, colour, declined, starts", [
-    ("declared", None, True, True, "`sensor_filter` none was declared"),
-    ("declared", None, False, True, "`sensor_filter` none was declared"),
-    ("measured (none shown)", None, False, True, "the load measures white"),
-    ("measured (none shown)", None, True, True, "the records show a defect"),
-    ("declared", {"kind": "rc", "order": 1, "corner": 5.0}, False, False, None),
-], ids=["declared none", "declared none, white", "checked, white", "checked, coloured", "declared a filter"])
-def test_a_fired_filter_check_declines_unless_a_filter_was_simulated(source, simulated, colour, declined, starts):
+@pytest.mark.parametrize("source, unfiltered, colour, declined, starts", [
+    ("declared", True, True, True, "`sensor_filter` none was declared"),
+    ("declared", True, False, True, "`sensor_filter` none was declared"),
+    ("measured (none shown)", False, False, True, "the load measures white"),
+    ("measured (none shown)", False, True, True, "the records show a defect"),
+    ("declared", False, False, False, None),
+], ids=["declared none", "declared none, white", "checked, white", "checked, coloured", "declared a filter or the whole model"])
+def test_a_fired_filter_check_declines_unless_a_filter_was_declared(source, unfiltered, colour, declined, starts):
     """Declared unfiltered, a fired ``filtered`` declines ``e`` (a soft contact, which no
     declaration models), the reason saying so first; a load measured white points to a soft
-    contact; a declared filter that the calibration simulated leaves it a warning."""
+    contact; a declared filter (or a record model declared whole) leaves it a warning."""
     doc = {"e": 0.97, "interval": [0.95, 0.99], "coverage": 0.95, "estimator": "e_v", "reason": None,
            "diagnostics": {"filtered": {"fired": True}}, "warning_codes": ["filtered"], "warnings": ["the impacts' velocity jumps are spread"],
            "repair": {"repaired": False},
-           "record_model": {"sources": {"sensor_filter": source}, "simulated": {} if simulated is None else {"sensor_filter": simulated},
-                            "measured": {"detected": {"colour": colour}}}}
-    out = inference.decline_unrepaired(doc)
+           "record_model": {"sources": {"sensor_filter": source}, "measured": {"detected": {"colour": colour}}}}
+    out = inference.decline_unrepaired(doc, unfiltered)
     assert (out["e"] is None) == declined
-    assert inference.filter_declared(doc) == (None if source != "declared" else "none" if simulated is None else "filter")
     assert declined or out == doc
     if declined:
         assert out["reason"].startswith(starts) and ("point to a soft contact" in out["reason"]) == (not colour)
