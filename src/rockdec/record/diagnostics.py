@@ -104,9 +104,9 @@ FLOOR_E = 0.95
 #: velocities (the narrow ones: one sample).
 IMPACT_WIDE = 4
 
-#: What a record that shows a filter after the block should do: the end of ``filtered``'s
-#: message and of the decline before any calibration
-#: (:func:`rockdec.calibrate.inference.filter_decline`).
+#: What a record that shows a steep filter after the block should do: the end of the decline
+#: before any calibration (:func:`rockdec.calibrate.inference.filter_decline`; a soft contact
+#: does not steepen the spectrum, so ``filtered``'s message ends with :data:`BLUNTED_HELP`).
 FILTER_HELP = (
     "a low-pass filter after the block (a logger's anti-alias filter, a sensor's bandwidth, a smoothing) rounds the "
     "impacts, which moves e; declare it (`sensor_filter` butterworth:ORDER:CORNER:PHASE or rc:CORNER:PHASE, with `load` "
