@@ -163,7 +163,8 @@ def estimate(theta, dt: float | None = None, *, g: float | None = None, load="au
     sensor_filter : str, SensorFilter or None, optional
         A low-pass filter between the block and the record, which the calibration applies to
         its simulated records: ``"auto"`` (the record is checked for one and ``e`` declined
-        when it shows one), ``"none"`` (the record is unfiltered), or
+        when it shows one), ``"none"`` (the record is unfiltered; impacts blunted as a filter
+        or a soft contact blunts them still decline ``e``), or
         ``"butterworth:ORDER:CORNER:PHASE"`` / ``"rc:CORNER:PHASE"`` with CORNER in rocking
         frequencies (eq. 5) or Hz (``12hz``) and PHASE ``zero-phase`` or ``causal``; declare
         ``load`` and ``sensor_noise`` beside it.

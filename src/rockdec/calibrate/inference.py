@@ -1120,7 +1120,7 @@ def _reads(b: belt.Belt, raw: float) -> str:
 #: Checks whose defect moves ``e`` by more than half its interval and which the repair
 #: (:mod:`rockdec.record.repair`) did not remove when they still fire after it: a load whose
 #: strength changes, a block that leans, drift or spikes the repair left, a filter after the
-#: block that was not declared. Any of them fired declines ``e`` (:func:`decline_unrepaired`),
+#: block that was not declared or a soft contact (``filtered``). Any of them fired declines ``e`` (:func:`decline_unrepaired`),
 #: rather than print an interval beside a warning that the record is broken (evidence:
 #: ``benchmarks/repair_study.py``, ``benchmarks/filter_study.py``, docs/explanation/constants.md).
 DECLINING_CHECKS = ("filtered", "nonstationary", "drift", "spikes", "asymmetry")
@@ -1145,25 +1145,48 @@ def repair_report(done: repair.Repair | None, dt: float, enabled: bool, why: str
             "repaired": bool(spikes or corner is not None), "why": why}
 
 
-def declining_fired(doc: dict) -> list[str]:
+def declining_fired(doc: dict, unfiltered: bool = False) -> list[str]:
     """The checks of :data:`DECLINING_CHECKS` that fired in ``doc`` and decline ``e``: all but a
-    ``filtered`` whose records' filter (or its absence) was declared, which only warns."""
-    declared = (doc.get("record_model") or {}).get("sources", {}).get("sensor_filter") == "declared"
+    ``filtered`` whose records' filter (or its absence, in a record model declared whole) was
+    declared, which only warns. ``unfiltered``: the records were declared unfiltered
+    (``sensor_filter`` none), where ``filtered`` declines too: a soft contact blunts the
+    impacts as a filter does and no declaration models it
+    (:data:`rockdec.record.diagnostics.BLUNTED_HELP`)."""
+    declared = (doc.get("record_model") or {}).get("sources", {}).get("sensor_filter") == "declared" and not unfiltered
     return [name for name in DECLINING_CHECKS if doc["diagnostics"].get(name, {}).get("fired") and not (name == "filtered" and declared)]
 
 
-def decline_unrepaired(doc: dict) -> dict:
+def blunted_cause(doc: dict, unfiltered: bool = False) -> str:
+    """What ``doc``'s reason says first when ``filtered`` declines ``e`` (else ``""``): on records
+    declared unfiltered (``unfiltered``), that none does not model a soft contact; and when
+    the record model measured the load white (no colour detected), that the blunting points
+    to a soft contact: a first-order filter after the block, gentle enough to pass the
+    roll-off check, makes a white load read low-pass, while a soft contact leaves the load as
+    it is (tests/calibrate/test_soft_contact.py)."""
+    if "filtered" not in declining_fired(doc, unfiltered):
+        return ""
+    detected = ((doc.get("record_model") or {}).get("measured") or {}).get("detected") or {}
+    white = detected.get("colour") is False
+    return (("`sensor_filter` none was declared, but the impacts are blunted and none does not model a soft contact, which "
+             "rockdec cannot calibrate; " if unfiltered else "")
+            + ("the load measures white, which a low-pass filter after the block would make read low-pass, so the blunted "
+               "impacts point to a soft contact; " if white else ""))
+
+
+def decline_unrepaired(doc: dict, unfiltered: bool = False) -> dict:
     """``doc`` with ``e`` declined when a check of :data:`DECLINING_CHECKS` fired on the
-    records as estimated (after any repair): ``reason`` names the check and its message. A
-    ``filtered`` that fired warns only when the records' filter (or its absence) was declared."""
-    fired = declining_fired(doc)
+    records as estimated (after any repair): ``reason`` names the check and its message, after
+    what :func:`blunted_cause` says of a fired ``filtered``. A ``filtered`` that fired warns
+    only when the records' filter (or its absence, in a record model declared whole) was
+    declared; ``unfiltered``: :func:`declining_fired`."""
+    fired = declining_fired(doc, unfiltered)
     if doc["e"] is None or not fired:
         return doc
     messages = {code: message for code, message in zip(doc["warning_codes"], doc["warnings"])}
     defects = "; ".join(f"{name}: {messages.get(name, name)}" for name in fired)
     repaired = " after the repair" if doc["repair"]["repaired"] else ""
-    reason = (f"the records show a defect that moves e by more than its interval and that{repaired} is still there ({defects}); "
-              "e is declined rather than given with an interval that does not hold")
+    reason = (f"{blunted_cause(doc, unfiltered)}the records show a defect that moves e by more than its interval and that{repaired} "
+              f"is still there ({defects}); e is declined rather than given with an interval that does not hold")
     return {**doc, "e": None, "interval": [None, None], "coverage": None, "estimator": None, "reason": reason}
 
 
@@ -1185,7 +1208,7 @@ def estimate(
     measures drift, are high-passed and tried again too (a drift of a few ``sigma_Y`` can
     hide the rocking); when that does not help, the first refusal or decline stands. A check of
     :data:`DECLINING_CHECKS` that fires on the records as estimated declines ``e``
-    (:func:`decline_unrepaired`); ``filtered`` (a filter after the block, not declared) fired on
+    (:func:`decline_unrepaired`); ``filtered`` (a filter after the block or a soft contact; with ``sensor_filter`` none too) fired on
     the records as given declines ``e`` without the high-pass, which cannot remove a filter
     and moves the zero crossings off the impacts that the check reads, unless the records
     drift (the ``drift`` check fired, or the record model measures drift): a drifting zero
@@ -1243,9 +1266,10 @@ def estimate(
     # a filter after the block is not what a high-pass mends, and the high-pass moves the zero crossings off the impacts
     # that the check reads: the records as given decide it (its ringing can fire spikes too); but a drifting zero moves
     # the crossings off the impacts as well and fires it on unfiltered records, so drift is high-passed first
-    filter_shown = not failed and "filtered" in declining_fired(doc) and not (drifting or "drift" in fired)
+    unfiltered = model is None and sensor_filter is None  # declared none: filtered declines (a soft contact)
+    filter_shown = not failed and "filtered" in declining_fired(doc, unfiltered) and not (drifting or "drift" in fired)
     if filter_shown or not (fired or drifting or doc is None):  # a decline for the load or the instrument is not retried unless drift is measured
-        return first._replace(document=decline_unrepaired(doc))
+        return first._replace(document=decline_unrepaired(doc, unfiltered))
     log.info("estimating again after a high-pass well below the rocking frequency (drift)")
     hp = repair.settings(bool(found), True)
     ppc = doc["points_per_cycle"] if doc is not None and doc["points_per_cycle"] else repair.cycle_samples([r.theta for r in despiked])
@@ -1265,10 +1289,10 @@ def estimate(
     if failed and (second is None or second.document["calibration"]["file"] is None):  # the high-pass did not help: as given
         if first is None:
             raise refusal
-        return first._replace(document=decline_unrepaired(doc))
+        return first._replace(document=decline_unrepaired(doc, unfiltered))
     if second is None:
-        return first._replace(document=decline_unrepaired(doc))
-    return second._replace(document=decline_unrepaired(second.document))
+        return first._replace(document=decline_unrepaired(doc, unfiltered))
+    return second._replace(document=decline_unrepaired(second.document, unfiltered))
 
 
 def estimate_once(

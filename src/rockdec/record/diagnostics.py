@@ -70,20 +70,33 @@ IMPACT_WIDE = 4
 
 #: Fewest steps of a quantised record's resolution that the one-sample velocities at its
 #: fast zero crossings must span for :func:`impact_ratios` to read them (:func:`impact_steps`):
-#: records of ``e`` 0.7-0.95 at 40-120 samples per cycle rounded to counts of ``sigma_Y`` / 50
-#: to / 2,000 move the statistic of ``filtered`` off the unrounded record's by up to 0.17 at 4
-#: steps, 0.054 at 10-29 and at most 0.011 from 42 on, against a spread of 0.006-0.01 among
-#: clean records (20 records a cell, ``benchmarks/quantised_records.py``).
+#: below it the rounding moves the statistic of ``filtered`` beyond the spread of clean
+#: records (evidence: ``benchmarks/quantised_records.py``).
 IMPACT_MIN_STEPS = 50
 
-#: What a record that shows a filter after the block should do: the end of ``filtered``'s
-#: message and of the decline before any calibration
-#: (:func:`rockdec.calibrate.inference.filter_decline`).
+#: What a record that shows a steep filter after the block should do: the end of the decline
+#: before any calibration (:func:`rockdec.calibrate.inference.filter_decline`; a soft contact
+#: does not steepen the spectrum, so ``filtered``'s message ends with :data:`BLUNTED_HELP`).
 FILTER_HELP = (
     "a low-pass filter after the block (a logger's anti-alias filter, a sensor's bandwidth, a smoothing) rounds the "
     "impacts, which moves e; declare it (`sensor_filter` butterworth:ORDER:CORNER:PHASE or rc:CORNER:PHASE, with `load` "
     "and `sensor_noise`) and the calibration filters its records alike, or `sensor_filter` none if the records are not "
     "filtered"
+)
+
+#: What a record whose impacts are blunted (``filtered`` fired) may hold and what to do: the
+#: end of ``filtered``'s message. A soft contact spreads each impact's velocity change over
+#: several samples as a filter does; the calibration's impacts are instantaneous (eq. 6), so
+#: no declaration models it, but keeping every k-th sample (no anti-alias filter) can fit the
+#: contact inside one sample step.
+BLUNTED_HELP = (
+    "either a low-pass filter between the block and the sensor (a logger's anti-alias filter, a sensor's bandwidth, "
+    "a smoothing) or a soft contact (the block's impact on its base lasting several samples, where the model's impact "
+    "is instantaneous, eq. 6), and either moves e; a filter: declare it (`sensor_filter` butterworth:ORDER:CORNER:PHASE "
+    "or rc:CORNER:PHASE, with `load` and `sensor_noise`) and the calibration filters its records alike; a soft contact: "
+    "rockdec cannot calibrate one and declaring `sensor_filter` none does not model it, but keeping every k-th sample "
+    "(no anti-alias filter) so that the contact lasts less than one sample step, at no fewer samples per cycle than "
+    "the analysis needs, can make the impacts sharp again"
 )
 
 #: Fewest of the records' trigger positions whose segment holds no NaN (:func:`segments`)
@@ -625,10 +638,10 @@ REGISTRY = (
           "the response is asymmetric: the block falls back with a different g on each side (|g+ - g-|/(g+ + g-) "
           "{value:.3f}, calibrated limit {threshold:.3f}); it may lean on one side or the load push one way, and the "
           "model assumes a symmetric block", "root", "widest"),
-    Check("filtered", "a low-pass filter after the block", impact_sharpness, "high",
+    Check("filtered", "a low-pass filter after the block, or a soft contact", impact_sharpness, "high",
           "the impacts' velocity jumps are spread over several samples: read over one sample they hold {value:+.3f} more "
-          "of the jump's logarithm than read over " + str(IMPACT_WIDE) + ", where unfiltered records of this model reach "
-          "{threshold:+.3f}: " + FILTER_HELP),
+          "of the jump's logarithm than read over " + str(IMPACT_WIDE) + ", where records of this model (unfiltered, "
+          "instantaneous impacts) reach {threshold:+.3f}: " + BLUNTED_HELP),
     Check("few_triggers", "gaps (NaN) that cost triggers", segments, "low",
           "gaps (NaN) leave {value:.0%} of the record's trigger positions a whole segment (below {threshold:.0%}): the "
           "record gives that share of the triggers of the calibration's records, which have no gaps, so its interval is "
