@@ -4,10 +4,10 @@ The random test assumes a stationary random load: the block's response keeps one
 over the record. The response to an earthquake or a shake-table test builds up, holds and dies
 away, and the block rocks down to rest after the base stops. :func:`envelope` splits each record
 into :data:`BLOCKS` blocks of equal length and compares the variance of the strongest with that
-of the stronger of its two end blocks (:attr:`Envelope.decades`, in decades): a record that
-builds up from rest and rocks down to rest begins and ends with blocks whose variance is little
-more than the sensor's, decades below its strong phase, while a stationary record's end blocks
-are as strong as any other block, give or take its random bursts. Above :data:`DECADES` the record's
+of the stronger of its two end blocks, their white sensor noise taken out (:attr:`Envelope.decades`,
+in decades): a record that builds up from rest and rocks down to rest begins and ends with blocks
+that hold little but the sensor's noise, while a stationary record's end blocks rock as strongly
+as any other block, give or take its random bursts. Above :data:`DECADES` the record's
 load is a transient and ``e`` is declined before any calibration
 (:func:`rockdec.calibrate.inference.transient_decline`). Evidence:
 ``tests/calibrate/test_transient_load.py`` (its false alarms on stationary records of the
@@ -26,8 +26,8 @@ __all__ = ["BLOCKS", "DECADES", "Envelope", "STRETCH", "envelope"]
 BLOCKS = 16
 
 #: A record whose strongest block's variance is more than this many decades above both its end
-#: blocks' is a transient (evidence: the module docstring).
-DECADES = 3.0
+#: blocks' (their white noise taken out) is a transient (evidence: the module docstring).
+DECADES = 4.0
 
 #: The strongest stretch the reason names: this many consecutive blocks.
 STRETCH = 4
@@ -35,7 +35,7 @@ STRETCH = 4
 
 class Envelope(NamedTuple):
     """A record's envelope: ``decades`` between its strongest block's variance and the larger of
-    its first and last blocks' (``inf`` when neither moves), the ``seconds`` of its strongest stretch of
+    its first and last blocks', their white noise taken out (``inf`` when neither rocks), the ``seconds`` of its strongest stretch of
     :data:`STRETCH` blocks and the ``share`` of the record's energy (sum of squares about each
     block's mean) it holds; ``transient``: ``decades`` above :data:`DECADES`."""
 
@@ -47,6 +47,12 @@ class Envelope(NamedTuple):
     def transient(self) -> bool:
         """Whether the record's load is a transient."""
         return self.decades > DECADES
+
+
+def _rocking_variance(block: np.ndarray) -> float:
+    """The variance of ``block`` less its white sensor noise's, read off the first differences
+    (white noise's differences have twice its variance; a smooth rocking record's far less)."""
+    return float(np.nanvar(block) - 0.5 * np.nanvar(np.diff(block)))
 
 
 def envelope(theta: np.ndarray, dt: float) -> Envelope | None:
@@ -63,6 +69,6 @@ def envelope(theta: np.ndarray, dt: float) -> Envelope | None:
     stretch = np.convolve(energy, np.ones(STRETCH), mode="valid")
     strongest = int(np.argmax(stretch))
     seconds = sum(b.size for b in blocks[strongest:strongest + STRETCH]) * dt
-    ends = max(var[0], var[-1])
+    ends = max(_rocking_variance(blocks[0]), _rocking_variance(blocks[-1]))
     decades = float(np.log10(var.max() / ends)) if ends > 0.0 else float("inf")
     return Envelope(decades, float(seconds), float(stretch[strongest] / energy.sum()))
