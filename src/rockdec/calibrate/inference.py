@@ -52,7 +52,7 @@ __all__ = [
     "RECORD_SECONDS", "SIDE_G_SHARE", "analyse", "beyond", "calibration_sets", "check_pooled",
     "checks_place", "choose_model", "colour_decline", "cost", "coverage_floor", "declared_contradictions",
     "decline_unrepaired", "diagnose", "estimate", "filter_decline", "measure_model", "own_scales",
-    "record_model", "select", "stage_seconds", "unresolved_impacts",
+    "record_model", "select", "stage_seconds", "transient_decline", "unresolved_impacts",
 ]
 
 log = logging.getLogger(__name__)
@@ -437,6 +437,26 @@ def colour_decline(model: RecordModel, sources: dict, measurement, points_per_cy
     )
 
 
+def transient_decline(records: list[Record], dt: float) -> str | None:
+    """Why ``e`` is declined, before any calibration, for records whose load is a transient (an
+    earthquake or a shake-table test: :attr:`rockdec.record.transient.Envelope.transient`), in one
+    sentence naming the first such record, its strongest stretch's share of its energy and what
+    to do instead; else ``None``."""
+    from rockdec.record import transient
+
+    for r in records:
+        found = transient.envelope(r.theta, dt)
+        if found is not None and found.transient:
+            return (
+                f"the record's amplitude builds up and dies away ({r.source}: its strongest {found.seconds:.3g} s hold "
+                f"{100.0 * found.share:.0f} % of its energy, its strongest stretch more than {transient.DECADES:g} decades "
+                "of variance above both its ends): the load is a transient, an earthquake or a shake-table test, not the "
+                "stationary random load the random test assumes; estimate e with the free-rocking test (`--test free`, "
+                "rockdec.free_rocking) on the free decay after the shaking, cut by hand after the base has stopped moving"
+            )
+    return None
+
+
 def filter_decline(rolloff) -> str | None:
     """Why ``e`` is declined, before any calibration, for records whose second differences fall
     faster than any unfiltered rocking record's (:attr:`rockdec.record.record_measure.Rolloff.filtered`:
@@ -611,6 +631,7 @@ NOTE_CODES = {
     "load_contradicted": "the declared load is not what the records show, beyond the measurement's error",
     "base_short": "a declared base record's spectrum stops below the rocking record's Nyquist frequency",
     "filtered_unchecked": "a record is quantised too coarsely for the check filtered to read its impacts; it was not checked",
+    "transient_load": "a record's amplitude builds up and dies away: its load is a transient, not a stationary random load; e is declined",
 }
 
 
@@ -649,7 +670,8 @@ def analyse(records: list[Record], *, g: float | None = None, settings: dict | N
     given together in different units (their own ``g``, :func:`own_scales`, apart by
     :data:`rockdec.calibrate.consistency.UNITS_RATIO` or more), records
     the analysis cannot read, records that do not look like rocking
-    (:func:`rockdec.rdd.measured.rocking_shape`) and a given ``g`` off the records' own by
+    (:func:`rockdec.rdd.measured.rocking_shape`; either refusal says so when a record's load is
+    a transient, :func:`transient_decline`) and a given ``g`` off the records' own by
     more than :data:`G_FACTOR`.
     """
     settings = {**measured.DEFAULT_SETTINGS, **(settings or {})}
@@ -672,7 +694,10 @@ def analyse(records: list[Record], *, g: float | None = None, settings: dict | N
     notes = []
     try:
         own = _analyse(records, dt, settings, None)
-    except RecordError:
+    except RecordError as exc:
+        shaken = transient_decline(records, dt)
+        if shaken:
+            raise RecordError(f"{names} cannot be analysed ({str(exc).rstrip('.')}): {shaken}.") from exc
         if g is None:
             raise
         own = None
@@ -682,6 +707,9 @@ def analyse(records: list[Record], *, g: float | None = None, settings: dict | N
     analysis = _analyse(records, dt, settings, g) if g is not None else own
     shape = measured.rocking_shape(own if own is not None else analysis)
     if shape:
+        shaken = transient_decline(records, dt)
+        if shaken:
+            raise RecordError(f"{names} does not look like a rocking record ({shape}): {shaken}.")
         raise RecordError(f"{names} does not look like a rocking record: {shape}; e is estimated only for rocking records.")
     return Analysed(tuple(records), dt, samples, settings, own, analysis, g, tuple(notes), None if apart is None else apart.message)
 
@@ -759,8 +787,9 @@ def choose_model(
     declared (:func:`rockdec.record.record_measure.rolloff`), choose what the calibration
     simulates (:func:`record_model`), note declared parts the records contradict
     (:func:`declared_contradictions`) and a base record whose spectrum stops short
-    (:func:`base_short`), and whether the records must be declined (records
-    given together whose own ``g`` lie too far apart, :attr:`Analysed.scales_apart`;
+    (:func:`base_short`), and whether the records must be declined (a transient load,
+    :func:`transient_decline`, first and with a ``transient_load`` :class:`Note`, its model
+    not measured; records given together whose own ``g`` lie too far apart, :attr:`Analysed.scales_apart`;
     :func:`filter_decline`, :func:`colour_decline`, or a part left to measure that cannot
     be). Housner's model (eq. 2) needs ``theta_cr``, and only it. ``repaired``: the repair
     the records had (:func:`rockdec.record.repair.settings`), which the calibration's sets
@@ -771,7 +800,9 @@ def choose_model(
     if model is None:
         check_filter_declared_with_model(sensor_filter, load, sensor)
     filtered = isinstance(sensor_filter, SensorFilter) or (model is not None and model.filter is not None)
-    measurement, why_not = measure_model(list(analysed.records), analysed.dt) if model is None and not filtered else (None, "declared")
+    shaken = transient_decline(list(analysed.records), analysed.dt)
+    measured_here = model is None and not filtered and shaken is None  # a transient's model is not measured: it is declined
+    measurement, why_not = measure_model(list(analysed.records), analysed.dt) if measured_here else (None, "declared" if shaken is None else "a transient load")
     checking = model is None and isinstance(sensor_filter, str)
     found = rolloff([r.theta for r in analysed.records], analysed.analysis.points_per_cycle) if checking else None
     model, sources = record_model(measurement, analysed.analysis, model=model, load=load, sensor=sensor, rocking=rocking, sensor_filter=sensor_filter)
@@ -783,7 +814,9 @@ def choose_model(
     cal_settings = calibration.calibration_settings(
         [r.theta.size for r in analysed.records], analysed.analysis.points_per_cycle, analysed.settings, model, ratio, repaired,
     )
-    if analysed.scales_apart:
+    if shaken:
+        declined = shaken
+    elif analysed.scales_apart:
         declined = analysed.scales_apart
     elif measuring and measurement is None:  # a part left to measure cannot be: no calibration is known to fit
         declined = (
@@ -795,8 +828,9 @@ def choose_model(
         declined = filter_decline(found) or colour_decline(
             model, sources, measurement, analysed.analysis.points_per_cycle, analysed.own_points_per_cycle,
         )
-    notes = (*declared_contradictions(measurement, model, sources, analysed.analysis.points_per_cycle),
-             *base_short(model, sources, analysed.analysis.points_per_cycle))
+    notes = ((Note("transient_load", shaken),) if shaken else ()) + (
+        *declared_contradictions(measurement, model, sources, analysed.analysis.points_per_cycle),
+        *base_short(model, sources, analysed.analysis.points_per_cycle))
     return ModelChoice(measurement, why_not, measuring, model, sources, cal_settings, declined, found, notes)
 
 
