@@ -29,7 +29,8 @@ on a shared machine:
 Prints, for every round, both times and the ratio project / reproduction (wall and CPU;
 the result: their medians over the rounds), then both eq. 28 tables side by side with
 their difference in standard errors, ``(mean_project - mean_reproduction) /
-sqrt(std_p^2/n_p + std_r^2/n_r)``.
+sqrt(std_p^2/n_p + std_r^2/n_r)``, and the project's step (its ``run.json``, printed
+beside the reproduction's, never read by it).
 
 Run: ``PYTHONPATH=src python benchmarks/bench_paper_reproduction.py`` (``--cores``,
 ``--processes``, ``--repeat``, ``--cold-numba``, ``--scene``). Measures; asserts nothing.
@@ -230,6 +231,7 @@ def main() -> None:
                 run = paper_run(REPO, base / f"project_{k}", args.cores, args.scene, env)
                 row["project"] = (run["wall"], run["cpu"])
                 row["table"] = table_rows(run["root"] / "results" / args.scene / "table.csv")
+                row["project_dt"] = json.loads((run["root"] / "results" / args.scene / "run.json").read_text()).get("dt", math.nan)
 
             def independent():
                 env = {**env_for("reproduction"), "PYTHONPATH": str(REPO / "src")}
@@ -257,7 +259,8 @@ def main() -> None:
     last = rounds[-1]
     s = last["result"]["settings"]
     print(f"reproduction's step: dt = {s['dt']:.6g} s (scale law, c = {s['c']:.1f} from its pilot), burn-in {s['burn_in']} steps, "
-          f"sigma_Y = {s['sigma_y']:.4g} rad, sigma_Ydot = {s['sigma_ydot']:.4g} rad/s, L = {s['n_lag']} lags")
+          f"sigma_Y = {s['sigma_y']:.4g} rad, sigma_Ydot = {s['sigma_ydot']:.4g} rad/s, L = {s['n_lag']} lags; "
+          f"the project's step (its run.json, printed only): dt = {last['project_dt']:.6g} s")
     print("\n| estimator | project mean | project std | reproduction mean | reproduction std | difference / SE |")
     print("|---|---:|---:|---:|---:|---:|")
     for name, (n_p, mean_p, std_p) in last["table"].items():
