@@ -46,10 +46,10 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 
 
-def snakemake(root: Path, tree: Path, cores: int, scene: str) -> tuple[float, float]:
+def snakemake(root: Path, tree: Path, cores: int, scene: str, env: dict | None = None) -> tuple[float, float]:
     """Wall and CPU seconds (the command and its jobs) of ``snakemake --cores`` in ``root``,
-    with ``tree``'s sources first on the path."""
-    env = {**os.environ, "PYTHONPATH": str(tree / "src")}
+    with ``tree``'s sources first on the path and ``env`` added to the environment."""
+    env = {**os.environ, **(env or {}), "PYTHONPATH": str(tree / "src")}
     start = time.perf_counter()
     proc = subprocess.Popen(
         [sys.executable, "-m", "snakemake", "--cores", str(cores), "-q", "--config", f"default_scene={scene}"],
@@ -63,15 +63,15 @@ def snakemake(root: Path, tree: Path, cores: int, scene: str) -> tuple[float, fl
     return wall, usage.ru_utime + usage.ru_stime
 
 
-def paper_run(tree: Path, root: Path, cores: int, scene: str) -> dict:
-    """The run and its no-op rerun in a fresh copy of ``tree`` at ``root``: wall and CPU
-    seconds of each, per-rule rows."""
+def paper_run(tree: Path, root: Path, cores: int, scene: str, env: dict | None = None) -> dict:
+    """The run and its no-op rerun in a fresh copy of ``tree`` at ``root`` (``env`` added to
+    their environment): wall and CPU seconds of each, per-rule rows."""
     root.mkdir(parents=True)
     shutil.copy(tree / "Snakefile", root)
     for folder in ("workflow", "config", "profiles"):
         shutil.copytree(tree / folder, root / folder)
-    wall, cpu = snakemake(root, tree, cores, scene)
-    noop_wall, noop_cpu = snakemake(root, tree, cores, scene)
+    wall, cpu = snakemake(root, tree, cores, scene, env)
+    noop_wall, noop_cpu = snakemake(root, tree, cores, scene, env)
     rules = []
     for path in sorted((root / "results" / scene / "benchmarks").glob("*.tsv")):
         with open(path) as f:
