@@ -46,21 +46,26 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 
 
-def snakemake(root: Path, tree: Path, cores: int, scene: str, env: dict | None = None) -> tuple[float, float]:
-    """Wall and CPU seconds (the command and its jobs) of ``snakemake --cores`` in ``root``,
-    with ``tree``'s sources first on the path and ``env`` added to the environment."""
-    env = {**os.environ, **(env or {}), "PYTHONPATH": str(tree / "src")}
+def timed(command: list[str], env: dict | None = None, cwd: Path | None = None) -> tuple[float, float]:
+    """Wall and CPU seconds (the process and the children it waited for, ``os.wait4``) of
+    ``command`` run in ``cwd`` with ``env`` added to the environment; exits naming the
+    command and its output when it fails."""
     start = time.perf_counter()
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "snakemake", "--cores", str(cores), "-q", "--config", f"default_scene={scene}"],
-        cwd=root, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-    )
+    proc = subprocess.Popen(command, cwd=cwd, env={**os.environ, **(env or {})}, stdout=subprocess.PIPE,
+                            stderr=subprocess.STDOUT, text=True)
     out = proc.stdout.read()
     _, status, usage = os.wait4(proc.pid, 0)
     wall = time.perf_counter() - start
     if os.waitstatus_to_exitcode(status) != 0:
-        sys.exit(f"the run in {root} failed:\n{out}")
+        sys.exit(f"{' '.join(command)} failed{f' in {cwd}' if cwd else ''}:\n{out}")
     return wall, usage.ru_utime + usage.ru_stime
+
+
+def snakemake(root: Path, tree: Path, cores: int, scene: str, env: dict | None = None) -> tuple[float, float]:
+    """Wall and CPU seconds (the command and its jobs) of ``snakemake --cores`` in ``root``,
+    with ``tree``'s sources first on the path and ``env`` added to the environment."""
+    return timed([sys.executable, "-m", "snakemake", "--cores", str(cores), "-q", "--config", f"default_scene={scene}"],
+                 {**(env or {}), "PYTHONPATH": str(tree / "src")}, root)
 
 
 def paper_run(tree: Path, root: Path, cores: int, scene: str, env: dict | None = None) -> dict:

@@ -44,13 +44,11 @@ import math
 import os
 import shutil
 import statistics
-import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 
-from bench_paper import REPO, paper_run
+from bench_paper import REPO, paper_run, timed
 
 TESTS = REPO / "tests"
 
@@ -164,18 +162,6 @@ def reproduce(scene_name: str, processes: int, out: Path) -> None:
         pool.close()
         pool.join()
     out.write_text(json.dumps({"settings": settings, "replicates": estimates}))
-
-
-def timed(command: list[str], env: dict) -> tuple[float, float]:
-    """Wall and CPU seconds (the process and the children it waited for) of ``command``."""
-    start = time.perf_counter()
-    proc = subprocess.Popen(command, env={**os.environ, **env}, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    out = proc.stdout.read()
-    _, status, usage = os.wait4(proc.pid, 0)
-    wall = time.perf_counter() - start
-    if os.waitstatus_to_exitcode(status) != 0:
-        sys.exit(f"{' '.join(command)} failed:\n{out}")
-    return wall, usage.ru_utime + usage.ru_stime
 
 
 def numba_cache(env: dict) -> str:
