@@ -15,7 +15,7 @@ PACKAGE = Path(rockdec.__file__).resolve().parent
 #: The layers from the ground up; a module belongs to the first prefix it matches.
 LAYERS = [
     ("base", ("rockdec._version", "rockdec.validate", "rockdec.timeaxis", "rockdec.console", "rockdec.sources", "rockdec.io",
-              "rockdec.engine", "rockdec.cache", "rockdec.locks", "rockdec.warning_types")),
+              "rockdec.engine", "rockdec.cache", "rockdec.locks", "rockdec.warning_types", "rockdec.lazy")),
     ("physics", ("rockdec.physics",)),
     ("analysis", ("rockdec.rdd", "rockdec.free")),
     ("record", ("rockdec.record",)),

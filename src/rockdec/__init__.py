@@ -31,9 +31,8 @@ Example::
 The command line (``rockdec estimate FILE``) is the same call.
 """
 
-from importlib import import_module
-
 from rockdec._version import __version__
+from rockdec.lazy import lazy_names
 
 __all__ = [
     "ConfidenceInterval",
@@ -67,14 +66,4 @@ _HOMES = {
     "NoTriggerWarning": "rockdec.warning_types",
 }
 
-
-def __getattr__(name: str):
-    if name in _HOMES:
-        value = getattr(import_module(_HOMES[name]), name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module 'rockdec' has no attribute {name!r}")
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(__all__))
+__getattr__, __dir__ = lazy_names(__name__, _HOMES)

@@ -9,7 +9,7 @@ kernels compile on import, so ``import rockdec.rdd.registry`` stays light.
 Explanation: docs/explanation/method/signatures.md, docs/explanation/method/estimators.md.
 """
 
-from importlib import import_module
+from rockdec.lazy import lazy_names
 
 #: The names each module of the package exports (its ``__all__``), by the module that defines them.
 _MODULES = {
@@ -33,14 +33,4 @@ _HOMES = {name: f"{__name__}.{module}" for module, names in _MODULES.items() for
 
 __all__ = sorted(_HOMES)
 
-
-def __getattr__(name: str):
-    if name in _HOMES:
-        value = getattr(import_module(_HOMES[name]), name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(__all__))
+__getattr__, __dir__ = lazy_names(__name__, _HOMES)
