@@ -315,11 +315,12 @@ def _first_guess(sequence, y, dt, t0, model, theta_cr) -> tuple[np.ndarray, floa
     return np.concatenate([[crossings[0] - fall], crossings]), q
 
 
-def _interval(centre, se, log=False):
-    """The :data:`CONFIDENCE` interval ``centre +- z se`` (normal ``z``), exponentiated if ``log``."""
+def _interval(centre, se, log=False, z=None):
+    """The :data:`CONFIDENCE` interval ``centre +- z se`` (``z`` the normal quantile unless
+    given), exponentiated if ``log``."""
     if not (math.isfinite(centre) and math.isfinite(se)):
         return (math.nan, math.nan)
-    z = stats.norm.ppf(0.5 + CONFIDENCE / 2)
+    z = stats.norm.ppf(0.5 + CONFIDENCE / 2) if z is None else z
     lo, hi = centre - z * se, centre + z * se
     return (math.exp(lo), math.exp(hi)) if log else (lo, hi)
 
@@ -451,7 +452,8 @@ def analyse_free_rocking(theta, dt, *, model: str = "simplified", theta_cr: floa
             fits.append(fit)
             seq_meta.append((r, stop_time, reason))
             if model == "simplified":
-                scores.append((t, y[seq.start : last + 1], precision, *flight_loss.loss_score(t, y[seq.start : last + 1], fit, precision)))
+                fitted = y[seq.start : last + 1]
+                scores.append((t, fitted, precision, *flight_loss.loss_score(t, fitted, fit, precision)))
     loss, loss_se = _pooled_mean([c for *_, c, _ in scores], [se for *_, se in scores]) if scores else (math.nan, math.nan)
     damped = None
     if loss > LOSS_Z * loss_se:  # the score test finds a loss in flight: the arcs are fitted with it
@@ -522,7 +524,7 @@ def _result(fits, seq_meta, notes, noises, model, theta_cr, damped, score) -> Fr
         pooled = _impact_mean(ys, blocks)
         e, birge, dof = math.exp(pooled.mu), pooled.scatter, pooled.dof
         log_se = max(pooled.se, SAMPLE_PRECISION)
-        interval = (math.exp(pooled.mu - pooled.quantile * log_se), math.exp(pooled.mu + pooled.quantile * log_se))
+        interval = _interval(pooled.mu, log_se, log=True, z=pooled.quantile)
         spread, spread_interval = e * pooled.tau, tuple(e * t for t in pooled.tau_interval)
         if dof == 0:
             notes.append("one impact only: its interval rests on the fit alone, with no check of the impacts' scatter.")
@@ -540,9 +542,11 @@ def _result(fits, seq_meta, notes, noises, model, theta_cr, damped, score) -> Fr
         notes.append(f"e changes with the impact speed: e = {e_reference:.4f} [{e_reference_interval[0]:.4f}, {e_reference_interval[1]:.4f}] "
                      f"at {reference_speed:.3g} rad/s (the impacts' geometric mean speed), and log e changes by {trend:.3g} +- {trend_se:.2g} "
                      f"per unit of log speed, where the {model} model holds it constant; the pooled e is the impacts' mean.")
-    q = np.array([d.g for d in damped] if with_loss else [f.q for f in fits])
-    q_se = np.array([math.sqrt(max((d if with_loss else f).covariance[-2 if with_loss else -1, -2 if with_loss else -1], 0.0))
-                     for f, d in zip(fits, damped or fits)])
+    if with_loss:  # g is the second-last parameter of a fit with c
+        q, q_var = np.array([d.g for d in damped]), np.array([d.covariance[-2, -2] for d in damped])
+    else:
+        q, q_var = np.array([f.q for f in fits]), np.array([f.covariance[-1, -1] for f in fits])
+    q_se = np.sqrt(np.clip(q_var, 0.0, None))
     q_mean, q_mean_se = _pooled_mean(q, q_se) if fits else (math.nan, math.nan)
     q_interval = _interval(q_mean, q_mean_se)
     if model == "simplified":

@@ -35,6 +35,13 @@ __all__ = [
 SERIES_BELOW = 1e-2
 
 
+def _phi(x: float) -> float:
+    """``phi(x) = (1 - exp(-x))/x`` (``phi(0) = 1``): the fall from rest lands at ``g T0 phi(c T0)``."""
+    if abs(x) < SERIES_BELOW:
+        return 1.0 - x / 2.0 + x**2 / 6.0 - x**3 / 24.0 + x**4 / 120.0
+    return float(-np.expm1(-x) / x)
+
+
 def _b(y):
     """``B(y) = (y/(1 - exp(-y)) - 1)/y`` (``B(0) = 1/2``), the speed at an end of a flight over ``g T``."""
     y = np.asarray(y, dtype=float)
@@ -252,9 +259,7 @@ def _impact_speeds(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     lands at :func:`speeds`."""
     times, g, c = x[:-2], x[-2], x[-1]
     T0 = times[1] - times[0]
-    x0 = c * T0
-    landing0 = g * T0 * (1.0 - x0 / 2.0 + x0**2 / 6.0 - x0**3 / 24.0 + x0**4 / 120.0) if abs(x0) < SERIES_BELOW \
-        else g * -np.expm1(-x0) / c
+    landing0 = g * T0 * _phi(c * T0)
     leave, land = speeds(np.diff(times[1:]), g, c)
     return np.concatenate([[landing0], land[:-1]]), leave
 
