@@ -8,6 +8,7 @@ from __future__ import annotations
 import math
 import sys
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -228,13 +229,16 @@ def test_a_gentle_filter_undeclared_is_declined_by_the_calibrated_check(tmp_path
 
 @pytest.mark.parametrize("source, declined", [("measured (none shown)", True), ("declared", False)])
 def test_a_fired_filter_check_declines_unless_the_filter_was_declared(source, declined):
-    doc = {"e": 0.9, "interval": [0.88, 0.92], "coverage": 0.95, "estimator": "e_0", "reason": None,
-           "diagnostics": {"filtered": {"fired": True}, "drift": {"fired": False}}, "warning_codes": ["filtered"],
-           "warnings": ["the impacts' velocity jumps are spread"], "repair": {"repaired": False},
-           "record_model": {"sources": {"sensor_filter": source}}}
-    out = inference.decline_unrepaired(doc)
+    doc = {"e": 0.9, "interval": [0.88, 0.92], "coverage": 0.95, "estimator": "e_0", "reason": None}
+    verdict = inference.Verdict(True, False, False, source == "declared", {"filtered": "the impacts' velocity jumps are spread"}, False)
+    out = inference.decline_unrepaired(inference.Outcome(doc, None, {}, verdict)).document
     assert (out["e"] is None) == declined and (out["interval"] == [None, None]) == declined
     assert not declined or "filtered: the impacts' velocity jumps are spread" in out["reason"]
+
+
+def _analysis():
+    """A stand-in for an estimate's analysis: the retry reads its samples per cycle."""
+    return SimpleNamespace(points_per_cycle=75.0)
 
 
 @pytest.mark.parametrize("source", ["measured (none shown)", "declared"])
@@ -247,12 +251,9 @@ def test_a_filter_shown_on_the_records_as_given_is_not_high_passed(monkeypatch, 
 
     def once(records, *args, **kwargs):
         calls.append(args[0])
-        doc = {"e": 0.9, "interval": [0.88, 0.92], "coverage": 0.95, "estimator": "e_0", "reason": None,
-               "calibration": {"file": "calibration-x.nc"}, "points_per_cycle": 75.0,
-               "diagnostics": {"filtered": {"fired": True}, "spikes": {"fired": True}}, "warning_codes": ["spikes", "filtered"],
-               "warnings": ["a sample stands far off", "the impacts' velocity jumps are spread"], "repair": {"repaired": bool(calls[1:])},
-               "record_model": {"sources": {"sensor_filter": source}}}
-        return inference.Outcome(doc, None, {})
+        doc = {"e": 0.9, "interval": [0.88, 0.92], "coverage": 0.95, "estimator": "e_0", "reason": None, "repair": {"repaired": bool(calls[1:])}}
+        fired = {"spikes": "a sample stands far off", "filtered": "the impacts' velocity jumps are spread"}
+        return inference.Outcome(doc, _analysis(), {}, inference.Verdict(True, False, False, source == "declared", fired, bool(calls[1:])))
 
     monkeypatch.setattr(inference, "estimate_once", once)
     y = _record(5, n=20_000)
@@ -272,12 +273,9 @@ def test_a_drifting_record_that_shows_a_filter_is_high_passed_and_read_again(mon
 
     def once(records, *args, **kwargs):
         calls.append(args[0])
-        fired = {"filtered": {"fired": True}, "drift": {"fired": True}} if len(calls) == 1 else {"filtered": {"fired": False}, "drift": {"fired": False}}
-        doc = {"e": 0.9, "interval": [0.88, 0.92], "coverage": 0.95, "estimator": "e_0", "reason": None,
-               "calibration": {"file": "calibration-x.nc"}, "points_per_cycle": 75.0, "diagnostics": fired,
-               "warning_codes": [], "warnings": [], "repair": {"repaired": len(calls) > 1},
-               "record_model": {"sources": {"sensor_filter": "auto"}}}
-        return inference.Outcome(doc, None, {})
+        fired = {"filtered": "the impacts' velocity jumps are spread", "drift": "the zero drifts"} if len(calls) == 1 else {}
+        doc = {"e": 0.9, "interval": [0.88, 0.92], "coverage": 0.95, "estimator": "e_0", "reason": None, "repair": {"repaired": len(calls) > 1}}
+        return inference.Outcome(doc, _analysis(), {}, inference.Verdict(True, False, False, False, fired, len(calls) > 1))
 
     monkeypatch.setattr(inference, "estimate_once", once)
     y = _record(5, n=20_000)

@@ -142,11 +142,9 @@ def test_a_fired_filter_check_declines_unless_a_filter_was_declared(source, unfi
     """Declared unfiltered, a fired ``filtered`` declines ``e`` (a soft contact, which no
     declaration models), the reason saying so first; a load measured white points to a soft
     contact; a declared filter (or a record model declared whole) leaves it a warning."""
-    doc = {"e": 0.97, "interval": [0.95, 0.99], "coverage": 0.95, "estimator": "e_v", "reason": None,
-           "diagnostics": {"filtered": {"fired": True}}, "warning_codes": ["filtered"], "warnings": ["the impacts' velocity jumps are spread"],
-           "repair": {"repaired": False},
-           "record_model": {"sources": {"sensor_filter": source}, "measured": {"detected": {"colour": colour}}}}
-    out = inference.decline_unrepaired(doc, unfiltered)
+    doc = {"e": 0.97, "interval": [0.95, 0.99], "coverage": 0.95, "estimator": "e_v", "reason": None}
+    verdict = inference.Verdict(True, False, not colour, source == "declared", {"filtered": "the impacts' velocity jumps are spread"}, False)
+    out = inference.decline_unrepaired(inference.Outcome(doc, None, {}, verdict), unfiltered).document
     assert (out["e"] is None) == declined
     assert declined or out == doc
     if declined:

@@ -150,10 +150,9 @@ def test_the_command_line_turns_the_repair_off():
 @pytest.mark.parametrize("check, declined", [("nonstationary", True), ("asymmetry", True), ("drift", True), ("spikes", True),
                                              ("few_triggers", False), ("coarse_sampling", False)])
 def test_a_check_left_fired_by_the_repair_declines_e_when_its_defect_moves_e(check, declined):
-    doc = {"e": 0.9, "interval": [0.88, 0.92], "coverage": 0.95, "estimator": "e_v", "reason": None,
-           "diagnostics": {name: {"fired": name == check} for name in ("nonstationary", "drift", "spikes", "asymmetry", "few_triggers", "coarse_sampling")},
-           "warning_codes": [check], "warnings": [f"the {check} message"], "repair": {"repaired": True}}
-    out = inference.decline_unrepaired(doc)
+    doc = {"e": 0.9, "interval": [0.88, 0.92], "coverage": 0.95, "estimator": "e_v", "reason": None}
+    verdict = inference.Verdict(True, False, False, False, {check: f"the {check} message"}, True)
+    out = inference.decline_unrepaired(inference.Outcome(doc, None, {}, verdict)).document
     assert (out["e"] is None) == declined and (out["interval"] == [None, None]) == declined
     if declined:
         assert f"{check}: the {check} message" in out["reason"] and "after the repair" in out["reason"]

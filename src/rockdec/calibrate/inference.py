@@ -52,7 +52,7 @@ __all__ = [
     "RECORD_SECONDS", "SIDE_G_SHARE", "analyse", "beyond", "calibration_sets", "check_pooled",
     "checks_place", "choose_model", "colour_decline", "cost", "coverage_floor", "declared_contradictions",
     "decline_unrepaired", "diagnose", "estimate", "filter_decline", "measure_model", "own_scales",
-    "record_model", "select", "stage_seconds", "transient_decline", "unresolved_impacts",
+    "Verdict", "record_model", "select", "stage_seconds", "transient_decline", "unresolved_impacts",
 ]
 
 log = logging.getLogger(__name__)
@@ -177,12 +177,12 @@ def diagnose(
     ``length_ratio``: the records' length over the calibration's records'; ``replaced``: the
     samples the repair replaced, per record, which the spikes statistic leaves out): a :class:`Note`
     (its code the check's name) for each check that fired and the ``filtered_unchecked`` ones of
-    :func:`unresolved_impacts`, and per check ``{"statistic", "threshold", "fired"}`` (JSON-able)."""
+    :func:`unresolved_impacts`, and per check its :class:`rockdec.record.diagnostics.Outcome`."""
     level = settings.get("level", measured.DEFAULT_SETTINGS["level"])
     outcomes = diagnostics.evaluate([r.theta for r in records], analysis, cal, e, interval, level, length_ratio, replaced)
     notes = [Note(name, o.message) for name, o in outcomes.items() if o.fired]
     notes.extend(unresolved_impacts(records))
-    return notes, {name: {"statistic": json_number(o.statistic), "threshold": json_number(o.threshold), "fired": o.fired} for name, o in outcomes.items()}
+    return notes, outcomes
 
 
 def unresolved_impacts(records: list[Record]) -> list:
@@ -1010,14 +1010,40 @@ def long_record_note(analysed: Analysed, choice: ModelChoice) -> tuple:
     )),)
 
 
+class Verdict(NamedTuple):
+    """What the repair-and-retry of :func:`estimate` decides on, read off one estimate's
+    stages (never off its report): whether a calibration was read (``calibrated``; ``False``:
+    declined before one), whether the record model measured ``drift`` and a ``white`` load,
+    whether the sensor filter (or its absence) was declared (``filter_declared``), the checks
+    that ``fired`` with their messages, and whether the records were ``repaired``."""
+
+    calibrated: bool
+    drift: bool
+    white: bool
+    filter_declared: bool
+    fired: dict
+    repaired: bool
+
+    @classmethod
+    def of(cls, choice: ModelChoice, calibrated: bool, fired: dict, done: repair.Repair | None) -> Verdict:
+        """The verdict of an estimate whose model is ``choice``, with the message of each
+        check that ``fired`` (``{name: message}``) and its repair ``done``."""
+        m = choice.measurement
+        return cls(calibrated, bool(m is not None and m.drifting), bool(m is not None and not m.coloured),
+                   choice.sources.get("sensor_filter") == "declared", fired,
+                   done is not None and bool(done.removed or done.corner is not None))
+
+
 class Outcome(NamedTuple):
-    """What :func:`estimate` gives: the JSON ``document`` (:func:`document`), and for plots
+    """What :func:`estimate` gives: the JSON ``document`` (:func:`document`), for plots
     the ``analysis`` (:class:`rockdec.rdd.measured.Analysis`) and the ``belts`` of every
-    estimator at the records' length (empty when the records were declined)."""
+    estimator at the records' length (empty when the records were declined), and the
+    :class:`Verdict` the repair-and-retry reads."""
 
     document: dict
     analysis: measured.Analysis
     belts: dict
+    verdict: Verdict
 
 
 def document(analysed: Analysed, choice: ModelChoice, calibrated: Calibrated | None, per: dict, selection: tuple,
@@ -1045,7 +1071,8 @@ def document(analysed: Analysed, choice: ModelChoice, calibrated: Calibrated | N
         "g_interval_note": g_reading.note, "points_per_cycle": json_number(analysis.points_per_cycle), "sigma_y": json_number(analysis.sigma_y),
         "dt": analysed.dt, "records": [r.source for r in analysed.records], "samples": analysed.samples,
         "nan_samples": int(analysis.nan_samples), "record_model": choice.report(analysed), "estimators": per,
-        "warnings": [n.message for n in notes], "warning_codes": [n.code for n in notes], "diagnostics": checks,
+        "warnings": [n.message for n in notes], "warning_codes": [n.code for n in notes], "diagnostics": {name: {"statistic": json_number(o.statistic), "threshold": json_number(o.threshold), "fired": o.fired}
+                                                                          for name, o in checks.items()},
         "rockdec_version": __version__, "calibration": cal,
         "repair": repaired if repaired is not None else repair_report(None, analysed.dt, True),
     }
@@ -1071,8 +1098,9 @@ def declined_rows(analysed: Analysed) -> tuple[dict, tuple]:
 class Pooled(NamedTuple):
     """What :func:`check_pooled` (a stage of :func:`estimate`) makes of records given
     together: the ``selection`` of :func:`select`, its estimator and reason replaced when
-    the records disagree on one ``e``; its :class:`Note` s; its entry of the JSON
-    ``diagnostics`` (empty for a single record)."""
+    the records disagree on one ``e``; its :class:`Note` s; its check
+    (``{"pooled_consistency": rockdec.record.diagnostics.Outcome}``, empty for a single
+    record)."""
 
     selection: tuple
     notes: tuple
@@ -1100,11 +1128,11 @@ def check_pooled(analysed: Analysed, choice: ModelChoice, calibrated: Calibrated
     if len(records) < 2:
         return Pooled(selection, (), {})
     if chosen is None:  # no e to check the records against
-        return Pooled(selection, (), {"pooled_consistency": {"statistic": None, "threshold": None, "fired": False}})
+        return Pooled(selection, (), {"pooled_consistency": diagnostics.Outcome(math.nan, math.nan, False, "")})
     raws, unread = _alone(analysed, chosen)
     b = calibrated.simulated_belts[chosen]
     outcome = consistency.check(raws, [r.theta.size for r in records], b.e, b.mean, b.spread, sum(choice.cal_settings["lengths"]))
-    checks = {"pooled_consistency": {"statistic": json_number(outcome.statistic), "threshold": json_number(outcome.threshold), "fired": outcome.fired}}
+    checks = {"pooled_consistency": diagnostics.Outcome(float(outcome.statistic), float(outcome.threshold), bool(outcome.fired), "")}
     notes = []
     if unread:
         rest = "the other records were checked against each other" if outcome.dof >= 1 else "whether the records agree on one e was not checked"
@@ -1179,49 +1207,47 @@ def repair_report(done: repair.Repair | None, dt: float, enabled: bool, why: str
             "repaired": bool(spikes or corner is not None), "why": why}
 
 
-def declining_fired(doc: dict, unfiltered: bool = False) -> list[str]:
-    """The checks of :data:`DECLINING_CHECKS` that fired in ``doc`` and decline ``e``: all but a
-    ``filtered`` whose records' filter (or its absence, in a record model declared whole) was
-    declared, which only warns. ``unfiltered``: the records were declared unfiltered
-    (``sensor_filter`` none), where ``filtered`` declines too: a soft contact blunts the
-    impacts as a filter does and no declaration models it
+def declining_fired(verdict: Verdict, unfiltered: bool = False) -> list[str]:
+    """The checks of :data:`DECLINING_CHECKS` that fired (``verdict``, :class:`Verdict`) and
+    decline ``e``: all but a ``filtered`` whose records' filter (or its absence, in a record
+    model declared whole) was declared, which only warns. ``unfiltered``: the records were
+    declared unfiltered (``sensor_filter`` none), where ``filtered`` declines too: a soft
+    contact blunts the impacts as a filter does and no declaration models it
     (:data:`rockdec.record.diagnostics.BLUNTED_HELP`)."""
-    declared = (doc.get("record_model") or {}).get("sources", {}).get("sensor_filter") == "declared" and not unfiltered
-    return [name for name in DECLINING_CHECKS if doc["diagnostics"].get(name, {}).get("fired") and not (name == "filtered" and declared)]
+    declared = verdict.filter_declared and not unfiltered
+    return [name for name in DECLINING_CHECKS if name in verdict.fired and not (name == "filtered" and declared)]
 
 
-def blunted_cause(doc: dict, unfiltered: bool = False) -> str:
-    """What ``doc``'s reason says first when ``filtered`` declines ``e`` (else ``""``): on records
+def blunted_cause(verdict: Verdict, unfiltered: bool = False) -> str:
+    """What the reason says first when ``filtered`` declines ``e`` (else ``""``): on records
     declared unfiltered (``unfiltered``), that none does not model a soft contact; and when
     the record model measured the load white (no colour detected), that the blunting points
     to a soft contact: a first-order filter after the block, gentle enough to pass the
     roll-off check, makes a white load read low-pass, while a soft contact leaves the load as
     it is (tests/calibrate/test_soft_contact.py)."""
-    if "filtered" not in declining_fired(doc, unfiltered):
+    if "filtered" not in declining_fired(verdict, unfiltered):
         return ""
-    detected = ((doc.get("record_model") or {}).get("measured") or {}).get("detected") or {}
-    white = detected.get("colour") is False
     return (("`sensor_filter` none was declared, but the impacts are blunted and none does not model a soft contact, which "
              "rockdec cannot calibrate; " if unfiltered else "")
             + ("the load measures white, which a low-pass filter after the block would make read low-pass, so the blunted "
-               "impacts point to a soft contact; " if white else ""))
+               "impacts point to a soft contact; " if verdict.white else ""))
 
 
-def decline_unrepaired(doc: dict, unfiltered: bool = False) -> dict:
-    """``doc`` with ``e`` declined when a check of :data:`DECLINING_CHECKS` fired on the
+def decline_unrepaired(outcome: Outcome, unfiltered: bool = False) -> Outcome:
+    """``outcome`` with ``e`` declined when a check of :data:`DECLINING_CHECKS` fired on the
     records as estimated (after any repair): ``reason`` names the check and its message, after
     what :func:`blunted_cause` says of a fired ``filtered``. A ``filtered`` that fired warns
     only when the records' filter (or its absence, in a record model declared whole) was
     declared; ``unfiltered``: :func:`declining_fired`."""
-    fired = declining_fired(doc, unfiltered)
+    verdict, doc = outcome.verdict, outcome.document
+    fired = declining_fired(verdict, unfiltered)
     if doc["e"] is None or not fired:
-        return doc
-    messages = {code: message for code, message in zip(doc["warning_codes"], doc["warnings"])}
-    defects = "; ".join(f"{name}: {messages.get(name, name)}" for name in fired)
-    repaired = " after the repair" if doc["repair"]["repaired"] else ""
-    reason = (f"{blunted_cause(doc, unfiltered)}the records show a defect that moves e by more than its interval and that{repaired} "
+        return outcome
+    defects = "; ".join(f"{name}: {verdict.fired[name]}" for name in fired)
+    repaired = " after the repair" if verdict.repaired else ""
+    reason = (f"{blunted_cause(verdict, unfiltered)}the records show a defect that moves e by more than its interval and that{repaired} "
               f"is still there ({defects}); e is declined rather than given with an interval that does not hold")
-    return {**doc, "e": None, "interval": [None, None], "coverage": None, "estimator": None, "reason": reason}
+    return outcome._replace(document={**doc, "e": None, "interval": [None, None], "coverage": None, "estimator": None, "reason": reason})
 
 
 def estimate(
@@ -1293,20 +1319,22 @@ def estimate(
         first, refusal = estimate_once(despiked, repaired, done if found else None, True, why, **options), None
     except RecordError as exc:  # drift can leave a record the analysis refuses until it is filtered
         first, refusal = None, exc
-    doc = first.document if first is not None else None
-    failed = doc is None or doc["calibration"]["file"] is None  # refused, or declined before any calibration
-    drifting = doc is not None and bool(((doc.get("record_model") or {}).get("measured") or {}).get("detected", {}).get("drift", False))
-    fired = [] if failed else [name for name in REPAIRING_CHECKS if doc["diagnostics"].get(name, {}).get("fired")]
+    verdict = first.verdict if first is not None else None
+    failed = verdict is None or not verdict.calibrated  # refused, or declined before any calibration
+    drifting = verdict is not None and verdict.drift
+    fired = [] if failed else [name for name in REPAIRING_CHECKS if name in verdict.fired]
     # a filter after the block is not what a high-pass mends, and the high-pass moves the zero crossings off the impacts
     # that the check reads: the records as given decide it (its ringing can fire spikes too); but a drifting zero moves
     # the crossings off the impacts as well and fires it on unfiltered records, so drift is high-passed first
     unfiltered = model is None and sensor_filter is None  # declared none: filtered declines (a soft contact)
-    filter_shown = not failed and "filtered" in declining_fired(doc, unfiltered) and not (drifting or "drift" in fired)
-    if filter_shown or not (fired or drifting or doc is None):  # a decline for the load or the instrument is not retried unless drift is measured
-        return first._replace(document=decline_unrepaired(doc, unfiltered))
+    filter_shown = not failed and "filtered" in declining_fired(verdict, unfiltered) and not (drifting or "drift" in fired)
+    if filter_shown or not (fired or drifting or verdict is None):  # a decline for the load or the instrument is not retried unless drift is measured
+        return decline_unrepaired(first, unfiltered)
     log.info("estimating again after a high-pass well below the rocking frequency (drift)")
     hp = repair.settings(bool(found), True)
-    ppc = doc["points_per_cycle"] if doc is not None and doc["points_per_cycle"] else repair.cycle_samples([r.theta for r in despiked])
+    ppc = float(first.analysis.points_per_cycle) if first is not None else math.nan
+    if not (math.isfinite(ppc) and ppc):
+        ppc = repair.cycle_samples([r.theta for r in despiked])
     filtered, done = repair.apply(thetas, hp, ppc)
     try:  # the rocking frequency read off the filtered records places the corner
         ppc = measured.analyse(filtered, same_step(records), {**measured.DEFAULT_SETTINGS, **(settings or {})}, g=g).points_per_cycle
@@ -1320,13 +1348,13 @@ def estimate(
         second = estimate_once([r._replace(theta=y) for r, y in zip(records, filtered)], hp, done, True, why, **options)
     except RecordError:
         second = None
-    if failed and (second is None or second.document["calibration"]["file"] is None):  # the high-pass did not help: as given
+    if failed and (second is None or not second.verdict.calibrated):  # the high-pass did not help: as given
         if first is None:
             raise refusal
-        return first._replace(document=decline_unrepaired(doc, unfiltered))
+        return decline_unrepaired(first, unfiltered)
     if second is None:
-        return first._replace(document=decline_unrepaired(doc, unfiltered))
-    return second._replace(document=decline_unrepaired(second.document, unfiltered))
+        return decline_unrepaired(first, unfiltered)
+    return decline_unrepaired(second, unfiltered)
 
 
 def estimate_once(
@@ -1347,7 +1375,7 @@ def estimate_once(
     if choice.declined:
         per, selection = declined_rows(analysed)
         doc = document(analysed, choice, None, per, (None, selection[1], choice.declined), None, [*analysed.notes, *choice.notes], {}, report)
-        return Outcome(doc, analysed.analysis, {})
+        return Outcome(doc, analysed.analysis, {}, Verdict.of(choice, False, {}, done))
     calibrated = calibrate(analysed, choice, cache_dir, available)
     per = correct(analysed, calibrated)
     selection = select(per, calibrated.n_sets, calibrated.belts)
@@ -1362,7 +1390,8 @@ def estimate_once(
     fired, checks = diagnose(list(analysed.records), analysed.analysis, analysed.settings, calibrated.cal,
                              *checks_place(per, shown), 1.0 / calibrated.scale**2, None if done is None else done.spikes)
     doc = document(analysed, choice, calibrated, per, pooled.selection, g_reading, notes + fired, {**checks, **pooled.checks}, report)
-    return Outcome(doc, analysed.analysis, calibrated.belts)
+    verdict = Verdict.of(choice, True, {name: o.message for name, o in {**checks, **pooled.checks}.items() if o.fired}, done)
+    return Outcome(doc, analysed.analysis, calibrated.belts, verdict)
 
 
 def beyond(b: belt.Belt, raw: float, c: belt.Corrected) -> str | None:
