@@ -1,0 +1,201 @@
+"""A shake-table test: ``e`` from the free-decay tails after the shaking stops.
+
+The base acceleration is read as the simplified rocking equation's load against the uplift
+level (``g tan(alpha)`` in m/s^2, or the block's ``g`` in rad/s^2): below it a block at rest
+stays at rest. The shaking ends after 95 % of the base's Arias intensity and after the last
+sample above :data:`QUIET` of the uplift level; every stretch as quiet as that, at least
+:data:`MIN_TAIL` s long, after the base first could lift the block, is a free-decay tail,
+analysed by :func:`rockdec.free.analysis.analyse_free_rocking` and pooled over the tails of
+all records of one block. A tail whose base still moves (a cut by hand) is refused with that
+reason, never fitted as if free. Entry point: :func:`analyse_shake_table`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from rockdec import validate as checks
+from rockdec.free.analysis import FreeRockingFit, analyse_free_rocking
+from rockdec.timeaxis import RecordError
+
+__all__ = ["ShakeTableFit", "analyse_shake_table", "shaking_end", "uplift_ratio"]
+
+#: Fraction of the uplift level below which the base counts as quiet (its load then moves a
+#: rocking block's impact speeds by well under the sensor's resolution of them).
+QUIET = 0.05
+
+#: Share of the base's Arias intensity after which the shaking may end.
+ARIAS = 0.95
+
+#: Fewest seconds of a free-decay tail.
+MIN_TAIL = 1.0
+
+#: Standard gravity, m/s^2.
+G0 = 9.80665
+
+BASE_UNITS = ("m/s2", "g", "rad/s2")
+
+
+@dataclass(frozen=True)
+class ShakeTableFit:
+    """What :func:`analyse_shake_table` found: the pooled free-rocking ``fit`` of the
+    accepted tails (``None`` when none), ``shaking_end`` per record (s, NaN when it never
+    ends), ``tails`` (record, start s, stop s) accepted with their ``tail_fits``, ``refused``
+    (record, start s, reason) and ``reason`` (why there is no ``e``; ``None`` when there is)."""
+
+    fit: FreeRockingFit | None
+    shaking_end: tuple[float, ...]
+    tails: tuple[tuple[int, float, float], ...]
+    tail_fits: tuple[FreeRockingFit, ...]
+    refused: tuple[tuple[int, float, str], ...]
+    reason: str | None
+
+    @property
+    def e(self) -> float:
+        """The pooled ``e`` (NaN without one)."""
+        return math.nan if self.fit is None or self.fit.reason else self.fit.e
+
+    @property
+    def e_interval(self) -> tuple[float, float]:
+        """Its 95 % interval."""
+        return (math.nan, math.nan) if self.fit is None or self.fit.reason else self.fit.e_interval
+
+
+def uplift_ratio(base, *, base_units: str = "m/s2", g_block: float | None = None, theta_cr: float | None = None) -> np.ndarray:
+    """The base acceleration over the uplift level (``|ratio| > 1`` can lift the block).
+
+    ``base_units`` "m/s2" or "g" need the critical angle ``theta_cr`` (level ``g tan(alpha)``);
+    "rad/s2" (the load of the simplified rocking equation) needs the block's ``g_block``.
+
+    Examples
+    --------
+    >>> uplift_ratio([0.0, 2.0, -4.0], base_units="rad/s2", g_block=2.0).tolist()
+    [0.0, 1.0, -2.0]
+    """
+    if base_units not in BASE_UNITS:
+        raise checks.InputError(f"`base_units` {base_units!r} is not one of {', '.join(BASE_UNITS)}; declare the base record's units.")
+    a = np.asarray(base, dtype=float)
+    if base_units == "rad/s2":
+        if g_block is None:
+            raise checks.InputError("a base in rad/s2 needs `g_block`, the block's g in rad/s^2; give it, or the base in m/s2 with the block.")
+        return a / checks.positive(g_block, "`g_block`", "give the block's g in rad/s^2")
+    if theta_cr is None:
+        raise checks.InputError(f"a base in {base_units} needs the block's critical angle; give block=(H, B) or theta_cr in rad.")
+    level = math.tan(checks.positive(theta_cr, "`theta_cr`", "give the critical angle in rad")) * (G0 if base_units == "m/s2" else 1.0)
+    return a / level
+
+
+def shaking_end(ratio, dt: float, *, quiet: float = QUIET, arias: float = ARIAS) -> int:
+    """Index of the first sample after the shaking: past ``arias`` of the Arias intensity and
+    past the last sample above ``quiet`` of the uplift level (``len(ratio)`` if it never ends).
+
+    Examples
+    --------
+    >>> shaking_end([0, 2, -2, 0.01, 0.0, 0.0], 0.01)
+    3
+    """
+    r = np.asarray(ratio, dtype=float)
+    energy = np.cumsum(r * r)
+    i_arias = int(np.searchsorted(energy, arias * energy[-1])) + 1 if energy[-1] > 0 else 0
+    loud = np.flatnonzero(np.abs(r) > quiet)
+    return max(i_arias, int(loud[-1]) + 1 if loud.size else 0)
+
+
+def _quiet_runs(r, quiet, n_min):
+    """``(start, stop)`` of each run of ``|r| <= quiet`` at least ``n_min`` long after the first uplift."""
+    lifted = np.flatnonzero(np.abs(r) > 1.0)
+    if lifted.size == 0:
+        return []
+    calm = np.abs(r) <= quiet
+    calm[: lifted[0] + 1] = False
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], calm.astype(np.int8), [0]])))
+    return [(int(a), int(b)) for a, b in zip(edges[::2], edges[1::2]) if b - a >= n_min]
+
+
+def analyse_shake_table(theta, base, dt: float, *, base_units: str = "m/s2", g_block: float | None = None,
+                        theta_cr: float | None = None, start: float | None = None, quiet: float = QUIET,
+                        min_tail: float = MIN_TAIL) -> ShakeTableFit:
+    """``e`` from shake-table records: the free-decay tails after the shaking, pooled.
+
+    Parameters
+    ----------
+    theta, base : array_like or list of array_like
+        The block's angle (rad) and the base acceleration (``base_units``), one sample each
+        per step ``dt`` (s); a list of records of one block is pooled.
+    base_units, g_block, theta_cr
+        As :func:`uplift_ratio`.
+    start : float, optional
+        A tail cut by hand (s from each record's start) instead of the quiet stretches; refused
+        if the base still moves after it.
+    quiet, min_tail
+        :data:`QUIET` and :data:`MIN_TAIL`.
+
+    Examples
+    --------
+    >>> from rockdec.physics.simulate import simulate_model
+    >>> free = simulate_model("simplified", [0], 2000, dt=0.005, g=2.0, e=0.9, sigma_p=0.0, theta0=0.01)[0][0]
+    >>> theta = np.concatenate([np.zeros(400), free])
+    >>> base = np.concatenate([np.where(np.arange(400) % 2, 3.0, -3.0), np.zeros(2000)])
+    >>> res = analyse_shake_table(theta, base, 0.005, base_units="rad/s2", g_block=2.0)
+    >>> round(res.e, 6), res.shaking_end
+    (0.9, (2.0,))
+    """
+    dt = checks.positive(dt, "`dt`", "give the sampling step in s, > 0")
+    many = isinstance(theta, (list, tuple)) and len(theta) > 0 and np.ndim(theta[0]) == 1
+    thetas, bases = (list(theta), list(base)) if many else ([theta], [base])
+    if len(thetas) != len(bases):
+        raise RecordError(f"{len(thetas)} records but {len(bases)} base records; give one base acceleration per record.")
+    ends, tails, pieces, steps, fits, refused = [], [], [], [], [], []
+    for k, (y, b) in enumerate(zip(thetas, bases)):
+        name = f"record {k}" if many else "the record"
+        y, b = np.asarray(y, dtype=float), np.asarray(b, dtype=float)
+        if b.ndim != 1 or b.size != y.size:
+            raise RecordError(f"{name}: the base has {b.size} samples for {y.size} angles; give the base sampled with the angle, one value per sample.")
+        if not np.all(np.isfinite(b)):
+            raise RecordError(f"{name}: the base acceleration has a NaN or infinite sample ({int(np.flatnonzero(~np.isfinite(b))[0])}); fill or cut it.")
+        r = uplift_ratio(b, base_units=base_units, g_block=g_block, theta_cr=theta_cr)
+        end = shaking_end(r, dt, quiet=quiet)
+        n_min = max(int(round(min_tail / dt)), 8)
+        ends.append(end * dt if y.size - end >= n_min else math.nan)
+        if start is not None:
+            i0 = int(round(checks.positive(start, "`start`", "give the tail's start in s") / dt))
+            peak = float(np.max(np.abs(r[i0:]))) if i0 < y.size else 0.0
+            if peak > 1.0:
+                refused.append((k, i0 * dt, f"the base still moves above the uplift level after {i0 * dt:.6g} s (up to {peak:.3g} times it); "
+                                            "the tail is not a free decay: cut it after the shaking ends"))
+                continue
+            if peak > quiet:
+                refused.append((k, i0 * dt, f"the base still moves after {i0 * dt:.6g} s ({peak:.2g} of the uplift level), which rocks the block; "
+                                            "cut the tail after the shaking ends"))
+                continue
+            runs = [(i0, y.size)]
+        else:
+            runs = _quiet_runs(r, quiet, n_min)
+            if not runs:
+                refused.append((k, 0.0, "the base never lifts the block" if not np.any(np.abs(r) > 1.0) else
+                                f"the shaking never stops: the base never stays below {quiet:g} of the uplift level for {min_tail:g} s"))
+                continue
+        for i0, i1 in runs:
+            t = dt * np.arange(i0, i1)
+            try:
+                fit = analyse_free_rocking(y[i0:i1], t, theta_cr=theta_cr)
+            except RecordError as err:
+                refused.append((k, i0 * dt, str(err).removeprefix("theta: ")))
+                continue
+            if fit.reason:
+                refused.append((k, i0 * dt, fit.reason))
+                continue
+            tails.append((k, i0 * dt, i1 * dt))
+            pieces.append(y[i0:i1])
+            steps.append(t)
+            fits.append(fit)
+    pooled = None
+    if pieces:
+        pooled = analyse_free_rocking(pieces if len(pieces) > 1 else pieces[0], steps if len(steps) > 1 else steps[0], theta_cr=theta_cr)
+    reason = None if pooled is not None and not pooled.reason else (
+        "no free-decay tail gives an e: " + "; ".join(f"{'record %d at ' % k if many else ''}{s:.6g} s: {why}" for k, s, why in refused)
+        if refused else "no free-decay tail")
+    return ShakeTableFit(pooled, tuple(ends), tuple(tails), tuple(fits), tuple(refused), reason)

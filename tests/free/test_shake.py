@@ -1,0 +1,46 @@
+"""The shake-table test on records of an independent transient generator (tests/transient_reference.py)."""
+
+import numpy as np
+import pytest
+
+import transient_reference as tr
+from rockdec.free.shake import analyse_shake_table, shaking_end
+from rockdec.timeaxis import RecordError
+
+
+def _base(e, seed):
+    """The generator's base acceleration (rad/s^2), rebuilt with the same draws as tr.transient."""
+    rng = np.random.default_rng(seed)
+    n_shake, n_free = int(20.0 * tr.FS), int(20.0 * tr.FS)
+    t = np.arange(n_shake) / n_shake
+    env = np.where(t < 0.2, (t / 0.2) ** 2, np.where(t < 0.7, 1.0, np.exp(-8.0 * (t - 0.7))))
+    return np.concatenate([0.8 * tr.G * env * tr._clough_penzien(n_shake, rng, tr.FS), np.zeros(n_free)])
+
+
+def test_shaking_end_is_after_the_last_loud_sample():
+    a = _base(0.9, 0)
+    end = shaking_end(a / tr.G, 1 / tr.FS)
+    assert np.all(np.abs(a[end:]) <= 0.05 * tr.G) and abs(a[end - 1]) > 0.05 * tr.G
+
+
+def test_answered_tails_cover_e_over_seeds():
+    covered = answered = 0
+    for e in (0.8, 0.9, 0.95):
+        for seed in range(3):
+            res = analyse_shake_table(tr.transient(e, seed, noise=0.0), _base(e, seed), 1 / tr.FS, base_units="rad/s2", g_block=tr.G)
+            if res.reason is None:
+                answered += 1
+                covered += res.e_interval[0] <= e <= res.e_interval[1]
+            else:
+                assert res.refused
+    assert answered >= 4 and covered >= answered - 1
+
+
+def test_a_tail_cut_while_the_base_moves_is_refused():
+    res = analyse_shake_table(tr.transient(0.9, 0), _base(0.9, 0), 1 / tr.FS, base_units="rad/s2", g_block=tr.G, start=8.0)
+    assert res.reason is not None and "uplift level" in res.refused[0][2]
+
+
+def test_base_of_another_length_is_refused():
+    with pytest.raises(RecordError, match="base"):
+        analyse_shake_table(np.zeros(100), np.zeros(99), 0.01, base_units="rad/s2", g_block=2.0)
