@@ -783,3 +783,26 @@ def test_the_pipeline_fingerprint_is_read_once_per_process(monkeypatch, tmp_path
         assert calibration.pipeline_fingerprint() != first
     finally:
         calibration.pipeline_fingerprint.cache_clear()
+
+
+def test_records_of_nearby_lengths_share_one_calibration_on_the_length_grid():
+    """length_grid: records whose lengths fall in one bin of the grid get one settings hash,
+    simulated at the bin's length (stated in the key); the spread scale is 1 at the bin's own
+    length and sqrt(bin / record) otherwise; records below the grid keep their own lengths
+    and no grid entry, one outside it is refused by length_bin, and without length_grid
+    nothing changes."""
+    keyed = [calibration.calibration_settings([n], 75.0, length_grid=True) for n in (31_600, 50_000, 99_999)]
+    assert len({calibration.settings_hash(k) for k in keyed}) == 1
+    assert keyed[0]["lengths"] == [31_600] and keyed[0]["length_grid"]["samples"] == 31_600
+    assert calibration.spread_scale(keyed[0], 31_600) == 1.0
+    assert calibration.spread_scale(keyed[1], 50_000) == pytest.approx(math.sqrt(31_600 / 50_000), rel=1e-12)
+    other = calibration.calibration_settings([100_000], 75.0, length_grid=True)
+    assert calibration.settings_hash(other) != calibration.settings_hash(keyed[0])
+    campaign = np.geomspace(2_000, 200_000, 20).astype(int)
+    assert len({calibration.settings_hash(calibration.calibration_settings([n], 75.0, length_grid=True)) for n in campaign}) <= 5
+    short = calibration.calibration_settings([800], 75.0, length_grid=True)
+    assert short["lengths"] == [800] and "length_grid" not in short and calibration.spread_scale(short, 800) == 1.0
+    with pytest.raises(ValueError, match="outside the length grid"):
+        calibration.length_bin(calibration.LENGTH_CAP + 1)
+    assert calibration.calibration_settings([50_000], 75.0) == calibration.calibration_settings([50_000], 75.0, length_grid=False)
+    assert "length_grid" not in calibration.calibration_settings([20_000_000], 75.0, length_grid=True)

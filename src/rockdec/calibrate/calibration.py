@@ -59,8 +59,8 @@ if TYPE_CHECKING:  # annotations only: xarray loads where a function needs it
 __all__ = [
     "CALIBRATION_SEED_OFFSET", "E_GRID", "E_GRID_LONG", "FILTER_BIN", "LENGTH_CAP", "NAMES", "NOISE_BIN",
     "PAPER", "PILOT_SETS", "POLE_BIN", "PPC_BIN", "PPC_BIN_LONG", "RATIO_BIN", "SEED_STRIDE",
-    "SETS_PER_E", "SETS_PER_E_CAPPED", "SET_PPC_TOLERANCE", "SET_STEP_TRIES", "STALE_S", "binned_model",
-    "build", "calibration_settings", "grid_tasks", "load_or_build", "pipeline_fingerprint", "ppc_key",
+    "LENGTHS_PER_DECADE", "LENGTH_GRID_MIN", "SETS_PER_E", "SETS_PER_E_CAPPED", "SET_PPC_TOLERANCE", "SET_STEP_TRIES", "STALE_S", "binned_model",
+    "build", "calibration_settings", "grid_tasks", "length_bin", "load_or_build", "pipeline_fingerprint", "ppc_key",
     "seed_base", "sets_per_e", "settings_hash", "simulated_lengths", "spread_scale", "step_for",
 ]
 
@@ -85,6 +85,13 @@ SETS_PER_E, SETS_PER_E_CAPPED = 120, 30
 #: many samples in all (:func:`simulated_lengths`), their belt's spread scaled to the
 #: records' length (:func:`spread_scale`).
 LENGTH_CAP = 1_000_000
+
+#: With ``length_grid`` (:func:`calibration_settings`), records of ``LENGTH_GRID_MIN`` to
+#: :data:`LENGTH_CAP` samples in all are calibrated on simulated records of the grid length
+#: at or below theirs, ``LENGTHS_PER_DECADE`` lengths a decade (:func:`length_bin`), their
+#: belt's spread scaled as the cap's (:func:`spread_scale`): records of nearby lengths share
+#: one calibration, never longer than theirs. Shorter records keep their own lengths.
+LENGTHS_PER_DECADE, LENGTH_GRID_MIN = 2, 1_000
 
 
 def _with_midpoints(grid) -> tuple[float, ...]:
@@ -209,7 +216,7 @@ def sets_per_e(capped: bool = False) -> int:
 
 def calibration_settings(
     lengths, points_per_cycle: float, settings: dict | None = None, model: RecordModel = PAPER, theta_cr_ratio: float | None = None,
-    repaired: dict | None = None,
+    repaired: dict | None = None, length_grid: bool = False,
 ) -> dict:
     """Everything a calibration depends on, as a JSON-able dict (hashed for the cache name).
 
@@ -221,15 +228,24 @@ def calibration_settings(
     ``theta_cr_ratio = sigma_Y / theta_cr`` (binned by :data:`RATIO_BIN`) enters the key.
     ``repaired``: the repair of the records (:func:`rockdec.record.repair.settings`), which
     every simulated set then gets too (:func:`_repaired`); it enters the key only when it
-    repairs something, so an unrepaired record keeps its calibration.
+    repairs something, so an unrepaired record keeps its calibration. ``length_grid``:
+    simulate records of :func:`length_bin`'s length (the key's ``length_grid`` entry says so;
+    :func:`simulated_lengths`), so that records of nearby lengths share the calibration.
+
+    Examples
+    --------
+    >>> a, b = (calibration_settings([n], 75.0, length_grid=True) for n in (12_000, 30_000))
+    >>> a["lengths"] == b["lengths"] == [10_000], settings_hash(a) == settings_hash(b)
+    (True, True)
     """
     if model.sensor.units != "sigma_y":
         raise ValueError("a calibration takes its sensor noise in units of sigma_Y")
     housner = model.rocking == "housner"
     if housner != (theta_cr_ratio is not None):
         raise ValueError("a calibration of Housner's model (eq. 2) needs sigma_Y / theta_cr, which the simplified model (eq. 4) does not take")
-    simulated = simulated_lengths(lengths)
-    capped = simulated != [int(n) for n in lengths]
+    capped = sum(int(n) for n in lengths) > LENGTH_CAP
+    simulated = simulated_lengths(lengths, length_grid)
+    gridded = length_grid and not capped and _on_grid(lengths)
     ppc_bin = PPC_BIN_LONG if capped else PPC_BIN
     out = {
         "lengths": simulated,
@@ -243,6 +259,10 @@ def calibration_settings(
     }
     if capped:
         out["length_cap"] = {"samples": LENGTH_CAP, "spread": "scaled by sqrt(simulated samples / record samples)"}
+    if gridded:
+        out["length_grid"] = {
+            "per_decade": LENGTHS_PER_DECADE, "samples": sum(simulated), "spread": "scaled by sqrt(simulated samples / record samples)",
+        }
     if housner:
         out["sigma_y_over_theta_cr"] = log_bin(theta_cr_ratio, RATIO_BIN)
     if repaired and any(repaired.get(k) is not None for k in ("spikes", "highpass")):
@@ -260,10 +280,34 @@ def _repaired(records: list, repaired: dict | None, points_per_cycle: float) -> 
     return records, done.spikes
 
 
-def simulated_lengths(lengths) -> list[int]:
+def length_bin(samples: int) -> int:
+    """The grid length (:data:`LENGTHS_PER_DECADE` a decade, 3 significant digits) at or
+    below ``samples``; refused below :data:`LENGTH_GRID_MIN` or above :data:`LENGTH_CAP`.
+
+    Examples
+    --------
+    >>> [length_bin(n) for n in (1_000, 3_159, 3_160, 99_999, 200_000)]
+    [1000, 1000, 3160, 31600, 100000]
+    """
+    if not LENGTH_GRID_MIN <= samples <= LENGTH_CAP:
+        raise ValueError(f"{samples} samples lie outside the length grid ({LENGTH_GRID_MIN} to {LENGTH_CAP}); calibrate them at their own length")
+    k = math.floor(math.log10(samples) * LENGTHS_PER_DECADE) + 1
+    while (n := int(float(f"{10.0 ** (k / LENGTHS_PER_DECADE):.3g}"))) > samples:
+        k -= 1
+    return n
+
+
+def _on_grid(lengths) -> bool:
+    """Whether records of ``lengths`` fall on the length grid (:func:`length_bin`)."""
+    return LENGTH_GRID_MIN <= sum(int(n) for n in lengths) <= LENGTH_CAP
+
+
+def simulated_lengths(lengths, length_grid: bool = False) -> list[int]:
     """The lengths of the records a calibration simulates for records of ``lengths``: the
     same when they hold at most :data:`LENGTH_CAP` samples in all, else each shrunk in
-    proportion to :data:`LENGTH_CAP` in all (at least one sample each).
+    proportion to :data:`LENGTH_CAP` in all (at least one sample each). With
+    ``length_grid``, records of :data:`LENGTH_GRID_MIN` to :data:`LENGTH_CAP` samples in all
+    are shrunk in proportion to :func:`length_bin` of their total.
 
     Why that holds. The bias of every estimator depends on ``e`` and the sampling (samples
     per cycle, eq. 5), and its spread falls as ``1/sqrt(length)`` (a record's triggers are
@@ -273,16 +317,20 @@ def simulated_lengths(lengths) -> list[int]:
     """
     lengths = [int(n) for n in lengths]
     total = sum(lengths)
-    if total <= LENGTH_CAP:
+    if length_grid and _on_grid(lengths):
+        target = length_bin(total)
+    elif total <= LENGTH_CAP:
         return lengths
-    return [max(1, round(n * LENGTH_CAP / total)) for n in lengths]
+    else:
+        target = LENGTH_CAP
+    return [max(1, round(n * target / total)) for n in lengths]
 
 
 def spread_scale(cal_settings: dict, samples: int) -> float:
     """Factor on the spread of the belt of the calibration ``cal_settings`` for records of
     ``samples`` in all: ``sqrt(simulated / samples)`` for a calibration on shortened records
-    (:func:`simulated_lengths`), else 1."""
-    if "length_cap" not in cal_settings:
+    (:func:`simulated_lengths`: beyond the cap or on the length grid), else 1."""
+    if "length_cap" not in cal_settings and "length_grid" not in cal_settings:
         return 1.0
     return math.sqrt(sum(cal_settings["lengths"]) / samples)
 
