@@ -46,7 +46,7 @@ def _fired(y, dt, cal):
     """The checks that fire on record ``y`` and the warnings' text."""
     analysis = measured.analyse([y], dt)
     notes, checks = diagnose([Record(y, dt, "r")], analysis, {}, cal, E, (E - 0.05, E + 0.05))
-    return {name for name, c in checks.items() if c["fired"]}, " ".join(n.message for n in notes)
+    return {name for name, c in checks.items() if c.fired}, " ".join(n.message for n in notes)
 
 
 def test_thresholds_fire_on_at_most_5_percent_of_the_calibrations_own_records():
