@@ -77,7 +77,7 @@ def test_the_json_reference_lists_every_key_of_an_estimate():
     page = rockdec_docs.estimate_json_markdown(schema)
     assert "{include} _includes/estimate-json.md" in (DOCS / "reference" / "outputs.md").read_text()
     kinds = rockdec_docs.estimate_kinds(schema)
-    assert set(kinds) == {"random", "free"}
+    assert set(kinds) == {"random", "free", "shake"}
     for kind in kinds.values():
         for key in kind["properties"]:
             assert f"| `{key}` |" in page, key

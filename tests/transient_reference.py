@@ -83,12 +83,19 @@ def transient(e: float, seed: int, *, strong: float = 20.0, free: float = 20.0, 
     as ``t^2``, a strong phase, a decay over the last 30 %) of Clough-Penzien noise peaking at
     ``peak`` times ``g`` in std, then ``free`` s of free decay from the block's last state; sensor
     noise ``noise`` times the record's std."""
+    return transient_with_base(e, seed, strong=strong, free=free, peak=peak, noise=noise, fs=fs)[0]
+
+
+def transient_with_base(e: float, seed: int, *, strong: float = 20.0, free: float = 20.0, peak: float = 0.8, noise: float = 0.01,
+                        fs: float = FS) -> tuple[np.ndarray, np.ndarray]:
+    """The record of :func:`transient` and the base acceleration that made it (rad/s^2, the
+    simplified rocking equation's load; the block lifts above ``G``)."""
     rng = np.random.default_rng(seed)
     n_shake, n_free = int(strong * fs), int(free * fs)
     t = np.arange(n_shake) / n_shake
     envelope = np.where(t < 0.2, (t / 0.2) ** 2, np.where(t < 0.7, 1.0, np.exp(-8.0 * (t - 0.7))))
     a = np.concatenate([peak * G * envelope * _clough_penzien(n_shake, rng, fs), np.zeros(n_free)])
-    return _noisy(_rock(a, e, G, fs), noise, rng)
+    return _noisy(_rock(a, e, G, fs), noise, rng), a
 
 
 def stationary(e: float, seed: int, *, seconds: float = 100.0, strength: float = 3.0, noise: float = 0.01,

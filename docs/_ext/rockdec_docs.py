@@ -120,7 +120,7 @@ def load_estimate_schema() -> dict:
 
 
 def estimate_kinds(schema: dict) -> dict[str, dict]:
-    """The documents the estimate's schema allows, by test (``random``, ``free``), each a
+    """The documents the estimate's schema allows, by test (``random``, ``free``, ``shake``), each a
     schema of its own (with the definitions it refers to)."""
     tests = [entry["$ref"].rsplit("/", 1)[-1] for entry in schema.get("oneOf", [])]
     return {name: {**schema["$defs"][name], "$defs": schema.get("$defs", {})} for name in tests}

@@ -13,6 +13,8 @@ The functions a user calls:
   ``.summary()``, ``.to_dict()``, ``.to_dataset()``, ``.plot()``);
 - :func:`free_rocking` -- ``e`` from a free-rocking test (the block released from a tilt),
   the reference beside the random test, as the same result object;
+- :func:`shake_table` -- ``e`` from a shake-table test (a recorded base motion, then the
+  block rocking to rest): the free-decay tails after the shaking, pooled;
 - :func:`read_record` -- read a record from CSV, ``.npy``, NetCDF or MATLAB ``.mat``;
 - :func:`simulate` -- a record of known ``e``, simulated exactly;
 - :class:`InputError`, :class:`RecordError` -- what is refused, in one sentence naming the
@@ -47,6 +49,7 @@ __all__ = [
     "estimate",
     "free_rocking",
     "read_record",
+    "shake_table",
     "simulate",
 ]
 
@@ -55,6 +58,7 @@ _HOMES = {
     "estimate": "rockdec.api",
     "free_rocking": "rockdec.api",
     "read_record": "rockdec.api",
+    "shake_table": "rockdec.api",
     "simulate": "rockdec.api",
     "RestitutionEstimate": "rockdec.report.result",
     "ConfidenceInterval": "rockdec.report.result",

@@ -32,7 +32,7 @@ from rockdec.warning_types import SimulationWarning
 if TYPE_CHECKING:
     import xarray as xr
 
-__all__ = ["block_angle", "estimate", "estimate_options", "free_rocking", "read_record", "simulate"]
+__all__ = ["block_angle", "estimate", "estimate_options", "free_rocking", "read_record", "shake_table", "simulate"]
 
 #: Rocking models :func:`estimate` calibrates with.
 MODELS = ("simplified", "housner")
@@ -325,6 +325,131 @@ def free_rocking(theta, dt: float | None = None, *, model: str = "simplified", t
     fit = analyse_free_rocking(values if many else values[0], steps if many else steps[0], model=model, theta_cr=theta_cr)
     doc = free_document(fit, [a[2] for a in arrays], steps, [v.size for v in values])
     return RestitutionEstimate.from_dict(with_block(doc, block), analysis=(fit, values if many else values[0], steps if many else steps[0]))
+
+
+def shake_table(theta, base, dt: float | None = None, *, base_units: str | None = None, block=None, theta_cr: float | None = None,
+                g_block: float | None = None, model: str = "simplified", start: float | None = None) -> RestitutionEstimate:
+    """Estimate ``e`` from a shake-table test: the free-decay tails after the shaking stops.
+
+    The base acceleration, divided by the level that lifts the block (``g tan(alpha)``),
+    says when the shaking ends: after 95 % of its Arias intensity and its last sample above
+    5 % of that level. Every stretch as quiet as that, at least 1 s long, after the base
+    first could lift the block, is a free decay: each is analysed as a free-rocking test
+    (:func:`free_rocking`) and all are pooled into one ``e``. A base that still moves in a
+    tail is refused with its reason, never fitted as if free.
+
+    Parameters
+    ----------
+    theta : array_like, xarray.DataArray, pandas.Series, or list of them
+        The rocking angle, in the forms :func:`estimate` takes; several records of one block
+        are pooled.
+    base : array_like, xarray.DataArray, pandas.Series, or list of them
+        The base acceleration, one sample per angle (a list: one per record).
+    dt : float, optional
+        Sampling step in s, for arrays without a time axis.
+    base_units : {"m/s2", "g", "rad/s2"}, optional
+        The base's units; default: a DataArray's ``units`` attribute. "m/s2" and "g" need the
+        block's critical angle (``block`` or ``theta_cr``); "rad/s2", the simplified rocking
+        equation's load, needs ``g_block``.
+    block : tuple of float, optional
+        The block's height and width ``(H, B)``, one unit: gives ``theta_cr = atan(B/H)``
+        and sets Housner's ``e`` beside the measured one.
+    theta_cr : float, optional
+        The critical angle in rad.
+    g_block : float, optional
+        The block's restoring acceleration ``nu^2 theta_cr`` in rad/s^2 (base in "rad/s2").
+    model : {"simplified", "housner"}
+        The free flight the tails are fitted with.
+    start : float, optional
+        The tail's start (s from each record's start), cut by hand instead of found.
+
+    Returns
+    -------
+    RestitutionEstimate
+        With ``test == "shake"``; ``impacts`` holds the impacts of the tails and
+        ``to_dict()["shake_table"]`` where the shaking ends and each tail.
+
+    Raises
+    ------
+    InputError, RecordError
+        A base missing its units, sampled otherwise than the angle, or not one per record,
+        and the refusals of :func:`free_rocking`, in one sentence.
+
+    Examples
+    --------
+    >>> import numpy as np, rockdec
+    >>> free = rockdec.simulate(0.9, 2_000, seed=0, sigma_p=0.0, theta0=0.01, dt=0.005).values
+    >>> theta = np.concatenate([np.zeros(400), free])
+    >>> base = np.concatenate([np.where(np.arange(400) % 2, 3.0, -3.0), np.zeros(2_000)])
+    >>> res = rockdec.shake_table(theta, base, 0.005, base_units="rad/s2", g_block=1.0)
+    >>> round(res.e, 6), res.test, res.to_dict()["shake_table"]["shaking_end"]
+    (0.9, 'shake', [2.0])
+    """
+    from rockdec.free.shake import analyse_shake_table
+    from rockdec.report.shake_result import shake_document
+
+    block, theta_cr = block_angle(block, model, theta_cr)
+    if theta_cr is None and block is not None:
+        theta_cr = block.theta_cr
+    arrays = _arrays(theta, dt)
+    bases, units = _base_arrays(base, arrays, base_units)
+    values, steps = [a[0] for a in arrays], [a[1] for a in arrays]
+    many = len(arrays) > 1
+    fit = analyse_shake_table(values if many else values[0], bases if many else bases[0], steps, base_units=units, g_block=g_block,
+                              theta_cr=theta_cr, model=model, start=start)
+    doc = shake_document(fit, [a[2] for a in arrays], steps, [v.size for v in values], base_units=units, model=model, theta_cr=theta_cr)
+    pieces = [values[k][round(t0 / steps[k]):round(t1 / steps[k])] for k, t0, t1 in fit.tails]
+    times = [steps[k] * np.arange(round(t0 / steps[k]), round(t1 / steps[k])) for k, t0, t1 in fit.tails]
+    analysis = None if fit.fit is None else (fit.fit, pieces if len(pieces) > 1 else pieces[0], times if len(times) > 1 else times[0])
+    return RestitutionEstimate.from_dict(with_block(doc, block), analysis=analysis)
+
+
+#: Spellings of the base's units :func:`shake_table` reads off a DataArray's ``units``.
+BASE_UNIT_NAMES = {"m/s2": "m/s2", "m s-2": "m/s2", "m/s^2": "m/s2", "m/s**2": "m/s2", "g": "g", "rad/s2": "rad/s2",
+                   "rad s-2": "rad/s2", "rad/s^2": "rad/s2"}
+
+
+def _base_arrays(base, arrays: list, base_units: str | None) -> tuple[list[np.ndarray], str]:
+    """The base acceleration of each record of ``arrays`` (:func:`_arrays`) and its units:
+    ``base_units``, else the ``units`` of the DataArrays, refused when they disagree or are missing."""
+    import pandas as pd
+    import xarray as xr
+
+    items = list(base) if len(arrays) > 1 and isinstance(base, list | tuple) else [base]
+    if len(items) != len(arrays):
+        raise InputError(f"`base` holds {len(items)} record(s) for {len(arrays)} records of `theta`; give one base acceleration per record.")
+    out, stated = [], set()
+    for item, (angles, step, source) in zip(items, arrays):
+        if isinstance(item, records_mod.Record):  # as rockdec.record.records.read_base reads it
+            if abs(item.dt - step) > 1e-6 * step:
+                raise RecordError(f"the base {item.source} is sampled every {item.dt:g} s, the angle every {step:g} s; "
+                                  "resample the base onto the angle's samples.")
+            item = item.theta
+        if isinstance(item, pd.Series):
+            item = xr.DataArray.from_series(item) if not isinstance(item.index, pd.RangeIndex) else item.to_numpy()
+        if isinstance(item, xr.DataArray):
+            if "units" in item.attrs:
+                stated.add(BASE_UNIT_NAMES.get(str(item.attrs["units"]).strip(), str(item.attrs["units"])))
+            dim = item.dims[-1] if item.ndim else None
+            if dim in item.coords and item.sizes[dim] > 1:
+                base_step = records_mod.sampling_step(np.asarray(item[dim].values, dtype=np.float64), f"the base of {source}")
+                if abs(base_step - step) > 1e-6 * step:
+                    raise RecordError(f"the base of {source} is sampled every {base_step:g} s, the angle every {step:g} s; "
+                                      "resample the base onto the angle's samples.")
+            item = item.values
+        values = np.asarray(item)
+        if values.dtype.kind not in "fiu" or values.ndim != 1:
+            raise InputError(f"`base` ({source}) holds {values.dtype} values of shape {values.shape}; "
+                             "give the base acceleration as a 1-D array of numbers, one per angle.")
+        out.append(values.astype(np.float64))
+    if base_units is None:
+        if len(stated) != 1:
+            raise InputError("`base_units` is not given and the base states " + (f"several units ({', '.join(sorted(stated))})" if stated else "none")
+                             + "; give base_units='m/s2', 'g' or 'rad/s2'.")
+        base_units = stated.pop()
+    elif stated - {base_units}:
+        raise InputError(f"`base_units` {base_units!r} disagrees with the base's units attribute ({', '.join(sorted(stated))}); give one.")
+    return out, base_units
 
 
 def read_record(path, *, variable: str = "theta", column: str = "theta", dt: float | None = None,

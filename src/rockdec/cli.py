@@ -77,7 +77,8 @@ FLAGS = {
     "overwrite": "--overwrite", "burn_in": "--burn-in", "theta0": "--theta0", "points_per_cycle": "--points-per-cycle",
     "e": "--e", "nu": "--nu", "sigma_p": "--sigma-p", "n_points": "--n-points", "theta": "the record",
     "group_size": "--group-size", "n_periods": "--n-periods", "fit_points": "--fit-points", "weights": "--weights",
-    "repair": "--no-repair", "block": "--block",
+    "repair": "--no-repair", "block": "--block", "base": "--base", "base_units": "--base-units", "g_block": "--g",
+    "start": "--tail-start",
 }
 
 
@@ -346,26 +347,37 @@ def cmd_estimate(args) -> None:
 
     for path in args.records:
         checks.path_name(path, "record")
-    free = args.test == "free"
-    if free:
-        unused = [flag for flag, given in (("--g", args.g is not None), ("--load", args.load != "auto"),
+    free, shake = args.test == "free", args.test == "shake"
+    if free or shake:
+        unused = [flag for flag, given in (("--g", args.g is not None and free), ("--load", args.load != "auto"),
                                            ("--sensor-noise", args.sensor_noise != "auto"),
                                            ("--sensor-filter", args.sensor_filter != "auto")) if given]
         if unused:
             from rockdec.free import NO_RECORD_MODEL
 
             raise UsageError(f"{', '.join(unused)}: {NO_RECORD_MODEL}; leave them out.")
+    shake_flags = [flag for flag, given in (("--base", bool(args.base)), ("--base-units", args.base_units is not None),
+                                            ("--tail-start", args.tail_start is not None)) if given]
+    if shake_flags and not shake:
+        raise UsageError(f"{', '.join(shake_flags)}: only the shake-table test reads them; add --test shake, or leave them out.")
+    if shake and len(args.base or []) != len(args.records):
+        raise UsageError(f"--test shake reads one --base file per record file: {len(args.records)} record file(s), "
+                         f"{len(args.base or [])} --base file(s); give the base acceleration of each record.")
+    for path in args.base or []:
+        checks.path_name(path, "base record")
     _, theta_cr = api.block_angle(args.block, args.model, args.theta_cr)  # refused before any record is read
     if not free:
         api.estimate_options(g=args.g, load=args.load, sensor_noise=args.sensor_noise, sensor_filter=args.sensor_filter, model=args.model,
                              theta_cr=theta_cr, cache=args.cache)
     with contextlib.ExitStack() as stack:
         plot = stack.enter_context(io.claimed(_plot_path(args), args.overwrite)) if args.plot else None
-        seconds = 0.0 if free else _check_estimate_size(args)
+        seconds = 0.0 if free or shake else _check_estimate_size(args)
         theta = [record for path in args.records
                  for record in records.read_records(path, column=args.column, variable=args.variable, dt=args.dt, fs=args.fs, checked=False)]
         if free:
             res = rockdec.free_rocking(theta, model=args.model, theta_cr=args.theta_cr, block=args.block)
+        elif shake:
+            res = _shake_table(args, theta)
         else:
             log.info(f"estimate: {len(args.records)} file(s) (up to {console.about(seconds)} when their calibration must be built)")
             with console.progress("calibrating"):  # a bar only while a calibration missing from the cache is built
@@ -382,6 +394,30 @@ def cmd_estimate(args) -> None:
     else:
         print(res.summary(verbose=args.verbose > 0))
         print("(more: rockdec -v estimate ...; what each word means: rockdec estimate --help)")
+
+
+def _shake_table(args, theta: list):
+    """``rockdec estimate --test shake``: the records ``theta`` with the ``--base`` files."""
+    import rockdec
+    from rockdec import api
+    from rockdec.record import records
+
+    bases, stated = [], set()
+    for path in args.base:
+        read, units = records.read_base(path, column=args.base_column, variable=args.base_variable, dt=args.dt, fs=args.fs)
+        bases += read
+        if units is not None:
+            stated.add(api.BASE_UNIT_NAMES.get(units.strip(), units))
+    if len(bases) != len(theta):
+        raise UsageError(f"the --base files hold {len(bases)} record(s) for {len(theta)} record(s) of the angle; give one base per record.")
+    if args.base_units is None and len(stated) != 1:
+        raise UsageError("--base-units is not given and the base files state " + (f"several ({', '.join(sorted(stated))})" if stated else
+                         "none") + "; give --base-units m/s2, g or rad/s2.")
+    units = args.base_units or stated.pop()
+    if stated - {units}:
+        raise UsageError(f"--base-units {units} disagrees with the base files' units attribute ({', '.join(sorted(stated))}); give one.")
+    return rockdec.shake_table(theta, bases if len(bases) > 1 else bases[0], base_units=units,
+                               block=args.block, theta_cr=args.theta_cr, g_block=args.g, model=args.model, start=args.tail_start)
 
 
 def cmd_verify(args) -> None:
@@ -538,10 +574,19 @@ def build_parser() -> argparse.ArgumentParser:
     est1.add_argument("--block", metavar="H,B", help="the block's height and width, one unit: the report sets Housner's e = 1 - 1.5 "
                       "sin^2(atan(B/H)) beside the measured e")
     est1.add_argument(
-        "--test", choices=("random", "free"), default="random",
+        "--test", choices=("random", "free", "shake"), default="random",
         help="random: the block's random response (Random Decrement, calibrated); free: a free-rocking test, the block "
-        "released from a tilt (impacts and fitted flights) (default: %(default)s)",
+        "released from a tilt (impacts and fitted flights); shake: a shake-table test, the free-decay tails after the "
+        "shaking (needs --base) (default: %(default)s)",
     )
+    est1.add_argument("--base", nargs="+", metavar="FILE", help="--test shake: the base acceleration, one file per record file, "
+                      "in the record's formats and sampling (.csv column --base-column, .nc variable --base-variable)")
+    est1.add_argument("--base-column", default="base", help="CSV column of the base acceleration (default: %(default)s)")
+    est1.add_argument("--base-variable", default="base", help="NetCDF variable of the base acceleration (default: %(default)s)")
+    est1.add_argument("--base-units", choices=("m/s2", "g", "rad/s2"), help="units of the base acceleration (default: the NetCDF "
+                      "units attribute); m/s2 and g need --block or --theta-cr, rad/s2 (the simplified rocking equation's load) --g")
+    est1.add_argument("--tail-start", type=float, metavar="SECONDS", help="--test shake: the free-decay tail starts here (s from "
+                      "each record's start), cut by hand instead of found")
     est1.add_argument(
         "--no-repair", dest="repair", action="store_false",
         help="estimate the record as given: no spikes replaced, no high-pass of a drifting zero (by default both are "

@@ -9,12 +9,8 @@ from rockdec.timeaxis import RecordError
 
 
 def _base(e, seed):
-    """The generator's base acceleration (rad/s^2), rebuilt with the same draws as tr.transient."""
-    rng = np.random.default_rng(seed)
-    n_shake, n_free = int(20.0 * tr.FS), int(20.0 * tr.FS)
-    t = np.arange(n_shake) / n_shake
-    env = np.where(t < 0.2, (t / 0.2) ** 2, np.where(t < 0.7, 1.0, np.exp(-8.0 * (t - 0.7))))
-    return np.concatenate([0.8 * tr.G * env * tr._clough_penzien(n_shake, rng, tr.FS), np.zeros(n_free)])
+    """The generator's base acceleration (rad/s^2)."""
+    return tr.transient_with_base(e, seed)[1]
 
 
 def test_shaking_end_is_after_the_last_loud_sample():
@@ -27,7 +23,8 @@ def test_answered_tails_cover_e_over_seeds():
     covered = answered = 0
     for e in (0.8, 0.9, 0.95):
         for seed in range(3):
-            res = analyse_shake_table(tr.transient(e, seed, noise=0.0), _base(e, seed), 1 / tr.FS, base_units="rad/s2", g_block=tr.G)
+            theta, base = tr.transient_with_base(e, seed, noise=0.0)
+            res = analyse_shake_table(theta, base, 1 / tr.FS, base_units="rad/s2", g_block=tr.G)
             if res.reason is None:
                 answered += 1
                 covered += res.e_interval[0] <= e <= res.e_interval[1]
@@ -37,7 +34,7 @@ def test_answered_tails_cover_e_over_seeds():
 
 
 def test_a_tail_cut_while_the_base_moves_is_refused():
-    res = analyse_shake_table(tr.transient(0.9, 0), _base(0.9, 0), 1 / tr.FS, base_units="rad/s2", g_block=tr.G, start=8.0)
+    res = analyse_shake_table(*tr.transient_with_base(0.9, 0), 1 / tr.FS, base_units="rad/s2", g_block=tr.G, start=8.0)
     assert res.reason is not None and "uplift level" in res.refused[0][2]
 
 

@@ -243,9 +243,10 @@ def calibration_settings(
     housner = model.rocking == "housner"
     if housner != (theta_cr_ratio is not None):
         raise ValueError("a calibration of Housner's model (eq. 2) needs sigma_Y / theta_cr, which the simplified model (eq. 4) does not take")
-    capped = sum(int(n) for n in lengths) > LENGTH_CAP
+    total = sum(int(n) for n in lengths)
+    capped = total > LENGTH_CAP
     simulated = simulated_lengths(lengths, length_grid)
-    gridded = length_grid and not capped and _on_grid(lengths)
+    gridded = length_grid and _on_grid(total)
     ppc_bin = PPC_BIN_LONG if capped else PPC_BIN
     out = {
         "lengths": simulated,
@@ -297,9 +298,9 @@ def length_bin(samples: int) -> int:
     return n
 
 
-def _on_grid(lengths) -> bool:
-    """Whether records of ``lengths`` fall on the length grid (:func:`length_bin`)."""
-    return LENGTH_GRID_MIN <= sum(int(n) for n in lengths) <= LENGTH_CAP
+def _on_grid(total: int) -> bool:
+    """Whether records of ``total`` samples in all fall on the length grid (:func:`length_bin`)."""
+    return LENGTH_GRID_MIN <= total <= LENGTH_CAP
 
 
 def simulated_lengths(lengths, length_grid: bool = False) -> list[int]:
@@ -317,7 +318,7 @@ def simulated_lengths(lengths, length_grid: bool = False) -> list[int]:
     """
     lengths = [int(n) for n in lengths]
     total = sum(lengths)
-    if length_grid and _on_grid(lengths):
+    if length_grid and _on_grid(total):
         target = length_bin(total)
     elif total <= LENGTH_CAP:
         return lengths

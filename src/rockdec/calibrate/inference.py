@@ -50,7 +50,7 @@ __all__ = [
     "ANALYSIS_SECONDS", "Analysed", "CALIBRATION_SECONDS", "COLOUR_CORNER_FLOOR", "COLOUR_CORNER_Z",
     "CalibrationNeeded", "LONG_RATIO", "NOTE_CODES", "NO_NOISE", "Outcome", "PAIR_SECONDS",
     "RECORD_SECONDS", "SIDE_G_SHARE", "analyse", "beyond", "calibration_sets", "check_pooled",
-    "checks_place", "choose_model", "colour_decline", "cost", "coverage_floor", "declared_contradictions",
+    "checks_place", "choose_model", "colour_decline", "cost", "coverage_floor", "declared_contradictions", "diagnostics_report",
     "decline_unrepaired", "diagnose", "estimate", "filter_decline", "measure_model", "own_scales",
     "Verdict", "record_model", "select", "stage_seconds", "transient_decline", "unresolved_impacts",
 ]
@@ -1031,7 +1031,7 @@ class Verdict(NamedTuple):
         m = choice.measurement
         return cls(calibrated, bool(m is not None and m.drifting), bool(m is not None and not m.coloured),
                    choice.sources.get("sensor_filter") == "declared", fired,
-                   done is not None and bool(done.removed or done.corner is not None))
+                   done is not None and done.repaired)
 
 
 class Outcome(NamedTuple):
@@ -1071,11 +1071,17 @@ def document(analysed: Analysed, choice: ModelChoice, calibrated: Calibrated | N
         "g_interval_note": g_reading.note, "points_per_cycle": json_number(analysis.points_per_cycle), "sigma_y": json_number(analysis.sigma_y),
         "dt": analysed.dt, "records": [r.source for r in analysed.records], "samples": analysed.samples,
         "nan_samples": int(analysis.nan_samples), "record_model": choice.report(analysed), "estimators": per,
-        "warnings": [n.message for n in notes], "warning_codes": [n.code for n in notes], "diagnostics": {name: {"statistic": json_number(o.statistic), "threshold": json_number(o.threshold), "fired": o.fired}
-                                                                          for name, o in checks.items()},
+        "warnings": [n.message for n in notes], "warning_codes": [n.code for n in notes], "diagnostics": diagnostics_report(checks),
         "rockdec_version": __version__, "calibration": cal,
         "repair": repaired if repaired is not None else repair_report(None, analysed.dt, True),
     }
+
+
+def diagnostics_report(checks: dict) -> dict:
+    """The JSON document's ``diagnostics``: per check of ``checks`` (``{name:
+    diagnostics.Outcome}``) its ``statistic``, ``threshold`` and whether it ``fired``."""
+    return {name: {"statistic": json_number(o.statistic), "threshold": json_number(o.threshold), "fired": o.fired}
+            for name, o in checks.items()}
 
 
 def declined_rows(analysed: Analysed) -> tuple[dict, tuple]:
@@ -1204,7 +1210,7 @@ def repair_report(done: repair.Repair | None, dt: float, enabled: bool, why: str
     corner = None if done is None else done.corner
     hz = None if corner is None else json_number(done.per_sample / dt)
     return {"enabled": enabled, "spikes_removed": spikes, "highpass_corner_rocking": corner, "highpass_corner_hz": hz,
-            "repaired": bool(spikes or corner is not None), "why": why}
+            "repaired": done is not None and done.repaired, "why": why}
 
 
 def declining_fired(verdict: Verdict, unfiltered: bool = False) -> list[str]:

@@ -115,18 +115,22 @@ def _quiet_runs(r, quiet, n_min):
     return [(int(a), int(b)) for a, b in zip(edges[::2], edges[1::2]) if b - a >= n_min]
 
 
-def analyse_shake_table(theta, base, dt: float, *, base_units: str = "m/s2", g_block: float | None = None,
-                        theta_cr: float | None = None, start: float | None = None, quiet: float = QUIET,
-                        min_tail: float = MIN_TAIL) -> ShakeTableFit:
+def analyse_shake_table(theta, base, dt, *, base_units: str = "m/s2", g_block: float | None = None,
+                        theta_cr: float | None = None, model: str = "simplified", start: float | None = None,
+                        quiet: float = QUIET, min_tail: float = MIN_TAIL) -> ShakeTableFit:
     """``e`` from shake-table records: the free-decay tails after the shaking, pooled.
 
     Parameters
     ----------
     theta, base : array_like or list of array_like
         The block's angle (rad) and the base acceleration (``base_units``), one sample each
-        per step ``dt`` (s); a list of records of one block is pooled.
+        per step; a list of records of one block is pooled.
+    dt : float or list of float
+        The sampling step (s), or one per record.
     base_units, g_block, theta_cr
         As :func:`uplift_ratio`.
+    model : {"simplified", "housner"}
+        The free flight the tails are fitted with (:func:`rockdec.free.analysis.analyse_free_rocking`).
     start : float, optional
         A tail cut by hand (s from each record's start) instead of the quiet stretches; refused
         if the base still moves after it.
@@ -143,13 +147,16 @@ def analyse_shake_table(theta, base, dt: float, *, base_units: str = "m/s2", g_b
     >>> round(res.e, 6), res.shaking_end
     (0.9, (2.0,))
     """
-    dt = checks.positive(dt, "`dt`", "give the sampling step in s, > 0")
     many = isinstance(theta, (list, tuple)) and len(theta) > 0 and np.ndim(theta[0]) == 1
     thetas, bases = (list(theta), list(base)) if many else ([theta], [base])
     if len(thetas) != len(bases):
         raise RecordError(f"{len(thetas)} records but {len(bases)} base records; give one base acceleration per record.")
+    per_record = list(dt) if isinstance(dt, (list, tuple)) else [dt] * len(thetas)
+    if len(per_record) != len(thetas):
+        raise RecordError(f"{len(thetas)} records but {len(per_record)} steps `dt`; give one step, or one per record.")
     ends, tails, pieces, steps, fits, refused = [], [], [], [], [], []
-    for k, (y, b) in enumerate(zip(thetas, bases)):
+    for k, (y, b, dt) in enumerate(zip(thetas, bases, per_record)):
+        dt = checks.positive(dt, "`dt`", "give the sampling step in s, > 0")
         name = f"record {k}" if many else "the record"
         y, b = np.asarray(y, dtype=float), np.asarray(b, dtype=float)
         if b.ndim != 1 or b.size != y.size:
@@ -181,7 +188,7 @@ def analyse_shake_table(theta, base, dt: float, *, base_units: str = "m/s2", g_b
         for i0, i1 in runs:
             t = dt * np.arange(i0, i1)
             try:
-                fit = analyse_free_rocking(y[i0:i1], t, theta_cr=theta_cr)
+                fit = analyse_free_rocking(y[i0:i1], t, model=model, theta_cr=theta_cr)
             except RecordError as err:
                 refused.append((k, i0 * dt, str(err).removeprefix("theta: ")))
                 continue
@@ -194,8 +201,10 @@ def analyse_shake_table(theta, base, dt: float, *, base_units: str = "m/s2", g_b
             fits.append(fit)
     pooled = None
     if pieces:
-        pooled = analyse_free_rocking(pieces if len(pieces) > 1 else pieces[0], steps if len(steps) > 1 else steps[0], theta_cr=theta_cr)
-    reason = None if pooled is not None and not pooled.reason else (
-        "no free-decay tail gives an e: " + "; ".join(f"{'record %d at ' % k if many else ''}{s:.6g} s: {why}" for k, s, why in refused)
-        if refused else "no free-decay tail")
+        pooled = analyse_free_rocking(pieces if len(pieces) > 1 else pieces[0], steps if len(steps) > 1 else steps[0], model=model,
+                                      theta_cr=theta_cr)
+    if pooled is not None:
+        reason = pooled.reason
+    else:
+        reason = "no free-decay tail gives an e: " + "; ".join(f"{'record %d at ' % k if many else ''}{s:.6g} s: {why}" for k, s, why in refused)
     return ShakeTableFit(pooled, tuple(ends), tuple(tails), tuple(fits), tuple(refused), reason)

@@ -23,7 +23,7 @@ from rockdec.validate import SQUARE_RANGE, file_kind, path_name, show
 
 __all__ = [
     "HOLD_SHARE", "MIN_SAMPLES", "Record", "RecordError", "angle_factor", "check_values", "distinct",
-    "held", "read_records", "record_size", "same_step", "sampling_step", "time_factor",
+    "held", "read_base", "read_records", "record_size", "same_step", "sampling_step", "time_factor",
 ]
 
 #: Largest fraction of NaN samples a record may hold.
@@ -150,7 +150,9 @@ def _numeric(series, path: Path, column: str) -> np.ndarray:
     return values
 
 
-def _read_netcdf(path: Path, variable: str, step: float | None) -> tuple[np.ndarray, float]:
+def _read_netcdf(path: Path, variable: str, step: float | None, angle: bool = True) -> tuple[np.ndarray, float, str | None]:
+    """The values of ``variable`` (in rad when ``angle``, else as stored), their step and
+    their ``units`` attribute."""
     import xarray as xr
 
     try:  # times as stored, scaled by their units below (``units`` as a CF time unit, with or without "since")
@@ -165,7 +167,8 @@ def _read_netcdf(path: Path, variable: str, step: float | None) -> tuple[np.ndar
             var = var.transpose(..., "time")  # one record per row, e.g. theta(seed, time) of `rockdec simulate`
         elif var.ndim != 1:
             raise RecordError(f"{path}: variable '{variable}' has dimensions {var.dims}; give theta(time) or theta(seed, time).")
-        values = var.values.astype(np.float64) * angle_factor(var.attrs.get("units"), str(path), variable)
+        units = var.attrs.get("units")
+        values = var.values.astype(np.float64) * (angle_factor(units, str(path), variable) if angle else 1.0)
         dim = var.dims[-1]
         if step is None:
             if dim in ds.coords:
@@ -179,7 +182,7 @@ def _read_netcdf(path: Path, variable: str, step: float | None) -> tuple[np.ndar
                     raise RecordError(f"{path}: its attribute dt {text!r} is not a number of seconds; fix it or give `dt` (s).") from None
             else:
                 raise RecordError(f"{path}: '{variable}' has no time coordinate and no 'dt' attribute; give `dt` (s) or `fs` (Hz).")
-    return values, step
+    return values, step, None if units is None else str(units)
 
 
 #: The first bytes of a ``.npy`` file (:mod:`numpy.lib.format`) and of a zip archive (``.npz``).
@@ -220,19 +223,41 @@ def read_records(path, *, column: str = "theta", variable: str = "theta", dt: fl
     ``dt``/``fs``; ``.npy``: a 1-D array with ``dt``/``fs``. Angles in rad, times in s.
     Raises :class:`RecordError`.
     """
+    source = str(path_name(path, "record"))
+    values, step, _ = _read_file(path, column, variable, dt, fs, angle=True)
+    rows = [(row, f"{source}[{i}]") for i, row in enumerate(values)] if values.ndim == 2 else [(values, source)]
+    if checked:
+        return [check_values(row, step, name) for row, name in rows]
+    return [Record(np.asarray(row, dtype=np.float64), check_step(step, np.size(row), name), name) for row, name in rows]
+
+
+def read_base(path, *, column: str = "base", variable: str = "base", dt: float | None = None,
+              fs: float | None = None) -> tuple[list[Record], str | None]:
+    """Read the base acceleration of a shake-table test from one file, in the formats of
+    :func:`read_records` (values as stored, not angles), and its NetCDF ``units`` attribute
+    (``None`` in the other formats). Raises :class:`RecordError`."""
+    source = str(path_name(path, "base record"))
+    values, step, units = _read_file(path, column, variable, dt, fs, angle=False)
+    rows = [(row, f"{source}[{i}]") for i, row in enumerate(values)] if values.ndim == 2 else [(values, source)]
+    return [Record(np.asarray(row, dtype=np.float64), check_step(step, np.size(row), name), name) for row, name in rows], units
+
+
+def _read_file(path, column: str, variable: str, dt: float | None, fs: float | None, angle: bool) -> tuple[np.ndarray, float, str | None]:
+    """The values of one record file (angles in rad when ``angle``), their step and units
+    attribute (:func:`read_records`)."""
     path = path_name(path, "record")
-    source = str(path)
-    step = _step_from_options(dt, fs, source)
+    step = _step_from_options(dt, fs, str(path))
     check_regular(path)
     if not path.is_file():
         raise RecordError(f"{path}: no such file; check the path.")
     if path.stat().st_size == 0:
         raise RecordError(f"{path}: the file is empty; give a record with at least {MIN_SAMPLES} samples.")
     suffix = path.suffix.lower()
+    units = None
     if suffix in (".csv", ".txt"):
         values, step = _read_csv(path, column, step)
     elif suffix in (".nc", ".nc4", ".netcdf"):
-        values, step = _read_netcdf(path, variable, step)
+        values, step, units = _read_netcdf(path, variable, step, angle)
     elif suffix == ".mat":
         from rockdec.record.matlab import read_mat
 
@@ -246,16 +271,13 @@ def read_records(path, *, column: str = "theta", variable: str = "theta", dt: fl
         except (OSError, ValueError) as exc:
             raise RecordError(f"{path}: not a readable .npy file ({exc}).") from None
         if values.ndim != 1 or values.dtype.kind not in "fiu":
-            raise RecordError(f"{path}: holds a {values.dtype} array of shape {values.shape}; give a 1-D array of angles in rad.")
+            raise RecordError(f"{path}: holds a {values.dtype} array of shape {values.shape}; give a 1-D array of numbers.")
         if step is None:
             raise RecordError(f"{path}: a .npy record has no time axis; give `dt` (s) or `fs` (Hz).")
         values = values.astype(np.float64)
     else:
         raise RecordError(f"{path}: unknown record format '{suffix}'; give a .csv, .nc, .npy or .mat file.")
-    rows = [(row, f"{source}[{i}]") for i, row in enumerate(values)] if values.ndim == 2 else [(values, source)]
-    if checked:
-        return [check_values(row, step, name) for row, name in rows]
-    return [Record(np.asarray(row, dtype=np.float64), check_step(step, np.size(row), name), name) for row, name in rows]
+    return values, step, units
 
 
 def check_step(dt: float, samples: int, source: str) -> float:

@@ -70,6 +70,11 @@ class Repair(NamedTuple):
         """Spikes replaced over all records."""
         return int(sum(where.size for where in self.spikes))
 
+    @property
+    def repaired(self) -> bool:
+        """Whether any record was changed: a spike replaced or a high-pass applied."""
+        return bool(self.removed or self.corner is not None)
+
 
 def settings(spikes: bool, drift: bool) -> dict:
     """The repair as the calibration's settings hold it: ``{"spikes": SPIKE_Z or None,

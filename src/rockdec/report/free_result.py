@@ -131,7 +131,8 @@ def free_text(doc: dict, verbose: bool = False) -> str:
 
 def free_dataset(res):
     """The CF-1.10 dataset of a free-rocking estimate: ``e`` with ``e_low``/``e_high``,
-    the impact-to-impact spread ``e_spread`` with its bounds, ``g`` with its bounds, and per ``impact`` its time, apex, speeds and ``e``."""
+    the impact-to-impact spread ``e_spread`` with its bounds, ``g`` with its bounds, and per ``impact`` its time, apex, speeds and ``e``
+    (of a shake-table test's tails: also ``shaking_end`` per record)."""
     import xarray as xr
 
     from rockdec.report.result_dataset import global_attrs
@@ -171,5 +172,11 @@ def free_dataset(res):
             "e_impact_se": ("impact", column("e_se"), {"units": "1", "long_name": f"standard error of the {what} of the impact"}),
         },
     )
-    ds.attrs = global_attrs(doc, "from a free-rocking test", "free-rocking analysis")
+    if doc["test"] == "shake":
+        ends = [nan(t) for t in doc["shake_table"]["shaking_end"]]
+        ds["shaking_end"] = ("record", np.array(ends, dtype=np.float64),
+                             {"units": "s", "long_name": "time the base's shaking ends, on the record's axis (NaN: it never does)"})
+        ds.attrs = global_attrs(doc, "from the free-decay tails of a shake-table test", "shake-table analysis")
+    else:
+        ds.attrs = global_attrs(doc, "from a free-rocking test", "free-rocking analysis")
     return ds

@@ -90,14 +90,15 @@ def schema() -> dict:
 
 def check_document(doc) -> bool:
     """Refuse a document :meth:`RestitutionEstimate.from_dict` cannot read as an estimate;
-    returns whether it is a free-rocking test's.
+    returns its test: ``"random"``, ``"free"`` (it has ``impacts``) or ``"shake"`` (it has
+    ``impacts`` and ``shake_table``).
 
     Its keys ``e``, ``interval``, ``warnings`` and ``estimators`` (``impacts`` for a
     free-rocking test) must be there; ``schema_version``, when there, :data:`SCHEMA_VERSION`;
     ``warnings`` (and ``warning_codes``) lists of strings, one code a warning; ``interval``
     null or two numbers or nulls, ``low <= high``; ``e`` null (a declined estimate) or a
     finite number inside its interval, in [0, 1] for the random test (> 0 for a free-rocking
-    test, whose fitted line of log impact speeds may read e above 1).
+    or shake-table test, whose fitted line of log impact speeds may read e above 1).
 
     Raises
     ------
@@ -107,8 +108,8 @@ def check_document(doc) -> bool:
     Examples
     --------
     >>> from rockdec.report.result import check_document
-    >>> check_document(res.to_dict())  # the random test's
-    False
+    >>> check_document(res.to_dict())
+    'random'
     >>> check_document({**res.to_dict(), "e": 1.7})
     Traceback (most recent call last):
     ...
@@ -117,6 +118,7 @@ def check_document(doc) -> bool:
     if not isinstance(doc, dict):
         raise InputError(f"`doc` is a {type(doc).__name__}, not an estimate's JSON document (a dict, RestitutionEstimate.to_dict).")
     free = "impacts" in doc
+    test = ("shake" if "shake_table" in doc else "free") if free else "random"
     missing = [key for key in ("e", "interval", "impacts" if free else "estimators", "warnings") if key not in doc]
     if missing:
         raise InputError(f"`doc` lacks {', '.join(missing)}: it is not an estimate's JSON document (RestitutionEstimate.to_dict).")
@@ -141,7 +143,7 @@ def check_document(doc) -> bool:
         raise InputError(f"`doc` interval [{show(low)}, {show(high)}] is reversed; give it as [low, high], low <= high.")
     e = doc["e"]
     if e is None:
-        return free
+        return test
     allowed = "a number > 0 inside its interval" if free else "a number in [0, 1] inside its interval"
     fix = f"an estimate's e is null or {allowed}"
     if free:
@@ -150,7 +152,7 @@ def check_document(doc) -> bool:
         in_range(e, "`doc` e", 0.0, 1.0, fix=fix)
     if low is None or high is None or not low <= e <= high:
         raise InputError(f"`doc` e {show(e)} is outside its interval {show(pair)}; {fix}.")
-    return free
+    return test
 
 
 def _interval(pair) -> ConfidenceInterval | None:
@@ -196,7 +198,8 @@ class RestitutionEstimate:
         The version that made the estimate.
     test : str
         ``"random"``: the random-response test (Random Decrement, :func:`rockdec.estimate`);
-        ``"free"``: the free-rocking test (:func:`rockdec.free_rocking`).
+        ``"free"``: the free-rocking test (:func:`rockdec.free_rocking`); ``"shake"``: the
+        free-decay tails of a shake-table test (:func:`rockdec.shake_table`).
 
     Examples
     --------
@@ -250,7 +253,8 @@ class RestitutionEstimate:
         >>> back.e == res.e and back.to_dict() == res.to_dict()
         True
         """
-        free = check_document(doc)
+        test = check_document(doc)
+        free = test != "random"
         doc = {key: copy.deepcopy(value) for key, value in doc.items() if key not in ADDED_KEYS}
         codes = doc.get("warning_codes") or ["warning"] * len(doc["warnings"])
         return cls(
@@ -266,7 +270,7 @@ class RestitutionEstimate:
             warnings=tuple(EstimateWarning(c, m) for c, m in zip(codes, doc["warnings"])),
             diagnostics=doc.get("diagnostics") or {},
             rockdec_version=doc.get("rockdec_version", ""),
-            test="free" if free else "random",
+            test=test,
             document=doc,
             analysis=analysis,
             belts=belts,
@@ -303,7 +307,7 @@ class RestitutionEstimate:
         """
         import pandas as pd
 
-        if self.test == "free":
+        if self.test != "random":
             low, high = self.confidence_interval
             return pd.DataFrame([{"estimator": "impacts", "reads": "line of the log impact speeds of the free-rocking test",
                                   "raw": None, "corrected": self.e, "low": low, "high": high, "coverage": None,
@@ -377,6 +381,10 @@ class RestitutionEstimate:
         >>> print(res.summary().splitlines()[0])  # doctest: +ELLIPSIS
         e = ... (95 % interval [..., ...]; estimator ...)
         """
+        if self.test == "shake":
+            from rockdec.report.shake_result import shake_text
+
+            return shake_text(self.document, verbose)
         if self.test == "free":
             from rockdec.report.free_result import free_text
 
@@ -401,7 +409,7 @@ class RestitutionEstimate:
         >>> float(ds["e"]) == res.e, ds["e"].attrs["units"]
         (True, '1')
         """
-        if self.test == "free":
+        if self.test != "random":
             from rockdec.report.free_result import free_dataset
 
             return free_dataset(self)
@@ -438,7 +446,7 @@ class RestitutionEstimate:
                 "this estimate was read back from its document, which carries no signatures to plot; "
                 "estimate the record again (rockdec.estimate) to plot it."
             )
-        if self.test == "free":
+        if self.test != "random":
             from rockdec.report.free_figures import plot_free_rocking
 
             fit, theta, dt = self.analysis
