@@ -87,14 +87,17 @@ def transient(e: float, seed: int, *, strong: float = 20.0, free: float = 20.0, 
 
 
 def transient_with_base(e: float, seed: int, *, strong: float = 20.0, free: float = 20.0, peak: float = 0.8, noise: float = 0.01,
-                        fs: float = FS) -> tuple[np.ndarray, np.ndarray]:
+                        fs: float = FS, residual: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """The record of :func:`transient` and the base acceleration that made it (rad/s^2, the
-    simplified rocking equation's load; the block lifts above ``G``)."""
+    simplified rocking equation's load; the block lifts above ``G``). ``residual``: the base
+    keeps moving in the free part, white noise uniform in ``+-residual G`` (drawn from its own
+    stream, so the shaking and the sensor noise stay those of ``residual = 0``)."""
     rng = np.random.default_rng(seed)
     n_shake, n_free = int(strong * fs), int(free * fs)
     t = np.arange(n_shake) / n_shake
     envelope = np.where(t < 0.2, (t / 0.2) ** 2, np.where(t < 0.7, 1.0, np.exp(-8.0 * (t - 0.7))))
-    a = np.concatenate([peak * G * envelope * _clough_penzien(n_shake, rng, fs), np.zeros(n_free)])
+    tail = residual * G * np.random.default_rng([seed, 1]).uniform(-1.0, 1.0, n_free) if residual else np.zeros(n_free)
+    a = np.concatenate([peak * G * envelope * _clough_penzien(n_shake, rng, fs), tail])
     return _noisy(_rock(a, e, G, fs), noise, rng), a
 
 

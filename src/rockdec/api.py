@@ -428,6 +428,9 @@ def _base_arrays(base, arrays: list, base_units: str | None) -> tuple[list[np.nd
         if isinstance(item, pd.Series):
             item = xr.DataArray.from_series(item) if not isinstance(item.index, pd.RangeIndex) else item.to_numpy()
         if isinstance(item, xr.DataArray):
+            if str(item.attrs.get("units", "")).strip() in ("rad", "radian", "radians", "deg", "degree", "degrees", "mrad"):
+                raise InputError(f"`base` ({source}) is labelled an angle (units {item.attrs['units']!r}, as rockdec.read_record labels "
+                                 "what it reads); give its values (base.values) with `base_units`.")
             if "units" in item.attrs:
                 stated.add(BASE_UNIT_NAMES.get(str(item.attrs["units"]).strip(), str(item.attrs["units"])))
             dim = item.dims[-1] if item.ndim else None

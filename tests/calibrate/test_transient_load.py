@@ -50,7 +50,7 @@ def test_transient_declined_before_any_calibration(transients, case, tmp_path):
     doc = inference.estimate([Record(transients[case], 1.0 / reference.FS, "quake")], cache_dir=cache).document
     assert doc["e"] is None and doc["interval"] == [None, None]
     assert doc["reason"].startswith("the record's amplitude builds up and dies away (quake: its strongest")
-    assert "the load is a transient, an earthquake or a shake-table test" in doc["reason"] and "`--test free`" in doc["reason"]
+    assert "the load is a transient, an earthquake or a shake-table test" in doc["reason"] and "`--test shake --base FILE`" in doc["reason"]
     assert "transient_load" in doc["warning_codes"]
     assert doc["calibration"]["file"] is None and list(cache.iterdir()) == []  # no calibration was built
 

@@ -451,8 +451,8 @@ def transient_decline(records: list[Record], dt: float) -> str | None:
                 f"the record's amplitude builds up and dies away ({r.source}: its strongest {found.seconds:.3g} s hold "
                 f"{100.0 * found.share:.0f} % of its energy, its strongest stretch more than {transient.DECADES:g} decades "
                 "of variance above both its ends): the load is a transient, an earthquake or a shake-table test, not the "
-                "stationary random load the random test assumes; estimate e with the free-rocking test (`--test free`, "
-                "rockdec.free_rocking) on the free decay after the shaking, cut by hand after the base has stopped moving"
+                "stationary random load the random test assumes; estimate e with the shake-table test (`--test shake --base "
+                "FILE`, rockdec.shake_table), which finds the free decay after the shaking from the base acceleration"
             )
     return None
 

@@ -1,0 +1,90 @@
+"""Answer rate and coverage of the shake-table test (:func:`rockdec.shake_table`) on records of
+the tests' independent transient generator (``tests/transient_reference.py``: its own rocking
+stepper under Clough-Penzien base noise, not the project's simulator).
+
+A plain script (not a test): prints measurements, never asserts them.
+
+    python benchmarks/shake_coverage.py                       # the default grid, 10 records a cell
+    python benchmarks/shake_coverage.py --records 4 --peak 1.6 --e 0.9
+
+Cells: true ``e`` x the shaking's strength (``--peak``: the base's std in its strong phase,
+in units of the uplift level) x sensor noise (a share of the record's std) x the base's
+residual motion in the free part (``--residual``, in units of the uplift level: below
+:data:`rockdec.free.shake.QUIET` the tail counts as free). Each record is 20 s of shaking
+and 20 s of free decay at 200 Hz. Per cell: the records answered, how many
+of their 95 % intervals hold the true ``e``, the median width, and why the others gave no
+``e`` (the first words of each reason, counted); then the pooled coverage.
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+import statistics
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+
+import transient_reference as tr  # noqa: E402
+
+import rockdec  # noqa: E402
+
+
+def cell(e: float, peak: float, noise: float, residual: float, records: int, seed: int) -> dict:
+    """Answered, covered, widths and reasons of ``records`` records of one cell."""
+    out = {"e": e, "peak": peak, "noise": noise, "residual": residual, "records": records, "answered": 0, "covered": 0, "widths": [],
+           "why": collections.Counter()}
+    for k in range(records):
+        theta, base = tr.transient_with_base(e, seed + k, peak=peak, noise=noise, residual=residual)
+        res = rockdec.shake_table(theta, base, 1 / tr.FS, base_units="rad/s2", g_block=tr.G)
+        if res.e is None:
+            out["why"][" ".join(res.reason.split(": ")[-1].split()[:5])] += 1
+            continue
+        low, high = res.confidence_interval
+        out["answered"] += 1
+        out["covered"] += low <= e <= high
+        out["widths"].append(high - low)
+    return out
+
+
+def markdown(cells: list[dict]) -> str:
+    """The cells as a Markdown table."""
+    lines = ["| e | peak | noise | residual | answered | covered | median width | no e: why (count) |",
+             "| --- | --- | --- | --- | --- | --- | --- | --- |"]
+    for c in cells:
+        width = f"{statistics.median(c['widths']):.3g}" if c["widths"] else "-"
+        why = "; ".join(f"{w} ({n})" for w, n in c["why"].most_common(3)) or "-"
+        lines.append(f"| {c['e']:g} | {c['peak']:g} | {c['noise']:g} | {c['residual']:g} | {c['answered']}/{c['records']} | "
+                     f"{c['covered']}/{c['answered']} | {width} | {why} |")
+    return "\n".join(lines)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--e", type=float, nargs="+", default=[0.8, 0.9, 0.95])
+    parser.add_argument("--peak", type=float, nargs="+", default=[0.8, 1.2, 1.6, 2.2])
+    parser.add_argument("--noise", type=float, nargs="+", default=[0.0, 0.01])
+    parser.add_argument("--residual", type=float, nargs="+", default=[0.0],
+                        help="the base's motion in the free part, in units of the uplift level (uniform white noise)")
+    parser.add_argument("--records", type=int, default=10)
+    parser.add_argument("--seed", type=int, default=0)
+    args = parser.parse_args()
+    start = time.perf_counter()
+    cells = []
+    for e in args.e:
+        for peak in args.peak:
+            for noise in args.noise:
+                for residual in args.residual:
+                    cells.append(cell(e, peak, noise, residual, args.records, args.seed))
+                    print(f"  e {e:g}, peak {peak:g}, noise {noise:g}, residual {residual:g}: "
+                          f"{cells[-1]['answered']}/{args.records} answered", file=sys.stderr)
+    print(markdown(cells))
+    answered, covered = sum(c["answered"] for c in cells), sum(c["covered"] for c in cells)
+    total = sum(c["records"] for c in cells)
+    print(f"\npooled: {answered}/{total} answered, {covered}/{answered} covered; {total} records in {time.perf_counter() - start:.0f} s.")
+
+
+if __name__ == "__main__":
+    main()
