@@ -39,7 +39,7 @@ from rockdec.free.impacts import CROSSING_BAND_SIGMAS, find_crossings, find_sequ
 from rockdec.physics.models import MODEL_TOLERANCE, MODELS, amplitude_limit
 from rockdec.timeaxis import RecordError, sampling_step
 
-__all__ = ["FreeRockingFit", "analyse_free_rocking"]
+__all__ = ["FreeRockingFit", "analyse_free_rocking", "load_covariance"]
 
 #: Confidence level of the intervals.
 CONFIDENCE = 0.95
@@ -341,7 +341,7 @@ def _pooled_mean(values, ses):
 
 
 def analyse_free_rocking(theta, dt, *, model: str = "simplified", theta_cr: float | None = None,
-                         min_arc_samples: int = MIN_ARC_SAMPLES) -> FreeRockingFit:
+                         min_arc_samples: int = MIN_ARC_SAMPLES, load_noise=None) -> FreeRockingFit:
     """The coefficient of restitution from free-rocking records (paper §2: eqs. 2, 4, 6).
 
     Finds each release and each impact (zero crossing) of the record, fits the flight
@@ -368,6 +368,11 @@ def analyse_free_rocking(theta, dt, *, model: str = "simplified", theta_cr: floa
         model it also gives ``nu = sqrt(g/theta_cr)`` and refuses a record that reaches it.
     min_arc_samples : int
         Fewest samples of a fitted arc between two impacts (>= 3).
+    load_noise : float or list of float, optional
+        A residual random load still acting on the block (a shake table that has not quite
+        stopped): its intensity per record in units of the block's ``g^2`` (s; white
+        acceleration of variance ``sigma^2 g^2`` sampled every ``dt`` has ``sigma^2 dt``).
+        Its effect on the impact steps (:func:`load_covariance`) enters their covariance.
 
     Returns
     -------
@@ -403,6 +408,10 @@ def analyse_free_rocking(theta, dt, *, model: str = "simplified", theta_cr: floa
     min_arc_samples = checks.integer(min_arc_samples, "`min_arc_samples`", 3)
     records = _records(theta, dt)
     many = len(records) > 1
+    if load_noise is not None:
+        load_noise = list(load_noise) if isinstance(load_noise, list | tuple) else [load_noise] * len(records)
+        if len(load_noise) != len(records) or not all(math.isfinite(v) and v >= 0 for v in load_noise):
+            raise checks.InputError(f"`load_noise` {load_noise!r}: give one finite intensity >= 0 per record, or one for all.")
     limit = amplitude_limit(MODEL_TOLERANCE)
 
     fits, seq_meta, notes, noises, scores = [], [], [], [], []
@@ -458,7 +467,7 @@ def analyse_free_rocking(theta, dt, *, model: str = "simplified", theta_cr: floa
     damped = None
     if loss > LOSS_Z * loss_se:  # the score test finds a loss in flight: the arcs are fitted with it
         damped = [flight_loss.fit_sequence(t, y_fit, fit, floor=precision, c0=c) for (t, y_fit, precision, c, _), fit in zip(scores, fits)]
-    return _result(fits, seq_meta, notes, noises, model, theta_cr, damped, (loss, loss_se))
+    return _result(fits, seq_meta, notes, noises, model, theta_cr, damped, (loss, loss_se), load_noise)
 
 
 def _impact_steps(fit, damped):
@@ -477,6 +486,39 @@ def _impact_steps(fit, damped):
     return steps, steps_cov, landing, landing * se / math.sqrt(2.0), leaving, leaving * se / math.sqrt(2.0)
 
 
+def load_covariance(fit, intensity: float) -> np.ndarray:
+    """The covariance a residual random load adds to one release's impact steps (``log e``).
+
+    A white load of ``intensity`` ``q`` (rad^2/s^3: the variance of the angular acceleration
+    it adds times the step it is sampled at) moves the block's speed as a random walk,
+    ``Var B(t) = q t``. The fitted arc's speed reads the mean of that walk over its flight
+    (its duration sets the speed, eqs. 4, 6): off the speed it left with by the walk's mean
+    ``Ī``, and off the speed it lands with by ``B(T) - Ī``, each of variance ``q T / 3``,
+    their covariance ``q T / 6``; the fall from release is off by ``B(H)``, variance ``q H``.
+    An impact step compares the landing of one arc with the leaving of the next, so
+    neighbouring steps share an arc: relative to the arc's speed ``S``, the step's variance
+    is ``q T/(3 S^2)`` of each arc and the covariance of neighbours ``-q T/(6 S^2)``.
+
+    Examples
+    --------
+    >>> fit = arcs.SequenceFit(np.array([0.0, 1.0, 2.6, 3.9]), 2.0, np.zeros((5, 5)), 0.0, 10, 1, "simplified", None)
+    >>> extra = load_covariance(fit, 0.01)
+    >>> extra.shape, bool(extra[0, 1] < 0 < extra[0, 0])
+    ((2, 2), True)
+    """
+    H = fit.half_durations
+    speed = arcs.speed(H, fit.q, fit.model, fit.theta_cr)
+    per_arc = intensity * 2.0 * H / (3.0 * speed**2)  # Var of the leaving and of the landing error, full flights
+    landing = per_arc.copy()
+    landing[0] = intensity * H[0] / speed[0] ** 2  # the fall from release
+    n = H.size - 1
+    out = np.diag(landing[:-1] + per_arc[1:])
+    shared = -0.5 * per_arc[1:-1]
+    out[np.arange(n - 1), np.arange(1, n)] = shared
+    out[np.arange(1, n), np.arange(n - 1)] = shared
+    return out
+
+
 def _loss_in_flight(damped) -> tuple[float, float]:
     """The block's loss in flight ``c`` (1/s) pooled over the releases' fits with it, and its
     standard error."""
@@ -485,10 +527,11 @@ def _loss_in_flight(damped) -> tuple[float, float]:
     return _pooled_mean(c, c_se)
 
 
-def _result(fits, seq_meta, notes, noises, model, theta_cr, damped, score) -> FreeRockingFit:
+def _result(fits, seq_meta, notes, noises, model, theta_cr, damped, score, load_noise=None) -> FreeRockingFit:
     """Per-impact table and the pooled estimates of the fitted releases: from their fits
     with a loss in flight (``damped``, when the score test found one) or without; ``score``
-    is the score test's pooled ``c`` and its standard error."""
+    is the score test's pooled ``c`` and its standard error; ``load_noise``: per record, the
+    intensity of a residual load in units of ``g^2`` (:func:`load_covariance`)."""
     with_loss = damped is not None
     loss, loss_se = _loss_in_flight(damped) if with_loss else score
     if with_loss:
@@ -498,6 +541,8 @@ def _result(fits, seq_meta, notes, noises, model, theta_cr, damped, score) -> Fr
     blocks, ys = [], []
     for s, (fit, (r, _, _)) in enumerate(zip(fits, seq_meta)):
         steps, steps_cov, landing, landing_se, leaving, leaving_se = _impact_steps(fit, damped[s] if with_loss else None)
+        if load_noise is not None and load_noise[r] > 0:
+            steps_cov = steps_cov + load_covariance(fit, load_noise[r] * fit.q**2)
         amp = arcs.shape(0.0, fit.half_durations, fit.q, model, theta_cr)[0]
         for i in range(steps.size):
             before_sign = -fit.side * (1.0 if i % 2 == 0 else -1.0)

@@ -21,7 +21,7 @@ from rockdec import validate as checks
 from rockdec.free.analysis import FreeRockingFit, analyse_free_rocking
 from rockdec.timeaxis import RecordError
 
-__all__ = ["ShakeTableFit", "analyse_shake_table", "shaking_end", "uplift_ratio"]
+__all__ = ["ShakeTableFit", "analyse_shake_table", "load_intensity", "shaking_end", "uplift_ratio"]
 
 #: Fraction of the uplift level below which the base counts as quiet (its load then moves a
 #: rocking block's impact speeds by well under the sensor's resolution of them).
@@ -37,6 +37,10 @@ MIN_TAIL = 1.0
 G0 = 9.80665
 
 BASE_UNITS = ("m/s2", "g", "rad/s2")
+
+#: Seconds over which the base's residual motion in a tail is integrated to read its
+#: intensity (:func:`load_intensity`).
+LOAD_WINDOW = 0.5
 
 
 @dataclass(frozen=True)
@@ -104,6 +108,24 @@ def shaking_end(ratio, dt: float, *, quiet: float = QUIET, arias: float = ARIAS)
     return max(i_arias, int(loud[-1]) + 1 if loud.size else 0)
 
 
+def load_intensity(ratio, dt: float, window: float = LOAD_WINDOW) -> float:
+    """The intensity (s) of the base's residual motion ``ratio`` (in units of the uplift
+    level, its mean taken out): the mean square of its integral over windows of ``window`` s,
+    per second; for white noise of variance ``sigma^2`` sampled every ``dt``, ``sigma^2 dt``.
+
+    Examples
+    --------
+    >>> r = np.random.default_rng(0).standard_normal(200_000) * 0.01
+    >>> round(load_intensity(r, 0.005) / (0.01**2 * 0.005), 1)
+    1.0
+    """
+    r = np.asarray(ratio, dtype=float)
+    r = r - r.mean()
+    n = max(1, min(r.size, int(round(window / dt))))
+    sums = r[: r.size // n * n].reshape(-1, n).sum(axis=1) * dt
+    return float(np.mean(sums**2) / (n * dt))
+
+
 def _quiet_runs(r, quiet, n_min):
     """``(start, stop)`` of each run of ``|r| <= quiet`` at least ``n_min`` long after the first uplift."""
     lifted = np.flatnonzero(np.abs(r) > 1.0)
@@ -154,7 +176,7 @@ def analyse_shake_table(theta, base, dt, *, base_units: str = "m/s2", g_block: f
     per_record = list(dt) if isinstance(dt, (list, tuple)) else [dt] * len(thetas)
     if len(per_record) != len(thetas):
         raise RecordError(f"{len(thetas)} records but {len(per_record)} steps `dt`; give one step, or one per record.")
-    ends, tails, pieces, steps, fits, refused = [], [], [], [], [], []
+    ends, tails, pieces, steps, fits, refused, loads = [], [], [], [], [], [], []
     for k, (y, b, dt) in enumerate(zip(thetas, bases, per_record)):
         dt = checks.positive(dt, "`dt`", "give the sampling step in s, > 0")
         name = f"record {k}" if many else "the record"
@@ -187,8 +209,9 @@ def analyse_shake_table(theta, base, dt, *, base_units: str = "m/s2", g_block: f
                 continue
         for i0, i1 in runs:
             t = dt * np.arange(i0, i1)
+            load = load_intensity(r[i0:i1], dt)
             try:
-                fit = analyse_free_rocking(y[i0:i1], t, model=model, theta_cr=theta_cr)
+                fit = analyse_free_rocking(y[i0:i1], t, model=model, theta_cr=theta_cr, load_noise=load)
             except RecordError as err:
                 refused.append((k, i0 * dt, str(err).removeprefix("theta: ")))
                 continue
@@ -196,13 +219,14 @@ def analyse_shake_table(theta, base, dt, *, base_units: str = "m/s2", g_block: f
                 refused.append((k, i0 * dt, fit.reason))
                 continue
             tails.append((k, i0 * dt, i1 * dt))
+            loads.append(load)
             pieces.append(y[i0:i1])
             steps.append(t)
             fits.append(fit)
     pooled = None
     if pieces:
         pooled = analyse_free_rocking(pieces if len(pieces) > 1 else pieces[0], steps if len(steps) > 1 else steps[0], model=model,
-                                      theta_cr=theta_cr)
+                                      theta_cr=theta_cr, load_noise=loads)
     if pooled is not None:
         reason = pooled.reason
     else:
