@@ -47,13 +47,15 @@ LOAD_WINDOW = 0.5
 class ShakeTableFit:
     """What :func:`analyse_shake_table` found: the pooled free-rocking ``fit`` of the
     accepted tails (``None`` when none), ``shaking_end`` per record (s, NaN when it never
-    ends), ``tails`` (record, start s, stop s) accepted with their ``tail_fits``, ``refused``
+    ends), ``tails`` (record, start s, stop s) accepted with their ``tail_fits`` and the base's
+    residual motion in each (``tail_loads``, :func:`load_intensity`), ``refused``
     (record, start s, reason) and ``reason`` (why there is no ``e``; ``None`` when there is)."""
 
     fit: FreeRockingFit | None
     shaking_end: tuple[float, ...]
     tails: tuple[tuple[int, float, float], ...]
     tail_fits: tuple[FreeRockingFit, ...]
+    tail_loads: tuple[float, ...]
     refused: tuple[tuple[int, float, str], ...]
     reason: str | None
 
@@ -231,4 +233,4 @@ def analyse_shake_table(theta, base, dt, *, base_units: str = "m/s2", g_block: f
         reason = pooled.reason
     else:
         reason = "no free-decay tail gives an e: " + "; ".join(f"{'record %d at ' % k if many else ''}{s:.6g} s: {why}" for k, s, why in refused)
-    return ShakeTableFit(pooled, tuple(ends), tuple(tails), tuple(fits), tuple(refused), reason)
+    return ShakeTableFit(pooled, tuple(ends), tuple(tails), tuple(fits), tuple(loads), tuple(refused), reason)

@@ -44,7 +44,8 @@ def shake_document(shake, sources: list[str], steps: list[float], sizes: list[in
         "min_tail": MIN_TAIL,
         "shaking_end": [json_number(t) for t in shake.shaking_end],
         "tails": [{"record": int(k), "start": json_number(t0), "stop": json_number(t1), "e": json_number(fit.e),
-                   "impacts": int(fit.n_impacts)} for (k, t0, t1), fit in zip(shake.tails, shake.tail_fits)],
+                   "impacts": int(fit.n_impacts), "base_motion": json_number(load)}
+                  for (k, t0, t1), fit, load in zip(shake.tails, shake.tail_fits, shake.tail_loads)],
         "refused": [{"record": int(k), "start": json_number(t0), "reason": why} for k, t0, why in shake.refused],
     }
     return doc
@@ -62,7 +63,10 @@ def shake_text(doc: dict, verbose: bool = False) -> str:
     """The report of a shake-table document (:meth:`rockdec.RestitutionEstimate.summary`):
     the free-rocking report of its tails, then where the shaking ends and each tail."""
     table = doc["shake_table"]
-    lines = [free_text(doc, verbose).replace("free-rocking test:", "shake-table test, free-decay tails:", 1), "", "shake table:"]
+    text = free_text(doc, verbose).replace("free-rocking test:", "shake-table test, free-decay tails:", 1)
+    text = text.replace("measured by the free-rocking study on simulated records of known e",
+                        "measured on shake-table records of known e from an independent simulator (the docs' shake-table page)", 1)
+    lines = [text, "", "shake table:"]
     for k, end in enumerate(table["shaking_end"]):
         name = doc["records"][k] if k < len(doc["records"]) else f"record {k}"
         lines.append(f"  {name}: the shaking ends at {end:.6g} s" if end is not None else f"  {name}: the shaking never ends")
