@@ -132,7 +132,7 @@ def _records(theta, dt) -> list[records_mod.Record]:
 
 def estimate(theta, dt: float | None = None, *, g: float | None = None, load="auto", sensor_noise="auto", sensor_filter="auto",
              model: str = "simplified", theta_cr: float | None = None, cache=None, repair: bool = True,
-             block=None) -> RestitutionEstimate:
+             block=None, share_lengths: bool = False) -> RestitutionEstimate:
     """Estimate the coefficient of restitution ``e`` of a rocking block from its random response.
 
     The record's Random Decrement signatures (paper eqs. 8, 19) give every estimator of
@@ -184,6 +184,12 @@ def estimate(theta, dt: float | None = None, *, g: float | None = None, load="au
     block : tuple of float, optional
         The block's height and width ``(H, B)``, one unit: the report sets Housner's
         ``e = 1 - 1.5 sin^2(atan(B/H))`` beside the measured one.
+    share_lengths : bool
+        Calibrate on the length grid (two lengths a decade, from 1,000 to 200,000 samples
+        in all): records of nearby lengths share one calibration, simulated at the grid
+        length at or below theirs and its spread scaled by ``sqrt(grid / record)``; a
+        campaign of records of many lengths then builds few calibrations. ``False``:
+        calibrate at the records' own length.
 
     Returns
     -------
@@ -209,7 +215,10 @@ def estimate(theta, dt: float | None = None, *, g: float | None = None, load="au
                                         theta_cr=theta_cr, cache=cache)
     if not isinstance(repair, bool):
         raise InputError(f"`repair` {show(repair)} is not True or False; give True to repair spikes and drift, False to leave the record as given.")
-    outcome = inference.estimate(_records(theta, dt), cache_dir=folder, g=g, rocking=model, theta_cr=theta_cr, repair_records=repair, **declared)
+    if not isinstance(share_lengths, bool):
+        raise InputError(f"`share_lengths` {show(share_lengths)} is not True or False; give True to share calibrations across nearby lengths.")
+    outcome = inference.estimate(_records(theta, dt), cache_dir=folder, g=g, rocking=model, theta_cr=theta_cr, repair_records=repair,
+                                 length_grid=share_lengths, **declared)
     return RestitutionEstimate.from_dict(with_block(outcome.document, block), analysis=outcome.analysis, belts=outcome.belts)
 
 

@@ -78,7 +78,7 @@ FLAGS = {
     "e": "--e", "nu": "--nu", "sigma_p": "--sigma-p", "n_points": "--n-points", "theta": "the record",
     "group_size": "--group-size", "n_periods": "--n-periods", "fit_points": "--fit-points", "weights": "--weights",
     "repair": "--no-repair", "block": "--block", "base": "--base", "base_units": "--base-units", "g_block": "--g",
-    "start": "--tail-start",
+    "start": "--tail-start", "share_lengths": "--share-lengths",
 }
 
 
@@ -382,7 +382,8 @@ def cmd_estimate(args) -> None:
             log.info(f"estimate: {len(args.records)} file(s) (up to {console.about(seconds)} when their calibration must be built)")
             with console.progress("calibrating"):  # a bar only while a calibration missing from the cache is built
                 res = rockdec.estimate(theta, g=args.g, load=args.load, sensor_noise=args.sensor_noise, sensor_filter=args.sensor_filter,
-                                       model=args.model, theta_cr=args.theta_cr, cache=args.cache, repair=args.repair, block=args.block)
+                                       model=args.model, theta_cr=args.theta_cr, cache=args.cache, repair=args.repair, block=args.block,
+                                       share_lengths=args.share_lengths)
         if plot is not None:
             from rockdec.report import figures
 
@@ -592,6 +593,8 @@ def build_parser() -> argparse.ArgumentParser:
         help="estimate the record as given: no spikes replaced, no high-pass of a drifting zero (by default both are "
         "repaired when found, the calibration's records repaired alike, and the report names the repair)",
     )
+    est1.add_argument("--share-lengths", action="store_true", help="calibrate on the length grid (two lengths a decade): records "
+                      "of nearby lengths share one calibration, its spread scaled to the record's length")
     est1.add_argument("--json", action="store_true", help="print one JSON object instead of the table")
     est1.add_argument("--plot", help="draw the signature and the calibration curve to this PNG or PDF")
     est1.add_argument("--cache", help=f"folder of stored calibrations (default: ${VARIABLE}, else ~/.cache/rockdec/calibration on Linux)")

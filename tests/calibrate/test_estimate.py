@@ -806,3 +806,26 @@ def test_records_of_nearby_lengths_share_one_calibration_on_the_length_grid():
         calibration.length_bin(calibration.LENGTH_CAP + 1)
     assert calibration.calibration_settings([50_000], 75.0) == calibration.calibration_settings([50_000], 75.0, length_grid=False)
     assert "length_grid" not in calibration.calibration_settings([20_000_000], 75.0, length_grid=True)
+
+
+def test_records_of_nearby_lengths_share_one_calibration_on_the_length_grid(tmp_path, monkeypatch):
+    """``share_lengths``: records of 12,000 and 15,000 samples read one calibration simulated
+    at the grid's 10,000, each its spread scaled by sqrt(10,000 / its length); without it each
+    reads its own length's."""
+    import fake_calibration
+    import rockdec
+
+    monkeypatch.setattr(calibration, "_grid_point", fake_calibration.grid_point)
+    shared, own = [], []
+    whole = rockdec.simulate(0.85, 15_000, seed=1)
+    for n in (12_000, 15_000):
+        theta = whole[:n]
+        shared.append(rockdec.estimate(theta, cache=tmp_path, share_lengths=True).to_dict()["calibration"])
+        own.append(rockdec.estimate(theta, cache=tmp_path).to_dict()["calibration"])
+    assert shared[0]["file"] == shared[1]["file"] and shared[1]["cached"]
+    for cal, n in zip(shared, (12_000, 15_000)):
+        assert cal["simulated_samples"] == 10_000 and cal["spread_scale"] == pytest.approx(math.sqrt(10_000 / n), rel=1e-12)
+    assert own[0]["file"] != own[1]["file"] and [c["simulated_samples"] for c in own] == [12_000, 15_000]
+    assert all(c["spread_scale"] == 1.0 for c in own)
+    with pytest.raises(rockdec.InputError, match="share_lengths"):
+        rockdec.estimate(rockdec.simulate(0.85, 2_000, seed=1), share_lengths="yes")

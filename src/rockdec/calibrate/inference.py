@@ -780,7 +780,7 @@ class ModelChoice(NamedTuple):
 def choose_model(
     analysed: Analysed, *, model: RecordModel | None = None, load: Load | str | None = None, sensor: SensorNoise | None = None,
     rocking: str | None = None, theta_cr: float | None = None, sensor_filter: SensorFilter | str | None = "auto",
-    repaired: dict | None = None,
+    repaired: dict | None = None, length_grid: bool = False,
 ) -> ModelChoice:
     """Stage 2 of :func:`estimate`: measure the records' model (sensor noise, load colour,
     drift) unless declared, check them for a filter after the block unless one (or none) is
@@ -793,7 +793,8 @@ def choose_model(
     :func:`filter_decline`, :func:`colour_decline`, or a part left to measure that cannot
     be). Housner's model (eq. 2) needs ``theta_cr``, and only it. ``repaired``: the repair
     the records had (:func:`rockdec.record.repair.settings`), which the calibration's sets
-    get too."""
+    get too. ``length_grid``: the calibration simulates records of the length grid's length
+    (:func:`rockdec.calibrate.calibration.simulated_lengths`), shared by records of nearby lengths."""
     from rockdec.record.record_measure import rolloff
 
     measuring = model is None and (load is None or sensor is None)
@@ -813,6 +814,7 @@ def choose_model(
     ratio = analysed.analysis.sigma_y / theta_cr if theta_cr is not None else None
     cal_settings = calibration.calibration_settings(
         [r.theta.size for r in analysed.records], analysed.analysis.points_per_cycle, analysed.settings, model, ratio, repaired,
+        length_grid=length_grid,
     )
     if shaken:
         declined = shaken
@@ -1260,7 +1262,7 @@ def estimate(
     records: list[Record], *, cache_dir, g: float | None = None, settings: dict | None = None, model: RecordModel | None = None,
     load: Load | str | None = None, sensor: SensorNoise | None = None, rocking: str | None = None, theta_cr: float | None = None,
     sensor_filter: SensorFilter | str | None = "auto",
-    repair_records: bool = True, available=None,
+    repair_records: bool = True, available=None, length_grid: bool = False,
 ) -> Outcome:
     """Calibrated estimates of ``e`` from ``records`` of one block (pooled), in named stages,
     after the records' repair.
@@ -1308,9 +1310,12 @@ def estimate(
     :class:`CalibrationNeeded`. The estimate reads at most two: that of the records as given
     (spikes replaced) and, when the repair decides on the high-pass, that of the high-passed
     records.
+
+    ``length_grid``: calibrations shared by records of nearby lengths (:func:`choose_model`),
+    their spread scaled to the records' length; a campaign of many lengths builds few.
     """
     options = dict(cache_dir=cache_dir, g=g, settings=settings, model=model, load=load, sensor=sensor, rocking=rocking, theta_cr=theta_cr,
-                   sensor_filter=sensor_filter, available=available)
+                   sensor_filter=sensor_filter, available=available, length_grid=length_grid)
     records = list(records)
     refuse_held(records)  # before the repair, whose high-pass would hide the hold
     if not repair_records:
@@ -1367,17 +1372,17 @@ def estimate_once(
     records: list[Record], repaired: dict | None, done: repair.Repair | None, enabled: bool, why: str | None = None, *, cache_dir,
     g: float | None = None, settings: dict | None = None, model: RecordModel | None = None, load: Load | str | None = None,
     sensor: SensorNoise | None = None, rocking: str | None = None, theta_cr: float | None = None,
-    sensor_filter: SensorFilter | str | None = "auto", available=None,
+    sensor_filter: SensorFilter | str | None = "auto", available=None, length_grid: bool = False,
 ) -> Outcome:
     """One estimate of :func:`estimate` on ``records`` as they are (already repaired as
     ``repaired`` says, :func:`rockdec.record.repair.settings`, with ``done`` what the repair
     did, ``why`` in words; ``enabled``: whether the repair was on), in the stages
     :func:`estimate` lists; the calibration's sets are repaired alike (``available``:
-    :func:`calibrate`)."""
+    :func:`calibrate`; ``length_grid``: :func:`choose_model`)."""
     analysed = analyse(records, g=g, settings=settings)
     report = repair_report(done, analysed.dt, enabled, why)
     choice = choose_model(analysed, model=model, load=load, sensor=sensor, rocking=rocking, theta_cr=theta_cr, sensor_filter=sensor_filter,
-                          repaired=repaired)
+                          repaired=repaired, length_grid=length_grid)
     if choice.declined:
         per, selection = declined_rows(analysed)
         doc = document(analysed, choice, None, per, (None, selection[1], choice.declined), None, [*analysed.notes, *choice.notes], {}, report)
