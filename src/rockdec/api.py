@@ -413,16 +413,13 @@ def shake_table(theta, base, dt: float | None = None, *, base_units: str | None 
     return RestitutionEstimate.from_dict(with_block(doc, block), analysis=analysis)
 
 
-#: Spellings of the base's units :func:`shake_table` reads off a DataArray's ``units``.
-BASE_UNIT_NAMES = {"m/s2": "m/s2", "m s-2": "m/s2", "m/s^2": "m/s2", "m/s**2": "m/s2", "g": "g", "rad/s2": "rad/s2",
-                   "rad s-2": "rad/s2", "rad/s^2": "rad/s2"}
-
-
 def _base_arrays(base, arrays: list, base_units: str | None) -> tuple[list[np.ndarray], str]:
     """The base acceleration of each record of ``arrays`` (:func:`_arrays`) and its units:
     ``base_units``, else the ``units`` of the DataArrays, refused when they disagree or are missing."""
     import pandas as pd
     import xarray as xr
+
+    from rockdec.free import shake
 
     items = list(base) if len(arrays) > 1 and isinstance(base, list | tuple) else [base]
     if len(items) != len(arrays):
@@ -441,7 +438,7 @@ def _base_arrays(base, arrays: list, base_units: str | None) -> tuple[list[np.nd
                 raise InputError(f"`base` ({source}) is labelled an angle (units {item.attrs['units']!r}, as rockdec.read_record labels "
                                  "what it reads); give its values (base.values) with `base_units`.")
             if "units" in item.attrs:
-                stated.add(BASE_UNIT_NAMES.get(str(item.attrs["units"]).strip(), str(item.attrs["units"])))
+                stated.add(shake.base_units_named(item.attrs["units"]))
             dim = item.dims[-1] if item.ndim else None
             if dim in item.coords and item.sizes[dim] > 1:
                 base_step = records_mod.sampling_step(np.asarray(item[dim].values, dtype=np.float64), f"the base of {source}")

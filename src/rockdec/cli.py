@@ -326,13 +326,13 @@ def _check_estimate_size(args) -> float:
 
     samples = sum(records.record_size(path, args.variable) for path in args.records)
     csv = any(Path(path).suffix.lower() in (".csv", ".txt") for path in args.records)
-    seconds, nbytes = inference.cost(samples, csv, args.g is not None, records=len(args.records))
+    seconds, nbytes = inference.cost(samples, csv, args.g is not None, records=len(args.records), length_grid=args.share_lengths)
     what = f"records of about {samples:.3g} samples"
     checks.memory(nbytes, what, "give shorter records")
     if seconds > MAX_SECONDS and not args.yes:
         raise UsageError(
             f"{what} need about {console.duration(seconds)} on 2 cores to read, analyse and calibrate (the calibration simulates "
-            f"{inference.calibration_sets(samples)} records of {sum(inference.calibration.simulated_lengths([samples])):.3g} "
+            f"{inference.calibration_sets(samples)} records of {sum(inference.calibration.simulated_lengths([samples], args.share_lengths)):.3g} "
             "samples); pass --yes to go on, or give a shorter record."
         )
     return seconds
@@ -400,7 +400,7 @@ def cmd_estimate(args) -> None:
 def _shake_table(args, theta: list):
     """``rockdec estimate --test shake``: the records ``theta`` with the ``--base`` files."""
     import rockdec
-    from rockdec import api
+    from rockdec.free import shake
     from rockdec.record import records
 
     bases, stated = [], set()
@@ -408,7 +408,7 @@ def _shake_table(args, theta: list):
         read, units = records.read_base(path, column=args.base_column, variable=args.base_variable, dt=args.dt, fs=args.fs)
         bases += read
         if units is not None:
-            stated.add(api.BASE_UNIT_NAMES.get(units.strip(), units))
+            stated.add(shake.base_units_named(units))
     if len(bases) != len(theta):
         raise UsageError(f"the --base files hold {len(bases)} record(s) for {len(theta)} record(s) of the angle; give one base per record.")
     if args.base_units is None and len(stated) != 1:

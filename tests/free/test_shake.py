@@ -64,3 +64,19 @@ def test_the_load_intensity_of_white_noise_is_its_variance_times_the_step():
     r = np.random.default_rng(1).uniform(-0.02, 0.02, 400_000)
     assert load_intensity(r, 0.005) == pytest.approx(0.02**2 / 3 * 0.005, rel=0.05)
     assert load_intensity(r + 0.3, 0.005) == pytest.approx(load_intensity(r, 0.005), rel=1e-9)  # a constant offset is not motion
+
+
+@pytest.mark.parametrize("into_the_fall", [0, 8, 15])
+def test_a_tail_that_starts_as_the_block_falls_is_read_from_its_first_impact(into_the_fall):
+    """A free decay whose first arc is cut as the block falls from its apex (the base falls
+    quiet mid-flight): the arcs after the first impact are the free flight's (eq. 4), so ``e``
+    is the simulated one however much of the first fall the tail lost."""
+    from rockdec.physics.simulate import simulate_model
+
+    free = simulate_model("simplified", [0], 3000, dt=0.005, g=2.0, e=0.9, sigma_p=0.0, theta0=0.01)[0][0]
+    theta = np.concatenate([np.zeros(400), free[into_the_fall:]])
+    base = np.concatenate([np.where(np.arange(400) % 2, 3.0, -3.0), np.zeros(free.size - into_the_fall)])
+    res = analyse_shake_table(theta, base, 0.005, base_units="rad/s2", g_block=2.0)
+    assert res.reason is None and res.e == pytest.approx(0.9, abs=1e-6)
+    first_negative = int(np.flatnonzero(free[into_the_fall:] < 0)[0])  # the impact falls within a sample before it
+    assert 0.0 <= res.tails[0][1] - (400 + first_negative) * 0.005 <= 0.005 + 1e-12

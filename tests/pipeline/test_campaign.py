@@ -62,7 +62,7 @@ BAD = {
     "housner without theta_cr": (["record\tpath\tmodel", "a\tr1.csv\thousner"], 1, "theta_cr", "needs the block's critical angle"),
     "theta_cr without housner": (["record\tpath\ttheta_cr", "a\tr1.csv\t0.2"], 1, "theta_cr", "set model to housner"),
     "unknown sensor noise": (["record\tpath\tsensor_noise", "a\tr1.csv\tloud"], 1, "sensor_noise", "'loud' is not allowed"),
-    "unknown test": (["record\tpath\ttest", "a\tr1.csv\tshake"], 1, "test", "give one of random, free"),
+    "unknown test": (["record\tpath\ttest", "a\tr1.csv\tquake"], 1, "test", "give one of random, free, shake"),
     "unknown filter": (["record\tpath\tsensor_filter", "a\tr1.csv\tbessel:4:10:causal"], 1, "sensor_filter", "'bessel:4:10:causal' is not allowed"),
     "filter phase": (["record\tpath\tload\tsensor_noise\tsensor_filter", "a\tr1.csv\twhite\t0\trc:5:sideways"], 1, "sensor_filter",
                      "the phase 'sideways' is not known"),
@@ -70,6 +70,28 @@ BAD = {
     "filters differ in a block": (["record\tpath\tblock\tsensor_filter", "a\tr1.csv\tA\tnone", "b\tr2.csv\tA\tauto"], 2,
                                   "sensor_filter", "pooled under one"),
     "free test with a filter": (["record\tpath\ttest\tsensor_filter", "a\tr1.csv\tfree\tnone"], 1, "sensor_filter", "needs no record model"),
+    "free test sharing lengths": (["record\tpath\ttest\tshare_lengths", "a\tr1.csv\tfree\tyes"], 1, "share_lengths", "takes no calibration"),
+    "share_lengths not yes or no": (["record\tpath\tshare_lengths", "a\tr1.csv\ttrue"], 1, "share_lengths", "give one of yes, no"),
+    "sharing differs in a block": (["record\tpath\tblock\tshare_lengths", "a\tr1.csv\tA\tyes", "b\tr2.csv\tA\tno"], 2,
+                                   "share_lengths", "pooled under one share_lengths"),
+    "shake without a base": (["record\tpath\ttest", "a\tr1.csv\tshake"], 1, "base", "needs its base acceleration's file"),
+    "a base on a random row": (["record\tpath\tbase", "a\tr1.csv\tr2.csv"], 1, "base", "only a shake-table test"),
+    "a base that does not exist": (["record\tpath\ttest\tbase", "a\tr1.csv\tshake\tnone.csv"], 1, "base", "does not exist"),
+    "a base without units": (["record\tpath\ttest\tbase", "a\tr1.csv\tshake\tr2.csv"], 1, "base_units", "states no units"),
+    "a base sampled otherwise": (["record\tpath\ttest\tbase\tbase_units\tg", "a\tr1.csv\tshake\tslow.csv\trad/s2\t1"], 1, "base",
+                                 "resample the base"),
+    "a base in m/s2 without theta_cr": (["record\tpath\ttest\tbase\tbase_units", "a\tr1.csv\tshake\tr2.csv\tm/s2"], 1, "theta_cr",
+                                        "needs the block's critical angle"),
+    "a base in rad/s2 without g": (["record\tpath\ttest\tbase\tbase_units", "a\tr1.csv\tshake\tr2.csv\trad/s2"], 1, "g",
+                                   "needs the block's g"),
+    "a shake test with a load": (["record\tpath\ttest\tbase\tbase_units\tg\tload", "a\tr1.csv\tshake\tr2.csv\trad/s2\t1\twhite"], 1,
+                                 "load", "needs no record model"),
+    "a shake recipe on a random row": (["record\ttrue_e\tdt\tsimulate", "a\t0.9\t0.005\tseed=1 n_points=8000 shake=2"], 1, "test",
+                                       "set test to shake"),
+    "a simulated shake row without shake": (["record\ttrue_e\tdt\tsimulate\ttest", "a\t0.9\t0.005\tseed=1 n_points=8000\tshake"], 1,
+                                            "simulate", "needs shake=PEAK"),
+    "a shake recipe with a tilt": (["record\ttrue_e\tdt\tsimulate\ttest", "a\t0.9\t0.005\tseed=1 shake=2 theta0=1\tshake"], 1,
+                                   "simulate", "leave theta0 and corner out"),
     "bad id": (["record\tpath", "1a\tr1.csv"], 1, "record", "'1a' is not allowed"),
     "block options differ": (["record\tpath\tblock\tload", "a\tr1.csv\tA\twhite", "b\tr2.csv\tA\tauto"], 2, "load", "pooled under one load"),
     "simulated without true e": (["record\tdt\tsimulate", "a\t0.8\tseed=1"], 1, "true_e", "needs its true_e"),
@@ -184,6 +206,29 @@ def test_a_free_rocking_rows_json_is_what_rockdec_estimate_test_free_prints(tmp_
     assert json.loads(capsys.readouterr().out) == doc
 
 
+def test_a_shake_table_rows_json_is_what_rockdec_estimate_test_shake_prints(tmp_path, monkeypatch, capsys):
+    """A simulated shake-table row (its base stored beside its angle, in rad/s^2 at g = 1) and a
+    block of two: the campaign's document is ``rockdec estimate --test shake --json``'s."""
+    from rockdec import cli
+
+    rows = campaign.read_sheet(sheet(tmp_path, "record\tblock\ttrue_e\tdt\tsimulate\ttest",
+                                     "s1\tE\t0.95\t0.005\tseed=3 n_points=6000 shake=3 noise=0.01\tshake",
+                                     "s2\tE\t0.95\t0.005\tseed=4 n_points=6000 shake=3 noise=0.01\tshake"), simulated=tmp_path)
+    assert [(r["base"], r["base_units"], r["g"]) for r in rows] == [(r["path"], "rad/s2", 1.0) for r in rows]
+    assert set(campaign.units(rows)) == {"record_s1", "record_s2", "block_E-shake"}
+    for row in rows:
+        campaign.simulate_step(row, row["path"])
+    paths = [r["path"] for r in rows]
+    monkeypatch.chdir(tmp_path)
+    for unit, members in (("record_s1", rows[:1]), ("block_E-shake", rows)):
+        doc, result = campaign.estimate_unit(members, campaign.options(members[0]), tmp_path, rockdec)
+        assert doc["test"] == "shake" and result.to_dict() == doc and campaign.plan(members, campaign.options(members[0]))["calibrations"] == {}
+        files = paths[: len(members)]
+        argv = ["estimate", "--test", "shake", *files, "--base", *files, "--base-variable", "base", "--g", "1", "--json"]
+        assert cli.main(argv) in (0, None)
+        assert json.loads(capsys.readouterr().out) == doc, unit
+
+
 def test_a_free_rocking_row_takes_no_record_model(folder):
     with pytest.raises(SheetError, match="row 1 \\(record 'a'\\), column 'load': the free-rocking test reads g off its arcs"):
         campaign.read_sheet(sheet(folder, "record\tpath\ttest\tload", "a\tr1.csv\tfree\twhite"))
@@ -219,6 +264,18 @@ def test_the_plan_names_the_calibration_the_estimate_asks_for(simulated, tmp_pat
     doc, result = campaign.estimate_unit(simulated, opts, tmp_path, rockdec)
     assert doc["calibration"]["file"] in planned["calibrations"] and doc["calibration"]["cached"] is True
     assert doc == result.to_dict()
+
+
+def test_a_row_sharing_lengths_plans_the_length_grids_calibration(simulated):
+    """``share_lengths yes`` is ``rockdec estimate --share-lengths``: the plan asks for the
+    calibration on the length grid's length at or below the record's, not the record's own."""
+    from rockdec.calibrate import calibration
+
+    (own,) = campaign.plan(simulated, campaign.options(simulated[0]))["calibrations"].values()
+    row = {**simulated[0], "share_lengths": "yes"}
+    (shared,) = campaign.plan([row], campaign.options(row))["calibrations"].values()
+    assert own["lengths"] == [4000] and "length_grid" not in own
+    assert shared["lengths"] == [calibration.length_bin(4000)] == [3160] and shared["length_grid"]["samples"] == 3160
 
 
 def test_a_declared_filter_reaches_the_calibration_the_plan_names(simulated):

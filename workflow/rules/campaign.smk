@@ -147,7 +147,7 @@ rule campaign_block:
     benchmark:
         "results/{campaign}/benchmarks/{unit}.tsv"
     wildcard_constraints:
-        unit="block_[A-Za-z][A-Za-z0-9_]*(-free)?",
+        unit="block_[A-Za-z][A-Za-z0-9_]*(-free|-shake)?",
     threads: 1
     resources:
         mem_mb=2000,

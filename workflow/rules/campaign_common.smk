@@ -62,8 +62,9 @@ def unit_options(wildcards):
 
 
 def unit_records(wildcards):
-    """The record files a record's or a block's estimate reads."""
-    return [row["path"] for row in CAMPAIGN_UNITS[wildcards.unit]]
+    """The record files a record's or a block's estimate reads (a shake-table test's base files too)."""
+    rows = CAMPAIGN_UNITS[wildcards.unit]
+    return list(dict.fromkeys([row["path"] for row in rows] + [row["base"] for row in rows if row.get("base")]))
 
 
 def _calibrations(plan_file):

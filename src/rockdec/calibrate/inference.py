@@ -110,17 +110,18 @@ CSV_SECONDS, ANALYSIS_SECONDS, CALIBRATION_SECONDS, BYTES_PER_SAMPLE = 5e-7, 1.0
 RECORD_SECONDS, PAIR_SECONDS = 4e-4, 7e-5
 
 
-def stage_seconds(samples: int, csv: bool, g_given: bool, cores: int = 2, records: int = 1) -> dict[str, float]:
+def stage_seconds(samples: int, csv: bool, g_given: bool, cores: int = 2, records: int = 1,
+                  length_grid: bool = False) -> dict[str, float]:
     """Seconds each stage of :func:`estimate` takes on ``records`` records of ``samples`` in all:
     ``reading`` (a CSV), ``analysing`` (twice with a given ``g``) and ``calibrating``
     (building the calibration: :func:`calibration_sets` records, of the records' length up to
-    :data:`rockdec.calibrate.calibration.LENGTH_CAP` in all,
-    :func:`rockdec.calibrate.calibration.simulated_lengths`, and beyond it the step search's
-    pilot sets of that length), from :data:`CSV_SECONDS` and the other constants of the
+    :data:`rockdec.calibrate.calibration.LENGTH_CAP` in all, or of the length grid's length
+    with ``length_grid``, :func:`rockdec.calibrate.calibration.simulated_lengths`, and beyond
+    the cap the step search's pilot sets of that length), from :data:`CSV_SECONDS` and the other constants of the
     model; each record beyond the first adds :data:`RECORD_SECONDS` in every simulated set
     and each pair of records :data:`PAIR_SECONDS`; several records are analysed twice more,
     each alone (:func:`own_scales`, :func:`check_pooled`)."""
-    simulated = sum(calibration.simulated_lengths([samples]))
+    simulated = sum(calibration.simulated_lengths([samples], length_grid))
     sets = calibration_sets(samples)
     return {
         "reading": samples * CSV_SECONDS * csv,
@@ -144,10 +145,10 @@ def calibration_sets(samples: int) -> int:
     return len(calibration.E_GRID_LONG) * sets
 
 
-def cost(samples: int, csv: bool, g_given: bool, cores: int = 2, records: int = 1) -> tuple[float, float]:
+def cost(samples: int, csv: bool, g_given: bool, cores: int = 2, records: int = 1, length_grid: bool = False) -> tuple[float, float]:
     """``(seconds, bytes)`` that :func:`estimate` needs for ``records`` records of ``samples``
     in all, calibration included (:func:`stage_seconds`)."""
-    return sum(stage_seconds(samples, csv, g_given, cores, records).values()), samples * BYTES_PER_SAMPLE
+    return sum(stage_seconds(samples, csv, g_given, cores, records, length_grid).values()), samples * BYTES_PER_SAMPLE
 
 
 def checks_place(per: dict, shown: dict) -> tuple[float | None, list | None]:
@@ -660,9 +661,10 @@ class Analysed(NamedTuple):
         return self.own.points_per_cycle if self.own is not None else math.nan
 
 
-def analyse(records: list[Record], *, g: float | None = None, settings: dict | None = None) -> Analysed:
+def analyse(records: list[Record], *, g: float | None = None, settings: dict | None = None, length_grid: bool = False) -> Analysed:
     """Stage 1 of :func:`estimate`: check the records and analyse them (signatures, every
-    estimator extrapolated to a zero window, :func:`rockdec.rdd.measured.analyse`).
+    estimator extrapolated to a zero window, :func:`rockdec.rdd.measured.analyse`), saying how
+    long it and the calibration take (:func:`stage_seconds`, ``length_grid`` as it takes it).
 
     Refuses (:class:`RecordError`) records given twice (also in disguise: an offset, a sign, a
     scale or an overlap, :func:`rockdec.record.sameness.same_data`), records at different steps, a
@@ -686,7 +688,7 @@ def analyse(records: list[Record], *, g: float | None = None, settings: dict | N
         raise RecordError(f"{apart.message}.")
     names = ", ".join(r.source for r in records)
     samples = int(sum(r.theta.size for r in records))
-    stages = stage_seconds(samples, False, g is not None, records=len(records))
+    stages = stage_seconds(samples, False, g is not None, records=len(records), length_grid=length_grid)
     log.info(
         f"analysing {samples} samples: {console.about(stages['analysing'])} "
         f"({console.about(stages['analysing'] + stages['calibrating'])} in all when the calibration must be built)"
@@ -881,7 +883,8 @@ def calibrate(analysed: Analysed, choice: ModelChoice, cache_dir, available=None
         f"; the records' {analysed.samples} samples are calibrated on simulated records of {simulated} samples, "
         f"the spread scaled by sqrt({simulated} / {analysed.samples}) = {scale:.3g}" if scale != 1.0 else ""
     )
-    stages = stage_seconds(analysed.samples, False, analysed.g is not None, records=len(analysed.records))
+    stages = stage_seconds(analysed.samples, False, analysed.g is not None, records=len(analysed.records),
+                           length_grid="length_grid" in cal_settings)
     log.info(
         f"calibration {calibration.settings_hash(cal_settings)}: {console.about(stages['calibrating'])} to build when it is not stored"
         f"{shortened}"
@@ -1379,7 +1382,7 @@ def estimate_once(
     did, ``why`` in words; ``enabled``: whether the repair was on), in the stages
     :func:`estimate` lists; the calibration's sets are repaired alike (``available``:
     :func:`calibrate`; ``length_grid``: :func:`choose_model`)."""
-    analysed = analyse(records, g=g, settings=settings)
+    analysed = analyse(records, g=g, settings=settings, length_grid=length_grid)
     report = repair_report(done, analysed.dt, enabled, why)
     choice = choose_model(analysed, model=model, load=load, sensor=sensor, rocking=rocking, theta_cr=theta_cr, sensor_filter=sensor_filter,
                           repaired=repaired, length_grid=length_grid)

@@ -19,9 +19,11 @@ import numpy as np
 
 from rockdec import validate as checks
 from rockdec.free.analysis import FreeRockingFit, analyse_free_rocking
+from rockdec.free.impacts import CROSSING_BAND_SIGMAS, find_crossings, noise_std
 from rockdec.timeaxis import RecordError
 
-__all__ = ["ShakeTableFit", "analyse_shake_table", "load_intensity", "shaking_end", "uplift_ratio"]
+__all__ = ["BASE_UNITS", "BASE_UNIT_NAMES", "ShakeTableFit", "analyse_shake_table", "base_units_named", "load_intensity", "shaking_end",
+           "uplift_ratio"]
 
 #: Fraction of the uplift level below which the base counts as quiet (its load then moves a
 #: rocking block's impact speeds by well under the sensor's resolution of them).
@@ -37,6 +39,9 @@ MIN_TAIL = 1.0
 G0 = 9.80665
 
 BASE_UNITS = ("m/s2", "g", "rad/s2")
+
+#: Other spellings of :data:`BASE_UNITS` a file's or a DataArray's ``units`` may carry.
+BASE_UNIT_NAMES = {"m s-2": "m/s2", "m/s^2": "m/s2", "m/s**2": "m/s2", "rad s-2": "rad/s2", "rad/s^2": "rad/s2"}
 
 #: Seconds over which the base's residual motion in a tail is integrated to read its
 #: intensity (:func:`load_intensity`).
@@ -68,6 +73,18 @@ class ShakeTableFit:
     def e_interval(self) -> tuple[float, float]:
         """Its 95 % interval."""
         return (math.nan, math.nan) if self.fit is None or self.fit.reason else self.fit.e_interval
+
+
+def base_units_named(units) -> str:
+    """The :data:`BASE_UNITS` spelling of a stated ``units`` attribute (as given when unknown).
+
+    Examples
+    --------
+    >>> base_units_named(" m s-2"), base_units_named("g"), base_units_named("furlong")
+    ('m/s2', 'g', 'furlong')
+    """
+    text = str(units).strip()
+    return BASE_UNIT_NAMES.get(text, text)
 
 
 def uplift_ratio(base, *, base_units: str = "m/s2", g_block: float | None = None, theta_cr: float | None = None) -> np.ndarray:
@@ -137,6 +154,22 @@ def _quiet_runs(r, quiet, n_min):
     calm[: lifted[0] + 1] = False
     edges = np.flatnonzero(np.diff(np.concatenate([[0], calm.astype(np.int8), [0]])))
     return [(int(a), int(b)) for a, b in zip(edges[::2], edges[1::2]) if b - a >= n_min]
+
+
+def first_impact(theta, i0: int, i1: int) -> int:
+    """The first sample after the first impact (zero crossing, :func:`rockdec.free.impacts.find_crossings`)
+    of ``theta[i0:i1]``, ``i0`` when it has none: a tail that starts as the block falls holds
+    the end of an arc whose apex it never saw, so the arcs after it would seem to grow.
+
+    Examples
+    --------
+    >>> t = np.arange(400) * 0.01
+    >>> first_impact(0.01 * np.cos(2 * np.pi * t), 0, 400)  # falling from the start, the impact at 0.25 s
+    26
+    """
+    y = np.asarray(theta[i0:i1], dtype=float)
+    crossings = find_crossings(y, CROSSING_BAND_SIGMAS * noise_std(y)) if y.size >= 8 else None
+    return i0 + int(np.floor(crossings.position[0])) + 1 if crossings is not None and crossings.position.size else i0
 
 
 def analyse_shake_table(theta, base, dt, *, base_units: str = "m/s2", g_block: float | None = None,
@@ -209,7 +242,8 @@ def analyse_shake_table(theta, base, dt, *, base_units: str = "m/s2", g_block: f
                 refused.append((k, 0.0, "the base never lifts the block" if not np.any(np.abs(r) > 1.0) else
                                 f"the shaking never stops: the base never stays below {quiet:g} of the uplift level for {min_tail:g} s"))
                 continue
-        for i0, i1 in runs:
+        for quiet_start, i1 in runs:
+            i0 = first_impact(y, quiet_start, i1)
             t = dt * np.arange(i0, i1)
             load = load_intensity(r[i0:i1], dt)
             try:

@@ -24,7 +24,9 @@ What each job of ``workflow/rules/campaign.smk`` runs:
 The steps run inside the Snakemake process (:func:`rockdec.pipeline.in_snakemake.campaign`).
 
 A row whose ``test`` is ``free`` (a free-rocking test) goes to :func:`free_rocking_unit`
-(``rockdec.free_rocking``, as ``rockdec estimate --test free`` runs it): no calibration.
+(``rockdec.free_rocking``, as ``rockdec estimate --test free`` runs it), one whose ``test`` is
+``shake`` (a shake-table test, with its ``base`` record) to :func:`shake_unit`
+(``rockdec.shake_table``, as ``rockdec estimate --test shake`` runs it): no calibration.
 """
 
 from __future__ import annotations
@@ -47,7 +49,7 @@ from rockdec.validate import InputError
 __all__ = [
     "FREE_UNAVAILABLE", "MAX_ID", "MAX_SIMULATED_POINTS", "SheetError", "build_calibration", "comparison",
     "declared", "estimate_step", "estimate_unit", "file_step", "markdown", "options", "plan", "plan_step",
-    "read", "read_sheet", "simulate_step", "simulated_record", "simulation", "summary_dataset", "table",
+    "read", "read_sheet", "shake_unit", "simulate_step", "simulated_record", "simulation", "summary_dataset", "table",
     "table_step", "unit_dataset", "units",
 ]
 
@@ -78,7 +80,7 @@ MAX_SIMULATED_POINTS = 20_000_000
 OTHER_SEPARATORS = {",": "commas", ";": "semicolons", " ": "spaces"}
 
 #: Options the records of one block must share: their pooled estimate takes one of each.
-BLOCK_OPTIONS = ("load", "sensor_noise", "sensor_filter", "model", "theta_cr", "g")
+BLOCK_OPTIONS = ("load", "sensor_noise", "sensor_filter", "model", "theta_cr", "g", "share_lengths", "base_units")
 
 #: What the table says of a free-rocking row while rockdec has no free-rocking analysis.
 FREE_UNAVAILABLE = "free-rocking analysis not available"
@@ -270,6 +272,7 @@ def _completed(row: dict, sheet: Path, simulated: Path, fail) -> dict:
             raise fail("dt", f"a step of {row['dt']:g} s over {row['simulate']['n_points']} samples gives time stamps a float cannot "
                              "tell apart or hold; give a step like the demonstration's 0.8 s")
         row["units_in_file"] = True  # the simulated record's angle is stored in rad
+        _simulated_shake(row, fail)
     else:
         if "path" not in row:
             raise fail("path", "empty; give the record's file (absolute, or relative to the sheet's folder)")
@@ -293,13 +296,22 @@ def _completed(row: dict, sheet: Path, simulated: Path, fail) -> dict:
         given = own if given is None else given
     row["dt"] = float(given)
     row.pop("fs", None)
-    if row["test"] == "free":
+    if row["test"] == "shake":
+        _base_of(row, sheet, fail)
+    elif "base" in row or "base_units" in row:
+        column = "base" if "base" in row else "base_units"
+        raise fail(column, "only a shake-table test (test shake) reads a base record; set test to shake, or leave it empty")
+    if row["test"] != "random":
+        why = NO_RECORD_MODEL if row["test"] == "free" else "the shake-table test fits the free decay after the shaking and needs no record model"
         for column, default in (("g", None), ("load", "auto"), ("sensor_noise", "auto"), ("sensor_filter", "auto")):
-            if row.get(column) != default:
-                raise fail(column, f"{NO_RECORD_MODEL}; leave it empty")
+            if row.get(column) != default and not (column == "g" and row["test"] == "shake"):
+                raise fail(column, f"{why}; leave it empty")
+        if row["share_lengths"] == "yes":
+            raise fail("share_lengths", f"the {'free-rocking' if row['test'] == 'free' else 'shake-table'} test takes no calibration to share; "
+                                        "leave it empty")
     if row["model"] == "housner" and "theta_cr" not in row:
         raise fail("theta_cr", "model housner needs the block's critical angle theta_cr in rad (atan(width/height))")
-    if row["model"] != "housner" and "theta_cr" in row:
+    if row["model"] != "housner" and "theta_cr" in row and row["test"] != "shake":
         raise fail("theta_cr", "theta_cr is the Housner model's critical angle; set model to housner, or leave it empty")
     try:
         row["load"] = load_option(row["load"], sheet)
@@ -315,6 +327,57 @@ def _completed(row: dict, sheet: Path, simulated: Path, fail) -> dict:
     except InputError as exc:
         raise fail("sensor_filter", str(exc).rstrip(".")) from None
     return row
+
+
+def _simulated_shake(row: dict, fail) -> None:
+    """A simulated row's shake-table recipe (``shake=PEAK``) against its ``test``; such a row's
+    base is stored beside its angle (:func:`simulated_record`) in rad/s^2 at ``g`` = 1."""
+    shaken = row["simulate"]["shake"] is not None
+    if shaken != (row["test"] == "shake"):
+        raise fail("test" if shaken else "simulate", "a recipe with shake= simulates a shake-table test; set test to shake" if shaken else
+                   "a shake-table row the workflow simulates needs shake=PEAK (the base's strength in uplift levels) in its recipe")
+    if not shaken:
+        return
+    if "base" in row:
+        raise fail("base", "a shake-table row the workflow simulates stores its base beside its angle; leave base empty")
+    if row.get("base_units", "rad/s2") != "rad/s2" or row.get("g", 1.0) != 1.0:
+        column = "g" if row.get("base_units", "rad/s2") == "rad/s2" else "base_units"
+        raise fail(column, "the workflow simulates its shake-table tests at g = 1 rad/s^2 with the base in rad/s2; leave it empty")
+    row.update(base=row["path"], base_variable="base", base_units="rad/s2", g=1.0, base_has_time=True)
+
+
+def _base_of(row: dict, sheet: Path, fail) -> None:
+    """A shake-table row's ``base``: its file resolved and checked (a time axis that agrees with
+    the record's step, units stated or given, and the block's ``theta_cr`` or ``g`` they need)."""
+    from rockdec.free.shake import BASE_UNITS, base_units_named
+
+    if "simulate" not in row:
+        if "base" not in row:
+            raise fail("base", "empty; a shake-table test needs its base acceleration's file (it may be the record's own)")
+        path = Path(row["base"]).expanduser()
+        path = path if path.is_absolute() else sheet.resolve().parent / path
+        if not path.is_file():
+            raise fail("base", f"'{path}' {'is a folder' if path.is_dir() else 'does not exist'}; give the base acceleration's file")
+        row["base"] = str(path)
+        try:
+            own, units = file_step(path, row["base_variable"], row["base_column"])
+        except timeaxis.RecordError as exc:
+            raise fail("base", str(exc).rstrip(".").replace("in the variable column", "in the base_variable column")) from None
+        if own is not None and abs(own - row["dt"]) > STEP_RTOL * row["dt"]:
+            raise fail("base", f"the base is sampled every {own:g} s, the record every {row['dt']:g} s; resample the base onto the record's samples")
+        named = None if units is None else base_units_named(units)
+        if named is not None and named not in BASE_UNITS:
+            raise fail("base", f"the base file's units '{units}' are not an acceleration rockdec reads; state m/s2, g or rad/s2")
+        if named is not None and row.get("base_units", named) != named:
+            raise fail("base_units", f"'{row['base_units']}' differs from the base file's own units '{units}'; leave base_units empty or give the file's")
+        if named is None and "base_units" not in row:
+            raise fail("base_units", f"'{path.name}' states no units for its base; give base_units m/s2, g or rad/s2")
+        row["base_units"] = row.get("base_units", named)
+        row["base_has_time"] = own is not None
+    if row["base_units"] == "rad/s2" and "g" not in row:
+        raise fail("g", "a base in rad/s2 (the rocking equation's load) needs the block's g in rad/s^2")
+    if row["base_units"] != "rad/s2" and "theta_cr" not in row:
+        raise fail("theta_cr", f"a base in {row['base_units']} needs the block's critical angle theta_cr in rad (atan(width/height))")
 
 
 def _check_blocks(rows: list[dict], sheet: Path, numbers: dict) -> None:
@@ -339,14 +402,16 @@ def simulation(text: str, fail=None) -> dict:
     """The recipe of a ``simulate`` cell: ``seed=N`` and optional ``n_points=N`` (default
     200000), ``noise=SHARE`` (sensor noise as a share of the record's rms, default 0),
     ``corner=C`` (a low-pass load's corner in rocking frequencies, default white) and
-    ``theta0=ANGLE`` (a free-rocking test: released from this tilt with no load).
+    ``theta0=ANGLE`` (a free-rocking test: released from this tilt with no load) and
+    ``shake=PEAK`` (a shake-table test: :func:`rockdec.physics.base_motion.shake_test` with the
+    base's strong motion at ``PEAK`` uplift levels).
 
     Examples
     --------
     >>> simulation("seed=3 noise=0.03")
-    {'seed': 3, 'n_points': 200000, 'noise': 0.03, 'corner': None, 'theta0': None}
+    {'seed': 3, 'n_points': 200000, 'noise': 0.03, 'corner': None, 'theta0': None, 'shake': None}
     """
-    out = {"seed": None, "n_points": 200000, "noise": 0.0, "corner": None, "theta0": None}
+    out = {"seed": None, "n_points": 200000, "noise": 0.0, "corner": None, "theta0": None, "shake": None}
     problem = None
     for part in text.split():
         key, _, value = part.partition("=")
@@ -360,8 +425,10 @@ def simulation(text: str, fail=None) -> dict:
     if problem is None and out["n_points"] > MAX_SIMULATED_POINTS:
         problem = (f"'{text}' asks for {out['n_points']:.3g} samples, more than the {MAX_SIMULATED_POINTS:.0e} of the longest records "
                    f"whose interval's coverage was measured; give n_points <= {MAX_SIMULATED_POINTS}")
-    if problem is None and (out["n_points"] < 1000 or out["noise"] < 0 or (out["corner"] is not None and out["corner"] <= 0)):
-        problem = f"'{text}' asks for fewer than 1000 samples, a negative noise or a corner <= 0; fix the recipe"
+    if problem is None and (out["n_points"] < 1000 or out["noise"] < 0 or any(out[k] is not None and out[k] <= 0 for k in ("corner", "shake"))):
+        problem = f"'{text}' asks for fewer than 1000 samples, a negative noise, or a corner or shake <= 0; fix the recipe"
+    if problem is None and out["shake"] is not None and (out["theta0"] is not None or out["corner"] is not None):
+        problem = f"'{text}': a shake-table test (shake=) is shaken by its base alone; leave theta0 and corner out"
     if problem is not None:
         if fail is None:
             raise SheetError(problem + ".")
@@ -434,20 +501,20 @@ def file_step(path: str | Path, variable: str = "theta", column: str = "theta") 
 
 def units(rows: list[dict]) -> dict[str, list[dict]]:
     """The campaign's estimates: ``record_<id>`` for each record, ``block_<name>`` for each
-    block of two or more random-response records and ``block_<name>-free`` for each block of
-    two or more free-rocking tests (an id holds no ``-``: no block's name is another's free
-    tests'), each mapped to its rows (the records it pools)."""
+    block of two or more random-response records, ``block_<name>-free`` for each block of
+    two or more free-rocking tests and ``block_<name>-shake`` of shake-table tests (an id holds
+    no ``-``: no block's name is another's tests'), each mapped to its rows (the records it pools)."""
     out = {f"record_{row['record']}": [row] for row in rows}
     blocks: dict[tuple, list[dict]] = {}
     for row in rows:
-        blocks.setdefault((row["block"], row["test"] == "free"), []).append(row)
-    out.update({f"block_{name}" + ("-free" if free else ""): members for (name, free), members in blocks.items() if len(members) > 1})
+        blocks.setdefault((row["block"], row["test"]), []).append(row)
+    out.update({f"block_{name}" + ("" if test == "random" else f"-{test}"): members for (name, test), members in blocks.items() if len(members) > 1})
     return out
 
 
 def options(row: dict) -> dict:
-    """The estimate options of a row (those of ``rockdec estimate``), as its job's params."""
-    return {key: row.get(key) for key in ("load", "sensor_noise", "sensor_filter", "model", "theta_cr", "g")}
+    """The estimate options of a row (those of ``rockdec estimate``, :data:`BLOCK_OPTIONS`), as its job's params."""
+    return {key: row.get(key) for key in BLOCK_OPTIONS}
 
 
 def read(rows: list[dict]):
@@ -488,7 +555,13 @@ def estimate(rows: list[dict], opts: dict, cache, api):
     Raises :class:`rockdec.validate.InputError` for records the estimate refuses.
     """
     return api.estimate(_theta(rows, api), g=opts.get("g"), load=opts["load"], sensor_noise=opts["sensor_noise"],
-                        sensor_filter=opts["sensor_filter"], model=opts["model"], theta_cr=opts.get("theta_cr"), cache=cache)
+                        sensor_filter=opts["sensor_filter"], model=opts["model"], theta_cr=opts.get("theta_cr"), cache=cache,
+                        share_lengths=_shares(opts))
+
+
+def _shares(opts: dict) -> bool:
+    """Whether the options ``opts`` share a calibration among records of nearby lengths (``share_lengths``)."""
+    return opts.get("share_lengths") == "yes"
 
 
 def _theta(rows: list[dict], api) -> list:
@@ -533,12 +606,12 @@ def plan(rows: list[dict], opts: dict, cache=None, earlier: dict | None = None) 
         return earlier
     known = dict(earlier["calibrations"]) if earlier is not None else {}
     done = {"calibrations": known, "error": None}
-    if rows[0]["test"] == "free":
+    if rows[0]["test"] != "random":
         return done
     available = {name.removeprefix("calibration-").removesuffix(".nc") for name in known}
     try:
         inference.estimate(read(rows), cache_dir=cache, g=opts.get("g"), rocking=opts["model"],
-                           theta_cr=opts.get("theta_cr"), available=available, **declared(opts))
+                           theta_cr=opts.get("theta_cr"), available=available, length_grid=_shares(opts), **declared(opts))
     except inference.CalibrationNeeded as need:
         known[f"calibration-{calibration.settings_hash(need.settings)}.nc"] = need.settings
     except InputError as exc:
@@ -565,14 +638,32 @@ def free_rocking_unit(rows: list[dict], opts: dict, api):
     return analysis(_theta(rows, api), model=opts["model"], theta_cr=opts.get("theta_cr"))
 
 
+def shake_unit(rows: list[dict], opts: dict, api):
+    """A shake-table test's estimate: ``shake_table`` of the front door ``api`` on the records of
+    ``rows`` (pooled) and their base records, as ``rockdec estimate --test shake`` runs it."""
+    from rockdec.record import records
+
+    bases = []
+    with _files():
+        for row in rows:
+            read, _ = records.read_base(row["base"], column=row["base_column"], variable=row["base_variable"],
+                                        dt=None if row["base_has_time"] else row["dt"])
+            bases += read
+    theta = _theta(rows, api)
+    return api.shake_table(theta if len(theta) > 1 else theta[0], bases if len(bases) > 1 else bases[0], base_units=opts["base_units"],
+                           theta_cr=opts.get("theta_cr"), g_block=opts.get("g"), model=opts["model"])
+
+
 def estimate_unit(rows: list[dict], opts: dict, cache, api) -> tuple[dict, object]:
     """The document of one record or block and its estimate: :func:`estimate`'s
     ``to_dict()`` (``rockdec estimate --json``) and the :class:`rockdec.RestitutionEstimate`;
     a refusal (:class:`rockdec.validate.InputError`) is a null ``e`` with the refusal as its
     ``reason`` and ``refused: true``, and no estimate; a free-rocking test goes to
     :func:`free_rocking_unit` (its reason :data:`FREE_UNAVAILABLE` when rockdec has none)."""
+    test = rows[0]["test"]
     try:
-        result = free_rocking_unit(rows, opts, api) if rows[0]["test"] == "free" else estimate(rows, opts, cache, api)
+        result = (free_rocking_unit(rows, opts, api) if test == "free" else shake_unit(rows, opts, api) if test == "shake" else
+                  estimate(rows, opts, cache, api))
     except InputError as exc:
         return refused(rows, exc), None
     if result is None:
@@ -657,11 +748,11 @@ def unit_dataset(name: str, rows: list[dict], doc: dict):
         data[field] = (("record",), np.array([value], dtype=object), {"long_name": field.replace("_", " ")})
     true_e = rows[0].get("true_e") if all(r.get("true_e") == rows[0].get("true_e") for r in rows) else None
     kind = "block" if name.startswith("block_") else "record"
-    test = "free" if rows[0].get("test") == "free" else "random"
-    pooled = f"{rows[0]['block']} ({'free tests' if test == 'free' else 'records'} pooled)"
+    test = rows[0].get("test", "random")
+    pooled = f"{rows[0]['block']} ({ {'free': 'free tests', 'shake': 'shake-table tests'}.get(test, 'records')} pooled)"
     coords.update({
         "record": ("record", [name.split("_", 1)[1] if kind == "record" else pooled], {"long_name": "record, or a block's records pooled"}),
-        "test": ("record", [test], {"long_name": "random (random response, Random Decrement) or free (free-rocking test)"}),
+        "test": ("record", [test], {"long_name": "random (random response, Random Decrement), free (free-rocking test) or shake (shake-table test)"}),
         "block": ("record", [rows[0]["block"]], {"long_name": "block the record belongs to"}),
         "kind": ("record", [kind], {"long_name": "record, or block (its records pooled)"}),
         "true_e": ("record", [math.nan if true_e is None else float(true_e)], {"units": "1", "long_name": "coefficient of restitution the record was simulated with"}),
@@ -775,8 +866,12 @@ def simulated_record(row: dict):
     recipe's share of the record's rms (:func:`rockdec.physics.loading.add_sensor_noise`). A
     recipe with ``theta0`` is a free-rocking test: released from that tilt, no load, no
     burn-in, its noise a share of the release angle (as the free-rocking study draws it,
-    :mod:`rockdec.studies.free_coverage`)."""
+    :mod:`rockdec.studies.free_coverage`). A recipe with ``shake`` is a shake-table test
+    (:func:`rockdec.physics.base_motion.shake_test`, its noise a share of the largest angle),
+    its base acceleration (rad/s^2) stored beside the angle as ``base``."""
     import xarray as xr
+
+    from rockdec.physics.base_motion import shake_test
 
     from rockdec.physics.loading import add_sensor_noise
     from rockdec.physics.record_model import Load
@@ -785,6 +880,14 @@ def simulated_record(row: dict):
     recipe, e, dt = row["simulate"], row["true_e"], row["dt"]
     placed_at = 75.0  # samples per cycle the coverage study places a load's corner at
     pole = (Load() if recipe["corner"] is None else Load("lowpass", recipe["corner"])).pole(placed_at)
+    time = {"time": ("time", np.arange(recipe["n_points"]) * dt, {"units": "s", "standard_name": "time", "long_name": "time", "axis": "T"})}
+    if recipe.get("shake") is not None:
+        theta, base = shake_test(e, recipe["n_points"], dt, recipe["seed"], peak=recipe["shake"], noise=recipe["noise"])
+        return xr.Dataset(
+            {"theta": ("time", theta, {"units": "rad", "long_name": "rocking angle"}),
+             "base": ("time", base, {"units": "rad s-2", "long_name": "base acceleration as the rocking equation's load"})},
+            coords=time, attrs={"true_e": e},
+        )
     if recipe.get("theta0") is None:
         theta = simulate_block([recipe["seed"]], recipe["n_points"], dt=dt, g=1.0, e=e, sigma_p=1.0,
                                burn_in=default_burn_in(e, placed_at), pole=pole)[0]
@@ -792,11 +895,7 @@ def simulated_record(row: dict):
         theta = simulate_block([recipe["seed"]], recipe["n_points"], dt=dt, g=1.0, e=e, sigma_p=0.0, theta0=recipe["theta0"])[0]
     scale = abs(recipe["theta0"]) if recipe.get("theta0") is not None else float(np.sqrt(np.mean(theta**2)))
     add_sensor_noise(theta, [recipe["seed"]], recipe["noise"] * scale)
-    return xr.Dataset(
-        {"theta": ("time", theta[0], {"units": "rad", "long_name": "rocking angle"})},
-        coords={"time": ("time", np.arange(theta.shape[1]) * dt, {"units": "s", "standard_name": "time", "long_name": "time", "axis": "T"})},
-        attrs={"true_e": e},
-    )
+    return xr.Dataset({"theta": ("time", theta[0], {"units": "rad", "long_name": "rocking angle"})}, coords=time, attrs={"true_e": e})
 
 
 def simulate_step(row: dict, output: str) -> str:
@@ -847,7 +946,7 @@ def estimate_step(unit: str, rows: list[dict], opts: dict, cache, plan_file: str
     from rockdec import io
 
     doc, result = estimate_unit(rows, opts, cache, api)
-    if rows[0]["test"] != "free":
+    if rows[0]["test"] == "random":
         planned = json.loads(Path(plan_file).read_text())["calibrations"]
         used = (doc.get("calibration") or {}).get("file")
         if used is not None and used not in planned:  # the plans run this estimate: a mismatch is a bug, not the user's
