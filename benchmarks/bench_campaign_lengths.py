@@ -70,7 +70,7 @@ def answer(result, e: float) -> str:
     """The estimate in words: ``e [low, high]`` and whether it holds the true ``e``, or the reason."""
     if result.e is None:
         return f"no e ({result.reason[:60]})"
-    low, high = result.interval
+    low, high = result.confidence_interval
     return f"{result.e:.3f} [{low:.3f}, {high:.3f}] {'holds' if low <= e <= high else 'MISSES'}"
 
 

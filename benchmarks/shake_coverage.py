@@ -14,6 +14,13 @@ residual motion in the free part (``--residual``, in units of the uplift level: 
 and 20 s of free decay at 200 Hz. Per cell: the records answered, how many
 of their 95 % intervals hold the true ``e``, the median width, and why the others gave no
 ``e`` (the first words of each reason, counted); then the pooled coverage.
+
+With ``--campaigns M``, each cell also gets ``M`` campaigns of ``--records`` records of one
+block (seeds apart from the cell's), pooled by one :func:`rockdec.shake_table` call: how many
+campaigns are answered and covered, and the median pooled width against the median width of
+their records analysed one by one.
+
+    python benchmarks/shake_coverage.py --campaigns 20 --e 0.9 0.95 --peak 1.6
 """
 
 from __future__ import annotations
@@ -38,7 +45,7 @@ def cell(e: float, peak: float, noise: float, residual: float, records: int, see
            "why": collections.Counter()}
     for k in range(records):
         theta, base = tr.transient_with_base(e, seed + k, peak=peak, noise=noise, residual=residual)
-        res = rockdec.shake_table(theta, base, 1 / tr.FS, base_units="rad/s2", g_block=tr.G)
+        res = _estimate(theta, base)
         if res.e is None:
             out["why"][" ".join(res.reason.split(": ")[-1].split()[:5])] += 1
             continue
@@ -46,6 +53,34 @@ def cell(e: float, peak: float, noise: float, residual: float, records: int, see
         out["answered"] += 1
         out["covered"] += low <= e <= high
         out["widths"].append(high - low)
+    return out
+
+
+def _records(e: float, peak: float, noise: float, residual: float, seeds) -> list:
+    return [tr.transient_with_base(e, seed, peak=peak, noise=noise, residual=residual) for seed in seeds]
+
+
+def _estimate(theta, base):
+    return rockdec.shake_table(theta, base, 1 / tr.FS, base_units="rad/s2", g_block=tr.G)
+
+
+def campaigns(e: float, peak: float, noise: float, residual: float, records: int, count: int, seed: int) -> dict:
+    """``count`` campaigns of ``records`` records each, pooled: answered, covered, the pooled
+    widths and their records' single widths."""
+    out = {"answered": 0, "covered": 0, "pooled": [], "single": []}
+    for j in range(count):
+        data = _records(e, peak, noise, residual, range(seed + (j + 1) * records, seed + (j + 2) * records))
+        for theta, base in data:
+            one = _estimate(theta, base)
+            if one.e is not None:
+                out["single"].append(one.confidence_interval[1] - one.confidence_interval[0])
+        res = _estimate([d[0] for d in data], [d[1] for d in data])
+        if res.e is None:
+            continue
+        low, high = res.confidence_interval
+        out["answered"] += 1
+        out["covered"] += low <= e <= high
+        out["pooled"].append(high - low)
     return out
 
 
@@ -70,6 +105,7 @@ def main() -> None:
                         help="the base's motion in the free part, in units of the uplift level (uniform white noise)")
     parser.add_argument("--records", type=int, default=10)
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--campaigns", type=int, default=0, help="campaigns of --records records a cell, each pooled")
     args = parser.parse_args()
     start = time.perf_counter()
     cells = []
@@ -78,9 +114,20 @@ def main() -> None:
             for noise in args.noise:
                 for residual in args.residual:
                     cells.append(cell(e, peak, noise, residual, args.records, args.seed))
+                    if args.campaigns:
+                        cells[-1]["campaigns"] = campaigns(e, peak, noise, residual, args.records, args.campaigns, args.seed)
                     print(f"  e {e:g}, peak {peak:g}, noise {noise:g}, residual {residual:g}: "
                           f"{cells[-1]['answered']}/{args.records} answered", file=sys.stderr)
     print(markdown(cells))
+    if args.campaigns:
+        print(f"\n| e | peak | noise | residual | campaigns of {args.records} answered | covered | median pooled width | "
+              "median single width |\n| --- | --- | --- | --- | --- | --- | --- | --- |")
+        for c in cells:
+            p = c["campaigns"]
+            pooled = f"{statistics.median(p['pooled']):.3g}" if p["pooled"] else "-"
+            single = f"{statistics.median(p['single']):.3g}" if p["single"] else "-"
+            print(f"| {c['e']:g} | {c['peak']:g} | {c['noise']:g} | {c['residual']:g} | {p['answered']}/{args.campaigns} | "
+                  f"{p['covered']}/{p['answered']} | {pooled} | {single} |")
     answered, covered = sum(c["answered"] for c in cells), sum(c["covered"] for c in cells)
     total = sum(c["records"] for c in cells)
     print(f"\npooled: {answered}/{total} answered, {covered}/{answered} covered; {total} records in {time.perf_counter() - start:.0f} s.")

@@ -31,6 +31,7 @@ SHEET = [
     "a2\t\tA\t0.9\t0.796\tseed=2 n_points=6000\t",
     "m1\tlab/m1.csv\tM\t\t\t\t",
     "f1\t\tA\t0.9\t0.796\tseed=41 n_points=3000 theta0=20 noise=0.01\tfree",
+    "s1\t\tE\t0.9\t0.005\tseed=51 n_points=8000 shake=3 noise=0.01\tshake",
 ]
 NEW_ROW = "a3\t\tA\t0.9\t0.796\tseed=3 n_points=6000\t"
 
@@ -88,13 +89,13 @@ def test_each_records_json_is_what_rockdec_estimate_prints_for_its_file(built, m
 
 def test_each_distinct_calibration_is_built_once_by_a_job_of_its_own(built):
     plans = {p.stem: json.loads(p.read_text()) for p in (built["results"] / "plans").glob("*.json") if not p.name.endswith(".first.json")}
-    assert plans["record_f1"]["calibrations"] == {}  # a free-rocking test needs none
+    assert plans["record_f1"]["calibrations"] == plans["record_s1"]["calibrations"] == {}  # free-rocking and shake-table tests need none
     wanted = {name for unit, plan in plans.items() for name in plan["calibrations"]}
-    assert len(plans) == 5 and all(plans[unit]["calibrations"] for unit in plans if unit != "record_f1")  # a1, a2, m1, f1 and block A
+    assert len(plans) == 6 and all(plans[unit]["calibrations"] for unit in plans if unit not in ("record_f1", "record_s1"))  # and block A
     assert built["log"].count("rule campaign_calibration:") == len(wanted)
     assert {p.name for p in built["cache"].glob("calibration-*.nc")} == wanted
     for path in (built["results"] / "estimates").glob("*.json"):
-        if path.stem != "record_f1":
+        if path.stem not in ("record_f1", "record_s1"):
             assert json.loads(path.read_text())["calibration"]["cached"] is True, path.name  # no estimate built one
 
 
@@ -117,12 +118,14 @@ def test_adding_a_row_reruns_only_that_record_its_block_and_the_summaries(built)
 
 def test_the_table_shows_each_estimate_beside_the_true_e_and_says_why_when_there_is_none(built):
     tab = pd.read_csv(built["results"] / "estimates.csv", keep_default_na=False)
-    assert list(tab["record"]) == ["a1", "a2", "m1", "f1", "A (records pooled)"]
+    assert list(tab["record"]) == ["a1", "a2", "m1", "f1", "s1", "A (records pooled)"]
     assert float(tab.loc[tab["record"] == "f1", "e"].iloc[0]) == pytest.approx(0.9, abs=0.01)  # the free-rocking test's
     for row in tab.itertuples():
         assert row.holds_true_e in ("yes", "no", "no estimate", "")
         assert (row.e != "") or row.reason, row  # no e: the reason says why
-    assert (tab["true_e"] == "").tolist() == [False, False, True, False, False]
+    assert (tab["true_e"] == "").tolist() == [False, False, True, False, False, False]
+    shake = json.loads((built["results"] / "estimates" / "record_s1.json").read_text())
+    assert shake["test"] == "shake" and (shake["e"] is not None or shake["reason"])
     md = (built["results"] / "estimates.md").read_text()
     assert "| A (records pooled) |" in md
     side = md[md.index("## The free-rocking test beside the random response"):]  # block A holds both tests
@@ -133,7 +136,7 @@ def test_the_estimates_netcdf_runs_along_record_and_estimator_and_is_cf_clean(bu
     path = built["results"] / "estimates.nc"
     with xr.open_dataset(path) as ds:
         assert ds["e"].dims == ("record",) and ds["estimator_e"].dims == ("record", "estimator")
-        assert list(ds["block"].values) == ["A", "A", "M", "A", "A"]
+        assert list(ds["block"].values) == ["A", "A", "M", "A", "E", "A"]
         assert ds["g"].attrs["units"] == "rad s-2" and ds["dt"].attrs["units"] == "s"
         one = json.loads((built["results"] / "estimates" / "record_a1.json").read_text())
         assert float(ds["e"].sel(record="a1")) == pytest.approx(np.nan if one["e"] is None else one["e"], nan_ok=True)
@@ -166,8 +169,8 @@ def test_the_slurm_profile_plans_a_job_per_record_block_and_calibration(built):
                           "--config", f"campaign={{name: demo, sheet: config/records.tsv, cache: {empty}}}")
     assert code == 0, out
     stats = job_stats(out)
-    assert stats["campaign_record"] == 4 and stats["campaign_block"] == 1 and stats["campaign_calibration"] == 4, out
-    assert stats["campaign_plan"] == 5 and "campaign_first_plan" not in stats, out
+    assert stats["campaign_record"] == 5 and stats["campaign_block"] == 1 and stats["campaign_calibration"] == 4, out
+    assert stats["campaign_plan"] == 6 and "campaign_first_plan" not in stats, out
 
 
 def test_a_bad_sheet_stops_the_run_before_any_job_naming_row_and_column(built):
@@ -214,7 +217,8 @@ def test_the_demonstration_runs_from_an_empty_folder_with_the_workflow_elsewhere
                           "--configfile", str(REPO / "config" / "config.yaml"))
     assert code == 0, out
     stats = job_stats(out)
-    assert stats["campaign_simulate"] == 10 and stats["campaign_first_plan"] == stats["campaign_plan"] == 11, out  # ten records, block A pooled
+    # twenty records, block A's random responses and block E's shake-table tests pooled
+    assert stats["campaign_simulate"] == 20 and stats["campaign_first_plan"] == stats["campaign_plan"] == 22, out
 
 
 #: A campaign of records the estimate repairs and one it refuses (:func:`repaired_records`).

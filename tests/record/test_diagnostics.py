@@ -483,3 +483,13 @@ def test_the_asymmetry_null_takes_the_widest_point_with_one_spread_for_the_grid(
     widest, pooled = np.array(widest), np.array(pooled)
     assert np.mean(widest) < 1.0 - diagnostics.QUANTILE
     assert np.mean(widest > 0.05) < np.mean(pooled > 0.05)
+
+
+def test_the_split_statistic_of_no_blocks_is_nan_without_a_warning():
+    """A record too short for one block (a calibration set of 2,000 samples) has no blocks:
+    the statistic is NaN, and NumPy's 'mean of empty slice' never reaches the user."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert np.isnan(diagnostics._split_t(np.array([]), np.array([])))

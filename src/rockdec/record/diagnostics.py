@@ -433,8 +433,8 @@ def _split_t(values: np.ndarray, owners: np.ndarray) -> float:
     on each side, each split's variance pooled within its two parts; over records, the root
     mean square. A step of the values lifts it without bound (von Neumann's ratio of
     :data:`BLOCKS` values reaches about 4.2 at most, for a step infinitely large);
-    about 2-3 for independent values. NaN for fewer than 4 values in a record, or no spread
-    within the parts.
+    about 2-3 for independent values. NaN for no values, fewer than 4 values in a record, or
+    no spread within the parts.
 
     Examples
     --------
@@ -456,7 +456,7 @@ def _split_t(values: np.ndarray, owners: np.ndarray) -> float:
         if not np.all(var > 0.0):
             return np.nan
         squares.append(float(np.max((left_mean - right_mean) ** 2 / (var * (1.0 / k + 1.0 / (n - k))))))
-    return float(np.sqrt(np.mean(squares)))
+    return float(np.sqrt(np.mean(squares))) if squares else np.nan
 
 
 def nonstationarity(s: Sums, analysis) -> float:
