@@ -181,7 +181,7 @@ def test_a_bad_sheet_stops_the_run_before_any_job_naming_row_and_column(built):
         code, out = snakemake(built["root"], "-n", "campaign")
     finally:
         sheet.write_text(before)
-    assert code == 2 and "row 5 (record 'm1'), column 'record'" in out, out
+    assert code == 2 and "row 6 (record 'm1'), column 'record'" in out, out
     assert "Job stats" not in out
 
 
