@@ -26,6 +26,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from rockdec import locks
 from rockdec._version import __version__
 from rockdec.validate import InputError, file_kind, path_name
 
@@ -127,12 +128,12 @@ REFERENCES = f"{PAPER_TITLE}; the method as implemented: docs/method.md of rockd
 
 def input_history(paths) -> list[str]:
     """The ``history`` lines of the NetCDF files among ``paths``, oldest first, each line once
-    (other inputs, such as a run's JSON file, have none)."""
+    (other inputs, such as a run's JSON file, have none), read holding :data:`rockdec.locks.HDF5`."""
     lines: list[str] = []
     for path in paths:
         if Path(path).suffix != ".nc":
             continue
-        with open_dataset(path) as ds:
+        with locks.HDF5, open_dataset(path) as ds:  # a step beside it may be writing (in_snakemake's threads)
             text = str(ds.attrs.get("history", ""))
         lines += [line for line in text.splitlines() if line.strip() and line not in lines]
     return lines

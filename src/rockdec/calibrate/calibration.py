@@ -42,7 +42,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from rockdec import io
+from rockdec import io, locks
 from rockdec._version import __version__
 from rockdec.record import diagnostics, repair
 from rockdec import engine
@@ -153,10 +153,11 @@ HEARTBEAT_S, STALE_S = 10.0, 120.0
 #: Seconds between looks at a lock held by another run.
 POLL_S = 1.0
 
-_FILE_ACCESS = threading.Lock()
-"""Serialises this process's reads and writes of calibration files: the HDF5 library under
-netCDF4 is not safe from two threads at once (a study estimates records in Dask threads,
-one thread storing a calibration while another reads one)."""
+_FILE_ACCESS = locks.HDF5
+"""Serialises this process's reads and writes of calibration files with every other HDF5
+user of the process (:data:`rockdec.locks.HDF5`): the HDF5 library under netCDF4 is not safe
+from two threads at once (a study estimates records in Dask threads, one thread storing a
+calibration while another reads one; the campaign's steps beside them)."""
 
 
 def log_bin(x: float, width: float) -> float:

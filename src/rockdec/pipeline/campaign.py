@@ -850,11 +850,9 @@ def markdown(tab) -> str:
 
 @contextlib.contextmanager
 def _files():
-    """Hold the locks of every HDF5 user of the process: the workflow's in-process steps'
-    (:data:`rockdec.locks.HDF5`) and the calibration cache's."""
-    from rockdec.calibrate import calibration
-
-    with locks.HDF5, calibration._FILE_ACCESS:
+    """Hold the lock of every HDF5 user of the process (:data:`rockdec.locks.HDF5`: the
+    workflow's in-process steps', the calibration cache's, the provenance's)."""
+    with locks.HDF5:
         yield
 
 
