@@ -366,7 +366,7 @@ def cmd_estimate(args) -> None:
     for path in args.base or []:
         checks.path_name(path, "base record")
     _, theta_cr = api.block_angle(args.block, args.model, args.theta_cr)  # refused before any record is read
-    if not free:
+    if not (free or shake):  # the random test's record model and cache; the others read neither
         api.estimate_options(g=args.g, load=args.load, sensor_noise=args.sensor_noise, sensor_filter=args.sensor_filter, model=args.model,
                              theta_cr=theta_cr, cache=args.cache)
     with contextlib.ExitStack() as stack:

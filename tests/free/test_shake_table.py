@@ -111,3 +111,7 @@ def test_the_command_line_runs_the_shake_table_test(shaken, tmp_path, capsys):
     assert "one --base file per record file" in capsys.readouterr().err
     assert main(["estimate", record, "--test", "shake", "--base", base_file, "--base-units", "g", "--block", "1,0.2"]) == 2
     assert "disagrees" in capsys.readouterr().err
+    in_g = tmp_path / "base_g.csv"
+    pd.DataFrame({"time": time, "base": base / tr.G * math.tan(0.2)}).to_csv(in_g, index=False)
+    assert main(["-q", "estimate", record, "--test", "shake", "--base", str(in_g), "--base-units", "g", "--theta-cr", "0.2", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["e"] == pytest.approx(doc["e"], rel=1e-9)  # --theta-cr for a base in g, no Housner needed
