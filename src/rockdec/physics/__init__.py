@@ -12,6 +12,7 @@ from rockdec.lazy import lazy_names
 
 #: The names each module of the package exports (its ``__all__``), by the module that defines them.
 _MODULES = {
+    "base_motion": ("envelope", "ground_gain", "ground_motion", "shake_test"),
     "fixed_step": ("KIND", "step"),
     "geometry": ("Block", "parse_block"),
     "housner": ("choose_model", "housner_flight", "integrate_housner", "simulate_block_housner"),
