@@ -10,7 +10,7 @@ checkout's commit) and when, and copies the figures to ``docs/generated/figures/
 pages ``{include}`` those files, so no study number is typed into the prose. A study whose
 results are absent keeps its last generated file. ``--run`` takes the studies to run first
 (``paper``, ``choices``, ``diagnostics``, ``amplitude``, ``tradeoff``, ``coverage``,
-``coverage_fresh``; ``all``); the coverage and warnings' studies take hours on 2 cores, in
+``coverage_fresh``, ``shake``; ``all``); the coverage and warnings' studies take hours on 2 cores, in
 jobs per cell or per ``e``, load and noise level that are kept as they finish (run again to go on).
 """
 
@@ -36,6 +36,7 @@ STUDIES = {
     "tradeoff": ("tradeoff_study", "results/studies/tradeoff/table.md", None),
     "coverage": ("coverage", "results/studies/coverage/table.md", None),
     "coverage_fresh": ("coverage_fresh_table", "results/studies/coverage/fresh/table.md", None),
+    "shake": ("shake_coverage", "results/studies/shake_coverage/table.md", None),
 }
 FIGURES = {
     "results/paper/figures": ["fig1b.png", "fig2.png", "fig3.png", "fig4.png", "fig_ev.png"],
