@@ -343,3 +343,21 @@ def test_the_comparison_sets_each_blocks_free_test_beside_its_random_estimate():
     a, b = out.iloc[0], out.iloc[1]
     assert (a["random_e"], a["free_e"], a["agree"]) == (0.895, 0.90, "yes")  # the pooled estimate, not a record's
     assert (b["random_high"], b["free_low"], b["agree"]) == (0.75, 0.79, "no")
+
+
+def test_the_comparison_sets_a_blocks_shake_table_tests_beside_its_free_test():
+    import pandas as pd
+
+    tab = pd.DataFrame({
+        "record": ["s1", "s2", "fe", "E (shake-table tests pooled)", "s9"],
+        "kind": ["record", "record", "record", "block", "record"],
+        "test": ["shake", "shake", "free", "shake", "shake"],
+        "block": ["E", "E", "E", "E", "F"],
+        "e": [0.90, 0.91, 0.899, 0.902, 0.9],
+        "low": [0.89, 0.90, 0.898, 0.899, 0.89],
+        "high": [0.91, 0.92, 0.900, 0.905, 0.91],
+    })
+    out = campaign.comparison(tab, ("free", "shake"))
+    assert list(out.columns) == ["block", "free_e", "free_low", "free_high", "shake_e", "shake_low", "shake_high", "agree"]
+    assert list(out["block"]) == ["E"] and (out.iloc[0]["shake_e"], out.iloc[0]["agree"]) == (0.902, "yes")  # the pooled shake estimate; F has no free test
+    assert campaign.comparison(tab).empty  # no random response anywhere

@@ -47,7 +47,7 @@ from rockdec.free import NO_RECORD_MODEL
 from rockdec.validate import InputError
 
 __all__ = [
-    "FREE_UNAVAILABLE", "MAX_ID", "MAX_SIMULATED_POINTS", "SheetError", "build_calibration", "comparison",
+    "COMPARED", "FREE_UNAVAILABLE", "MAX_ID", "MAX_SIMULATED_POINTS", "SheetError", "build_calibration", "comparison",
     "declared", "estimate_step", "estimate_unit", "file_step", "markdown", "options", "plan", "plan_step",
     "read", "read_sheet", "shake_unit", "simulate_step", "simulated_record", "simulation", "summary_dataset", "table",
     "table_step", "unit_dataset", "units",
@@ -810,10 +810,12 @@ def table(ds):
     return out if not out["true_e"].isna().all() else out.drop(columns=["true_e", "holds_true_e"])
 
 
-def comparison(tab):
-    """Per block that has both, the free-rocking ``e`` beside the random-response ``e`` (each
-    the block's pooled estimate, or its one record's) with both 95 % intervals, and whether
-    they agree (the intervals overlap); an empty table when no block has both."""
+def comparison(tab, tests: tuple[str, str] = ("random", "free")):
+    """Per block that has both ``tests`` (the test names of :func:`units`), the second one's
+    ``e`` beside the first one's (each the block's pooled estimate, or its one record's) with
+    both 95 % intervals, and whether they agree (the intervals overlap); an empty table when
+    no block has both. Columns ``block``, ``<test>_e``, ``<test>_low``, ``<test>_high`` of each
+    test, ``agree``."""
     import pandas as pd
 
     def pick(part, test):
@@ -821,17 +823,23 @@ def comparison(tab):
         pooled = rows[rows["kind"] == "block"]
         return pooled.iloc[0] if len(pooled) else rows.iloc[0] if len(rows) == 1 else None
 
+    first, second = tests
+    columns = ["block", *(f"{t}_{q}" for t in tests for q in ("e", "low", "high")), "agree"]
     out = []
     for block in dict.fromkeys(tab["block"]):
         part = tab[tab["block"] == block]
-        random, free = pick(part, "random"), pick(part, "free")
-        if random is None or free is None:
+        a, b = pick(part, first), pick(part, second)
+        if a is None or b is None:
             continue
-        known = all(math.isfinite(v) for v in (random["low"], random["high"], free["low"], free["high"]))
-        agree = ("yes" if random["low"] <= free["high"] and free["low"] <= random["high"] else "no") if known else "no estimate"
-        out.append({"block": block, "random_e": random["e"], "random_low": random["low"], "random_high": random["high"],
-                    "free_e": free["e"], "free_low": free["low"], "free_high": free["high"], "agree": agree})
-    return pd.DataFrame(out, columns=["block", "random_e", "random_low", "random_high", "free_e", "free_low", "free_high", "agree"])
+        known = all(math.isfinite(v) for v in (a["low"], a["high"], b["low"], b["high"]))
+        agree = ("yes" if a["low"] <= b["high"] and b["low"] <= a["high"] else "no") if known else "no estimate"
+        out.append(dict(zip(columns, [block, a["e"], a["low"], a["high"], b["e"], b["low"], b["high"], agree])))
+    return pd.DataFrame(out, columns=columns)
+
+
+#: The tests :func:`table_step` sets side by side per block, and the heading of each pair.
+COMPARED = {("random", "free"): "The free-rocking test beside the random response, per block",
+            ("free", "shake"): "The shake-table tests beside the free-rocking test, per block"}
 
 
 def markdown(tab) -> str:
@@ -972,13 +980,13 @@ def table_step(inputs: list[str], nc: str, csv_out: str, md: str, units_rows: di
         io.write_netcdf(summary, nc)
     tab = table(summary)
     tab.to_csv(csv_out, index=False)
-    both = comparison(tab)
     text = markdown(tab)
-    if len(both):
-        shown = both.copy()
+    for tests, heading in COMPARED.items():
+        shown = comparison(tab, tests)
+        if not len(shown):
+            continue
         for column in shown.columns[1:-1]:
             shown[column] = [("" if math.isnan(v) else f"{v:.3f}") for v in shown[column]]
-        text += ("\n## The free-rocking test beside the random response, per block\n\n"
-                 "agree: the two 95 % intervals overlap.\n\n" + shown.to_markdown(index=False) + "\n")
+        text += f"\n## {heading}\n\nagree: the two 95 % intervals overlap.\n\n" + shown.to_markdown(index=False) + "\n"
     _write_text(md, text)
     return f"{len(tab)} rows"
