@@ -113,10 +113,9 @@ def test_the_inputs_history_waits_for_another_thread_that_holds_the_hdf5_lock(tm
     """The campaign's estimate steps and the workflow's signature step read their inputs'
     history on Snakemake's threads while another step writes a NetCDF file; the HDF5 library
     under netCDF4 crashes the process when two threads use it at once (a segmentation fault
-    seen in `snakemake --cores 2 campaign`). The read waits for the lock, which the calibration
-    cache shares, and a holder may take it again."""
+    seen in `snakemake --cores 2 campaign`). The read waits for the lock, and a holder may
+    take it again."""
     from rockdec import locks
-    from rockdec.calibrate import calibration
 
     path = io.write_netcdf(xr.Dataset({"x": ("n", [1.0, 2.0])}, attrs={"history": "2000-01-01T00:00:00Z: rockdec x simulate"}),
                            tmp_path / "a.nc")
@@ -126,7 +125,7 @@ def test_the_inputs_history_waits_for_another_thread_that_holds_the_hdf5_lock(tm
         reader.start()
         reader.join(0.5)
         assert reader.is_alive() and not got  # waiting for the lock
-        with calibration._FILE_ACCESS:  # the same lock, taken again by its holder
+        with locks.HDF5:  # taken again by its holder (the calibration cache's reads take it too)
             assert io.input_history([path]) == ["2000-01-01T00:00:00Z: rockdec x simulate"]
     reader.join(10)
     assert got == [["2000-01-01T00:00:00Z: rockdec x simulate"]]

@@ -153,11 +153,6 @@ HEARTBEAT_S, STALE_S = 10.0, 120.0
 #: Seconds between looks at a lock held by another run.
 POLL_S = 1.0
 
-_FILE_ACCESS = locks.HDF5
-"""Serialises this process's reads and writes of calibration files with every other HDF5
-user of the process (:data:`rockdec.locks.HDF5`): the HDF5 library under netCDF4 is not safe
-from two threads at once (a study estimates records in Dask threads, one thread storing a
-calibration while another reads one; the campaign's steps beside them)."""
 
 
 def log_bin(x: float, width: float) -> float:
@@ -628,7 +623,7 @@ def _read_checked(path: Path, expected_hash: str) -> tuple[ncread.Stored | None,
     """The calibration stored at ``path`` and ``None``, or ``None`` and why it cannot be trusted
     (read by :func:`rockdec.calibrate.ncread.read`: no xarray to import for a cached calibration)."""
     try:
-        with _FILE_ACCESS:
+        with locks.HDF5:  # the HDF5 library is not safe from two threads at once (a study's Dask threads)
             ds = ncread.read(path)
     except (OSError, ValueError, RuntimeError, AttributeError) as exc:  # netCDF4 raises AttributeError on a bad attribute
         return None, f"it is not readable ({type(exc).__name__})"
@@ -824,9 +819,9 @@ def load_or_build(cal_settings: dict, cache_dir: str | Path, notes: list | None 
                 return _read_checked(path, expected)[0], True
             ds = build(cal_settings)
             ds.attrs["content_sha256"] = content_checksum(ds)
-            with _FILE_ACCESS:
+            with locks.HDF5:
                 io.write_netcdf(ds, path, overwrite=True)
     finally:
         lock.unlink(missing_ok=True)
-    with _FILE_ACCESS:
+    with locks.HDF5:
         return ncread.read(path), False

@@ -31,7 +31,6 @@ A row whose ``test`` is ``free`` (a free-rocking test) goes to :func:`free_rocki
 
 from __future__ import annotations
 
-import contextlib
 import csv
 import functools
 import json
@@ -276,10 +275,7 @@ def _completed(row: dict, sheet: Path, simulated: Path, fail) -> dict:
     else:
         if "path" not in row:
             raise fail("path", "empty; give the record's file (absolute, or relative to the sheet's folder)")
-        path = Path(row["path"]).expanduser()
-        path = path if path.is_absolute() else sheet.resolve().parent / path
-        if not path.is_file():
-            raise fail("path", f"'{path}' {'is a folder' if path.is_dir() else 'does not exist'}; give the record's file")
+        path = _sheet_file(row["path"], sheet, lambda problem: fail("path", f"{problem}; give the record's file"))
         row["path"] = str(path)
         try:
             own, units = file_step(path, row["variable"], row["column"])
@@ -329,6 +325,21 @@ def _completed(row: dict, sheet: Path, simulated: Path, fail) -> dict:
     return row
 
 
+def _on_sheet(text: str, sheet: Path) -> Path:
+    """The path ``text`` of a sheet's cell: ``~`` expanded, absolute, or relative to the sheet's folder."""
+    path = Path(text).expanduser()
+    return path if path.is_absolute() else sheet.resolve().parent / path
+
+
+def _sheet_file(text: str, sheet: Path, fail) -> Path:
+    """The file a sheet's cell names (:func:`_on_sheet`); ``fail(problem)`` raises when it is a
+    folder or does not exist."""
+    path = _on_sheet(text, sheet)
+    if not path.is_file():
+        raise fail(f"'{path}' {'is a folder' if path.is_dir() else 'does not exist'}")
+    return path
+
+
 def _simulated_shake(row: dict, fail) -> None:
     """A simulated row's shake-table recipe (``shake=PEAK``) against its ``test``; such a row's
     base is stored beside its angle (:func:`simulated_record`) in rad/s^2 at ``g`` = 1."""
@@ -354,10 +365,7 @@ def _base_of(row: dict, sheet: Path, fail) -> None:
     if "simulate" not in row:
         if "base" not in row:
             raise fail("base", "empty; a shake-table test needs its base acceleration's file (it may be the record's own)")
-        path = Path(row["base"]).expanduser()
-        path = path if path.is_absolute() else sheet.resolve().parent / path
-        if not path.is_file():
-            raise fail("base", f"'{path}' {'is a folder' if path.is_dir() else 'does not exist'}; give the base acceleration's file")
+        path = _sheet_file(row["base"], sheet, lambda problem: fail("base", f"{problem}; give the base acceleration's file"))
         row["base"] = str(path)
         try:
             own, units = file_step(path, row["base_variable"], row["base_column"])
@@ -446,8 +454,7 @@ def load_option(text: str, sheet: Path) -> str:
         return text
     kind, sep, arg = text.partition(":")
     if kind in ("spectrum", "base"):
-        path = Path(arg).expanduser()
-        text = f"{kind}:{path if path.is_absolute() else sheet.resolve().parent / path}"
+        text = f"{kind}:{_on_sheet(arg, sheet)}"
     parse_load(text, dt=1.0, points_per_cycle=1.0)  # a file is checked at a stand-in rocking frequency
     return text
 
@@ -524,7 +531,7 @@ def read(rows: list[dict]):
     from rockdec.record import records
 
     out = []
-    with _files():
+    with locks.HDF5:
         for row in rows:
             for rec in records.read_records(row["path"], column=row["column"], variable=row["variable"], dt=_given_step(row)):
                 factor = _angle_factor(row)
@@ -567,7 +574,7 @@ def _shares(opts: dict) -> bool:
 def _theta(rows: list[dict], api) -> list:
     """The records of ``rows`` as the front door ``api`` reads them (``read_record``), in rad."""
     theta = []
-    with _files():
+    with locks.HDF5:
         for row in rows:
             da = api.read_record(row["path"], column=row["column"], variable=row["variable"], dt=_given_step(row))
             theta.append(da if _angle_factor(row) == 1.0 else da.copy(data=da.values * _angle_factor(row)))
@@ -644,7 +651,7 @@ def shake_unit(rows: list[dict], opts: dict, api):
     from rockdec.record import records
 
     bases = []
-    with _files():
+    with locks.HDF5:
         for row in rows:
             read, _ = records.read_base(row["base"], column=row["base_column"], variable=row["base_variable"],
                                         dt=None if row["base_has_time"] else row["dt"])
@@ -852,16 +859,8 @@ def markdown(tab) -> str:
 
 
 # --- the steps the campaign's rules run inside the Snakemake process ----------------------
-# (rockdec.pipeline.in_snakemake.campaign): each reads and writes its files holding FILES,
-# since the HDF5 library under netCDF4 is used by one thread of a process at a time.
-
-
-@contextlib.contextmanager
-def _files():
-    """Hold the lock of every HDF5 user of the process (:data:`rockdec.locks.HDF5`: the
-    workflow's in-process steps', the calibration cache's, the provenance's)."""
-    with locks.HDF5:
-        yield
+# (rockdec.pipeline.in_snakemake.campaign): each reads and writes its files holding
+# rockdec.locks.HDF5, since the HDF5 library under netCDF4 is used by one thread of a process at a time.
 
 
 def simulated_record(row: dict):
@@ -910,7 +909,7 @@ def simulate_step(row: dict, output: str) -> str:
 
     ds = simulated_record(row)
     ds.attrs.update(io.provenance("campaign_simulate", {"record": row["record"], "true_e": row["true_e"], "dt": row["dt"], **row["simulate"]}))
-    with _files():
+    with locks.HDF5:
         io.write_netcdf(ds, output)
     return f"simulated {row['record']}: e = {row['true_e']}, {json.dumps(row['simulate'], sort_keys=True)}"
 
@@ -961,7 +960,7 @@ def estimate_step(unit: str, rows: list[dict], opts: dict, cache, plan_file: str
     ds = result.to_dataset() if result is not None else unit_dataset(unit, rows, doc)
     for key, value in io.provenance(step, {"rows": rows, "options": opts}, inputs=[row["path"] for row in rows]).items():
         ds.attrs.setdefault(key, value)
-    with _files():
+    with locks.HDF5:
         io.write_netcdf(ds, nc_out)
     return f"{unit}: e = {doc.get('e')}"
 
@@ -976,7 +975,7 @@ def table_step(inputs: list[str], nc: str, csv_out: str, md: str, units_rows: di
     datasets = [unit_dataset(Path(path).stem, units_rows[Path(path).stem], json.loads(Path(path).read_text())) for path in inputs]
     summary = summary_dataset(datasets)
     summary.attrs.update(io.provenance("campaign_table", {"units": list(units_rows)}, inputs=inputs))
-    with _files():
+    with locks.HDF5:
         io.write_netcdf(summary, nc)
     tab = table(summary)
     tab.to_csv(csv_out, index=False)
