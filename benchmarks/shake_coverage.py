@@ -1,4 +1,5 @@
-"""Answer rate and coverage of the shake-table test (:func:`rockdec.shake_table`) on records of
+"""Answer rate and coverage of the shake-table test (what :func:`rockdec.shake_table` runs,
+:func:`rockdec.free.shake.analyse_shake_table`) on records of
 the tests' independent transient generator (``tests/transient_reference.py``: its own rocking
 stepper under Clough-Penzien base noise, not the project's simulator).
 
@@ -16,7 +17,7 @@ of their 95 % intervals hold the true ``e``, the median width, and why the other
 ``e`` (the first words of each reason, counted); then the pooled coverage.
 
 With ``--campaigns M``, each cell also gets ``M`` campaigns of ``--records`` records of one
-block (seeds apart from the cell's), pooled by one :func:`rockdec.shake_table` call: how many
+block (seeds apart from the cell's), pooled by one analysis: how many
 campaigns are answered and covered, and the median pooled width against the median width of
 their records analysed one by one.
 
@@ -26,7 +27,6 @@ their records analysed one by one.
 from __future__ import annotations
 
 import argparse
-import collections
 import statistics
 import sys
 import time
@@ -36,32 +36,23 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
 import transient_reference as tr  # noqa: E402
 
-import rockdec  # noqa: E402
-
-
-def cell(e: float, peak: float, noise: float, residual: float, records: int, seed: int) -> dict:
-    """Answered, covered, widths and reasons of ``records`` records of one cell."""
-    out = {"e": e, "peak": peak, "noise": noise, "residual": residual, "records": records, "answered": 0, "covered": 0, "widths": [],
-           "why": collections.Counter()}
-    for k in range(records):
-        theta, base = tr.transient_with_base(e, seed + k, peak=peak, noise=noise, residual=residual)
-        res = _estimate(theta, base)
-        if res.e is None:
-            out["why"][" ".join(res.reason.split(": ")[-1].split()[:5])] += 1
-            continue
-        low, high = res.confidence_interval
-        out["answered"] += 1
-        out["covered"] += low <= e <= high
-        out["widths"].append(high - low)
-    return out
+from rockdec.free.shake import analyse_shake_table  # noqa: E402
+from rockdec.studies.shake_coverage import COLUMNS, markdown, tally  # noqa: E402
 
 
 def _records(e: float, peak: float, noise: float, residual: float, seeds) -> list:
     return [tr.transient_with_base(e, seed, peak=peak, noise=noise, residual=residual) for seed in seeds]
 
 
-def _estimate(theta, base):
-    return rockdec.shake_table(theta, base, 1 / tr.FS, base_units="rad/s2", g_block=tr.G)
+def _fit(theta, base):
+    """:func:`rockdec.free.shake.analyse_shake_table`, what ``rockdec.shake_table`` runs."""
+    return analyse_shake_table(theta, base, 1 / tr.FS, base_units="rad/s2", g_block=tr.G)
+
+
+def cell(e: float, peak: float, noise: float, residual: float, records: int, seed: int) -> dict:
+    """Answered, covered, widths and reasons of ``records`` records of one cell (:func:`rockdec.studies.shake_coverage.tally`)."""
+    fits = (_fit(theta, base) for theta, base in _records(e, peak, noise, residual, range(seed, seed + records)))
+    return {"e": e, "peak": peak, "noise": noise, "residual": residual, "records": records, **tally(fits, e)}
 
 
 def campaigns(e: float, peak: float, noise: float, residual: float, records: int, count: int, seed: int) -> dict:
@@ -70,30 +61,12 @@ def campaigns(e: float, peak: float, noise: float, residual: float, records: int
     out = {"answered": 0, "covered": 0, "pooled": [], "single": []}
     for j in range(count):
         data = _records(e, peak, noise, residual, range(seed + (j + 1) * records, seed + (j + 2) * records))
-        for theta, base in data:
-            one = _estimate(theta, base)
-            if one.e is not None:
-                out["single"].append(one.confidence_interval[1] - one.confidence_interval[0])
-        res = _estimate([d[0] for d in data], [d[1] for d in data])
-        if res.e is None:
-            continue
-        low, high = res.confidence_interval
-        out["answered"] += 1
-        out["covered"] += low <= e <= high
-        out["pooled"].append(high - low)
+        out["single"] += tally((_fit(theta, base) for theta, base in data), e)["widths"]
+        pooled = tally([_fit([d[0] for d in data], [d[1] for d in data])], e)
+        out["answered"] += pooled["answered"]
+        out["covered"] += pooled["covered"]
+        out["pooled"] += pooled["widths"]
     return out
-
-
-def markdown(cells: list[dict]) -> str:
-    """The cells as a Markdown table."""
-    lines = ["| e | peak | noise | residual | answered | covered | median width | no e: why (count) |",
-             "| --- | --- | --- | --- | --- | --- | --- | --- |"]
-    for c in cells:
-        width = f"{statistics.median(c['widths']):.3g}" if c["widths"] else "-"
-        why = "; ".join(f"{w} ({n})" for w, n in c["why"].most_common(3)) or "-"
-        lines.append(f"| {c['e']:g} | {c['peak']:g} | {c['noise']:g} | {c['residual']:g} | {c['answered']}/{c['records']} | "
-                     f"{c['covered']}/{c['answered']} | {width} | {why} |")
-    return "\n".join(lines)
 
 
 def main() -> None:
@@ -118,7 +91,7 @@ def main() -> None:
                         cells[-1]["campaigns"] = campaigns(e, peak, noise, residual, args.records, args.campaigns, args.seed)
                     print(f"  e {e:g}, peak {peak:g}, noise {noise:g}, residual {residual:g}: "
                           f"{cells[-1]['answered']}/{args.records} answered", file=sys.stderr)
-    print(markdown(cells))
+    print(markdown(cells, (*COLUMNS, ("residual", "residual"))))
     if args.campaigns:
         print(f"\n| e | peak | noise | residual | campaigns of {args.records} answered | covered | median pooled width | "
               "median single width |\n| --- | --- | --- | --- | --- | --- | --- | --- |")
@@ -128,9 +101,7 @@ def main() -> None:
             single = f"{statistics.median(p['single']):.3g}" if p["single"] else "-"
             print(f"| {c['e']:g} | {c['peak']:g} | {c['noise']:g} | {c['residual']:g} | {p['answered']}/{args.campaigns} | "
                   f"{p['covered']}/{p['answered']} | {pooled} | {single} |")
-    answered, covered = sum(c["answered"] for c in cells), sum(c["covered"] for c in cells)
-    total = sum(c["records"] for c in cells)
-    print(f"\npooled: {answered}/{total} answered, {covered}/{answered} covered; {total} records in {time.perf_counter() - start:.0f} s.")
+    print(f"\n{sum(c['records'] for c in cells)} records in {time.perf_counter() - start:.0f} s.")
 
 
 if __name__ == "__main__":
