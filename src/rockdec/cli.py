@@ -353,9 +353,9 @@ def cmd_estimate(args) -> None:
                                            ("--sensor-noise", args.sensor_noise != "auto"),
                                            ("--sensor-filter", args.sensor_filter != "auto")) if given]
         if unused:
-            from rockdec.free import NO_RECORD_MODEL
+            from rockdec.free import no_record_model
 
-            raise UsageError(f"{', '.join(unused)}: {NO_RECORD_MODEL}; leave them out.")
+            raise UsageError(f"{', '.join(unused)}: {no_record_model(args.test)}; leave them out.")
     shake_flags = [flag for flag, given in (("--base", bool(args.base)), ("--base-units", args.base_units is not None),
                                             ("--tail-start", args.tail_start is not None)) if given]
     if shake_flags and not shake:

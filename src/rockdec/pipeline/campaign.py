@@ -42,7 +42,7 @@ from pathlib import Path
 import numpy as np
 
 from rockdec import locks, timeaxis
-from rockdec.free import NO_RECORD_MODEL
+from rockdec.free import no_record_model
 from rockdec.validate import InputError
 
 __all__ = [
@@ -298,7 +298,7 @@ def _completed(row: dict, sheet: Path, simulated: Path, fail) -> dict:
         column = "base" if "base" in row else "base_units"
         raise fail(column, "only a shake-table test (test shake) reads a base record; set test to shake, or leave it empty")
     if row["test"] != "random":
-        why = NO_RECORD_MODEL if row["test"] == "free" else "the shake-table test fits the free decay after the shaking and needs no record model"
+        why = no_record_model(row["test"])
         for column, default in (("g", None), ("load", "auto"), ("sensor_noise", "auto"), ("sensor_filter", "auto")):
             if row.get(column) != default and not (column == "g" and row["test"] == "shake"):
                 raise fail(column, f"{why}; leave it empty")
