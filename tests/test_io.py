@@ -168,3 +168,25 @@ def test_a_lock_is_never_seen_without_its_owner_while_runs_claim_it(tmp_path):
     assert seen, "the reader never saw the lock"
     assert set(seen) == {f"{os.getpid()}\n"}
     assert sorted(p.name for p in tmp_path.iterdir()) == [], "a claim left a file behind"
+
+
+def test_a_lazy_series_beyond_float32_is_refused_after_every_chunk_is_written_and_leaves_no_file(tmp_path):
+    # the first chunk is beyond the range and the others are slow: a refusal raised inside its
+    # Dask task would end the write while the others still wrote, and one of them reopened
+    # (so recreated) the removed temporary file
+    import time
+
+    import dask.array as da
+
+    def slow(block, block_info=None):
+        if block_info[None]["chunk-location"][0]:
+            time.sleep(0.02)
+        return block
+
+    data = da.zeros(4000, chunks=100).map_blocks(slow, dtype=float)
+    data = da.concatenate([da.full(100, 1e300, chunks=100), data[100:]])
+    ds = xr.Dataset({"theta": ("time", data)})
+    with pytest.raises(io.OutputError, match="beyond the float32 range"):
+        io.write_netcdf(ds, tmp_path / "o.nc", float32=("theta",))
+    time.sleep(0.3)  # any task still running would have written by now
+    assert list(tmp_path.iterdir()) == []

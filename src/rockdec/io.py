@@ -284,19 +284,25 @@ def write_netcdf(
     variables are computed chunk by chunk while writing.
     """
     with claimed(path, overwrite) as path:
-        encoding = {}
+        encoding, excess = {}, []
         for name, var in ds.data_vars.items():
             enc = {"zlib": True, "complevel": 4}
             if name in float32:
                 enc["dtype"] = "float32"
-                ds = ds.assign({name: var.copy(data=_fits_float32(var.data, name))})
+                ds = ds.assign({name: var.copy(data=_fits_float32(var.data, name, excess))})
             if var.ndim >= 1 and var.dtype.kind == "f":
                 enc["_FillValue"] = float("nan")
             if chunks and var.ndim >= 1:
                 enc["chunksizes"] = tuple(max(1, min(chunks.get(dim, size), size)) for dim, size in var.sizes.items())
             encoding[name] = enc
         encoding.update(coordinate_encoding(ds))
-        return write_claimed(path, lambda tmp: ds.to_netcdf(tmp, encoding=encoding, engine="netcdf4"), overwrite)
+
+        def write(tmp):
+            ds.to_netcdf(tmp, encoding=encoding, engine="netcdf4")
+            if excess:  # raised once every chunk is written: no task still holds the file
+                raise excess[0]
+
+        return write_claimed(path, write, overwrite)
 
 
 def _write_failure(exc: BaseException, path: Path) -> BaseException:
@@ -400,21 +406,34 @@ def _new_partial(path: Path, suffix: str = "") -> Path:
             continue
 
 
-def _fits_float32(data, name: str):
-    """``data``, checked (chunk by chunk while writing, if lazy) to stay within the float32 range."""
+def _fits_float32(data, name: str, excess: list):
+    """``data``, checked to stay within the float32 range: at once if in memory (raising),
+    chunk by chunk while writing if lazy, where a chunk beyond the range is noted in
+    ``excess`` (raising inside a Dask task would end the write while other tasks still
+    write, and one of them would reopen, so recreate, the removed temporary file)."""
 
     def check(block):
         big = np.abs(block) > FLOAT32_MAX  # NaN (a fallen block) is stored as NaN: not refused
         if np.any(big):
-            raise OutputError(
+            return OutputError(
                 f"'{name}' reaches {np.abs(block[big]).max():.3g}, beyond the float32 range it is stored in "
                 f"({FLOAT32_MAX:.3g}); choose smaller scales (initial state, sigma_p, dt)."
             )
-        return block
+        return None
+
+    def noted(block):
+        found = check(block)
+        if found is None:
+            return block
+        excess.append(found)
+        return np.full_like(block, np.nan)  # written as NaN (no overflowing cast), then the file is removed
 
     if hasattr(data, "map_blocks"):
-        return data.map_blocks(check, dtype=data.dtype)
-    return check(np.asarray(data))
+        return data.map_blocks(noted, dtype=data.dtype)
+    found = check(np.asarray(data))
+    if found is not None:
+        raise found
+    return np.asarray(data)
 
 
 def open_dataset(path: str | Path, **kwargs) -> xr.Dataset:
