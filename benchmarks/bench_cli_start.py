@@ -8,7 +8,7 @@ Each case runs in a fresh interpreter (``python -m rockdec ...``), ``--repeat`` 
 turn with the others; the median and the fastest wall time are printed with their ratio to
 ``python -c pass`` (the floor every command pays) and the extra milliseconds over it. For
 scale, the last case imports the numerical modules a command loads once it runs
-(``rockdec.calibrate.inference``: numpy, scipy, numba; no xarray, pandas or Dask, which load only
+(``rockdec.estimation``: numpy, scipy, numba; no xarray, pandas or Dask, which load only
 where a function needs them), which ``--version``, ``--help`` and a refused option do not
 wait for. ``bench_estimate.py`` times a whole warm ``rockdec estimate``.
 """
@@ -28,7 +28,7 @@ CASES = {
     "rockdec estimate --help": ["-m", "rockdec", "estimate", "--help"],
     "rockdec simulate --bogus (refused)": ["-m", "rockdec", "simulate", "--out", "x.nc", "--bogus"],
     "rockdec simulate --e 2 (refused value)": ["-m", "rockdec", "simulate", "--out", "x.nc", "--e", "2"],
-    "import of a running command": ["-c", "import rockdec.cli, rockdec.calibrate.inference"],
+    "import of a running command": ["-c", "import rockdec.cli, rockdec.estimation"],
 }
 
 

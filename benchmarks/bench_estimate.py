@@ -14,7 +14,7 @@ A plain script (not a test): prints timings and ratios, never asserts them.
    the record and :func:`rockdec.rdd.measured.analyse` on it (what any estimate must do:
    Python, NumPy, numba and its kernels loaded from the cache, the analysis); and, in a
    process that has everything loaded, the analysis alone and the whole estimate
-   (:func:`rockdec.calibrate.inference.estimate`, cached calibration), and the analysis and
+   (:func:`rockdec.estimation.estimate`, cached calibration), and the analysis and
    :func:`rockdec.record.record_measure.measure` on the record already read, medians of ``--repeat``.
 
 5. **The cold build split**: a cold estimate in one process, the CPU seconds of each
@@ -62,7 +62,8 @@ measured.analyse([r.theta for r in recs], recs[0].dt)
 
 IN_PROCESS = """
 import json, statistics, sys, time
-from rockdec.calibrate import inference
+from rockdec import estimation
+from rockdec.report.estimate_report import document
 from rockdec.rdd import measured
 from rockdec.record import records
 
@@ -80,12 +81,12 @@ def analysis():
     measured.analyse([r.theta for r in recs], recs[0].dt)
 
 def whole():
-    inference.estimate(records.read_records(sys.argv[1]), cache_dir=sys.argv[2]).document
+    document(estimation.estimate(records.read_records(sys.argv[1]), cache_dir=sys.argv[2]))
 
 recs = records.read_records(sys.argv[1])
 
 def model():
-    inference.measure_model(recs, recs[0].dt)
+    estimation.measure_model(recs, recs[0].dt)
 
 def analysis_only():
     measured.analyse([r.theta for r in recs], recs[0].dt)
@@ -98,7 +99,8 @@ print(json.dumps({"analysis": timed(analysis, n), "estimate": timed(whole, n), "
 
 COLD_SPLIT = """
 import json, sys, tempfile, threading, time
-from rockdec.calibrate import calibration, inference
+from rockdec.calibrate import calibration
+from rockdec import estimation
 from rockdec.record import records
 
 tasks = []
@@ -113,7 +115,7 @@ def timed_grid_point(*args):
 calibration._grid_point = timed_grid_point
 cpu = time.process_time()
 with tempfile.TemporaryDirectory() as cache:
-    inference.estimate(records.read_records(sys.argv[1]), cache_dir=cache)
+    estimation.estimate(records.read_records(sys.argv[1]), cache_dir=cache)
 per_thread = {}
 for thread, seconds in tasks:
     per_thread[thread] = per_thread.get(thread, 0.0) + seconds
@@ -194,7 +196,7 @@ def main() -> None:
         for _ in range(args.repeat):
             for t, src in trees.items():
                 runs[t]["warm"].append(child(command(t, caches[t]), src))
-                runs[t]["import"].append(child(["-c", "import rockdec.cli, rockdec.calibrate.inference"], src))
+                runs[t]["import"].append(child(["-c", "import rockdec.cli, rockdec.estimation"], src))
                 runs[t]["floor"].append(child(["-c", FLOOR, str(csv)], src))
         for t, src in trees.items():
             runs[t]["inproc"] = json.loads(child(["-c", IN_PROCESS, str(csv), str(caches[t]), str(args.repeat)], src)[2])
@@ -208,13 +210,13 @@ def main() -> None:
     rows = [
         ("cold `rockdec estimate` (builds the calibration), fresh interpreter", "cold"),
         ("warm `rockdec estimate` (calibration cached), fresh interpreter", "warm"),
-        ("import of rockdec.cli and rockdec.calibrate.inference, fresh interpreter", "import"),
+        ("import of rockdec.cli and rockdec.estimation, fresh interpreter", "import"),
         ("read + rockdec.rdd.measured.analyse, fresh interpreter (the floor of any estimate)", "floor"),
     ]
     for label, key in rows:
         print(f"| {label} | " + " | ".join(f"{median(runs[t][key], 0):.2f} | {median(runs[t][key], 1):.2f}" for t in trees) + " |")
     for label, key in (
-        ("in process: read + inference.estimate (cached)", "estimate"),
+        ("in process: read + estimation.estimate (cached)", "estimate"),
         ("in process: read + measured.analyse (the analysis alone)", "analysis"),
         ("in process: measured.analyse, the record already read", "analyse"),
         ("in process: record_measure.measure (the record's model), the record already read", "model"),

@@ -10,7 +10,7 @@ corner at the rocking frequency; that load with 2 % noise) by
 :func:`rockdec.physics.simulate.simulate_block` and :func:`rockdec.physics.loading.add_sensor_noise`, at the
 step for which the analysis reads about 75 samples per cycle off them
 (:func:`rockdec.calibrate.calibration.step_for`, on pilot seeds of their own), with seeds apart from
-every calibration's. Each record is estimated twice by :func:`rockdec.calibrate.inference.estimate`:
+every calibration's. Each record is estimated twice by :func:`rockdec.estimation.estimate`:
 with ``model=None`` (the record's model measured off it) and with ``model=PAPER`` (white
 load, noise-free sensor). Per condition and model: records with a value, coverage of the
 95 % interval (a record without a value counts as not covered), bias and spread of the
@@ -42,7 +42,11 @@ from pathlib import Path
 
 import numpy as np
 
-from rockdec.calibrate import calibration, inference
+from rockdec.calibrate import calibration
+
+from rockdec import estimation
+
+from rockdec.report.estimate_report import document
 from rockdec.rdd import measured
 from rockdec.physics.loading import add_sensor_noise
 from rockdec.physics.record_model import PAPER, Load, RecordModel, SensorNoise
@@ -78,7 +82,7 @@ def records_of(condition: str, e: float, n: int, count: int, index: int) -> tupl
 
 def one(theta: np.ndarray, dt: float, cache: str, model) -> dict:
     try:
-        res = inference.estimate([Record(theta, dt, "r")], cache_dir=cache, model=model).document
+        res = document(estimation.estimate([Record(theta, dt, "r")], cache_dir=cache, model=model))
     except ValueError as exc:
         return {"refused": str(exc)}
     rm = res["record_model"]
@@ -95,20 +99,20 @@ def bin_error(theta: np.ndarray, dt: float, cache: str) -> dict:
     adjacent bins of its noise and of its load's pole (module docstring)."""
     import math
 
-    base = inference.estimate([Record(theta, dt, "r")], cache_dir=cache).document
+    base = document(estimation.estimate([Record(theta, dt, "r")], cache_dir=cache))
     sim, ppc = base["record_model"]["simulated"], base["points_per_cycle"]
     name = base["estimator"]
     out = {"e": base["e"], "width": None if base["e"] is None else base["interval"][1] - base["interval"][0], "estimator": name}
     if sim["sensor_noise"]["std"] > 0:
         for step in (-1, 1):
             sensor = SensorNoise(sim["sensor_noise"]["std"] * math.exp(step * calibration.NOISE_BIN))
-            res = inference.estimate([Record(theta, dt, "r")], cache_dir=cache, sensor=sensor).document
+            res = document(estimation.estimate([Record(theta, dt, "r")], cache_dir=cache, sensor=sensor))
             out[f"noise {step:+d}"] = res["estimators"][name]["e"] if name else None
     if sim["load"]["kind"] == "lowpass":
         rate = -math.log(sim["load_pole_per_sample"])
         for step in (-1, 1):
             load = Load("lowpass", rate * math.exp(step * calibration.POLE_BIN) * ppc / (2 * math.pi))
-            res = inference.estimate([Record(theta, dt, "r")], cache_dir=cache, load=load).document
+            res = document(estimation.estimate([Record(theta, dt, "r")], cache_dir=cache, load=load))
             out[f"pole {step:+d}"] = res["estimators"][name]["e"] if name else None
     return out
 
@@ -137,10 +141,10 @@ def timing(e: float, n: int) -> None:
     analysis = time.perf_counter() - start
     with tempfile.TemporaryDirectory() as cache:
         start = time.perf_counter()
-        inference.estimate([Record(theta, dt, "r")], cache_dir=cache).document
+        document(estimation.estimate([Record(theta, dt, "r")], cache_dir=cache))
         cold = time.perf_counter() - start
         start = time.perf_counter()
-        inference.estimate([Record(theta, dt, "r")], cache_dir=cache).document
+        document(estimation.estimate([Record(theta, dt, "r")], cache_dir=cache))
         warm = time.perf_counter() - start
         path = Path(cache) / "r.csv"
         np.savetxt(path, np.c_[np.arange(theta.size) * dt, theta], delimiter=",", header="time,theta", comments="", fmt="%.10g")

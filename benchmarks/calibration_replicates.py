@@ -27,7 +27,8 @@ from pathlib import Path
 import numpy as np
 
 from rockdec import engine
-from rockdec.calibrate import belt, calibration, inference
+from rockdec.calibrate import belt, calibration
+from rockdec import estimation
 from rockdec.rdd import measured
 from rockdec.studies import coverage
 
@@ -70,7 +71,7 @@ def main() -> None:
                 got = []
                 for raw in raws:
                     c = belt.correct(belts[name], raw[name])
-                    ok = inference.beyond(belts[name], raw[name], c) is None and np.isfinite(c.value)
+                    ok = estimation.beyond(belts[name], raw[name], c) is None and np.isfinite(c.value)
                     got.append((c.value, c.low, c.high) if ok else (np.nan,) * 3)
                 v, lo, hi = np.array(got).T
                 answered = np.isfinite(v)

@@ -10,7 +10,7 @@ calibration of a 200,000-sample record at 75 samples per cycle under a low-pass 
 (:func:`rockdec.calibrate.calibration._grid_point`: the step search and the sets' step
 correction); prints the samples per cycle read off its 30 sets (10th, 25th, 50th, 75th,
 90th percentiles of the try kept) and the number of tries. The spread (90th over 10th
-percentile) is what :data:`rockdec.calibrate.inference.COLOUR_CORNER_FLOOR` rests on.
+percentile) is what :data:`rockdec.estimation.COLOUR_CORNER_FLOOR` rests on.
 
 ``coverage``: the whole calibration at one corner (built in, or read from, ``--cache``);
 prints each estimator's in-sample coverage

@@ -15,7 +15,7 @@ the measured corner) and measured (:func:`rockdec.record.record_measure.measure`
 cell it prints the share of records measured noisy and coloured
 (:attr:`rockdec.record.record_measure.MeasuredModel.coloured`), the share whose load beneath
 noise is left possibly low-pass below the floor, the share declined by
-:func:`rockdec.calibrate.inference.colour_decline` for any reason, the percentiles of the shape
+:func:`rockdec.estimation.colour_decline` for any reason, the percentiles of the shape
 ratio's z, the 0, 5 and 50th percentiles of the side means' share of the signature's ``g``
 (:meth:`rockdec.record.record_measure.MeasuredModel.side_g_share`) and the records that could
 not be analysed or measured.
@@ -28,7 +28,7 @@ import math
 
 import numpy as np
 
-from rockdec.calibrate import inference
+from rockdec import estimation
 from rockdec.physics.record_model import Load, RecordModel
 from rockdec.pipeline.layout import COVERAGE_CASES, COVERAGE_CONDITIONS
 from rockdec.rdd import measured
@@ -52,8 +52,8 @@ def cell_rates(cell: str, records: int, offset: int) -> dict:
             refused += 1
             continue
         load = Load("lowpass", -math.log(m.pole.value) * n / (2 * math.pi)) if m.coloured else Load()
-        declined = inference.colour_decline(RecordModel(load=load), {"load": "measured"}, m, n) is not None
-        unruled = declined and m.noisy and not m.coloured and m.shape_corner_low(n, inference.COLOUR_CORNER_Z) < inference.COLOUR_CORNER_FLOOR
+        declined = estimation.colour_decline(RecordModel(load=load), {"load": "measured"}, m, n) is not None
+        unruled = declined and m.noisy and not m.coloured and m.shape_corner_low(n, estimation.COLOUR_CORNER_Z) < estimation.COLOUR_CORNER_FLOOR
         rows.append((m.noisy, m.coloured, unruled, declined, m.shape_z if m.noisy else math.nan, m.side_g_share(n)))
     r = np.array(rows, dtype=float)
     z = r[:, 4][np.isfinite(r[:, 4])]

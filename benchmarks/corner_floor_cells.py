@@ -6,7 +6,7 @@ A plain script (not a test): prints measurements, never asserts them.
 
 Runs the coverage study's cell (:func:`rockdec.studies.coverage.run_cell`, the kernel's
 records or the reference simulator's, as the cell says) with
-:data:`rockdec.calibrate.inference.COLOUR_CORNER_FLOOR` set to ``--floor`` (0: no record is
+:data:`rockdec.estimation.COLOUR_CORNER_FLOOR` set to ``--floor`` (0: no record is
 declined for its corner; the side means' rule and every other rule stay), on ``--threads``
 Dask threads, writes the cell to ``<out>/<cell>_floor<F>.nc`` and prints what
 :func:`rockdec.studies.coverage.summary` reads off it, with the median interval width beside
@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from rockdec import io
-from rockdec.calibrate import inference
+from rockdec import estimation
 from rockdec import engine
 from rockdec.pipeline.layout import COVERAGE_CASES
 from rockdec.studies import coverage
@@ -41,7 +41,7 @@ def main() -> None:
     parser.add_argument("--out", type=Path, required=True, help="folder for the cell's NetCDF")
     args = parser.parse_args()
 
-    inference.COLOUR_CORNER_FLOOR = args.floor
+    estimation.COLOUR_CORNER_FLOOR = args.floor
     reference = Path(__file__).resolve().parents[1] / "tests" / "rocking_vectorised.py"
     with engine.session(args.threads):
         ds = coverage.run_cell(args.cell, args.records, args.n_points, args.cache,

@@ -15,11 +15,11 @@ at the requested 75 samples per cycle). Each record is estimated twice:
 Then the false alarms, on unfiltered records (white and low-pass loads of corners 3, 5 and
 10 rocking frequencies, sensor noise 0 and 1 % of ``sigma_Y``, ``e`` 0.6-0.98), each estimated
 whole: how often the steep-filter check before the calibration
-(:func:`rockdec.calibrate.inference.filter_decline`, the roll-off floor of
+(:func:`rockdec.estimation.filter_decline`, the roll-off floor of
 :func:`rockdec.record.record_measure.rolloff`) declines ``e``, how often the calibrated check
 ``filtered`` (:func:`rockdec.record.diagnostics.impact_sharpness`) fires, and how often ``e``
 is declined for either; and the declared-model check
-(:func:`rockdec.calibrate.inference.declared_contradictions`) on records whose declaration is
+(:func:`rockdec.estimation.declared_contradictions`) on records whose declaration is
 right (and, beside them, on two that are wrong).
 
 Run (the parts and filter kinds can run apart, in parallel)::
@@ -43,7 +43,8 @@ import numpy as np
 from scipy import signal
 
 import rockdec
-from rockdec.calibrate import calibration, inference
+from rockdec.calibrate import calibration
+from rockdec import estimation
 from rockdec.physics.record_model import RecordModel, Load, SensorNoise, parse_sensor_filter
 from rockdec.physics.simulate import default_burn_in, simulate_model
 from rockdec.rdd import measured
@@ -207,8 +208,8 @@ def study_false_alarms(seeds: int, cache: Path, out) -> None:
         for e in (0.6, 0.8, 0.9, 0.98):
             for seed in range(seeds):
                 y, dt = clean_record(e, corner, 900 + seed, noise, steps)
-                analysed = inference.analyse([Record(y, dt, "record")])
-                choice = inference.choose_model(analysed, **declared)
+                analysed = estimation.analyse([Record(y, dt, "record")])
+                choice = estimation.choose_model(analysed, **declared)
                 noted += bool(choice.notes)
                 total += 1
         what = f"load {declared['load'].describe()}, noise {declared['sensor'].std:g} sigma_Y"

@@ -30,7 +30,10 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
 import rocking_vectorised  # noqa: E402
 
-from rockdec.calibrate import calibration, inference  # noqa: E402
+from rockdec.calibrate import calibration
+
+from rockdec import estimation
+from rockdec.report.estimate_report import document  # noqa: E402
 from rockdec.physics.simulate import default_burn_in  # noqa: E402
 from rockdec.rdd import measured  # noqa: E402
 from rockdec.record.records import Record  # noqa: E402
@@ -74,12 +77,12 @@ def main() -> None:
                 docs = {}
                 for grid in (False, True):
                     tick = time.perf_counter()
-                    out = inference.estimate([Record(y, dt, f"record {k}")], cache_dir=cache, length_grid=grid)
+                    out = document(estimation.estimate([Record(y, dt, f"record {k}")], cache_dir=cache, length_grid=grid))
                     seconds[grid] += time.perf_counter() - tick
-                    docs[grid] = out.document
-                    if out.document["calibration"]["file"]:
-                        built[grid].add(out.document["calibration"]["file"])
-                    cell[grid].append(outcome(out.document, e))
+                    docs[grid] = out
+                    if out["calibration"]["file"]:
+                        built[grid].add(out["calibration"]["file"])
+                    cell[grid].append(outcome(out, e))
                 if docs[False]["e"] is not None and docs[True]["e"] is not None:
                     cell["diff"].append(abs(docs[True]["e"] - docs[False]["e"]))
             rows.append(cell)

@@ -12,7 +12,7 @@ like a calibration's sets (:func:`rockdec.calibrate.calibration._grid_point`) on
 (:func:`rockdec.studies.belt_study.pool`'s, replica ``--replica``), stored in ``OUT``. Each record
 gets every candidate's interval from the belt with its spread scaled to its length
 (:func:`rockdec.calibrate.belt.belts`, :func:`rockdec.calibrate.calibration.spread_scale`) and the
-candidate ``rockdec estimate`` reports (:func:`rockdec.calibrate.inference.select`).
+candidate ``rockdec estimate`` reports (:func:`rockdec.estimation.select`).
 
 Printed: the share of the test records on which each check of
 :mod:`rockdec.record.diagnostics` fires (false alarms: the records are clean), and per ``e`` and estimator: coverage of the 95 % interval and its binomial sd, the mean
@@ -36,7 +36,9 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from rockdec.calibrate import belt, calibration, inference
+from rockdec.calibrate import belt, calibration
+
+from rockdec import estimation
 from rockdec.rdd import measured, registry
 from rockdec.record import diagnostics
 from rockdec.studies import belt_study
@@ -64,7 +66,7 @@ def table(cal, test: xr.Dataset, scale: float) -> pd.DataFrame:
     """Coverage, bias/sd, ``curve_z`` and width per true ``e`` and candidate, and of the reported one."""
     belts = belt.belts(cal, scale)
     n_sets = int(cal["raw"].sizes["e_true"] * cal["raw"].sizes["set"])
-    cover = {name: belt.calibration_coverage(cal, name, belt.belt(cal, name)) for name in registry.CANDIDATES}  # as inference.estimate
+    cover = {name: belt.calibration_coverage(cal, name, belt.belt(cal, name)) for name in registry.CANDIDATES}  # as estimation.estimate
     rows, alarms = [], []
     for e in test["e_true"].values:
         per_record = []
@@ -73,11 +75,11 @@ def table(cal, test: xr.Dataset, scale: float) -> pd.DataFrame:
             for name in registry.CANDIDATES:
                 raw = float(test["raw"].sel(name=name, e_true=e).values[k])
                 c = belt.correct(belts[name], raw)
-                side = inference.beyond(belts[name], raw, c)
+                side = estimation.beyond(belts[name], raw, c)
                 per[name] = {"e": None if side or not np.isfinite(c.value) else c.value, "beyond": side, "notes": list(c.notes),
                              "interval": [None if not np.isfinite(c.low) else c.low, None if not np.isfinite(c.high) else c.high],
                              "coverage": cover[name], "calibrated_range": [belts[name].e[0], belts[name].e[-1]]}
-            chosen, _, _ = inference.select(per, n_sets, belts)
+            chosen, _, _ = estimation.select(per, n_sets, belts)
             shown = per[chosen] if chosen else {"e": None, "interval": [None, None]}
             if "diagnostic" in test:
                 limits = diagnostics.thresholds(cal, shown["e"], shown["interval"], measured.DEFAULT_SETTINGS["level"], 1.0 / scale**2)

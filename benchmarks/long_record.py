@@ -8,7 +8,7 @@ with the overlap handled by :func:`rockdec.rdd.signatures.signature_cube`; it al
 cube on the first ``--check`` points in memory, chunked and whole, and prints their difference.
 Step ``estimate`` runs ``rockdec estimate`` on the file (a fresh process, calibration cache
 ``--cache``; a missing calibration is built) and prints its wall and CPU seconds, the up-front
-estimate of :func:`rockdec.calibrate.inference.cost` and the answer (true ``e`` 0.95).
+estimate of :func:`rockdec.estimation.cost` and the answer (true ``e`` 0.95).
 
 Run: ``python benchmarks/long_record.py --points 100000000`` (write, analyse), or
 ``python benchmarks/long_record.py --points 2e7 --step write`` then ``--step estimate``.
@@ -88,7 +88,7 @@ def estimate(path: Path, cache: Path) -> None:
     import json
     import os
 
-    from rockdec.calibrate import inference
+    from rockdec import estimation
 
     with xr.open_dataset(path) as ds:
         points = ds.sizes["time"]
@@ -101,7 +101,7 @@ def estimate(path: Path, cache: Path) -> None:
     res = json.loads(out.stdout)
     print(out.stderr, file=sys.stderr)
     print(f"estimate: {points:.3g} points, wall {wall:.1f} s, CPU {cpu:.1f} s, peak RSS {peak:.0f} MiB; "
-          f"up-front estimate {inference.cost(points, False, False)[0]:.0f} s; calibration {res['calibration']}")
+          f"up-front estimate {estimation.cost(points, False, False)[0]:.0f} s; calibration {res['calibration']}")
     print(f"e = {res['e']} ({res['estimator']}), 95 % interval {res['interval']} (true {E}); warnings {res['warnings']}")
 
 

@@ -12,7 +12,7 @@ units) rests on these rates. For each cell (``e``, samples per cycle, length, si
 :func:`rockdec.physics.simulate.simulate_block` and the independent one of
 ``tests/rocking_vectorised.py``) it simulates ``--records`` records of one block at one load
 (``g = 1``, each its own seed) and reads each alone as the estimate does
-(:func:`rockdec.calibrate.inference.own_scales`); every pair of them is one pool of two. It
+(:func:`rockdec.estimation.own_scales`); every pair of them is one pool of two. It
 prints the share of pairs declined and refused, the largest ``g`` and ``sigma_Y`` ratios, and
 records whose ``g`` is unread. Then pairs of one block at loads 2 and 3 times apart (``g`` the
 same: they must pass) and pairs whose second record is in degrees, mrad or µrad (or rad against
@@ -35,7 +35,9 @@ sys.path.insert(0, str(ROOT / "tests"))
 from conftest import calibrated_step  # noqa: E402
 import rocking_vectorised  # noqa: E402
 
-from rockdec.calibrate import consistency, inference  # noqa: E402
+from rockdec.calibrate import consistency
+
+from rockdec import estimation  # noqa: E402
 from rockdec.physics import simulate  # noqa: E402
 from rockdec.rdd import measured  # noqa: E402
 from rockdec.record.records import Record  # noqa: E402
@@ -71,7 +73,7 @@ def main(argv=None) -> None:
         for n in [*args.lengths, *([200_000] if args.long and source == "project" else [])]:
             count = args.long if n == 200_000 else args.records
             recs, dt = records(source, list(range(300, 300 + count)), n, e, ppc)
-            sigmas, gs = inference.own_scales(recs, dt, SETTINGS)
+            sigmas, gs = estimation.own_scales(recs, dt, SETTINGS)
             out = pairs(sigmas, gs)
             totals.setdefault(n, []).extend(out)
             ok = np.isfinite(gs)
@@ -92,12 +94,12 @@ def main(argv=None) -> None:
             other, _ = records("project", list(range(600, 630)), n, 0.85, 75.0, k * SIGMA_P)
             out, ratios = [], []
             for a, b in zip(base, other):
-                sigmas, gs = inference.own_scales([a, b], dt, SETTINGS)
+                sigmas, gs = estimation.own_scales([a, b], dt, SETTINGS)
                 ratios.append(sigmas[1] / sigmas[0])
                 out.append(consistency.scales_apart(["a", "b"], sigmas, gs))
             print(f"load x{k:g}, n {n}: {len(out)} pairs, sigma_Y ratio {min(ratios):.1f}-{max(ratios):.1f}, "
                   f"flagged {sum(o is not None for o in out)}", flush=True)
-        sigmas, gs = inference.own_scales(base, dt, SETTINGS)
+        sigmas, gs = estimation.own_scales(base, dt, SETTINGS)
         read = [(s, g) for s, g in zip(sigmas, gs) if np.isfinite(g)]
         for factor in (180.0 / math.pi, 1e3 * math.pi / 180.0, 1e3, 1e6, math.pi / 180.0):
             out = [consistency.scales_apart(["a", "b"], [s, t * factor], [g, h * factor]) for (s, g), (t, h) in zip(read, read[1:])]

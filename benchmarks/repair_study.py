@@ -7,7 +7,7 @@ A plain script (not a test): measures, never asserts.
 
 Cells, each at ``e`` = 0.6, 0.9 and 0.98 (``--e``), records of ``--n-points`` samples
 (:func:`rockdec.simulate`, 75 samples per cycle at its amplitude, the record model measured as a
-new user's is), estimated by :func:`rockdec.calibrate.inference.estimate` with the repair on:
+new user's is), estimated by :func:`rockdec.estimation.estimate` with the repair on:
 
 * ``clean``: no defect. How often a repair triggers (spikes found, or the high-pass), and for
   those the same record estimated without the repair (is the answer unchanged?).
@@ -42,7 +42,9 @@ import numpy as np
 
 import tests_path  # noqa: F401  (tests/ on sys.path for the second simulator)
 import rockdec
-from rockdec.calibrate import calibration, inference
+from rockdec.calibrate import calibration
+from rockdec import estimation
+from rockdec.report.estimate_report import document
 from rockdec.rdd import measured
 from rockdec.record.records import Record
 
@@ -120,7 +122,7 @@ def run(cells, es, records: int, n: int, cache: str, out: Path, first: int = 0) 
                 y, dt, defect = record(cell, e, k, n, seed)
                 started = time.perf_counter()
                 try:
-                    doc = inference.estimate([Record(y, dt, f"{cell} {seed}")], cache_dir=cache).document
+                    doc = document(estimation.estimate([Record(y, dt, f"{cell} {seed}")], cache_dir=cache))
                 except rockdec.RecordError as exc:
                     doc = {"e": None, "interval": [None, None], "reason": f"refused: {exc}", "diagnostics": {}, "repair": {}}
                 row = {
@@ -130,7 +132,7 @@ def run(cells, es, records: int, n: int, cache: str, out: Path, first: int = 0) 
                     "seconds": round(time.perf_counter() - started, 2),
                 }
                 if cell == "clean" and doc["repair"].get("repaired"):  # the same record without the repair
-                    plain = inference.estimate([Record(y, dt, "plain")], cache_dir=cache, repair_records=False).document
+                    plain = document(estimation.estimate([Record(y, dt, "plain")], cache_dir=cache, repair_records=False))
                     row["unrepaired"] = {"e": plain["e"], "low": plain["interval"][0], "high": plain["interval"][1]}
                 with out.open("a") as f:
                     f.write(json.dumps(row) + "\n")

@@ -1,9 +1,9 @@
 """Which candidate to report: the narrowest belt at the candidates' common ``e``
-(:func:`rockdec.calibrate.inference.select`) against the narrowest of the record's own intervals,
+(:func:`rockdec.estimation.select`) against the narrowest of the record's own intervals,
 on clean records of known ``e``, in one run.
 
 Each record (``--samples`` samples at 75 samples per cycle, ``g = 1``, seeds from ``--seed``
-on, apart from every calibration's) goes through :func:`rockdec.calibrate.inference.estimate`
+on, apart from every calibration's) goes through :func:`rockdec.estimation.estimate`
 with the calibration cache ``--cache`` (built once per samples-per-cycle bin). From its
 trusted candidates, both rules pick one; printed per ``e``: the coverage of the 95 % interval
 each rule reports, with its binomial sd, and the median width, beside each candidate's own
@@ -20,7 +20,11 @@ import math
 
 import numpy as np
 
-from rockdec.calibrate import belt, inference
+from rockdec.calibrate import belt
+
+from rockdec import estimation
+
+from rockdec.report.estimate_report import document
 from rockdec.physics import simulate
 from rockdec.rdd import registry
 from rockdec.record.records import Record
@@ -50,7 +54,7 @@ def main() -> None:
         width = {rule: [] for rule in covered}
         for seed in range(args.seed, args.seed + args.records):
             theta = simulate.simulate_block([seed], args.samples, dt=step["dt"], g=1.0, e=e, sigma_p=0.003, burn_in=step["burn_in"])[0][0]
-            res = inference.estimate([Record(theta.astype(float), step["dt"], f"seed {seed}")], cache_dir=args.cache).document
+            res = document(estimation.estimate([Record(theta.astype(float), step["dt"], f"seed {seed}")], cache_dir=args.cache))
             chosen = picks(res)
             for row in res["selection"]:
                 if row["holds"]:

@@ -12,7 +12,7 @@ reference of this checkout's tests/, and the cell's step, pole, burn-in and nois
 measured (:func:`rockdec.record.record_measure.measure`); their share
 (:meth:`rockdec.record.record_measure.MeasuredModel.side_g_share`) is read at the samples per
 cycle the cell's run read. The share only adds declines
-(:func:`rockdec.calibrate.inference.colour_decline`), so the records without a number stay
+(:func:`rockdec.estimation.colour_decline`), so the records without a number stay
 without one. Prints per cell the records, those without a number, those with one and how many
 of their intervals cover the true ``e``, the same with the share, and the share's smallest and
 median value on the records with a number.
@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from rockdec.calibrate import inference
+from rockdec import estimation
 from rockdec.record import record_measure
 from rockdec.studies import coverage
 from rockdec.validate import InputError
@@ -49,7 +49,7 @@ def cell_row(path: Path) -> str:
             except InputError:
                 shares.append(math.nan)
     shares = np.array(shares)
-    kept = answered[shares >= inference.SIDE_G_SHARE]
+    kept = answered[shares >= estimation.SIDE_G_SHARE]
     n = ds.sizes["record"]
     low = f"{np.nanmin(shares):.2f}, {np.nanmedian(shares):.2f}" if answered.size else "-"
     return (f"| {path.stem} | {n} | {n - answered.size} | {answered.size}: {int(covered[answered].sum())} | {n - kept.size} | "

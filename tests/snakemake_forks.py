@@ -108,7 +108,7 @@ def load_python() -> None:
     import netCDF4  # noqa: F401
     import xarray  # noqa: F401
 
-    import rockdec.calibrate.inference  # noqa: F401
+    import rockdec.estimation  # noqa: F401
     import rockdec.cli  # noqa: F401
     import rockdec.io  # noqa: F401
     import rockdec.physics.simulate  # noqa: F401

@@ -343,13 +343,14 @@ def test_calibrating_is_announced_only_when_a_calibration_is_built(tmp_path, cap
 def test_a_corrected_value_at_the_end_of_the_calibrated_range_is_shown_as_a_bound(raw, side, shown):
     """Identity belt (mean e, spread 0.01) on [0.4, 0.995]: a raw value beyond the mean curve
     is corrected to the range's end, which bounds e rather than estimating it."""
-    from rockdec.calibrate import belt, inference
+    from rockdec.calibrate import belt
+    from rockdec import estimation
     from rockdec.report.summary import text as _estimate_text
 
     e = np.linspace(0.4, 0.995, 1191)
     b = belt.Belt(e, e.copy(), np.full(e.size, 0.01), 0.0)
     c = belt.correct(b, raw)
-    assert inference.beyond(b, raw, c) == side
+    assert estimation.beyond(b, raw, c) == side
     est = {"raw": raw, "e": None if side else c.value, "beyond": side, "calibrated_range": [0.4, 0.995],
            "interval": [c.low, c.high], "coverage": 0.95, "triggers": 100, "notes": []}
     res = {"records": ["r.csv"], "samples": 1000, "dt": 0.01, "nan_samples": 0, "sigma_y": 0.01, "points_per_cycle": 75.0,

@@ -165,7 +165,8 @@ STUDY_NUMBER = {
 
 def design_percentages() -> set[str]:
     """Percentages with decimals that are settings of the code, not study results."""
-    from rockdec.calibrate import calibration, consistency, inference
+    from rockdec.calibrate import calibration, consistency
+    from rockdec import estimation
     from rockdec.record import diagnostics, record_measure
 
     shares = [
@@ -175,8 +176,8 @@ def design_percentages() -> set[str]:
         consistency.LEVEL,  # the pooled-records check's chi-square point
         record_measure.NOISE_FLOOR,  # the smallest noise called noise
         calibration.SET_PPC_TOLERANCE,  # how closely a coloured calibration's sets hit their sampling
-        inference.coverage_floor(len(calibration.E_GRID) * calibration.SETS_PER_E),  # the selection's coverage floor
-        inference.coverage_floor(len(calibration.E_GRID_LONG) * calibration.SETS_PER_E_CAPPED),
+        estimation.coverage_floor(len(calibration.E_GRID) * calibration.SETS_PER_E),  # the selection's coverage floor
+        estimation.coverage_floor(len(calibration.E_GRID_LONG) * calibration.SETS_PER_E_CAPPED),
     ]
     return {f"{100 * share:.1f}".rstrip("0").rstrip(".") for share in shares}
 

@@ -478,7 +478,9 @@ def test_cli_simulate_options_give_a_finite_file_or_one_sentence(tmp_path_factor
 # Records of 20,000 samples and a calibration of 6 e x 5 sets keep each answered case near 1 s;
 # refusals come before any calibration.
 
-from rockdec.calibrate import calibration, inference  # noqa: E402
+from rockdec.calibrate import calibration
+
+from rockdec import estimation  # noqa: E402
 
 #: The calibration's own grid and sets, before any test shrinks them.
 FULL_CALIBRATION = (calibration.E_GRID, calibration.SETS_PER_E)
@@ -956,13 +958,13 @@ def test_a_plot_made_by_someone_else_during_the_calibration_is_kept_and_the_run_
     """Issue 21: ``--plot`` was checked only before the calibration, then written directly,
     replacing a file made meanwhile by a program that takes no lock."""
     plot = tmp_path / "p.png"
-    real = inference.estimate
+    real = estimation.estimate
 
     def meanwhile(*args, **kwargs):
         plot.write_bytes(b"made meanwhile")
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(inference, "estimate", meanwhile)
+    monkeypatch.setattr(estimation, "estimate", meanwhile)
     code, _, err = _estimate([rocking["csv"], "--plot", plot], tiny_cache_copy(tiny_cache, tmp_path))
     assert code == 2 and "appeared while this run wrote it" in err and "internal error" not in err, err
     assert plot.read_bytes() == b"made meanwhile"
@@ -987,7 +989,7 @@ def test_a_50_million_sample_record_is_refused_up_front_with_its_estimate(rockin
     else:
         head = b"time,theta\n" + b"".join(f"{k * 0.01:.2f},{v:.8f}\n".encode() for k, v in enumerate(rocking["theta"][:4000]))
         _sparse(path, head, 50_000_000 * (len(head) // 4001))
-    seconds, _ = inference.cost(50_000_000, kind == "csv", False)
+    seconds, _ = estimation.cost(50_000_000, kind == "csv", False)
     monkeypatch.setattr(cli, "MAX_SECONDS", min(cli.MAX_SECONDS, seconds / 2))
     monkeypatch.setattr(checks, "available_memory", lambda: 2.0**50)  # the time refusal, whatever memory is free
     argv = ["estimate", str(path), "--cache", str(tmp_path / "c")] + (["--dt", "0.01"] if kind == "npy" else [])
@@ -1030,7 +1032,7 @@ def test_a_40_million_sample_record_is_refused_with_its_time_unless_yes(tmp_path
     with open(path, "wb") as handle:  # a header for 40 million float64 samples, then a hole
         np.lib.format.write_array_header_1_0(handle, {"descr": "<f8", "fortran_order": False, "shape": (40_000_000,)})
         handle.truncate(handle.tell() + 8 * 40_000_000)
-    seconds, _ = inference.cost(40_000_000, False, False)
+    seconds, _ = estimation.cost(40_000_000, False, False)
     assert seconds > 600
     refused(["estimate", str(path), "--dt", "0.01", "--cache", str(tmp_path / "c")], tmp_path, capsys, ["4e+07 samples", "min", "--yes"])
 

@@ -20,6 +20,7 @@ LAYERS = [
     ("analysis", ("rockdec.rdd", "rockdec.free")),
     ("record", ("rockdec.record",)),
     ("calibrate", ("rockdec.calibrate",)),
+    ("estimation", ("rockdec.estimation",)),
     ("report", ("rockdec.report",)),
     ("pipeline and studies", ("rockdec.pipeline", "rockdec.studies")),
     ("front door", ("rockdec.api", "rockdec.cli", "rockdec.__main__", "rockdec")),

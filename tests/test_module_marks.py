@@ -67,7 +67,7 @@ def test_module_docstring_is_short(module):
     assert len(doc.split()) <= MAX_WORDS, f"{module}'s docstring has {len(doc.split())} words (at most {MAX_WORDS}; derivations go to docs/explanation)"
 
 
-@pytest.mark.parametrize("package", ["rockdec.rdd", "rockdec.physics"])
+@pytest.mark.parametrize("package", ["rockdec.rdd", "rockdec.physics", "rockdec.estimation"])
 def test_package_re_exports_its_modules(package):
     """The package's ``__all__`` is the union of its submodules' ``__all__``, each name the
     very object of the submodule it is defined in."""

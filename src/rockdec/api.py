@@ -3,7 +3,7 @@
 :func:`estimate` takes the record in the forms a notebook holds it (a NumPy array with its
 step, an ``xarray.DataArray`` or a ``pandas.Series`` with a time axis, or a list of them:
 records of one block, pooled), checks it, and runs the estimate's stages
-(:func:`rockdec.calibrate.inference.estimate`) into a :class:`rockdec.RestitutionEstimate`.
+(:func:`rockdec.estimation.estimate`) into a :class:`rockdec.RestitutionEstimate`.
 :func:`read_record` reads the files laboratories write; :func:`simulate` makes a record of
 known ``e`` with the simulator of ``rockdec simulate``. Errors name the Python parameter
 (``dt``, ``load``): :class:`rockdec.InputError`, :class:`rockdec.RecordError` for a record.
@@ -19,10 +19,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from rockdec.cache import cache_folder
-from rockdec.calibrate import inference
+from rockdec import estimation
 from rockdec.physics.geometry import Block, parse_block
 from rockdec.physics.record_model import check_filter_declared_with_model, declared_load, parse_sensor_filter, parse_sensor_noise
 from rockdec.record import records as records_mod
+from rockdec.report.estimate_report import document
 from rockdec.report.result import RestitutionEstimate
 from rockdec.report.summary import with_block
 from rockdec.timeaxis import RecordError, angle_factor
@@ -217,9 +218,9 @@ def estimate(theta, dt: float | None = None, *, g: float | None = None, load="au
         raise InputError(f"`repair` {show(repair)} is not True or False; give True to repair spikes and drift, False to leave the record as given.")
     if not isinstance(share_lengths, bool):
         raise InputError(f"`share_lengths` {show(share_lengths)} is not True or False; give True to share calibrations across nearby lengths.")
-    outcome = inference.estimate(_records(theta, dt), cache_dir=folder, g=g, rocking=model, theta_cr=theta_cr, repair_records=repair,
+    outcome = estimation.estimate(_records(theta, dt), cache_dir=folder, g=g, rocking=model, theta_cr=theta_cr, repair_records=repair,
                                  length_grid=share_lengths, **declared)
-    return RestitutionEstimate.from_dict(with_block(outcome.document, block), analysis=outcome.analysis, belts=outcome.belts)
+    return RestitutionEstimate.from_dict(with_block(document(outcome), block), analysis=outcome.analysis, belts=outcome.belts)
 
 
 def block_angle(block, model: str, theta_cr: float | None) -> tuple[Block | None, float | None]:
@@ -246,7 +247,7 @@ def block_angle(block, model: str, theta_cr: float | None) -> tuple[Block | None
 def estimate_options(*, g=None, load="auto", sensor_noise="auto", sensor_filter="auto", model="simplified", theta_cr=None,
                      cache=None) -> tuple[dict, Path]:
     """Check :func:`estimate`'s options before any record is read: the declared record
-    model (``load``, ``sensor``, ``sensor_filter``) as :func:`rockdec.calibrate.inference.estimate`
+    model (``load``, ``sensor``, ``sensor_filter``) as :func:`rockdec.estimation.estimate`
     takes it, and the calibration folder.
 
     Raises

@@ -319,20 +319,21 @@ def _plot_path(args) -> str:
 
 def _check_estimate_size(args) -> float:
     """Refuse, before reading the records, a run beyond the memory, or longer than
-    :data:`MAX_SECONDS` without ``--yes`` (:func:`rockdec.calibrate.inference.cost`, from the files'
+    :data:`MAX_SECONDS` without ``--yes`` (:func:`rockdec.estimation.cost`, from the files'
     headers or sizes); returns the estimated seconds."""
-    from rockdec.calibrate import inference
+    from rockdec import estimation
+    from rockdec.calibrate import calibration
     from rockdec.record import records
 
     samples = sum(records.record_size(path, args.variable) for path in args.records)
     csv = any(Path(path).suffix.lower() in (".csv", ".txt") for path in args.records)
-    seconds, nbytes = inference.cost(samples, csv, args.g is not None, records=len(args.records), length_grid=args.share_lengths)
+    seconds, nbytes = estimation.cost(samples, csv, args.g is not None, records=len(args.records), length_grid=args.share_lengths)
     what = f"records of about {samples:.3g} samples"
     checks.memory(nbytes, what, "give shorter records")
     if seconds > MAX_SECONDS and not args.yes:
         raise UsageError(
             f"{what} need about {console.duration(seconds)} on 2 cores to read, analyse and calibrate (the calibration simulates "
-            f"{inference.calibration_sets(samples)} records of {sum(inference.calibration.simulated_lengths([samples], args.share_lengths)):.3g} "
+            f"{estimation.calibration_sets(samples)} records of {sum(calibration.simulated_lengths([samples], args.share_lengths)):.3g} "
             "samples); pass --yes to go on, or give a shorter record."
         )
     return seconds

@@ -2,7 +2,7 @@
 
 Closed forms of the statistic and of its null (chi-square with one degree of freedom fewer
 than the records, on raw values drawn about one mean with known spreads), its invariants,
-and the stage of the estimate (:func:`rockdec.calibrate.inference.check_pooled`) on records
+and the stage of the estimate (:func:`rockdec.estimation.check_pooled`) on records
 of 20,000 samples with a calibration made without simulation (``tests/fake_calibration.py``).
 """
 
@@ -14,7 +14,10 @@ import numpy as np
 import pytest
 
 import rockdec
-from rockdec.calibrate import belt, calibration, consistency, inference
+from rockdec.calibrate import belt, calibration, consistency
+from rockdec import estimation
+from rockdec.physics.record_model import NO_NOISE
+from rockdec.report.estimate_report import document
 from rockdec.rdd import measured
 from rockdec.record.records import Record
 
@@ -126,8 +129,8 @@ def test_a_pair_of_short_records_reports_its_check_and_declines_e_when_they_disa
     """20,000 samples at e = 0.7 and 0.95 against a calibration whose spread is 0.01: the
     records' own raw values lie tens of spreads apart, so the check fires, e is declined and
     the reason names what each record reads alone."""
-    doc = inference.estimate(records((0.7, 20_000, 1), (0.95, 20_000, 2)), cache_dir=fake_cal, load="white",
-                             sensor=inference.NO_NOISE).document
+    doc = document(estimation.estimate(records((0.7, 20_000, 1), (0.95, 20_000, 2)), cache_dir=fake_cal, load="white",
+                             sensor=NO_NOISE))
     check = doc["diagnostics"]["pooled_consistency"]
     assert set(check) == {"statistic", "threshold", "fired"}
     assert check["fired"] and check["statistic"] > check["threshold"] == pytest.approx(consistency.threshold(1))
@@ -139,17 +142,17 @@ def test_a_pair_of_short_records_reports_its_check_and_declines_e_when_they_disa
 
 def test_a_single_record_is_not_checked_and_its_report_has_no_pooled_entry(fake_cal, monkeypatch):
     (rec,) = records((0.85, 20_000, 4))
-    doc = inference.estimate([rec], cache_dir=fake_cal, load="white", sensor=inference.NO_NOISE).document
+    doc = document(estimation.estimate([rec], cache_dir=fake_cal, load="white", sensor=NO_NOISE))
     assert "pooled_consistency" not in doc["diagnostics"]
     assert not {"pooled_disagree", "pooled_unchecked"} & set(doc["warning_codes"])
 
     def refuse(*args, **kwargs):
         raise AssertionError("a single record is analysed once")
 
-    selection = ("e_v", [], None)
-    analysed = inference.Analysed((rec,), rec.dt, rec.theta.size, dict(measured.DEFAULT_SETTINGS), None, None, None, ())
+    selection = estimation.Selection("e_v", (), None)
+    analysed = estimation.Analysed((rec,), rec.dt, rec.theta.size, dict(measured.DEFAULT_SETTINGS), None, None, None, ())
     monkeypatch.setattr(measured, "analyse", refuse)
-    assert inference.check_pooled(analysed, None, None, selection) == (selection, (), {})
+    assert estimation.check_pooled(analysed, None, None, selection) == (selection, (), {})
 
 
 @pytest.mark.parametrize("given", [3, 2])
@@ -167,7 +170,7 @@ def test_a_record_that_cannot_be_analysed_alone_is_named_and_left_out(fake_cal, 
         return analyse(rs, *args, **kwargs)
 
     monkeypatch.setattr(measured, "analyse", failing)
-    doc = inference.estimate(recs, cache_dir=fake_cal, load="white", sensor=inference.NO_NOISE).document
+    doc = document(estimation.estimate(recs, cache_dir=fake_cal, load="white", sensor=NO_NOISE))
     notes = [w for w, code in zip(doc["warnings"], doc["warning_codes"]) if code == "pooled_unchecked"]
     assert len(notes) == 1 and short in notes[0] and "too short for the test's sake" in notes[0]
     check = doc["diagnostics"]["pooled_consistency"]

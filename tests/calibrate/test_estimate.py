@@ -17,7 +17,9 @@ import pytest
 import xarray as xr
 
 from conftest import calibrated_step
-from rockdec.calibrate import belt, calibration, inference
+from rockdec.calibrate import belt, calibration
+from rockdec import estimation
+from rockdec.report.estimate_report import document
 from rockdec.studies import belt_study
 from rockdec.rdd import measured, signatures
 from rockdec.cli import main
@@ -174,7 +176,7 @@ def test_analysis_in_threads_warns_nothing_while_a_direct_signature_names_its_em
     the empty windows; ``mean_signature`` called directly still names them."""
     theta, dt = short_record
     settings = {"windows": [0.001, 0.002, 0.5, 1.0]}  # the two narrowest windows hold no trigger
-    analyse = (lambda _: inference._analyse([Record(theta, dt, "record")], dt, settings, None))
+    analyse = (lambda _: estimation.analysed._analyse([Record(theta, dt, "record")], dt, settings, None))
     analyse(0)  # numba compiles its kernels for these windows once, under catch_warnings of its own
     entered = []
     catch = warnings.catch_warnings
@@ -670,24 +672,24 @@ def test_a_belt_scaled_to_longer_records_has_their_spread_and_covers_them():
 
 
 def test_the_cost_of_a_long_record_stops_growing_with_its_length():
-    """The up-front cost (inference.cost) of records beyond the cap grows only with their
+    """The up-front cost (estimation.cost) of records beyond the cap grows only with their
     reading and analysis; records up to the cap cost the calibration of their own length on
     E_GRID (the model: samples x grid x sets x CALIBRATION_SECONDS / cores); for 20 million
     samples it lies within a factor 2 of the measured times."""
-    from rockdec.calibrate import inference
+    from rockdec import estimation
 
     n = 200_000
-    expected = n * inference.ANALYSIS_SECONDS + n * len(calibration.E_GRID) * calibration.SETS_PER_E * inference.CALIBRATION_SECONDS / 2
-    assert inference.cost(n, False, False)[0] == pytest.approx(expected, rel=1e-12)
-    long = inference.stage_seconds(20_000_000, False, False)
-    assert long["calibrating"] == pytest.approx(inference.stage_seconds(40_000_000, True, True)["calibrating"], rel=1e-12)
+    expected = n * estimation.ANALYSIS_SECONDS + n * len(calibration.E_GRID) * calibration.SETS_PER_E * estimation.CALIBRATION_SECONDS / 2
+    assert estimation.cost(n, False, False)[0] == pytest.approx(expected, rel=1e-12)
+    long = estimation.stage_seconds(20_000_000, False, False)
+    assert long["calibrating"] == pytest.approx(estimation.stage_seconds(40_000_000, True, True)["calibrating"], rel=1e-12)
     sets = calibration.SETS_PER_E_CAPPED + calibration.PILOT_SETS * 3  # and the white step search's 3 rounds of pilots
     assert long["calibrating"] == pytest.approx(
-        calibration.LENGTH_CAP * len(calibration.E_GRID_LONG) * sets * inference.CALIBRATION_SECONDS / 2, rel=1e-12)
+        calibration.LENGTH_CAP * len(calibration.E_GRID_LONG) * sets * estimation.CALIBRATION_SECONDS / 2, rel=1e-12)
     # against benchmarks/long_record.py on 20 million samples: 77.5 s of CPU with the calibration
     # built (79 s of it parallel over 2 cores in the build: about 60 s of wall on 2 idle cores)
     # and 22.7 s with it stored; the estimate lies within a factor 2 of both
-    seconds = inference.cost(20_000_000, False, False)[0]
+    seconds = estimation.cost(20_000_000, False, False)[0]
     assert 60.0 / 2 <= seconds <= 60.0 * 2 and 77.5 / 2 <= seconds <= 77.5 * 2
     assert 22.7 / 2 <= seconds - long["calibrating"] <= 22.7 * 2
 
@@ -701,7 +703,7 @@ def test_a_long_record_says_each_stage_and_the_time_left(monkeypatch, caplog, tm
     import logging
 
     import fake_calibration
-    from rockdec.calibrate import inference
+    from rockdec import estimation
     from rockdec.record.records import Record
 
     monkeypatch.setattr(calibration, "LENGTH_CAP", 10_000)
@@ -709,7 +711,7 @@ def test_a_long_record_says_each_stage_and_the_time_left(monkeypatch, caplog, tm
     monkeypatch.setattr(calibration, "_grid_point", fake_calibration.grid_point)
     theta, dt = simulated_record(0.85, 20_000)
     with caplog.at_level(logging.INFO, logger="rockdec"):
-        res = inference.estimate([Record(theta, dt, "long")], cache_dir=tmp_path).document
+        res = document(estimation.estimate([Record(theta, dt, "long")], cache_dir=tmp_path))
     text = "\n".join(r.getMessage() for r in caplog.records)
     assert "analysing 20000 samples: " in text and " in all when the calibration must be built" in text
     assert "calibrated on simulated records of 10000 samples" in text and "sqrt(10000 / 20000) = 0.707" in text
@@ -718,13 +720,13 @@ def test_a_long_record_says_each_stage_and_the_time_left(monkeypatch, caplog, tm
     assert fake_calibration.grid_point.settings["lengths"] == [10_000]
     assert res["calibration"]["simulated_samples"] == 10_000
     assert res["calibration"]["spread_scale"] == pytest.approx(math.sqrt(0.5), rel=1e-12)
-    # twice the simulated length is within inference.LONG_RATIO (20): no warning; 25 times is beyond it
+    # twice the simulated length is within estimation.LONG_RATIO (20): no warning; 25 times is beyond it
     assert not any("times the calibration's simulated records" in w for w in res["warnings"])
     monkeypatch.setattr(calibration, "LENGTH_CAP", 800)
-    res = inference.estimate([Record(theta, dt, "long")], cache_dir=tmp_path).document
+    res = document(estimation.estimate([Record(theta, dt, "long")], cache_dir=tmp_path))
     assert any("20000 samples are 25 times the calibration's simulated records" in w for w in res["warnings"])
     monkeypatch.setattr(calibration, "LENGTH_CAP", 1_000)  # exactly LONG_RATIO times: measured, no warning
-    res = inference.estimate([Record(theta, dt, "long")], cache_dir=tmp_path).document
+    res = document(estimation.estimate([Record(theta, dt, "long")], cache_dir=tmp_path))
     assert res["calibration"]["simulated_samples"] == 1_000
     assert not any("times the calibration's simulated records" in w for w in res["warnings"])
 
@@ -760,11 +762,11 @@ def test_the_up_front_cost_counts_each_pooled_record():
     """Issue 38: 300 records of 2,000 samples were estimated at 12 s and took 221 s. The cost
     model adds each record's own pass in every simulated set and each pair's check for
     copies: many short records cost more than one record of as many samples."""
-    one = inference.cost(600_000, False, False)[0]
-    many = inference.cost(600_000, False, False, records=300)[0]
-    sets = inference.calibration_sets(600_000)
-    alone = 2 * 600_000 * inference.ANALYSIS_SECONDS  # each record analysed alone for its scales and for the consistency check
-    assert many - one == pytest.approx(299 * sets * inference.RECORD_SECONDS + 300 * 299 / 2 * inference.PAIR_SECONDS + alone)
+    one = estimation.cost(600_000, False, False)[0]
+    many = estimation.cost(600_000, False, False, records=300)[0]
+    sets = estimation.calibration_sets(600_000)
+    alone = 2 * 600_000 * estimation.ANALYSIS_SECONDS  # each record analysed alone for its scales and for the consistency check
+    assert many - one == pytest.approx(299 * sets * estimation.RECORD_SECONDS + 300 * 299 / 2 * estimation.PAIR_SECONDS + alone)
     assert many > 2 * one
 
 

@@ -10,7 +10,9 @@ import math
 import numpy as np
 import pytest
 
-from rockdec.calibrate import belt, calibration, inference
+from rockdec.calibrate import belt, calibration
+
+from rockdec import estimation
 from rockdec.rdd import measured
 from rockdec.record import record_measure
 from rockdec.api import estimate_options
@@ -60,20 +62,20 @@ def test_measured_noise_and_colour_reach_the_calibration_key():
     noisy = _record(21, noise=0.03)
     analysis = measured.analyse([noisy], DT_WHITE)
     m = record_measure.measure(noisy, DT_WHITE)
-    model, sources = inference.record_model(m, analysis)
+    model, sources = estimation.record_model(m, analysis)
     assert m.noisy and sources["sensor_noise"] == "measured" and model.load.kind == "white"
     key = calibration.calibration_settings([noisy.size], analysis.points_per_cycle, model=model)["record_model"]
     assert key["sensor_noise"]["std"] == pytest.approx(0.03, rel=0.1)
     coloured = _record(22, pole=Load("lowpass", 1.0).pole(75.0), dt=DT_CORNER_1, n=200_000)
     analysis = measured.analyse([coloured], DT_CORNER_1)
     m = record_measure.measure(coloured, DT_CORNER_1)
-    model, _ = inference.record_model(m, analysis)
+    model, _ = estimation.record_model(m, analysis)
     assert m.coloured and model.load.kind == "lowpass"
     assert model.load.pole(analysis.points_per_cycle) == pytest.approx(m.pole.value, rel=1e-9)  # the pole per sample measured
-    declared, sources = inference.record_model(m, analysis, load=Load(), sensor=SensorNoise(0.5 * analysis.sigma_y, "rad"))
+    declared, sources = estimation.record_model(m, analysis, load=Load(), sensor=SensorNoise(0.5 * analysis.sigma_y, "rad"))
     assert declared.load.kind == "white" and declared.sensor == SensorNoise(0.5, "sigma_y")
     assert sources["load"] == sources["sensor_noise"] == "declared"
-    assert inference.record_model(m, analysis, model=PAPER)[0] == PAPER
+    assert estimation.record_model(m, analysis, model=PAPER)[0] == PAPER
 
 
 def test_a_declared_spectrum_file_is_placed_at_the_records_rocking_frequency(tmp_path):
@@ -84,7 +86,7 @@ def test_a_declared_spectrum_file_is_placed_at_the_records_rocking_frequency(tmp
     analysis = measured.analyse([y], DT_WHITE)
     table = tmp_path / "psd.csv"
     table.write_text("frequency_hz,psd\n0.0,1.0\n0.01,1.0\n0.02,0.1\n")
-    model, sources = inference.record_model(None, analysis, load=f"spectrum:{table}", sensor=SensorNoise())
+    model, sources = estimation.record_model(None, analysis, load=f"spectrum:{table}", sensor=SensorNoise())
     assert model.load.kind == "spectrum" and sources["load"] == "declared"
     f_rock = 1.0 / (DT_WHITE * analysis.points_per_cycle)
     np.testing.assert_allclose(model.load.frequency, np.array([0.0, 0.01, 0.02]) / f_rock)
@@ -150,7 +152,9 @@ def test_bad_model_options_end_in_one_sentence_before_any_calibration(tmp_path, 
 
 
 def _entry(e, low, high, coverage, beyond=None, notes=()):
-    return {"e": e, "interval": [low, high], "coverage": coverage, "beyond": beyond, "notes": list(notes), "calibrated_range": [0.4, 0.995]}
+    nan = math.nan
+    return estimation.Reading(nan if e is None else e, nan if e is None else e, beyond, (0.4, 0.995), nan if low is None else low,
+                              nan if high is None else high, nan if coverage is None else coverage, 100, tuple(notes))
 
 
 def _unbiased_belts(**spreads):
@@ -161,15 +165,15 @@ def _unbiased_belts(**spreads):
 
 
 def test_the_narrowest_trusted_candidate_at_the_common_e_is_reported():
-    floor = inference.coverage_floor(600)
+    floor = estimation.coverage_floor(600)
     assert floor == pytest.approx(0.95 - 1.959964 * math.sqrt(0.95 * 0.05 / 600), abs=1e-6)
     belts = _unbiased_belts(e_0=0.03, e4=0.005, e_v=0.01)
     per = {"e_0": _entry(0.9, 0.85, 0.95, 0.95), "e4": _entry(0.9, 0.88, 0.92, floor - 0.01), "e_v": _entry(0.9, 0.87, 0.94, 0.94)}
-    name, rows, reason = inference.select(per, 600, belts)
+    name, rows, reason = estimation.select(per, 600, belts)
     assert name == "e_v" and reason is None  # e4 is narrower, but its calibrated coverage does not hold
-    assert {row["estimator"]: row["holds"] for row in rows} == {"e_0": True, "e4": False, "e_v": True}
-    assert "below" in next(row["why_not"] for row in rows if row["estimator"] == "e4")
-    widths = {row["estimator"]: row["width_at_common_e"] for row in rows}
+    assert {row.estimator: row.holds for row in rows} == {"e_0": True, "e4": False, "e_v": True}
+    assert "below" in next(row.why_not for row in rows if row.estimator == "e4")
+    widths = {row.estimator: row.width_at_common_e for row in rows}
     assert widths["e_v"] == pytest.approx(2 * belt.Z95 * 0.01, abs=1e-3) and widths["e_0"] == pytest.approx(2 * belt.Z95 * 0.03, abs=1e-3)
 
 
@@ -178,26 +182,27 @@ def test_a_record_interval_cut_short_at_the_range_end_does_not_win_the_selection
     calibrated range's lower end; e_v's belt is the narrower one at the candidates' common e."""
     belts = _unbiased_belts(e_0=0.05, e4=0.05, e_v=0.02)
     per = {"e_0": _entry(0.41, 0.4, 0.43, 0.95), "e4": _entry(0.6, 0.5, 0.7, 0.95), "e_v": _entry(0.62, 0.58, 0.66, 0.95)}
-    name, rows, _ = inference.select(per, 600, belts)
+    name, rows, _ = estimation.select(per, 600, belts)
     assert name == "e_v"
-    assert next(row["width"] for row in rows if row["estimator"] == "e_0") < next(row["width"] for row in rows if row["estimator"] == "e_v")
+    assert next(row.width for row in rows if row.estimator == "e_0") < next(row.width for row in rows if row.estimator == "e_v")
 
 
 def test_no_trusted_candidate_gives_null_with_a_one_sentence_reason():
+    from rockdec.report.estimate_report import candidate_row
     from rockdec.report.summary import text as _estimate_text
 
     per = {"e_0": _entry(None, None, None, 0.95, beyond="above"), "e4": _entry(0.9, 0.8, 0.99, 0.5),
            "e_v": _entry(None, None, None, None, notes=["no raw estimate"])}
     belts = _unbiased_belts(e_0=0.03, e4=0.03, e_v=0.03)
-    whole = inference.select({**per, "e_v": _entry(0.41, 0.4, 0.995, 0.95)}, 600, belts)
+    whole = estimation.select({**per, "e_v": _entry(0.41, 0.4, 0.995, 0.95)}, 600, belts)
     assert whole[0] is None and "spans the whole calibrated range" in whole[2]  # an interval that says nothing
-    name, rows, reason = inference.select(per, 600, belts)
-    assert name is None and not any(row["holds"] for row in rows)
+    name, rows, reason = estimation.select(per, 600, belts)
+    assert name is None and not any(row.holds for row in rows)
     assert reason.startswith("no estimator can be trusted") and all(n in reason for n in per) and "\n" not in reason
     res = {"records": ["r.csv"], "samples": 1000, "dt": 0.01, "nan_samples": 0, "sigma_y": 0.01, "points_per_cycle": 75.0,
            "g": None, "g_given": False, "g_raw": 1.0, "calibration": {"file": "c.nc", "cached": True, "seconds": 0.0},
            "estimators": {}, "estimator": None, "e": None, "interval": [None, None], "coverage": None, "warnings": [],
-           "record_model": None, "selection": rows, "reason": reason}
+           "record_model": None, "selection": [candidate_row(row) for row in rows], "reason": reason}
     assert f"e: not estimated: {reason}" in _estimate_text(res)
 
 
@@ -259,7 +264,7 @@ def test_a_measured_corner_below_the_floor_is_declined_with_its_corner_and_no_ca
     assert main(["estimate", str(path), "--dt", str(DT_CORNER_1), "--cache", str(cache), "--json"]) == 0
     res = json.loads(capsys.readouterr().out)
     corner = res["record_model"]["measured"]["load_corner_rocking"]["value"]
-    assert res["record_model"]["measured"]["detected"]["colour"] and corner < inference.COLOUR_CORNER_FLOOR
+    assert res["record_model"]["measured"]["detected"]["colour"] and corner < estimation.COLOUR_CORNER_FLOOR
     assert res["e"] is None and res["interval"] == [None, None] and res["estimator"] is None
     assert f"corner at {corner:.2f} +- " in res["reason"] and "`load`" in res["reason"] and res["reason"].count(". ") == 0
     assert not any(cache.glob("calibration-*.nc")) and res["calibration"]["file"] is None
@@ -273,11 +278,11 @@ def test_the_colour_decline_takes_only_a_measured_corner_below_the_floor():
     """A declared load is calibrated as declared, a white load or a corner at or above the
     floor is not declined; the sentence names the corner and the floor."""
     low = RecordModel(load=Load("lowpass", 0.7))
-    assert inference.colour_decline(low, {"load": "declared"}, None, 75.0) is None
-    assert inference.colour_decline(RecordModel(), {"load": "measured"}, None, 75.0) is None
-    assert inference.colour_decline(RecordModel(load=Load("lowpass", inference.COLOUR_CORNER_FLOOR)), {"load": "measured"}, None, 75.0) is None
-    reason = inference.colour_decline(low, {"load": "measured"}, None, 75.0)
-    assert "0.70 times the rocking frequency" in reason and f"below {inference.COLOUR_CORNER_FLOOR:g}" in reason
+    assert estimation.colour_decline(low, {"load": "declared"}, None, 75.0) is None
+    assert estimation.colour_decline(RecordModel(), {"load": "measured"}, None, 75.0) is None
+    assert estimation.colour_decline(RecordModel(load=Load("lowpass", estimation.COLOUR_CORNER_FLOOR)), {"load": "measured"}, None, 75.0) is None
+    reason = estimation.colour_decline(low, {"load": "measured"}, None, 75.0)
+    assert "0.70 times the rocking frequency" in reason and f"below {estimation.COLOUR_CORNER_FLOOR:g}" in reason
 
 
 @pytest.mark.parametrize("shape, se, declined", [(8.0, 0.3, False), (11.8, 0.3, True), (8.0, 1.5, True), (8.0, math.nan, True)])
@@ -291,11 +296,11 @@ def test_a_load_read_white_beneath_noise_is_declined_unless_its_shape_rules_out_
 
     measurement = SimpleNamespace(noisy=True, shape=Quantity(shape, se), side_g_share=lambda n: 1.0)
     measurement.shape_corner_low = lambda n, z: MeasuredModel.shape_corner_low(measurement, n, z)
-    reason = inference.colour_decline(RecordModel(), {"load": "measured"}, measurement, 75.0)
+    reason = estimation.colour_decline(RecordModel(), {"load": "measured"}, measurement, 75.0)
     assert (reason is not None) == declined
     if declined:
-        assert "colour is not ruled out" in reason and f"below {inference.COLOUR_CORNER_FLOOR:g}" in reason
-    assert inference.colour_decline(RecordModel(), {"load": "declared"}, measurement, 75.0) is None
+        assert "colour is not ruled out" in reason and f"below {estimation.COLOUR_CORNER_FLOOR:g}" in reason
+    assert estimation.colour_decline(RecordModel(), {"load": "declared"}, measurement, 75.0) is None
 
 
 @pytest.mark.parametrize("rate_se, declined", [(0.0, False), (0.02, False), (0.5, True)])
@@ -306,11 +311,11 @@ def test_a_measured_corner_above_the_floor_must_be_clear_of_it_by_its_errors(rat
 
     alpha = math.exp(-2 * math.pi * 3.0 / 75.0)
     measurement = SimpleNamespace(pole=SimpleNamespace(value=alpha, se=rate_se * alpha), side_g_share=lambda n: 1.0)  # se of -ln(alpha), relative
-    reason = inference.colour_decline(RecordModel(load=Load("lowpass", 3.0)), {"load": "measured"}, measurement, 75.0)
+    reason = estimation.colour_decline(RecordModel(load=Load("lowpass", 3.0)), {"load": "measured"}, measurement, 75.0)
     assert (reason is not None) == declined
     if declined:
         se = 3.0 * rate_se / -math.log(alpha)
-        assert f"3.00 +- {se:.2f}" in reason and f"not {inference.COLOUR_CORNER_Z:g} errors above" in reason
+        assert f"3.00 +- {se:.2f}" in reason and f"not {estimation.COLOUR_CORNER_Z:g} errors above" in reason
 
 
 @pytest.mark.parametrize("share, declined", [(1.0, False), (0.75, False), (0.5, True), (0.0, True)])
@@ -322,11 +327,11 @@ def test_a_measured_load_whose_side_means_hold_part_of_g_is_declined(share, decl
     alpha = math.exp(-2 * math.pi * 3.0 / 75.0)
     measurement = SimpleNamespace(pole=SimpleNamespace(value=alpha, se=0.0), noisy=False, side_g_share=lambda n: share)
     for load in (Load(), Load("lowpass", 3.0)):
-        reason = inference.colour_decline(RecordModel(load=load), {"load": "measured"}, measurement, 75.0)
+        reason = estimation.colour_decline(RecordModel(load=load), {"load": "measured"}, measurement, 75.0)
         assert (reason is not None) == declined
         if declined:
             assert f"is {share:.2f} of the g their signature reads" in reason and "`load`" in reason and reason.count(". ") == 0
-        assert inference.colour_decline(RecordModel(load=load), {"load": "declared"}, measurement, 75.0) is None
+        assert estimation.colour_decline(RecordModel(load=load), {"load": "declared"}, measurement, 75.0) is None
 
 
 def test_a_record_at_half_the_rocking_frequency_read_as_a_whiter_corner_gets_no_number(tmp_path, capsys):
@@ -343,10 +348,10 @@ def test_a_record_at_half_the_rocking_frequency_read_as_a_whiter_corner_gets_no_
     assert main(["estimate", str(path), "--dt", str(dt), "--cache", str(cache), "--json"]) == 0
     res = json.loads(capsys.readouterr().out)
     corner = res["record_model"]["measured"]["load_corner_rocking"]
-    assert corner["value"] - inference.COLOUR_CORNER_Z * corner["se"] > inference.COLOUR_CORNER_FLOOR  # the corner alone passes
+    assert corner["value"] - estimation.COLOUR_CORNER_Z * corner["se"] > estimation.COLOUR_CORNER_FLOOR  # the corner alone passes
     assert res["e"] is None and res["interval"] == [None, None] and res["estimator"] is None
     assert "g read off the side means" in res["reason"] and "`load`" in res["reason"]
-    assert res["record_model"]["measured"]["g_side_share"] < inference.SIDE_G_SHARE
+    assert res["record_model"]["measured"]["g_side_share"] < estimation.SIDE_G_SHARE
     assert f"is {res['record_model']['measured']['g_side_share']:.2f} of the g" in res["reason"]
     assert not any(cache.glob("calibration-*.nc"))
     assert main(["-v", "estimate", str(path), "--dt", str(dt), "--cache", str(cache)]) == 0

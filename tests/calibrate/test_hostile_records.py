@@ -11,8 +11,14 @@ import re
 import numpy as np
 import pytest
 
-from rockdec.calibrate import calibration, consistency, inference
+from rockdec.calibrate import calibration, consistency
+
+from rockdec import estimation
+
+from rockdec.physics.record_model import NO_NOISE
+from rockdec.report.estimate_report import document
 from rockdec.physics import simulate
+from rockdec.rdd import measured
 from rockdec.record.records import Record, RecordError
 
 from conftest import calibrated_step
@@ -84,7 +90,7 @@ def test_records_whose_own_g_lie_apart_beyond_one_blocks_are_declined_naming_eac
     """A record of a block whose g is 6 times the other's (the same motion at 6 times the
     angle): e is declined before any calibration, each record's own g named."""
     recs = [Record(block["theta"][0], block["dt"], "a.csv"), Record(6.0 * block["theta"][1], block["dt"], "b.csv")]
-    doc = inference.estimate(recs, cache_dir=fake_cal, load="white", sensor=inference.NO_NOISE).document
+    doc = document(estimation.estimate(recs, cache_dir=fake_cal, load="white", sensor=NO_NOISE))
     assert doc["e"] is None and doc["calibration"]["file"] is None
     ratio, a, b = map(float, re.search(r"read g alone ([0-9.]+) times apart \(a\.csv ([0-9.]+), b\.csv ([0-9.]+) rad/s\^2\)",
                                        doc["reason"]).groups())
@@ -96,14 +102,14 @@ def test_records_whose_own_g_lie_apart_beyond_one_blocks_are_declined_naming_eac
 def test_records_of_one_block_pass_the_scales_check_at_one_load_and_at_twice_the_load(block):
     """Six records at one load (15 pairs) and two at twice the load, whose sigma_Y lie several
     times apart: g is one block's constant, and no pair is declined or refused."""
-    sigmas, gs = inference.own_scales([Record(y, block["dt"], "r") for y in [*block["theta"], *block["louder"]]], block["dt"],
-                                      dict(inference.measured.DEFAULT_SETTINGS))
+    sigmas, gs = estimation.own_scales([Record(y, block["dt"], "r") for y in [*block["theta"], *block["louder"]]], block["dt"],
+                                      dict(measured.DEFAULT_SETTINGS))
     assert np.all(np.isfinite(gs))
     assert max(sigmas[6:]) / min(sigmas[:6]) > 2.0  # the louder records' amplitude
     for i in range(len(gs)):
         for j in range(i + 1, len(gs)):
             assert consistency.scales_apart(["a", "b"], [sigmas[i], sigmas[j]], [gs[i], gs[j]]) is None, (i, j, gs)
-    analysed = inference.analyse([Record(block["theta"][0], block["dt"], "a"), Record(block["louder"][0], block["dt"], "b")])
+    analysed = estimation.analyse([Record(block["theta"][0], block["dt"], "a"), Record(block["louder"][0], block["dt"], "b")])
     assert analysed.scales_apart is None
 
 
@@ -166,7 +172,7 @@ def _base_csv(path, dt, n=20_000, seed=3):
 
 @pytest.fixture(scope="module")
 def analysed_block(block):
-    return inference.analyse([Record(block["theta"][0], block["dt"], "rec.csv")])
+    return estimation.analyse([Record(block["theta"][0], block["dt"], "rec.csv")])
 
 
 @hostile("wrong answers", "warned")
@@ -177,14 +183,14 @@ def test_a_base_record_sampled_more_coarsely_than_the_rocking_record_is_warned(a
     too narrow with no warning. The warning names where the spectrum stops (the base record's
     Nyquist frequency in rocking frequencies, N / (2 x coarser)) and the rocking record's."""
     base = _base_csv(tmp_path / "ground.csv", coarser * block["dt"])
-    choice = inference.choose_model(analysed_block, load=f"base:{base}", sensor=inference.NO_NOISE)
+    choice = estimation.choose_model(analysed_block, load=f"base:{base}", sensor=NO_NOISE)
     ppc = analysed_block.analysis.points_per_cycle
     notes = [n.message for n in choice.notes if n.code == "base_short"]
     assert len(notes) == 1 and choice.declined is None
     top = ppc / (2 * coarser)
     assert f"stops at its Nyquist frequency, {top:.3g} times the rocking frequency" in notes[0], (notes, top)
     assert f"below the rocking record's {ppc / 2:.3g}" in notes[0] and f"sampled {coarser:.3g} times as finely" in notes[0]
-    assert "base_short" in inference.NOTE_CODES
+    assert "base_short" in estimation.NOTE_CODES
     assert choice.model.load.frequency[-1] == pytest.approx(top, rel=1e-9)  # the table's last row: where the calibration's load stops
 
 
@@ -192,7 +198,7 @@ def test_a_base_record_sampled_more_coarsely_than_the_rocking_record_is_warned(a
 @pytest.mark.parametrize("finer", [1, 2])
 def test_a_base_record_sampled_as_finely_as_the_rocking_record_is_not_warned(analysed_block, block, tmp_path, finer):
     base = _base_csv(tmp_path / "ground.csv", block["dt"] / finer)
-    choice = inference.choose_model(analysed_block, load=f"base:{base}", sensor=inference.NO_NOISE)
+    choice = estimation.choose_model(analysed_block, load=f"base:{base}", sensor=NO_NOISE)
     assert not [n for n in choice.notes if n.code == "base_short"]
     assert choice.model.load.frequency[-1] >= analysed_block.analysis.points_per_cycle / 2 * (1 - 1e-9)
 
@@ -224,8 +230,8 @@ def test_integer_counts_too_coarse_for_the_impacts_leave_the_filter_check_out_wi
         assert diagnostics.resolution(coarse) == 1.0 and diagnostics.resolution(y) == 0.0
         assert diagnostics.impact_steps(coarse) < diagnostics.IMPACT_MIN_STEPS <= diagnostics.impact_steps(fine)
         assert math.isnan(sharpness(coarse)) and sharpness(fine) == pytest.approx(sharpness(y), abs=0.005)
-        (note,) = inference.unresolved_impacts([Record(coarse, block["dt"], f"r{i}.csv")])
+        (note,) = estimation.unresolved_impacts([Record(coarse, block["dt"], f"r{i}.csv")])
         assert note.code == "filtered_unchecked" and note.message.startswith(f"r{i}.csv is quantised to steps of 1,")
         assert "was not checked for a low-pass filter" in note.message
-        assert inference.unresolved_impacts([Record(y, block["dt"], "r"), Record(fine, block["dt"], "f")]) == []
-    assert "filtered_unchecked" in inference.NOTE_CODES
+        assert estimation.unresolved_impacts([Record(y, block["dt"], "r"), Record(fine, block["dt"], "f")]) == []
+    assert "filtered_unchecked" in estimation.NOTE_CODES

@@ -8,14 +8,16 @@ from __future__ import annotations
 import math
 import sys
 from pathlib import Path
-from types import SimpleNamespace
 
 import numpy as np
 import pytest
 from scipy import signal
 
 from rockdec.api import estimate_options
-from rockdec.calibrate import calibration, inference
+from rockdec.calibrate import calibration
+from rockdec import estimation
+from rockdec.report.estimate_report import document
+from stand_in_outcome import stand_in
 from rockdec.cli import main
 from rockdec.physics.record_model import Load, RecordModel, SensorFilter, SensorNoise, parse_sensor_filter
 from rockdec.physics.simulate import simulate_block
@@ -144,19 +146,19 @@ def test_rolloff_of_a_closed_form_spectrum_reads_its_slope():
 
 
 def _analysed(y):
-    return inference.analyse([Record(y, DT_WHITE, "record")])
+    return estimation.analyse([Record(y, DT_WHITE, "record")])
 
 
 @pytest.mark.hostile("wrong answers", "warned")
 def test_a_declared_part_the_record_contradicts_is_noted_and_a_right_one_is_not():
     analysed = _analysed(_record(3, n=60_000))
-    right = inference.choose_model(analysed, load=Load(), sensor=SensorNoise())
+    right = estimation.choose_model(analysed, load=Load(), sensor=SensorNoise())
     assert right.notes == ()
-    noisy = inference.choose_model(analysed, load=Load(), sensor=SensorNoise(0.2))
+    noisy = estimation.choose_model(analysed, load=Load(), sensor=SensorNoise(0.2))
     assert [n.code for n in noisy.notes] == ["noise_contradicted"] and "0.2 sigma_Y" in noisy.notes[0].message
-    coloured = inference.choose_model(analysed, load=Load("lowpass", 3.0), sensor=SensorNoise())
+    coloured = estimation.choose_model(analysed, load=Load("lowpass", 3.0), sensor=SensorNoise())
     assert [n.code for n in coloured.notes] == ["load_contradicted"]
-    assert set(inference.NOTE_CODES) >= {"noise_contradicted", "load_contradicted"}
+    assert set(estimation.NOTE_CODES) >= {"noise_contradicted", "load_contradicted"}
 
 
 @pytest.fixture
@@ -205,7 +207,7 @@ def test_a_gentle_filter_blunts_the_impacts_where_the_spectrum_cannot_show_it(ma
     for found in (SensorFilter("rc", 1, 3.0, False), SensorFilter("rc", 1, 5.0, False), SensorFilter("rc", 1, 10.0, False),
                   SensorFilter("rc", 1, 20.0, True)):
         z = found.apply(y, ppc)
-        choice = inference.choose_model(_analysed(z))
+        choice = estimation.choose_model(_analysed(z))
         assert choice.declined is None and not choice.rolloff.filtered, found.text()
         assert sharpness(z) > clean + 0.01, found.text()
 
@@ -229,16 +231,10 @@ def test_a_gentle_filter_undeclared_is_declined_by_the_calibrated_check(tmp_path
 
 @pytest.mark.parametrize("source, declined", [("measured (none shown)", True), ("declared", False)])
 def test_a_fired_filter_check_declines_unless_the_filter_was_declared(source, declined):
-    doc = {"e": 0.9, "interval": [0.88, 0.92], "coverage": 0.95, "estimator": "e_0", "reason": None}
-    verdict = inference.Verdict(True, False, False, source == "declared", {"filtered": "the impacts' velocity jumps are spread"}, False)
-    out = inference.decline_unrepaired(inference.Outcome(doc, None, {}, verdict)).document
-    assert (out["e"] is None) == declined and (out["interval"] == [None, None]) == declined
-    assert not declined or "filtered: the impacts' velocity jumps are spread" in out["reason"]
-
-
-def _analysis():
-    """A stand-in for an estimate's analysis: the retry reads its samples per cycle."""
-    return SimpleNamespace(points_per_cycle=75.0)
+    verdict = estimation.Verdict(True, False, False, source == "declared", {"filtered": "the impacts' velocity jumps are spread"}, False)
+    out = estimation.decline_unrepaired(stand_in(verdict))
+    assert (out.declined is not None) == declined and (out.shown is None) == declined
+    assert not declined or "filtered: the impacts' velocity jumps are spread" in out.declined
 
 
 @pytest.mark.parametrize("source", ["measured (none shown)", "declared"])
@@ -249,19 +245,18 @@ def test_a_filter_shown_on_the_records_as_given_is_not_high_passed(monkeypatch, 
     first. Declared, ``filtered`` only warns and the repair goes on."""
     calls = []
 
-    def once(records, *args, **kwargs):
-        calls.append(args[0])
-        doc = {"e": 0.9, "interval": [0.88, 0.92], "coverage": 0.95, "estimator": "e_0", "reason": None, "repair": {"repaired": bool(calls[1:])}}
+    def once(records, repaired, simulated_repair=None, **kwargs):
+        calls.append(simulated_repair)
         fired = {"spikes": "a sample stands far off", "filtered": "the impacts' velocity jumps are spread"}
-        return inference.Outcome(doc, _analysis(), {}, inference.Verdict(True, False, False, source == "declared", fired, bool(calls[1:])))
+        return stand_in(estimation.Verdict(True, False, False, source == "declared", fired, bool(calls[1:])))
 
-    monkeypatch.setattr(inference, "estimate_once", once)
+    monkeypatch.setattr(estimation.retry, "estimate_once", once)
     y = _record(5, n=20_000)
-    out = inference.estimate([Record(y, DT_WHITE, "record")], cache_dir=None).document
+    out = estimation.estimate([Record(y, DT_WHITE, "record")], cache_dir=None)
     if source == "declared":
-        assert len(calls) == 2 and out["reason"].startswith("the records show a defect") and "filtered" not in out["reason"]
+        assert len(calls) == 2 and out.declined.startswith("the records show a defect") and "filtered" not in out.declined
     else:
-        assert len(calls) == 1 and out["e"] is None and "(filtered: the impacts' velocity jumps are spread; spikes:" in out["reason"]
+        assert len(calls) == 1 and out.shown is None and "(filtered: the impacts' velocity jumps are spread; spikes:" in out.declined
 
 
 def test_a_drifting_record_that_shows_a_filter_is_high_passed_and_read_again(monkeypatch):
@@ -271,16 +266,15 @@ def test_a_drifting_record_that_shows_a_filter_is_high_passed_and_read_again(mon
     and ``e`` is declined only when a check still fires on the repaired records."""
     calls = []
 
-    def once(records, *args, **kwargs):
-        calls.append(args[0])
+    def once(records, repaired, simulated_repair=None, **kwargs):
+        calls.append(simulated_repair)
         fired = {"filtered": "the impacts' velocity jumps are spread", "drift": "the zero drifts"} if len(calls) == 1 else {}
-        doc = {"e": 0.9, "interval": [0.88, 0.92], "coverage": 0.95, "estimator": "e_0", "reason": None, "repair": {"repaired": len(calls) > 1}}
-        return inference.Outcome(doc, _analysis(), {}, inference.Verdict(True, False, False, False, fired, len(calls) > 1))
+        return stand_in(estimation.Verdict(True, False, False, False, fired, len(calls) > 1))
 
-    monkeypatch.setattr(inference, "estimate_once", once)
+    monkeypatch.setattr(estimation.retry, "estimate_once", once)
     y = _record(5, n=20_000)
-    out = inference.estimate([Record(y, DT_WHITE, "record")], cache_dir=None).document
-    assert len(calls) == 2 and calls[1] is not None and out["e"] == 0.9 and out["repair"]["repaired"]
+    out = estimation.estimate([Record(y, DT_WHITE, "record")], cache_dir=None)
+    assert len(calls) == 2 and calls[1] is not None and out.shown.e == 0.9 and out.verdict.repaired
 
 
 @pytest.fixture(scope="module")
@@ -300,7 +294,7 @@ def test_an_undeclared_filter_declines_e_naming_the_declaration(white_record, fo
     of order 2 to 4 falls faster than f^-3 and is declined before any calibration, the reason
     naming `sensor_filter` (first-order stages: the calibrated check, tests above)."""
     y, ppc = white_record
-    choice = inference.choose_model(_analysed(found.apply(y, ppc)))
+    choice = estimation.choose_model(_analysed(found.apply(y, ppc)))
     assert choice.declined and "`sensor_filter`" in choice.declined
 
 
@@ -312,5 +306,5 @@ def test_an_undeclared_filter_declines_e_naming_the_declaration(white_record, fo
     ({"load": Load("lowpass", 5.0), "sensor": SensorNoise()}, "load_contradicted"),
 ], ids=["noise 5%", "noise 20%", "lowpass:2", "lowpass:5"])
 def test_a_declaration_the_white_record_contradicts_is_warned(white_record, declared, code):
-    choice = inference.choose_model(_analysed(white_record[0]), **declared)
+    choice = estimation.choose_model(_analysed(white_record[0]), **declared)
     assert code in [n.code for n in choice.notes]

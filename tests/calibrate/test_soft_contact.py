@@ -14,7 +14,10 @@ import numpy as np
 import pytest
 
 import rockdec
-from rockdec.calibrate import calibration, inference
+from rockdec.calibrate import calibration
+from rockdec import estimation
+from rockdec.report.estimate_report import document
+from stand_in_outcome import stand_in
 from rockdec.physics.record_model import SensorFilter
 from rockdec.physics.simulate import simulate_block
 from rockdec.rdd import measured
@@ -142,14 +145,14 @@ def test_a_fired_filter_check_declines_unless_a_filter_was_declared(source, unfi
     """Declared unfiltered, a fired ``filtered`` declines ``e`` (a soft contact, which no
     declaration models), the reason saying so first; a load measured white points to a soft
     contact; a declared filter (or a record model declared whole) leaves it a warning."""
-    doc = {"e": 0.97, "interval": [0.95, 0.99], "coverage": 0.95, "estimator": "e_v", "reason": None}
-    verdict = inference.Verdict(True, False, not colour, source == "declared", {"filtered": "the impacts' velocity jumps are spread"}, False)
-    out = inference.decline_unrepaired(inference.Outcome(doc, None, {}, verdict), unfiltered).document
-    assert (out["e"] is None) == declined
-    assert declined or out == doc
+    verdict = estimation.Verdict(True, False, not colour, source == "declared", {"filtered": "the impacts' velocity jumps are spread"}, False)
+    given = stand_in(verdict, e=0.97, estimator="e_v")
+    out = estimation.decline_unrepaired(given, unfiltered)
+    assert (out.declined is not None) == declined
+    assert declined or out == given
     if declined:
-        assert out["reason"].startswith(starts) and ("point to a soft contact" in out["reason"]) == (not colour)
-        assert "filtered: the impacts' velocity jumps are spread" in out["reason"]
+        assert out.declined.startswith(starts) and ("point to a soft contact" in out.declined) == (not colour)
+        assert "filtered: the impacts' velocity jumps are spread" in out.declined
 
 
 @pytest.mark.parametrize("seed", [1, 2, 3])
@@ -159,7 +162,7 @@ def test_a_first_order_filter_colours_a_white_load_and_a_soft_contact_does_not(s
     5 rocking frequencies, zero-phase at 20: gentle enough to pass the roll-off check) makes it
     read low-pass."""
     def read(y):
-        choice = inference.choose_model(inference.analyse([Record(y, DT, "record")]))
+        choice = estimation.choose_model(estimation.analyse([Record(y, DT, "record")]))
         return choice.declined is None, choice.measurement.coloured
 
     for contact in (1.5, 3.0):

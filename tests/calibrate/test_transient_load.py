@@ -15,7 +15,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rockdec.calibrate import inference
+from rockdec import estimation
+
+from rockdec.physics.record_model import NO_NOISE
+from rockdec.report.estimate_report import document
 from rockdec.physics.simulate import simulate_block
 from rockdec.record import transient
 from rockdec.record.records import Record
@@ -47,7 +50,7 @@ def test_check_fires_on_transients(transients, case):
 def test_transient_declined_before_any_calibration(transients, case, tmp_path):
     cache = tmp_path / "cache"
     cache.mkdir()
-    doc = inference.estimate([Record(transients[case], 1.0 / reference.FS, "quake")], cache_dir=cache).document
+    doc = document(estimation.estimate([Record(transients[case], 1.0 / reference.FS, "quake")], cache_dir=cache))
     assert doc["e"] is None and doc["interval"] == [None, None]
     assert doc["reason"].startswith("the record's amplitude builds up and dies away (quake: its strongest")
     assert "the load is a transient, an earthquake or a shake-table test" in doc["reason"] and "`--test shake --base FILE`" in doc["reason"]
@@ -60,8 +63,8 @@ def test_transient_declined_with_the_load_declared(transients, tmp_path):
     """A declared record model does not let a transient through: the load is not the one declared."""
     cache = tmp_path / "cache"
     cache.mkdir()
-    doc = inference.estimate([Record(transients[TRANSIENTS[0]], 1.0 / reference.FS, "quake")], cache_dir=cache,
-                             load="white", sensor=inference.NO_NOISE).document
+    doc = document(estimation.estimate([Record(transients[TRANSIENTS[0]], 1.0 / reference.FS, "quake")], cache_dir=cache,
+                             load="white", sensor=NO_NOISE))
     assert doc["e"] is None and "the load is a transient" in doc["reason"] and list(cache.iterdir()) == []
 
 

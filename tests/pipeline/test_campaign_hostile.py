@@ -230,9 +230,10 @@ def test_a_block_named_like_another_blocks_free_tests_gets_its_own_estimate(lab)
 
 
 def test_the_simulated_size_limit_is_the_longest_records_whose_coverage_was_measured():
-    from rockdec.calibrate import calibration, inference
+    from rockdec.calibrate import calibration
+    from rockdec import estimation
 
-    assert campaign.MAX_SIMULATED_POINTS == inference.LONG_RATIO * calibration.LENGTH_CAP
+    assert campaign.MAX_SIMULATED_POINTS == estimation.LONG_RATIO * calibration.LENGTH_CAP
 
 
 SIZES = {

@@ -7,6 +7,8 @@ record's e, length and sampling: what `rockdec.calibrate.calibration.build` stor
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 import xarray as xr
@@ -15,7 +17,7 @@ from conftest import calibrated_step
 from rockdec.calibrate import calibration
 from rockdec.record import diagnostics
 from rockdec.rdd import fits, measured
-from rockdec.calibrate.inference import diagnose
+from rockdec.estimation import diagnose
 from rockdec.record.records import Record
 from rockdec.physics.simulate import simulate_block
 
@@ -101,22 +103,25 @@ def test_a_record_without_a_reported_e_is_checked_where_its_estimators_place_it(
     beyond (a record at e = 0.98 whose estimators all read above the top of the grid is
     checked at the top, not at the grid point whose null is narrowest); none at all leaves
     the strictest grid point. A reported e is used as it is."""
-    from rockdec.calibrate.inference import checks_place
+    from rockdec.estimation import Reading, checks_place
     from rockdec.rdd import registry
 
     top, bottom = calibration.E_GRID[-1], calibration.E_GRID[0]
-    span = [bottom, top]
+    span = (bottom, top)
+
+    def reading(e, side=None, low=math.nan, high=math.nan):
+        return Reading(math.nan, math.nan if e is None else e, side, span, low, high, 0.95, 100, ())
 
     def per(*entries):
-        return {name: {"e": e, "beyond": side, "calibrated_range": span} for name, (e, side) in zip(registry.CANDIDATES, entries)}
+        return {name: reading(*entry) for name, entry in zip(registry.CANDIDATES, entries)}
 
-    none = {"e": None, "interval": [None, None]}
+    none = None
     assert len(registry.CANDIDATES) == 3
     assert checks_place(per((None, "above"), (None, "above"), (None, "above")), none) == (top, None)
     assert checks_place(per((None, "above"), (0.97, None), (None, "above")), none) == (top, None)
     assert checks_place(per((None, "below"), (0.5, None), (0.6, None)), none) == (0.5, None)
     assert checks_place(per((None, "unreached"), (None, None), (None, None)), none) == (None, None)
-    assert checks_place(per(*[(None, "above")] * 3), {"e": 0.9, "interval": [0.85, 0.95]}) == (0.9, [0.85, 0.95])
+    assert checks_place(per(*[(None, "above")] * 3), reading(0.9, None, 0.85, 0.95)) == (0.9, [0.85, 0.95])
     grid = np.asarray(calibration.E_GRID)
     rising = np.linspace(0.0, 3.0, grid.size)[:, None, None]  # the statistic grows with e (the nonstationary z does)
     cal = _calibration(rising + np.random.default_rng(8).standard_normal((grid.size, 30, len(diagnostics.CHECKS))), calibration.E_GRID)

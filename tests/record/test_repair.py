@@ -8,7 +8,11 @@ import pytest
 
 import rockdec
 from rockdec import cli
-from rockdec.calibrate import calibration, inference
+from rockdec.calibrate import calibration
+from rockdec import estimation
+from rockdec.physics.record_model import NO_NOISE
+from rockdec.report.estimate_report import document
+from stand_in_outcome import stand_in
 from rockdec.rdd import measured
 from rockdec.record import repair
 from rockdec.record.records import Record
@@ -127,14 +131,14 @@ def test_the_report_names_the_repair_and_the_repair_can_be_turned_off(clean, fak
     y, dt = clean
     spiked = y.copy()
     spiked[[5000, 9000, 20000]] += 25.0 * y.std()
-    options = dict(cache_dir=fake_cal, load="white", sensor=inference.NO_NOISE)
-    doc = inference.estimate([Record(spiked, dt, "spiked")], **options).document
+    options = dict(cache_dir=fake_cal, load="white", sensor=NO_NOISE)
+    doc = document(estimation.estimate([Record(spiked, dt, "spiked")], **options))
     assert doc["repair"]["spikes_removed"] == 3 and doc["repair"]["repaired"] and doc["repair"]["enabled"]
     assert "3 spikes replaced" in summary.text(doc)
-    off = inference.estimate([Record(spiked, dt, "spiked")], repair_records=False, **options).document
+    off = document(estimation.estimate([Record(spiked, dt, "spiked")], repair_records=False, **options))
     assert off["repair"] == {**off["repair"], "enabled": False, "repaired": False, "spikes_removed": 0}
     assert "repair: off" in summary.text(off)
-    plain = inference.estimate([Record(y, dt, "clean")], **options).document
+    plain = document(estimation.estimate([Record(y, dt, "clean")], **options))
     assert not plain["repair"]["repaired"] and "repaired" not in summary.text(plain)
 
 
@@ -150,14 +154,14 @@ def test_the_command_line_turns_the_repair_off():
 @pytest.mark.parametrize("check, declined", [("nonstationary", True), ("asymmetry", True), ("drift", True), ("spikes", True),
                                              ("few_triggers", False), ("coarse_sampling", False)])
 def test_a_check_left_fired_by_the_repair_declines_e_when_its_defect_moves_e(check, declined):
-    doc = {"e": 0.9, "interval": [0.88, 0.92], "coverage": 0.95, "estimator": "e_v", "reason": None}
-    verdict = inference.Verdict(True, False, False, False, {check: f"the {check} message"}, True)
-    out = inference.decline_unrepaired(inference.Outcome(doc, None, {}, verdict)).document
-    assert (out["e"] is None) == declined and (out["interval"] == [None, None]) == declined
+    verdict = estimation.Verdict(True, False, False, False, {check: f"the {check} message"}, True)
+    given = stand_in(verdict, estimator="e_v")
+    out = estimation.decline_unrepaired(given)
+    assert (out.declined is not None) == declined and (out.shown is None) == declined
     if declined:
-        assert f"{check}: the {check} message" in out["reason"] and "after the repair" in out["reason"]
+        assert f"{check}: the {check} message" in out.declined and "after the repair" in out.declined
     else:
-        assert out == doc
+        assert out == given
 
 
 @pytest.mark.parametrize("gaps", [0, 40])

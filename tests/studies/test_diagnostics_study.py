@@ -74,7 +74,8 @@ def test_a_record_that_rockdec_estimate_declines_asks_for_no_calibration(step):
     """A record under a low-pass load with its corner at the rocking frequency (below the
     floor at which a calibration tells the colour apart from e) is declined by ``rockdec
     estimate``, so the study builds no calibration for it; a white one gets its settings."""
-    from rockdec.calibrate import inference
+    from rockdec import estimation
+    from rockdec.report.estimate_report import document
     from rockdec.physics.record_model import Load
 
     pole = Load("lowpass", 1.0).pole(ds.POINTS_PER_CYCLE)
@@ -82,7 +83,7 @@ def test_a_record_that_rockdec_estimate_declines_asks_for_no_calibration(step):
     white = ds._cell(E, None, 0.0, 0.0, [14], N, step["dt"], step["burn_in"], 0.0)
     assert coloured[0][0] is None and white[0][0] is not None
     y = ds.record(E, 14, N, 2.513, 4362, None, 0.0, 0.0, pole)
-    assert inference.estimate([ds.Record(y, 2.513, "coloured")], cache_dir=None).document["reason"]  # declined, with its reason
+    assert document(estimation.estimate([ds.Record(y, 2.513, "coloured")], cache_dir=None))["reason"]  # declined, with its reason
 
 
 def test_the_workflow_parts_together_give_the_rows_of_one_run_of_all(monkeypatch):

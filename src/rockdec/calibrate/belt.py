@@ -378,7 +378,7 @@ def held_es(b: Belt, raws: np.ndarray) -> np.ndarray:
     if b.e.size == 0:
         return out
     with np.errstate(invalid="ignore"):
-        on_curve = np.isfinite(raws) & (b.mean.min() <= raws) & (raws <= b.mean.max())  # beyond the mean curve: no estimate (inference.beyond)
+        on_curve = np.isfinite(raws) & (b.mean.min() <= raws) & (raws <= b.mean.max())  # beyond the mean curve: no estimate (estimation.beyond)
     where = np.flatnonzero(on_curve.ravel())
     observed = raws.ravel()[where]
     first, last, table = _spans(b, observed)

@@ -1,7 +1,7 @@
 """Whether records given together are consistent with one coefficient of restitution.
 
-Records pooled by :func:`rockdec.calibrate.inference.estimate` are taken to be of one block;
-this module tests it, for the stage :func:`rockdec.calibrate.inference.check_pooled` (no
+Records pooled by :func:`rockdec.estimation.estimate` are taken to be of one block;
+this module tests it, for the stage :func:`rockdec.estimation.check_pooled` (no
 equation of the paper: Cochran's test of homogeneity). First the scales
 (:func:`scales_apart`): ``g`` is one block's constant, so records whose own ``g`` lie
 :data:`G_FACTOR` times apart are not of one block, :data:`UNITS_RATIO` times not in one unit

@@ -69,7 +69,7 @@ MAX_ID = 64
 
 #: Samples a record the workflow simulates (``simulate``) may have at most: the longest
 #: records whose interval's coverage was measured,
-#: :data:`rockdec.calibrate.inference.LONG_RATIO` times the calibration's longest simulated
+#: :data:`rockdec.estimation.LONG_RATIO` times the calibration's longest simulated
 #: records (:data:`rockdec.calibrate.calibration.LENGTH_CAP`); a longer one takes minutes to
 #: analyse, and its estimate is warned that its coverage was not measured.
 MAX_SIMULATED_POINTS = 20_000_000
@@ -595,10 +595,10 @@ def declared(opts: dict) -> dict:
 def plan(rows: list[dict], opts: dict, cache=None, earlier: dict | None = None) -> dict:
     """Which calibrations the estimate of ``rows`` (a record, or a block's records pooled)
     under ``opts`` reads, found by running that estimate
-    itself (:func:`rockdec.calibrate.inference.estimate`, with the options the public estimate
+    itself (:func:`rockdec.estimation.estimate`, with the options the public estimate
     passes it), its repair's decisions included, allowed to read only the calibrations of the
     ``earlier`` plan (from ``cache``) and stopped at the first it asks for beyond them
-    (:class:`rockdec.calibrate.inference.CalibrationNeeded`). The estimate reads at most two
+    (:class:`rockdec.estimation.CalibrationNeeded`). The estimate reads at most two
     (the records' as given and, when the repair high-passes them, the high-passed records'):
     the plan without ``earlier`` finds the first, the plan on it, once built, the rest.
 
@@ -607,7 +607,8 @@ def plan(rows: list[dict], opts: dict, cache=None, earlier: dict | None = None) 
     does not refuse the records). A plan that needs no calibration, or refuses, is final: the
     plan on it is itself.
     """
-    from rockdec.calibrate import calibration, inference
+    from rockdec.calibrate import calibration
+    from rockdec import estimation
 
     if earlier is not None and (earlier["error"] or not earlier["calibrations"]):
         return earlier
@@ -617,9 +618,9 @@ def plan(rows: list[dict], opts: dict, cache=None, earlier: dict | None = None) 
         return done
     available = {name.removeprefix("calibration-").removesuffix(".nc") for name in known}
     try:
-        inference.estimate(read(rows), cache_dir=cache, g=opts.get("g"), rocking=opts["model"],
+        estimation.estimate(read(rows), cache_dir=cache, g=opts.get("g"), rocking=opts["model"],
                            theta_cr=opts.get("theta_cr"), available=available, length_grid=_shares(opts), **declared(opts))
-    except inference.CalibrationNeeded as need:
+    except estimation.CalibrationNeeded as need:
         known[f"calibration-{calibration.settings_hash(need.settings)}.nc"] = need.settings
     except InputError as exc:
         done["error"] = str(exc)

@@ -129,7 +129,7 @@ def step(rule: str, log: str, *args) -> None:
 
 #: What the campaign's steps import as they start (the estimate's engine, the calibration's
 #: Dask, the campaign's steps): :func:`campaign` imports them once, holding :data:`_IMPORTS`.
-CAMPAIGN_STARTS = ("dask", "dask.array", "dask.threaded", "rockdec.calibrate.inference", "rockdec.pipeline.campaign", "xarray")
+CAMPAIGN_STARTS = ("dask", "dask.array", "dask.threaded", "rockdec.estimation", "rockdec.pipeline.campaign", "xarray")
 
 
 def campaign(rule: str, log: str, *args, api=None) -> None:

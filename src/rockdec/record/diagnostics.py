@@ -4,7 +4,7 @@ Every check is a :class:`Check`: its name, the defect it names, a cheap dimensio
 statistic of the records and their analysis (:func:`rockdec.rdd.measured.analyse`), the side
 on which a large (``"high"``) or small (``"low"``) value is suspicious, its one-sentence
 message, and how its threshold is set. :data:`REGISTRY` lists them; the calibration, ``rockdec
-estimate`` (:func:`rockdec.calibrate.inference.diagnose`), the study and the docs read it.
+estimate`` (:func:`rockdec.estimation.diagnose`), the study and the docs read it.
 :func:`statistics` computes every statistic (one compiled pass, :func:`sums`; :func:`spikes`;
 :func:`impact_ratios`); the calibration stores them on its simulated record sets, and
 :func:`thresholds` takes the :data:`QUANTILE` quantile of the null (:func:`null`) of the grid
@@ -75,7 +75,7 @@ IMPACT_WIDE = 4
 IMPACT_MIN_STEPS = 50
 
 #: What a record that shows a steep filter after the block should do: the end of the decline
-#: before any calibration (:func:`rockdec.calibrate.inference.filter_decline`; a soft contact
+#: before any calibration (:func:`rockdec.estimation.filter_decline`; a soft contact
 #: does not steepen the spectrum, so ``filtered``'s message ends with :data:`BLUNTED_HELP`).
 FILTER_HELP = (
     "a low-pass filter after the block (a logger's anti-alias filter, a sensor's bandwidth, a smoothing) rounds the "
@@ -733,7 +733,7 @@ def thresholds(cal, e: float | None, interval, level: float, length_ratio: float
     calibration ``cal``'s ``diagnostic(e_true, set, check)`` (module docstring): the
     :data:`QUANTILE` quantile (``1 - QUANTILE`` for a ``"low"`` check) of the :func:`null`
     of the grid points pooled about ``e`` (where the record's estimators place it,
-    :func:`rockdec.calibrate.inference.checks_place`; for a ``"widest"`` :class:`Check`, the
+    :func:`rockdec.estimation.checks_place`; for a ``"widest"`` :class:`Check`, the
     loosest of those points' own). A record without an ``e`` (``None`` or
     NaN: no estimator places it) gets the strictest grid point's threshold, each grid point's
     null apart. ``level``: the trigger level in ``sigma_Y`` (for the structural floor). NaN

@@ -9,7 +9,7 @@ in decades): a record that builds up from rest and rocks down to rest begins and
 that hold little but the sensor's noise, while a stationary record's end blocks rock as strongly
 as any other block, give or take its random bursts. Above :data:`DECADES` the record's
 load is a transient and ``e`` is declined before any calibration
-(:func:`rockdec.calibrate.inference.transient_decline`). Evidence:
+(:func:`rockdec.estimation.transient_decline`). Evidence:
 ``tests/calibrate/test_transient_load.py`` (its false alarms on stationary records of the
 project's simulator and of an independent generator, its detections on transients).
 """

@@ -40,7 +40,7 @@ SCHEMA_PATH = "estimate.schema.json"
 CONFIDENCE_LEVEL = 0.95
 
 #: Keys of the document that :meth:`RestitutionEstimate.to_dict` adds to the one
-#: :func:`rockdec.calibrate.inference.estimate` writes.
+#: :func:`rockdec.estimation.estimate` writes.
 ADDED_KEYS = ("schema_version", "test", "confidence_level")
 
 

@@ -5,7 +5,7 @@ first-order low-pass load with its corner in rocking frequencies ``1/T(sigma_Y)`
 both; :data:`rockdec.pipeline.layout.COVERAGE_CONDITIONS`) and the simulator that makes its records
 (the compiled kernel of :mod:`rockdec.physics.simulate`, or a reference written apart and passed in,
 ``tests/rocking_vectorised.py``). Every record goes through exactly the path of
-``rockdec estimate``: :func:`rockdec.calibrate.inference.estimate` with the record model measured
+``rockdec estimate``: :func:`rockdec.estimation.estimate` with the record model measured
 from the record (``model=None``), and once more with the paper's model (white load,
 noise-free sensor: :data:`rockdec.physics.record_model.PAPER`), the calibration the tool used
 before it measured the record, for its width and coverage beside.
@@ -41,7 +41,8 @@ import xarray as xr
 from scipy import stats
 
 from rockdec import engine
-from rockdec.calibrate import inference
+from rockdec import estimation
+from rockdec.report.estimate_report import document
 from rockdec.calibrate.belt import Z95
 from rockdec.rdd import registry
 from rockdec.pipeline.layout import COVERAGE_CASES, COVERAGE_CONDITIONS, COVERAGE_SIMULATORS
@@ -108,7 +109,7 @@ SHARPNESS_BAND = (0.9, 1.15)
 #: 92 % from 98 %: the binomial sd at 50 records is 3 points).
 BAND_MIN_ANSWERED = 50
 
-#: The model argument of :func:`rockdec.calibrate.inference.estimate` that measures the record's own model.
+#: The model argument of :func:`rockdec.estimation.estimate` that measures the record's own model.
 MEASURED = None
 
 
@@ -173,7 +174,7 @@ def _num(x) -> float:
 
 def _model_read(report: dict | None) -> dict:
     """What the tool measured of the record's model (``record_model`` of
-    :func:`rockdec.calibrate.inference.estimate`): the sensor noise in ``sigma_Y`` and the load's
+    :func:`rockdec.estimation.estimate`): the sensor noise in ``sigma_Y`` and the load's
     corner in rocking frequencies (NaN when not measured), and the model it simulated."""
     measured = (report or {}).get("measured") or {}
     detected = measured.get("detected") or {}
@@ -186,10 +187,10 @@ def _model_read(report: dict | None) -> dict:
 
 
 def estimate_record(theta: np.ndarray, dt: float, source: str, cache_dir, model) -> dict:
-    """:func:`rockdec.calibrate.inference.estimate` of one record, flattened; a refusal
+    """:func:`rockdec.estimation.estimate` of one record, flattened; a refusal
     (:class:`rockdec.record.records.RecordError`) is a null ``e`` with the refusal as its reason."""
     try:
-        out = inference.estimate([Record(theta, dt, source)], cache_dir=cache_dir, model=model).document
+        out = document(estimation.estimate([Record(theta, dt, source)], cache_dir=cache_dir, model=model))
     except RecordError as exc:
         return {"e": math.nan, "low": math.nan, "high": math.nan, "reason": f"refused: {exc}", "estimator": "", "warnings": [],
                 "points_per_cycle": math.nan, "calibration": "", "per": {}, **_model_read(None)}
@@ -316,7 +317,7 @@ def recorrect(ds: xr.Dataset, cache_dir) -> xr.Dataset:
     with the belt that ran the cell, ``e_hat``, ``low`` and ``high`` come back unchanged.
     The estimator reported stays the one the cell stored (a variant that would change the
     choice needs the cell run again); a record with a null ``e`` stays null, and a raw value
-    beyond the belt's mean curve gives a null (:func:`rockdec.calibrate.inference.beyond`).
+    beyond the belt's mean curve gives a null (:func:`rockdec.estimation.beyond`).
     Returns a copy of ``ds`` with ``e_hat``, ``low`` and ``high`` replaced.
     """
     if "est_raw" not in ds:
@@ -333,7 +334,7 @@ def recorrect(ds: xr.Dataset, cache_dir) -> xr.Dataset:
 
 class _Inverter:
     """Raw values inverted through the belts of stored calibrations (``cache_dir``), as
-    :func:`rockdec.calibrate.inference.estimate` inverts a record's: each calibration's belts
+    :func:`rockdec.estimation.estimate` inverts a record's: each calibration's belts
     read once, their spread scaled to records of ``n_points``
     (:func:`rockdec.calibrate.calibration.spread_scale`)."""
 
@@ -343,7 +344,7 @@ class _Inverter:
     def __call__(self, file: str, name: str, raw: float) -> tuple[float, float, float]:
         """Corrected ``e``, low and high of ``raw`` of estimator ``name`` through the calibration
         ``file``; NaN for each when the belt gives no value or the raw value lies beyond its
-        mean curve (:func:`rockdec.calibrate.inference.beyond`)."""
+        mean curve (:func:`rockdec.estimation.beyond`)."""
         import json
         from pathlib import Path
 
@@ -354,14 +355,14 @@ class _Inverter:
             self.belts[file] = belt.belts(cal, calibration.spread_scale(json.loads(cal.attrs["settings"]), self.n_points))
         b = self.belts[file][name]
         c = belt.correct(b, raw)
-        if inference.beyond(b, raw, c) is not None or not np.isfinite(c.value):
+        if estimation.beyond(b, raw, c) is not None or not np.isfinite(c.value):
             return math.nan, math.nan, math.nan
         return c.value, c.low, c.high
 
 
 def _fresh_raw(simulate, seeds, attrs: dict) -> list[tuple]:
     """Records ``seeds`` of the route of a cell of attributes ``attrs`` (:func:`run_cell`),
-    each analysed as :func:`rockdec.calibrate.inference.estimate` analyses it: the samples
+    each analysed as :func:`rockdec.estimation.estimate` analyses it: the samples
     per cycle read and every estimator's raw value."""
     from rockdec.rdd import measured
 

@@ -6,7 +6,7 @@ Records of known ``e`` are simulated apart from any calibration (``g = sigma_p =
 :data:`DEFECTS` (:func:`add_defect`), at every noise level and load of
 :mod:`rockdec.pipeline.layout` (``DIAGNOSTICS_NOISE``, ``DIAGNOSTICS_CORNERS``,
 ``DIAGNOSTICS_COLOURED_NOISE``, :data:`COLOURED_DEFECTS`), and go through ``rockdec
-estimate`` itself (:func:`rockdec.calibrate.inference.estimate`, :func:`run`). The defects,
+estimate`` itself (:func:`rockdec.estimation.estimate`, :func:`run`). The defects,
 on the clean records' seeds so the shift of ``e`` is read record by record:
 ``nonstationary`` (the impulses' standard deviation ramped from ``1 - m`` to ``1 + m``),
 ``drift`` (a trend from ``-D/2`` to ``+D/2`` in ``sigma_Y``), ``spikes`` (one sample in
@@ -28,7 +28,11 @@ import dask
 import numpy as np
 import pandas as pd
 
-from rockdec.calibrate import calibration, inference
+from rockdec.calibrate import calibration
+
+from rockdec import estimation
+
+from rockdec.report.estimate_report import document
 from rockdec.record import diagnostics
 from rockdec import engine
 from rockdec.rdd import measured
@@ -123,10 +127,10 @@ def record(e: float, seed: int, n: int, dt: float, burn_in: int, defect: str | N
 def _cell(e: float, defect: str | None, size: float, noise: float, seeds, n: int, dt: float, burn_in: int, pole: float) -> list:
     """``(calibration settings, seconds to simulate and analyse, seconds for the
     statistics)`` per seed of one cell: the settings ``rockdec estimate`` calibrates the record
-    with (its measured record model, :func:`rockdec.calibrate.inference.record_model`); ``None``
+    with (its measured record model, :func:`rockdec.estimation.record_model`); ``None``
     when the record cannot be analysed or ``rockdec estimate`` declines it (its model cannot
     be measured, or its measured colour is not shown to lie above the corner's floor,
-    :func:`rockdec.calibrate.inference.colour_decline`): ``rockdec estimate`` builds no
+    :func:`rockdec.estimation.colour_decline`): ``rockdec estimate`` builds no
     calibration for such a record, and neither does the study (at corner 3 and 3 % noise, 21
     of the 58 calibrations of 400 records would serve declined records only)."""
     out = []
@@ -141,15 +145,15 @@ def _cell(e: float, defect: str | None, size: float, noise: float, seeds, n: int
         tock = time.perf_counter()
         diagnostics.statistics([y], analysis)
         spent = time.perf_counter() - tock
-        measurement, _ = inference.measure_model([Record(y, dt, "study")], dt)
-        model, sources = inference.record_model(measurement, analysis)
-        declined = measurement is None or inference.colour_decline(model, sources, measurement, analysis.points_per_cycle)
+        measurement, _ = estimation.measure_model([Record(y, dt, "study")], dt)
+        model, sources = estimation.record_model(measurement, analysis)
+        declined = measurement is None or estimation.colour_decline(model, sources, measurement, analysis.points_per_cycle)
         out.append((None if declined else calibration.calibration_settings([n], analysis.points_per_cycle, None, model), tock - tick, spent))
     return out
 
 
 def _estimates(e: float, defect: str | None, size: float, noise: float, seeds, n: int, dt: float, burn_in: int, pole: float, cache_dir) -> list:
-    """Per seed of one cell, what :func:`rockdec.calibrate.inference.estimate` gives the record
+    """Per seed of one cell, what :func:`rockdec.estimation.estimate` gives the record
     (its calibration stored in ``cache_dir``): ``e`` (``None`` when it gives none), the
     interval, the calibration's file name, and per check its statistic, threshold and whether it fired; ``None`` for a
     record it refuses."""
@@ -157,7 +161,7 @@ def _estimates(e: float, defect: str | None, size: float, noise: float, seeds, n
     for seed in seeds:
         y = record(e, int(seed), n, dt, burn_in, defect, size, noise, pole)
         try:
-            got = inference.estimate([Record(y, dt, f"record {seed}")], cache_dir=cache_dir, repair_records=False).document  # the checks themselves, on the records as given
+            got = document(estimation.estimate([Record(y, dt, f"record {seed}")], cache_dir=cache_dir, repair_records=False))  # the checks themselves, on the records as given
         except InputError:
             out.append(None)
             continue
@@ -187,7 +191,7 @@ def run(
 ) -> pd.DataFrame:
     """One row per record and cell (``e``, sensor ``noise``, load ``corner``, ``defect``,
     ``size``; ``defect`` ``"clean"`` for the records without one): the corrected ``e`` and
-    interval ``rockdec estimate`` gives (:func:`rockdec.calibrate.inference.estimate`, the
+    interval ``rockdec estimate`` gives (:func:`rockdec.estimation.estimate`, the
     record model measured off the record), and per check its statistic, threshold and
     whether it fired; under a coloured load (``corners`` other than 0) at the noise levels
     of ``coloured_noise`` and with the defects of ``coloured_defects`` only. Calibrations are stored in ``cache_dir`` and built before the records
