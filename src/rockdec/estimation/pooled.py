@@ -33,7 +33,7 @@ class Pooled(NamedTuple):
     (``{"pooled_consistency": rockdec.record.diagnostics.Outcome}``, empty for a single
     record)."""
 
-    selection: tuple
+    selection: Selection
     notes: tuple
     checks: dict
 
