@@ -14,5 +14,6 @@ def stand_in(verdict: estimation.Verdict, e: float = 0.9, estimator: str = "e_0"
     and an analysis that reads ``points_per_cycle`` samples per cycle."""
     reading = estimation.Reading(e, e, None, (0.5, 0.99), e - 0.02, e + 0.02, 0.95, 100, ())
     analysed = SimpleNamespace(analysis=SimpleNamespace(points_per_cycle=points_per_cycle))
-    return estimation.Outcome(analysed, None, None, {estimator: reading}, estimation.Selection(estimator, (), None), None, (), {},
+    return estimation.Outcome(analysed, None, None, {estimator: reading}, estimation.Selection(estimator, (), None),
+                              estimation.uncalibrated_g(None), (), {},
                               estimation.Repaired(None, True), verdict)

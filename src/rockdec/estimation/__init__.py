@@ -29,7 +29,7 @@ _MODULES = {
     "corrected": ("Reading", "beyond", "correct", "gains_speed", "uncalibrated"),
     "cost_model": ("ANALYSIS_SECONDS", "BYTES_PER_SAMPLE", "CALIBRATION_SECONDS", "CSV_SECONDS", "PAIR_SECONDS", "RECORD_SECONDS", "calibration_sets", "cost", "stage_seconds"),
     "diagnosed": ("checks_place", "diagnose", "unresolved_impacts"),
-    "g_read": ("GReading", "LONG_RATIO", "g_note", "long_record_note", "read_g"),
+    "g_read": ("GReading", "LONG_RATIO", "g_note", "long_record_note", "read_g", "uncalibrated_g"),
     "model_choice": ("BASE_NYQUIST_TOLERANCE", "BASE_SOURCE", "COLOUR_CORNER_FLOOR", "COLOUR_CORNER_Z", "DECLARED_FACTOR", "DECLARED_Z", "ModelChoice", "SIDE_G_SHARE", "base_short", "choose_model", "colour_decline", "declared_contradictions", "filter_decline", "measure_model", "record_model"),
     "notes": ("NOTE_CODES", "Note"),
     "pooled": ("Pooled", "check_pooled"),

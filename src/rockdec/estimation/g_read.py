@@ -18,7 +18,7 @@ from rockdec.estimation.notes import Note
 from rockdec.rdd import measured
 from rockdec.rdd.registry import DEFAULT_ESTIMATOR
 
-__all__ = ["GReading", "LONG_RATIO", "g_note", "long_record_note", "read_g"]
+__all__ = ["GReading", "LONG_RATIO", "g_note", "long_record_note", "read_g", "uncalibrated_g"]
 
 #: Records more than this many times as long as the calibration's simulated records are warned
 #: that their interval's coverage was not measured at their length (evidence:
@@ -72,6 +72,11 @@ def read_g(analysed: Analysed, choice: ModelChoice, calibrated: Calibrated, chos
         g_note(g is not None, bool(np.isfinite(low)), chosen is not None, calibrated.scale, sum(choice.cal_settings["lengths"])),
         tuple(notes),
     )
+
+
+def uncalibrated_g(g: float | None) -> GReading:
+    """``g`` of records declined before any calibration: as given (NaN when not), no interval."""
+    return GReading(math.nan if g is None else float(g), None, math.nan, g_note(g is not None, False, False, 1.0, 0), ())
 
 
 def g_note(given: bool, has_interval: bool, has_e: bool, scale: float, simulated: int) -> str:

@@ -11,7 +11,7 @@ from rockdec.estimation import corrected, selected
 from rockdec.estimation.analysed import Analysed, analyse
 from rockdec.estimation.calibrated import Calibrated, get_calibration
 from rockdec.estimation.diagnosed import checks_place, diagnose
-from rockdec.estimation.g_read import GReading, long_record_note, read_g
+from rockdec.estimation.g_read import GReading, long_record_note, read_g, uncalibrated_g
 from rockdec.estimation.model_choice import ModelChoice, choose_model
 from rockdec.estimation.pooled import check_pooled
 from rockdec.physics.record_model import Load, RecordModel, SensorFilter, SensorNoise
@@ -61,7 +61,7 @@ class Outcome(NamedTuple):
     ``choice`` of record model, the ``calibrated`` belts (``None``: declined before any
     calibration), every estimator's :class:`~rockdec.estimation.corrected.Reading`, the
     :class:`~rockdec.estimation.selected.Selection` (after the pooled check), the
-    :class:`~rockdec.estimation.g_read.GReading` (``None`` without a calibration), the
+    :class:`~rockdec.estimation.g_read.GReading`, the
     ``notes`` (:class:`~rockdec.estimation.notes.Note`), every check's
     :class:`rockdec.record.diagnostics.Outcome`, what the repair did (:class:`Repaired`),
     the :class:`Verdict` the repair-and-retry reads, and ``declined``: why ``e`` is declined
@@ -73,7 +73,7 @@ class Outcome(NamedTuple):
     calibrated: Calibrated | None
     readings: dict
     selection: selected.Selection
-    g_reading: GReading | None
+    g_reading: GReading
     notes: tuple
     checks: dict
     repaired: Repaired
@@ -119,8 +119,8 @@ def estimate_once(
                           repaired=simulated_repair, length_grid=length_grid)
     if choice.declined:
         rows = selected.declined_rows("not calibrated: the records are declined (see the reason)")
-        return Outcome(analysed, choice, None, corrected.uncalibrated(analysed), selected.Selection(None, rows, choice.declined), None,
-                       (*analysed.notes, *choice.notes), {}, repaired, Verdict.of(choice, False, {}, repaired.done))
+        return Outcome(analysed, choice, None, corrected.uncalibrated(analysed), selected.Selection(None, rows, choice.declined),
+                       uncalibrated_g(analysed.g), (*analysed.notes, *choice.notes), {}, repaired, Verdict.of(choice, False, {}, repaired.done))
     calibrated = get_calibration(analysed, choice, cache_dir, available)
     per = corrected.correct(analysed, calibrated)
     selection = selected.select(per, calibrated.n_sets, calibrated.belts)

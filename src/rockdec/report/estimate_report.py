@@ -8,7 +8,6 @@ import math
 
 from rockdec._version import __version__
 from rockdec.calibrate import calibration
-from rockdec.estimation.g_read import g_note
 from rockdec.estimation.stages import Outcome, Repaired
 from rockdec.physics.record_model import RecordModel
 from rockdec.rdd import measured
@@ -133,9 +132,7 @@ def candidate_row(c) -> dict:
 
 def _g(outcome: Outcome) -> tuple:
     """``(value, interval, coverage, note)`` of the document's ``g``."""
-    g, reading = outcome.analysed.g, outcome.g_reading
-    if reading is None:  # declined before any calibration
-        return None if g is None else json_number(g), None, None, g_note(g is not None, False, False, 1.0, 0)
+    reading = outcome.g_reading
     interval = None if reading.interval is None else [json_number(x) for x in reading.interval]
     return json_number(reading.value), interval, json_number(reading.coverage), reading.note
 
