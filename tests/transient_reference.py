@@ -48,11 +48,20 @@ def _step(theta: float, omega: float, a: float, dt: float, g: float, e: float) -
     raise RuntimeError("the block chatters without end")
 
 
-def _rock(a: np.ndarray, e: float, g: float = G, fs: float = FS) -> np.ndarray:
-    """The rocking angle at each sample under the base acceleration ``a`` (one value per sample)."""
+def _rock(a: np.ndarray, e: float, g: float = G, fs: float = FS, substeps: int = 0) -> np.ndarray:
+    """The rocking angle at each sample under the base acceleration ``a`` (one value per
+    sample): held over each sample (``substeps`` 0), or linear between samples, read at the
+    midpoints of ``substeps`` equal steps of each sample."""
     out = np.empty(a.size)
     theta = omega = 0.0
     dt = 1.0 / fs
+    if substeps:
+        mid = (np.arange(substeps) + 0.5) / substeps
+        for i, ai in enumerate(a):
+            out[i] = theta
+            for ak in ai + mid * ((a[i + 1] if i + 1 < a.size else ai) - ai):
+                theta, omega = _step(theta, omega, float(ak), dt / substeps, g, e)
+        return out
     for i, ai in enumerate(a):
         out[i] = theta
         theta, omega = _step(theta, omega, float(ai), dt, g, e)
@@ -87,18 +96,19 @@ def transient(e: float, seed: int, *, strong: float = 20.0, free: float = 20.0, 
 
 
 def transient_with_base(e: float, seed: int, *, strong: float = 20.0, free: float = 20.0, peak: float = 0.8, noise: float = 0.01,
-                        fs: float = FS, residual: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+                        fs: float = FS, residual: float = 0.0, substeps: int = 0) -> tuple[np.ndarray, np.ndarray]:
     """The record of :func:`transient` and the base acceleration that made it (rad/s^2, the
     simplified rocking equation's load; the block lifts above ``G``). ``residual``: the base
     keeps moving in the free part, white noise uniform in ``+-residual G`` (drawn from its own
-    stream, so the shaking and the sensor noise stay those of ``residual = 0``)."""
+    stream, so the shaking and the sensor noise stay those of ``residual = 0``). ``substeps``:
+    as :func:`_rock` (0: the base held over each sample)."""
     rng = np.random.default_rng(seed)
     n_shake, n_free = int(strong * fs), int(free * fs)
     t = np.arange(n_shake) / n_shake
     envelope = np.where(t < 0.2, (t / 0.2) ** 2, np.where(t < 0.7, 1.0, np.exp(-8.0 * (t - 0.7))))
     tail = residual * G * np.random.default_rng([seed, 1]).uniform(-1.0, 1.0, n_free) if residual else np.zeros(n_free)
     a = np.concatenate([peak * G * envelope * _clough_penzien(n_shake, rng, fs), tail])
-    return _noisy(_rock(a, e, G, fs), noise, rng), a
+    return _noisy(_rock(a, e, G, fs, substeps), noise, rng), a
 
 
 def stationary(e: float, seed: int, *, seconds: float = 100.0, strength: float = 3.0, noise: float = 0.01,

@@ -7,7 +7,9 @@ sample above :data:`QUIET` of the uplift level; every stretch as quiet as that, 
 :data:`MIN_TAIL` s long, after the base first could lift the block, is a free-decay tail,
 analysed by :func:`rockdec.free.analysis.analyse_free_rocking` and pooled over the tails of
 all records of one block. A tail whose base still moves (a cut by hand) is refused with that
-reason, never fitted as if free. Entry point: :func:`analyse_shake_table`.
+reason, never fitted as if free. Beside the tails, each whole record is read with the base as
+a known load in its arcs (:mod:`rockdec.free.forced`, the simplified model), its impacts
+pooled over the records. Entry point: :func:`analyse_shake_table`.
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ import numpy as np
 
 from rockdec import validate as checks
 from rockdec.free.analysis import FreeRockingFit, analyse_free_rocking
+from rockdec.free.forced import ForcedFit, analyse_forced, pool_forced
 from rockdec.free.impacts import CROSSING_BAND_SIGMAS, find_crossings, noise_std
 from rockdec.timeaxis import RecordError
 
@@ -54,7 +57,10 @@ class ShakeTableFit:
     accepted tails (``None`` when none), ``shaking_end`` per record (s, NaN when it never
     ends), ``tails`` (record, start s, stop s) accepted with their ``tail_fits`` and the base's
     residual motion in each (``tail_loads``, :func:`load_intensity`), ``refused``
-    (record, start s, reason) and ``reason`` (why there is no ``e``; ``None`` when there is)."""
+    (record, start s, reason) and ``reason`` (why there is no ``e``; ``None`` when there is);
+    ``forced``: each record read with the base as a known load
+    (:func:`rockdec.free.forced.analyse_forced`) and ``forced_pooled`` their impacts together
+    (empty and ``None`` under the Housner model, which it does not fit)."""
 
     fit: FreeRockingFit | None
     shaking_end: tuple[float, ...]
@@ -63,6 +69,8 @@ class ShakeTableFit:
     tail_loads: tuple[float, ...]
     refused: tuple[tuple[int, float, str], ...]
     reason: str | None
+    forced: tuple[ForcedFit, ...] = ()
+    forced_pooled: ForcedFit | None = None
 
     @property
     def e(self) -> float:
@@ -211,7 +219,7 @@ def analyse_shake_table(theta, base, dt, *, base_units: str = "m/s2", g_block: f
     per_record = list(dt) if isinstance(dt, (list, tuple)) else [dt] * len(thetas)
     if len(per_record) != len(thetas):
         raise RecordError(f"{len(thetas)} records but {len(per_record)} steps `dt`; give one step, or one per record.")
-    ends, tails, pieces, steps, fits, refused, loads = [], [], [], [], [], [], []
+    ends, tails, pieces, steps, fits, refused, loads, forced = [], [], [], [], [], [], [], []
     for k, (y, b, dt) in enumerate(zip(thetas, bases, per_record)):
         dt = checks.positive(dt, "`dt`", "give the sampling step in s, > 0")
         name = f"record {k}" if many else "the record"
@@ -221,6 +229,8 @@ def analyse_shake_table(theta, base, dt, *, base_units: str = "m/s2", g_block: f
         if not np.all(np.isfinite(b)):
             raise RecordError(f"{name}: the base acceleration has a NaN or infinite sample ({int(np.flatnonzero(~np.isfinite(b))[0])}); fill or cut it.")
         r = uplift_ratio(b, base_units=base_units, g_block=g_block, theta_cr=theta_cr)
+        if model == "simplified":
+            forced.append(analyse_forced(y, r, dt) if np.all(np.isfinite(y)) else ForcedFit.none("the angle has a NaN or infinite sample"))
         end = shaking_end(r, dt, quiet=quiet)
         n_min = max(int(round(min_tail / dt)), 8)
         ends.append(end * dt if y.size - end >= n_min else math.nan)
@@ -267,4 +277,5 @@ def analyse_shake_table(theta, base, dt, *, base_units: str = "m/s2", g_block: f
         reason = pooled.reason
     else:
         reason = "no free-decay tail gives an e: " + "; ".join(f"{'record %d at ' % k if many else ''}{s:.6g} s: {why}" for k, s, why in refused)
-    return ShakeTableFit(pooled, tuple(ends), tuple(tails), tuple(fits), tuple(loads), tuple(refused), reason)
+    return ShakeTableFit(pooled, tuple(ends), tuple(tails), tuple(fits), tuple(loads), tuple(refused), reason, tuple(forced),
+                         pool_forced(forced) if forced else None)

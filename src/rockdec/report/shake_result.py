@@ -5,7 +5,9 @@ The document is the free-rocking document of the pooled free-decay tails
 (:mod:`rockdec.report.free_result`; impacts and releases numbered by the record they lie in,
 times on that record's axis) and a ``shake_table`` entry: the base's units, the thresholds of
 quiet and of a tail's length, where the shaking ends in each record, the tails analysed (with
-their own ``e``) and the stretches refused, each with its reason (:mod:`rockdec.free.shake`).
+their own ``e``) and the stretches refused, each with its reason (:mod:`rockdec.free.shake`),
+and ``forced``: the records read with the base as a known load in their arcs
+(:mod:`rockdec.free.forced`), per record and pooled.
 """
 
 from __future__ import annotations
@@ -48,7 +50,17 @@ def shake_document(shake, sources: list[str], steps: list[float], sizes: list[in
                   for (k, t0, t1), fit, load in zip(shake.tails, shake.tail_fits, shake.tail_loads)],
         "refused": [{"record": int(k), "start": json_number(t0), "reason": why} for k, t0, why in shake.refused],
     }
+    if shake.forced_pooled is not None:
+        doc["shake_table"]["forced"] = {**_forced(shake.forced_pooled), "g": json_number(shake.forced_pooled.g),
+                                        "records": [{"record": k, **_forced(f), "g": json_number(f.g), "load_gain": json_number(f.load_gain),
+                                                     "base_shift": json_number(f.shift)} for k, f in enumerate(shake.forced)]}
     return doc
+
+
+def _forced(fit) -> dict:
+    """The entries of one reading of :mod:`rockdec.free.forced` (a record's or the pool's)."""
+    return {"e": json_number(fit.e), "interval": [json_number(x) for x in fit.e_interval], "impacts": fit.impacts,
+            "set_aside": int(fit.set_aside), "reason": fit.reason}
 
 
 def _empty_document(sources: list[str], steps: list[float], sizes: list[int], model: str, theta_cr: float | None) -> dict:
@@ -74,5 +86,19 @@ def shake_text(doc: dict, verbose: bool = False) -> str:
               for t in table["tails"] if t["e"] is not None]
     lines += [f"  refused in record {r['record']} from {r['start']:.6g} s: {r['reason']}" for r in table["refused"]]
     lines.append(f"  (base in {table['base_units']}; quiet below {table['quiet']:g} of the uplift level for at least {table['min_tail']:g} s)")
+    forced = table.get("forced")
+    if forced is not None:
+        lines += ["", "every impact, the base as a known load in the arcs:"]
+        rows = [("all records", forced), *((doc["records"][r["record"]] if r["record"] < len(doc["records"]) else f"record {r['record']}", r)
+                                          for r in forced["records"])] if len(forced["records"]) > 1 else [("the record", forced)]
+        for name, r in rows:
+            if r["e"] is None:
+                lines.append(f"  {name}: no e: {r['reason']}")
+            else:
+                lo, hi = r["interval"]
+                lines.append(f"  {name}: e = {r['e']:.4f}, 95 % interval [{lo:.4f}, {hi:.4f}], from {r['impacts']} impacts")
+        gains = [r["load_gain"] for r in forced["records"] if r["load_gain"] is not None]
+        if gains:
+            lines.append(f"  (the base's fitted load over what its units and the block's angle say: {min(gains):.3f}-{max(gains):.3f})")
     return "\n".join(lines)
 

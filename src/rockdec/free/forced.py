@@ -1,0 +1,278 @@
+"""The forced stretch of a shake-table test: ``e`` from every impact, the base a known load.
+
+Between two impacts the simplified block (eq. 4) under the base's load ``k r(t)`` (``r``
+the base over the uplift level, :func:`rockdec.free.shake.uplift_ratio`) flies as
+``theta = c0 + c1 tau - sign g tau^2 / 2 + k L(t)``, ``L`` the base's double integral
+from the arc's first sample (the base linear between samples, :func:`base_integrals`).
+That is linear in each arc's ``c0, c1`` and the record's ``g, k``, so all arcs of a record
+are fitted at once by least squares (:func:`fit_arcs`); ``k / g`` is 1 when the base's
+units and the block's angle are right (the ``load_gain``). The base's samples may lag the
+angle's by part of a sample (a logger's filters, or a base held over each sample instead
+of varying smoothly): the lag that fits the arcs best within :data:`MAX_SHIFT` samples is
+read first and taken out (:func:`base_shift`). Each impact's ``e`` is the
+ratio of the arcs' speeds where each meets zero; ``e`` is the mean of ``log e`` over the
+impacts (outliers beyond :data:`OUTLIER_MADS` set aside), its 95 % interval Student's
+``t`` on their scatter, never narrower than :data:`FLOOR`. Entry points:
+:func:`analyse_forced`, :func:`pool_forced`.
+
+Explanation: docs/explanation/shake-table.md (the forced stretch).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import stats
+
+from rockdec.free.impacts import CROSSING_BAND_SIGMAS, find_crossings, noise_std
+
+__all__ = ["FEWEST_IMPACTS", "FLOOR", "ForcedFit", "MAX_SHIFT", "MIN_ARC_SAMPLES", "OUTLIER_MADS", "analyse_forced", "base_integrals",
+           "base_shift", "fit_arcs", "pool_forced"]
+
+#: Fewest samples off zero for an arc to be fitted.
+MIN_ARC_SAMPLES = 6
+
+#: Impacts whose ``log e`` lies further than this many (normal-scaled) median absolute
+#: deviations from the median are set aside (an arc cut short by a rest, a chatter).
+OUTLIER_MADS = 5.0
+
+#: Largest lag (samples) of the base behind the angle, or ahead, that :func:`base_shift` seeks.
+MAX_SHIFT = 2.0
+
+#: Fewest impacts for an ``e``.
+FEWEST_IMPACTS = 5
+
+#: Half-width floor of the interval in ``log e``: the arcs' fit reads a noise-free record's
+#: ``e`` to about 1e-6 (the base's reading between samples), so an interval is never narrower.
+FLOOR = 1e-5
+
+
+@dataclass(frozen=True)
+class ForcedFit:
+    """What :func:`analyse_forced` found in one record, or :func:`pool_forced` in several:
+    ``log_e`` of each impact used, ``set_aside`` (outliers), the fitted ``g`` (rad/s^2),
+    ``load_gain`` (``|k| / g``) and the base's lag ``shift`` (samples; both NaN for a pool),
+    ``e`` and its 95 % ``e_interval`` (NaN when ``reason`` says why there is none)."""
+
+    log_e: np.ndarray
+    set_aside: int
+    g: float
+    load_gain: float
+    shift: float
+    e: float
+    e_interval: tuple[float, float]
+    reason: str | None
+
+    @classmethod
+    def none(cls, reason: str) -> ForcedFit:
+        """No reading, for ``reason``."""
+        return cls(np.empty(0), 0, math.nan, math.nan, math.nan, math.nan, (math.nan, math.nan), reason)
+
+    @property
+    def impacts(self) -> int:
+        """The impacts ``e`` is read from."""
+        return int(self.log_e.size)
+
+
+def base_integrals(ratio, dt: float) -> tuple[np.ndarray, np.ndarray]:
+    """The base's integral and double integral from the first sample, the base linear between
+    samples: ``(V, L)`` at each sample (units of ``ratio`` times s and s^2).
+
+    Examples
+    --------
+    >>> v, l = base_integrals(np.ones(3), 0.5)
+    >>> v.tolist(), l.tolist()
+    ([0.0, 0.5, 1.0], [0.0, 0.125, 0.5])
+    """
+    a = np.asarray(ratio, dtype=float)
+    v = np.concatenate([[0.0], np.cumsum(0.5 * (a[:-1] + a[1:]) * dt)])
+    step = v[:-1] * dt + (2.0 * a[:-1] + a[1:]) * dt * dt / 6.0
+    return v, np.concatenate([[0.0], np.cumsum(step)])
+
+
+def _arcs(theta: np.ndarray, band: float):
+    """``(lo, hi, side, crossing before, crossing after)`` of every run of at least
+    :data:`MIN_ARC_SAMPLES` samples beyond ``band`` on one side (crossings as indices into
+    the crossings found, -1 where a rest or the record's end bounds the run)."""
+    c = find_crossings(theta, band)
+    edges = np.concatenate([[-0.5], c.position, [theta.size - 0.5]])
+    sides = np.concatenate([c.side, [-c.side[-1]]]) if c.side.size else np.array([1 if theta[np.argmax(np.abs(theta))] > 0 else -1])
+    out = []
+    for k in range(edges.size - 1):
+        lo, hi = max(int(np.floor(edges[k])) + 1, 0), min(int(np.floor(edges[k + 1])) + 1, theta.size)
+        off = np.flatnonzero(sides[k] * theta[lo:hi] > band) + lo
+        runs = np.split(off, np.flatnonzero(np.diff(off) > 1) + 1) if off.size else []
+        for j, run in enumerate(runs):
+            if run.size >= MIN_ARC_SAMPLES:
+                before = k - 1 if j == 0 and k > 0 else -1
+                after = k if j == len(runs) - 1 and k < edges.size - 2 else -1
+                out.append((int(run[0]), int(run[-1]) + 1, int(sides[k]), before, after))
+    return c.position, out
+
+
+def fit_arcs(theta, ratio, dt: float, arcs) -> tuple[float, float, np.ndarray]:
+    """Least-squares ``g``, ``k`` and each arc's ``(c0, c1)`` of the forced flight (module
+    docstring) over the ``arcs`` ``(lo, hi, side, ...)``: each arc's ``c0, c1`` projected out
+    exactly, ``g`` and ``k`` from what remains.
+
+    Examples
+    --------
+    >>> t = np.arange(40) * 0.01
+    >>> r = np.sin(3.0 * t)
+    >>> v, l = base_integrals(r, 0.01)
+    >>> theta = 0.1 + 0.5 * t - 2.0 * t**2 / 2 + 1.5 * l
+    >>> g, k, c = fit_arcs(theta, r, 0.01, [(0, 40, 1)])
+    >>> round(g, 9), round(k, 9), c.round(9).tolist()
+    (2.0, 1.5, [[0.1, 0.5]])
+    """
+    theta = np.asarray(theta, dtype=float)
+    v, l = base_integrals(ratio, dt)
+    ys, zs, bases = [], [], []
+    for lo, hi, side, *_ in arcs:
+        tau = dt * np.arange(hi - lo)
+        x = np.column_stack([np.ones(tau.size), tau])
+        z = np.column_stack([-side * tau * tau / 2.0, l[lo:hi] - l[lo] - v[lo] * tau])
+        q, _ = np.linalg.qr(x)
+        y = theta[lo:hi]
+        ys.append(y - q @ (q.T @ y))
+        zs.append(z - q @ (q.T @ z))
+        bases.append((x, z, y))
+    beta = np.linalg.lstsq(np.concatenate(zs), np.concatenate(ys), rcond=None)[0]
+    coef = np.array([np.linalg.lstsq(x, y - z @ beta, rcond=None)[0] for x, z, y in bases])
+    return float(beta[0]), float(beta[1]), coef
+
+
+def _shifted(ratio: np.ndarray, lag: float) -> np.ndarray:
+    """``ratio`` read ``lag`` samples later (linear between samples, held past the ends)."""
+    i = np.arange(ratio.size, dtype=float)
+    return np.interp(i - lag, i, ratio)
+
+
+def _misfit(theta, ratio, dt, arcs, lag) -> float:
+    """The arcs' sum of squared residuals with the base lagged by ``lag`` samples."""
+    r = _shifted(ratio, lag)
+    g, k, coef = fit_arcs(theta, r, dt, arcs)
+    v, l = base_integrals(r, dt)
+    total = 0.0
+    for (lo, hi, side, *_), (c0, c1) in zip(arcs, coef):
+        tau = dt * np.arange(hi - lo)
+        total += float(np.sum((theta[lo:hi] - c0 - c1 * tau + side * g * tau * tau / 2.0 - k * (l[lo:hi] - l[lo] - v[lo] * tau)) ** 2))
+    return total
+
+
+def base_shift(theta, ratio, dt: float, arcs) -> float:
+    """The lag (samples, within :data:`MAX_SHIFT`) of the base behind the angle that fits the
+    ``arcs`` best: a grid of quarter samples, then a bounded search about its best point.
+
+    Examples
+    --------
+    >>> t = np.arange(60) * 0.01
+    >>> r = np.sin(7.0 * t)
+    >>> theta = 0.05 - t**2 + 2.0 * base_integrals(np.sin(7.0 * (t - 0.003)), 0.01)[1]
+    >>> round(base_shift(theta, r, 0.01, [(0, 60, 1)]), 2)
+    0.3
+    """
+    from scipy import optimize
+
+    theta, ratio = np.asarray(theta, dtype=float), np.asarray(ratio, dtype=float)
+    grid = np.arange(-MAX_SHIFT, MAX_SHIFT + 0.125, 0.25)
+    best = grid[int(np.argmin([_misfit(theta, ratio, dt, arcs, d) for d in grid]))]
+    lo, hi = max(best - 0.25, -MAX_SHIFT), min(best + 0.25, MAX_SHIFT)
+    return float(optimize.minimize_scalar(lambda d: _misfit(theta, ratio, dt, arcs, d), bounds=(lo, hi), method="bounded",
+                                          options={"xatol": 1e-4}).x)
+
+
+def _root(arc, coef, g, k, ratio, v, l, dt, guess):
+    """Where one fitted arc meets zero near ``guess`` (s) and its speed there (Newton's
+    method; NaN when it does not settle within two samples of the guess)."""
+    lo, _, side = arc[:3]
+    c0, c1 = coef
+    a = ratio
+    t = guess
+    for _ in range(12):
+        j = min(max(int(t // dt), 0), a.size - 2)
+        u, slope = t - j * dt, (a[j + 1] - a[j]) / dt
+        vt = v[j] + a[j] * u + slope * u * u / 2.0
+        lt = l[j] + v[j] * u + a[j] * u * u / 2.0 + slope * u**3 / 6.0
+        tau = t - lo * dt
+        f = c0 + c1 * tau - side * g * tau * tau / 2.0 + k * (lt - l[lo] - v[lo] * tau)
+        speed = c1 - side * g * tau + k * (vt - v[lo])
+        if speed == 0.0 or not math.isfinite(speed):
+            return math.nan, math.nan
+        t -= f / speed
+    return (t, speed) if abs(t - guess) < 2.0 * dt else (math.nan, math.nan)
+
+
+def _pooled_e(log_e: np.ndarray) -> tuple[np.ndarray, int, float, tuple[float, float], str | None]:
+    """The impacts kept, how many were set aside, ``e`` and its interval (module docstring)."""
+    if log_e.size < FEWEST_IMPACTS:
+        return log_e, 0, math.nan, (math.nan, math.nan), (
+            f"the forced stretch gives {log_e.size} impacts whose arcs fit either side, fewer than {FEWEST_IMPACTS}")
+    centre = np.median(log_e)
+    spread = stats.median_abs_deviation(log_e, scale="normal")
+    kept = log_e[np.abs(log_e - centre) <= OUTLIER_MADS * spread] if spread > 0 else log_e
+    mean = float(kept.mean())
+    half = max(stats.t.ppf(0.975, kept.size - 1) * kept.std(ddof=1) / math.sqrt(kept.size), FLOOR)
+    return kept, int(log_e.size - kept.size), math.exp(mean), (math.exp(mean - half), math.exp(mean + half)), None
+
+
+def analyse_forced(theta, ratio, dt: float) -> ForcedFit:
+    """``e`` of one record from the impacts of its forced stretch (module docstring).
+
+    Parameters
+    ----------
+    theta : array_like
+        The block's angle (rad), finite, one sample each ``dt``.
+    ratio : array_like
+        The base acceleration over the uplift level at the same samples
+        (:func:`rockdec.free.shake.uplift_ratio`).
+    dt : float
+        The sampling step (s).
+
+    Examples
+    --------
+    >>> from rockdec.physics.base_motion import shake_test
+    >>> theta, base = shake_test(0.85, 8_000, 0.005, 3, peak=1.6, g=2.0)
+    >>> fit = analyse_forced(theta, base / 2.0, 0.005)
+    >>> abs(fit.e - 0.85) < 2e-3, fit.impacts > 20, round(fit.load_gain, 2)
+    (True, True, 1.0)
+    """
+    theta, ratio = np.asarray(theta, dtype=float), np.asarray(ratio, dtype=float)
+    if theta.size < 2 * MIN_ARC_SAMPLES:
+        return ForcedFit.none(f"the record holds {theta.size} samples, too few for two flight arcs")
+    crossings, arcs = _arcs(theta, CROSSING_BAND_SIGMAS * noise_std(theta))
+    if len(arcs) < 2:
+        return ForcedFit.none("the record holds fewer than two flight arcs")
+    shift = base_shift(theta, ratio, dt, arcs)
+    ratio = _shifted(ratio, shift)
+    g, k, coef = fit_arcs(theta, ratio, dt, arcs)
+    v, l = base_integrals(ratio, dt)
+    log_e = []
+    for i, (left, right) in enumerate(zip(arcs[:-1], arcs[1:])):
+        joined = left[4] >= 0 and left[4] == right[3] and left[2] == -right[2] and right[0] - left[1] <= 4
+        if not joined:
+            continue
+        guess = dt * crossings[left[4]]
+        t_in, speed_in = _root(left, coef[i], g, k, ratio, v, l, dt, guess)
+        t_out, speed_out = _root(right, coef[i + 1], g, k, ratio, v, l, dt, guess)
+        if abs(t_in - t_out) < dt and speed_out / speed_in > 0.0:  # NaN fails both
+            log_e.append(math.log(speed_out / speed_in))
+    kept, aside, e, interval, reason = _pooled_e(np.asarray(log_e))
+    return ForcedFit(kept, aside, g, abs(k) / g if g > 0 else math.nan, shift, e, interval, reason)
+
+
+def pool_forced(fits) -> ForcedFit:
+    """The records' impacts of :func:`analyse_forced` read together: one block's ``e``.
+
+    Examples
+    --------
+    >>> one = ForcedFit(np.log([0.9, 0.91, 0.89]), 0, 2.0, 1.0, 0.0, 0.9, (0.88, 0.92), None)
+    >>> round(pool_forced([one, one]).e, 4)
+    0.9
+    """
+    fits = list(fits)
+    kept, aside, e, interval, reason = _pooled_e(np.concatenate([f.log_e for f in fits]) if fits else np.empty(0))
+    g = float(np.nanmean([f.g for f in fits])) if any(np.isfinite(f.g) for f in fits) else math.nan
+    return ForcedFit(kept, aside + sum(f.set_aside for f in fits), g, math.nan, math.nan, e, interval, reason)
