@@ -39,7 +39,7 @@ from rockdec.free.impacts import CROSSING_BAND_SIGMAS, find_crossings, find_sequ
 from rockdec.physics.models import MODEL_TOLERANCE, MODELS, amplitude_limit
 from rockdec.timeaxis import RecordError, sampling_step
 
-__all__ = ["FreeRockingFit", "analyse_free_rocking", "load_covariance"]
+__all__ = ["FreeRockingFit", "ImpactMean", "analyse_free_rocking", "impact_mean", "load_covariance", "pooled_mean"]
 
 #: Confidence level of the intervals.
 CONFIDENCE = 0.95
@@ -325,7 +325,7 @@ def _interval(centre, se, log=False, z=None):
     return (math.exp(lo), math.exp(hi)) if log else (lo, hi)
 
 
-def _pooled_mean(values, ses):
+def pooled_mean(values, ses):
     """Weighted mean of ``values`` and its standard error, widened by the Birge ratio."""
     values, ses = np.asarray(values), np.asarray(ses)
     ok = np.isfinite(values) & np.isfinite(ses) & (ses > 0)
@@ -463,7 +463,7 @@ def analyse_free_rocking(theta, dt, *, model: str = "simplified", theta_cr: floa
             if model == "simplified":
                 fitted = y[seq.start : last + 1]
                 scores.append((t, fitted, precision, *flight_loss.loss_score(t, fitted, fit, precision)))
-    loss, loss_se = _pooled_mean([c for *_, c, _ in scores], [se for *_, se in scores]) if scores else (math.nan, math.nan)
+    loss, loss_se = pooled_mean([c for *_, c, _ in scores], [se for *_, se in scores]) if scores else (math.nan, math.nan)
     damped = None
     if loss > LOSS_Z * loss_se:  # the score test finds a loss in flight: the arcs are fitted with it
         damped = [flight_loss.fit_sequence(t, y_fit, fit, floor=precision, c0=c) for (t, y_fit, precision, c, _), fit in zip(scores, fits)]
@@ -524,7 +524,7 @@ def _loss_in_flight(damped) -> tuple[float, float]:
     standard error."""
     c = np.array([d.c for d in damped])
     c_se = np.array([math.sqrt(max(d.covariance[-1, -1], 0.0)) for d in damped])
-    return _pooled_mean(c, c_se)
+    return pooled_mean(c, c_se)
 
 
 def _result(fits, seq_meta, notes, noises, model, theta_cr, damped, score, load_noise=None) -> FreeRockingFit:
@@ -566,7 +566,7 @@ def _result(fits, seq_meta, notes, noises, model, theta_cr, damped, score, load_
         reason = (f"only {n_impacts} impact{'s' if n_impacts != 1 else ''} could be fitted, fewer than the {MIN_IMPACTS} a pooled e "
                   "with an interval needs; record more samples per cycle, a larger release angle or more releases.")
     else:
-        pooled = _impact_mean(ys, blocks)
+        pooled = impact_mean(ys, blocks)
         e, birge, dof = math.exp(pooled.mu), pooled.scatter, pooled.dof
         log_se = max(pooled.se, SAMPLE_PRECISION)
         interval = _interval(pooled.mu, log_se, log=True, z=pooled.quantile)
@@ -592,7 +592,7 @@ def _result(fits, seq_meta, notes, noises, model, theta_cr, damped, score, load_
     else:
         q, q_var = np.array([f.q for f in fits]), np.array([f.covariance[-1, -1] for f in fits])
     q_se = np.sqrt(np.clip(q_var, 0.0, None))
-    q_mean, q_mean_se = _pooled_mean(q, q_se) if fits else (math.nan, math.nan)
+    q_mean, q_mean_se = pooled_mean(q, q_se) if fits else (math.nan, math.nan)
     q_interval = _interval(q_mean, q_mean_se)
     if model == "simplified":
         g, g_interval = q_mean, q_interval
@@ -647,7 +647,7 @@ def _gls(y, X, V):
     return beta, np.linalg.pinv(Xw.T @ Xw), float(np.sum((yw - Xw @ beta) ** 2))
 
 
-class _ImpactMean(NamedTuple):
+class ImpactMean(NamedTuple):
     """The pooled ``mu = log e`` of the impacts (module docstring): its standard error, the
     scatter of the steps over their fit errors alone (``sqrt(Q(0)/dof)``), the degrees of
     freedom, the impacts' spread ``tau`` of ``log e`` with its 95 % interval, and the
@@ -662,7 +662,7 @@ class _ImpactMean(NamedTuple):
     quantile: float
 
 
-def _impact_mean(steps, covariances) -> _ImpactMean:
+def impact_mean(steps, covariances) -> ImpactMean:
     """Each release's impacts' ``log e`` (``steps``, covariances ``covariances``: ``D C D^T``
     without loss in flight) pooled into one ``mu`` under the covariance plus ``tau^2 I``,
     ``tau^2`` by Paule-Mandel and its interval by the Q-profile (module docstring). Each
@@ -696,7 +696,7 @@ def _impact_mean(steps, covariances) -> _ImpactMean:
 
     if dof < 1:
         mu, se, _ = weighted(0.0)
-        return _ImpactMean(mu, se, math.nan, dof, math.nan, (math.nan, math.nan), stats.norm.ppf(0.5 + CONFIDENCE / 2))
+        return ImpactMean(mu, se, math.nan, dof, math.nan, (math.nan, math.nan), stats.norm.ppf(0.5 + CONFIDENCE / 2))
     tau2 = tau2_at(dof)
     low, high = (math.sqrt(tau2_at(stats.chi2.ppf(p, dof))) for p in (0.5 + CONFIDENCE / 2, 0.5 - CONFIDENCE / 2))
     if q0 > stats.chi2.ppf(SCATTER_LEVEL, dof):  # the impacts scatter beyond their fits: the log speeds walk
@@ -706,7 +706,7 @@ def _impact_mean(steps, covariances) -> _ImpactMean:
         mu, se, _ = weighted(0.0)
         se *= max(1.0, math.sqrt(q0 / dof))
         quantile = stats.norm.ppf(0.5 + CONFIDENCE / 2)
-    return _ImpactMean(mu, se, math.sqrt(q0 / dof), dof, math.sqrt(tau2), (low, high), float(quantile))
+    return ImpactMean(mu, se, math.sqrt(q0 / dof), dof, math.sqrt(tau2), (low, high), float(quantile))
 
 
 def _trend(steps, covariances, speeds) -> tuple[float, float, float, float, float]:

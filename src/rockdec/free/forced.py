@@ -6,14 +6,19 @@ the base over the uplift level, :func:`rockdec.free.shake.uplift_ratio`) flies a
 from the arc's first sample (the base linear between samples, :func:`base_integrals`).
 That is linear in each arc's ``c0, c1`` and the record's ``g, k``, so all arcs of a record
 are fitted at once by least squares (:func:`fit_arcs`); ``k / g`` is 1 when the base's
-units and the block's angle are right (the ``load_gain``). The base's samples may lag the
+units and the block's angle are right (the ``load_gain``; past :data:`LOAD_GAIN_LIMIT` ``e``
+is refused). The base's samples may lag the
 angle's by part of a sample (a logger's filters, or a base held over each sample instead
 of varying smoothly): the lag that fits the arcs best within :data:`MAX_SHIFT` samples is
 read first and taken out (:func:`base_shift`). Each impact's ``e`` is the
-ratio of the arcs' speeds where each meets zero; ``e`` is the mean of ``log e`` over the
-impacts (outliers beyond :data:`OUTLIER_MADS` set aside), its 95 % interval Student's
-``t`` on their scatter, never narrower than :data:`FLOOR`. Entry points:
-:func:`analyse_forced`, :func:`pool_forced`.
+ratio of the arcs' speeds where each meets zero, its error from the arcs' fit (the speed
+and the zero's time, neighbouring impacts sharing an arc); outliers beyond
+:data:`OUTLIER_MADS` set aside, the impacts' ``log e`` are pooled as the free-rocking test's
+(:func:`rockdec.free.analysis.impact_mean`: their fit errors plus an impact-to-impact
+spread). Its standard error is the delete-a-group jackknife's over :data:`GROUPS` runs of
+arcs, each refitted (``g`` and ``k`` too, so their errors and the impacts' are all in it),
+with Student's ``t``; records are pooled by their errors. The interval is never narrower
+than :data:`FLOOR`. Entry points: :func:`analyse_forced`, :func:`pool_forced`.
 
 Explanation: docs/explanation/shake-table.md (the forced stretch).
 """
@@ -26,13 +31,18 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats
 
+from rockdec.free.analysis import impact_mean, pooled_mean
 from rockdec.free.impacts import CROSSING_BAND_SIGMAS, find_crossings, noise_std
 
-__all__ = ["FEWEST_IMPACTS", "FLOOR", "ForcedFit", "MAX_SHIFT", "MIN_ARC_SAMPLES", "OUTLIER_MADS", "analyse_forced", "base_integrals",
+__all__ = ["FEWEST_IMPACTS", "FLOOR", "ForcedFit", "GROUPS", "LOAD_GAIN_LIMIT", "MAX_SHIFT", "MIN_ARC_SAMPLES", "OUTLIER_MADS", "REST_SAMPLES", "analyse_forced", "arc_covariances",
+           "base_integrals",
            "base_shift", "fit_arcs", "pool_forced"]
 
 #: Fewest samples off zero for an arc to be fitted.
 MIN_ARC_SAMPLES = 6
+
+#: More samples than this within the noise band inside a flight are a rest: the flight ends.
+REST_SAMPLES = 3
 
 #: Impacts whose ``log e`` lies further than this many (normal-scaled) median absolute
 #: deviations from the median are set aside (an arc cut short by a rest, a chatter).
@@ -40,6 +50,13 @@ OUTLIER_MADS = 5.0
 
 #: Largest lag (samples) of the base behind the angle, or ahead, that :func:`base_shift` seeks.
 MAX_SHIFT = 2.0
+
+#: Widest ratio of the fitted load to the declared one (either way) that is read as one: past it
+#: the base's units, the block's angle or its ``g`` are wrong, and ``e`` is refused.
+LOAD_GAIN_LIMIT = 1.2
+
+#: Runs of arcs the jackknife leaves out one at a time.
+GROUPS = 10
 
 #: Fewest impacts for an ``e``.
 FEWEST_IMPACTS = 5
@@ -52,23 +69,28 @@ FLOOR = 1e-5
 @dataclass(frozen=True)
 class ForcedFit:
     """What :func:`analyse_forced` found in one record, or :func:`pool_forced` in several:
-    ``log_e`` of each impact used, ``set_aside`` (outliers), the fitted ``g`` (rad/s^2),
-    ``load_gain`` (``|k| / g``) and the base's lag ``shift`` (samples; both NaN for a pool),
-    ``e`` and its 95 % ``e_interval`` (NaN when ``reason`` says why there is none)."""
+    ``log_e`` of each impact used and their ``covariance`` from the arcs' fit, ``set_aside``
+    (outliers), the fitted ``g`` (rad/s^2), ``load_gain`` (``|k| / g``) and the base's lag
+    ``shift`` (samples; both NaN for a pool), ``e``, the standard error ``se`` of ``log e``
+    (the jackknife's), its 95 % ``e_interval`` and the impact-to-impact ``spread`` of ``log e``
+    (NaN when ``reason`` says why there is none)."""
 
     log_e: np.ndarray
+    covariance: np.ndarray
     set_aside: int
     g: float
     load_gain: float
     shift: float
     e: float
+    se: float
     e_interval: tuple[float, float]
+    spread: float
     reason: str | None
 
     @classmethod
-    def none(cls, reason: str) -> ForcedFit:
+    def none(cls, reason: str, g: float = math.nan, load_gain: float = math.nan, shift: float = math.nan) -> ForcedFit:
         """No reading, for ``reason``."""
-        return cls(np.empty(0), 0, math.nan, math.nan, math.nan, math.nan, (math.nan, math.nan), reason)
+        return cls(np.empty(0), np.empty((0, 0)), 0, g, load_gain, shift, math.nan, math.nan, (math.nan, math.nan), math.nan, reason)
 
     @property
     def impacts(self) -> int:
@@ -93,9 +115,11 @@ def base_integrals(ratio, dt: float) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _arcs(theta: np.ndarray, band: float):
-    """``(lo, hi, side, crossing before, crossing after)`` of every run of at least
-    :data:`MIN_ARC_SAMPLES` samples beyond ``band`` on one side (crossings as indices into
-    the crossings found, -1 where a rest or the record's end bounds the run)."""
+    """``(lo, hi, side, crossing before, crossing after)`` of every flight between crossings
+    (crossings as indices into the crossings found, -1 where a rest or the record's end bounds
+    it): the samples from the first beyond ``band`` on its side to the last, both left out
+    (chosen by their noise, they would bias the arc's ends), split at a rest (more than
+    :data:`REST_SAMPLES` samples within the band), at least :data:`MIN_ARC_SAMPLES` long."""
     c = find_crossings(theta, band)
     edges = np.concatenate([[-0.5], c.position, [theta.size - 0.5]])
     sides = np.concatenate([c.side, [-c.side[-1]]]) if c.side.size else np.array([1 if theta[np.argmax(np.abs(theta))] > 0 else -1])
@@ -103,19 +127,19 @@ def _arcs(theta: np.ndarray, band: float):
     for k in range(edges.size - 1):
         lo, hi = max(int(np.floor(edges[k])) + 1, 0), min(int(np.floor(edges[k + 1])) + 1, theta.size)
         off = np.flatnonzero(sides[k] * theta[lo:hi] > band) + lo
-        runs = np.split(off, np.flatnonzero(np.diff(off) > 1) + 1) if off.size else []
+        runs = np.split(off, np.flatnonzero(np.diff(off) > REST_SAMPLES + 1) + 1) if off.size else []
         for j, run in enumerate(runs):
-            if run.size >= MIN_ARC_SAMPLES:
+            if run[-1] - run[0] - 1 >= MIN_ARC_SAMPLES:
                 before = k - 1 if j == 0 and k > 0 else -1
                 after = k if j == len(runs) - 1 and k < edges.size - 2 else -1
-                out.append((int(run[0]), int(run[-1]) + 1, int(sides[k]), before, after))
+                out.append((int(run[0]) + 1, int(run[-1]), int(sides[k]), before, after))
     return c.position, out
 
 
 def fit_arcs(theta, ratio, dt: float, arcs) -> tuple[float, float, np.ndarray]:
     """Least-squares ``g``, ``k`` and each arc's ``(c0, c1)`` of the forced flight (module
     docstring) over the ``arcs`` ``(lo, hi, side, ...)``: each arc's ``c0, c1`` projected out
-    exactly, ``g`` and ``k`` from what remains.
+    exactly, ``g`` and ``k`` from what remains (:func:`arc_covariances` gives their errors).
 
     Examples
     --------
@@ -142,6 +166,30 @@ def fit_arcs(theta, ratio, dt: float, arcs) -> tuple[float, float, np.ndarray]:
     beta = np.linalg.lstsq(np.concatenate(zs), np.concatenate(ys), rcond=None)[0]
     coef = np.array([np.linalg.lstsq(x, y - z @ beta, rcond=None)[0] for x, z, y in bases])
     return float(beta[0]), float(beta[1]), coef
+
+
+def arc_covariances(theta, ratio, dt: float, arcs, g: float, k: float, coef: np.ndarray) -> np.ndarray:
+    """The covariance of each arc's ``(c0, c1)`` given ``g`` and ``k`` (``(arcs, 2, 2)``), the
+    residual variance pooled over the arcs.
+
+    Examples
+    --------
+    >>> t = np.arange(40) * 0.01
+    >>> theta = 0.1 + 0.5 * t - t**2 + 1e-3 * np.random.default_rng(0).standard_normal(40)
+    >>> g, k, coef = fit_arcs(theta, np.zeros(40), 0.01, [(0, 40, 1)])
+    >>> c = arc_covariances(theta, np.zeros(40), 0.01, [(0, 40, 1)], g, k, coef)
+    >>> c.shape, bool(0 < c[0, 1, 1] < 1e-3)
+    ((1, 2, 2), True)
+    """
+    v, l = base_integrals(ratio, dt)
+    rss, inverses = 0.0, []
+    for (lo, hi, side, *_), (c0, c1) in zip(arcs, coef):
+        tau = dt * np.arange(hi - lo)
+        rss += float(np.sum((theta[lo:hi] - c0 - c1 * tau + side * g * tau * tau / 2.0 - k * (l[lo:hi] - l[lo] - v[lo] * tau)) ** 2))
+        x = np.column_stack([np.ones(tau.size), tau])
+        inverses.append(np.linalg.inv(x.T @ x))
+    n = sum(hi - lo for lo, hi, *_ in arcs)
+    return rss / max(n - 2 * len(arcs) - 2, 1) * np.array(inverses)
 
 
 def _shifted(ratio: np.ndarray, lag: float) -> np.ndarray:
@@ -185,8 +233,9 @@ def base_shift(theta, ratio, dt: float, arcs) -> float:
 
 
 def _root(arc, coef, g, k, ratio, v, l, dt, guess):
-    """Where one fitted arc meets zero near ``guess`` (s) and its speed there (Newton's
-    method; NaN when it does not settle within two samples of the guess)."""
+    """Where one fitted arc meets zero near ``guess`` (s), its speed there and the speed's
+    gradient in the arc's ``(c0, c1)`` (the zero's time moving with them; Newton's method,
+    NaN when it does not settle within two samples of the guess)."""
     lo, _, side = arc[:3]
     c0, c1 = coef
     a = ratio
@@ -200,22 +249,57 @@ def _root(arc, coef, g, k, ratio, v, l, dt, guess):
         f = c0 + c1 * tau - side * g * tau * tau / 2.0 + k * (lt - l[lo] - v[lo] * tau)
         speed = c1 - side * g * tau + k * (vt - v[lo])
         if speed == 0.0 or not math.isfinite(speed):
-            return math.nan, math.nan
+            return math.nan, math.nan, None
         t -= f / speed
-    return (t, speed) if abs(t - guess) < 2.0 * dt else (math.nan, math.nan)
+    if not abs(t - guess) < 2.0 * dt:
+        return math.nan, math.nan, None
+    tau = t - lo * dt
+    acceleration = -side * g + k * a[min(max(int(t // dt), 0), a.size - 1)]
+    return t, speed, np.array([-acceleration / speed, 1.0 - acceleration * tau / speed])
 
 
-def _pooled_e(log_e: np.ndarray) -> tuple[np.ndarray, int, float, tuple[float, float], str | None]:
-    """The impacts kept, how many were set aside, ``e`` and its interval (module docstring)."""
-    if log_e.size < FEWEST_IMPACTS:
-        return log_e, 0, math.nan, (math.nan, math.nan), (
-            f"the forced stretch gives {log_e.size} impacts whose arcs fit either side, fewer than {FEWEST_IMPACTS}")
-    centre = np.median(log_e)
+def _screened(log_e: np.ndarray, covariance: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
+    """The impacts within :data:`OUTLIER_MADS` of their median, their covariance, and how
+    many were set aside."""
+    if log_e.size == 0:
+        return log_e, covariance, 0
     spread = stats.median_abs_deviation(log_e, scale="normal")
-    kept = log_e[np.abs(log_e - centre) <= OUTLIER_MADS * spread] if spread > 0 else log_e
-    mean = float(kept.mean())
-    half = max(stats.t.ppf(0.975, kept.size - 1) * kept.std(ddof=1) / math.sqrt(kept.size), FLOOR)
-    return kept, int(log_e.size - kept.size), math.exp(mean), (math.exp(mean - half), math.exp(mean + half)), None
+    keep = np.abs(log_e - np.median(log_e)) <= OUTLIER_MADS * spread if spread > 0 else np.ones(log_e.size, bool)
+    return log_e[keep], covariance[np.ix_(keep, keep)], int(log_e.size - keep.sum())
+
+
+def _mean_log_e(log_e: np.ndarray, covariance: np.ndarray):
+    """The impacts within :data:`OUTLIER_MADS` of their median pooled
+    (:func:`rockdec.free.analysis.impact_mean`), with what was kept and set aside; ``None``
+    for fewer than :data:`FEWEST_IMPACTS`."""
+    kept, cov, aside = _screened(log_e, covariance)
+    if kept.size < FEWEST_IMPACTS:
+        return None, kept, cov, aside
+    return impact_mean([kept], [cov]), kept, cov, aside
+
+
+def _interval(mu: float, se: float, dof: int) -> tuple[float, float]:
+    """``exp(mu +- t se)``, Student's ``t`` at ``dof``, the half-width at least :data:`FLOOR`."""
+    half = max(float(stats.t.ppf(0.975, dof)) * se, FLOOR)
+    return math.exp(mu - half), math.exp(mu + half)
+
+
+def _jackknife_se(theta, ratio, dt, crossings, arcs) -> tuple[float, int]:
+    """The delete-a-group jackknife's standard error of the pooled ``log e`` (module
+    docstring) and its degrees of freedom (NaN, 0 with fewer than 3 groups that give one)."""
+    edges = np.linspace(0, len(arcs), GROUPS + 1).round().astype(int)
+    leave_out = []
+    for lo, hi in zip(edges[:-1], edges[1:]):
+        rest = arcs[:lo] + arcs[hi:]
+        g, k, coef = fit_arcs(theta, ratio, dt, rest)
+        pooled = _mean_log_e(*_impacts(theta, ratio, dt, crossings, rest, g, k, coef))[0]
+        if pooled is not None:
+            leave_out.append(pooled.mu)
+    n = len(leave_out)
+    if n < 3:
+        return math.nan, 0
+    values = np.asarray(leave_out)
+    return math.sqrt((n - 1) / n * float(np.sum((values - values.mean()) ** 2))), n - 1
 
 
 def analyse_forced(theta, ratio, dt: float) -> ForcedFit:
@@ -248,31 +332,72 @@ def analyse_forced(theta, ratio, dt: float) -> ForcedFit:
     shift = base_shift(theta, ratio, dt, arcs)
     ratio = _shifted(ratio, shift)
     g, k, coef = fit_arcs(theta, ratio, dt, arcs)
+    gain = abs(k) / g if g > 0 else math.nan
+    if not 1.0 / LOAD_GAIN_LIMIT <= gain <= LOAD_GAIN_LIMIT:
+        return ForcedFit.none(f"the arcs read the base's load on the block as {gain:.3g} times what its units and the block's angle say; "
+                              "check the base's units and theta_cr (or g_block)", g, gain, shift)
+    pooled, kept, cov, aside = _mean_log_e(*_impacts(theta, ratio, dt, crossings, arcs, g, k, coef))
+    if pooled is None:
+        return ForcedFit(kept, cov, aside, g, gain, shift, math.nan, math.nan, (math.nan, math.nan), math.nan,
+                         f"the record gives {kept.size} impacts whose arcs fit either side, fewer than {FEWEST_IMPACTS}")
+    se, dof = _jackknife_se(theta, ratio, dt, crossings, arcs)
+    if dof == 0:
+        return ForcedFit(kept, cov, aside, g, gain, shift, math.nan, math.nan, (math.nan, math.nan), pooled.tau,
+                         f"the record's {kept.size} impacts are too few to read the error of their e")
+    return ForcedFit(kept, cov, aside, g, gain, shift, math.exp(pooled.mu), se, _interval(pooled.mu, se, dof), pooled.tau, None)
+
+
+def _impacts(theta, ratio, dt, crossings, arcs, g, k, coef) -> tuple[np.ndarray, np.ndarray]:
+    """``log e`` of every impact between two fitted arcs that meet zero together, and their
+    covariance (each arc's speeds at both ends share its ``(c0, c1)``)."""
     v, l = base_integrals(ratio, dt)
-    log_e = []
+    cov = arc_covariances(theta, ratio, dt, arcs, g, k, coef)
+    log_e, rows = [], []  # rows: (arc, gradient of log speed) pairs entering each impact, + for out, - for in
     for i, (left, right) in enumerate(zip(arcs[:-1], arcs[1:])):
-        joined = left[4] >= 0 and left[4] == right[3] and left[2] == -right[2] and right[0] - left[1] <= 4
-        if not joined:
+        if not (left[4] >= 0 and left[4] == right[3] and left[2] == -right[2] and right[0] - left[1] <= 6):
             continue
         guess = dt * crossings[left[4]]
-        t_in, speed_in = _root(left, coef[i], g, k, ratio, v, l, dt, guess)
-        t_out, speed_out = _root(right, coef[i + 1], g, k, ratio, v, l, dt, guess)
+        t_in, speed_in, grad_in = _root(left, coef[i], g, k, ratio, v, l, dt, guess)
+        t_out, speed_out, grad_out = _root(right, coef[i + 1], g, k, ratio, v, l, dt, guess)
         if abs(t_in - t_out) < dt and speed_out / speed_in > 0.0:  # NaN fails both
             log_e.append(math.log(speed_out / speed_in))
-    kept, aside, e, interval, reason = _pooled_e(np.asarray(log_e))
-    return ForcedFit(kept, aside, g, abs(k) / g if g > 0 else math.nan, shift, e, interval, reason)
+            rows.append(((i + 1, grad_out / speed_out), (i, -grad_in / speed_in)))
+    jac = np.zeros((len(rows), 2 * len(arcs)))
+    for r, pairs in enumerate(rows):
+        for arc, grad in pairs:
+            jac[r, 2 * arc : 2 * arc + 2] += grad
+    blocks = np.zeros((2 * len(arcs), 2 * len(arcs)))
+    for j, c in enumerate(cov):
+        blocks[2 * j : 2 * j + 2, 2 * j : 2 * j + 2] = c
+    return np.asarray(log_e), jac @ blocks @ jac.T
 
 
 def pool_forced(fits) -> ForcedFit:
-    """The records' impacts of :func:`analyse_forced` read together: one block's ``e``.
+    """The records' readings of :func:`analyse_forced` together, one block's ``e``: the
+    records' ``log e`` weighted by their errors, the error widened by their scatter beyond it
+    (the Birge ratio), Student's ``t`` at the records' jackknife degrees of freedom.
 
     Examples
     --------
-    >>> one = ForcedFit(np.log([0.9, 0.91, 0.89]), 0, 2.0, 1.0, 0.0, 0.9, (0.88, 0.92), None)
-    >>> round(pool_forced([one, one]).e, 4)
-    0.9
+    >>> one = ForcedFit(np.log([0.9, 0.91, 0.89]), 1e-4 * np.eye(3), 0, 2.0, 1.0, 0.0, 0.9, 0.01, (0.88, 0.92), 0.01, None)
+    >>> both = pool_forced([one, one])
+    >>> round(both.e, 4), both.impacts, round(both.se / one.se, 4)
+    (0.9, 6, 0.7071)
     """
     fits = list(fits)
-    kept, aside, e, interval, reason = _pooled_e(np.concatenate([f.log_e for f in fits]) if fits else np.empty(0))
+    log_e = np.concatenate([f.log_e for f in fits]) if fits else np.empty(0)
+    covariance = np.zeros((log_e.size, log_e.size))
+    at = 0
+    for f in fits:
+        covariance[at : at + f.impacts, at : at + f.impacts] = f.covariance
+        at += f.impacts
     g = float(np.nanmean([f.g for f in fits])) if any(np.isfinite(f.g) for f in fits) else math.nan
-    return ForcedFit(kept, aside + sum(f.set_aside for f in fits), g, math.nan, math.nan, e, interval, reason)
+    answered = [f for f in fits if f.reason is None]
+    if not answered:
+        return ForcedFit(log_e, covariance, sum(f.set_aside for f in fits), g, math.nan, math.nan, math.nan, math.nan, (math.nan, math.nan),
+                         math.nan, "no record gives an e: " + "; ".join(f"record {k}: {f.reason}" for k, f in enumerate(fits)))
+    mu, se = pooled_mean([math.log(f.e) for f in answered], [f.se for f in answered])
+    dof = sum(GROUPS - 1 for _ in answered) if len(answered) > 1 else GROUPS - 1
+    spread = float(np.nanmedian([f.spread for f in answered]))
+    return ForcedFit(log_e, covariance, sum(f.set_aside for f in fits), g, math.nan, math.nan, math.exp(mu), se, _interval(mu, se, dof),
+                     spread, None)
