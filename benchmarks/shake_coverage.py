@@ -7,14 +7,18 @@ A plain script (not a test): prints measurements, never asserts them.
 
     python benchmarks/shake_coverage.py                       # the default grid, 10 records a cell
     python benchmarks/shake_coverage.py --records 4 --peak 1.6 --e 0.9
+    python benchmarks/shake_coverage.py --base linear --peak 1.2 1.6 2.2
 
 Cells: true ``e`` x the shaking's strength (``--peak``: the base's std in its strong phase,
 in units of the uplift level) x sensor noise (a share of the record's std) x the base's
 residual motion in the free part (``--residual``, in units of the uplift level: below
 :data:`rockdec.free.shake.QUIET` the tail counts as free). Each record is 20 s of shaking
-and 20 s of free decay at 200 Hz. Per cell: the records answered, how many
-of their 95 % intervals hold the true ``e``, the median width, and why the others gave no
-``e`` (the first words of each reason, counted); then the pooled coverage.
+and 20 s of free decay at 200 Hz, its base held over each sample or linear between samples
+(``--base``). Per cell, for the test's ``e`` and for each of its two readings alone (the
+free-decay tails; every impact with the base a known load, :mod:`rockdec.free.forced`): the
+records answered, how many of their 95 % intervals hold the true ``e``, the median width;
+and why the test gave no ``e`` (the first words of each reason, counted); then the pooled
+coverage.
 
 With ``--campaigns M``, each cell also gets ``M`` campaigns of ``--records`` records of one
 block (seeds apart from the cell's), pooled by one analysis: how many
@@ -40,8 +44,13 @@ from rockdec.free.shake import analyse_shake_table  # noqa: E402
 from rockdec.studies.shake_coverage import COLUMNS, markdown, tally  # noqa: E402
 
 
-def _records(e: float, peak: float, noise: float, residual: float, seeds) -> list:
-    return [tr.transient_with_base(e, seed, peak=peak, noise=noise, residual=residual) for seed in seeds]
+#: How the generator's base acts between samples (``--base``): linear, as a sampled smooth
+#: motion and as the forced reading fits it (read at the midpoints of 8 steps), or held over
+#: each sample (a simulator's staircase).
+SUBSTEPS = {"held": 0, "linear": 8}
+
+def _records(e: float, peak: float, noise: float, residual: float, seeds, base: str) -> list:
+    return [tr.transient_with_base(e, seed, peak=peak, noise=noise, residual=residual, substeps=SUBSTEPS[base]) for seed in seeds]
 
 
 def _fit(theta, base):
@@ -49,18 +58,18 @@ def _fit(theta, base):
     return analyse_shake_table(theta, base, 1 / tr.FS, base_units="rad/s2", g_block=tr.G)
 
 
-def cell(e: float, peak: float, noise: float, residual: float, records: int, seed: int) -> dict:
+def cell(e: float, peak: float, noise: float, residual: float, records: int, seed: int, base: str) -> dict:
     """Answered, covered, widths and reasons of ``records`` records of one cell (:func:`rockdec.studies.shake_coverage.tally`)."""
-    fits = (_fit(theta, base) for theta, base in _records(e, peak, noise, residual, range(seed, seed + records)))
+    fits = (_fit(theta, base) for theta, base in _records(e, peak, noise, residual, range(seed, seed + records), base))
     return {"e": e, "peak": peak, "noise": noise, "residual": residual, "records": records, **tally(fits, e)}
 
 
-def campaigns(e: float, peak: float, noise: float, residual: float, records: int, count: int, seed: int) -> dict:
+def campaigns(e: float, peak: float, noise: float, residual: float, records: int, count: int, seed: int, base: str) -> dict:
     """``count`` campaigns of ``records`` records each, pooled: answered, covered, the pooled
     widths and their records' single widths."""
     out = {"answered": 0, "covered": 0, "pooled": [], "single": []}
     for j in range(count):
-        data = _records(e, peak, noise, residual, range(seed + (j + 1) * records, seed + (j + 2) * records))
+        data = _records(e, peak, noise, residual, range(seed + (j + 1) * records, seed + (j + 2) * records), base)
         out["single"] += tally((_fit(theta, base) for theta, base in data), e)["widths"]
         pooled = tally([_fit([d[0] for d in data], [d[1] for d in data])], e)
         out["answered"] += pooled["answered"]
@@ -79,6 +88,7 @@ def main() -> None:
     parser.add_argument("--records", type=int, default=10)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--campaigns", type=int, default=0, help="campaigns of --records records a cell, each pooled")
+    parser.add_argument("--base", choices=list(SUBSTEPS), default="held", help="how the base acts between samples")
     args = parser.parse_args()
     start = time.perf_counter()
     cells = []
@@ -86,9 +96,9 @@ def main() -> None:
         for peak in args.peak:
             for noise in args.noise:
                 for residual in args.residual:
-                    cells.append(cell(e, peak, noise, residual, args.records, args.seed))
+                    cells.append(cell(e, peak, noise, residual, args.records, args.seed, args.base))
                     if args.campaigns:
-                        cells[-1]["campaigns"] = campaigns(e, peak, noise, residual, args.records, args.campaigns, args.seed)
+                        cells[-1]["campaigns"] = campaigns(e, peak, noise, residual, args.records, args.campaigns, args.seed, args.base)
                     print(f"  e {e:g}, peak {peak:g}, noise {noise:g}, residual {residual:g}: "
                           f"{cells[-1]['answered']}/{args.records} answered", file=sys.stderr)
     print(markdown(cells, (*COLUMNS, ("residual", "residual"))))

@@ -82,6 +82,16 @@ class ShakeTableFit:
         """Its 95 % interval."""
         return (math.nan, math.nan) if self.fit is None or self.fit.reason else self.fit.e_interval
 
+    @property
+    def answer(self) -> tuple[str | None, float, tuple[float, float]]:
+        """The test's ``e``: ``("impacts", e, interval)`` from the tails, else ``("forced", ...)``
+        from every impact with the base a known load, else ``(None, nan, (nan, nan))``."""
+        if math.isfinite(self.e):
+            return "impacts", self.e, self.e_interval
+        if self.forced_pooled is not None and self.forced_pooled.reason is None:
+            return "forced", self.forced_pooled.e, self.forced_pooled.e_interval
+        return None, math.nan, (math.nan, math.nan)
+
 
 def base_units_named(units) -> str:
     """The :data:`BASE_UNITS` spelling of a stated ``units`` attribute (as given when unknown).

@@ -433,7 +433,8 @@ class RestitutionEstimate:
         Raises
         ------
         InputError
-            For an estimate read back from its document, which carries no signatures.
+            For an estimate read back from its document, which carries no signatures, and a
+            shake-table estimate without a free-decay tail (the figure draws the tails).
 
         Examples
         --------
@@ -441,6 +442,9 @@ class RestitutionEstimate:
         >>> len(fig.axes)
         2
         """
+        if self.analysis is None and self.test == "shake" and self.estimator != "impacts":
+            raise InputError("this shake-table estimate has no free-decay tail to draw (the figure draws the tails' fits); "
+                             "its readings of every impact are in to_dict()['shake_table']['forced'].")
         if self.analysis is None:
             raise InputError(
                 "this estimate was read back from its document, which carries no signatures to plot; "

@@ -7,7 +7,8 @@ times on that record's axis) and a ``shake_table`` entry: the base's units, the 
 quiet and of a tail's length, where the shaking ends in each record, the tails analysed (with
 their own ``e``) and the stretches refused, each with its reason (:mod:`rockdec.free.shake`),
 and ``forced``: the records read with the base as a known load in their arcs
-(:mod:`rockdec.free.forced`), per record and pooled.
+(:mod:`rockdec.free.forced`), per record and pooled. The document's ``e`` is the tails'; when
+no tail gives one, it is the forced reading's (``estimator`` "forced").
 """
 
 from __future__ import annotations
@@ -50,7 +51,13 @@ def shake_document(shake, sources: list[str], steps: list[float], sizes: list[in
                   for (k, t0, t1), fit, load in zip(shake.tails, shake.tail_fits, shake.tail_loads)],
         "refused": [{"record": int(k), "start": json_number(t0), "reason": why} for k, t0, why in shake.refused],
     }
-    if shake.forced_pooled is not None:
+    forced = shake.forced_pooled
+    source, e, interval = shake.answer
+    if source == "forced":
+        doc.update(e=json_number(e), interval=[json_number(x) for x in interval], reason=None, estimator="forced")
+        if doc["g"] is None:
+            doc["g"] = json_number(forced.g)
+    if forced is not None:
         doc["shake_table"]["forced"] = {**_forced(shake.forced_pooled), "g": json_number(shake.forced_pooled.g),
                                         "records": [{"record": k, **_forced(f), "g": json_number(f.g), "load_gain": json_number(f.load_gain),
                                                      "base_shift": json_number(f.shift)} for k, f in enumerate(shake.forced)]}
@@ -76,6 +83,11 @@ def shake_text(doc: dict, verbose: bool = False) -> str:
     the free-rocking report of its tails, then where the shaking ends and each tail."""
     table = doc["shake_table"]
     text = free_text(doc, verbose).replace("free-rocking test:", "shake-table test, free-decay tails:", 1)
+    if doc["estimator"] == "forced":
+        head, _, rest = text.partition("\n")
+        lo, hi = doc["interval"]
+        text = "\n".join([f"e = {doc['e']:.4f} (95 % interval [{lo:.4f}, {hi:.4f}]; shake-table test: every impact, the base as a "
+                           f"known load in the arcs, {table['forced']['impacts']} impacts; no free-decay tail gives an e)", rest])
     text = text.replace("measured by the free-rocking study on simulated records of known e",
                         "measured on shake-table records of known e from an independent simulator (the docs' shake-table page)", 1)
     lines = [text, "", "shake table:"]
