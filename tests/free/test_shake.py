@@ -1,5 +1,7 @@
 """The shake-table test on records of an independent transient generator (tests/transient_reference.py)."""
 
+import math
+
 import numpy as np
 import pytest
 
@@ -80,3 +82,13 @@ def test_a_tail_that_starts_as_the_block_falls_is_read_from_its_first_impact(int
     assert res.reason is None and res.e == pytest.approx(0.9, abs=1e-6)
     first_negative = int(np.flatnonzero(free[into_the_fall:] < 0)[0])  # the impact falls within a sample before it
     assert 0.0 <= res.tails[0][1] - (400 + first_negative) * 0.005 <= 0.005 + 1e-12
+
+
+def test_a_tail_whose_one_impact_cannot_be_bounded_is_refused_not_raised():
+    """A tail of the independent generator (e 0.8, strong shaking, 1 % noise) whose single impact's
+    error is enormous: refused with that reason; the record is still answered by every impact."""
+    theta, base = tr.transient_with_base(0.8, 28, peak=2.2, noise=0.01)
+    res = analyse_shake_table(theta, base, 1 / tr.FS, base_units="rad/s2", g_block=tr.G)
+    source, e, (low, high) = res.answer
+    assert all(isinstance(why, str) for _, _, why in res.refused)
+    assert source is None or (math.isfinite(low) and math.isfinite(high) and low <= e <= high)

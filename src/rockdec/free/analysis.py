@@ -82,6 +82,10 @@ SAMPLE_PRECISION = 1e-12
 #: weighting, which a chance ``tau`` of the size of the fit errors would undo.
 SCATTER_LEVEL = 0.95
 
+#: Widest half-width of the 95 % interval of ``log e`` that is reported: past it (``e`` known
+#: to a factor of 7 either way) the impacts give no usable ``e``, and the record is refused.
+WIDEST_LOG_HALF_WIDTH = 2.0
+
 #: ``z`` of the pooled loss in flight ``c`` (the score test, one-sided) beyond which the arcs
 #: are fitted with it (:mod:`rockdec.free.flight_loss`) and ``e`` is the impacts' share: an
 #: ideal block's ``c`` passes it by chance on about 2.5 % of records (tests/free/test_flight_loss.py).
@@ -569,7 +573,11 @@ def _result(fits, seq_meta, notes, noises, model, theta_cr, damped, score, load_
         pooled = impact_mean(ys, blocks)
         e, birge, dof = math.exp(pooled.mu), pooled.scatter, pooled.dof
         log_se = max(pooled.se, SAMPLE_PRECISION)
-        interval = _interval(pooled.mu, log_se, log=True, z=pooled.quantile)
+        if not pooled.quantile * log_se <= WIDEST_LOG_HALF_WIDTH:  # NaN too
+            reason = (f"the {n_impacts} impacts' e scatter too widely for an interval (log e known to +-{pooled.quantile * log_se:.3g}); "
+                      "record more samples per cycle or more releases, or look for a release that is not free.")
+        else:
+            interval = _interval(pooled.mu, log_se, log=True, z=pooled.quantile)
         spread, spread_interval = e * pooled.tau, tuple(e * t for t in pooled.tau_interval)
         if dof == 0:
             notes.append("one impact only: its interval rests on the fit alone, with no check of the impacts' scatter.")
