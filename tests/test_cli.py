@@ -429,3 +429,22 @@ def test_a_scene_is_found_from_any_folder(tmp_path, monkeypatch):
     assert main(args) == 0
     with xr.open_dataset(tmp_path / "x.nc") as ds:
         assert json.loads(ds.attrs["settings"])["system"]["e"] == 0.95  # the tiny scene's e
+
+
+def test_a_reader_that_stops_early_ends_the_command_quietly(monkeypatch, capsys):
+    """`rockdec estimate ... | head`: the closed pipe is not reported as a bug in rockdec."""
+    import os
+
+    def prints_into_a_closed_pipe(args):
+        raise BrokenPipeError(32, "Broken pipe")
+
+    from rockdec import cli
+
+    monkeypatch.setattr(cli, "cmd_estimate", prints_into_a_closed_pipe)
+    saved = os.dup(1)  # the command points the process's stdout at /dev/null
+    try:
+        assert main(["estimate", "record.csv"]) == 141
+    finally:
+        os.dup2(saved, 1)
+        os.close(saved)
+    assert "internal error" not in capsys.readouterr().err

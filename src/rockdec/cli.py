@@ -695,6 +695,12 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"rockdec {args.command}: interrupted.", file=sys.stderr)
         return 130
+    except BrokenPipeError:  # the reader stopped early (`| head`): what it read is all it wanted
+        try:  # no second error as Python flushes stdout at exit
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        except (OSError, ValueError):  # a stdout without a file descriptor (captured)
+            pass
+        return 141
     except checks.InputError as exc:
         if args.debug:
             raise

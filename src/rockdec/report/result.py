@@ -308,11 +308,18 @@ class RestitutionEstimate:
         import pandas as pd
 
         if self.test != "random":
-            low, high = self.confidence_interval
-            return pd.DataFrame([{"estimator": "impacts", "reads": "line of the log impact speeds of the free-rocking test",
-                                  "raw": None, "corrected": self.e, "low": low, "high": high, "coverage": None,
-                                  "triggers": len(self.document["impacts"]), "candidate": True, "reported": self.e is not None,
-                                  "notes": "; ".join(w.message for w in self.warnings)}]).set_index("estimator")
+            notes = "; ".join(w.message for w in self.warnings)
+            tails = self.document if self.estimator != "forced" else {"e": None, "interval": [None, None]}
+            rows = [{"estimator": "impacts", "reads": "line of the log impact speeds of the free-rocking test", "raw": None,
+                     "corrected": tails["e"], "low": tails["interval"][0], "high": tails["interval"][1], "coverage": None,
+                     "triggers": len(self.document["impacts"]), "candidate": True, "reported": self.estimator == "impacts", "notes": notes}]
+            forced = self.document.get("shake_table", {}).get("forced")
+            if forced is not None:
+                rows.append({"estimator": "forced", "reads": "every impact, the base a known load in the flights", "raw": None,
+                             "corrected": forced["e"], "low": forced["interval"][0], "high": forced["interval"][1], "coverage": None,
+                             "triggers": forced["impacts"], "candidate": True, "reported": self.estimator == "forced",
+                             "notes": forced["reason"] or ""})
+            return pd.DataFrame(rows).set_index("estimator")
         rows = []
         for name, est in self.document["estimators"].items():
             shown = est["e"] is not None

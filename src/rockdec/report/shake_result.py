@@ -57,6 +57,8 @@ def shake_document(shake, sources: list[str], steps: list[float], sizes: list[in
         doc.update(e=json_number(e), interval=[json_number(x) for x in interval], reason=None, estimator="forced")
         if doc["g"] is None:
             doc["g"] = json_number(forced.g)
+    elif forced is not None and doc["reason"]:
+        doc["reason"] = doc["reason"].rstrip(".") + f"; and every impact with the base a known load gives none: {forced.reason}"
     if forced is not None:
         doc["shake_table"]["forced"] = {**_forced(shake.forced_pooled), "g": json_number(shake.forced_pooled.g),
                                         "records": [{"record": k, **_forced(f), "g": json_number(f.g), "load_gain": json_number(f.load_gain),
