@@ -84,13 +84,16 @@ class ShakeTableFit:
 
     @property
     def answer(self) -> tuple[str | None, float, tuple[float, float]]:
-        """The test's ``e``: ``("impacts", e, interval)`` from the tails, else ``("forced", ...)``
-        from every impact with the base a known load, else ``(None, nan, (nan, nan))``."""
-        if math.isfinite(self.e):
-            return "impacts", self.e, self.e_interval
+        """The test's ``e``: of the tails' (``"impacts"``) and every impact's with the base a
+        known load (``"forced"``), the one with the narrower interval, as ``(source, e,
+        interval)``; ``(None, nan, (nan, nan))`` when neither answers."""
+        readings = [("impacts", self.e, self.e_interval)]
         if self.forced_pooled is not None and self.forced_pooled.reason is None:
-            return "forced", self.forced_pooled.e, self.forced_pooled.e_interval
-        return None, math.nan, (math.nan, math.nan)
+            readings.append(("forced", self.forced_pooled.e, self.forced_pooled.e_interval))
+        answered = [r for r in readings if math.isfinite(r[1])]
+        if not answered:
+            return None, math.nan, (math.nan, math.nan)
+        return min(answered, key=lambda r: r[2][1] - r[2][0])
 
 
 def base_units_named(units) -> str:

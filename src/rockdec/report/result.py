@@ -309,7 +309,8 @@ class RestitutionEstimate:
 
         if self.test != "random":
             notes = "; ".join(w.message for w in self.warnings)
-            tails = self.document if self.estimator != "forced" else {"e": None, "interval": [None, None]}
+            table = self.document.get("shake_table", {})
+            tails = {"e": table["tails_e"], "interval": table["tails_interval"]} if "tails_e" in table else self.document
             rows = [{"estimator": "impacts", "reads": "line of the log impact speeds of the free-rocking test", "raw": None,
                      "corrected": tails["e"], "low": tails["interval"][0], "high": tails["interval"][1], "coverage": None,
                      "triggers": len(self.document["impacts"]), "candidate": True, "reported": self.estimator == "impacts", "notes": notes}]

@@ -7,8 +7,9 @@ times on that record's axis) and a ``shake_table`` entry: the base's units, the 
 quiet and of a tail's length, where the shaking ends in each record, the tails analysed (with
 their own ``e``) and the stretches refused, each with its reason (:mod:`rockdec.free.shake`),
 and ``forced``: the records read with the base as a known load in their arcs
-(:mod:`rockdec.free.forced`), per record and pooled. The document's ``e`` is the tails'; when
-no tail gives one, it is the forced reading's (``estimator`` "forced").
+(:mod:`rockdec.free.forced`), per record and pooled. The document's ``e`` is the reading with
+the narrower interval (:attr:`rockdec.free.shake.ShakeTableFit.answer`; ``estimator``
+"impacts" for the tails, "forced" for every impact).
 """
 
 from __future__ import annotations
@@ -59,6 +60,8 @@ def shake_document(shake, sources: list[str], steps: list[float], sizes: list[in
             doc["g"] = json_number(forced.g)
     elif forced is not None and doc["reason"]:
         doc["reason"] = doc["reason"].rstrip(".") + f"; and every impact with the base a known load gives none: {forced.reason}"
+    doc["shake_table"]["tails_e"] = json_number(shake.e)
+    doc["shake_table"]["tails_interval"] = [json_number(x) for x in shake.e_interval]
     if forced is not None:
         doc["shake_table"]["forced"] = {**_forced(shake.forced_pooled), "g": json_number(shake.forced_pooled.g),
                                         "records": [{"record": k, **_forced(f), "g": json_number(f.g), "load_gain": json_number(f.load_gain),
@@ -88,8 +91,9 @@ def shake_text(doc: dict, verbose: bool = False) -> str:
     if doc["estimator"] == "forced":
         head, _, rest = text.partition("\n")
         lo, hi = doc["interval"]
+        tails = "no free-decay tail gives an e" if not table["tails"] else "narrower than the free-decay tails' interval"
         text = "\n".join([f"e = {doc['e']:.4f} (95 % interval [{lo:.4f}, {hi:.4f}]; shake-table test: every impact, the base as a "
-                           f"known load in the arcs, {table['forced']['impacts']} impacts; no free-decay tail gives an e)", rest])
+                           f"known load in the arcs, {table['forced']['impacts']} impacts; {tails})", rest])
     text = text.replace("measured by the free-rocking study on simulated records of known e",
                         "measured on shake-table records of known e from an independent simulator (the docs' shake-table page)", 1)
     lines = [text, "", "shake table:"]
