@@ -339,14 +339,18 @@ def free_rocking(theta, dt: float | None = None, *, model: str = "simplified", t
 
 def shake_table(theta, base, dt: float | None = None, *, base_units: str | None = None, block=None, theta_cr: float | None = None,
                 g_block: float | None = None, model: str = "simplified", start: float | None = None) -> RestitutionEstimate:
-    """Estimate ``e`` from a shake-table test: the free-decay tails after the shaking stops.
+    """Estimate ``e`` from a shake-table test: the free-decay tails, and every impact with
+    the base as a known load.
 
     The base acceleration, divided by the level that lifts the block (``g tan(alpha)``),
     says when the shaking ends: after 95 % of its Arias intensity and its last sample above
     5 % of that level. Every stretch as quiet as that, at least 1 s long, after the base
     first could lift the block, is a free decay: each is analysed as a free-rocking test
     (:func:`free_rocking`) and all are pooled into one ``e``. A base that still moves in a
-    tail is refused with its reason, never fitted as if free.
+    tail is refused with its reason, never fitted as if free. Every impact of the records
+    is read too, the flights fitted with the base's load in them
+    (:mod:`rockdec.free.forced`, the simplified model only); the result's ``e`` is the
+    reading with the narrower interval (``estimator`` "impacts" or "forced").
 
     Parameters
     ----------
@@ -376,8 +380,9 @@ def shake_table(theta, base, dt: float | None = None, *, base_units: str | None 
     Returns
     -------
     RestitutionEstimate
-        With ``test == "shake"``; ``impacts`` holds the impacts of the tails and
-        ``to_dict()["shake_table"]`` where the shaking ends and each tail.
+        With ``test == "shake"``; ``impacts`` holds the impacts of the tails,
+        ``estimators`` both readings, and ``to_dict()["shake_table"]`` where the shaking
+        ends, each tail and every impact's reading (``forced``: per record and pooled).
 
     Raises
     ------

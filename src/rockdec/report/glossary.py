@@ -47,7 +47,11 @@ GLOSSARY = """glossary:
   repaired   what was mended before the estimate: spikes replaced by the line through
              their neighbours, a drifting zero removed by a high-pass well below the
              rocking frequency; the calibration's records are mended alike (--no-repair: off)
-  e_spread   free test: the standard deviation of the per-impact e about the block's
+  e_spread   free test: the standard deviation of the per-impact e about the block's e
+  forced     shake test: e from every impact, the shaking's too, each flight fitted with
+             the base's load in it (the other reading, impacts, is the free-decay tails')
+  load gain  shake test: the base's load on the block as the flights read it over what
+             the base's units and the block's angle say (1: they agree; beyond 1.2 refused)
   flight_loss  free test: c of theta'' = -g sign(theta) - c theta' (1/s), the loss
              between impacts; fitted when its test finds it
   Housner's e  1 - 1.5 sin^2(atan(B/H)) of a block H high and B wide (--block H,B)
