@@ -349,7 +349,7 @@ def shake_table(theta, base, dt: float | None = None, *, base_units: str | None 
     (:func:`free_rocking`) and all are pooled into one ``e``. A base that still moves in a
     tail is refused with its reason, never fitted as if free. Every impact of the records
     is read too, the flights fitted with the base's load in them
-    (:mod:`rockdec.free.forced`, the simplified model only); the result's ``e`` is the
+    (``rockdec.free.forced``, the simplified model only); the result's ``e`` is the
     reading with the narrower interval (``estimator`` "impacts" or "forced").
 
     Parameters
