@@ -7,7 +7,8 @@ times on that record's axis) and a ``shake_table`` entry: the base's units, the 
 quiet and of a tail's length, where the shaking ends in each record, the tails analysed (with
 their own ``e``) and the stretches refused, each with its reason (:mod:`rockdec.free.shake`),
 and ``forced``: the records read with the base as a known load in their arcs
-(:mod:`rockdec.free.forced`), per record and pooled. The document's ``e`` is the reading with
+(:mod:`rockdec.free.forced`), per record and pooled, with the base read linear between
+samples and held over each (``readings``, their ``reading_gap``). The document's ``e`` is the reading with
 the narrower interval (:attr:`rockdec.free.shake.ShakeTableFit.answer`; ``estimator``
 "impacts" for the tails, "forced" for every impact).
 """
@@ -70,9 +71,12 @@ def shake_document(shake, sources: list[str], steps: list[float], sizes: list[in
 
 
 def _forced(fit) -> dict:
-    """The entries of one reading of :mod:`rockdec.free.forced` (a record's or the pool's)."""
+    """The entries of one reading of :mod:`rockdec.free.forced` (a record's or the pool's):
+    its answer, and each way of reading the base between samples with the gap between them."""
     return {"e": json_number(fit.e), "interval": [json_number(x) for x in fit.e_interval], "impacts": fit.impacts,
-            "set_aside": int(fit.set_aside), "reason": fit.reason}
+            "set_aside": int(fit.set_aside), "reason": fit.reason, "reading_gap": json_number(fit.reading_gap),
+            "readings": {name: {"e": json_number(r.e), "interval": [json_number(x) for x in r.e_interval], "base_shift": json_number(r.shift)}
+                         for name, r in fit.readings.items()}}
 
 
 def _empty_document(sources: list[str], steps: list[float], sizes: list[int], model: str, theta_cr: float | None) -> dict:
@@ -114,9 +118,12 @@ def shake_text(doc: dict, verbose: bool = False) -> str:
                 lines.append(f"  {name}: no e: {r['reason']}")
             else:
                 lo, hi = r["interval"]
-                lines.append(f"  {name}: e = {r['e']:.4f}, 95 % interval [{lo:.4f}, {hi:.4f}], from {r['impacts']} impacts")
+                both = ", ".join(f"{way}: {x['e']:.4f}" for way, x in r["readings"].items() if x["e"] is not None)
+                lines.append(f"  {name}: e = {r['e']:.4f}, 95 % interval [{lo:.4f}, {hi:.4f}], from {r['impacts']} impacts"
+                             + (f" (the base between samples {both})" if both else ""))
         gains = [r["load_gain"] for r in forced["records"] if r["load_gain"] is not None]
         if gains:
             lines.append(f"  (the base's fitted load over what its units and the block's angle say: {min(gains):.3f}-{max(gains):.3f})")
+        lines.append("  (each interval the union of two readings of the base between samples: linear, and held over each sample)")
     return "\n".join(lines)
 
