@@ -19,7 +19,7 @@ with Student's ``t``; records are pooled by their errors, each reading apart. Th
 whichever way the base moved: their gap is systematic and does not average down over
 records. Entry points: :func:`analyse_forced`, :func:`pool_forced`.
 
-Explanation: docs/explanation/shake-table.md (the forced stretch).
+Explanation: docs/how-to/shake-table.md (every impact, the base a known load).
 """
 
 from __future__ import annotations

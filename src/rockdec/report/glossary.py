@@ -52,6 +52,9 @@ GLOSSARY = """glossary:
              the base's load in it (the other reading, impacts, is the free-decay tails')
   load gain  shake test: the base's load on the block as the flights read it over what
              the base's units and the block's angle say (1: they agree; beyond 1.2 refused)
+  readings   shake test: every impact read twice, the base linear between its samples
+             and held over each (a staircase); the interval is the union of both, and
+             reading_gap the |log e| between their e
   flight_loss  free test: c of theta'' = -g sign(theta) - c theta' (1/s), the loss
              between impacts; fitted when its test finds it
   Housner's e  1 - 1.5 sin^2(atan(B/H)) of a block H high and B wide (--block H,B)
