@@ -349,8 +349,9 @@ def shake_table(theta, base, dt: float | None = None, *, base_units: str | None 
     (:func:`free_rocking`) and all are pooled into one ``e``. A base that still moves in a
     tail is refused with its reason, never fitted as if free. Every impact of the records
     is read too, the flights fitted with the base's load in them
-    (``rockdec.free.forced``, the simplified model only); the result's ``e`` is the
-    reading with the narrower interval (``estimator`` "impacts" or "forced").
+    (``rockdec.free.forced``, the simplified model only; the base read both linear between
+    its samples and held over each, the interval the union of the two); the result's ``e``
+    is the reading with the narrower interval (``estimator`` "impacts" or "forced").
 
     Parameters
     ----------
