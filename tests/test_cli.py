@@ -278,6 +278,7 @@ def test_workflow_without_snakemake_says_which_extra_to_install(monkeypatch, cap
     assert "pip install 'rockdec[workflow]'" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_workflow_passes_its_scene_and_every_other_option_to_snakemake(tmp_path, monkeypatch, capfd):
     """A dry run (-n) of the tiny scene from an empty folder: Snakemake plans the tiny scene's jobs there.
     The command runs in this process; Snakemake, its child, writes to the captured descriptors."""
@@ -295,6 +296,7 @@ def test_workflow_passes_its_scene_and_every_other_option_to_snakemake(tmp_path,
 NOT_ON_THE_WARM_PATH = ("xarray", "pandas", "dask", "distributed", "matplotlib", "jsonschema", "scipy.stats", "scipy.signal")
 
 
+@pytest.mark.slow
 def test_a_warm_estimate_of_a_csv_record_loads_no_library_it_does_not_use(tmp_path, capsys, monkeypatch):
     """A CSV record's calibration built here (a fake one); ``rockdec estimate --json`` in a fresh
     interpreter then reads it from the cache, reads the record, repairs it, measures its

@@ -246,6 +246,7 @@ io.write_netcdf(xr.Dataset({"x": ("i", x)}), sys.argv[1])
 
 
 @hostile("concurrency", "refused")
+@pytest.mark.slow
 def test_concurrent_runs_on_one_output_refuse_and_on_two_do_not_interfere(tmp_path):
     out, other, go = tmp_path / "a.nc", tmp_path / "b.nc", tmp_path / "go"
     proc = PYTHON_FORKS.start_script(WRITER, out, go, output=tmp_path.parent / f"{tmp_path.name}-writer")  # a second process

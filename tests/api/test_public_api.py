@@ -69,7 +69,7 @@ def test_every_public_name_has_a_numpydoc_docstring_with_an_example(name):
         assert "Parameters\n" in doc and "Returns\n" in doc, f"{name} lacks Parameters or Returns"
 
 
-@pytest.mark.parametrize("module", ["rockdec.api", "rockdec.report.result", "rockdec.cache"])
+@pytest.mark.parametrize("module", [pytest.param("rockdec.api", marks=pytest.mark.slow), "rockdec.report.result", "rockdec.cache"])
 def test_docstring_examples_run(module, res, cache, tmp_path, monkeypatch):
     monkeypatch.setenv("ROCKDEC_CACHE", str(cache))
     mod = importlib.import_module(module)

@@ -63,7 +63,16 @@ def record_085(tmp_path_factory):
     return write_csv(tmp_path_factory.mktemp("rec") / "block.csv", theta, dt)
 
 
+@pytest.fixture(scope="module")
+def short_085(tmp_path_factory):
+    """A 40,000-sample record at e = 0.85, for claims that do not rest on the record's length
+    (its calibration costs a fifth of :func:`record_085`'s)."""
+    theta, dt = simulated_record(0.85, 40_000)
+    return write_csv(tmp_path_factory.mktemp("rec") / "short.csv", theta, dt)
+
+
 @pytest.mark.usefixtures("capped_sets")
+@pytest.mark.slow
 def test_record_at_085_is_inside_its_interval(record_085, cache, capsys, tmp_path):
     res = run_json([record_085, "--cache", cache, "--plot", tmp_path / "block.png"], capsys)
     low, high = res["interval"]
@@ -78,20 +87,21 @@ def test_record_at_085_is_inside_its_interval(record_085, cache, capsys, tmp_pat
 
 
 @pytest.mark.usefixtures("capped_sets")
-def test_second_run_reuses_the_calibration_and_agrees(record_085, cache, capsys):
-    first = run_json([record_085, "--cache", cache], capsys)
-    again = run_json([record_085, "--cache", cache], capsys)
+@pytest.mark.usefixtures("capped_sets")
+def test_second_run_reuses_the_calibration_and_agrees(short_085, cache, capsys):
+    first = run_json([short_085, "--cache", cache], capsys)
+    again = run_json([short_085, "--cache", cache], capsys)
     assert again["calibration"]["cached"] is True
     assert again["e"] == first["e"] and again["interval"] == first["interval"]
 
 
 @pytest.mark.usefixtures("capped_sets")
-def test_the_report_gives_every_check_its_statistic_threshold_and_warning(record_085, cache, capsys):
+def test_the_report_gives_every_check_its_statistic_threshold_and_warning(short_085, cache, capsys):
     """The JSON's diagnostics hold every check of rockdec.record.diagnostics; a check fires exactly
     when its statistic passes its threshold, and each that fires has its warning."""
     from rockdec.record import diagnostics
 
-    res = run_json([record_085, "--cache", cache], capsys)
+    res = run_json([short_085, "--cache", cache], capsys)
     assert list(res["diagnostics"]) == list(diagnostics.CHECKS)
     for check in diagnostics.REGISTRY:
         c = res["diagnostics"][check.name]
@@ -101,6 +111,7 @@ def test_the_report_gives_every_check_its_statistic_threshold_and_warning(record
 
 
 @pytest.mark.usefixtures("capped_sets")
+@pytest.mark.slow
 def test_g_is_recovered_within_2_percent(cache, tmp_path, capsys):
     """On 200,000 samples the g of seeds 4-8 lies within 0.16, 0.08, 0.13, 0.48 and 1.1 % of
     the truth: 2 % leaves room for the spread, not for a bias. The record is as long as
@@ -113,8 +124,8 @@ def test_g_is_recovered_within_2_percent(cache, tmp_path, capsys):
 
 
 @pytest.mark.usefixtures("capped_sets")
-def test_given_g_is_reported_as_given(record_085, cache, capsys):
-    res = run_json([record_085, "--cache", cache, "--g", "1.0"], capsys)
+def test_given_g_is_reported_as_given(short_085, cache, capsys):
+    res = run_json([short_085, "--cache", cache, "--g", "1.0"], capsys)
     assert res["g"] == 1.0 and res["g_given"] is True
 
 
@@ -787,7 +798,7 @@ def test_the_pipeline_fingerprint_is_read_once_per_process(monkeypatch, tmp_path
         calibration.pipeline_fingerprint.cache_clear()
 
 
-def test_records_of_nearby_lengths_share_one_calibration_on_the_length_grid():
+def test_the_length_grid_keys_nearby_lengths_to_one_calibration_setting():
     """length_grid: records whose lengths fall in one bin of the grid get one settings hash,
     simulated at the bin's length (stated in the key); the spread scale is 1 at the bin's own
     length and sqrt(bin / record) otherwise; records below the grid keep their own lengths
@@ -810,6 +821,7 @@ def test_records_of_nearby_lengths_share_one_calibration_on_the_length_grid():
     assert "length_grid" not in calibration.calibration_settings([20_000_000], 75.0, length_grid=True)
 
 
+@pytest.mark.slow
 def test_records_of_nearby_lengths_share_one_calibration_on_the_length_grid(tmp_path, monkeypatch):
     """``share_lengths``: records of 12,000 and 15,000 samples read one calibration simulated
     at the grid's 10,000, each its spread scaled by sqrt(10,000 / its length); without it each

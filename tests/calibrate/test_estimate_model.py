@@ -94,6 +94,7 @@ def test_a_declared_spectrum_file_is_placed_at_the_records_rocking_frequency(tmp
     assert key["load"]["kind"] == "spectrum" and key["load"]["psd"] == [1.0, 1.0, 0.1]
 
 
+@pytest.mark.slow
 def test_noisy_record_json_names_the_noise_and_its_calibration_simulates_it(tmp_path, capsys, small_calibration):
     y = _record(23, noise=0.03)
     path = tmp_path / "r.npy"

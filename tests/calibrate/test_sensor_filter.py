@@ -213,6 +213,7 @@ def test_a_gentle_filter_blunts_the_impacts_where_the_spectrum_cannot_show_it(ma
 
 
 @pytest.mark.hostile("wrong answers", "refused")
+@pytest.mark.slow
 def test_a_gentle_filter_undeclared_is_declined_by_the_calibrated_check(tmp_path, small_calibration, monkeypatch):
     """A causal RC stage at 5 rocking frequencies, end to end: the calibration's unfiltered
     records hold sharper impacts, ``filtered`` fires, and ``e`` is declined naming the

@@ -175,6 +175,7 @@ def test_a_first_order_filter_colours_a_white_load_and_a_soft_contact_does_not(s
 
 @pytest.mark.hostile("wrong answers", "refused")
 @pytest.mark.parametrize("found", [SensorFilter("butterworth", 4, 5.0, True), SensorFilter("rc", 1, 5.0, False)], ids=lambda f: f.text())
+@pytest.mark.slow
 def test_a_filtered_record_declared_unfiltered_is_declined(small_calibrations, found):
     """A filter after the block that the user declares absent: the roll-off check is skipped
     (declared), the calibration simulates unfiltered records, and ``filtered`` fires; it

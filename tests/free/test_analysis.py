@@ -242,6 +242,7 @@ def test_scatter_free_impacts_give_the_closed_form_mean_and_spread_of_log_e():
     assert fit.impacts_above_one == int(np.sum(drawn[:n] > 1.0))
 
 
+@pytest.mark.slow
 def test_impact_to_impact_scatter_is_held_by_both_intervals():
     """Per-impact e ~ N(0.9, 0.04), 0.5 % sensor noise, 30 releases: the interval holds the
     mean e and the spread interval holds 0.04 on at least 25 of 30 each (95 % intervals: 25

@@ -47,6 +47,7 @@ def test_no_loss_is_the_parabola_and_the_series_meets_the_exponentials():
     np.testing.assert_allclose(below, above, rtol=1e-11, atol=1e-16)
 
 
+@pytest.mark.slow
 def test_ideal_blocks_rarely_get_a_loss_in_flight():
     """Forty ideal releases (c = 0, 0.5 % sensor noise): the score test fires by chance on
     about 2.5 % (LOSS_Z, one-sided); 5 or more of 40 has a chance of 0.7 % at that rate."""
@@ -59,6 +60,7 @@ def test_ideal_blocks_rarely_get_a_loss_in_flight():
     assert chosen <= 4 and held >= 35, (chosen, held)
 
 
+@pytest.mark.slow
 def test_a_loss_in_flight_is_found_and_e_is_the_impacts_share():
     """Ten releases with c = 0.15 /s and e = 0.9 at impact (0.5 % noise): the loss is found,
     and e and c are each held by their intervals (the one-e fit misses e confidently on
@@ -74,6 +76,7 @@ def test_a_loss_in_flight_is_found_and_e_is_the_impacts_share():
     assert any("loses speed in flight" in note for note in fit.notes)
 
 
+@pytest.mark.slow
 def test_a_loss_in_flight_leaves_the_time_and_angle_scales_invariant():
     y, dt, _ = damped_release(0.9, 0.15, noise=0.005, seed=3)
     a = analyse_free_rocking(y, dt)

@@ -21,6 +21,7 @@ def test_shaking_end_is_after_the_last_loud_sample():
     assert np.all(np.abs(a[end:]) <= 0.05 * tr.G) and abs(a[end - 1]) > 0.05 * tr.G
 
 
+@pytest.mark.slow
 def test_answered_tails_cover_e_over_seeds():
     covered = answered = 0
     for e in (0.8, 0.9, 0.95):
@@ -45,6 +46,7 @@ def test_base_of_another_length_is_refused():
         analyse_shake_table(np.zeros(100), np.zeros(99), 0.01, base_units="rad/s2", g_block=2.0)
 
 
+@pytest.mark.slow
 def test_a_residual_base_motion_in_the_tails_widens_the_interval_to_hold():
     """The base still moving at 2 % of the uplift level (white) in the tails: the intervals
     hold e over seeds, their z scores of unit spread, because the load's random walk of the

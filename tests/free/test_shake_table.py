@@ -44,6 +44,7 @@ def test_the_shake_table_test_is_the_same_result_object(shaken, tmp_path):
     assert len(res.plot().axes) == 2
 
 
+@pytest.mark.slow
 def test_the_base_in_any_units_gives_the_same_tails(shaken):
     """Invariance: the base in m/s^2 (level g tan(alpha)) or in g, scaled to the same uplift
     ratio, reads the same shaking end and the same e as in rad/s^2."""
@@ -96,6 +97,7 @@ def test_a_base_sampled_otherwise_than_the_angle_is_refused(shaken):
         rockdec.shake_table([theta, theta], [base], DT, base_units="rad/s2", g_block=tr.G)
 
 
+@pytest.mark.slow
 def test_the_command_line_runs_the_shake_table_test(shaken, tmp_path, capsys):
     theta, base = shaken
     time = DT * np.arange(theta.size)

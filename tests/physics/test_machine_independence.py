@@ -12,6 +12,8 @@ import os
 import subprocess
 import sys
 
+import pytest
+
 #: The environment of another instruction set (docs/explanation/reproducibility.md).
 OTHER_MACHINE = {
     "NPY_DISABLE_CPU_FEATURES": "X86_V3 X86_V4 AVX512_ICL AVX512_SPR",
@@ -47,6 +49,7 @@ def probe(extra: dict) -> dict:
     return json.loads(done.stdout.splitlines()[-1])
 
 
+@pytest.mark.slow
 def test_white_and_low_pass_series_are_bit_identical_under_another_instruction_set():
     here, there = probe({}), probe(OTHER_MACHINE)
     assert here.keys() == there.keys()

@@ -5,6 +5,8 @@ reaches it without the workflow's scene validation."""
 import subprocess
 import sys
 
+import pytest
+
 from rockdec.physics import run
 from rockdec.physics.record_model import Load, SensorNoise
 from rockdec.pipeline import config
@@ -23,6 +25,7 @@ def test_a_scene_and_its_plain_settings_give_one_run():
     assert run.from_scene(scene, pilot=pilot) == plain
 
 
+@pytest.mark.slow
 def test_rockdec_simulate_imports_nothing_from_the_workflow_layer():
     code = ("import sys, rockdec; rockdec.simulate(0.85, 200, seed=0, dt=0.01, burn_in=0); "
             "print(sorted(m for m in sys.modules if m.startswith('rockdec.pipeline')))")

@@ -199,6 +199,7 @@ def test_verify_refuses_a_folder_without_manifest_and_an_existing_rebuild_folder
     assert code == 2 and "exists already" in out and not list(existing.iterdir())
 
 
+@pytest.mark.slow
 def test_rebuild_remakes_tables_and_figures_from_the_archive_without_simulating(reference, tmp_path, capsys, monkeypatch):
     def no_simulation(*args, **kwargs):
         raise AssertionError("the rebuild simulated")

@@ -206,6 +206,7 @@ def test_a_free_rocking_rows_json_is_what_rockdec_estimate_test_free_prints(tmp_
     assert json.loads(capsys.readouterr().out) == doc
 
 
+@pytest.mark.slow
 def test_a_shake_table_rows_json_is_what_rockdec_estimate_test_shake_prints(tmp_path, monkeypatch, capsys):
     """A simulated shake-table row (its base stored beside its angle, in rad/s^2 at g = 1) and a
     block of two: the campaign's document is ``rockdec estimate --test shake --json``'s."""

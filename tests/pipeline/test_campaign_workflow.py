@@ -25,6 +25,9 @@ from rockdec import cli
 from rockdec.pipeline import archive
 from test_workflow import REPO, job_stats
 
+#: A Snakemake campaign end to end: the slow tier (docs/development/testing.md).
+pytestmark = pytest.mark.slow
+
 SHEET = [
     "record\tpath\tblock\ttrue_e\tdt\tsimulate\ttest",
     "a1\t\tA\t0.9\t0.796\tseed=4 n_points=6000\t",

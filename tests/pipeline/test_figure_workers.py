@@ -11,6 +11,9 @@ import pytest
 from rockdec.pipeline import figure_workers, in_snakemake, steps
 from rockdec.validate import InputError
 
+#: Worker processes started, killed and replaced: the slow tier (docs/development/testing.md).
+pytestmark = pytest.mark.slow
+
 
 @pytest.fixture(scope="module", autouse=True)
 def workers():

@@ -136,6 +136,7 @@ def test_every_cell_names_a_condition_and_a_simulator():
 
 
 @pytest.mark.usefixtures("capped_sets")
+@pytest.mark.slow
 def test_reduced_coverage_holds(calibrations):
     """40 records of 20,000 samples at e = 0.9: the 95 % interval of e_v covers e >= 85 %
     (on the paper model's calibrations of those records, of the capped calibration's sets per
@@ -147,6 +148,7 @@ def test_reduced_coverage_holds(calibrations):
     assert np.isfinite(ds["est_e"].sel(estimator="e_v").values).all()
 
 
+@pytest.mark.slow
 def test_a_cell_read_again_offline_gives_back_its_intervals(tmp_path):
     """:func:`rockdec.studies.coverage.recorrect`: the stored raw values inverted through the
     stored calibrations by the belt that ran the cell give back every reported ``e`` and
@@ -422,6 +424,7 @@ def test_fresh_records_are_judged_per_calibration():
 
 
 @pytest.mark.parametrize("sd", [0.0, 0.02])
+@pytest.mark.slow
 def test_calibration_error_predicts_the_dispersion_of_cells_that_share_calibrations(sd):
     """Studies of 31 cells of 200 records, each cell's records served by three calibrations
     (shares 0.5, 0.3, 0.2) whose own coverage is 95 % plus a normal error of ``sd``, the

@@ -1,8 +1,11 @@
 """The shake-table study (rockdec.studies.shake_coverage) on a small grid."""
 
+import pytest
+
 from rockdec.studies import shake_coverage
 
 
+@pytest.mark.slow
 def test_the_study_tallies_each_cell_and_pools_them():
     cells = shake_coverage.run_grid(e_values=(0.95,), peaks=(3.0,), noise=(0.0, 0.01), records=3)
     assert [(c["e"], c["peak"], c["noise"], c["records"]) for c in cells] == [(0.95, 3.0, 0.0, 3), (0.95, 3.0, 0.01, 3)]
