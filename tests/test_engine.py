@@ -12,6 +12,7 @@ from rockdec.pipeline import config, replicates, series
 from rockdec.physics import run
 
 
+@pytest.mark.slow
 def test_the_threads_engine_computes_without_loading_dask_distributed():
     """The threads engine names Dask's threaded scheduler by its function: looking up the name
     "threads" would import dask.distributed (a second of imports) to look for a client. The

@@ -770,6 +770,7 @@ def test_a_listener_that_is_not_dask_is_refused_at_once(tmp_path, capsys):
 
 
 @hostile("limits", "refused")
+@pytest.mark.slow
 def test_a_file_size_limit_is_one_sentence(tmp_path):
     script = (
         "import resource, sys; resource.setrlimit(resource.RLIMIT_FSIZE, (20000, 20000)); "

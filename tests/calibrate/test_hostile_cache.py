@@ -173,6 +173,7 @@ calibration.load_or_build({"lengths": [1000], "hostile": "sigterm"}, sys.argv[1]
 
 
 @hostile("kills", "answered")
+@pytest.mark.slow
 def test_sigterm_during_a_build_removes_its_lock_and_the_next_run_does_not_wait(tmp_path, quick):
     cache = tmp_path / "cache"
     lock = _lock(cache, {"lengths": [1000], "hostile": "sigterm"})

@@ -59,6 +59,7 @@ def test_the_base_in_any_units_gives_the_same_tails(shaken):
         assert other.e == pytest.approx(ref.e, rel=1e-12)
 
 
+@pytest.mark.slow
 def test_records_of_one_block_are_pooled(shaken):
     theta, base = shaken
     other_theta, other_base = tr.transient_with_base(0.9, 0)

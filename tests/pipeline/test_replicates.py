@@ -136,6 +136,7 @@ def reduced_paper():
     return replicates.replicate_estimates(cube, fit_points=scene["estimates"]["fit_points"], weights=scene["estimates"]["weights"])
 
 
+@pytest.mark.slow
 def test_reduced_paper_scene_lands_near_the_papers_means(reduced_paper):
     """e_0, e1, e3, e4 at zero window against the paper (§5, eq. 28).
 

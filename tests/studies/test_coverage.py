@@ -77,6 +77,7 @@ def tiny_table(tmp_path_factory):
     return datasets, coverage.table(datasets)
 
 
+@pytest.mark.slow
 def test_tiny_study_table_has_its_columns_and_invariants(tiny_table):
     datasets, table = tiny_table
     need = {"simulator", "condition", "e_true", "records", "coverage", "bias", "sd", "median_width", "nulls", "null_reasons",
@@ -97,6 +98,7 @@ def test_tiny_study_table_has_its_columns_and_invariants(tiny_table):
     assert markdown.count("\n| kernel") + markdown.count("\n| reference") == len(table)
 
 
+@pytest.mark.slow
 def test_tiny_study_counts_declined_records_apart(tiny_table):
     """Coverage of the answered records times their number is the coverage of every record
     (a null not covered) times theirs; the declined share is the nulls' share; the table
@@ -119,6 +121,7 @@ def test_tiny_study_counts_declined_records_apart(tiny_table):
     figures.fig_coverage(table)
 
 
+@pytest.mark.slow
 def test_tiny_study_places_the_corner(tiny_table):
     """The records' own corner, in their own rocking frequencies, is the cell's within the
     spread of two records' sigma_Y (the median of the pilots is placed within 1.5 %)."""
