@@ -1051,6 +1051,7 @@ sys.exit(main(["estimate", sys.argv[1], "--json", "--cache", sys.argv[2]]))
 
 
 @hostile("concurrency", "answered")
+@pytest.mark.slow
 def test_two_concurrent_estimates_on_one_record_build_one_calibration(rocking, tmp_path):
     """Issue 19: two processes, same settings; the second waits for the first's build."""
     cache = tmp_path / "cache"

@@ -66,7 +66,7 @@ def record_085(tmp_path_factory):
 @pytest.fixture(scope="module")
 def short_085(tmp_path_factory):
     """A 40,000-sample record at e = 0.85, for claims that do not rest on the record's length
-    (its calibration costs a fifth of :func:`record_085`'s)."""
+    (its calibration costs about half of :func:`record_085`'s)."""
     theta, dt = simulated_record(0.85, 40_000)
     return write_csv(tmp_path_factory.mktemp("rec") / "short.csv", theta, dt)
 

@@ -169,6 +169,7 @@ def small_calibration(monkeypatch):
 
 
 @pytest.mark.hostile("wrong answers", "refused or answered")
+@pytest.mark.slow
 def test_a_filtered_record_is_declined_undeclared_and_covered_declared(tmp_path, small_calibration, capsys):
     y = _record(17, n=60_000)
     ppc = measured.analyse([y], DT_WHITE).points_per_cycle

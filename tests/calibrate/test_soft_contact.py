@@ -109,6 +109,7 @@ def small_calibrations(tmp_path_factory):
 @pytest.mark.hostile("wrong answers", "refused")
 @pytest.mark.parametrize("sensor_filter", ["auto", "none"])
 @pytest.mark.parametrize("contact, e", [(3.0, 0.9), (1.5, 0.9), (3.0, 0.8)], ids=["3 samples", "1.5 samples", "3 samples, e 0.8"])
+@pytest.mark.slow
 def test_a_soft_contact_is_declined_naming_both_causes(small_calibrations, sensor_filter, contact, e):
     """A contact of 3 or 1.5 samples: ``filtered`` fires; checked for a filter, ``e`` is
     declined naming a filter and a soft contact; declared unfiltered (the advice a filter's

@@ -84,6 +84,7 @@ def _project_records() -> list[np.ndarray]:
     return out
 
 
+@pytest.mark.slow
 def test_check_quiet_on_the_project_simulator():
     """24 stationary records of the project's simulator (:func:`_project_records`). Tolerance:
     at most one fires (a false-alarm rate of 1 % gives two or more of 24 with probability 2.4 %)."""

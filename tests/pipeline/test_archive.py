@@ -37,6 +37,10 @@ from rockdec.pipeline import crate as crates
 from rockdec import io as rockdec_io
 from rockdec.cli import main
 
+#: Every test here reads the tiny scene built by Snakemake end to end (conftest.tiny_workflow):
+#: the slow tier (docs/development/testing.md).
+pytestmark = pytest.mark.slow
+
 REPO = Path(__file__).resolve().parents[2]
 SCENE = "tiny"
 TABLE_SUFFIXES = (".nc", ".csv", ".md", ".json")
@@ -199,7 +203,6 @@ def test_verify_refuses_a_folder_without_manifest_and_an_existing_rebuild_folder
     assert code == 2 and "exists already" in out and not list(existing.iterdir())
 
 
-@pytest.mark.slow
 def test_rebuild_remakes_tables_and_figures_from_the_archive_without_simulating(reference, tmp_path, capsys, monkeypatch):
     def no_simulation(*args, **kwargs):
         raise AssertionError("the rebuild simulated")
@@ -544,7 +547,6 @@ def half_built(reference: Path, root: Path) -> Path:
 
 
 @pytest.mark.hostile("kills", "answered")
-@pytest.mark.slow
 def test_sigterm_then_the_readmes_command_gives_the_uninterrupted_outputs(reference, tmp_path):
     results = half_built(reference, tmp_path)
     proc = start(tmp_path)
@@ -563,7 +565,6 @@ def test_sigterm_then_the_readmes_command_gives_the_uninterrupted_outputs(refere
 
 
 @pytest.mark.hostile("kills", "answered")
-@pytest.mark.slow
 def test_sigkill_then_the_readmes_recovery_command_gives_the_uninterrupted_outputs(reference, tmp_path):
     results = half_built(reference, tmp_path)
     proc = start(tmp_path)

@@ -152,6 +152,7 @@ def test_reduced_paper_scene_lands_near_the_papers_means(reduced_paper):
         assert abs(row["mean"] - row.paper_mean) < tolerance, (name, row["mean"], row.paper_mean, tolerance)
 
 
+@pytest.mark.slow
 def test_impact_slope_estimator_is_unbiased_on_the_reduced_scene(reduced_paper):
     """e_v (the paper's §6 proposal): no bias detectable at 3 standard errors."""
     row = tables.bias_row(reduced_paper["e_hat0"].sel(estimator="e_v").values, 0.95)

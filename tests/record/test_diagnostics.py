@@ -288,6 +288,7 @@ def test_a_step_in_the_loads_strength_lifts_the_nonstationarity_without_bound():
     assert stats.t.ppf(1 - 0.015 / 2, 18) < point < stats.t.ppf(1 - 0.015 / 2 / 17, 18)
 
 
+@pytest.mark.slow
 def test_a_load_that_doubles_halfway_stands_above_every_clean_record_at_e_098():
     """At e = 0.98 stationary records' block variances wander and von Neumann's ratio of
     them reaches its ceiling's range; a record whose impulses double in strength halfway
