@@ -4,6 +4,7 @@ import math
 
 import numpy as np
 import pytest
+from scipy import stats
 
 import transient_reference as tr
 from rockdec.free.shake import analyse_shake_table, load_intensity, shaking_end
@@ -94,3 +95,26 @@ def test_a_tail_whose_one_impact_cannot_be_bounded_is_refused_not_raised():
     source, e, (low, high) = res.answer
     assert all(isinstance(why, str) for _, _, why in res.refused)
     assert source is None or (math.isfinite(low) and math.isfinite(high) and low <= e <= high)
+
+
+@pytest.mark.slow
+def test_records_are_pooled_by_their_own_errors():
+    """Tails in several records: each record's tails read alone (its ``record_fits`` entry is
+    the record analysed by itself), the block's ``e`` their error-weighted mean, its error
+    the weighted mean's widened by the Birge ratio (computed here by hand), Student's ``t`` at
+    the records' degrees of freedom summed; one record alone keeps its own reading."""
+    records = [tr.transient_with_base(0.95, seed, strong=8.0, free=12.0, peak=1.6, noise=0.01) for seed in (3, 4, 5, 6)]
+    pooled = analyse_shake_table([t for t, _ in records], [b for _, b in records], 1 / tr.FS, base_units="rad/s2", g_block=tr.G)
+    alone = [analyse_shake_table(t, b, 1 / tr.FS, base_units="rad/s2", g_block=tr.G) for t, b in records]
+    alone = [a for a in alone if a.tails]
+    assert len(pooled.record_fits) == len(alone) >= 2 and all(not a.record_fits for a in alone)
+    for fit, one in zip(pooled.record_fits, alone):
+        assert fit.e == pytest.approx(one.e, rel=1e-12) and one.e == one.fit.e
+    log_e, se = np.log([a.e for a in alone]), np.array([a.log_e_se for a in alone])
+    w = se ** -2
+    mu = np.sum(w * log_e) / np.sum(w)
+    birge = math.sqrt(np.sum(w * (log_e - mu) ** 2) / (len(alone) - 1))
+    assert pooled.e == pytest.approx(math.exp(mu), rel=1e-12)
+    assert pooled.log_e_se == pytest.approx(max(1.0, birge) / math.sqrt(np.sum(w)), rel=1e-9)
+    half = math.log(pooled.e_interval[1] / pooled.e)
+    assert half == pytest.approx(stats.t.ppf(0.975, sum(f.dof for f in pooled.record_fits)) * pooled.log_e_se, rel=1e-9)

@@ -5,8 +5,10 @@ level (``g tan(alpha)`` in m/s^2, or the block's ``g`` in rad/s^2): below it a b
 stays at rest. The shaking ends after 95 % of the base's Arias intensity and after the last
 sample above :data:`QUIET` of the uplift level; every stretch as quiet as that, at least
 :data:`MIN_TAIL` s long, after the base first could lift the block, is a free-decay tail,
-analysed by :func:`rockdec.free.analysis.analyse_free_rocking` and pooled over the tails of
-all records of one block. A tail whose base still moves (a cut by hand) is refused with that
+analysed by :func:`rockdec.free.analysis.analyse_free_rocking`: the tails of one record
+together, and the records of one block pooled by their errors (as the forced reading pools
+them, :func:`rockdec.free.analysis.pooled_mean`), since one impact spread for every record
+would weigh a precise record down by a noisy one. A tail whose base still moves (a cut by hand) is refused with that
 reason, never fitted as if free. Beside the tails, each whole record is read with the base as
 a known load in its arcs (:mod:`rockdec.free.forced`, the simplified model), its impacts
 pooled over the records. Entry point: :func:`analyse_shake_table`.
@@ -18,9 +20,10 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy import stats
 
 from rockdec import validate as checks
-from rockdec.free.analysis import FreeRockingFit, analyse_free_rocking
+from rockdec.free.analysis import FreeRockingFit, analyse_free_rocking, pooled_mean
 from rockdec.free.forced import ForcedFit, analyse_forced, pool_forced
 from rockdec.free.impacts import CROSSING_BAND_SIGMAS, find_crossings, noise_std
 from rockdec.timeaxis import RecordError
@@ -60,7 +63,9 @@ class ShakeTableFit:
     (record, start s, reason) and ``reason`` (why there is no ``e``; ``None`` when there is);
     ``forced``: each record read with the base as a known load
     (:func:`rockdec.free.forced.analyse_forced`) and ``forced_pooled`` their impacts together
-    (empty and ``None`` under the Housner model, which it does not fit)."""
+    (empty and ``None`` under the Housner model, which it does not fit); ``record_fits``: with
+    tails in more than one record, each record's tails analysed together, whose ``e`` pooled
+    by their errors is the tails' ``e`` (:attr:`e`)."""
 
     fit: FreeRockingFit | None
     shaking_end: tuple[float, ...]
@@ -71,16 +76,36 @@ class ShakeTableFit:
     reason: str | None
     forced: tuple[ForcedFit, ...] = ()
     forced_pooled: ForcedFit | None = None
+    record_fits: tuple[FreeRockingFit, ...] = ()
 
     @property
     def e(self) -> float:
-        """The pooled ``e`` (NaN without one)."""
-        return math.nan if self.fit is None or self.fit.reason else self.fit.e
+        """The tails' ``e`` (NaN without one): :attr:`fit`'s, or with tails in several records
+        theirs pooled by their errors (:attr:`log_e_se`)."""
+        return self._tails[0]
 
     @property
     def e_interval(self) -> tuple[float, float]:
-        """Its 95 % interval."""
-        return (math.nan, math.nan) if self.fit is None or self.fit.reason else self.fit.e_interval
+        """Its 95 % interval: Student's ``t`` at the records' degrees of freedom summed."""
+        return self._tails[1]
+
+    @property
+    def log_e_se(self) -> float:
+        """The standard error of the tails' ``log e``, widened by the records' scatter beyond
+        their errors (the Birge ratio) when several are pooled."""
+        return self._tails[2]
+
+    @property
+    def _tails(self) -> tuple[float, tuple[float, float], float]:
+        none = (math.nan, (math.nan, math.nan), math.nan)
+        if self.fit is None or self.fit.reason:
+            return none
+        answered = [f for f in self.record_fits if f.reason is None and math.isfinite(f.e) and math.isfinite(f.log_e_se)]
+        if len(answered) < 2:
+            return self.fit.e, self.fit.e_interval, self.fit.log_e_se
+        mu, se = pooled_mean([math.log(f.e) for f in answered], [f.log_e_se for f in answered])
+        half = float(stats.t.ppf(0.975, sum(f.dof for f in answered))) * se
+        return math.exp(mu), (math.exp(mu - half), math.exp(mu + half)), se
 
     @property
     def answer(self) -> tuple[str | None, float, tuple[float, float]]:
@@ -286,9 +311,17 @@ def analyse_shake_table(theta, base, dt, *, base_units: str = "m/s2", g_block: f
     if pieces:
         pooled = analyse_free_rocking(pieces if len(pieces) > 1 else pieces[0], steps if len(steps) > 1 else steps[0], model=model,
                                       theta_cr=theta_cr, load_noise=loads)
+    owners = [k for k, _, _ in tails]
+    record_fits = []
+    if len(set(owners)) > 1:
+        for k in sorted(set(owners)):
+            mine = [j for j, owner in enumerate(owners) if owner == k]
+            record_fits.append(fits[mine[0]] if len(mine) == 1 else
+                               analyse_free_rocking([pieces[j] for j in mine], [steps[j] for j in mine], model=model, theta_cr=theta_cr,
+                                                    load_noise=[loads[j] for j in mine]))
     if pooled is not None:
         reason = pooled.reason
     else:
         reason = "no free-decay tail gives an e: " + "; ".join(f"{'record %d at ' % k if many else ''}{s:.6g} s: {why}" for k, s, why in refused)
     return ShakeTableFit(pooled, tuple(ends), tuple(tails), tuple(fits), tuple(loads), tuple(refused), reason, tuple(forced),
-                         pool_forced(forced) if forced else None)
+                         pool_forced(forced) if forced else None, tuple(record_fits))

@@ -3,7 +3,8 @@ a :class:`rockdec.RestitutionEstimate` with ``test == "shake"``).
 
 The document is the free-rocking document of the pooled free-decay tails
 (:mod:`rockdec.report.free_result`; impacts and releases numbered by the record they lie in,
-times on that record's axis) and a ``shake_table`` entry: the base's units, the thresholds of
+times on that record's axis; with tails in several records, its ``e``, interval and
+``log_e_se`` those of the records pooled by their errors) and a ``shake_table`` entry: the base's units, the thresholds of
 quiet and of a tail's length, where the shaking ends in each record, the tails analysed (with
 their own ``e``) and the stretches refused, each with its reason (:mod:`rockdec.free.shake`),
 and ``forced``: the records read with the base as a known load in their arcs
@@ -59,6 +60,8 @@ def shake_document(shake, sources: list[str], steps: list[float], sizes: list[in
         doc.update(e=json_number(e), interval=[json_number(x) for x in interval], reason=None, estimator="forced")
         if doc["g"] is None:
             doc["g"] = json_number(forced.g)
+    elif source == "impacts" and shake.record_fits:
+        doc.update(e=json_number(e), interval=[json_number(x) for x in interval], log_e_se=json_number(shake.log_e_se))
     elif forced is not None and doc["reason"]:
         doc["reason"] = doc["reason"].rstrip(".") + f"; and every impact with the base a known load gives none: {forced.reason}"
     doc["shake_table"]["tails_e"] = json_number(shake.e)
