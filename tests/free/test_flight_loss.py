@@ -11,7 +11,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from damped_reference import damped_release
-from rockdec.free import flight_loss
+from rockdec.free import arcs, flight_loss
 from rockdec.free.analysis import analyse_free_rocking
 
 
@@ -84,3 +84,14 @@ def test_a_loss_in_flight_leaves_the_time_and_angle_scales_invariant():
     assert a.loss_in_flight and b.loss_in_flight
     assert b.e == pytest.approx(a.e, rel=1e-6) and b.flight_loss == pytest.approx(3.0 * a.flight_loss, rel=1e-5)
     assert math.isfinite(a.flight_loss_interval[0])
+
+
+def test_a_release_whose_score_is_unread_starts_its_fit_at_no_loss():
+    """A release whose score test could not read ``c`` (NaN: its loss column is explained by
+    the arcs alone) is fitted from ``c = 0``, as it would be with that guess, instead of
+    stopping the analysis with non-finite residuals."""
+    tt = np.linspace(0.0, 1.5, 61)
+    yy = np.where(tt < 0.5, 0.25 - tt**2, -(tt - 0.5) * (1.5 - tt))
+    first = arcs.fit_sequence(tt, yy, side=1, times0=[0.0, 0.5, 1.5], q0=2.0, model="simplified", theta_cr=None)
+    unread, zero = flight_loss.fit_sequence(tt, yy, first, c0=math.nan), flight_loss.fit_sequence(tt, yy, first, c0=0.0)
+    assert unread.g == zero.g and unread.c == zero.c and np.array_equal(unread.times, zero.times)

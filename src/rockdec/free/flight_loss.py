@@ -172,7 +172,8 @@ def fit_sequence(t, y, start: arcs.SequenceFit, floor: float = 0.0, c0: float = 
     floor : float
         Smallest standard deviation (rad) the samples' scatter is taken to have.
     c0 : float
-        First guess of ``c`` (1/s).
+        First guess of ``c`` (1/s); a guess that is not finite (a release whose score
+        :func:`loss_score` could not read) starts at 0.
 
     Returns
     -------
@@ -193,6 +194,7 @@ def fit_sequence(t, y, start: arcs.SequenceFit, floor: float = 0.0, c0: float = 
     t_ref, t_unit, y_unit = t[0], t[1] - t[0], float(np.max(np.abs(y)))
     g_unit = y_unit / t_unit**2
     ts, ys = (t - t_ref) / t_unit, y / y_unit
+    c0 = c0 if math.isfinite(c0) else 0.0
     x0 = np.concatenate([(start.times - t_ref) / t_unit, [start.q / g_unit, c0 * t_unit]])
 
     def residual(x):
