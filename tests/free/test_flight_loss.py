@@ -95,3 +95,14 @@ def test_a_release_whose_score_is_unread_starts_its_fit_at_no_loss():
     first = arcs.fit_sequence(tt, yy, side=1, times0=[0.0, 0.5, 1.5], q0=2.0, model="simplified", theta_cr=None)
     unread, zero = flight_loss.fit_sequence(tt, yy, first, c0=math.nan), flight_loss.fit_sequence(tt, yy, first, c0=0.0)
     assert unread.g == zero.g and unread.c == zero.c and np.array_equal(unread.times, zero.times)
+
+
+@pytest.mark.parametrize("c", [50.0, 800.0, 1e4])
+def test_a_fall_with_a_large_loss_stays_finite_and_below_the_lossless_fall(c):
+    """``c T0`` past ~700 overflowed ``expm1`` (inf times 0: NaN) and stopped the fit of a
+    release whose score guessed such a loss (met in the shake study). The fall is finite,
+    rises from 0, and a loss only lowers it."""
+    s = np.linspace(0.0, 2.0, 9)
+    h = flight_loss.fall_height(s, 2.0, 2.0, c)
+    assert np.all(np.isfinite(h)) and h[0] == 0.0 and np.all(np.diff(h) > 0)
+    assert np.all(h <= flight_loss.fall_height(s, 2.0, 2.0, 0.0) + 1e-15)

@@ -109,7 +109,9 @@ def fall_height(s, T0, g: float, c: float):
     series = (T0**2 - tau**2) / 2.0 - c * (T0**3 - tau**3) / 6.0 + c**2 * (T0**4 - tau**4) / 24.0 - c**3 * (T0**5 - tau**5) / 120.0 \
         + c**4 * (T0**6 - tau**6) / 720.0 - c**5 * (T0**7 - tau**7) / 5040.0
     c_safe = c if c != 0.0 else 1.0
-    direct = (c_safe * s - np.exp(-c_safe * T0) * np.expm1(c_safe * s)) / c_safe**2
+    # exp(-c T0) expm1(c s) written as exp(c (s - T0)) - exp(-c T0): s <= T0, so a large loss
+    # (c T0 past ~700) underflows to 0 instead of overflowing to inf * 0.
+    direct = (c_safe * s - (np.exp(c_safe * (s - T0)) - np.exp(-c_safe * T0))) / c_safe**2
     return g * np.where(small, series, direct)
 
 
