@@ -16,6 +16,7 @@ pooled over the records. Entry point: :func:`analyse_shake_table`.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -86,7 +87,8 @@ class ShakeTableFit:
 
     @property
     def e_interval(self) -> tuple[float, float]:
-        """Its 95 % interval: Student's ``t`` at the records' degrees of freedom summed."""
+        """Its interval at the tails' ``confidence_level`` (95 %): Student's ``t`` at the
+        records' degrees of freedom summed."""
         return self._tails[1]
 
     @property
@@ -95,7 +97,7 @@ class ShakeTableFit:
         their errors (the Birge ratio) when several are pooled."""
         return self._tails[2]
 
-    @property
+    @functools.cached_property
     def _tails(self) -> tuple[float, tuple[float, float], float]:
         none = (math.nan, (math.nan, math.nan), math.nan)
         if self.fit is None or self.fit.reason:
@@ -104,7 +106,7 @@ class ShakeTableFit:
         if len(answered) < 2:
             return self.fit.e, self.fit.e_interval, self.fit.log_e_se
         mu, se = pooled_mean([math.log(f.e) for f in answered], [f.log_e_se for f in answered])
-        half = float(stats.t.ppf(0.975, sum(f.dof for f in answered))) * se
+        half = float(stats.t.ppf(0.5 + self.fit.confidence_level / 2, sum(f.dof for f in answered))) * se
         return math.exp(mu), (math.exp(mu - half), math.exp(mu + half)), se
 
     @property
